@@ -1,0 +1,87 @@
+// The map data model: keyframes, map points and their ids, as plain values.
+//
+// One process owns one Map (the mapper owns the real one, the frontend a mirror); there are no
+// locks because no Map is shared between threads. Containers are ordered by id so every iteration
+// is deterministic (lockstep runs must be bit-identical).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "components/core/feature/features.hpp"
+#include "components/core/geometry/pose.hpp"
+
+namespace heslam {
+
+using KeyframeId = std::uint64_t;
+using PointId = std::uint64_t;
+inline constexpr std::uint64_t kNoId = 0;
+
+// Ids are allocated without coordination: the creating process's tag in the top 8 bits,
+// a per-creator counter (starting at 1) below.
+inline constexpr std::uint64_t make_id(std::uint8_t creator_tag, std::uint64_t counter) {
+  return (static_cast<std::uint64_t>(creator_tag) << 56) | (counter & ((1ULL << 56) - 1));
+}
+inline constexpr std::uint8_t creator_of(std::uint64_t id) { return static_cast<std::uint8_t>(id >> 56); }
+
+// Creator tags of the shipped processes.
+inline constexpr std::uint8_t kFrontendTag = 1;
+inline constexpr std::uint8_t kMapperTag = 2;
+inline constexpr std::uint8_t kLoopCloserTag = 3;
+
+struct Keyframe {
+  KeyframeId id = kNoId;
+  std::int64_t stamp_ns = 0;
+  Pose3 T_wc = Pose3::Identity();
+  StereoFeatures features;
+  std::vector<PointId> point_ids;  // per keypoint: the observed map point, or kNoId
+
+  // State owned by the local mapper after creation.
+  KeyframeId parent = kNoId;                                  // spanning tree
+  std::vector<std::pair<KeyframeId, int>> covisible;          // (neighbour, shared points), by weight desc
+  bool culled = false;
+};
+
+struct MapPoint {
+  PointId id = kNoId;
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
+  Descriptor descriptor{};                       // representative (median-distance) descriptor
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // mean viewing direction, unit
+  float min_distance_m = 0.f;                    // scale-invariance range
+  float max_distance_m = 0.f;
+  KeyframeId reference_kf = kNoId;
+  std::vector<std::pair<KeyframeId, int>> observations;  // (keyframe, keypoint index)
+  int visible = 1;  // times predicted visible in a frame
+  int found = 1;    // times actually matched
+  bool culled = false;
+  PointId merged_into = kNoId;
+};
+
+struct Map {
+  std::map<KeyframeId, Keyframe> keyframes;
+  std::map<PointId, MapPoint> points;
+  std::uint64_t version = 0;  // bumped on every change the mapper publishes
+
+  Keyframe* keyframe(KeyframeId id) {
+    auto it = keyframes.find(id);
+    return it == keyframes.end() ? nullptr : &it->second;
+  }
+  MapPoint* point(PointId id) {
+    auto it = points.find(id);
+    return it == points.end() ? nullptr : &it->second;
+  }
+  const Keyframe* keyframe(KeyframeId id) const {
+    auto it = keyframes.find(id);
+    return it == keyframes.end() ? nullptr : &it->second;
+  }
+  const MapPoint* point(PointId id) const {
+    auto it = points.find(id);
+    return it == points.end() ? nullptr : &it->second;
+  }
+};
+
+}  // namespace heslam
