@@ -1,0 +1,86 @@
+// Parsing of the flags every heslam process shares.
+#include "runtime/args.hpp"
+
+#include <charconv>
+#include <optional>
+#include <cstdlib>
+#include <stdexcept>
+
+#include "runtime/participant.hpp"
+#include "runtime/topics.hpp"
+
+namespace heslam::runtime {
+namespace {
+
+int parse_domain(const std::string& flag, const std::string& text) {
+  int value = -1;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc{} || end != text.data() + text.size() || value < 0 || value > kMaxDomainId) {
+    throw std::runtime_error(flag + ": expected an integer in [0, " + std::to_string(kMaxDomainId) + "], got '" +
+                             text + "'");
+  }
+  return value;
+}
+
+}  // namespace
+
+CommonArgs parse_common_args(int argc, const char* const* argv, std::string_view default_name) {
+  CommonArgs args;
+  args.name = std::string(default_name);
+  if (const char* env = std::getenv("HESLAM_DOMAIN"); env != nullptr && *env != '\0') {
+    args.domain_id = parse_domain("$HESLAM_DOMAIN", env);
+  }
+  for (int i = 1; i < argc; ++i) {
+    std::string arg = argv[i];
+    std::string flag = arg;
+    std::optional<std::string> inline_value;
+    if (arg.rfind("--", 0) == 0) {
+      if (const auto eq = arg.find('='); eq != std::string::npos) {
+        flag = arg.substr(0, eq);
+        inline_value = arg.substr(eq + 1);
+      }
+    }
+    const auto value = [&]() -> std::string {
+      if (inline_value) return *inline_value;
+      if (i + 1 >= argc) throw std::runtime_error(flag + ": missing value");
+      return argv[++i];
+    };
+    if (flag == "--domain") {
+      args.domain_id = parse_domain(flag, value());
+    } else if (flag == "--namespace") {
+      args.ns = value();
+      Topics check(args.ns);  // throws the namespace message
+    } else if (flag == "--name") {
+      args.name = value();
+      if (args.name.empty()) throw std::runtime_error("--name: expected a non-empty name");
+    } else if (flag == "--config") {
+      args.config_file = value();
+    } else if (flag == "--log-level") {
+      const std::string text = value();
+      const auto level = parse_log_level(text);
+      if (!level) throw std::runtime_error("--log-level: expected debug, info, warn, error or off, got '" + text + "'");
+      args.log_level = *level;
+    } else if (flag == "--dds-config") {
+      args.dds_config = value();
+    } else if (arg == "-h" || arg == "--help") {
+      args.help = true;
+    } else {
+      args.rest.push_back(arg);
+    }
+  }
+  return args;
+}
+
+std::string common_args_usage() {
+  return "common options:\n"
+         "  --domain N          DDS domain id, 0-232 (default: $HESLAM_DOMAIN or 0)\n"
+         "  --namespace NAME    topic namespace (default: heslam)\n"
+         "  --name NAME         instance name in status and logs (default: the program's)\n"
+         "  --config FILE       YAML options (default: every option at its documented default)\n"
+         "  --log-level LEVEL   debug, info, warn, error or off (default: info)\n"
+         "  --dds-config XML    Cyclone configuration, XML or file://PATH (default: $CYCLONEDDS_URI,\n"
+         "                      else the built-in loopback config/cyclonedds.xml)\n"
+         "  -h, --help          this help\n";
+}
+
+}  // namespace heslam::runtime

@@ -1,0 +1,33 @@
+// The command-line flags every component and tool shares (the pipeline file sets them):
+//   --domain N  --namespace NAME  --name NAME  --config FILE  --log-level LEVEL  --dds-config XML|file://…
+// parse_common_args() takes these out and leaves every other argument, in order, for the tool.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "runtime/log.hpp"
+
+namespace heslam::runtime {
+
+struct CommonArgs {
+  int domain_id = 0;                  // default: $HESLAM_DOMAIN when set, else 0
+  std::string ns = "heslam";          // topic namespace
+  std::string name;                   // instance name (status key, log prefix); default: the program's
+  std::filesystem::path config_file;  // empty: every option at its documented default
+  LogLevel log_level = LogLevel::kInfo;
+  std::string dds_config;             // empty: see ParticipantOptions::dds_config
+  bool help = false;                  // -h / --help seen
+  std::vector<std::string> rest;      // everything else, in order (argv[0] excluded)
+};
+
+// Accepts "--flag value" and "--flag=value". Throws std::runtime_error with one line for a bad value,
+// e.g. "--domain: expected an integer in [0, 232], got 'x'".
+CommonArgs parse_common_args(int argc, const char* const* argv, std::string_view default_name);
+
+// The help text of the common flags (append to a tool's own usage).
+std::string common_args_usage();
+
+}  // namespace heslam::runtime

@@ -1,0 +1,61 @@
+// Component lifecycle: configure -> run -> shutdown, with status and one-line errors.
+#include "runtime/component.hpp"
+
+#include <iostream>
+
+namespace heslam::runtime {
+
+Component::Component(std::string default_name, const CommonArgs& args)
+    : program_("heslam-" + default_name),
+      name_(args.name.empty() ? default_name : args.name),
+      args_(args),
+      log_(name_, args.log_level),
+      participant_(ParticipantOptions{args.domain_id, args.dds_config}),
+      topics_(args.ns),
+      status_(std::make_unique<StatusPublisher>(participant_, topics_, name_, stats_)),
+      waitset_(participant_) {
+  install_shutdown_handlers();
+}
+
+Component::~Component() = default;
+
+int Component::execute() {
+  try {
+    if (!args_.rest.empty() && !accepts_positional_args()) {
+      throw std::runtime_error("unexpected argument '" + args_.rest.front() + "' (see --help)");
+    }
+    const Config config = args_.config_file.empty() ? Config::empty() : Config::load(args_.config_file);
+    configure(config);
+    config.reject_unknown();
+    status_->set_state(ComponentState::kRunning);
+    log_.debug("running on domain ", participant_.domain_id(), ", namespace '", topics_.ns(), "'");
+    run();
+    status_->set_state(ComponentState::kShuttingDown);
+    on_shutdown();
+    return 0;
+  } catch (const std::exception& error) {
+    std::cerr << program_ << ": " << error.what() << std::endl;
+    try {
+      status_->set_state(ComponentState::kFailed, error.what());
+    } catch (...) {
+      // Reporting the failure failed too (DDS gone); the exit code still says it.
+    }
+    return 1;
+  }
+}
+
+void Component::spin() {
+  while (spin_once(std::chrono::milliseconds(kSpinTimeoutMs))) {
+  }
+}
+
+bool Component::spin_once(std::chrono::milliseconds timeout) {
+  const Wake wake = waitset_.wait(timeout);
+  if (wake == Wake::kShutdown) return false;
+  if (wake == Wake::kData) {
+    for (const auto& subscription : subscriptions_) subscription->dispatch();
+  }
+  return !shutdown_requested();
+}
+
+}  // namespace heslam::runtime

@@ -1,0 +1,153 @@
+// The QoS profile of each role (figures and reasons: shared/notes/cyclonedds-0.10-findings.md).
+#include "runtime/qos.hpp"
+
+#include <utility>
+
+namespace heslam::runtime {
+namespace {
+
+using std::chrono::milliseconds;
+
+// Images: a writer facing a slow reader blocks at most this long before KEEP_LAST overwrites.
+constexpr milliseconds kImageMaxBlocking{100};
+// Frames kept per reader: enough to absorb a hiccup, few enough that a slow frontend sees fresh data.
+constexpr int32_t kImageDepth = 4;
+// Odometry kept per reader: ~5 s at 20 Hz so a recorder never loses poses to a short stall.
+constexpr int32_t kOdometryDepth = 100;
+// Corrections are rare and precious; KEEP_ALL with a short block, replay the last 100 to late joiners
+// (replay depth comes from durability_service, not history: findings pitfall 7).
+constexpr milliseconds kCorrectionMaxBlocking{100};
+constexpr int32_t kCorrectionReplayDepth = 100;
+// Lockstep acks: tiny, one per frame; 64 covers any realistic backlog without KEEP_ALL blocking.
+constexpr int32_t kLockstepDepth = 64;
+// Default blocking for other reliable writers (KEEP_LAST never blocks long; bounds pathological cases).
+constexpr milliseconds kDefaultMaxBlocking{100};
+// Status is published every second; the supervisor declares a writer gone after 2 missed periods.
+constexpr milliseconds kStatusLiveliness{2000};
+
+void apply(dds_qos_t* qos, QosRole role) {
+  switch (role) {
+    case QosRole::kImages:
+      dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(kImageMaxBlocking.count()));
+      dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
+      dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, kImageDepth);
+      break;
+    case QosRole::kCalibration:
+    case QosRole::kKeyframes:
+    case QosRole::kMapState:
+      // Keyed (or single-instance) state: KEEP_LAST(1) per instance never blocks and is all a late
+      // joiner needs; durability_service depth must match for the replay (pitfall 7).
+      dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(kDefaultMaxBlocking.count()));
+      dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
+      dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
+      dds_qset_durability_service(qos, 0, DDS_HISTORY_KEEP_LAST, 1, DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED,
+                                  DDS_LENGTH_UNLIMITED);
+      break;
+    case QosRole::kOdometry:
+      dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(kDefaultMaxBlocking.count()));
+      dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
+      dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, kOdometryDepth);
+      break;
+    case QosRole::kCorrections:
+      dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(kCorrectionMaxBlocking.count()));
+      dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
+      dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, DDS_LENGTH_UNLIMITED);
+      dds_qset_durability_service(qos, 0, DDS_HISTORY_KEEP_LAST, kCorrectionReplayDepth, DDS_LENGTH_UNLIMITED,
+                                  DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
+      break;
+    case QosRole::kLockstep:
+      dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(kDefaultMaxBlocking.count()));
+      dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
+      dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, kLockstepDepth);
+      break;
+    case QosRole::kStatus:
+      dds_qset_reliability(qos, DDS_RELIABILITY_BEST_EFFORT, 0);
+      dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
+      dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
+      dds_qset_liveliness(qos, DDS_LIVELINESS_AUTOMATIC, DDS_MSECS(kStatusLiveliness.count()));
+      break;
+    case QosRole::kSpy:
+      dds_qset_reliability(qos, DDS_RELIABILITY_BEST_EFFORT, 0);
+      dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
+      dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
+      break;
+  }
+}
+
+}  // namespace
+
+std::string_view to_string(QosRole role) {
+  switch (role) {
+    case QosRole::kImages: return "images";
+    case QosRole::kCalibration: return "calibration";
+    case QosRole::kOdometry: return "odometry";
+    case QosRole::kKeyframes: return "keyframes";
+    case QosRole::kMapState: return "map-state";
+    case QosRole::kCorrections: return "corrections";
+    case QosRole::kLockstep: return "lockstep";
+    case QosRole::kStatus: return "status";
+    case QosRole::kSpy: return "spy";
+  }
+  return "unknown";
+}
+
+Qos::Qos(QosRole role) : role_(role), qos_(dds_create_qos()) { apply(qos_, role); }
+
+Qos::~Qos() {
+  if (qos_ != nullptr) dds_delete_qos(qos_);
+}
+
+Qos::Qos(const Qos& other) : role_(other.role_), qos_(dds_create_qos()) { dds_copy_qos(qos_, other.qos_); }
+
+Qos& Qos::operator=(const Qos& other) {
+  if (this != &other) {
+    role_ = other.role_;
+    dds_copy_qos(qos_, other.qos_);
+  }
+  return *this;
+}
+
+Qos::Qos(Qos&& other) noexcept : role_(other.role_), qos_(std::exchange(other.qos_, nullptr)) {}
+
+Qos& Qos::operator=(Qos&& other) noexcept {
+  if (this != &other) {
+    if (qos_ != nullptr) dds_delete_qos(qos_);
+    role_ = other.role_;
+    qos_ = std::exchange(other.qos_, nullptr);
+  }
+  return *this;
+}
+
+Qos& Qos::keep_last(int32_t depth) {
+  dds_qset_history(qos_, DDS_HISTORY_KEEP_LAST, depth);
+  return *this;
+}
+
+Qos& Qos::keep_all() {
+  dds_qset_history(qos_, DDS_HISTORY_KEEP_ALL, DDS_LENGTH_UNLIMITED);
+  return *this;
+}
+
+Qos& Qos::reliable(std::chrono::milliseconds max_blocking_time) {
+  dds_qset_reliability(qos_, DDS_RELIABILITY_RELIABLE, DDS_MSECS(max_blocking_time.count()));
+  return *this;
+}
+
+Qos& Qos::best_effort() {
+  dds_qset_reliability(qos_, DDS_RELIABILITY_BEST_EFFORT, 0);
+  return *this;
+}
+
+Qos& Qos::volatile_durability() {
+  dds_qset_durability(qos_, DDS_DURABILITY_VOLATILE);
+  return *this;
+}
+
+Qos& Qos::transient_local(int32_t replay_depth) {
+  dds_qset_durability(qos_, DDS_DURABILITY_TRANSIENT_LOCAL);
+  dds_qset_durability_service(qos_, 0, DDS_HISTORY_KEEP_LAST, replay_depth, DDS_LENGTH_UNLIMITED,
+                              DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
+  return *this;
+}
+
+}  // namespace heslam::runtime

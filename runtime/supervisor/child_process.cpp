@@ -1,0 +1,168 @@
+// Spawning (posix_spawn, own process group, clean signal state), output pipes, the exec trampoline.
+#include "runtime/supervisor/child_process.hpp"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/prctl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <stdexcept>
+#include <utility>
+
+extern char** environ;
+
+namespace heslam::supervisor {
+namespace {
+
+// Read size per call: a component's log burst fits in one or two reads.
+constexpr std::size_t kReadChunk = 64 * 1024;
+
+}  // namespace
+
+ChildProcess ChildProcess::spawn(const std::filesystem::path& trampoline, const std::filesystem::path& program,
+                                 const std::vector<std::string>& args, const std::map<std::string, std::string>& env) {
+  int pipe_fds[2];
+  if (pipe2(pipe_fds, O_CLOEXEC) != 0) {
+    throw std::runtime_error("cannot start " + program.string() + ": pipe: " + std::strerror(errno));
+  }
+
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDOUT_FILENO);
+  posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDERR_FILENO);
+
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP | POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
+  posix_spawnattr_setpgroup(&attributes, 0);  // own group: Ctrl-C reaches only the supervisor
+  sigset_t empty_mask, defaults;
+  sigemptyset(&empty_mask);
+  posix_spawnattr_setsigmask(&attributes, &empty_mask);
+  sigemptyset(&defaults);
+  for (int s : {SIGINT, SIGTERM, SIGPIPE, SIGCHLD, SIGHUP, SIGUSR1, SIGUSR2}) sigaddset(&defaults, s);
+  posix_spawnattr_setsigdefault(&attributes, &defaults);
+
+  std::vector<std::string> argv_text{trampoline.string(), "--exec-child", program.string()};
+  argv_text.insert(argv_text.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& text : argv_text) argv.push_back(text.data());
+  argv.push_back(nullptr);
+
+  std::map<std::string, std::string> environment;
+  for (char** entry = environ; *entry != nullptr; ++entry) {
+    const std::string text = *entry;
+    const auto eq = text.find('=');
+    if (eq != std::string::npos) environment[text.substr(0, eq)] = text.substr(eq + 1);
+  }
+  for (const auto& [key, value] : env) environment[key] = value;
+  environment["HESLAM_SUPERVISOR_PID"] = std::to_string(getpid());
+  std::vector<std::string> env_text;
+  for (const auto& [key, value] : environment) env_text.push_back(key + "=" + value);
+  std::vector<char*> envp;
+  for (auto& text : env_text) envp.push_back(text.data());
+  envp.push_back(nullptr);
+
+  pid_t pid = 0;
+  const int error = posix_spawn(&pid, trampoline.c_str(), &actions, &attributes, argv.data(), envp.data());
+  posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attributes);
+  close(pipe_fds[1]);
+  if (error != 0) {
+    close(pipe_fds[0]);
+    throw std::runtime_error("cannot start " + program.string() + ": " + std::strerror(error));
+  }
+  fcntl(pipe_fds[0], F_SETFL, fcntl(pipe_fds[0], F_GETFL) | O_NONBLOCK);
+  ChildProcess child;
+  child.pid_ = pid;
+  child.output_fd_ = pipe_fds[0];
+  return child;
+}
+
+ChildProcess::ChildProcess(ChildProcess&& other) noexcept
+    : pid_(std::exchange(other.pid_, 0)),
+      output_fd_(std::exchange(other.output_fd_, -1)),
+      partial_(std::move(other.partial_)) {}
+
+ChildProcess& ChildProcess::operator=(ChildProcess&& other) noexcept {
+  if (this != &other) {
+    close_output();
+    pid_ = std::exchange(other.pid_, 0);
+    output_fd_ = std::exchange(other.output_fd_, -1);
+    partial_ = std::move(other.partial_);
+  }
+  return *this;
+}
+
+ChildProcess::~ChildProcess() { close_output(); }
+
+void ChildProcess::close_output() {
+  if (output_fd_ >= 0) close(output_fd_);
+  output_fd_ = -1;
+}
+
+bool ChildProcess::read_lines(std::vector<std::string>& lines) {
+  if (output_fd_ < 0) return false;
+  char buffer[kReadChunk];
+  for (;;) {
+    const ssize_t n = read(output_fd_, buffer, sizeof buffer);
+    if (n > 0) {
+      partial_.append(buffer, static_cast<std::size_t>(n));
+      std::size_t start = 0;
+      for (std::size_t newline; (newline = partial_.find('\n', start)) != std::string::npos; start = newline + 1) {
+        lines.push_back(partial_.substr(start, newline - start));
+      }
+      partial_.erase(0, start);
+      continue;
+    }
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return true;
+    // End of stream (every writer, including grandchildren, closed it) or an error.
+    if (!partial_.empty()) lines.push_back(std::exchange(partial_, {}));
+    close_output();
+    return false;
+  }
+}
+
+void ChildProcess::signal_group(int signal_number) const {
+  if (pid_ > 0) kill(-pid_, signal_number);
+}
+
+void exec_child(int argc, char** argv) {
+  // argv: heslam-supervisor --exec-child PROGRAM ARGS...
+  if (argc < 3) {
+    const char message[] = "heslam-supervisor: --exec-child needs a program\n";
+    [[maybe_unused]] const ssize_t ignored = write(STDERR_FILENO, message, sizeof message - 1);
+    _exit(127);
+  }
+  prctl(PR_SET_PDEATHSIG, SIGTERM);
+  // If the supervisor died before the prctl, nobody will signal us: do not start at all.
+  const char* parent = std::getenv("HESLAM_SUPERVISOR_PID");
+  if (parent != nullptr && std::to_string(getppid()) != parent) _exit(127);
+  std::vector<char*> args;
+  std::string name = std::filesystem::path(argv[2]).filename().string();
+  args.push_back(name.data());
+  for (int i = 3; i < argc; ++i) args.push_back(argv[i]);
+  args.push_back(nullptr);
+  execv(argv[2], args.data());
+  const std::string message = std::string("heslam-supervisor: cannot execute ") + argv[2] + ": " +
+                              std::strerror(errno) + "\n";
+  [[maybe_unused]] const ssize_t ignored = write(STDERR_FILENO, message.data(), message.size());
+  _exit(127);
+}
+
+std::string describe_exit(int wait_status) {
+  if (WIFEXITED(wait_status)) return "exit code " + std::to_string(WEXITSTATUS(wait_status));
+  if (WIFSIGNALED(wait_status)) {
+    const int s = WTERMSIG(wait_status);
+    const char* name = sigabbrev_np(s);
+    return std::string("killed by ") + (name != nullptr ? std::string("SIG") + name : "signal " + std::to_string(s));
+  }
+  return "stopped";
+}
+
+}  // namespace heslam::supervisor

@@ -1,0 +1,53 @@
+// ChildProcess: one spawned program in its own process group, its stdout+stderr on a pipe.
+//
+// Spawned through the supervisor's own binary in "--exec-child" mode, which sets PR_SET_PDEATHSIG
+// before exec'ing the program, so even a program that knows nothing of heslam dies with the
+// supervisor (kill -9 included).
+#pragma once
+
+#include <sys/types.h>
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace heslam::supervisor {
+
+class ChildProcess {
+ public:
+  // Throws std::runtime_error("cannot start PROGRAM: reason").
+  static ChildProcess spawn(const std::filesystem::path& trampoline, const std::filesystem::path& program,
+                            const std::vector<std::string>& args, const std::map<std::string, std::string>& env);
+
+  ChildProcess() = default;
+  ChildProcess(ChildProcess&& other) noexcept;
+  ChildProcess& operator=(ChildProcess&& other) noexcept;
+  ChildProcess(const ChildProcess&) = delete;
+  ChildProcess& operator=(const ChildProcess&) = delete;
+  ~ChildProcess();  // closes the pipe; never kills (the supervisor decides that)
+
+  pid_t pid() const { return pid_; }
+  int output_fd() const { return output_fd_; }
+
+  // Reads what is available (non-blocking) and returns complete lines; at end of stream also the
+  // unterminated rest. Returns false once the stream is closed.
+  bool read_lines(std::vector<std::string>& lines);
+  void close_output();
+
+  // Signals the whole process group (the program and anything it started).
+  void signal_group(int signal_number) const;
+
+ private:
+  pid_t pid_ = 0;
+  int output_fd_ = -1;
+  std::string partial_;
+};
+
+// The --exec-child mode of heslam-supervisor: never returns (exec or _exit(127)).
+[[noreturn]] void exec_child(int argc, char** argv);
+
+// "exit code 3", "killed by SIGKILL" for a waitpid status.
+std::string describe_exit(int wait_status);
+
+}  // namespace heslam::supervisor

@@ -1,0 +1,129 @@
+// heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]
+//                   [--log-dir DIR] [--log-level LEVEL]
+#include <signal.h>
+#include <unistd.h>
+
+#include <ctime>
+#include <iostream>
+
+#include "runtime/log.hpp"
+#include "runtime/participant.hpp"
+#include "runtime/shutdown.hpp"
+#include "runtime/supervisor/child_process.hpp"
+#include "runtime/supervisor/pipeline.hpp"
+#include "runtime/supervisor/supervisor.hpp"
+
+namespace {
+
+using namespace heslam;
+
+constexpr const char* kUsage =
+    "usage: heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]\n"
+    "                         [--log-dir DIR] [--log-level debug|info|warn|error]\n"
+    "  --check      validate the pipeline file and every file it references; start nothing\n"
+    "  --arg k=v    value for $(arg k) in the pipeline file (overrides its 'args' default)\n"
+    "  --log-dir    per-component logs (default: $HESLAM_LOG_DIR or ~/.heslam/log, + /<pipeline>-<time>)\n";
+
+std::filesystem::path default_log_dir(const std::string& pipeline_name) {
+  std::filesystem::path base;
+  if (const char* env = std::getenv("HESLAM_LOG_DIR"); env != nullptr && *env != '\0') {
+    base = env;
+  } else if (const char* home = std::getenv("HOME"); home != nullptr && *home != '\0') {
+    base = std::filesystem::path(home) / ".heslam" / "log";
+  } else {
+    base = std::filesystem::temp_directory_path() / "heslam-log";
+  }
+  char stamp[32];
+  const std::time_t now = std::time(nullptr);
+  std::tm local{};
+  localtime_r(&now, &local);
+  std::strftime(stamp, sizeof stamp, "%Y%m%d-%H%M%S", &local);
+  return base / (pipeline_name + "-" + stamp + "-" + std::to_string(getpid()));
+}
+
+std::string value_of(int argc, char** argv, int& i, const std::string& flag) {
+  if (i + 1 >= argc) throw std::runtime_error(flag + ": missing value");
+  return argv[++i];
+}
+
+int run(int argc, char** argv) {
+  std::filesystem::path pipeline_file;
+  supervisor::PipelineOverrides overrides;
+  bool check = false;
+  std::filesystem::path log_dir;
+  runtime::LogLevel log_level = runtime::LogLevel::kInfo;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "-h" || arg == "--help") {
+      std::cout << kUsage;
+      return 0;
+    } else if (arg == "--check") {
+      check = true;
+    } else if (arg == "--arg") {
+      const std::string pair = value_of(argc, argv, i, arg);
+      const auto eq = pair.find('=');
+      if (eq == std::string::npos || eq == 0) throw std::runtime_error("--arg: expected key=value, got '" + pair + "'");
+      overrides.args[pair.substr(0, eq)] = pair.substr(eq + 1);
+    } else if (arg == "--domain") {
+      const std::string text = value_of(argc, argv, i, arg);
+      try {
+        std::size_t used = 0;
+        const int domain = std::stoi(text, &used);
+        if (used != text.size() || domain < 0 || domain > runtime::kMaxDomainId) throw std::out_of_range(text);
+        overrides.domain_id = domain;
+      } catch (const std::logic_error&) {
+        throw std::runtime_error("--domain: expected an integer in [0, " + std::to_string(runtime::kMaxDomainId) +
+                                 "], got '" + text + "'");
+      }
+    } else if (arg == "--namespace") {
+      overrides.ns = value_of(argc, argv, i, arg);
+    } else if (arg == "--log-dir") {
+      log_dir = value_of(argc, argv, i, arg);
+    } else if (arg == "--log-level") {
+      const std::string text = value_of(argc, argv, i, arg);
+      const auto level = runtime::parse_log_level(text);
+      if (!level) throw std::runtime_error("--log-level: expected debug, info, warn, error or off, got '" + text + "'");
+      log_level = *level;
+    } else if (!arg.empty() && arg[0] == '-') {
+      throw std::runtime_error("unknown option '" + arg + "' (see --help)");
+    } else if (pipeline_file.empty()) {
+      pipeline_file = arg;
+    } else {
+      throw std::runtime_error("unexpected argument '" + arg + "': one pipeline file per supervisor");
+    }
+  }
+  if (pipeline_file.empty()) throw std::runtime_error(std::string("missing PIPELINE.yaml\n") + kUsage);
+
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe");
+  const auto loaded = supervisor::load_pipeline(pipeline_file, overrides, self.parent_path());
+  if (!loaded.problems.empty()) {
+    for (const std::string& problem : loaded.problems) std::cerr << "heslam-supervisor: " << problem << "\n";
+    return 1;
+  }
+  if (check) {
+    std::cout << pipeline_file.string() << ": OK (" << loaded.pipeline.components.size() << " components:";
+    for (const auto& component : loaded.pipeline.components) std::cout << " " << component.name;
+    std::cout << ")\n";
+    return 0;
+  }
+  runtime::install_shutdown_handlers();
+  signal(SIGPIPE, SIG_IGN);  // a closed terminal must not kill the supervisor before it stops its children
+  supervisor::SupervisorOptions options;
+  options.self_executable = self;
+  options.log_dir = log_dir.empty() ? default_log_dir(loaded.pipeline.name) : log_dir;
+  options.log_level = log_level;
+  supervisor::Supervisor supervisor(loaded.pipeline, options);
+  return supervisor.run();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc >= 2 && std::string(argv[1]) == "--exec-child") heslam::supervisor::exec_child(argc, argv);
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {
+    std::cerr << "heslam-supervisor: " << error.what() << "\n";
+    return 1;
+  }
+}

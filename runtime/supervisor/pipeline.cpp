@@ -1,0 +1,231 @@
+// Pipeline file loading: fields with defaults, $(arg) substitution, and validation of every
+// referenced file, collecting one message per problem (what --check prints).
+#include "runtime/supervisor/pipeline.hpp"
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <functional>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "runtime/config.hpp"
+#include "runtime/participant.hpp"
+#include "runtime/topics.hpp"
+
+namespace heslam::supervisor {
+namespace {
+
+using runtime::Config;
+
+// A component name becomes a file name and a DDS key: keep it simple.
+bool valid_name(const std::string& name) {
+  if (name.empty()) return false;
+  for (char c : name) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-') return false;
+  }
+  return true;
+}
+
+bool is_executable(const std::filesystem::path& path) {
+  return std::filesystem::is_regular_file(path) && access(path.c_str(), X_OK) == 0;
+}
+
+// heslam-* and bare names: the supervisor's own folder first (a build's bin/), then $PATH.
+std::optional<std::filesystem::path> resolve_executable(const std::string& text, const std::filesystem::path& folder,
+                                                        const std::filesystem::path& bin_dir) {
+  if (text.find('/') != std::string::npos) {
+    std::filesystem::path path = text;
+    if (path.is_relative()) path = folder / path;
+    return is_executable(path) ? std::optional(std::filesystem::absolute(path)) : std::nullopt;
+  }
+  if (!bin_dir.empty() && is_executable(bin_dir / text)) return bin_dir / text;
+  const char* env_path = std::getenv("PATH");
+  std::stringstream dirs(env_path == nullptr ? "" : env_path);
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    if (!dir.empty() && is_executable(std::filesystem::path(dir) / text)) return std::filesystem::path(dir) / text;
+  }
+  return std::nullopt;
+}
+
+std::string join_keys(const std::map<std::string, std::string>& map) {
+  std::string out;
+  for (const auto& [key, value] : map) out += (out.empty() ? "" : ", ") + key;
+  return out.empty() ? "none" : out;
+}
+
+// Runs fn, turning its runtime_error into a recorded problem.
+void collect(std::vector<std::string>& problems, const std::function<void()>& fn) {
+  try {
+    fn();
+  } catch (const std::runtime_error& error) {
+    problems.emplace_back(error.what());
+  }
+}
+
+}  // namespace
+
+std::string substitute_args(const std::string& text, const std::map<std::string, std::string>& args,
+                            std::vector<std::string>& unknown) {
+  static const std::regex pattern(R"(\$\(arg\s+([A-Za-z0-9_\-]+)\s*\))");
+  std::string out;
+  auto begin = std::sregex_iterator(text.begin(), text.end(), pattern);
+  std::size_t last = 0;
+  for (auto it = begin; it != std::sregex_iterator(); ++it) {
+    const std::smatch& match = *it;
+    out += text.substr(last, static_cast<std::size_t>(match.position(0)) - last);
+    const auto found = args.find(match[1].str());
+    if (found == args.end()) {
+      unknown.push_back(match[1].str());
+    } else {
+      out += found->second;
+    }
+    last = static_cast<std::size_t>(match.position(0) + match.length(0));
+  }
+  out += text.substr(last);
+  return out;
+}
+
+LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverrides& overrides,
+                         const std::filesystem::path& bin_dir) {
+  LoadResult result;
+  Pipeline& pipeline = result.pipeline;
+  std::vector<std::string>& problems = result.problems;
+  pipeline.file = std::filesystem::absolute(file);
+  const std::string source = file.string();
+
+  std::optional<Config> config;
+  collect(problems, [&] { config = Config::load(file); });
+  if (!config) return result;
+
+  // Arguments: declared with defaults in the file, overridden by --arg.
+  std::map<std::string, std::string> args;
+  collect(problems, [&] { args = config->get_string_map("args"); });
+  for (const auto& [key, value] : overrides.args) {
+    if (args.count(key) == 0) {
+      problems.push_back(source + ": --arg " + key + ": the pipeline declares no such argument (declared: " +
+                         join_keys(args) + ")");
+    }
+    args[key] = value;
+  }
+  const auto substitute = [&](const std::string& field, const std::string& text) {
+    std::vector<std::string> unknown;
+    std::string out = substitute_args(text, args, unknown);
+    for (const auto& name : unknown) {
+      problems.push_back(source + ": field '" + field + "': unknown $(arg " + name + ") (declared: " +
+                         join_keys(args) + ")");
+    }
+    return out;
+  };
+  const std::filesystem::path folder = pipeline.file.parent_path();
+
+  collect(problems, [&] { pipeline.name = config->get_string("name", file.stem().string()); });
+  collect(problems, [&] {
+    const std::string text = substitute("domain", config->get_scalar("domain", "0"));
+    int domain = -1;
+    std::istringstream parse(text);
+    if (!(parse >> domain) || !parse.eof() || domain < 0 || domain > runtime::kMaxDomainId) {
+      throw std::runtime_error(source + ": field 'domain': expected an integer in [0, " +
+                               std::to_string(runtime::kMaxDomainId) + "], got '" + text + "'");
+    }
+    pipeline.domain_id = domain;
+  });
+  if (overrides.domain_id) pipeline.domain_id = *overrides.domain_id;
+  collect(problems, [&] {
+    pipeline.ns = substitute("namespace", config->get_string("namespace", std::string(runtime::kDefaultNamespace)));
+    if (overrides.ns) pipeline.ns = *overrides.ns;
+    runtime::Topics check(pipeline.ns);
+  });
+  collect(problems, [&] {
+    const std::string text = substitute("dds_config", config->get_string("dds_config", ""));
+    if (text.empty()) return;
+    std::filesystem::path path = text;
+    if (path.is_relative()) path = folder / path;
+    if (!std::filesystem::is_regular_file(path)) {
+      throw std::runtime_error(source + ": field 'dds_config': file " + path.string() + " does not exist");
+    }
+    pipeline.dds_config = "file://" + std::filesystem::absolute(path).string();
+  });
+  collect(problems, [&] { pipeline.stop_timeout_s = config->get_double("stop_timeout_s", 5.0, 0.1, 600.0); });
+
+  std::vector<Config> sections;
+  collect(problems, [&] { sections = config->get_sections("components"); });
+  if (sections.empty() && problems.empty()) problems.push_back(source + ": field 'components': expected a non-empty list");
+  collect(problems, [&] { config->reject_unknown(); });
+
+  std::map<std::string, int> first_index;
+  for (std::size_t i = 0; i < sections.size(); ++i) {
+    const Config& section = sections[i];
+    const std::string where = "components[" + std::to_string(i) + "]";
+    ComponentSpec spec;
+    collect(problems, [&] {
+      spec.name = section.get_string("name", "");
+      if (!valid_name(spec.name)) {
+        throw std::runtime_error(source + ": field '" + where + ".name': expected letters, digits, '_' or '-', got '" +
+                                 spec.name + "'");
+      }
+      const auto [it, inserted] = first_index.emplace(spec.name, static_cast<int>(i));
+      if (!inserted) {
+        throw std::runtime_error(source + ": " + where + ": duplicate name '" + spec.name + "' (also components[" +
+                                 std::to_string(it->second) + "])");
+      }
+    });
+    const std::string label = spec.name.empty() ? where : "component '" + spec.name + "'";
+    collect(problems, [&] {
+      const std::string text = substitute(where + ".executable", section.get_string("executable", ""));
+      if (text.empty()) throw std::runtime_error(source + ": " + label + ": field 'executable' is required");
+      const auto resolved = resolve_executable(text, folder, bin_dir);
+      if (!resolved) {
+        throw std::runtime_error(source + ": " + label + ": executable '" + text + "' not found (looked in " +
+                                 (bin_dir.empty() ? std::string() : bin_dir.string() + " and ") + "$PATH)");
+      }
+      spec.executable = *resolved;
+    });
+    collect(problems, [&] {
+      for (const std::string& arg : section.get_strings("args", {})) spec.args.push_back(substitute(where + ".args", arg));
+    });
+    collect(problems, [&] {
+      const std::string text = substitute(where + ".config", section.get_string("config", ""));
+      if (text.empty()) return;
+      std::filesystem::path path = text;
+      if (path.is_relative()) path = folder / path;
+      if (!std::filesystem::is_regular_file(path)) {
+        throw std::runtime_error(source + ": " + label + ": config " + path.string() + " does not exist");
+      }
+      Config::load(path);  // its own syntax errors, named by its file
+      spec.config = std::filesystem::absolute(path);
+    });
+    collect(problems, [&] {
+      for (auto& [key, value] : section.get_string_map("env")) spec.env[key] = substitute(where + ".env", value);
+    });
+    collect(problems, [&] {
+      const std::string restart = section.get_choice("restart", "never", {"never", "on-failure", "always"});
+      spec.restart = restart == "always"       ? RestartPolicy::kAlways
+                     : restart == "on-failure" ? RestartPolicy::kOnFailure
+                                               : RestartPolicy::kNever;
+    });
+    collect(problems, [&] { spec.max_restarts = section.get_int("max_restarts", 3, 0, 1000); });
+    collect(problems, [&] { spec.restart_backoff_s = section.get_double("restart_backoff_s", 0.1, 0.0, 600.0); });
+    collect(problems, [&] {
+      spec.restart_backoff_max_s = section.get_double("restart_backoff_max_s", 5.0, 0.0, 3600.0);
+    });
+    collect(problems, [&] {
+      spec.ready = section.get_choice("ready", "status", {"status", "started"}) == "status" ? Readiness::kStatus
+                                                                                           : Readiness::kStarted;
+    });
+    collect(problems, [&] { spec.ready_timeout_s = section.get_double("ready_timeout_s", 10.0, 0.1, 3600.0); });
+    collect(problems, [&] { spec.required = section.get_bool("required", true); });
+    collect(problems, [&] {
+      spec.shutdown_on_exit = section.get_choice("on_exit", "none", {"none", "shutdown"}) == "shutdown";
+    });
+    collect(problems, [&] { spec.common_args = section.get_bool("common_args", true); });
+    collect(problems, [&] { section.reject_unknown(); });
+    pipeline.components.push_back(std::move(spec));
+  }
+  return result;
+}
+
+}  // namespace heslam::supervisor

@@ -1,0 +1,61 @@
+// Pipeline: the parsed and validated pipeline file heslam-supervisor runs (format: docs/supervisor.md).
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace heslam::supervisor {
+
+enum class RestartPolicy { kNever, kOnFailure, kAlways };
+enum class Readiness { kStatus, kStarted };
+
+struct ComponentSpec {
+  std::string name;                       // unique in the pipeline; also its --name and log file
+  std::filesystem::path executable;       // resolved absolute path
+  std::vector<std::string> args;          // after $(arg) substitution
+  std::filesystem::path config;           // empty: none
+  std::map<std::string, std::string> env; // added to the supervisor's environment
+  RestartPolicy restart = RestartPolicy::kNever;
+  int max_restarts = 3;                   // restarts allowed before giving up
+  double restart_backoff_s = 0.1;         // first delay; doubles per consecutive restart
+  double restart_backoff_max_s = 5.0;
+  Readiness ready = Readiness::kStatus;   // status: the next component waits for this one's status
+  double ready_timeout_s = 10.0;
+  bool required = true;                   // its failure fails the run (exit code 1)
+  bool shutdown_on_exit = false;          // on_exit: shutdown — its end ends the run
+  bool common_args = true;                // pass --domain --namespace --name [--config] --log-level --dds-config
+};
+
+struct Pipeline {
+  std::filesystem::path file;
+  std::string name;                       // default: file stem
+  int domain_id = 0;
+  std::string ns = "heslam";
+  std::string dds_config;                 // "file://ABS" or "" (built-in loopback XML)
+  double stop_timeout_s = 5.0;            // SIGTERM -> SIGKILL
+  std::vector<ComponentSpec> components;  // start order
+};
+
+struct PipelineOverrides {
+  std::map<std::string, std::string> args;  // --arg key=value
+  std::optional<int> domain_id;
+  std::optional<std::string> ns;
+};
+
+// Loads and validates. Problems are collected, one line each ("FILE: ..."); the pipeline is only
+// usable when problems is empty. bin_dir is searched first for executables, then $PATH.
+struct LoadResult {
+  Pipeline pipeline;
+  std::vector<std::string> problems;
+};
+LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverrides& overrides,
+                         const std::filesystem::path& bin_dir);
+
+// Replaces every $(arg NAME); unknown names are reported in unknown.
+std::string substitute_args(const std::string& text, const std::map<std::string, std::string>& args,
+                            std::vector<std::string>& unknown);
+
+}  // namespace heslam::supervisor

@@ -1,0 +1,312 @@
+// The supervisor's run loop (single-threaded: every spawn happens on the main thread, which
+// PR_SET_PDEATHSIG in the children relies on).
+#include "runtime/supervisor/supervisor.hpp"
+
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <thread>
+
+#include "runtime/participant.hpp"
+#include "runtime/reader.hpp"
+#include "runtime/sequence.hpp"
+#include "runtime/shutdown.hpp"
+#include "runtime/stats.hpp"
+#include "runtime/status.hpp"
+#include "runtime/topics.hpp"
+
+namespace heslam::supervisor {
+namespace {
+
+using namespace std::chrono_literals;
+
+// Event loop granularity: bounds restart latency and status polling without measurable CPU.
+constexpr auto kPumpPeriod = 20ms;
+// A component that ran this long before dying is "stable again": its backoff starts over.
+constexpr auto kStableRun = 10s;
+// After SIGKILL the kernel reaps within milliseconds; this only bounds a pathological wait.
+constexpr auto kKillReapTimeout = 2s;
+
+struct StatusSeen {
+  int32_t pid = 0;
+  heslam_msg_ComponentState state = heslam_msg_STATE_CONFIGURING;
+  std::string message;
+};
+
+}  // namespace
+
+struct Supervisor::Dds {
+  Dds(const Pipeline& pipeline)
+      : participant(runtime::ParticipantOptions{pipeline.domain_id, pipeline.dds_config}),
+        topics(pipeline.ns),
+        status_reader(participant, topics.status()),
+        status(participant, topics, "supervisor", stats) {}
+  runtime::Participant participant;
+  runtime::Topics topics;
+  runtime::Reader<msg::ComponentStatus> status_reader;
+  runtime::Stats stats;
+  runtime::StatusPublisher status;
+  std::map<std::string, StatusSeen> seen;
+};
+
+Supervisor::Supervisor(Pipeline pipeline, SupervisorOptions options)
+    : pipeline_(std::move(pipeline)), options_(std::move(options)), log_("supervisor", options_.log_level) {
+  dds_ = std::make_unique<Dds>(pipeline_);
+  std::filesystem::create_directories(options_.log_dir);
+  for (const ComponentSpec& spec : pipeline_.components) {
+    auto managed = std::make_unique<Managed>();
+    managed->spec = spec;
+    name_width_ = std::max(name_width_, spec.name.size());
+    components_.push_back(std::move(managed));
+  }
+}
+
+Supervisor::~Supervisor() = default;
+
+std::vector<std::string> Supervisor::child_args(const Managed& component) const {
+  std::vector<std::string> args = component.spec.args;
+  if (component.spec.common_args) {
+    args.insert(args.end(), {"--domain", std::to_string(pipeline_.domain_id), "--namespace", pipeline_.ns, "--name",
+                             component.spec.name, "--log-level", std::string(runtime::to_string(options_.log_level))});
+    if (!component.spec.config.empty()) args.insert(args.end(), {"--config", component.spec.config.string()});
+    if (!pipeline_.dds_config.empty()) args.insert(args.end(), {"--dds-config", pipeline_.dds_config});
+  }
+  return args;
+}
+
+void Supervisor::start(Managed& component) {
+  if (!component.log_file.is_open()) {
+    component.log_file.open(options_.log_dir / (component.spec.name + ".log"), std::ios::app);
+  }
+  component.process =
+      ChildProcess::spawn(options_.self_executable, component.spec.executable, child_args(component), component.spec.env);
+  component.phase = Phase::kRunning;
+  component.started_at = Clock::now();
+  component.ready = component.spec.ready == Readiness::kStarted;
+  component.stopping = false;
+  log_.info("started ", component.spec.name, " (pid ", component.process.pid(), ")");
+}
+
+bool Supervisor::wait_ready(Managed& component) {
+  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(component.spec.ready_timeout_s));
+  while (!component.ready) {
+    if (runtime::shutdown_requested() || end_requested_) return false;
+    // Ended while starting: fine for a short-lived program, fatal if it failed and is required.
+    if (component.phase == Phase::kEnded) return !failed_;
+    if (Clock::now() >= deadline) {
+      log_.error(component.spec.name, ": no status within ", component.spec.ready_timeout_s,
+                 " s (a program that publishes no heslam status needs 'ready: started'; a heslam program built"
+                 " from other .idl files cannot talk to this one: rebuild both from the same tree)");
+      if (component.spec.required) failed_ = true;
+      return !component.spec.required;
+    }
+    pump(kPumpPeriod);
+  }
+  log_.info(component.spec.name, " is ready");
+  return true;
+}
+
+void Supervisor::forward_output(Managed& component) {
+  std::vector<std::string> lines;
+  component.process.read_lines(lines);
+  for (const std::string& line : lines) {
+    std::string prefix = component.spec.name;
+    prefix.resize(name_width_, ' ');
+    std::cout << prefix << " | " << line << '\n';
+    component.log_file << line << '\n';
+  }
+  if (!lines.empty()) {
+    std::cout.flush();
+    component.log_file.flush();
+  }
+}
+
+void Supervisor::read_status() {
+  for (auto& received : dds_->status_reader.take()) {
+    if (!received.info.valid_data) continue;
+    const msg::ComponentStatus& status = *received.sample;
+    StatusSeen& seen = dds_->seen[runtime::to_string(status.name)];
+    seen.pid = status.pid;
+    seen.state = status.state;
+    seen.message = runtime::to_string(status.message);
+  }
+  for (auto& component : components_) {
+    const auto it = dds_->seen.find(component->spec.name);
+    if (it == dds_->seen.end() || component->phase != Phase::kRunning) continue;
+    const StatusSeen& seen = it->second;
+    if (seen.pid != component->process.pid()) continue;  // an older instance's last words
+    if (!component->ready && seen.state == heslam_msg_STATE_RUNNING) component->ready = true;
+    if (seen.state == heslam_msg_STATE_FAILED && seen.message != component->last_reported_failure) {
+      component->last_reported_failure = seen.message;
+      log_.error(component->spec.name, " reports failure: ", seen.message);
+    }
+  }
+}
+
+void Supervisor::reap() {
+  for (;;) {
+    int wait_status = 0;
+    const pid_t pid = waitpid(-1, &wait_status, WNOHANG);
+    if (pid <= 0) return;
+    for (auto& component : components_) {
+      if (component->phase == Phase::kRunning && component->process.pid() == pid) on_exit(*component, wait_status);
+    }
+  }
+}
+
+void Supervisor::on_exit(Managed& component, int wait_status) {
+  forward_output(component);
+  // Anything the program left behind in its group goes with it.
+  component.process.signal_group(SIGKILL);
+  const bool success = WIFEXITED(wait_status) && WEXITSTATUS(wait_status) == 0;
+  const std::string how = describe_exit(wait_status);
+  const std::string& name = component.spec.name;
+  component.phase = Phase::kEnded;
+  component.ready = false;
+  if (component.stopping) {
+    log_.info(name, " stopped (", how, ")");
+    return;
+  }
+  const bool wants_restart = component.spec.restart == RestartPolicy::kAlways ||
+                             (component.spec.restart == RestartPolicy::kOnFailure && !success);
+  if (wants_restart && !end_requested_ && !runtime::shutdown_requested()) {
+    if (component.restarts >= component.spec.max_restarts) {
+      log_.error(name, " (pid ", component.process.pid(), ") ", how, "; giving up after ", component.restarts,
+                 " restarts");
+      if (component.spec.required) {
+        failed_ = true;
+        end_requested_ = true;
+      }
+      return;
+    }
+    if (Clock::now() - component.started_at >= kStableRun) component.consecutive_restarts = 0;
+    const double delay_s = std::min(component.spec.restart_backoff_max_s,
+                                    component.spec.restart_backoff_s * std::pow(2.0, component.consecutive_restarts));
+    component.restart_at =
+        Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(delay_s));
+    component.phase = Phase::kRestartPending;
+    ++component.restarts;
+    ++component.consecutive_restarts;
+    dds_->stats.count("restarts." + name);
+    log_.warn(name, " (pid ", component.process.pid(), ") ", how, "; restarting in ", delay_s, " s (restart ",
+              component.restarts, " of ", component.spec.max_restarts, ")");
+    return;
+  }
+  if (success) {
+    log_.info(name, " finished (", how, ")");
+  } else {
+    log_.error(name, " (pid ", component.process.pid(), ") ", how);
+    if (component.spec.required) failed_ = true;
+  }
+  if (component.spec.shutdown_on_exit || (!success && component.spec.required)) end_requested_ = true;
+}
+
+void Supervisor::pump(std::chrono::milliseconds timeout) {
+  std::vector<pollfd> fds;
+  std::vector<Managed*> owners;
+  for (auto& component : components_) {
+    if (component->process.output_fd() >= 0) {
+      fds.push_back(pollfd{component->process.output_fd(), POLLIN, 0});
+      owners.push_back(component.get());
+    }
+  }
+  if (fds.empty()) {
+    std::this_thread::sleep_for(timeout);
+  } else {
+    poll(fds.data(), fds.size(), static_cast<int>(timeout.count()));
+  }
+  for (std::size_t i = 0; i < fds.size(); ++i) {
+    if (fds[i].revents != 0) forward_output(*owners[i]);
+  }
+  reap();
+  read_status();
+  for (auto& component : components_) {
+    if (component->phase == Phase::kRestartPending && Clock::now() >= component->restart_at && !end_requested_ &&
+        !runtime::shutdown_requested()) {
+      try {
+        start(*component);
+        log_.warn("restarted ", component->spec.name, " (pid ", component->process.pid(), ")");
+        dds_->status.publish_now();
+      } catch (const std::exception& error) {
+        log_.error(error.what());
+        component->phase = Phase::kEnded;
+        if (component->spec.required) {
+          failed_ = true;
+          end_requested_ = true;
+        }
+      }
+    }
+  }
+}
+
+bool Supervisor::anything_alive() const {
+  return std::any_of(components_.begin(), components_.end(), [](const auto& component) {
+    return component->phase == Phase::kRunning || component->phase == Phase::kRestartPending;
+  });
+}
+
+void Supervisor::stop(Managed& component) {
+  if (component.phase == Phase::kRestartPending) component.phase = Phase::kEnded;
+  if (component.phase != Phase::kRunning) return;
+  component.stopping = true;
+  component.process.signal_group(SIGTERM);
+  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(pipeline_.stop_timeout_s));
+  while (component.phase == Phase::kRunning && Clock::now() < deadline) pump(kPumpPeriod);
+  if (component.phase == Phase::kRunning) {
+    log_.warn(component.spec.name, " did not stop within ", pipeline_.stop_timeout_s, " s; sending SIGKILL");
+    component.process.signal_group(SIGKILL);
+    const auto kill_deadline = Clock::now() + kKillReapTimeout;
+    while (component.phase == Phase::kRunning && Clock::now() < kill_deadline) pump(kPumpPeriod);
+  }
+}
+
+void Supervisor::stop_all() {
+  for (auto it = components_.rbegin(); it != components_.rend(); ++it) stop(**it);
+  for (auto& component : components_) {
+    forward_output(*component);
+    component->process.close_output();
+  }
+}
+
+int Supervisor::run() {
+  log_.info("pipeline '", pipeline_.name, "' on domain ", pipeline_.domain_id, ", namespace '", pipeline_.ns,
+            "'; logs in ", options_.log_dir.string());
+  dds_->status.set_state(runtime::ComponentState::kRunning);
+  bool started_all = true;
+  for (auto& component : components_) {
+    try {
+      start(*component);
+    } catch (const std::exception& error) {
+      log_.error(error.what());
+      failed_ = failed_ || component->spec.required;
+      if (component->spec.required) {
+        started_all = false;
+        break;
+      }
+      continue;
+    }
+    if (!wait_ready(*component)) {
+      started_all = false;
+      break;
+    }
+  }
+  if (started_all) {
+    while (!runtime::shutdown_requested() && !end_requested_ && anything_alive()) pump(kPumpPeriod);
+  }
+  if (runtime::shutdown_requested()) {
+    log_.info("shutdown requested (signal ", runtime::shutdown_signal(), "); stopping in reverse order");
+  }
+  dds_->status.set_state(runtime::ComponentState::kShuttingDown);
+  stop_all();
+  log_.info(failed_ ? "pipeline failed" : "pipeline finished");
+  return failed_ ? 1 : 0;
+}
+
+}  // namespace heslam::supervisor

@@ -1,0 +1,77 @@
+// Supervisor: runs a Pipeline — start in order with readiness, forward and log output, restart per
+// policy with backoff, stop in reverse order (SIGTERM, then SIGKILL), exit code from the outcome.
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "runtime/log.hpp"
+#include "runtime/supervisor/child_process.hpp"
+#include "runtime/supervisor/pipeline.hpp"
+
+namespace heslam::supervisor {
+
+struct SupervisorOptions {
+  std::filesystem::path self_executable;  // the exec trampoline (this binary)
+  std::filesystem::path log_dir;          // per-component logs go here
+  runtime::LogLevel log_level = runtime::LogLevel::kInfo;
+};
+
+class Supervisor {
+ public:
+  Supervisor(Pipeline pipeline, SupervisorOptions options);
+  ~Supervisor();
+  Supervisor(const Supervisor&) = delete;
+  Supervisor& operator=(const Supervisor&) = delete;
+
+  // Runs until the pipeline ends or shutdown is requested; 0 = success, 1 = a required component failed.
+  int run();
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  enum class Phase { kIdle, kRunning, kRestartPending, kEnded };
+
+  struct Managed {
+    ComponentSpec spec;
+    Phase phase = Phase::kIdle;
+    ChildProcess process;
+    std::ofstream log_file;
+    Clock::time_point started_at{};
+    Clock::time_point restart_at{};
+    int restarts = 0;
+    int consecutive_restarts = 0;
+    bool ready = false;
+    bool stopping = false;  // we sent SIGTERM: the exit is expected
+    std::string last_reported_failure;
+  };
+
+  struct Dds;  // participant, status reader and writer (pimpl: keeps DDS out of this header)
+
+  void start(Managed& component);
+  bool wait_ready(Managed& component);
+  void pump(std::chrono::milliseconds timeout);  // output, exits, status, due restarts
+  void forward_output(Managed& component);
+  void reap();
+  void on_exit(Managed& component, int wait_status);
+  void read_status();
+  void stop_all();
+  void stop(Managed& component);
+  std::vector<std::string> child_args(const Managed& component) const;
+  bool anything_alive() const;
+
+  Pipeline pipeline_;
+  SupervisorOptions options_;
+  runtime::Logger log_;
+  std::unique_ptr<Dds> dds_;
+  std::vector<std::unique_ptr<Managed>> components_;
+  std::size_t name_width_ = 0;
+  bool failed_ = false;
+  bool end_requested_ = false;
+};
+
+}  // namespace heslam::supervisor

@@ -1,0 +1,41 @@
+// The topic table's namespace check and the list of all topics.
+#include "runtime/topics.hpp"
+
+#include <array>
+#include <stdexcept>
+
+namespace heslam::runtime {
+namespace {
+
+bool valid_namespace_char(char c) {
+  return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-' ||
+         c == '/';
+}
+
+constexpr std::array kAllTopics{
+    TopicEntry{topic_names::kStereo, "StereoFrame", QosRole::kImages},
+    TopicEntry{topic_names::kCalibration, "StereoCalibration", QosRole::kCalibration},
+    TopicEntry{topic_names::kOdometry, "Odometry", QosRole::kOdometry},
+    TopicEntry{topic_names::kKeyframes, "Keyframe", QosRole::kKeyframes},
+    TopicEntry{topic_names::kKeyframeStates, "KeyframeState", QosRole::kMapState},
+    TopicEntry{topic_names::kMapPoints, "MapPointState", QosRole::kMapState},
+    TopicEntry{topic_names::kLoopCorrections, "LoopCorrection", QosRole::kCorrections},
+    TopicEntry{topic_names::kFrameDone, "FrameDone", QosRole::kLockstep},
+    TopicEntry{topic_names::kKeyframeDone, "KeyframeDone", QosRole::kLockstep},
+    TopicEntry{topic_names::kStatus, "ComponentStatus", QosRole::kStatus},
+};
+
+}  // namespace
+
+Topics::Topics(std::string_view ns) : ns_(ns) {
+  bool valid = !ns_.empty() && ns_.front() != '/' && ns_.back() != '/' && !(ns_.front() >= '0' && ns_.front() <= '9');
+  for (char c : ns_) valid = valid && valid_namespace_char(c);
+  if (!valid) {
+    throw std::runtime_error("namespace '" + ns_ +
+                             "': expected letters, digits, '_', '-' or inner '/', not starting with a digit");
+  }
+}
+
+std::span<const TopicEntry> all_topics() { return kAllTopics; }
+
+}  // namespace heslam::runtime

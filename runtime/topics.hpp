@@ -1,0 +1,77 @@
+// THE table of topics: name (under a namespace, default "heslam"), type and QoS role of every topic.
+// Components, tools and tests take topic specs from here, never from string literals.
+#pragma once
+
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "runtime/messages.hpp"
+#include "runtime/qos.hpp"
+
+namespace heslam::runtime {
+
+inline constexpr std::string_view kDefaultNamespace = "heslam";
+
+// A topic's full DDS name, its message type T and the QoS role its writers and readers use.
+template <Message T>
+struct TopicSpec {
+  std::string name;
+  QosRole role;
+};
+
+// Relative names (docs/topics.md documents writer and readers of each).
+namespace topic_names {
+inline constexpr std::string_view kStereo = "camera/stereo";
+inline constexpr std::string_view kCalibration = "camera/calibration";
+inline constexpr std::string_view kOdometry = "odometry";
+inline constexpr std::string_view kKeyframes = "map/keyframes";
+inline constexpr std::string_view kKeyframeStates = "map/keyframe_states";
+inline constexpr std::string_view kMapPoints = "map/points";
+inline constexpr std::string_view kLoopCorrections = "loop/corrections";
+inline constexpr std::string_view kFrameDone = "lockstep/frame_done";
+inline constexpr std::string_view kKeyframeDone = "lockstep/keyframe_done";
+inline constexpr std::string_view kStatus = "system/status";
+}  // namespace topic_names
+
+// All topics under one namespace: Topics("robot1").stereo().name == "robot1/camera/stereo".
+class Topics {
+ public:
+  // Throws std::runtime_error for a namespace that is empty or not [A-Za-z0-9_/-] (DDS name rules).
+  explicit Topics(std::string_view ns = kDefaultNamespace);
+
+  const std::string& ns() const { return ns_; }
+  std::string full_name(std::string_view relative) const { return ns_ + "/" + std::string(relative); }
+
+  TopicSpec<msg::StereoFrame> stereo() const { return {full_name(topic_names::kStereo), QosRole::kImages}; }
+  TopicSpec<msg::StereoCalibration> calibration() const {
+    return {full_name(topic_names::kCalibration), QosRole::kCalibration};
+  }
+  TopicSpec<msg::Odometry> odometry() const { return {full_name(topic_names::kOdometry), QosRole::kOdometry}; }
+  TopicSpec<msg::Keyframe> keyframes() const { return {full_name(topic_names::kKeyframes), QosRole::kKeyframes}; }
+  TopicSpec<msg::KeyframeState> keyframe_states() const {
+    return {full_name(topic_names::kKeyframeStates), QosRole::kMapState};
+  }
+  TopicSpec<msg::MapPointState> map_points() const { return {full_name(topic_names::kMapPoints), QosRole::kMapState}; }
+  TopicSpec<msg::LoopCorrection> loop_corrections() const {
+    return {full_name(topic_names::kLoopCorrections), QosRole::kCorrections};
+  }
+  TopicSpec<msg::FrameDone> frame_done() const { return {full_name(topic_names::kFrameDone), QosRole::kLockstep}; }
+  TopicSpec<msg::KeyframeDone> keyframe_done() const {
+    return {full_name(topic_names::kKeyframeDone), QosRole::kLockstep};
+  }
+  TopicSpec<msg::ComponentStatus> status() const { return {full_name(topic_names::kStatus), QosRole::kStatus}; }
+
+ private:
+  std::string ns_;
+};
+
+// Every topic of the table, for tools that iterate (spy list, docs): relative name, type name, role.
+struct TopicEntry {
+  std::string_view relative_name;
+  std::string_view type_name;
+  QosRole role;
+};
+std::span<const TopicEntry> all_topics();
+
+}  // namespace heslam::runtime
