@@ -1,0 +1,288 @@
+// Loaders for EuRoC sensor.yaml pairs, KITTI calib.txt and ORB-SLAM2 stereo settings.
+#include "components/core/camera/stereo_calibration.hpp"
+
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <opencv2/core.hpp>
+
+namespace heslam {
+namespace {
+
+// EuRoC sensor.yaml files are plain YAML without the "%YAML:1.0" line cv::FileStorage insists on.
+constexpr const char* kOpenCvYamlHeader = "%YAML:1.0\n";
+
+[[noreturn]] void fail(const std::filesystem::path& file, const std::string& field, const std::string& what) {
+  throw std::runtime_error(file.string() + ": " + field + ": " + what);
+}
+
+std::string read_text(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error(file.string() + ": cannot open file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+cv::FileStorage open_yaml(const std::filesystem::path& file, bool add_header_if_missing) {
+  std::string text = read_text(file);
+  if (add_header_if_missing && text.rfind("%YAML", 0) != 0) text = kOpenCvYamlHeader + text;
+  try {
+    cv::FileStorage storage(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+    if (!storage.isOpened()) throw std::runtime_error(file.string() + ": not a readable YAML file");
+    return storage;
+  } catch (const cv::Exception& e) {
+    throw std::runtime_error(file.string() + ": not valid YAML (" + e.err + ")");
+  }
+}
+
+double read_number(const cv::FileNode& node, const std::filesystem::path& file, const std::string& field) {
+  if (node.empty() || node.isNone()) fail(file, field, "missing (expected a number)");
+  if (!node.isReal() && !node.isInt()) fail(file, field, "expected a number");
+  return static_cast<double>(node);
+}
+
+double read_positive(const cv::FileNode& node, const std::filesystem::path& file, const std::string& field) {
+  const double value = read_number(node, file, field);
+  if (!(value > 0.0)) fail(file, field, "expected a positive number, got " + std::to_string(value));
+  return value;
+}
+
+// A YAML sequence of numbers whose length is one of `allowed_sizes`.
+std::vector<double> read_sequence(const cv::FileNode& node, const std::filesystem::path& file, const std::string& field,
+                                  std::initializer_list<std::size_t> allowed_sizes) {
+  std::string expected;
+  for (std::size_t n : allowed_sizes) expected += (expected.empty() ? "" : " or ") + std::to_string(n);
+  if (node.empty() || node.isNone()) fail(file, field, "missing (expected a list of " + expected + " numbers)");
+  if (!node.isSeq()) fail(file, field, "expected a list of " + expected + " numbers");
+  std::vector<double> values;
+  for (const cv::FileNode& item : node) {
+    if (!item.isReal() && !item.isInt()) fail(file, field, "expected only numbers in the list");
+    values.push_back(static_cast<double>(item));
+  }
+  bool size_ok = false;
+  for (std::size_t n : allowed_sizes) size_ok = size_ok || values.size() == n;
+  if (!size_ok) fail(file, field, "expected " + expected + " numbers, got " + std::to_string(values.size()));
+  return values;
+}
+
+// An OpenCV "!!opencv-matrix" of the given size, as doubles.
+cv::Mat read_matrix(const cv::FileNode& node, const std::filesystem::path& file, const std::string& field, int rows,
+                    int cols) {
+  if (node.empty() || node.isNone()) fail(file, field, "missing (expected a " + std::to_string(rows) + "x" +
+                                                           std::to_string(cols) + " !!opencv-matrix)");
+  cv::Mat m;
+  try {
+    node >> m;
+  } catch (const cv::Exception&) {
+    fail(file, field, "expected an !!opencv-matrix");
+  }
+  if (m.empty() || m.total() != static_cast<std::size_t>(rows * cols)) {
+    fail(file, field, "expected a " + std::to_string(rows) + "x" + std::to_string(cols) + " matrix");
+  }
+  cv::Mat out;
+  m.reshape(1, rows).convertTo(out, CV_64F);
+  return out;
+}
+
+void check_rotation(const Eigen::Matrix3d& R, const std::filesystem::path& file, const std::string& field) {
+  constexpr double kRotationTolerance = 1e-3;  // calibration files print ~9 digits; 1e-3 catches typos only
+  if ((R * R.transpose() - Eigen::Matrix3d::Identity()).norm() > kRotationTolerance || R.determinant() < 0.0) {
+    fail(file, field, "expected a rotation matrix (orthonormal, determinant +1)");
+  }
+}
+
+CameraModel read_euroc_camera(const std::filesystem::path& file, double* rate_hz) {
+  cv::FileStorage fs = open_yaml(file, /*add_header_if_missing=*/true);
+  CameraModel camera;
+
+  const std::string model = static_cast<std::string>(fs["camera_model"]);
+  if (model != "pinhole") fail(file, "camera_model", "expected 'pinhole', got '" + model + "'");
+
+  const std::vector<double> intrinsics = read_sequence(fs["intrinsics"], file, "intrinsics", {4});
+  camera.fx_px = intrinsics[0];
+  camera.fy_px = intrinsics[1];
+  camera.cx_px = intrinsics[2];
+  camera.cy_px = intrinsics[3];
+  if (!(camera.fx_px > 0.0 && camera.fy_px > 0.0)) fail(file, "intrinsics", "expected positive fu, fv");
+
+  const std::vector<double> resolution = read_sequence(fs["resolution"], file, "resolution", {2});
+  camera.width_px = static_cast<int>(resolution[0]);
+  camera.height_px = static_cast<int>(resolution[1]);
+  if (camera.width_px <= 0 || camera.height_px <= 0) fail(file, "resolution", "expected positive width, height");
+
+  const std::string distortion = static_cast<std::string>(fs["distortion_model"]);
+  if (distortion == "radial-tangential" || distortion == "radtan") {
+    camera.distortion_model = DistortionModel::kRadialTangential;
+    camera.distortion = read_sequence(fs["distortion_coefficients"], file, "distortion_coefficients", {4, 5});
+  } else if (distortion == "none" || distortion.empty()) {
+    camera.distortion_model = DistortionModel::kNone;
+  } else {
+    fail(file, "distortion_model", "expected 'radial-tangential' or 'none', got '" + distortion + "'");
+  }
+
+  const cv::FileNode t_bs = fs["T_BS"];
+  if (t_bs.empty() || t_bs.isNone()) fail(file, "T_BS", "missing (expected {rows: 4, cols: 4, data: [16 numbers]})");
+  const std::vector<double> data = read_sequence(t_bs["data"], file, "T_BS.data", {16});
+  Eigen::Matrix4d T = Eigen::Map<const Eigen::Matrix<double, 4, 4, Eigen::RowMajor>>(data.data());
+  check_rotation(T.topLeftCorner<3, 3>(), file, "T_BS");
+  camera.T_BS.matrix() = T;
+  camera.T_BS.makeAffine();
+
+  if (!fs["rate_hz"].empty()) *rate_hz = read_positive(fs["rate_hz"], file, "rate_hz");
+  return camera;
+}
+
+}  // namespace
+
+StereoCalibration load_euroc_calibration(const std::filesystem::path& mav0_dir) {
+  const std::filesystem::path left_file = mav0_dir / "cam0" / "sensor.yaml";
+  const std::filesystem::path right_file = mav0_dir / "cam1" / "sensor.yaml";
+  StereoCalibration calibration;
+  double left_rate_hz = 0.0;
+  double right_rate_hz = 0.0;
+  calibration.left = read_euroc_camera(left_file, &left_rate_hz);
+  calibration.right = read_euroc_camera(right_file, &right_rate_hz);
+  if (calibration.left.width_px != calibration.right.width_px ||
+      calibration.left.height_px != calibration.right.height_px) {
+    fail(right_file, "resolution", "expected the same resolution as " + left_file.string());
+  }
+  calibration.rate_hz = left_rate_hz;
+  calibration.source = left_file.string() + ", " + right_file.string();
+  return calibration;
+}
+
+StereoCalibration load_kitti_calibration(const std::filesystem::path& calib_txt, int width_px, int height_px) {
+  if (width_px <= 0 || height_px <= 0) fail(calib_txt, "image size", "expected a positive width and height");
+  std::ifstream in(calib_txt);
+  if (!in) throw std::runtime_error(calib_txt.string() + ": cannot open file");
+  std::optional<std::vector<double>> p0;
+  std::optional<std::vector<double>> p1;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string key;
+    fields >> key;
+    if (key != "P0:" && key != "P1:") continue;
+    std::vector<double> values;
+    double v = 0.0;
+    while (fields >> v) values.push_back(v);
+    if (!fields.eof() || values.size() != 12) {
+      fail(calib_txt, key.substr(0, 2), "expected 12 numbers (a 3x4 projection matrix)");
+    }
+    (key == "P0:" ? p0 : p1) = values;
+  }
+  if (!p0) fail(calib_txt, "P0", "missing (expected a line 'P0: 12 numbers')");
+  if (!p1) fail(calib_txt, "P1", "missing (expected a line 'P1: 12 numbers')");
+
+  StereoCalibration calibration;
+  calibration.input_rectified = true;
+  CameraModel& left = calibration.left;
+  left.width_px = width_px;
+  left.height_px = height_px;
+  left.fx_px = (*p0)[0];
+  left.cx_px = (*p0)[2];
+  left.fy_px = (*p0)[5];
+  left.cy_px = (*p0)[6];
+  if (!(left.fx_px > 0.0 && left.fy_px > 0.0)) fail(calib_txt, "P0", "expected positive focal lengths");
+  if ((*p1)[0] != left.fx_px || (*p1)[2] != left.cx_px || (*p1)[5] != left.fy_px || (*p1)[6] != left.cy_px) {
+    fail(calib_txt, "P1", "expected the same intrinsics as P0 (rectified pair)");
+  }
+  // P1 = K [I | -b e_x] relative to the left camera: P1[3] - P0[3] = -fx * baseline.
+  const double baseline_m = -((*p1)[3] - (*p0)[3]) / left.fx_px;
+  if (!(baseline_m > 0.0)) fail(calib_txt, "P1", "expected P1[0][3] < 0 (right camera to the right of the left)");
+  calibration.right = left;
+  calibration.right.T_BS = Pose3::Identity();
+  calibration.right.T_BS.translation() = Eigen::Vector3d(baseline_m, 0.0, 0.0);
+  calibration.source = calib_txt.string();
+  return calibration;
+}
+
+StereoCalibration load_orbslam_settings(const std::filesystem::path& settings_yaml) {
+  const std::filesystem::path& file = settings_yaml;
+  cv::FileStorage fs = open_yaml(file, /*add_header_if_missing=*/true);
+  StereoCalibration calibration;
+  calibration.source = file.string();
+  if (!fs["Camera.fps"].empty()) calibration.rate_hz = read_positive(fs["Camera.fps"], file, "Camera.fps");
+
+  const double fx = read_positive(fs["Camera.fx"], file, "Camera.fx");
+  const double fy = read_positive(fs["Camera.fy"], file, "Camera.fy");
+  const double cx = read_number(fs["Camera.cx"], file, "Camera.cx");
+  const double cy = read_number(fs["Camera.cy"], file, "Camera.cy");
+  const double bf = read_positive(fs["Camera.bf"], file, "Camera.bf");
+  const int width_px = static_cast<int>(read_positive(fs["Camera.width"], file, "Camera.width"));
+  const int height_px = static_cast<int>(read_positive(fs["Camera.height"], file, "Camera.height"));
+
+  if (fs["LEFT.K"].empty()) {
+    // Already rectified input (KITTI style): Camera.* is the rectified model, no distortion allowed.
+    for (const char* key : {"Camera.k1", "Camera.k2", "Camera.p1", "Camera.p2", "Camera.k3"}) {
+      if (!fs[key].empty() && read_number(fs[key], file, key) != 0.0) {
+        fail(file, key, "expected 0 for rectified stereo input (give LEFT.K/D/R/P, RIGHT.K/D/R/P for raw images)");
+      }
+    }
+    calibration.input_rectified = true;
+    CameraModel& left = calibration.left;
+    left.width_px = width_px;
+    left.height_px = height_px;
+    left.fx_px = fx;
+    left.fy_px = fy;
+    left.cx_px = cx;
+    left.cy_px = cy;
+    calibration.right = left;
+    calibration.right.T_BS.translation() = Eigen::Vector3d(bf / fx, 0.0, 0.0);
+    return calibration;
+  }
+
+  ExplicitRectification rect;
+  auto read_camera = [&](const std::string& side, Eigen::Matrix3d* R, Eigen::Matrix<double, 3, 4>* P) {
+    CameraModel camera;
+    const cv::Mat K = read_matrix(fs[side + ".K"], file, side + ".K", 3, 3);
+    camera.fx_px = K.at<double>(0, 0);
+    camera.fy_px = K.at<double>(1, 1);
+    camera.cx_px = K.at<double>(0, 2);
+    camera.cy_px = K.at<double>(1, 2);
+    if (!(camera.fx_px > 0.0 && camera.fy_px > 0.0)) fail(file, side + ".K", "expected positive focal lengths");
+    const cv::FileNode d_node = fs[side + ".D"];
+    if (d_node.empty()) fail(file, side + ".D", "missing (expected a 1x4 or 1x5 !!opencv-matrix k1 k2 p1 p2 [k3])");
+    cv::Mat D;
+    d_node >> D;
+    if (D.total() != 4 && D.total() != 5) fail(file, side + ".D", "expected 4 or 5 coefficients k1 k2 p1 p2 [k3]");
+    D = D.reshape(1, 1);
+    D.convertTo(D, CV_64F);
+    camera.distortion.assign(D.begin<double>(), D.end<double>());
+    camera.distortion_model = DistortionModel::kRadialTangential;
+    const cv::Mat Rm = read_matrix(fs[side + ".R"], file, side + ".R", 3, 3);
+    const cv::Mat Pm = read_matrix(fs[side + ".P"], file, side + ".P", 3, 4);
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) (*R)(r, c) = Rm.at<double>(r, c);
+      for (int c = 0; c < 4; ++c) (*P)(r, c) = Pm.at<double>(r, c);
+    }
+    check_rotation(*R, file, side + ".R");
+    camera.width_px = fs[side + ".width"].empty() ? width_px
+                                                  : static_cast<int>(read_positive(fs[side + ".width"], file, side + ".width"));
+    camera.height_px = fs[side + ".height"].empty()
+                           ? height_px
+                           : static_cast<int>(read_positive(fs[side + ".height"], file, side + ".height"));
+    return camera;
+  };
+  calibration.left = read_camera("LEFT", &rect.R_left, &rect.P_left);
+  calibration.right = read_camera("RIGHT", &rect.R_right, &rect.P_right);
+
+  if (!(rect.P_left(0, 0) > 0.0)) fail(file, "LEFT.P", "expected a positive focal length P[0][0]");
+  const double baseline_m = -rect.P_right(0, 3) / rect.P_right(0, 0);
+  if (!(baseline_m > 0.0)) fail(file, "RIGHT.P", "expected P[0][3] = -fx * baseline < 0");
+  constexpr double kBfTolerance = 1e-3;  // Camera.bf and RIGHT.P are printed from the same number
+  if (std::abs(baseline_m * rect.P_left(0, 0) - bf) > kBfTolerance * bf) {
+    fail(file, "Camera.bf", "expected -RIGHT.P[0][3] = " + std::to_string(-rect.P_right(0, 3)));
+  }
+  // Rectified frames: p_rect_l = R_left p_l, p_rect_r = R_right p_r, p_rect_r = p_rect_l - b e_x.
+  Pose3 T_rl = Pose3::Identity();
+  T_rl.linear() = rect.R_right.transpose() * rect.R_left;
+  T_rl.translation() = -rect.R_right.transpose() * Eigen::Vector3d(baseline_m, 0.0, 0.0);
+  calibration.right.T_BS = T_rl.inverse();
+  calibration.explicit_rectification = rect;
+  return calibration;
+}
+
+}  // namespace heslam

@@ -1,0 +1,66 @@
+// Raw (unrectified) stereo calibration and its loaders for the formats users already have:
+// EuRoC ASL sensor.yaml pairs, KITTI odometry calib.txt, and ORB-SLAM2 stereo settings files.
+//
+// Every loader throws std::runtime_error whose what() is one line naming the file and the field.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "components/core/geometry/pose.hpp"
+
+namespace heslam {
+
+enum class DistortionModel { kNone, kRadialTangential };  // radtan: k1 k2 p1 p2 [k3]
+
+// One raw camera of the rig.
+struct CameraModel {
+  int width_px = 0;
+  int height_px = 0;
+  double fx_px = 0;
+  double fy_px = 0;
+  double cx_px = 0;
+  double cy_px = 0;
+  DistortionModel distortion_model = DistortionModel::kNone;
+  std::vector<double> distortion;  // k1 k2 p1 p2 [k3]
+  Pose3 T_BS = Pose3::Identity();  // sensor (this camera) -> body
+};
+
+// Rectifying rotations and projections given explicitly (ORB-SLAM2 settings LEFT.R/P, RIGHT.R/P).
+struct ExplicitRectification {
+  Eigen::Matrix3d R_left = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d R_right = Eigen::Matrix3d::Identity();
+  Eigen::Matrix<double, 3, 4> P_left = Eigen::Matrix<double, 3, 4>::Zero();
+  Eigen::Matrix<double, 3, 4> P_right = Eigen::Matrix<double, 3, 4>::Zero();
+};
+
+struct StereoCalibration {
+  CameraModel left;
+  CameraModel right;
+  // True for KITTI calib.txt and ORB-SLAM2 settings without LEFT.*: the images are already rectified
+  // and `left` holds the rectified intrinsics, `right.T_BS` the baseline along +x.
+  bool input_rectified = false;
+  std::optional<ExplicitRectification> explicit_rectification;
+  double rate_hz = 0.0;  // 0 = unknown
+  std::string source;    // file(s) it was read from
+
+  // Left camera -> right camera: p_right = T_rl() * p_left.
+  Pose3 T_rl() const { return right.T_BS.inverse() * left.T_BS; }
+};
+
+// EuRoC ASL layout: reads mav0_dir/cam0/sensor.yaml (left) and mav0_dir/cam1/sensor.yaml (right).
+StereoCalibration load_euroc_calibration(const std::filesystem::path& mav0_dir);
+
+// KITTI odometry calib.txt: rectified projections P0 (left) and P1 (right); the image size is not in
+// the file, so the caller passes it (1241x376 for sequences 00-02, 1226x370 for 04-12).
+StereoCalibration load_kitti_calibration(const std::filesystem::path& calib_txt, int width_px, int height_px);
+
+// ORB-SLAM2 stereo settings: Camera.fx/fy/cx/cy/width/height/bf (+ Camera.fps), and optionally
+// LEFT.K/D/R/P, RIGHT.K/D/R/P (+ LEFT.width/height) for raw images that must be rectified.
+StereoCalibration load_orbslam_settings(const std::filesystem::path& settings_yaml);
+
+}  // namespace heslam

@@ -1,0 +1,119 @@
+// Stereo rectification: the rectified model and remap tables from a StereoCalibration.
+#include "components/core/camera/stereo_rectifier.hpp"
+
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace heslam {
+namespace {
+
+// alpha 0: the rectified image holds only valid pixels (no black borders), as ORB-SLAM2's EuRoC.yaml.
+constexpr double kRectifyAlpha = 0.0;
+
+cv::Mat camera_matrix(const CameraModel& c) {
+  return (cv::Mat_<double>(3, 3) << c.fx_px, 0.0, c.cx_px, 0.0, c.fy_px, c.cy_px, 0.0, 0.0, 1.0);
+}
+
+cv::Mat distortion_vector(const CameraModel& c) {
+  if (c.distortion_model == DistortionModel::kNone) return cv::Mat();
+  return cv::Mat(c.distortion, /*copyData=*/true).reshape(1, 1);
+}
+
+template <int R, int C>
+cv::Mat to_cv(const Eigen::Matrix<double, R, C>& m) {
+  cv::Mat out(R, C, CV_64F);
+  for (int r = 0; r < R; ++r)
+    for (int c = 0; c < C; ++c) out.at<double>(r, c) = m(r, c);
+  return out;
+}
+
+Eigen::Matrix3d to_eigen3(const cv::Mat& m) {
+  Eigen::Matrix3d out;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) out(r, c) = m.at<double>(r, c);
+  return out;
+}
+
+void check_image(const cv::Mat& image, cv::Size expected, const char* which) {
+  if (image.type() != CV_8UC1 || image.size() != expected) {
+    throw std::runtime_error(std::string("StereoRectifier: ") + which + " image is " + std::to_string(image.cols) +
+                             "x" + std::to_string(image.rows) + " type " + std::to_string(image.type()) +
+                             ", expected " + std::to_string(expected.width) + "x" + std::to_string(expected.height) +
+                             " 8-bit grey");
+  }
+}
+
+}  // namespace
+
+StereoRectifier::StereoRectifier(const StereoCalibration& calibration) {
+  const CameraModel& left = calibration.left;
+  const CameraModel& right = calibration.right;
+  if (left.width_px <= 0 || left.height_px <= 0 || !(left.fx_px > 0.0) || !(left.fy_px > 0.0)) {
+    throw std::runtime_error(calibration.source + ": left camera: expected positive size and focal lengths");
+  }
+  raw_size_ = cv::Size(left.width_px, left.height_px);
+  camera_.width_px = left.width_px;
+  camera_.height_px = left.height_px;
+
+  if (calibration.input_rectified) {
+    const Eigen::Vector3d t_rl = calibration.T_rl().translation();
+    camera_.fx_px = left.fx_px;
+    camera_.fy_px = left.fy_px;
+    camera_.cx_px = left.cx_px;
+    camera_.cy_px = left.cy_px;
+    camera_.baseline_m = -t_rl.x();
+    T_B_rect_ = left.T_BS;
+    passthrough_ = true;
+  } else {
+    cv::Mat R1, R2, P1, P2;
+    if (calibration.explicit_rectification) {
+      const ExplicitRectification& e = *calibration.explicit_rectification;
+      R1 = to_cv(e.R_left);
+      R2 = to_cv(e.R_right);
+      P1 = to_cv(e.P_left);
+      P2 = to_cv(e.P_right);
+    } else {
+      const Pose3 T_rl = calibration.T_rl();
+      const cv::Mat R = to_cv(Eigen::Matrix3d(T_rl.linear()));
+      const cv::Mat T = to_cv(Eigen::Matrix<double, 3, 1>(T_rl.translation()));
+      cv::Mat Q;
+      cv::stereoRectify(camera_matrix(left), distortion_vector(left), camera_matrix(right), distortion_vector(right),
+                        raw_size_, R, T, R1, R2, P1, P2, Q, cv::CALIB_ZERO_DISPARITY, kRectifyAlpha, raw_size_);
+    }
+    camera_.fx_px = P1.at<double>(0, 0);
+    camera_.fy_px = P1.at<double>(1, 1);
+    camera_.cx_px = P1.at<double>(0, 2);
+    camera_.cy_px = P1.at<double>(1, 2);
+    camera_.baseline_m = -P2.at<double>(0, 3) / P2.at<double>(0, 0);
+    // p_rect = R1 p_cam0, so rect -> body is T_BS(cam0) * R1^T.
+    Pose3 T_cam0_rect = Pose3::Identity();
+    T_cam0_rect.linear() = to_eigen3(R1).transpose();
+    T_B_rect_ = left.T_BS * T_cam0_rect;
+    cv::initUndistortRectifyMap(camera_matrix(left), distortion_vector(left), R1, P1.colRange(0, 3), raw_size_,
+                                CV_16SC2, left_map_xy_, left_map_frac_);
+    cv::initUndistortRectifyMap(camera_matrix(right), distortion_vector(right), R2, P2.colRange(0, 3),
+                                cv::Size(right.width_px, right.height_px), CV_16SC2, right_map_xy_, right_map_frac_);
+  }
+  if (!(camera_.baseline_m > 0.0)) {
+    throw std::runtime_error(calibration.source +
+                             ": right camera: expected it to the right of the left camera (positive baseline)");
+  }
+}
+
+void StereoRectifier::rectify(const cv::Mat& left_raw, const cv::Mat& right_raw, cv::Mat& left_rect,
+                              cv::Mat& right_rect) const {
+  check_image(left_raw, raw_size_, "left");
+  check_image(right_raw, raw_size_, "right");
+  if (passthrough_) {
+    left_rect = left_raw;
+    right_rect = right_raw;
+    return;
+  }
+  cv::remap(left_raw, left_rect, left_map_xy_, left_map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  cv::remap(right_raw, right_rect, right_map_xy_, right_map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+}
+
+}  // namespace heslam

@@ -1,0 +1,270 @@
+// ORB extraction: pyramid, gridded FAST with fallback threshold, quadtree distribution, intensity-
+// centroid orientation and rotated BRIEF.
+#include "components/core/feature/orb_extractor.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "components/core/feature/orb_pattern.hpp"
+#include "components/core/feature/quadtree_distribution.hpp"
+#include "components/core/image/yaml_option.hpp"
+
+namespace heslam {
+namespace {
+
+// Radius of the intensity-centroid patch (ORB's 31x31 patch).
+constexpr int kOrientationRadiusPx = 15;
+// Keypoints are detected this far from the level edge (ORB-SLAM2: EDGE_THRESHOLD - 3): the
+// orientation patch (radius 15) then lies inside the level image.
+constexpr int kDetectionMarginPx = kOrbBorderPx - 3;
+// FAST's Bresenham circle has radius 3: cv::FAST does not report corners closer than this to the edge
+// of the image it is given.
+constexpr int kFastRadiusPx = 3;
+// Descriptor smoothing (ORB-SLAM2): 7x7 Gaussian, sigma 2, against BRIEF's noise sensitivity.
+constexpr int kBlurSizePx = 7;
+constexpr double kBlurSigmaPx = 2.0;
+
+static_assert(kOrbPatternRadiusPx * 1.4143 < kOrbBorderPx, "rotated pattern must stay inside the border");
+
+}  // namespace
+
+OrbOptions OrbOptions::from_yaml(const cv::FileNode& root, const std::string& source) {
+  OrbOptions o;
+  yaml_option::read(root, "ORBextractor.nFeatures", source, o.features);
+  yaml_option::read(root, "ORBextractor.scaleFactor", source, o.scale_factor);
+  yaml_option::read(root, "ORBextractor.nLevels", source, o.levels);
+  yaml_option::read(root, "ORBextractor.iniThFAST", source, o.fast_threshold_initial);
+  yaml_option::read(root, "ORBextractor.minThFAST", source, o.fast_threshold_min);
+  yaml_option::read(root, "ORBextractor.cellSize", source, o.cell_size_px);
+  yaml_option::read(root, "ORBextractor.featuresByArea", source, o.features_by_area);
+  if (o.features < 1) yaml_option::fail(source, "ORBextractor.nFeatures", "an integer >= 1");
+  if (!(o.scale_factor > 1.f)) yaml_option::fail(source, "ORBextractor.scaleFactor", "a number > 1");
+  if (o.levels < 1) yaml_option::fail(source, "ORBextractor.nLevels", "an integer >= 1");
+  if (o.fast_threshold_initial < 1) yaml_option::fail(source, "ORBextractor.iniThFAST", "an integer >= 1");
+  if (o.fast_threshold_min < 1 || o.fast_threshold_min > o.fast_threshold_initial) {
+    yaml_option::fail(source, "ORBextractor.minThFAST", "an integer in [1, iniThFAST]");
+  }
+  if (!(o.cell_size_px >= 8.f)) yaml_option::fail(source, "ORBextractor.cellSize", "a number >= 8");
+  return o;
+}
+
+OrbExtractor::OrbExtractor(const OrbOptions& options)
+    : options_(options), scales_(ScalePyramid::make(options.levels, options.scale_factor)) {
+  if (options.levels < 1 || !(options.scale_factor > 1.f) || options.features < 1) {
+    throw std::invalid_argument("OrbExtractor: expected levels >= 1, scale_factor > 1, features >= 1");
+  }
+  // Geometric share per level: factor^l with factor = 1/s^2 (area) or 1/s (ORB-SLAM2).
+  const double factor = options.features_by_area ? 1.0 / (options.scale_factor * options.scale_factor)
+                                                 : 1.0 / options.scale_factor;
+  const double first = options.features * (1.0 - factor) / (1.0 - std::pow(factor, options.levels));
+  int assigned = 0;
+  features_per_level_.resize(static_cast<std::size_t>(options.levels));
+  for (int l = 0; l + 1 < options.levels; ++l) {
+    features_per_level_[l] = static_cast<int>(std::lround(first * std::pow(factor, l)));
+    assigned += features_per_level_[l];
+  }
+  features_per_level_.back() = std::max(options.features - assigned, 0);
+
+  // Half width of each row of the circular orientation patch.
+  circle_half_width_.resize(kOrientationRadiusPx + 1);
+  for (int v = 0; v <= kOrientationRadiusPx; ++v) {
+    circle_half_width_[v] =
+        static_cast<int>(std::lround(std::sqrt(static_cast<double>(kOrientationRadiusPx * kOrientationRadiusPx - v * v))));
+  }
+  padded_.resize(static_cast<std::size_t>(options.levels));
+  level_.resize(static_cast<std::size_t>(options.levels));
+  blurred_.resize(static_cast<std::size_t>(options.levels));
+  level_keypoints_.resize(static_cast<std::size_t>(options.levels));
+  level_features_.resize(static_cast<std::size_t>(options.levels));
+}
+
+void OrbExtractor::extract(const cv::Mat& image, OrbFeatures& out) {
+  build_pyramid(image);
+  detect();
+  describe(out);
+}
+
+void OrbExtractor::build_pyramid(const cv::Mat& image) {
+  if (image.empty() || image.type() != CV_8UC1) throw std::invalid_argument("OrbExtractor: expected an 8-bit grey image");
+  for (int l = 0; l < options_.levels; ++l) {
+    const cv::Size size(static_cast<int>(std::lround(image.cols * scales_.inv_scale[l])),
+                        static_cast<int>(std::lround(image.rows * scales_.inv_scale[l])));
+    const cv::Mat* source = &image;
+    if (l > 0) {
+      cv::resize(level_[l - 1], resize_scratch_, size, 0, 0, cv::INTER_LINEAR);
+      source = &resize_scratch_;
+    }
+    cv::copyMakeBorder(*source, padded_[l], kOrbBorderPx, kOrbBorderPx, kOrbBorderPx, kOrbBorderPx,
+                       cv::BORDER_REFLECT_101);
+    level_[l] = padded_[l](cv::Rect(kOrbBorderPx, kOrbBorderPx, size.width, size.height));
+  }
+}
+
+void OrbExtractor::detect() {
+  for (int l = 0; l < options_.levels; ++l) detect_level(l);
+}
+
+void OrbExtractor::detect_level(int level) {
+  std::vector<LevelKeypoint>& result = level_keypoints_[static_cast<std::size_t>(level)];
+  result.clear();
+  const cv::Mat& image = level_[static_cast<std::size_t>(level)];
+  const int min_x = kDetectionMarginPx;
+  const int min_y = kDetectionMarginPx;
+  const int max_x = image.cols - kDetectionMarginPx;  // exclusive
+  const int max_y = image.rows - kDetectionMarginPx;
+  const int wanted = features_per_level_[static_cast<std::size_t>(level)];
+  if (max_x - min_x < 2 * kFastRadiusPx || max_y - min_y < 2 * kFastRadiusPx || wanted <= 0) return;
+
+  // The grid: about cell_size_px square cells over the detection area.
+  const int width = max_x - min_x;
+  const int height = max_y - min_y;
+  const int cols = std::max(1, static_cast<int>(width / options_.cell_size_px));
+  const int rows = std::max(1, static_cast<int>(height / options_.cell_size_px));
+  const int cell_w = (width + cols - 1) / cols;
+  const int cell_h = (height + rows - 1) / rows;
+
+  // FAST with the initial threshold once over the whole area (the same corners as per cell, without
+  // the per-call overhead), then the fallback threshold only in the cells that found nothing.
+  std::vector<cv::KeyPoint> corners;
+  const cv::Rect area(min_x - kFastRadiusPx, min_y - kFastRadiusPx, width + 2 * kFastRadiusPx,
+                      height + 2 * kFastRadiusPx);
+  cv::FAST(image(area), corners, options_.fast_threshold_initial, /*nonmaxSuppression=*/true);
+  std::vector<ScoredPoint> points;
+  points.reserve(corners.size() + 256);
+  std::vector<std::uint8_t> cell_found(static_cast<std::size_t>(cols * rows), 0);
+  for (const cv::KeyPoint& c : corners) {
+    const float x = c.pt.x + static_cast<float>(area.x);
+    const float y = c.pt.y + static_cast<float>(area.y);
+    points.push_back({x, y, c.response});
+    const int col = std::min((static_cast<int>(x) - min_x) / cell_w, cols - 1);
+    const int row = std::min((static_cast<int>(y) - min_y) / cell_h, rows - 1);
+    cell_found[static_cast<std::size_t>(row * cols + col)] = 1;
+  }
+  for (int row = 0; row < rows; ++row) {
+    for (int col = 0; col < cols; ++col) {
+      if (cell_found[static_cast<std::size_t>(row * cols + col)]) continue;
+      const int x0 = min_x + col * cell_w;
+      const int y0 = min_y + row * cell_h;
+      const int x1 = std::min(x0 + cell_w, max_x);
+      const int y1 = std::min(y0 + cell_h, max_y);
+      if (x1 - x0 < 1 || y1 - y0 < 1) continue;
+      const cv::Rect cell(x0 - kFastRadiusPx, y0 - kFastRadiusPx, x1 - x0 + 2 * kFastRadiusPx,
+                          y1 - y0 + 2 * kFastRadiusPx);
+      corners.clear();
+      cv::FAST(image(cell), corners, options_.fast_threshold_min, /*nonmaxSuppression=*/true);
+      for (const cv::KeyPoint& c : corners) {
+        points.push_back({c.pt.x + static_cast<float>(cell.x), c.pt.y + static_cast<float>(cell.y), c.response});
+      }
+    }
+  }
+
+  const std::vector<int> kept = distribute_quadtree(points, static_cast<float>(min_x), static_cast<float>(max_x),
+                                                    static_cast<float>(min_y), static_cast<float>(max_y), wanted);
+
+  // Orientation by intensity centroid over the circular patch (the level image is not blurred).
+  const auto step = static_cast<int>(image.step1());
+  result.reserve(kept.size());
+  for (int i : kept) {
+    const ScoredPoint& p = points[static_cast<std::size_t>(i)];
+    const std::uint8_t* center = image.ptr<std::uint8_t>(static_cast<int>(p.y)) + static_cast<int>(p.x);
+    int m10 = 0;
+    int m01 = 0;
+    for (int u = -kOrientationRadiusPx; u <= kOrientationRadiusPx; ++u) m10 += u * center[u];
+    for (int v = 1; v <= kOrientationRadiusPx; ++v) {
+      const int half = circle_half_width_[v];
+      const std::uint8_t* below = center + v * step;
+      const std::uint8_t* above = center - v * step;
+      int sum_v = 0;
+      for (int u = -half; u <= half; ++u) {
+        const int b = below[u];
+        const int a = above[u];
+        sum_v += b - a;
+        m10 += u * (b + a);
+      }
+      m01 += v * sum_v;
+    }
+    float angle = static_cast<float>(std::atan2(static_cast<double>(m01), static_cast<double>(m10)) *
+                                     (180.0 / std::numbers::pi));
+    if (angle < 0.f) angle += 360.f;
+    if (angle >= 360.f) angle -= 360.f;
+    result.push_back({p.x, p.y, p.response, angle});
+  }
+}
+
+void OrbExtractor::describe(OrbFeatures& out) {
+  for (int l = 0; l < options_.levels; ++l) describe_level(l);
+  collect(out);
+}
+
+void OrbExtractor::detect_and_describe_level(int level) {
+  detect_level(level);
+  describe_level(level);
+}
+
+void OrbExtractor::collect(OrbFeatures& out) const {
+  out.keypoints.clear();
+  out.descriptors.clear();
+  out.pyramid.assign(level_.begin(), level_.end());
+  std::size_t total = 0;
+  for (const auto& k : level_features_) total += k.keypoints.size();
+  out.keypoints.reserve(total);
+  out.descriptors.reserve(total);
+  for (const OrbFeatures& level : level_features_) {
+    out.keypoints.insert(out.keypoints.end(), level.keypoints.begin(), level.keypoints.end());
+    out.descriptors.insert(out.descriptors.end(), level.descriptors.begin(), level.descriptors.end());
+  }
+}
+
+void OrbExtractor::describe_level(int l) {
+  OrbFeatures& level_out = level_features_[static_cast<std::size_t>(l)];
+  level_out.keypoints.clear();
+  level_out.descriptors.clear();
+  const std::vector<LevelKeypoint>& kps = level_keypoints_[static_cast<std::size_t>(l)];
+  if (kps.empty()) return;
+  level_out.keypoints.reserve(kps.size());
+  level_out.descriptors.reserve(kps.size());
+  cv::GaussianBlur(padded_[l], blurred_[l], cv::Size(kBlurSizePx, kBlurSizePx), kBlurSigmaPx, kBlurSigmaPx,
+                   cv::BORDER_REFLECT_101);
+  const cv::Mat& blurred = blurred_[l];
+  const auto step = static_cast<int>(blurred.step1());
+  const float scale = scales_.scale[static_cast<std::size_t>(l)];
+  for (const LevelKeypoint& k : kps) {
+    const std::uint8_t* center =
+        blurred.ptr<std::uint8_t>(static_cast<int>(k.y) + kOrbBorderPx) + static_cast<int>(k.x) + kOrbBorderPx;
+    const float radians = k.angle_deg * static_cast<float>(std::numbers::pi / 180.0);
+    const float c = std::cos(radians);
+    const float s = std::sin(radians);
+    // Pattern points rotated by the keypoint angle (column x c - y s, row x s + y c) as offsets
+    // into the blurred image; cvRound is the inlined SSE conversion (lround is a libm call).
+    std::array<int, 2 * kOrbPattern.size()> offsets;
+    for (std::size_t t = 0; t < kOrbPattern.size(); ++t) {
+      const auto& q = kOrbPattern[t];
+      offsets[2 * t] = cvRound(q[0] * s + q[1] * c) * step + cvRound(q[0] * c - q[1] * s);
+      offsets[2 * t + 1] = cvRound(q[2] * s + q[3] * c) * step + cvRound(q[2] * c - q[3] * s);
+    }
+    Descriptor d{};
+    for (std::size_t byte = 0; byte < d.size(); ++byte) {
+      std::uint8_t bits = 0;
+      for (std::size_t bit = 0; bit < 8; ++bit) {
+        const std::size_t t = byte * 8 + bit;
+        bits |= static_cast<std::uint8_t>((center[offsets[2 * t]] < center[offsets[2 * t + 1]]) << bit);
+      }
+      d[byte] = bits;
+    }
+    Keypoint kp;
+    kp.u_px = k.x * scale;
+    kp.v_px = k.y * scale;
+    kp.angle_deg = k.angle_deg;
+    kp.response = k.response;
+    kp.octave = l;
+    level_out.keypoints.push_back(kp);
+    level_out.descriptors.push_back(d);
+  }
+}
+
+}  // namespace heslam

@@ -1,0 +1,136 @@
+// Per-frame feature pipeline: HE, ORB left || right, stereo matching split in two halves.
+#include "components/core/feature/stereo_feature_pipeline.hpp"
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "components/core/image/yaml_option.hpp"
+
+namespace heslam {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+OrbOptions right_options(const StereoFeaturePipelineOptions& options) {
+  OrbOptions right = options.orb;
+  right.features = static_cast<int>(std::lround(options.orb.features * options.right_features_factor));
+  return right;
+}
+
+}  // namespace
+
+StereoFeaturePipelineOptions StereoFeaturePipelineOptions::from_yaml(const cv::FileNode& root, const std::string& source) {
+  StereoFeaturePipelineOptions o;
+  o.he = HistogramEqualizerOptions::from_yaml(root, source);
+  o.orb = OrbOptions::from_yaml(root, source);
+  o.stereo = StereoMatcherOptions::from_yaml(root, source);
+  yaml_option::read(root, "Pipeline.parallel", source, o.parallel);
+  yaml_option::read(root, "Pipeline.rightFeaturesFactor", source, o.right_features_factor);
+  if (!(o.right_features_factor >= 1.f) || o.right_features_factor > 4.f) {
+    yaml_option::fail(source, "Pipeline.rightFeaturesFactor", "a number in [1, 4]");
+  }
+  return o;
+}
+
+StereoFeaturePipelineOptions StereoFeaturePipelineOptions::load(const std::filesystem::path& settings_yaml) {
+  cv::FileStorage fs;
+  try {
+    fs.open(settings_yaml.string(), cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {
+    throw std::runtime_error(settings_yaml.string() + ": not valid YAML (" + e.err + ")");
+  }
+  if (!fs.isOpened()) throw std::runtime_error(settings_yaml.string() + ": cannot open file");
+  return from_yaml(fs.root(), settings_yaml.string());
+}
+
+StereoFeaturePipeline::StereoFeaturePipeline(const PinholeStereo& camera, const StereoFeaturePipelineOptions& options)
+    : camera_(camera),
+      options_(options),
+      equalizer_(options.he),
+      left_extractor_(options.orb),
+      right_extractor_(right_options(options)),
+      stereo_matcher_(camera, left_extractor_.scale_pyramid(), options.stereo) {
+  if (camera.width_px <= 0 || camera.height_px <= 0 || !(camera.fx_px > 0.0) || !(camera.baseline_m > 0.0)) {
+    throw std::invalid_argument("StereoFeaturePipeline: expected a rectified camera with size, fx and baseline");
+  }
+  if (options.parallel) worker_ = std::make_unique<PairWorker>();
+}
+
+StereoFeatures StereoFeaturePipeline::process(const cv::Mat& left_rect, const cv::Mat& right_rect,
+                                              StereoFeatureTimings* timings) {
+  const cv::Size expected(camera_.width_px, camera_.height_px);
+  if (left_rect.type() != CV_8UC1 || right_rect.type() != CV_8UC1 || left_rect.size() != expected ||
+      right_rect.size() != expected) {
+    throw std::invalid_argument("StereoFeaturePipeline: expected two 8-bit grey images of " +
+                                std::to_string(expected.width) + "x" + std::to_string(expected.height));
+  }
+  const Clock::time_point t0 = Clock::now();
+  equalizer_.equalize(left_rect, right_rect, left_he_, right_he_);
+  const Clock::time_point t1 = Clock::now();
+
+  if (worker_) {
+    // Pyramids: one per thread. Then the (image, level) jobs, largest first, taken by whichever
+    // thread is free: the right image has more features, so a fixed left || right split would leave
+    // one core idle. Each job writes only its own level, so the result does not depend on which
+    // thread ran it.
+    worker_->run([&] { right_extractor_.build_pyramid(right_he_); }, [&] { left_extractor_.build_pyramid(left_he_); });
+    const int levels = options_.orb.levels;
+    std::atomic<int> next_job{0};
+    auto run_jobs = [&] {
+      for (int job = next_job++; job < 2 * levels; job = next_job++) {
+        OrbExtractor& extractor = job % 2 == 0 ? right_extractor_ : left_extractor_;
+        extractor.detect_and_describe_level(job / 2);
+      }
+    };
+    worker_->run(run_jobs, run_jobs);
+    left_extractor_.collect(left_);
+    right_extractor_.collect(right_);
+  } else {
+    left_extractor_.extract(left_he_, left_);
+    right_extractor_.extract(right_he_, right_);
+  }
+  const Clock::time_point t2 = Clock::now();
+
+  StereoFeatures out;
+  out.pyramid = left_extractor_.scale_pyramid();
+  const std::size_t n = left_.keypoints.size();
+  out.u_right_px.assign(n, kNoStereo);
+  out.depth_m.assign(n, kNoStereo);
+  stereo_matcher_.prepare_rows(right_, right_rows_);
+  sad_left_half_.clear();
+  sad_right_half_.clear();
+  const std::size_t half = n / 2;
+  auto first_half = [&] {
+    stereo_matcher_.match_range(left_, right_, right_rows_, 0, half, out.u_right_px, out.depth_m, sad_left_half_);
+  };
+  auto second_half = [&] {
+    stereo_matcher_.match_range(left_, right_, right_rows_, half, n, out.u_right_px, out.depth_m, sad_right_half_);
+  };
+  if (worker_) {
+    worker_->run(second_half, first_half);
+  } else {
+    first_half();
+    second_half();
+  }
+  sad_left_half_.insert(sad_left_half_.end(), sad_right_half_.begin(), sad_right_half_.end());
+  stereo_matcher_.reject_outliers(sad_left_half_, out.u_right_px, out.depth_m);
+  out.keypoints = left_.keypoints;
+  out.descriptors = left_.descriptors;
+  const Clock::time_point t3 = Clock::now();
+
+  if (timings) {
+    timings->he_ms = ms_between(t0, t1);
+    timings->extract_ms = ms_between(t1, t2);
+    timings->stereo_ms = ms_between(t2, t3);
+    timings->total_ms = ms_between(t0, t3);
+  }
+  return out;
+}
+
+}  // namespace heslam

@@ -1,0 +1,72 @@
+// The per-frame feature pipeline: rectified stereo pair -> joint histogram equalization -> ORB on
+// both images (pyramid levels of both spread over two threads) -> stereo matching -> StereoFeatures.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/feature/features.hpp"
+#include "components/core/feature/orb_extractor.hpp"
+#include "components/core/feature/pair_worker.hpp"
+#include "components/core/image/histogram_equalizer.hpp"
+#include "components/core/match/stereo_matcher.hpp"
+
+namespace heslam {
+
+struct StereoFeaturePipelineOptions {
+  HistogramEqualizerOptions he;
+  OrbOptions orb;
+  StereoMatcherOptions stereo;
+  // Two threads: the pyramid levels of both images as jobs, then halves of stereo matching.
+  bool parallel = true;
+  // The right image keeps this many times orb.features (its keypoints serve only stereo matching):
+  // the quadtree picks partly different corners in the two images, and a left keypoint whose
+  // counterpart was not kept on the right cannot get a depth. See docs/vision.md for the measurement.
+  float right_features_factor = 2.0f;
+
+  // Reads the HE.*, ORBextractor.*, Stereo.* keys, Pipeline.parallel and Pipeline.rightFeaturesFactor.
+  static StereoFeaturePipelineOptions from_yaml(const cv::FileNode& root, const std::string& source);
+  // Same, from a settings file (e.g. config/camera/EuRoC.yaml). Throws std::runtime_error naming the
+  // file and key on bad input.
+  static StereoFeaturePipelineOptions load(const std::filesystem::path& settings_yaml);
+};
+
+struct StereoFeatureTimings {
+  double he_ms = 0.0;
+  double extract_ms = 0.0;
+  double stereo_ms = 0.0;
+  double total_ms = 0.0;
+};
+
+class StereoFeaturePipeline {
+ public:
+  StereoFeaturePipeline(const PinholeStereo& camera, const StereoFeaturePipelineOptions& options);
+
+  // Inputs: rectified 8-bit grey images of the camera's size. Output: StereoFeatures, fully filled.
+  // Deterministic: the same pair gives the same output whether parallel or not. Not thread-safe.
+  StereoFeatures process(const cv::Mat& left_rect, const cv::Mat& right_rect, StereoFeatureTimings* timings = nullptr);
+
+  // Whether the last pair was equalized (adaptive HE switches on and off).
+  bool he_active() const { return equalizer_.active(); }
+  const StereoFeaturePipelineOptions& options() const { return options_; }
+  const PinholeStereo& camera() const { return camera_; }
+
+ private:
+  PinholeStereo camera_;
+  StereoFeaturePipelineOptions options_;
+  HistogramEqualizer equalizer_;
+  OrbExtractor left_extractor_;
+  OrbExtractor right_extractor_;
+  StereoMatcher stereo_matcher_;
+  std::unique_ptr<PairWorker> worker_;  // only when parallel
+  cv::Mat left_he_, right_he_;
+  OrbFeatures left_, right_;
+  std::vector<std::vector<int>> right_rows_;
+  std::vector<std::pair<int, int>> sad_left_half_, sad_right_half_;
+};
+
+}  // namespace heslam

@@ -1,0 +1,237 @@
+// Joint-histogram equalization of a stereo pair: global (paper), CLAHE with shared tile LUTs, adaptive.
+#include "components/core/image/histogram_equalizer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "components/core/image/yaml_option.hpp"
+
+namespace heslam {
+namespace {
+
+constexpr int kLevels = 256;  // 8-bit grey
+
+using Histogram = std::array<std::uint32_t, kLevels>;
+using Lut = std::array<std::uint8_t, kLevels>;
+
+// Adds the histogram of `image` (region `roi`) to `histogram`. Four partial histograms break the
+// store-to-load dependency of runs of equal pixels, about 2x faster than one.
+void accumulate_histogram(const cv::Mat& image, const cv::Rect& roi, Histogram& histogram) {
+  std::array<std::array<std::uint32_t, kLevels>, 4> partial{};
+  for (int y = roi.y; y < roi.y + roi.height; ++y) {
+    const std::uint8_t* row = image.ptr<std::uint8_t>(y) + roi.x;
+    int x = 0;
+    for (; x + 4 <= roi.width; x += 4) {
+      ++partial[0][row[x]];
+      ++partial[1][row[x + 1]];
+      ++partial[2][row[x + 2]];
+      ++partial[3][row[x + 3]];
+    }
+    for (; x < roi.width; ++x) ++partial[0][row[x]];
+  }
+  for (int v = 0; v < kLevels; ++v) histogram[v] += partial[0][v] + partial[1][v] + partial[2][v] + partial[3][v];
+}
+
+// The paper's mapping y = 255 * cdf(x), cdf normalized to [0, 1].
+Lut cdf_lut(const Histogram& histogram) {
+  std::uint64_t total = 0;
+  for (std::uint32_t h : histogram) total += h;
+  Lut lut{};
+  if (total == 0) return lut;
+  std::uint64_t cumulative = 0;
+  for (int v = 0; v < kLevels; ++v) {
+    cumulative += histogram[v];
+    lut[v] = static_cast<std::uint8_t>((255 * cumulative + total / 2) / total);
+  }
+  return lut;
+}
+
+void apply_lut(const cv::Mat& in, cv::Mat& out, const Lut& lut) {
+  cv::LUT(in, cv::Mat(1, kLevels, CV_8U, const_cast<std::uint8_t*>(lut.data())), out);
+}
+
+double rms_contrast(const Histogram& histogram) {
+  double n = 0.0;
+  double sum = 0.0;
+  double sum2 = 0.0;
+  for (int v = 0; v < kLevels; ++v) {
+    n += histogram[v];
+    sum += static_cast<double>(v) * histogram[v];
+    sum2 += static_cast<double>(v) * v * histogram[v];
+  }
+  if (n == 0.0) return 0.0;
+  const double mean = sum / n;
+  return std::sqrt(std::max(0.0, sum2 / n - mean * mean));
+}
+
+void check_pair(const cv::Mat& left, const cv::Mat& right) {
+  if (left.type() != CV_8UC1 || right.type() != CV_8UC1 || left.size() != right.size() || left.empty()) {
+    throw std::invalid_argument("HistogramEqualizer: expected two non-empty 8-bit grey images of the same size");
+  }
+}
+
+}  // namespace
+
+HeMode parse_he_mode(const std::string& name) {
+  if (name == "none") return HeMode::kNone;
+  if (name == "global") return HeMode::kGlobal;
+  if (name == "clahe") return HeMode::kClahe;
+  if (name == "adaptive") return HeMode::kAdaptive;
+  throw std::invalid_argument("HE mode '" + name + "': expected none | global | clahe | adaptive");
+}
+
+const char* to_string(HeMode mode) {
+  switch (mode) {
+    case HeMode::kNone: return "none";
+    case HeMode::kGlobal: return "global";
+    case HeMode::kClahe: return "clahe";
+    case HeMode::kAdaptive: return "adaptive";
+  }
+  return "unknown";
+}
+
+HistogramEqualizerOptions HistogramEqualizerOptions::from_yaml(const cv::FileNode& root, const std::string& source) {
+  HistogramEqualizerOptions o;
+  std::string mode = to_string(o.mode);
+  yaml_option::read(root, "HE.mode", source, mode);
+  try {
+    o.mode = parse_he_mode(mode);
+  } catch (const std::invalid_argument&) {
+    yaml_option::fail(source, "HE.mode", "none | global | clahe | adaptive, got '" + mode + "'");
+  }
+  yaml_option::read(root, "HE.clipLimit", source, o.clahe_clip_limit);
+  yaml_option::read(root, "HE.tilesX", source, o.clahe_tiles_x);
+  yaml_option::read(root, "HE.tilesY", source, o.clahe_tiles_y);
+  yaml_option::read(root, "HE.adaptiveOnBelow", source, o.adaptive_on_below);
+  yaml_option::read(root, "HE.adaptiveOffAbove", source, o.adaptive_off_above);
+  if (!(o.clahe_clip_limit > 0.0)) yaml_option::fail(source, "HE.clipLimit", "a positive number");
+  if (o.clahe_tiles_x < 1) yaml_option::fail(source, "HE.tilesX", "an integer >= 1");
+  if (o.clahe_tiles_y < 1) yaml_option::fail(source, "HE.tilesY", "an integer >= 1");
+  if (o.adaptive_off_above < o.adaptive_on_below) {
+    yaml_option::fail(source, "HE.adaptiveOffAbove", "a value >= HE.adaptiveOnBelow (hysteresis)");
+  }
+  return o;
+}
+
+HistogramEqualizer::HistogramEqualizer(const HistogramEqualizerOptions& options)
+    : options_(options), active_(options.mode == HeMode::kGlobal || options.mode == HeMode::kClahe) {}
+
+void HistogramEqualizer::equalize(const cv::Mat& left, const cv::Mat& right, cv::Mat& left_out, cv::Mat& right_out) {
+  check_pair(left, right);
+  switch (options_.mode) {
+    case HeMode::kNone:
+      left_out = left;
+      right_out = right;
+      return;
+    case HeMode::kClahe:
+      last_contrast_ = equalize_clahe(left, right, left_out, right_out);
+      return;
+    case HeMode::kGlobal:
+    case HeMode::kAdaptive: {
+      Histogram histogram{};
+      accumulate_histogram(left, cv::Rect(0, 0, left.cols, left.rows), histogram);
+      accumulate_histogram(right, cv::Rect(0, 0, right.cols, right.rows), histogram);
+      last_contrast_ = rms_contrast(histogram);
+      if (options_.mode == HeMode::kAdaptive) {
+        if (active_ && last_contrast_ > options_.adaptive_off_above) active_ = false;
+        if (!active_ && last_contrast_ < options_.adaptive_on_below) active_ = true;
+        if (!active_) {
+          left_out = left;
+          right_out = right;
+          return;
+        }
+      }
+      equalize_global(left, right, left_out, right_out, histogram);
+      return;
+    }
+  }
+}
+
+void HistogramEqualizer::equalize_global(const cv::Mat& left, const cv::Mat& right, cv::Mat& left_out,
+                                         cv::Mat& right_out, const Histogram& histogram) const {
+  const Lut lut = cdf_lut(histogram);
+  apply_lut(left, left_out, lut);
+  apply_lut(right, right_out, lut);
+}
+
+double HistogramEqualizer::equalize_clahe(const cv::Mat& left, const cv::Mat& right, cv::Mat& left_out,
+                                          cv::Mat& right_out) const {
+  const int tiles_x = options_.clahe_tiles_x;
+  const int tiles_y = options_.clahe_tiles_y;
+  const int tile_w = (left.cols + tiles_x - 1) / tiles_x;
+  const int tile_h = (left.rows + tiles_y - 1) / tiles_y;
+
+  // One clipped-histogram LUT per tile, from the same tile of both images.
+  std::vector<Lut> luts(static_cast<std::size_t>(tiles_x * tiles_y));
+  Histogram all{};
+  for (int ty = 0; ty < tiles_y; ++ty) {
+    for (int tx = 0; tx < tiles_x; ++tx) {
+      const cv::Rect roi = cv::Rect(tx * tile_w, ty * tile_h, tile_w, tile_h) & cv::Rect(0, 0, left.cols, left.rows);
+      Histogram h{};
+      if (roi.area() > 0) {
+        accumulate_histogram(left, roi, h);
+        accumulate_histogram(right, roi, h);
+      }
+      for (int v = 0; v < kLevels; ++v) all[v] += h[v];
+      const std::uint32_t count = 2u * static_cast<std::uint32_t>(std::max(roi.area(), 0));
+      // Clip every bin at clip_limit x the mean bin count and spread the excess evenly (cv::CLAHE).
+      const auto clip = std::max<std::uint32_t>(
+          1u, static_cast<std::uint32_t>(options_.clahe_clip_limit * count / kLevels));
+      std::uint32_t excess = 0;
+      for (std::uint32_t& bin : h) {
+        if (bin > clip) {
+          excess += bin - clip;
+          bin = clip;
+        }
+      }
+      const std::uint32_t batch = excess / kLevels;
+      const std::uint32_t residual = excess - batch * kLevels;
+      for (std::uint32_t& bin : h) bin += batch;
+      if (residual > 0) {
+        const std::uint32_t step = std::max<std::uint32_t>(kLevels / residual, 1u);
+        for (std::uint32_t v = 0, given = 0; v < static_cast<std::uint32_t>(kLevels) && given < residual; v += step, ++given) {
+          ++h[v];
+        }
+      }
+      luts[static_cast<std::size_t>(ty * tiles_x + tx)] = cdf_lut(h);
+    }
+  }
+
+  // Bilinear interpolation between the LUTs of the four nearest tile centres.
+  const int width = left.cols;
+  std::vector<int> x0(static_cast<std::size_t>(width)), x1(static_cast<std::size_t>(width));
+  std::vector<float> wx(static_cast<std::size_t>(width));
+  for (int x = 0; x < width; ++x) {
+    const float t = (static_cast<float>(x) + 0.5f) / static_cast<float>(tile_w) - 0.5f;
+    const int i = static_cast<int>(std::floor(t));
+    wx[x] = t - static_cast<float>(i);
+    x0[x] = std::clamp(i, 0, tiles_x - 1);
+    x1[x] = std::clamp(i + 1, 0, tiles_x - 1);
+  }
+  auto map_image = [&](const cv::Mat& in, cv::Mat& out) {
+    cv::Mat result(in.size(), CV_8UC1);
+    for (int y = 0; y < in.rows; ++y) {
+      const float t = (static_cast<float>(y) + 0.5f) / static_cast<float>(tile_h) - 0.5f;
+      const int j = static_cast<int>(std::floor(t));
+      const float wy = t - static_cast<float>(j);
+      const Lut* row0 = &luts[static_cast<std::size_t>(std::clamp(j, 0, tiles_y - 1) * tiles_x)];
+      const Lut* row1 = &luts[static_cast<std::size_t>(std::clamp(j + 1, 0, tiles_y - 1) * tiles_x)];
+      const std::uint8_t* src = in.ptr<std::uint8_t>(y);
+      std::uint8_t* dst = result.ptr<std::uint8_t>(y);
+      for (int x = 0; x < width; ++x) {
+        const std::uint8_t v = src[x];
+        const float top = row0[x0[x]][v] + wx[x] * (static_cast<float>(row0[x1[x]][v]) - row0[x0[x]][v]);
+        const float bottom = row1[x0[x]][v] + wx[x] * (static_cast<float>(row1[x1[x]][v]) - row1[x0[x]][v]);
+        dst[x] = static_cast<std::uint8_t>(std::lround(top + wy * (bottom - top)));
+      }
+    }
+    out = result;
+  };
+  map_image(left, left_out);
+  map_image(right, right_out);
+  return rms_contrast(all);  // the pair's contrast, reported like the other modes
+}
+
+}  // namespace heslam

@@ -1,0 +1,56 @@
+// Reading optional tunables from an OpenCV YAML settings file (flat ORB-SLAM2-style keys such as
+// "ORBextractor.nFeatures"): a missing key keeps the documented default, a present key of the wrong
+// type is one clear error naming the source and the key.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/core/persistence.hpp>
+
+namespace heslam::yaml_option {
+
+[[noreturn]] inline void fail(const std::string& source, const std::string& key, const std::string& expected) {
+  throw std::runtime_error(source + ": " + key + ": expected " + expected);
+}
+
+inline bool present(const cv::FileNode& root, const std::string& key) {
+  const cv::FileNode node = root[key];
+  return !node.empty() && !node.isNone();
+}
+
+inline void read(const cv::FileNode& root, const std::string& key, const std::string& source, double& value) {
+  if (!present(root, key)) return;
+  const cv::FileNode node = root[key];
+  if (!node.isReal() && !node.isInt()) fail(source, key, "a number");
+  value = static_cast<double>(node);
+}
+
+inline void read(const cv::FileNode& root, const std::string& key, const std::string& source, float& value) {
+  double v = value;
+  read(root, key, source, v);
+  value = static_cast<float>(v);
+}
+
+inline void read(const cv::FileNode& root, const std::string& key, const std::string& source, int& value) {
+  if (!present(root, key)) return;
+  const cv::FileNode node = root[key];
+  if (!node.isInt()) fail(source, key, "an integer");
+  value = static_cast<int>(node);
+}
+
+inline void read(const cv::FileNode& root, const std::string& key, const std::string& source, bool& value) {
+  int v = value ? 1 : 0;
+  read(root, key, source, v);
+  if (v != 0 && v != 1) fail(source, key, "0 or 1");
+  value = v == 1;
+}
+
+inline void read(const cv::FileNode& root, const std::string& key, const std::string& source, std::string& value) {
+  if (!present(root, key)) return;
+  const cv::FileNode node = root[key];
+  if (!node.isString()) fail(source, key, "a string");
+  value = static_cast<std::string>(node);
+}
+
+}  // namespace heslam::yaml_option

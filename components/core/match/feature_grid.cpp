@@ -1,0 +1,68 @@
+// Uniform grid over keypoints, stored as compressed rows (one counting pass, one filling pass).
+#include "components/core/match/feature_grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace heslam {
+
+FeatureGrid::FeatureGrid(std::span<const Keypoint> keypoints, int width_px, int height_px,
+                         const FeatureGridOptions& options) {
+  if (width_px <= 0 || height_px <= 0 || !(options.cell_size_px > 0.f)) {
+    throw std::runtime_error("FeatureGrid: expected a positive image size and cell_size_px");
+  }
+  inv_cell_size_ = 1.f / options.cell_size_px;
+  cols_ = std::max(1, static_cast<int>(std::ceil(width_px * inv_cell_size_)));
+  rows_ = std::max(1, static_cast<int>(std::ceil(height_px * inv_cell_size_)));
+
+  const std::size_t n = keypoints.size();
+  u_px_.resize(n);
+  v_px_.resize(n);
+  octave_.resize(n);
+  std::vector<int> cell_of(n);
+  cell_start_.assign(static_cast<std::size_t>(cols_ * rows_) + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    u_px_[i] = keypoints[i].u_px;
+    v_px_[i] = keypoints[i].v_px;
+    octave_[i] = keypoints[i].octave;
+    cell_of[i] = cell_row(v_px_[i]) * cols_ + cell_col(u_px_[i]);
+    ++cell_start_[static_cast<std::size_t>(cell_of[i]) + 1];
+  }
+  for (std::size_t c = 1; c < cell_start_.size(); ++c) cell_start_[c] += cell_start_[c - 1];
+  cell_items_.resize(n);
+  std::vector<int> fill(cell_start_.begin(), cell_start_.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) cell_items_[static_cast<std::size_t>(fill[cell_of[i]]++)] = static_cast<int>(i);
+}
+
+int FeatureGrid::cell_col(float u_px) const {
+  return std::clamp(static_cast<int>(std::floor(u_px * inv_cell_size_)), 0, cols_ - 1);
+}
+
+int FeatureGrid::cell_row(float v_px) const {
+  return std::clamp(static_cast<int>(std::floor(v_px * inv_cell_size_)), 0, rows_ - 1);
+}
+
+std::vector<int> FeatureGrid::in_area(float u_px, float v_px, float radius_px, int min_level, int max_level) const {
+  std::vector<int> result;
+  if (u_px_.empty() || !(radius_px > 0.f)) return result;
+  const int col0 = cell_col(u_px - radius_px);
+  const int col1 = cell_col(u_px + radius_px);
+  const int row0 = cell_row(v_px - radius_px);
+  const int row1 = cell_row(v_px + radius_px);
+  for (int row = row0; row <= row1; ++row) {
+    for (int col = col0; col <= col1; ++col) {
+      const int cell = row * cols_ + col;
+      for (int k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
+        const int i = cell_items_[k];
+        if (min_level >= 0 && octave_[i] < min_level) continue;
+        if (max_level >= 0 && octave_[i] > max_level) continue;
+        if (std::abs(u_px_[i] - u_px) < radius_px && std::abs(v_px_[i] - v_px) < radius_px) result.push_back(i);
+      }
+    }
+  }
+  std::sort(result.begin(), result.end());
+  return result;
+}
+
+}  // namespace heslam

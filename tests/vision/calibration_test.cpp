@@ -1,0 +1,286 @@
+// Calibration loaders and rectification: every format gives the same rectified model for the same rig
+// (EuRoC's VI-Sensor), and each malformed file gives one clear line naming the file and the field.
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "components/core/camera/stereo_calibration.hpp"
+#include "components/core/camera/stereo_rectifier.hpp"
+#include "test_support.hpp"
+
+namespace heslam {
+namespace {
+
+namespace fs = std::filesystem;
+
+// ORB-SLAM2's Examples/Stereo/EuRoC.yaml: the rectified model of this rig (stereoRectify, alpha 0).
+constexpr double kOrbSlamFx = 435.2046959714599;
+constexpr double kOrbSlamCx = 367.4517211914062;
+constexpr double kOrbSlamCy = 252.2008514404297;
+constexpr double kOrbSlamBf = 47.90639384423901;
+
+constexpr const char* kEurocCam0 = R"(# General sensor definitions.
+sensor_type: camera
+comment: VI-Sensor cam0 (MT9M034)
+T_BS:
+  cols: 4
+  rows: 4
+  data: [0.0148655429818, -0.999880929698, 0.00414029679422, -0.0216401454975,
+         0.999557249008, 0.0149672133247, 0.025715529948, -0.064676986768,
+        -0.0257744366974, 0.00375618835797, 0.999660727178, 0.00981073058949,
+         0.0, 0.0, 0.0, 1.0]
+rate_hz: 20
+resolution: [752, 480]
+camera_model: pinhole
+intrinsics: [458.654, 457.296, 367.215, 248.375] #fu, fv, cu, cv
+distortion_model: radial-tangential
+distortion_coefficients: [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05]
+)";
+
+constexpr const char* kEurocCam1 = R"(sensor_type: camera
+comment: VI-Sensor cam1 (MT9M034)
+T_BS:
+  cols: 4
+  rows: 4
+  data: [0.0125552670891, -0.999755099723, 0.0182237714554, -0.0198435579556,
+         0.999598781151, 0.0130119051815, 0.0251588363115, 0.0453689425024,
+        -0.0253898008918, 0.0179005838253, 0.999517347078, 0.00786212447038,
+         0.0, 0.0, 0.0, 1.0]
+rate_hz: 20
+resolution: [752, 480]
+camera_model: pinhole
+intrinsics: [457.587, 456.134, 379.999, 255.238] #fu, fv, cu, cv
+distortion_model: radial-tangential
+distortion_coefficients: [-0.28368365,  0.07451284, -0.00010473, -3.55590700e-05]
+)";
+
+fs::path scratch_dir(const std::string& name) {
+  const fs::path dir = fs::path(::testing::TempDir()) / ("heslam_calibration_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+void write(const fs::path& file, const std::string& text) {
+  fs::create_directories(file.parent_path());
+  std::ofstream(file) << text;
+}
+
+fs::path write_euroc(const std::string& name, const std::string& cam0, const std::string& cam1) {
+  const fs::path mav0 = scratch_dir(name) / "mav0";
+  write(mav0 / "cam0" / "sensor.yaml", cam0);
+  write(mav0 / "cam1" / "sensor.yaml", cam1);
+  return mav0;
+}
+
+std::string replace(std::string text, const std::string& from, const std::string& to) {
+  const auto pos = text.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  return text.replace(pos, from.size(), to);
+}
+
+// The error of loading `load()`; empty when it did not throw.
+template <typename F>
+std::string error_of(F load) {
+  try {
+    load();
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return {};
+}
+
+void expect_one_line_naming(const std::string& error, const std::string& file_part, const std::string& field) {
+  EXPECT_FALSE(error.empty());
+  EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+  EXPECT_NE(error.find(file_part), std::string::npos) << error;
+  EXPECT_NE(error.find(field), std::string::npos) << error;
+}
+
+void expect_same_model(const PinholeStereo& a, const PinholeStereo& b, double tolerance_px) {
+  EXPECT_NEAR(a.fx_px, b.fx_px, tolerance_px);
+  EXPECT_NEAR(a.fy_px, b.fy_px, tolerance_px);
+  EXPECT_NEAR(a.cx_px, b.cx_px, tolerance_px);
+  EXPECT_NEAR(a.cy_px, b.cy_px, tolerance_px);
+  EXPECT_NEAR(a.bf(), b.bf(), tolerance_px);
+  EXPECT_EQ(a.width_px, b.width_px);
+  EXPECT_EQ(a.height_px, b.height_px);
+}
+
+TEST(Calibration, EurocSensorYamlAgreesWithOrbSlamSettings) {
+  const StereoCalibration calibration = load_euroc_calibration(write_euroc("euroc", kEurocCam0, kEurocCam1));
+  EXPECT_FALSE(calibration.input_rectified);
+  EXPECT_EQ(calibration.left.width_px, 752);
+  EXPECT_EQ(calibration.left.distortion.size(), 4u);
+  EXPECT_DOUBLE_EQ(calibration.rate_hz, 20.0);
+  // EuRoC baseline is about 11 cm along +x of cam0.
+  EXPECT_NEAR(calibration.T_rl().translation().norm(), 0.110, 0.001);
+  EXPECT_LT(calibration.T_rl().translation().x(), 0.0);
+
+  const StereoRectifier rectifier(calibration);
+  const PinholeStereo& camera = rectifier.camera();
+  // Same baseline and the same rectifying rotation as ORB-SLAM2's published settings. The new camera
+  // matrix for alpha 0 differs slightly: OpenCV 4.6 picks fx 436.2, (cx, cy) (364.4, 257.0) where the
+  // OpenCV 2.4 used for ORB-SLAM2's file picked 435.2, (367.5, 252.2); both keep only valid pixels.
+  EXPECT_NEAR(camera.baseline_m, kOrbSlamBf / kOrbSlamFx, 1e-5);
+  EXPECT_NEAR(camera.fx_px, kOrbSlamFx, 0.005 * kOrbSlamFx);
+  EXPECT_NEAR(camera.cx_px, kOrbSlamCx, 6.0);
+  EXPECT_NEAR(camera.cy_px, kOrbSlamCy, 6.0);
+  EXPECT_EQ(camera.fx_px, camera.fy_px);
+
+  const StereoCalibration orbslam = load_orbslam_settings(test::source_dir() / "config" / "camera" / "EuRoC.yaml");
+  ASSERT_TRUE(orbslam.explicit_rectification.has_value());
+  const StereoRectifier from_orbslam(orbslam);
+  EXPECT_NEAR(from_orbslam.camera().fx_px, kOrbSlamFx, 1e-9);
+  EXPECT_NEAR(from_orbslam.camera().bf(), kOrbSlamBf, 1e-9);
+  // Rectified-left -> cam0 rotation (R1^T): from EuRoC via stereoRectify, from ORB-SLAM2 as LEFT.R^T.
+  const Eigen::Matrix3d R1t_euroc = (calibration.left.T_BS.inverse() * rectifier.T_B_rect()).linear();
+  const Eigen::Matrix3d R1t_orbslam = from_orbslam.T_B_rect().linear();
+  EXPECT_LT(Eigen::AngleAxisd(R1t_euroc.transpose() * R1t_orbslam).angle(), 1e-4);
+  // The rig's extrinsics recovered from R/P agree with the EuRoC T_BS pair.
+  EXPECT_LT((orbslam.T_rl().translation() - calibration.T_rl().translation()).norm(), 1e-4);
+  EXPECT_LT(Eigen::AngleAxisd(orbslam.T_rl().linear().transpose() * calibration.T_rl().linear()).angle(), 1e-4);
+}
+
+std::string matrix_yaml(const std::string& key, const Eigen::MatrixXd& m) {
+  std::string text = key + ": !!opencv-matrix\n   rows: " + std::to_string(m.rows()) +
+                     "\n   cols: " + std::to_string(m.cols()) + "\n   dt: d\n   data: [";
+  char number[64];
+  for (int r = 0; r < m.rows(); ++r) {
+    for (int c = 0; c < m.cols(); ++c) {
+      std::snprintf(number, sizeof number, "%s%.17g", (r + c) ? ", " : "", m(r, c));
+      text += number;
+    }
+  }
+  return text + "]\n";
+}
+
+TEST(Calibration, SameRigGivesSameModelInEveryFormat) {
+  const StereoCalibration euroc = load_euroc_calibration(write_euroc("same", kEurocCam0, kEurocCam1));
+  const StereoRectifier from_euroc(euroc);
+  const PinholeStereo& m = from_euroc.camera();
+  const fs::path dir = scratch_dir("formats");
+
+  // ORB-SLAM2 raw-image settings holding this rig's K, D and its rectification R, P.
+  const Eigen::Matrix3d R1 = (euroc.left.T_BS.inverse() * from_euroc.T_B_rect()).linear().transpose();
+  const Eigen::Matrix3d R2 = R1 * euroc.T_rl().linear().transpose();
+  Eigen::Matrix<double, 3, 4> P1;
+  P1 << m.fx_px, 0, m.cx_px, 0, 0, m.fy_px, m.cy_px, 0, 0, 0, 1, 0;
+  Eigen::Matrix<double, 3, 4> P2 = P1;
+  P2(0, 3) = -m.bf();
+  auto K = [](const CameraModel& c) {
+    Eigen::Matrix3d k;
+    k << c.fx_px, 0, c.cx_px, 0, c.fy_px, c.cy_px, 0, 0, 1;
+    return k;
+  };
+  auto D = [](const CameraModel& c) {
+    return Eigen::RowVectorXd(Eigen::Map<const Eigen::RowVectorXd>(c.distortion.data(), 4));
+  };
+  char header[512];
+  std::snprintf(header, sizeof header,
+                "%%YAML:1.0\nCamera.fx: %.17g\nCamera.fy: %.17g\nCamera.cx: %.17g\nCamera.cy: %.17g\n"
+                "Camera.width: %d\nCamera.height: %d\nCamera.fps: 20.0\nCamera.bf: %.17g\n",
+                m.fx_px, m.fy_px, m.cx_px, m.cy_px, m.width_px, m.height_px, m.bf());
+  write(dir / "raw.yaml", std::string(header) + matrix_yaml("LEFT.K", K(euroc.left)) +
+                              matrix_yaml("LEFT.D", D(euroc.left)) + matrix_yaml("LEFT.R", R1) +
+                              matrix_yaml("LEFT.P", P1) + matrix_yaml("RIGHT.K", K(euroc.right)) +
+                              matrix_yaml("RIGHT.D", D(euroc.right)) + matrix_yaml("RIGHT.R", R2) +
+                              matrix_yaml("RIGHT.P", P2));
+  const StereoCalibration raw_settings = load_orbslam_settings(dir / "raw.yaml");
+  expect_same_model(StereoRectifier(raw_settings).camera(), m, 1e-9);
+  EXPECT_LT((raw_settings.T_rl().translation() - euroc.T_rl().translation()).norm(), 1e-9);
+
+  // The rectified model written as KITTI calib.txt and as ORB-SLAM2 rectified (KITTI-style) settings.
+  char line[512];
+  std::snprintf(line, sizeof line, "P0: %.17g 0 %.17g 0 0 %.17g %.17g 0 0 0 1 0\nP1: %.17g 0 %.17g %.17g 0 %.17g %.17g 0 0 0 1 0\n",
+                m.fx_px, m.cx_px, m.fy_px, m.cy_px, m.fx_px, m.cx_px, -m.bf(), m.fy_px, m.cy_px);
+  write(dir / "calib.txt", std::string("P2: 1 0 0 0 0 1 0 0 0 0 1 0\n") + line);
+  const StereoRectifier from_kitti(load_kitti_calibration(dir / "calib.txt", m.width_px, m.height_px));
+  expect_same_model(from_kitti.camera(), m, 1e-9);
+
+  write(dir / "rectified.yaml", std::string(header) + "Camera.k1: 0.0\n");
+  const StereoCalibration rectified = load_orbslam_settings(dir / "rectified.yaml");
+  EXPECT_TRUE(rectified.input_rectified);
+  expect_same_model(StereoRectifier(rectified).camera(), m, 1e-9);
+}
+
+TEST(Calibration, ShippedKittiSettingsLoad) {
+  for (const char* name : {"KITTI00-02.yaml", "KITTI03.yaml", "KITTI04-12.yaml"}) {
+    const StereoCalibration calibration = load_orbslam_settings(test::source_dir() / "config" / "camera" / name);
+    EXPECT_TRUE(calibration.input_rectified) << name;
+    const PinholeStereo camera = StereoRectifier(calibration).camera();
+    EXPECT_NEAR(camera.baseline_m, 0.537, 0.005) << name;  // KITTI's grey pair is 0.54 m apart
+  }
+}
+
+TEST(Calibration, RectifiedEurocRowsAgreeOnRealImages) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const fs::path mav0 = test::shared_dataset("euroc_mh01_handheld") / "mav0";
+  const StereoRectifier rectifier(load_euroc_calibration(mav0));
+  const std::string name = "1403636584763555584.png";
+  const cv::Mat left = cv::imread((mav0 / "cam0" / "data" / name).string(), cv::IMREAD_GRAYSCALE);
+  const cv::Mat right = cv::imread((mav0 / "cam1" / "data" / name).string(), cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(left.empty());
+  cv::Mat left_rect, right_rect;
+  rectifier.rectify(left, right, left_rect, right_rect);
+  EXPECT_EQ(left_rect.size(), cv::Size(752, 480));
+  EXPECT_EQ(right_rect.size(), cv::Size(752, 480));
+  // alpha 0: no invalid (black) border in the middle rows.
+  EXPECT_GT(left_rect.at<std::uint8_t>(240, 2) + left_rect.at<std::uint8_t>(240, 749), 0);
+  // Wrong size is one clear error.
+  const std::string error = error_of([&] { rectifier.rectify(left.colRange(0, 700), right, left_rect, right_rect); });
+  expect_one_line_naming(error, "StereoRectifier", "left");
+}
+
+TEST(Calibration, MalformedEurocFilesGiveOneClearLine) {
+  struct Case {
+    std::string cam0;
+    std::string field;
+  };
+  const std::vector<Case> cases = {
+      {replace(kEurocCam0, "intrinsics: [458.654, 457.296, 367.215, 248.375]", "intrinsics: [458.654, 457.296]"),
+       "intrinsics"},
+      {replace(kEurocCam0, "resolution: [752, 480]", ""), "resolution"},
+      {replace(kEurocCam0, "camera_model: pinhole", "camera_model: omni"), "camera_model"},
+      {replace(kEurocCam0, "distortion_model: radial-tangential", "distortion_model: equidistant"),
+       "distortion_model"},
+      {replace(kEurocCam0, "0.0, 0.0, 0.0, 1.0]", "0.0, 0.0, 1.0]"), "T_BS"},
+      {replace(kEurocCam0, "0.0148655429818, -0.999880929698", "2.0148655429818, -0.999880929698"), "T_BS"},
+      {replace(kEurocCam0, "intrinsics: [458.654,", "intrinsics: [abc,"), "intrinsics"},
+      {"T_BS: [1, 2\nfoo: {", "cam0"},
+  };
+  for (std::size_t k = 0; k < cases.size(); ++k) {
+    const fs::path mav0 = write_euroc("bad" + std::to_string(k), cases[k].cam0, kEurocCam1);
+    const std::string error = error_of([&] { load_euroc_calibration(mav0); });
+    expect_one_line_naming(error, "cam0/sensor.yaml", cases[k].field);
+  }
+  const std::string missing = error_of([&] { load_euroc_calibration(scratch_dir("missing")); });
+  expect_one_line_naming(missing, "cam0/sensor.yaml", "cannot open");
+}
+
+TEST(Calibration, MalformedKittiAndOrbSlamFilesGiveOneClearLine) {
+  const fs::path dir = scratch_dir("bad_formats");
+  write(dir / "short.txt", "P0: 718.856 0 607.1928 0 0 718.856 185.2157 0 0 0 1\nP1: 1 2 3\n");
+  expect_one_line_naming(error_of([&] { load_kitti_calibration(dir / "short.txt", 1241, 376); }), "short.txt", "P0");
+  write(dir / "no_p1.txt", "P0: 718.856 0 607.1928 0 0 718.856 185.2157 0 0 0 1 0\n");
+  expect_one_line_naming(error_of([&] { load_kitti_calibration(dir / "no_p1.txt", 1241, 376); }), "no_p1.txt", "P1");
+
+  const std::string good = "%YAML:1.0\nCamera.fx: 718.856\nCamera.fy: 718.856\nCamera.cx: 607.1928\n"
+                           "Camera.cy: 185.2157\nCamera.width: 1241\nCamera.height: 376\nCamera.bf: 386.1448\n";
+  write(dir / "good.yaml", good);
+  EXPECT_NO_THROW(load_orbslam_settings(dir / "good.yaml"));
+  write(dir / "no_bf.yaml", replace(good, "Camera.bf: 386.1448\n", ""));
+  expect_one_line_naming(error_of([&] { load_orbslam_settings(dir / "no_bf.yaml"); }), "no_bf.yaml", "Camera.bf");
+  write(dir / "text_fx.yaml", replace(good, "Camera.fx: 718.856", "Camera.fx: seven"));
+  expect_one_line_naming(error_of([&] { load_orbslam_settings(dir / "text_fx.yaml"); }), "text_fx.yaml", "Camera.fx");
+  write(dir / "distorted.yaml", good + "Camera.k1: -0.2\n");
+  expect_one_line_naming(error_of([&] { load_orbslam_settings(dir / "distorted.yaml"); }), "distorted.yaml",
+                         "Camera.k1");
+  write(dir / "bad_k.yaml", good + "LEFT.K: !!opencv-matrix\n   rows: 2\n   cols: 2\n   dt: d\n   data: [1, 0, 0, 1]\n");
+  expect_one_line_naming(error_of([&] { load_orbslam_settings(dir / "bad_k.yaml"); }), "bad_k.yaml", "LEFT.K");
+}
+
+}  // namespace
+}  // namespace heslam

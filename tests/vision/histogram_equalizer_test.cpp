@@ -1,0 +1,199 @@
+// Histogram equalization: the paper's mapping as a known answer, one mapping for both images of a
+// pair, CLAHE with shared tile LUTs, adaptive switching with hysteresis, options from YAML, and the
+// HE-SLAM claim on real EuRoC frames made dark or flat.
+#include <numeric>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "components/core/feature/stereo_feature_pipeline.hpp"
+#include "components/core/image/histogram_equalizer.hpp"
+#include "vision_test_data.hpp"
+
+namespace heslam {
+namespace {
+
+HistogramEqualizerOptions with_mode(HeMode mode) {
+  HistogramEqualizerOptions o;
+  o.mode = mode;
+  return o;
+}
+
+TEST(HistogramEqualizer, GlobalIsTheCdfOfTheJointHistogram) {
+  // Left: half 10, half 20. Right: all 30. Joint histogram: 25 % 10, 25 % 20, 50 % 30, so the paper's
+  // mapping y = 255 cdf(x) gives 10 -> 64, 20 -> 128, 30 -> 255.
+  cv::Mat left(4, 8, CV_8UC1, cv::Scalar(10));
+  left.colRange(4, 8).setTo(20);
+  const cv::Mat right(4, 8, CV_8UC1, cv::Scalar(30));
+  HistogramEqualizer equalizer(with_mode(HeMode::kGlobal));
+  cv::Mat left_out, right_out;
+  equalizer.equalize(left, right, left_out, right_out);
+  EXPECT_EQ(left_out.at<std::uint8_t>(0, 0), 64);
+  EXPECT_EQ(left_out.at<std::uint8_t>(0, 7), 128);
+  EXPECT_EQ(right_out.at<std::uint8_t>(3, 3), 255);
+  EXPECT_TRUE(equalizer.active());
+}
+
+TEST(HistogramEqualizer, BothImagesGetTheSameMapping) {
+  HESLAM_REQUIRE_TEXTURE();
+  const cv::Mat texture = test::load_texture();
+  const cv::Mat left = texture(cv::Rect(0, 0, 400, 300)).clone();
+  cv::Mat right = texture(cv::Rect(200, 200, 400, 300)).clone();
+  for (const HeMode mode : {HeMode::kGlobal, HeMode::kClahe}) {
+    cv::Mat left_out, right_out;
+    HistogramEqualizer(with_mode(mode)).equalize(left, right, left_out, right_out);
+    // Same input value at the same pixel position -> same output value in both images.
+    int compared = 0;
+    for (int y = 0; y < left.rows; y += 3) {
+      for (int x = 0; x < left.cols; x += 3) {
+        if (left.at<std::uint8_t>(y, x) != right.at<std::uint8_t>(y, x)) continue;
+        ++compared;
+        ASSERT_EQ(left_out.at<std::uint8_t>(y, x), right_out.at<std::uint8_t>(y, x)) << to_string(mode);
+      }
+    }
+    EXPECT_GT(compared, 50) << to_string(mode);
+    // Equalization spreads the histogram: the output's contrast is higher.
+    cv::Scalar mean_in, sd_in, mean_out, sd_out;
+    cv::meanStdDev(left, mean_in, sd_in);
+    cv::meanStdDev(left_out, mean_out, sd_out);
+    EXPECT_GT(sd_out[0], sd_in[0]) << to_string(mode);
+  }
+}
+
+TEST(HistogramEqualizer, ClaheLimitsLocalContrastGain) {
+  // A flat tile with tiny noise: global HE blows the noise up to full range, CLAHE's clip limit
+  // keeps the gain bounded.
+  cv::Mat flat(240, 320, CV_8UC1);
+  cv::RNG rng(5);
+  rng.fill(flat, cv::RNG::NORMAL, 128, 2);
+  cv::Mat global_out, clahe_out, unused;
+  HistogramEqualizer(with_mode(HeMode::kGlobal)).equalize(flat, flat, global_out, unused);
+  HistogramEqualizer(with_mode(HeMode::kClahe)).equalize(flat, flat, clahe_out, unused);
+  cv::Scalar mean, sd_global, sd_clahe;
+  cv::meanStdDev(global_out, mean, sd_global);
+  cv::meanStdDev(clahe_out, mean, sd_clahe);
+  EXPECT_GT(sd_global[0], 50.0);
+  EXPECT_LT(sd_clahe[0], 0.5 * sd_global[0]);
+  // Same order of gain as OpenCV's CLAHE with the same clip limit and tiles.
+  cv::Mat reference;
+  cv::createCLAHE(2.0, cv::Size(8, 8))->apply(flat, reference);
+  cv::Scalar sd_reference;
+  cv::meanStdDev(reference, mean, sd_reference);
+  std::printf("noise sigma 2 -> global HE %.1f, CLAHE %.1f, cv::CLAHE %.1f\n", sd_global[0], sd_clahe[0],
+              sd_reference[0]);
+  EXPECT_NEAR(sd_clahe[0], sd_reference[0], 0.25 * sd_reference[0]);
+}
+
+TEST(HistogramEqualizer, AdaptiveSwitchesWithHysteresis) {
+  HESLAM_REQUIRE_TEXTURE();
+  const cv::Mat texture = test::load_texture()(cv::Rect(0, 0, 320, 240)).clone();
+  cv::Scalar mean, sd;
+  cv::meanStdDev(texture, mean, sd);
+  // Contrast (standard deviation) scaled to chosen values around the thresholds 25 / 35.
+  auto with_contrast = [&](double target) {
+    cv::Mat out;
+    texture.convertTo(out, CV_8U, target / sd[0], 128.0 - mean[0] * target / sd[0]);
+    return out;
+  };
+  HistogramEqualizer equalizer(with_mode(HeMode::kAdaptive));
+  const std::vector<std::pair<double, bool>> sequence = {
+      {60, false}, {30, false}, {20, true}, {30, true}, {34, true}, {40, false}, {30, false}, {10, true}};
+  for (const auto& [contrast, expect_active] : sequence) {
+    const cv::Mat image = with_contrast(contrast);
+    cv::Mat left_out, right_out;
+    equalizer.equalize(image, image, left_out, right_out);
+    EXPECT_NEAR(equalizer.last_contrast(), contrast, 1.5);
+    EXPECT_EQ(equalizer.active(), expect_active) << "contrast " << contrast;
+    if (!expect_active) {
+      EXPECT_EQ(cv::norm(left_out, image, cv::NORM_INF), 0.0);
+    }
+  }
+}
+
+TEST(HistogramEqualizer, OptionsFromYaml) {
+  const std::string text =
+      "%YAML:1.0\nHE.mode: clahe\nHE.clipLimit: 3.5\nHE.tilesX: 4\nHE.tilesY: 3\nHE.adaptiveOnBelow: 10\n"
+      "HE.adaptiveOffAbove: 20\n";
+  cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
+  const HistogramEqualizerOptions o = HistogramEqualizerOptions::from_yaml(fs.root(), "test.yaml");
+  EXPECT_EQ(o.mode, HeMode::kClahe);
+  EXPECT_EQ(o.clahe_clip_limit, 3.5);
+  EXPECT_EQ(o.clahe_tiles_x, 4);
+  EXPECT_EQ(o.clahe_tiles_y, 3);
+  EXPECT_EQ(o.adaptive_on_below, 10.0);
+  EXPECT_EQ(o.adaptive_off_above, 20.0);
+
+  cv::FileStorage bad("%YAML:1.0\nHE.mode: sometimes\n", cv::FileStorage::READ | cv::FileStorage::MEMORY);
+  try {
+    HistogramEqualizerOptions::from_yaml(bad.root(), "bad.yaml");
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.yaml: HE.mode"), std::string::npos) << e.what();
+  }
+  cv::FileStorage inverted("%YAML:1.0\nHE.adaptiveOnBelow: 30\nHE.adaptiveOffAbove: 20\n",
+                           cv::FileStorage::READ | cv::FileStorage::MEMORY);
+  EXPECT_THROW(HistogramEqualizerOptions::from_yaml(inverted.root(), "x.yaml"), std::runtime_error);
+}
+
+// Features and stereo matches of a list of pairs under one pipeline configuration.
+struct Counts {
+  std::size_t features = 0;
+  std::size_t stereo = 0;
+};
+
+Counts count(const PinholeStereo& camera, HeMode mode, const std::vector<test::RectifiedPair>& pairs) {
+  StereoFeaturePipelineOptions options;
+  options.he.mode = mode;
+  StereoFeaturePipeline pipeline(camera, options);
+  Counts c;
+  for (const auto& pair : pairs) {
+    const StereoFeatures f = pipeline.process(pair.left, pair.right);
+    c.features += f.size();
+    for (std::size_t i = 0; i < f.size(); ++i) c.stereo += f.has_stereo(i) ? 1 : 0;
+  }
+  return c;
+}
+
+TEST(HistogramEqualizer, DarkAndFlatEurocFramesKeepTheirFeatures) {
+  HESLAM_REQUIRE_SHARED_DATA(test::kEurocDataset);
+  PinholeStereo camera;
+  const auto original = test::load_euroc_pairs({0, 60, 120}, &camera);
+  cv::RNG rng(2023);  // seeded: the same noise every run
+  constexpr double kNoiseSigma = 1.0;  // grey levels, sensor read noise on the dark frames
+  auto degrade = [&](const cv::Mat& image, bool dark) {
+    cv::Mat f;
+    image.convertTo(f, CV_32F);
+    if (dark) {
+      cv::Mat noise(image.size(), CV_32F);
+      rng.fill(noise, cv::RNG::NORMAL, 0.0, kNoiseSigma);
+      f = f * 0.1 + noise;
+    } else {
+      f = (f - 128.0) * 0.12 + 128.0;
+    }
+    cv::Mat out;
+    f.convertTo(out, CV_8U);  // rounds and saturates
+    return out;
+  };
+  std::vector<test::RectifiedPair> dark, flat;
+  for (const auto& p : original) {
+    dark.push_back({degrade(p.left, true), degrade(p.right, true)});
+    flat.push_back({degrade(p.left, false), degrade(p.right, false)});
+  }
+  std::printf("%-9s %-9s %9s %9s   (3 EuRoC MH01 pairs, 1200 features each)\n", "HE", "images", "features", "stereo");
+  for (const HeMode mode : {HeMode::kNone, HeMode::kGlobal, HeMode::kAdaptive, HeMode::kClahe}) {
+    const Counts base = count(camera, mode, original);
+    std::printf("%-9s %-9s %9zu %9zu\n", to_string(mode), "original", base.features, base.stereo);
+    for (const auto& [name, pairs] : {std::pair{"dark", &dark}, std::pair{"flat", &flat}}) {
+      const Counts c = count(camera, mode, *pairs);
+      std::printf("%-9s %-9s %9zu %9zu  (%3.0f %% / %3.0f %% of original)\n", to_string(mode), name, c.features, c.stereo,
+                  100.0 * c.features / base.features, 100.0 * c.stereo / base.stereo);
+      if (mode == HeMode::kGlobal || mode == HeMode::kAdaptive) {
+        EXPECT_GE(c.features, 0.8 * base.features) << to_string(mode) << " " << name;
+        EXPECT_GE(c.stereo, 0.8 * base.stereo) << to_string(mode) << " " << name;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace heslam
