@@ -150,4 +150,9 @@ Qos& Qos::transient_local(int32_t replay_depth) {
   return *this;
 }
 
+Qos& Qos::keep_instances_on_writer_exit() {
+  dds_qset_writer_data_lifecycle(qos_, false);
+  return *this;
+}
+
 }  // namespace heslam::runtime

@@ -41,6 +41,9 @@ class Qos {
   Qos& best_effort();
   Qos& volatile_durability();
   Qos& transient_local(int32_t replay_depth);  // also sets durability_service KEEP_LAST(replay_depth)
+  // Writers only: deleting the writer (process exit) unregisters its instances WITHOUT disposing
+  // them, so readers keep the state (DDS default: dispose, i.e. "deleted").
+  Qos& keep_instances_on_writer_exit();
 
   const dds_qos_t* get() const { return qos_; }
   QosRole role() const { return role_; }
