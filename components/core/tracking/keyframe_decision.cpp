@@ -1,0 +1,59 @@
+// ORB-SLAM2's stereo keyframe rules.
+#include "components/core/tracking/keyframe_decision.hpp"
+
+namespace heslam {
+namespace {
+
+// Stereo: insert also when tracking is thin, below this fraction of the reference keyframe's points.
+constexpr float kWeakTrackingRatio = 0.25f;
+constexpr int kTinyMapKeyframes = 2;
+
+}  // namespace
+
+int reference_min_observations(int keyframes_in_map) { return keyframes_in_map <= kTinyMapKeyframes ? 2 : 3; }
+
+int count_reference_points(const Keyframe& reference, const Map& map, int min_observations) {
+  int count = 0;
+  for (PointId id : reference.point_ids) {
+    const MapPoint* point = map.point(id);
+    if (point != nullptr && !point->culled && static_cast<int>(point->observations.size()) >= min_observations) ++count;
+  }
+  return count;
+}
+
+KeyframeDecision decide_keyframe(const Frame& frame, const PinholeStereo& camera, const KeyframeDecisionInput& input,
+                                 const TrackerOptions& options) {
+  KeyframeDecision decision;
+  // Just after a relocalization the pose is fragile: no keyframe until a second has passed.
+  if (input.frames_since_relocalization < options.max_frames_between_keyframes &&
+      input.keyframes_in_map > options.max_frames_between_keyframes) {
+    return decision;
+  }
+  const double close_depth_m = options.close_depth_baselines * camera.baseline_m;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    const float depth = frame.features.depth_m[i];
+    if (depth <= 0.f || depth >= close_depth_m) continue;
+    if (frame.point_ids[i] != kNoId && !frame.outlier[i]) {
+      ++decision.tracked_close;
+    } else {
+      ++decision.untracked_close;
+    }
+  }
+  const bool need_close = decision.tracked_close < options.close_tracked_needed &&
+                          decision.untracked_close > options.close_untracked_enough;
+  const float ratio = input.keyframes_in_map < 2 ? options.reference_ratio_single_keyframe
+                                                 : options.reference_ratio_stereo;
+  const float reference = static_cast<float>(input.reference_tracked_points);
+  const float tracked = static_cast<float>(input.tracked_inliers);
+
+  const bool c1a = input.frames_since_keyframe >= options.max_frames_between_keyframes;
+  const bool c1b = input.frames_since_keyframe >= options.min_frames_between_keyframes && input.mapper_idle;
+  const bool c1c = tracked < reference * kWeakTrackingRatio || need_close;
+  const bool c2 = (tracked < reference * ratio || need_close) && input.tracked_inliers > options.min_keyframe_inliers;
+  // A busy mapper would be interrupted in ORB-SLAM2; stereo still inserts (its queue is short), so the
+  // mapper state only gates c1b here.
+  decision.insert = (c1a || c1b || c1c) && c2;
+  return decision;
+}
+
+}  // namespace heslam

@@ -1,0 +1,45 @@
+// Motion-only bundle adjustment: refines one camera pose against fixed map points (ORB-SLAM2's
+// Optimizer::PoseOptimization), with Ceres.
+//
+// Observations are monocular (u, v) or stereo (u, v, u_right), weighted by the keypoint's pyramid level.
+// Several rounds: optimize with a Huber kernel, classify every observation by its chi-square error
+// (5.991 mono / 7.815 stereo, 95 %), optimize again on the inliers only; the last rounds drop the kernel.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/geometry/pose.hpp"
+
+namespace heslam {
+
+struct PoseObservation {
+  Eigen::Vector3d p_w;       // fixed map point, world frame
+  double u_px = 0.0;
+  double v_px = 0.0;
+  double u_right_px = -1.0;  // < 0: monocular observation
+  double inv_sigma2 = 1.0;   // 1 / (level scale)^2
+  bool stereo() const { return u_right_px >= 0.0; }
+};
+
+struct MotionOnlyBaOptions {
+  int rounds = 4;                   // ORB-SLAM2: 4 optimizations of 10 iterations
+  int iterations_per_round = 10;
+  int robust_rounds = 2;            // rounds with the Huber kernel; later rounds are plain least squares
+  double chi2_mono = 5.991;         // chi-square 95 % quantile, 2 dof
+  double chi2_stereo = 7.815;       // chi-square 95 % quantile, 3 dof
+};
+
+struct MotionOnlyBaResult {
+  Pose3 T_cw = Pose3::Identity();
+  std::vector<bool> outlier;  // per observation
+  int inliers = 0;
+};
+
+// Starts from T_cw_guess; returns the refined pose and the outlier flags of the last classification.
+MotionOnlyBaResult optimize_pose(const PinholeStereo& camera, const std::vector<PoseObservation>& observations,
+                                 const Pose3& T_cw_guess, const MotionOnlyBaOptions& options = {});
+
+}  // namespace heslam

@@ -1,0 +1,39 @@
+// Frame <-> motion-only BA glue.
+#include "components/core/tracking/optimize_frame.hpp"
+
+#include "components/core/tracking/motion_only_ba.hpp"
+
+namespace heslam {
+
+int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camera, const TrackerOptions& options) {
+  std::vector<PoseObservation> observations;
+  std::vector<std::size_t> keypoint_of;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    frame.outlier[i] = false;
+    if (frame.point_ids[i] == kNoId) continue;
+    const MapPoint* point = map.point(frame.point_ids[i]);
+    if (point == nullptr) {
+      frame.point_ids[i] = kNoId;
+      continue;
+    }
+    const Keypoint& kp = frame.features.keypoints[i];
+    PoseObservation obs;
+    obs.p_w = point->p_w;
+    obs.u_px = kp.u_px;
+    obs.v_px = kp.v_px;
+    obs.u_right_px = frame.features.has_stereo(i) ? frame.features.u_right_px[i] : -1.0;
+    obs.inv_sigma2 = frame.features.pyramid.inv_sigma2[static_cast<std::size_t>(kp.octave)];
+    observations.push_back(obs);
+    keypoint_of.push_back(i);
+  }
+  if (observations.empty()) return 0;
+  MotionOnlyBaOptions ba;
+  ba.rounds = options.pose_optimization_rounds;
+  ba.iterations_per_round = options.pose_optimization_iterations;
+  const MotionOnlyBaResult result = optimize_pose(camera, observations, frame.T_cw(), ba);
+  frame.T_wc = result.T_cw.inverse();
+  for (std::size_t k = 0; k < keypoint_of.size(); ++k) frame.outlier[keypoint_of[k]] = result.outlier[k];
+  return result.inliers;
+}
+
+}  // namespace heslam

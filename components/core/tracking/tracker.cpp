@@ -1,0 +1,266 @@
+// The stereo frame tracker: initialization, motion model / reference keyframe / relocalization,
+// local map tracking, keyframe decision.
+#include "components/core/tracking/tracker.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <limits>
+
+#include "components/core/tracking/keyframe_decision.hpp"
+#include "components/core/tracking/local_map.hpp"
+#include "components/core/tracking/optimize_frame.hpp"
+#include "components/core/tracking/projection_search.hpp"
+#include "components/core/tracking/relocalizer.hpp"
+
+namespace heslam {
+namespace {
+
+// ORB-SLAM2 doubles the motion-model window once before giving up on it.
+constexpr float kMotionRetryFactor = 2.f;
+// For two frames after a relocalization the motion model is not trusted (no velocity yet).
+constexpr int kFramesWithoutMotionModelAfterRelocalization = 2;
+
+// One line naming the field that is wrong; the frontend skips and counts such frames.
+void validate(const StereoFeatures& f) {
+  const std::size_t n = f.keypoints.size();
+  auto fail = [](const std::string& what) { throw std::invalid_argument("StereoFeatures: " + what); };
+  if (f.descriptors.size() != n || f.u_right_px.size() != n || f.depth_m.size() != n) {
+    fail("descriptors/u_right_px/depth_m must have one entry per keypoint (" + std::to_string(n) + ")");
+  }
+  if (f.pyramid.levels < 1 || f.pyramid.scale.size() != static_cast<std::size_t>(f.pyramid.levels) ||
+      f.pyramid.inv_sigma2.size() != f.pyramid.scale.size() || f.pyramid.sigma2.size() != f.pyramid.scale.size()) {
+    fail("pyramid tables do not match pyramid.levels");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const Keypoint& kp = f.keypoints[i];
+    if (kp.octave < 0 || kp.octave >= f.pyramid.levels) fail("keypoint " + std::to_string(i) + " octave out of range");
+    if (!std::isfinite(kp.u_px) || !std::isfinite(kp.v_px) || !std::isfinite(f.depth_m[i]) ||
+        !std::isfinite(f.u_right_px[i])) {
+      fail("keypoint " + std::to_string(i) + " has a non-finite coordinate or depth");
+    }
+  }
+}
+
+double elapsed_ms(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since).count();
+}
+
+}  // namespace
+
+const char* to_string(TrackingState state) {
+  switch (state) {
+    case TrackingState::kNotInitialized: return "NOT_INITIALIZED";
+    case TrackingState::kOk: return "OK";
+    case TrackingState::kLost: return "LOST";
+  }
+  return "UNKNOWN";
+}
+
+const char* to_string(TrackingMethod method) {
+  switch (method) {
+    case TrackingMethod::kNone: return "none";
+    case TrackingMethod::kInitialization: return "initialization";
+    case TrackingMethod::kMotionModel: return "motion_model";
+    case TrackingMethod::kReferenceKeyframe: return "reference_keyframe";
+    case TrackingMethod::kRelocalization: return "relocalization";
+  }
+  return "unknown";
+}
+
+Tracker::Tracker(const PinholeStereo& camera, const TrackerOptions& options) : camera_(camera), options_(options) {}
+
+TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatures features) {
+  const auto start = std::chrono::steady_clock::now();
+  validate(features);
+  TrackResult result;
+  Frame frame(stamp_ns, seq, std::move(features), camera_);
+
+  if (state_ == TrackingState::kNotInitialized) {
+    initialize(frame, result);
+    result.timings.total_ms = elapsed_ms(start);
+    return result;
+  }
+
+  const bool last_frame_tracked = state_ == TrackingState::kOk;
+  bool ok = false;
+  if (last_frame_tracked) {
+    if (velocity_ && frames_since_relocalization_ >= kFramesWithoutMotionModelAfterRelocalization) {
+      ok = track_motion_model(frame);
+      if (ok) result.method = TrackingMethod::kMotionModel;
+    }
+    if (!ok) {
+      ok = track_reference_keyframe(frame);
+      if (ok) result.method = TrackingMethod::kReferenceKeyframe;
+    }
+  } else {
+    frame.T_wc = last_frame_.T_wc;
+    const auto relocalization = relocalize(frame, map_, camera_, options_);
+    if (relocalization) {
+      ok = true;
+      result.method = TrackingMethod::kRelocalization;
+      reference_kf_ = relocalization->keyframe;
+      frames_since_relocalization_ = 0;
+    }
+  }
+  result.timings.initial_pose_ms = elapsed_ms(start);
+
+  int inliers = 0;
+  if (ok) {
+    const auto local_start = std::chrono::steady_clock::now();
+    ok = track_local_map(frame, inliers);
+    result.timings.local_map_ms = elapsed_ms(local_start);
+  }
+
+  if (ok) {
+    state_ = TrackingState::kOk;
+    if (last_frame_tracked) {
+      velocity_ = last_frame_.T_wc.inverse() * frame.T_wc;
+    } else {
+      velocity_.reset();  // the last frame had no pose: no velocity until two frames in a row are tracked
+    }
+    // Counted before keyframe creation adds the new stereo points to the frame's matches.
+    for (std::size_t i = 0; i < frame.size(); ++i) {
+      if (frame.point_ids[i] != kNoId && frame.features.has_stereo(i)) ++result.tracked_stereo;
+    }
+    result.tracked_points = inliers;
+    ++frames_since_keyframe_;
+    const auto keyframe_start = std::chrono::steady_clock::now();
+    maybe_insert_keyframe(frame, inliers, result);
+    result.timings.keyframe_ms = elapsed_ms(keyframe_start);
+    result.T_wc = frame.T_wc;
+  } else {
+    state_ = TrackingState::kLost;
+    velocity_.reset();
+    frame.clear_matches();
+    frame.T_wc = last_frame_.T_wc;  // kept only as the relocalization starting guess
+    result.T_wc = frame.T_wc;
+  }
+  ++frames_since_relocalization_;
+  result.state = state_;
+  result.reference_kf = reference_kf_;
+  if (const Keyframe* reference = map_.keyframe(reference_kf_)) {
+    result.T_ref_c = reference->T_wc.inverse() * frame.T_wc;
+  }
+  last_frame_ = std::move(frame);
+  result.timings.total_ms = elapsed_ms(start);
+  return result;
+}
+
+bool Tracker::initialize(Frame& frame, TrackResult& result) {
+  int stereo = 0;
+  for (std::size_t i = 0; i < frame.size(); ++i) stereo += frame.features.has_stereo(i) ? 1 : 0;
+  result.state = TrackingState::kNotInitialized;
+  if (static_cast<int>(frame.size()) < options_.min_features_to_initialize ||
+      stereo < options_.min_stereo_points_to_initialize) {
+    return false;
+  }
+
+  // The first keyframe is the world origin and gets a point for every stereo feature, near or far.
+  frame.T_wc = Pose3::Identity();
+  TrackerOptions all_points = options_;
+  all_points.new_keyframe_min_points = std::numeric_limits<int>::max();
+  KeyframeCandidate candidate = make_keyframe(frame, camera_, map_, next_keyframe_id(), point_counter_, all_points);
+  insert_keyframe(map_, candidate, camera_, options_);
+  frame.point_ids = candidate.keyframe.point_ids;
+
+  state_ = TrackingState::kOk;
+  reference_kf_ = candidate.keyframe.id;
+  frames_since_keyframe_ = 0;
+  result.state = state_;
+  result.method = TrackingMethod::kInitialization;
+  result.T_wc = frame.T_wc;
+  result.reference_kf = reference_kf_;
+  result.tracked_points = static_cast<int>(candidate.new_points.size());
+  result.tracked_stereo = result.tracked_points;
+  result.new_keyframe = std::move(candidate.keyframe);
+  result.new_points = std::move(candidate.new_points);
+  last_frame_ = std::move(frame);
+  return true;
+}
+
+bool Tracker::track_motion_model(Frame& frame) {
+  frame.T_wc = last_frame_.T_wc * *velocity_;
+  frame.clear_matches();
+  int matches = search_from_last_frame(frame, last_frame_, map_, camera_, options_.motion_search_radius_px, options_);
+  if (matches < options_.min_motion_matches) {
+    frame.clear_matches();
+    matches = search_from_last_frame(frame, last_frame_, map_, camera_,
+                                     kMotionRetryFactor * options_.motion_search_radius_px, options_);
+  }
+  if (matches < options_.min_motion_matches) {
+    frame.clear_matches();
+    return false;
+  }
+  optimize_frame_pose(frame, map_, camera_, options_);
+  return frame.discard_outliers() >= options_.min_pose_inliers;
+}
+
+bool Tracker::track_reference_keyframe(Frame& frame) {
+  const Keyframe* reference = map_.keyframe(reference_kf_);
+  if (reference == nullptr) return false;
+  frame.T_wc = last_frame_.T_wc;
+  frame.clear_matches();
+  int matches = search_keyframe_by_projection(frame, *reference, map_, camera_, options_.reference_search_radius_px,
+                                              options_.reference_ratio, options_);
+  if (matches < options_.min_reference_matches) {
+    frame.clear_matches();
+    matches = search_keyframe_brute_force(frame, *reference, map_, options_.reference_ratio, options_);
+  }
+  if (matches < options_.min_reference_matches) {
+    frame.clear_matches();
+    return false;
+  }
+  optimize_frame_pose(frame, map_, camera_, options_);
+  return frame.discard_outliers() >= options_.min_pose_inliers;
+}
+
+bool Tracker::track_local_map(Frame& frame, int& inliers) {
+  const LocalMapSelection local = select_local_map(frame, map_, options_);
+  if (local.reference != kNoId) reference_kf_ = local.reference;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    if (MapPoint* point = map_.point(frame.point_ids[i])) ++point->visible;
+  }
+  const bool recently_relocalized = frames_since_relocalization_ < kFramesWithoutMotionModelAfterRelocalization;
+  const float radius = recently_relocalized ? options_.local_search_radius_relocalized_px : options_.local_search_radius_px;
+  search_local_points(frame, local.points, map_, camera_, radius, options_);
+  optimize_frame_pose(frame, map_, camera_, options_);
+  inliers = 0;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    if (frame.point_ids[i] == kNoId || frame.outlier[i]) continue;
+    if (MapPoint* point = map_.point(frame.point_ids[i])) {
+      ++point->found;
+      ++inliers;
+    }
+  }
+  frame.discard_outliers();
+  const int needed = frames_since_relocalization_ < options_.max_frames_between_keyframes
+                         ? options_.min_local_map_inliers_after_relocalization
+                         : options_.min_local_map_inliers;
+  return inliers >= needed;
+}
+
+void Tracker::maybe_insert_keyframe(Frame& frame, int inliers, TrackResult& result) {
+  const Keyframe* reference = map_.keyframe(reference_kf_);
+  if (reference == nullptr) return;
+  KeyframeDecisionInput input;
+  input.frames_since_keyframe = frames_since_keyframe_;
+  input.frames_since_relocalization = frames_since_relocalization_;
+  input.tracked_inliers = inliers;
+  input.keyframes_in_map = static_cast<int>(map_.keyframes.size());
+  input.reference_tracked_points =
+      count_reference_points(*reference, map_, reference_min_observations(input.keyframes_in_map));
+  input.mapper_idle = mapper_idle_ || options_.assume_mapper_idle;
+  if (!decide_keyframe(frame, camera_, input, options_).insert) return;
+
+  KeyframeCandidate candidate = make_keyframe(frame, camera_, map_, next_keyframe_id(), point_counter_, options_);
+  insert_keyframe(map_, candidate, camera_, options_);
+  frame.point_ids = candidate.keyframe.point_ids;  // the next frame tracks the new points too
+  reference_kf_ = candidate.keyframe.id;
+  frames_since_keyframe_ = 0;
+  result.new_keyframe = std::move(candidate.keyframe);
+  result.new_points = std::move(candidate.new_points);
+}
+
+}  // namespace heslam

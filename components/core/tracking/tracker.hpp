@@ -1,0 +1,91 @@
+// The stereo frame tracker (ORB-SLAM2 Tracking, stereo, without threads or I/O): one call per frame,
+// from stereo features to a pose, a state and, sometimes, a new keyframe with its new map points.
+//
+// The tracker keeps a Map: alone it fills it itself (keyframes, points, observations, covisibility);
+// inside the frontend process the local mapper's state is applied to it (local_map()) and
+// TrackerOptions::maintain_map is false. Deterministic: same frames in, same poses out, bit for bit.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/feature/features.hpp"
+#include "components/core/geometry/pose.hpp"
+#include "components/core/map/map.hpp"
+#include "components/core/tracking/frame.hpp"
+#include "components/core/tracking/tracker_options.hpp"
+
+namespace heslam {
+
+enum class TrackingState { kNotInitialized, kOk, kLost };
+const char* to_string(TrackingState state);
+
+// How the frame's pose was first found, before the local map refinement.
+enum class TrackingMethod { kNone, kInitialization, kMotionModel, kReferenceKeyframe, kRelocalization };
+const char* to_string(TrackingMethod method);
+
+struct TrackTimings {
+  double initial_pose_ms = 0.0;  // motion model / reference keyframe / relocalization, with its BA
+  double local_map_ms = 0.0;     // local map selection, search, BA
+  double keyframe_ms = 0.0;      // decision and creation
+  double total_ms = 0.0;
+};
+
+struct TrackResult {
+  TrackingState state = TrackingState::kNotInitialized;
+  TrackingMethod method = TrackingMethod::kNone;
+  // Published only when state == kOk; otherwise T_wc is the last good pose and must not be used.
+  Pose3 T_wc = Pose3::Identity();
+  KeyframeId reference_kf = kNoId;
+  Pose3 T_ref_c = Pose3::Identity();  // current camera in the reference keyframe's frame
+  int tracked_points = 0;             // inlier map points after the local map search
+  int tracked_stereo = 0;             // ... of which with a stereo observation
+  std::optional<Keyframe> new_keyframe;
+  std::vector<MapPoint> new_points;   // created with new_keyframe
+  TrackTimings timings;
+
+  bool pose_valid() const { return state == TrackingState::kOk; }
+};
+
+class Tracker {
+ public:
+  Tracker(const PinholeStereo& camera, const TrackerOptions& options);
+
+  // Throws std::invalid_argument (one line naming the field) on inconsistent features; the tracker's
+  // state is unchanged then, so the caller can skip the frame and count it.
+  TrackResult track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatures features);
+
+  // Whether the local mapper can take a keyframe now (real-time mode); lockstep keeps it true.
+  void set_mapper_idle(bool idle) { mapper_idle_ = idle; }
+
+  Map& local_map() { return map_; }
+  const Map& local_map() const { return map_; }
+  TrackingState state() const { return state_; }
+  const PinholeStereo& camera() const { return camera_; }
+  const TrackerOptions& options() const { return options_; }
+
+ private:
+  bool initialize(Frame& frame, TrackResult& result);
+  bool track_motion_model(Frame& frame);
+  bool track_reference_keyframe(Frame& frame);
+  bool track_local_map(Frame& frame, int& inliers);
+  void maybe_insert_keyframe(Frame& frame, int inliers, TrackResult& result);
+  KeyframeId next_keyframe_id() { return make_id(options_.id_tag, ++keyframe_counter_); }
+
+  PinholeStereo camera_;
+  TrackerOptions options_;
+  Map map_;
+  TrackingState state_ = TrackingState::kNotInitialized;
+  Frame last_frame_;
+  std::optional<Pose3> velocity_;  // T_last_current of the last tracked pair
+  KeyframeId reference_kf_ = kNoId;
+  std::uint64_t keyframe_counter_ = 0;
+  std::uint64_t point_counter_ = 1;
+  int frames_since_keyframe_ = 0;
+  int frames_since_relocalization_ = 1 << 30;
+  bool mapper_idle_ = true;
+};
+
+}  // namespace heslam

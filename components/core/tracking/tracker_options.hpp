@@ -1,0 +1,86 @@
+// Tunables of the stereo frame tracker, with ORB-SLAM2's values as defaults and why each is what it is.
+//
+// The frontend reads these from its YAML config; tests and the offline harness use the defaults.
+#pragma once
+
+#include <cstdint>
+
+namespace heslam {
+
+struct TrackerOptions {
+  // --- initialization ---
+  // ORB-SLAM2 stereo (Tracking::StereoInitialization) starts the map on the first frame with more than
+  // 500 keypoints (N > 500), whatever its stereo count. EuRoC frames of 1200 ORB features give 350-450
+  // stereo matches, so requiring 500 *stereo* points would never start; a floor on stereo points
+  // keeps a textureless or black first frame from seeding a map of a handful of points.
+  int min_features_to_initialize = 500;
+  int min_stereo_points_to_initialize = 150;
+
+  // --- depth classes ---
+  // Stereo points closer than this many baselines are "close" (reliable depth): ORB-SLAM2 ThDepth = 35.
+  double close_depth_baselines = 35.0;
+
+  // --- descriptor matching ---
+  int descriptor_threshold_high = 100;  // TH_HIGH: accept a projection match at most this far
+  int descriptor_threshold_low = 50;    // TH_LOW: brute-force / relocalization matches
+  bool check_orientation = true;        // keep matches in the 3 dominant rotation-histogram bins
+
+  // --- motion model search (ORB-SLAM2 TrackWithMotionModel, stereo) ---
+  float motion_search_radius_px = 7.f;  // times the keypoint's scale; doubled once if too few matches
+  int min_motion_matches = 20;          // fewer: widen the window, then fall back to the reference keyframe
+
+  // --- reference keyframe search (no bag of words yet: guided projection, then brute force) ---
+  float reference_search_radius_px = 25.f;  // wide: the motion model failed, the pose guess is poor
+  float reference_ratio = 0.7f;             // nearest / second nearest (ORB-SLAM2 uses 0.7 with BoW)
+  int min_reference_matches = 15;
+
+  // After pose optimization in motion-model / reference tracking: at least this many inlier map points.
+  int min_pose_inliers = 10;
+
+  // --- local map search (ORB-SLAM2 SearchLocalPoints) ---
+  float local_search_radius_px = 3.f;          // stereo/RGB-D value in ORB-SLAM2 (th = 3)
+  float local_search_radius_relocalized_px = 5.f;
+  float local_ratio = 0.8f;                    // best / second best, applied when both are on one level
+  float min_view_cosine = 0.5f;                // the point was never seen from more than 60 degrees off
+  int local_map_max_keyframes = 80;            // ORB-SLAM2 caps the local keyframe set at 80
+  int local_map_neighbours_per_keyframe = 10;  // best covisible neighbours added per local keyframe
+  int min_local_map_inliers = 30;              // fewer: tracking is lost
+  int min_local_map_inliers_after_relocalization = 50;
+
+  // --- motion-only bundle adjustment ---
+  int pose_optimization_rounds = 4;      // outlier reclassification rounds
+  int pose_optimization_iterations = 10;  // Levenberg-Marquardt iterations per round
+
+  // --- keyframe decision (ORB-SLAM2 NeedNewKeyFrame, stereo) ---
+  int max_frames_between_keyframes = 20;  // = camera fps in ORB-SLAM2: at least one keyframe a second
+  int min_frames_between_keyframes = 0;
+  int close_tracked_needed = 100;   // fewer close points tracked ...
+  int close_untracked_enough = 70;  // ... and this many close ones could be added: insert
+  float reference_ratio_stereo = 0.75f;
+  float reference_ratio_single_keyframe = 0.4f;
+  int min_keyframe_inliers = 15;
+  // Points created for a new keyframe: all close untracked ones, then far ones until this many in all.
+  int new_keyframe_min_points = 100;
+
+  // --- relocalization ---
+  int relocalization_keyframes = 8;          // most recent keyframes tried, newest first
+  float relocalization_ratio = 0.75f;        // ORB-SLAM2 relocalization BoW ratio
+  int min_relocalization_matches = 15;
+  int min_relocalization_inliers = 50;       // ORB-SLAM2: 50 after pose optimization
+  std::uint64_t ransac_seed = 0x5eed;        // PnP RANSAC: same seed + same frame = same pose
+
+  // --- map maintenance ---
+  // True when no local mapper runs: the tracker itself adds observations of tracked points to each new
+  // keyframe, updates point normals / descriptors and the covisibility graph. False when a mapper owns
+  // that state and the frontend mirrors it.
+  bool maintain_map = true;
+  // With maintain_map: a point's position becomes the inverse-variance weighted mean of its stereo
+  // observations (a local mapper's BA does better; this is the tracker-alone stand-in).
+  bool fuse_stereo_observations = true;
+  // Lockstep runs (and a tracker alone) treat the mapper as idle; real time reports it per frame.
+  bool assume_mapper_idle = true;
+  // Creator tag for keyframe and point ids (map.hpp).
+  std::uint8_t id_tag = 1;
+};
+
+}  // namespace heslam

@@ -1,0 +1,81 @@
+// Keyframe decision: ORB-SLAM2's stereo rules on hand-made counts.
+#include <gtest/gtest.h>
+
+#include "components/core/tracking/keyframe_decision.hpp"
+#include "synthetic_scene.hpp"
+
+namespace heslam {
+namespace {
+
+// A frame with `tracked` close tracked stereo points, `untracked` close untracked ones.
+Frame make_counted_frame(const PinholeStereo& camera, int tracked, int untracked) {
+  StereoFeatures f;
+  for (int i = 0; i < tracked + untracked; ++i) {
+    Keypoint kp;
+    kp.u_px = static_cast<float>(10 + i % 600);
+    kp.v_px = static_cast<float>(10 + i / 600);
+    f.keypoints.push_back(kp);
+    f.descriptors.push_back(Descriptor{});
+    f.depth_m.push_back(2.f);  // close: under 35 baselines (3.85 m)
+    f.u_right_px.push_back(kp.u_px - 20.f);
+  }
+  Frame frame(0, 0, f, camera);
+  for (int i = 0; i < tracked; ++i) frame.point_ids[static_cast<std::size_t>(i)] = make_id(1, static_cast<std::uint64_t>(i + 1));
+  return frame;
+}
+
+TEST(KeyframeDecision, FewCloseTrackedAndManyNewInserts) {
+  const PinholeStereo camera = test::synthetic_camera();
+  const Frame frame = make_counted_frame(camera, 60, 200);
+  KeyframeDecisionInput input;
+  input.frames_since_keyframe = 3;
+  input.tracked_inliers = 60;
+  input.keyframes_in_map = 5;
+  input.reference_tracked_points = 70;  // 60 > 0.75 * 70: only the close-point rule can trigger
+  const KeyframeDecision decision = decide_keyframe(frame, camera, input, TrackerOptions{});
+  EXPECT_EQ(decision.tracked_close, 60);
+  EXPECT_EQ(decision.untracked_close, 200);
+  EXPECT_TRUE(decision.insert);
+}
+
+TEST(KeyframeDecision, WellTrackedFrameIsNotAKeyframe) {
+  const PinholeStereo camera = test::synthetic_camera();
+  const Frame frame = make_counted_frame(camera, 300, 50);
+  KeyframeDecisionInput input;
+  input.frames_since_keyframe = 3;
+  input.tracked_inliers = 300;
+  input.keyframes_in_map = 5;
+  input.reference_tracked_points = 320;
+  EXPECT_FALSE(decide_keyframe(frame, camera, input, TrackerOptions{}).insert);
+}
+
+TEST(KeyframeDecision, RatioToReferenceTriggers) {
+  const PinholeStereo camera = test::synthetic_camera();
+  const Frame frame = make_counted_frame(camera, 200, 50);
+  KeyframeDecisionInput input;
+  input.frames_since_keyframe = 3;
+  input.tracked_inliers = 200;
+  input.keyframes_in_map = 5;
+  input.reference_tracked_points = 300;  // 200 < 0.75 * 300
+  input.mapper_idle = true;
+  EXPECT_TRUE(decide_keyframe(frame, camera, input, TrackerOptions{}).insert);
+  input.mapper_idle = false;  // busy mapper, not a second yet, tracking not weak: wait
+  EXPECT_FALSE(decide_keyframe(frame, camera, input, TrackerOptions{}).insert);
+  input.frames_since_keyframe = 20;  // a second without a keyframe: insert anyway
+  EXPECT_TRUE(decide_keyframe(frame, camera, input, TrackerOptions{}).insert);
+}
+
+TEST(KeyframeDecision, NoKeyframeRightAfterRelocalizationInABigMap) {
+  const PinholeStereo camera = test::synthetic_camera();
+  const Frame frame = make_counted_frame(camera, 20, 300);
+  KeyframeDecisionInput input;
+  input.frames_since_relocalization = 2;
+  input.frames_since_keyframe = 30;
+  input.tracked_inliers = 60;
+  input.keyframes_in_map = 40;
+  input.reference_tracked_points = 300;
+  EXPECT_FALSE(decide_keyframe(frame, camera, input, TrackerOptions{}).insert);
+}
+
+}  // namespace
+}  // namespace heslam
