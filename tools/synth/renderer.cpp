@@ -1,0 +1,229 @@
+// Scene radiance by per-pixel ray / quad intersection, trilinear anisotropic texturing and
+// silhouette supersampling.
+#include "tools/synth/renderer.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace heslam::synth {
+namespace {
+
+// Surfaces closer than this to the camera centre are clipped (a lens cannot focus closer anyway).
+constexpr float kNearM = 0.05f;
+// Rays more grazing than this to a plane are treated as missing it (avoids dividing by ~0).
+constexpr float kMinCosine = 1e-6f;
+// Up to this many texture taps along the major axis of a stretched pixel footprint (beyond it the
+// footprint is widened instead: slightly blurrier grazing floors, never aliasing). Each extra tap
+// is two more bilinear lookups on every stretched pixel, the renderer's main cost.
+constexpr int kMaxAnisotropicTaps = 2;
+// Rotated-grid 4x supersampling pattern for silhouette pixels (offsets in pixels).
+constexpr float kSubsamples[4][2] = {{-0.125f, -0.375f}, {0.375f, -0.125f}, {0.125f, 0.375f}, {-0.375f, 0.125f}};
+
+}  // namespace
+
+Renderer::Renderer(const Scene& scene, const CameraRays& rays) : scene_(scene), rays_(rays) {
+  const std::size_t n = static_cast<std::size_t>(rays.width_px()) * static_cast<std::size_t>(rays.height_px());
+  depth_.resize(n);
+  hit_.resize(n);
+}
+
+void Renderer::prepare_quads(const Pose3& T_wc) {
+  const Pose3 T_cw = T_wc.inverse();
+  const Eigen::Matrix3d R = T_cw.linear();
+  cam_quads_.clear();
+  for (std::size_t qi = 0; qi < scene_.quads.size(); ++qi) {
+    const Quad& q = scene_.quads[qi];
+    const Eigen::Vector3d o = T_cw * q.origin_w;
+    const Eigen::Vector3d u = R * q.axis_u_w;
+    const Eigen::Vector3d v = R * q.axis_v_w;
+    // Clip the rectangle against the near plane, then bound its projection.
+    const Eigen::Vector3d corners[4] = {o, o + q.size_u_m * u, o + q.size_u_m * u + q.size_v_m * v, o + q.size_v_m * v};
+    float x_min = 1e30f, x_max = -1e30f, y_min = 1e30f, y_max = -1e30f;
+    bool any = false;
+    auto add = [&](const Eigen::Vector3d& p) {
+      const float x = static_cast<float>(p.x() / p.z()), y = static_cast<float>(p.y() / p.z());
+      x_min = std::min(x_min, x);
+      x_max = std::max(x_max, x);
+      y_min = std::min(y_min, y);
+      y_max = std::max(y_max, y);
+      any = true;
+    };
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector3d& a = corners[k];
+      const Eigen::Vector3d& b = corners[(k + 1) % 4];
+      const bool a_in = a.z() >= kNearM, b_in = b.z() >= kNearM;
+      if (a_in) add(a);
+      if (a_in != b_in) add(a + (b - a) * ((kNearM - a.z()) / (b.z() - a.z())));
+    }
+    if (!any || x_max < rays_.x_min() || x_min > rays_.x_max() || y_max < rays_.y_min() || y_min > rays_.y_max()) {
+      continue;
+    }
+    const Eigen::Vector3d n = u.cross(v);
+    CameraQuad cq;
+    cq.n = n.cast<float>();
+    cq.u = u.cast<float>();
+    cq.v = v.cast<float>();
+    cq.n_o = static_cast<float>(n.dot(o));
+    cq.u_o = static_cast<float>(u.dot(o));
+    cq.v_o = static_cast<float>(v.dot(o));
+    cq.size_u = static_cast<float>(q.size_u_m);
+    cq.size_v = static_cast<float>(q.size_v_m);
+    cq.x_min = x_min;
+    cq.x_max = x_max;
+    cq.y_min = y_min;
+    cq.y_max = y_max;
+    cq.index = static_cast<int>(qi);
+    cq.texture = &scene_.textures[static_cast<std::size_t>(q.texture)];
+    cq.inv_texel = static_cast<float>(1.0 / q.texel_m);
+    cq.s0 = static_cast<float>(q.s0_texels);
+    cq.t0 = static_cast<float>(q.t0_texels);
+    cq.shade = q.shade;
+    cam_quads_.push_back(cq);
+  }
+}
+
+int Renderer::trace(float x, float y, const int* candidates, int count, float& t_hit) const {
+  int best = -1;
+  t_hit = 1e30f;
+  for (int k = 0; k < count; ++k) {
+    const CameraQuad& q = cam_quads_[static_cast<std::size_t>(candidates[k])];
+    const float nd = q.n.x() * x + q.n.y() * y + q.n.z();
+    if (std::abs(nd) < kMinCosine) continue;
+    const float t = q.n_o / nd;
+    if (t < kNearM || t >= t_hit) continue;
+    const float a = t * (q.u.x() * x + q.u.y() * y + q.u.z()) - q.u_o;
+    const float b = t * (q.v.x() * x + q.v.y() * y + q.v.z()) - q.v_o;
+    if (a < 0 || b < 0 || a > q.size_u || b > q.size_v) continue;
+    t_hit = t;
+    best = candidates[k];
+  }
+  return best;
+}
+
+float Renderer::shade(const CameraQuad& cq, float x, float y, float t, float step) const {
+  const MipTexture& tex = *cq.texture;
+  const float inv_texel = cq.inv_texel;
+  const float ud = cq.u.x() * x + cq.u.y() * y + cq.u.z();
+  const float vd = cq.v.x() * x + cq.v.y() * y + cq.v.z();
+  const float nd = cq.n.x() * x + cq.n.y() * y + cq.n.z();
+  const float s = (t * ud - cq.u_o) * inv_texel + cq.s0;
+  const float tt = (t * vd - cq.v_o) * inv_texel + cq.t0;
+  // Texture-space footprint of one pixel: d(point)/d(pixel) = t * step * (e - d (n.e) / (n.d)).
+  const float k = t * step * inv_texel;
+  const float inv_nd = 1.0f / nd;
+  const float ds_dx = k * (cq.u.x() - ud * cq.n.x() * inv_nd);
+  const float dt_dx = k * (cq.v.x() - vd * cq.n.x() * inv_nd);
+  const float ds_dy = k * (cq.u.y() - ud * cq.n.y() * inv_nd);
+  const float dt_dy = k * (cq.v.y() - vd * cq.n.y() * inv_nd);
+  const float len_x = std::sqrt(ds_dx * ds_dx + dt_dx * dt_dx);
+  const float len_y = std::sqrt(ds_dy * ds_dy + dt_dy * dt_dy);
+  const bool x_major = len_x >= len_y;
+  const float major = x_major ? len_x : len_y;
+  const float minor = std::max(x_major ? len_y : len_x, 1e-6f);
+  const int taps = std::clamp(static_cast<int>(std::ceil(major / minor)), 1, kMaxAnisotropicTaps);
+  float value;
+  if (taps == 1) {
+    value = tex.sample(s, tt, major);
+  } else {
+    const float footprint = std::max(major / static_cast<float>(taps), minor);
+    const float ax = x_major ? ds_dx : ds_dy, ay = x_major ? dt_dx : dt_dy;
+    value = 0.0f;
+    for (int i = 0; i < taps; ++i) {
+      const float f = (static_cast<float>(i) + 0.5f) / static_cast<float>(taps) - 0.5f;
+      value += tex.sample(s + f * ax, tt + f * ay, footprint);
+    }
+    value /= static_cast<float>(taps);
+  }
+  return value * cq.shade;
+}
+
+float Renderer::sky(const Eigen::Matrix3f& R_wc, float x, float y) const {
+  if (scene_.sky_radiance <= 0.0f) return 0.0f;
+  const Eigen::Vector3f d = (R_wc * Eigen::Vector3f(x, y, 1.0f)).normalized();
+  // Brighter towards the zenith, as a clear or overcast sky is.
+  return scene_.sky_radiance * (0.8f + 0.2f * std::clamp(d.z(), 0.0f, 1.0f));
+}
+
+void Renderer::render(const Pose3& T_wc, cv::Mat& radiance, cv::Mat* depth_m) {
+  const int w = rays_.width_px(), h = rays_.height_px();
+  radiance.create(h, w, CV_32F);
+  prepare_quads(T_wc);
+  const Eigen::Matrix3f R_wc = T_wc.linear().cast<float>();
+  std::fill(depth_.begin(), depth_.end(), 1e30f);
+  std::fill(hit_.begin(), hit_.end(), -1);
+
+  // Visibility: per tile, every quad whose projection overlaps it, in scene order.
+  for (const CameraRays::Tile& tile : rays_.tiles()) {
+    for (std::size_t k = 0; k < cam_quads_.size(); ++k) {
+      const CameraQuad& q = cam_quads_[k];
+      if (q.x_max < tile.x_min || q.x_min > tile.x_max || q.y_max < tile.y_min || q.y_min > tile.y_max) continue;
+      for (int r = tile.r0; r < tile.r1; ++r) {
+        for (int c = tile.c0; c < tile.c1; ++c) {
+          const int i = r * w + c;
+          const float x = rays_.x(i), y = rays_.y(i);
+          const float nd = q.n.x() * x + q.n.y() * y + q.n.z();
+          if (std::abs(nd) < kMinCosine) continue;
+          const float t = q.n_o / nd;
+          float& zbuf = depth_[static_cast<std::size_t>(i)];
+          if (t < kNearM || t >= zbuf) continue;
+          const float a = t * (q.u.x() * x + q.u.y() * y + q.u.z()) - q.u_o;
+          const float b = t * (q.v.x() * x + q.v.y() * y + q.v.z()) - q.v_o;
+          if (a < 0 || b < 0 || a > q.size_u || b > q.size_v) continue;
+          zbuf = t;
+          hit_[static_cast<std::size_t>(i)] = static_cast<int>(k);
+        }
+      }
+    }
+  }
+
+  // Shading, with silhouette pixels (a neighbour sees another surface) supersampled 4x.
+  for (int r = 0; r < h; ++r) {
+    float* out = radiance.ptr<float>(r);
+    for (int c = 0; c < w; ++c) {
+      const int i = r * w + c;
+      const int id = hit_[static_cast<std::size_t>(i)];
+      const bool edge = (c + 1 < w && hit_[static_cast<std::size_t>(i + 1)] != id) ||
+                        (c > 0 && hit_[static_cast<std::size_t>(i - 1)] != id) ||
+                        (r + 1 < h && hit_[static_cast<std::size_t>(i + w)] != id) ||
+                        (r > 0 && hit_[static_cast<std::size_t>(i - w)] != id);
+      if (!edge) {
+        out[c] = id >= 0 ? shade(cam_quads_[static_cast<std::size_t>(id)], rays_.x(i), rays_.y(i),
+                                 depth_[static_cast<std::size_t>(i)], rays_.step(i))
+                         : sky(R_wc, rays_.x(i), rays_.y(i));
+        continue;
+      }
+      int candidates[9];
+      int count = 0;
+      for (int dr = -1; dr <= 1; ++dr) {
+        for (int dc = -1; dc <= 1; ++dc) {
+          const int rr = r + dr, cc = c + dc;
+          if (rr < 0 || cc < 0 || rr >= h || cc >= w) continue;
+          const int nid = hit_[static_cast<std::size_t>(rr * w + cc)];
+          if (nid >= 0 && std::find(candidates, candidates + count, nid) == candidates + count) candidates[count++] = nid;
+        }
+      }
+      float sum = 0.0f;
+      for (const auto& off : kSubsamples) {
+        const Eigen::Vector2f ray = rays_.ray_at(static_cast<float>(c) + off[0], static_cast<float>(r) + off[1]);
+        float t = 0.0f;
+        const int sid = trace(ray.x(), ray.y(), candidates, count, t);
+        sum += sid >= 0 ? shade(cam_quads_[static_cast<std::size_t>(sid)], ray.x(), ray.y(), t, rays_.step(i))
+                        : sky(R_wc, ray.x(), ray.y());
+      }
+      out[c] = 0.25f * sum;
+    }
+  }
+
+  if (depth_m) {
+    depth_m->create(h, w, CV_32F);
+    for (int r = 0; r < h; ++r) {
+      float* d = depth_m->ptr<float>(r);
+      for (int c = 0; c < w; ++c) {
+        const int i = r * w + c;
+        d[c] = hit_[static_cast<std::size_t>(i)] >= 0 ? depth_[static_cast<std::size_t>(i)] : 0.0f;
+      }
+    }
+  }
+}
+
+}  // namespace heslam::synth

@@ -1,0 +1,166 @@
+// Spline trajectories with arc-length parameterization and seeded heading oscillations.
+#include "tools/synth/trajectory.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include <Eigen/Geometry>
+
+namespace heslam::synth {
+namespace {
+
+// Arc-length table resolution: samples per spline segment (sub-millimetre error for metre segments).
+constexpr int kSamplesPerSegment = 64;
+// Heading is taken from the path this far ahead, which smooths yaw rate through tight bends.
+constexpr double kHeadingLookaheadM = 0.3;
+// Second oscillation harmonic, an irrational ratio so the motion does not look periodic.
+constexpr double kSecondHarmonic = 2.37;
+// Velocity by central difference over this time step.
+constexpr double kVelocityStepS = 1e-3;
+constexpr double kPi = 3.14159265358979323846;
+// Wavelengths of the path jitter along the path: room-scale and step-scale deviations.
+constexpr double kJitterLongWaveM = 7.0;
+constexpr double kJitterShortWaveM = 3.1;
+
+double deg(double d) { return d * kPi / 180.0; }
+
+// Platform-independent uniform in [-1, 1] (std distributions differ between standard libraries).
+double signed_unit(std::mt19937_64& rng) { return 2.0 * static_cast<double>(rng() >> 11) * 0x1.0p-53 - 1.0; }
+
+}  // namespace
+
+Trajectory::Trajectory(const PathSpec& path, const TrajectorySpec& spec, std::uint64_t seed)
+    : closed_(path.closed), spec_(spec) {
+  const auto& cps = path.control_points_w;
+  const int n = static_cast<int>(cps.size());
+  if (n < 4) throw std::runtime_error("trajectory needs at least 4 control points");
+  std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + 17);
+  // Jitter is a smooth function of the distance along the control polygon (two seeded sine waves),
+  // so densely placed control points (tight turns) are displaced together instead of zig-zagging.
+  std::vector<double> along(cps.size(), 0.0);
+  for (int i = 1; i < n; ++i) along[static_cast<std::size_t>(i)] = along[static_cast<std::size_t>(i) - 1] + (cps[static_cast<std::size_t>(i)] - cps[static_cast<std::size_t>(i) - 1]).norm();
+  const double polygon_length = along.back() + (closed_ ? (cps.front() - cps.back()).norm() : 0.0);
+  auto wavelength = [&](double nominal) {
+    // Closed paths need a whole number of waves so the jitter closes on itself too.
+    return closed_ ? polygon_length / std::max(1.0, std::round(polygon_length / nominal)) : nominal;
+  };
+  const double wave_long = wavelength(kJitterLongWaveM), wave_short = wavelength(kJitterShortWaveM);
+  double jitter_phase[4];
+  for (double& ph : jitter_phase) ph = signed_unit(rng) * kPi;
+  auto jitter = [&](double s, int k) {
+    return 0.6 * std::sin(2 * kPi * s / wave_long + jitter_phase[2 * k]) + 0.4 * std::sin(2 * kPi * s / wave_short + jitter_phase[2 * k + 1]);
+  };
+  std::vector<Eigen::Vector3d> jittered(cps.size());
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d& prev = cps[static_cast<std::size_t>(closed_ ? (i + n - 1) % n : std::max(i - 1, 0))];
+    const Eigen::Vector3d& next = cps[static_cast<std::size_t>(closed_ ? (i + 1) % n : std::min(i + 1, n - 1))];
+    Eigen::Vector3d dir = next - prev;
+    dir.z() = 0;
+    const Eigen::Vector3d side = dir.norm() > 1e-9 ? Eigen::Vector3d(-dir.y(), dir.x(), 0).normalized()
+                                                   : Eigen::Vector3d::Zero();
+    const double s_i = along[static_cast<std::size_t>(i)];
+    jittered[static_cast<std::size_t>(i)] = cps[static_cast<std::size_t>(i)] + spec.lateral_jitter_m * jitter(s_i, 0) * side +
+                                            spec.height_jitter_m * jitter(s_i, 1) * Eigen::Vector3d::UnitZ();
+  }
+  for (double& ph : phases_) ph = signed_unit(rng) * kPi;
+
+  if (closed_) {
+    points_ = jittered;
+    num_segments_ = n;
+  } else {
+    // Triple end points so the open B-spline starts and ends exactly on them.
+    points_.push_back(jittered.front());
+    points_.push_back(jittered.front());
+    points_.insert(points_.end(), jittered.begin(), jittered.end());
+    points_.push_back(jittered.back());
+    points_.push_back(jittered.back());
+    num_segments_ = static_cast<int>(points_.size()) - 3;
+  }
+  table_step_u_ = 1.0 / kSamplesPerSegment;
+  const int samples = num_segments_ * kSamplesPerSegment;
+  arc_length_.resize(static_cast<std::size_t>(samples) + 1);
+  arc_length_[0] = 0.0;
+  Eigen::Vector3d last = spline_point(0.0);
+  for (int i = 1; i <= samples; ++i) {
+    const Eigen::Vector3d p = spline_point(std::min(i * table_step_u_, num_segments_ - 1e-9));
+    arc_length_[static_cast<std::size_t>(i)] = arc_length_[static_cast<std::size_t>(i) - 1] + (p - last).norm();
+    last = p;
+  }
+}
+
+Eigen::Vector3d Trajectory::spline_point(double u) const {
+  const int n = static_cast<int>(points_.size());
+  int seg = static_cast<int>(std::floor(u));
+  seg = std::clamp(seg, 0, num_segments_ - 1);
+  const double t = u - seg;
+  auto cp = [&](int k) -> const Eigen::Vector3d& {
+    return points_[static_cast<std::size_t>(closed_ ? ((k % n) + n) % n : std::clamp(k, 0, n - 1))];
+  };
+  // Closed: segment i spans control points i-1..i+2; open (padded): i..i+3.
+  const int base = closed_ ? seg - 1 : seg;
+  const double t2 = t * t, t3 = t2 * t;
+  const double b0 = (1 - 3 * t + 3 * t2 - t3) / 6.0;
+  const double b1 = (4 - 6 * t2 + 3 * t3) / 6.0;
+  const double b2 = (1 + 3 * t + 3 * t2 - 3 * t3) / 6.0;
+  const double b3 = t3 / 6.0;
+  return b0 * cp(base) + b1 * cp(base + 1) + b2 * cp(base + 2) + b3 * cp(base + 3);
+}
+
+double Trajectory::distance_at(double t_s) const {
+  const double v = spec_.speed_mps;
+  const double ta = std::max(spec_.accel_time_s, 1e-6);
+  double s = t_s < ta ? v * t_s * t_s / (2 * ta) : v * (t_s - ta / 2);
+  const double length = length_m();
+  if (closed_) {
+    s = std::fmod(s, length);
+    if (s < 0) s += length;
+  } else {
+    s = std::clamp(s, 0.0, length);
+  }
+  return s;
+}
+
+double Trajectory::param_at_distance(double s_m) const {
+  const auto it = std::upper_bound(arc_length_.begin(), arc_length_.end(), s_m);
+  if (it == arc_length_.begin()) return 0.0;
+  if (it == arc_length_.end()) return num_segments_ - 1e-9;
+  const std::size_t i = static_cast<std::size_t>(it - arc_length_.begin());
+  const double s0 = arc_length_[i - 1], s1 = arc_length_[i];
+  const double frac = s1 > s0 ? (s_m - s0) / (s1 - s0) : 0.0;
+  return std::min((static_cast<double>(i - 1) + frac) * table_step_u_, num_segments_ - 1e-9);
+}
+
+Pose3 Trajectory::T_wb(double t_s) const {
+  const double s = distance_at(t_s);
+  const Eigen::Vector3d p = position_at_distance(s);
+  double ahead = s + kHeadingLookaheadM;
+  double behind = s;
+  if (!closed_ && ahead > length_m()) {
+    ahead = length_m();
+    behind = length_m() - kHeadingLookaheadM;
+  }
+  if (closed_) ahead = std::fmod(ahead, length_m());
+  const Eigen::Vector3d dir = position_at_distance(ahead) - position_at_distance(behind);
+  const double heading = std::atan2(dir.y(), dir.x());
+  const double w = 2 * kPi * spec_.wiggle_hz * t_s;
+  auto wiggle = [&](int k) { return 0.7 * std::sin(w + phases_[2 * k]) + 0.3 * std::sin(kSecondHarmonic * w + phases_[2 * k + 1]); };
+  const double yaw = heading + deg(spec_.yaw_offset_deg) + deg(spec_.yaw_wiggle_deg) * wiggle(0);
+  const double pitch = deg(spec_.pitch_offset_deg) + deg(spec_.pitch_wiggle_deg) * wiggle(1);
+  const double roll = deg(spec_.roll_wiggle_deg) * wiggle(2);
+  Pose3 T = Pose3::Identity();
+  T.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  T.translation() = p;
+  return T;
+}
+
+Eigen::Vector3d Trajectory::velocity_w(double t_s) const {
+  const double t0 = std::max(0.0, t_s - kVelocityStepS);
+  const double t1 = t_s + kVelocityStepS;
+  return (T_wb(t1).translation() - T_wb(t0).translation()) / (t1 - t0);
+}
+
+}  // namespace heslam::synth

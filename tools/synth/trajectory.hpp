@@ -1,0 +1,46 @@
+// Smooth, seeded camera-rig trajectories: a C2 cubic B-spline through jittered control points,
+// travelled at a realistic speed, heading along the path with smooth seeded oscillations.
+//
+// The body frame B is x forward, y left, z up (a vehicle / drone convention); the world is z up.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "components/core/geometry/pose.hpp"
+#include "tools/synth/preset.hpp"
+
+namespace heslam::synth {
+
+// The nominal path of a scene: control points (world, metres) and whether it closes on itself.
+struct PathSpec {
+  std::vector<Eigen::Vector3d> control_points_w;
+  bool closed = true;
+};
+
+class Trajectory {
+ public:
+  Trajectory(const PathSpec& path, const TrajectorySpec& spec, std::uint64_t seed);
+
+  Pose3 T_wb(double t_s) const;
+  Eigen::Vector3d velocity_w(double t_s) const;  // m/s, world frame
+  double length_m() const { return arc_length_.back(); }
+
+ private:
+  Eigen::Vector3d spline_point(double u) const;  // u in [0, num_segments)
+  double distance_at(double t_s) const;          // travelled arc length at time t
+  double param_at_distance(double s_m) const;
+  Eigen::Vector3d position_at_distance(double s_m) const { return spline_point(param_at_distance(s_m)); }
+
+  std::vector<Eigen::Vector3d> points_;  // jittered control points (padded for open paths)
+  bool closed_ = true;
+  int num_segments_ = 0;
+  TrajectorySpec spec_;
+  std::vector<double> arc_length_;       // cumulative length at each table sample
+  double table_step_u_ = 0.0;
+  double phases_[6] = {0, 0, 0, 0, 0, 0};
+};
+
+}  // namespace heslam::synth
