@@ -1,0 +1,107 @@
+// heslam-replay's DDS-free parts: pacing with rate and pauses, progress text, option parsing.
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+
+#include "tools/replay/replay_options.hpp"
+#include "tools/replay/replay_pacer.hpp"
+#include "tools/replay/replay_progress.hpp"
+
+namespace heslam {
+namespace {
+
+constexpr std::int64_t kMs = 1'000'000;
+
+TEST(ReplayPacer, RealTimeDoubleSpeedAndFlatOut) {
+  ReplayPacer real_time(1.0);
+  real_time.start(5000 * kMs, 100 * kMs);
+  EXPECT_EQ(real_time.due_ns(5000 * kMs), 100 * kMs);
+  EXPECT_EQ(real_time.due_ns(5050 * kMs), 150 * kMs);
+  ReplayPacer twice(2.0);
+  twice.start(5000 * kMs, 100 * kMs);
+  EXPECT_EQ(twice.due_ns(5100 * kMs), 150 * kMs);
+  ReplayPacer flat_out(0.0);
+  flat_out.start(5000 * kMs, 100 * kMs);
+  EXPECT_EQ(flat_out.due_ns(9000 * kMs), 100 * kMs);
+}
+
+TEST(ReplayPacer, PauseShiftsEverythingAfterIt) {
+  ReplayPacer pacer(1.0);
+  pacer.start(0, 1000 * kMs);
+  pacer.pause(1020 * kMs);
+  EXPECT_TRUE(pacer.paused());
+  EXPECT_EQ(pacer.due_ns(50 * kMs), INT64_MAX);
+  pacer.pause(1030 * kMs);  // idempotent: the first pause time counts
+  pacer.resume(1520 * kMs);
+  EXPECT_FALSE(pacer.paused());
+  EXPECT_EQ(pacer.due_ns(50 * kMs), 1550 * kMs);  // 500 ms paused
+  pacer.resume(2000 * kMs);                       // idempotent
+  EXPECT_EQ(pacer.due_ns(50 * kMs), 1550 * kMs);
+}
+
+TEST(ReplayPacer, StartPausedWaitsForResume) {
+  ReplayPacer pacer(1.0);
+  pacer.pause(0);
+  pacer.start(0, 100 * kMs);
+  pacer.resume(400 * kMs);
+  EXPECT_EQ(pacer.due_ns(0), 400 * kMs);
+}
+
+TEST(ReplayProgress, LineAndSummary) {
+  ReplayCounts counts;
+  counts.published = 40;
+  counts.pass_published = 40;
+  counts.total = 95;
+  counts.elapsed_s = 2.5;
+  counts.paused_s = 0.5;
+  EXPECT_EQ(format_progress_line(counts), "frame 40/95   42%  20.0 fps  ETA 2.8 s");
+  counts.paused = true;
+  counts.pass = 2;
+  counts.skipped_images = 1;
+  EXPECT_EQ(format_progress_line(counts), "frame 40/95   42%  20.0 fps  ETA 2.8 s  pass 2  skipped 1  [paused]");
+  counts.unpaired_rows = 4;
+  EXPECT_EQ(format_summary(counts), "published 40 frames in 2.00 s (20.0 fps) over 2 passes; skipped 1 images; 4 unpaired rows");
+}
+
+std::string option_error(const std::vector<std::string>& args) {
+  try {
+    parse_replay_options(args);
+  } catch (const std::runtime_error& error) {
+    return error.what();
+  }
+  return "(no error)";
+}
+
+TEST(ReplayOptions, ParsesEveryOption) {
+  const ReplayOptions options =
+      parse_replay_options({"/data/V101", "--format", "euroc", "--rate", "0.5", "--loop", "--start-offset", "1.5",
+                            "--duration", "2", "--start-paused", "--strict", "--wait", "0", "--no-progress"});
+  EXPECT_EQ(options.dataset, "/data/V101");
+  EXPECT_EQ(options.format, DatasetFormat::kEuroc);
+  EXPECT_DOUBLE_EQ(options.rate, 0.5);
+  EXPECT_TRUE(options.loop);
+  EXPECT_DOUBLE_EQ(options.start_offset_s, 1.5);
+  EXPECT_DOUBLE_EQ(options.duration_s, 2.0);
+  EXPECT_TRUE(options.start_paused);
+  EXPECT_TRUE(options.strict);
+  EXPECT_DOUBLE_EQ(options.wait_subscriber_s, 0.0);
+  EXPECT_FALSE(options.progress);
+  EXPECT_FALSE(options.lockstep);
+  const ReplayOptions lockstep = parse_replay_options({"d", "--lockstep", "--ack-timeout", "3"});
+  EXPECT_TRUE(lockstep.lockstep);
+  EXPECT_DOUBLE_EQ(lockstep.ack_timeout_s, 3.0);
+}
+
+TEST(ReplayOptions, EachBadOptionHasItsMessage) {
+  EXPECT_EQ(option_error({}), "missing DATASET argument (see --help)");
+  EXPECT_EQ(option_error({"d", "--rate", "fast"}), "--rate: expected a number >= 0, got 'fast'");
+  EXPECT_EQ(option_error({"d", "--rate"}), "--rate: missing value");
+  EXPECT_EQ(option_error({"d", "--format", "bag"}), "--format: unknown format 'bag' (expected euroc, kitti or auto)");
+  EXPECT_EQ(option_error({"d", "--lockstep", "--rate", "1"}),
+            "--rate and --lockstep exclude each other (lockstep is paced by the consumer)");
+  EXPECT_EQ(option_error({"d", "--bogus"}), "--bogus: unknown option (see --help)");
+  EXPECT_EQ(option_error({"d", "e"}), "e: unexpected second dataset argument (see --help)");
+}
+
+}  // namespace
+}  // namespace heslam

@@ -1,0 +1,234 @@
+// heslam-replay and heslam-spy as real processes on loopback DDS, each test on its own domain:
+// lockstep replay delivers every EuRoC pair bit-identical to the PNGs; spy hz measures a --rate 1
+// replay at 20 +/- 1 Hz; spy list / echo / info show the topics; replay's errors are one clear line.
+#include <unistd.h>
+
+#include <chrono>
+#include <iostream>
+#include <regex>
+#include <set>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "child_process.hpp"
+#include "runtime/participant.hpp"
+#include "runtime/reader.hpp"
+#include "runtime/sequence.hpp"
+#include "runtime/topics.hpp"
+#include "runtime/waitset.hpp"
+#include "runtime/writer.hpp"
+#include "test_support.hpp"
+#include "tools/replay/dataset/stereo_dataset.hpp"
+#include "tools/replay/dataset/stereo_images.hpp"
+
+namespace heslam {
+namespace {
+
+namespace fs = std::filesystem;
+using std::chrono::milliseconds;
+using std::chrono::seconds;
+
+constexpr const char* kClip = "euroc_v101_head";
+constexpr std::size_t kClipPairs = 95;
+
+// A domain per test process (ctest runs each test as its own process, possibly two at a time).
+int test_domain(int salt) { return 1 + static_cast<int>((getpid() * 7 + salt) % 230); }
+
+class ReplaySpy : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    log_dir_ = fs::temp_directory_path() / ("heslam_tools_" + std::to_string(getpid()) + "_" + info->name());
+    fs::create_directories(log_dir_);
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(log_dir_);
+  }
+
+  std::unique_ptr<test::ChildProcess> start(const std::string& tool, std::vector<std::string> args, const std::string& label) {
+    args.insert(args.end(), {"--domain", std::to_string(domain_)});
+    return std::make_unique<test::ChildProcess>(test::bin_dir() / ("heslam-" + tool), args, log_dir_, label);
+  }
+
+  // Runs a tool to completion (bounded) and returns its exit code.
+  int run(test::ChildProcess& child, seconds timeout = seconds(30)) {
+    const std::optional<int> code = child.wait(timeout);
+    EXPECT_TRUE(code.has_value()) << "still running after " << timeout.count() << " s; stderr:\n" << child.err();
+    return code.value_or(-1);
+  }
+
+  fs::path log_dir_;
+  int domain_ = test_domain(0);
+};
+
+TEST_F(ReplaySpy, LockstepDeliversEveryPairBitIdenticalToThePngs) {
+  HESLAM_REQUIRE_SHARED_DATA(kClip);
+  const StereoDataset dataset = open_dataset(test::shared_dataset(kClip));
+  ASSERT_EQ(dataset.frames.size(), kClipPairs);
+
+  runtime::Participant participant({.domain_id = domain_, .dds_config = ""});
+  const runtime::Topics topics;
+  runtime::Reader<msg::StereoFrame> frames(participant, topics.stereo());
+  runtime::Reader<msg::StereoCalibration> calibration(participant, topics.calibration());
+  runtime::Writer<msg::FrameDone> acks(participant, topics.frame_done());
+  runtime::WaitSet waitset(participant);
+  waitset.attach(frames);
+
+  auto replay = start("replay", {test::shared_dataset(kClip).string(), "--lockstep", "--ack-timeout", "20",
+                                 "--no-progress", "--no-keyboard"},
+                      "replay");
+  std::size_t received = 0;
+  std::size_t identical = 0;
+  const auto deadline = std::chrono::steady_clock::now() + seconds(90);
+  while (received < kClipPairs && std::chrono::steady_clock::now() < deadline) {
+    if (waitset.wait(milliseconds(200)) != runtime::Wake::kData) continue;
+    for (auto& frame : frames.take()) {
+      if (!frame.info.valid_data) continue;
+      const msg::StereoFrame& sample = *frame.sample;
+      ASSERT_EQ(sample.seq, received) << "frames must arrive in order, none lost";
+      const StereoFrameFiles& files = dataset.frames[received];
+      EXPECT_EQ(sample.stamp_ns, files.stamp_ns);
+      const StereoImages png = load_stereo_images(files);
+      const auto left = runtime::view(sample.left);
+      const auto right = runtime::view(sample.right);
+      const bool same = sample.width_px == 752u && sample.height_px == 480u && sample.encoding == heslam_msg_ENCODING_MONO8 &&
+                        left.size() == png.left.total() && right.size() == png.right.total() &&
+                        std::equal(left.begin(), left.end(), png.left.data) &&
+                        std::equal(right.begin(), right.end(), png.right.data);
+      identical += same ? 1 : 0;
+      msg::FrameDone done{};
+      done.seq = sample.seq;
+      done.stamp_ns = sample.stamp_ns;
+      const std::string component = "test-consumer";
+      done.component = runtime::borrow(component);
+      acks.write(done);
+      ++received;
+    }
+  }
+  EXPECT_EQ(received, kClipPairs);
+  EXPECT_EQ(identical, kClipPairs);
+  EXPECT_EQ(run(*replay), 0) << replay->err();
+  EXPECT_NE(replay->err().find("published 95 frames"), std::string::npos) << replay->err();
+
+  // The calibration is transient-local: this reader existed before the replay, so it has it.
+  const auto calibrations = calibration.take();
+  ASSERT_FALSE(calibrations.empty());
+  const msg::StereoCalibration& calib = *calibrations.back().sample;
+  EXPECT_DOUBLE_EQ(calib.left.fx_px, 458.654);
+  EXPECT_EQ(calib.left.width_px, 752u);
+  EXPECT_FALSE(calib.input_rectified);
+  EXPECT_GT(calib.rectified.fx_px, 0.0);
+  EXPECT_NEAR(calib.rectified.baseline_m, 0.110, 0.002);  // EuRoC rig: 11 cm
+}
+
+TEST_F(ReplaySpy, SpyHzMeasuresRealTimeReplayAt20Hz) {
+  HESLAM_REQUIRE_SHARED_DATA(kClip);
+  // The spy taps a running replay, as a user would. A 1 s excerpt looped: after the first pass the
+  // replay publishes from decoded memory, so a loaded 2-core machine still keeps 20 Hz; passes join
+  // seamlessly (stamps shift by the excerpt length plus one period).
+  auto replay = start("replay", {test::shared_dataset(kClip).string(), "--rate", "1", "--duration", "1", "--loop",
+                                 "--no-progress", "--no-keyboard"},
+                      "replay");
+  auto spy = start("spy", {"hz", "camera/stereo", "--count", "80", "--window", "80", "--timeout", "30"}, "spy");
+  ASSERT_EQ(run(*spy, seconds(60)), 0) << spy->err();
+  const std::string out = spy->out();
+  std::string last_rate;
+  const std::regex rate_line("average rate: ([0-9.]+)");
+  for (auto it = std::sregex_iterator(out.begin(), out.end(), rate_line); it != std::sregex_iterator(); ++it) {
+    last_rate = (*it)[1];
+  }
+  ASSERT_FALSE(last_rate.empty()) << out;
+  std::cout << "heslam-spy hz camera/stereo: " << last_rate << " Hz\n";
+  EXPECT_NEAR(std::stod(last_rate), 20.0, 1.0) << out;
+  EXPECT_NE(out.find("window: 80"), std::string::npos) << out;
+  replay->signal(SIGINT);
+  EXPECT_EQ(run(*replay), 0) << replay->err();
+}
+
+TEST_F(ReplaySpy, SpyListEchoAndInfoShowTheReplayTopics) {
+  HESLAM_REQUIRE_SHARED_DATA(kClip);
+  auto replay = start("replay", {test::shared_dataset(kClip).string(), "--rate", "1", "--loop", "--wait", "0",
+                                 "--no-progress", "--no-keyboard"},
+                      "replay");
+
+  // echo first: it waits for the replay to be up (startup takes seconds on a loaded machine).
+  auto echo = start("spy", {"echo", "camera/stereo", "--once", "--timeout", "20"}, "echo");
+  ASSERT_EQ(run(*echo), 0) << echo->err();
+  EXPECT_NE(echo->out().find("size: 752x480 mono8"), std::string::npos) << echo->out();
+  EXPECT_NE(echo->out().find("mean_intensity_left_right: "), std::string::npos);
+
+  auto list = start("spy", {"list", "--wait", "2"}, "list");
+  ASSERT_EQ(run(*list), 0) << list->err();
+  EXPECT_TRUE(std::regex_search(list->out(), std::regex("heslam/camera/stereo +heslam::msg::StereoFrame +1 +0")))
+      << list->out();
+  EXPECT_TRUE(std::regex_search(list->out(), std::regex("heslam/camera/calibration +heslam::msg::StereoCalibration +1")))
+      << list->out();
+
+  // Published once before this reader existed: arrives only through transient-local history.
+  auto calibration = start("spy", {"echo", "camera/calibration", "--once", "--timeout", "20"}, "calibration");
+  ASSERT_EQ(run(*calibration), 0) << calibration->err();
+  EXPECT_NE(calibration->out().find("rectified: {fx_px: "), std::string::npos) << calibration->out();
+  EXPECT_NE(calibration->out().find("sensor.yaml"), std::string::npos) << calibration->out();
+
+  auto info = start("spy", {"info", "camera/stereo", "--wait", "2"}, "info");
+  ASSERT_EQ(run(*info), 0) << info->err();
+  EXPECT_NE(info->out().find("writers: 1\n"), std::string::npos) << info->out();
+  EXPECT_NE(info->out().find("heslam-replay  RELIABLE"), std::string::npos) << info->out();
+  EXPECT_NE(info->out().find("all writer/reader pairs are QoS-compatible"), std::string::npos) << info->out();
+
+  replay->signal(SIGINT);
+  EXPECT_EQ(run(*replay), 0) << replay->err();
+  EXPECT_NE(replay->err().find("(stopped early)"), std::string::npos) << replay->err();
+}
+
+TEST_F(ReplaySpy, LockstepWithoutConsumerFailsWithOneClearLine) {
+  HESLAM_REQUIRE_SHARED_DATA(kClip);
+  auto replay = start("replay", {test::shared_dataset(kClip).string(), "--lockstep", "--ack-timeout", "1",
+                                 "--no-progress", "--no-keyboard"},
+                      "replay");
+  EXPECT_EQ(run(*replay), 1);
+  EXPECT_NE(replay->err().find("heslam-replay: --lockstep: no consumer within 1"), std::string::npos) << replay->err();
+}
+
+TEST_F(ReplaySpy, BadDatasetAndBadOptionsAreOneClearLine) {
+  auto missing = start("replay", {"/nonexistent/sequence"}, "missing");
+  EXPECT_EQ(run(*missing), 1);
+  EXPECT_EQ(missing->err(), "heslam-replay: /nonexistent/sequence: not a folder (expected an EuRoC or KITTI sequence)\n");
+  auto empty = start("replay", {log_dir_.string()}, "empty");
+  EXPECT_EQ(run(*empty), 1);
+  EXPECT_NE(empty->err().find("layout found"), std::string::npos) << empty->err();
+  auto bad_rate = start("replay", {log_dir_.string(), "--rate", "x"}, "bad_rate");
+  EXPECT_EQ(run(*bad_rate), 1);
+  EXPECT_EQ(bad_rate->err(), "heslam-replay: --rate: expected a number >= 0, got 'x'\n");
+  auto bad_topic = start("spy", {"echo", "camera/mono"}, "bad_topic");
+  EXPECT_EQ(run(*bad_topic), 1);
+  EXPECT_NE(bad_topic->err().find("heslam-spy: topic 'camera/mono': not a heslam topic"), std::string::npos)
+      << bad_topic->err();
+}
+
+TEST_F(ReplaySpy, StartPausedWaitsForSigusr2) {
+  HESLAM_REQUIRE_SHARED_DATA(kClip);
+  runtime::Participant participant({.domain_id = domain_, .dds_config = ""});
+  const runtime::Topics topics;
+  // KEEP_ALL: the paused replay then publishes flat out, and every frame is counted.
+  runtime::Reader<msg::StereoFrame> frames(participant, topics.stereo(), runtime::Qos(runtime::QosRole::kImages).keep_all());
+  auto replay = start("replay", {test::shared_dataset(kClip).string(), "--rate", "0", "--duration", "0.5",
+                                 "--start-paused", "--no-progress", "--no-keyboard"},
+                      "replay");
+  ASSERT_TRUE(frames.wait_for_writers(1, seconds(10)));
+  std::this_thread::sleep_for(seconds(1));
+  EXPECT_TRUE(frames.take().empty()) << "frames published while paused";
+  replay->signal(SIGUSR2);
+  EXPECT_EQ(run(*replay), 0) << replay->err();
+  std::size_t received = 0;
+  const auto deadline = std::chrono::steady_clock::now() + seconds(10);
+  while (received < 10 && std::chrono::steady_clock::now() < deadline) {
+    for (auto& frame : frames.take()) received += frame.info.valid_data ? 1 : 0;
+    std::this_thread::sleep_for(milliseconds(20));
+  }
+  EXPECT_EQ(received, 10u);  // 0.5 s of a 20 Hz recording
+}
+
+}  // namespace
+}  // namespace heslam

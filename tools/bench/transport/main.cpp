@@ -1,0 +1,283 @@
+// heslam-bench-transport: one-way transport latency of stereo frames from a real heslam-replay
+// process to a subscriber (this process), for an EuRoC 752x480 pair and a KITTI 1241x376 pair.
+//
+// Latency of a frame = this process's CLOCK_REALTIME when take() returned the deserialised sample
+// minus the sample's source timestamp (CLOCK_REALTIME at dds_write in the replay; same machine, same
+// clock). It therefore includes serialisation, loopback UDP, reassembly, the waitset wake-up and the
+// copy into the C++ sample: what a frontend sees. The replay runs with --rate 1 at 20 Hz.
+// wake_p50 is the median to the waitset wake-up, before take(): the difference is the take
+// (allocation + deserialisation into the owned sample).
+//
+//   heslam-bench-transport [--frames N] [--domain D] [--bin DIR] [--euroc DIR] [--ddsperf-seconds S]
+//
+// For reference it then runs Cyclone's `ddsperf` ping/pong (when on PATH) with the same sample sizes,
+// 20 Hz and the same (project) Cyclone configuration; ddsperf reports half the round trip per second,
+// summarised here as the median over those seconds of its per-second median and p99.
+//
+// The KITTI-sized sequence is synthesised in a temporary folder (EuRoC images resized to 1241x376,
+// 20 Hz like the EuRoC run) because no KITTI images ship with the shared data.
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "runtime/args.hpp"
+#include "runtime/participant.hpp"
+#include "runtime/reader.hpp"
+#include "runtime/shutdown.hpp"
+#include "runtime/topics.hpp"
+#include "runtime/waitset.hpp"
+#include "tools/replay/dataset/stereo_dataset.hpp"
+#include "tools/replay/dataset/stereo_images.hpp"
+
+extern char** environ;
+
+namespace heslam {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kKittiWidth = 1241;
+constexpr int kKittiHeight = 376;
+constexpr double kFramePeriodS = 0.05;  // 20 Hz, as the EuRoC cameras
+// Frames received before measuring: discovery, first-fragment socket buffer growth, page faults.
+constexpr std::size_t kWarmupFrames = 10;
+constexpr std::chrono::seconds kNoFrameTimeout{15};
+
+std::int64_t realtime_ns() {
+  timespec now{};
+  clock_gettime(CLOCK_REALTIME, &now);
+  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
+
+// A KITTI sequence of `frames` pairs: EuRoC images resized, times at 20 Hz, a plausible calib.txt.
+fs::path make_kitti_sequence(const StereoDataset& euroc, std::size_t frames) {
+  const fs::path dir = fs::temp_directory_path() / ("heslam_bench_kitti_" + std::to_string(getpid()));
+  fs::create_directories(dir / "image_0");
+  fs::create_directories(dir / "image_1");
+  std::ofstream times(dir / "times.txt");
+  for (std::size_t i = 0; i < frames; ++i) {
+    const StereoImages images = load_stereo_images(euroc.frames[i % euroc.frames.size()]);
+    char name[32];
+    std::snprintf(name, sizeof(name), "%06zu.png", i);
+    cv::Mat left, right;
+    cv::resize(images.left, left, cv::Size(kKittiWidth, kKittiHeight));
+    cv::resize(images.right, right, cv::Size(kKittiWidth, kKittiHeight));
+    cv::imwrite((dir / "image_0" / name).string(), left);
+    cv::imwrite((dir / "image_1" / name).string(), right);
+    times << static_cast<double>(i) * kFramePeriodS << "\n";
+  }
+  // KITTI 00's P0/P1 (718.856 px focal length, 0.537 m baseline).
+  std::ofstream(dir / "calib.txt")
+      << "P0: 718.856 0 607.1928 0 0 718.856 185.2157 0 0 0 1 0\n"
+         "P1: 718.856 0 607.1928 -386.1448 0 718.856 185.2157 0 0 0 1 0\n";
+  return dir;
+}
+
+struct Result {
+  std::string name;
+  std::size_t bytes = 0;
+  std::vector<double> latencies_us;       // source timestamp -> sample taken (deserialised)
+  std::vector<double> wake_latencies_us;  // source timestamp -> waitset woke (before take)
+  std::uint64_t first_seq = 0;
+  std::uint64_t last_seq = 0;
+};
+
+double percentile(std::vector<double> values, double p) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const auto index = static_cast<std::size_t>(p * static_cast<double>(values.size() - 1) + 0.5);
+  return values[std::min(index, values.size() - 1)];
+}
+
+Result measure(const std::string& name, const fs::path& dataset, const fs::path& bin_dir, int domain,
+               std::size_t frames) {
+  runtime::Participant participant({.domain_id = domain, .dds_config = ""});
+  const runtime::Topics topics;
+  runtime::Reader<msg::StereoFrame> reader(participant, topics.stereo());
+  runtime::WaitSet waitset(participant);
+  waitset.attach(reader);
+
+  std::vector<std::string> args{(bin_dir / "heslam-replay").string(), dataset.string(), "--rate", "1", "--loop",
+                                "--domain", std::to_string(domain), "--no-progress", "--no-keyboard",
+                                "--log-level", "error"};
+  std::vector<char*> argv;
+  for (std::string& arg : args) argv.push_back(arg.data());
+  argv.push_back(nullptr);
+  pid_t replay = 0;
+  if (posix_spawn(&replay, argv[0], nullptr, nullptr, argv.data(), environ) != 0) {
+    throw std::runtime_error(args[0] + ": cannot start (build heslam-replay, or pass --bin DIR)");
+  }
+
+  Result result;
+  result.name = name;
+  std::size_t received = 0;
+  auto last_frame = std::chrono::steady_clock::now();
+  while (result.latencies_us.size() < frames && !runtime::shutdown_requested()) {
+    if (std::chrono::steady_clock::now() - last_frame > kNoFrameTimeout) {
+      kill(replay, SIGKILL);
+      waitpid(replay, nullptr, 0);
+      throw std::runtime_error(name + ": no frame from heslam-replay for 15 s");
+    }
+    if (waitset.wait(std::chrono::milliseconds(100)) != runtime::Wake::kData) continue;
+    const std::int64_t wake_ns = realtime_ns();
+    bool first_of_wake = true;
+    for (auto& frame : reader.take()) {
+      const std::int64_t now_ns = realtime_ns();
+      if (!frame.info.valid_data) continue;
+      last_frame = std::chrono::steady_clock::now();
+      if (++received <= kWarmupFrames) continue;
+      if (result.latencies_us.empty()) result.first_seq = frame.sample->seq;
+      result.last_seq = frame.sample->seq;
+      result.bytes = frame.sample->left._length + frame.sample->right._length;
+      result.latencies_us.push_back(static_cast<double>(now_ns - frame.info.source_stamp_ns) * 1e-3);
+      if (first_of_wake) result.wake_latencies_us.push_back(static_cast<double>(wake_ns - frame.info.source_stamp_ns) * 1e-3);
+      first_of_wake = false;
+    }
+  }
+  kill(replay, SIGINT);
+  waitpid(replay, nullptr, 0);
+  return result;
+}
+
+void print(const Result& result) {
+  const std::size_t expected = result.last_seq - result.first_seq + 1;
+  std::printf("%-18s %8.0f KB %7zu %6zu %9.0f %9.0f %9.0f %9.0f %9.0f\n", result.name.c_str(),
+              static_cast<double>(result.bytes) / 1e3, result.latencies_us.size(), expected - result.latencies_us.size(),
+              percentile(result.latencies_us, 0.5), percentile(result.latencies_us, 0.9),
+              percentile(result.latencies_us, 0.99), percentile(result.latencies_us, 1.0),
+              percentile(result.wake_latencies_us, 0.5));
+}
+
+pid_t spawn(std::vector<std::string> args, const fs::path& output, const std::string& dds_config) {
+  std::vector<char*> argv;
+  for (std::string& arg : args) argv.push_back(arg.data());
+  argv.push_back(nullptr);
+  std::vector<std::string> environment_text{"CYCLONEDDS_URI=" + dds_config};
+  for (char** variable = environ; *variable != nullptr; ++variable) {
+    if (std::string(*variable).rfind("CYCLONEDDS_URI=", 0) != 0) environment_text.emplace_back(*variable);
+  }
+  std::vector<char*> environment;
+  for (std::string& variable : environment_text) environment.push_back(variable.data());
+  environment.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  pid_t pid = 0;
+  const int error = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environment.data());
+  posix_spawn_file_actions_destroy(&actions);
+  return error == 0 ? pid : 0;
+}
+
+// ddsperf ping/pong at 20 Hz with `bytes` per sample; prints median-of-seconds of its 50% and 99%.
+void run_ddsperf(const std::string& name, std::size_t bytes, int domain, int seconds) {
+  const fs::path pong_out = fs::temp_directory_path() / ("heslam_bench_pong_" + std::to_string(getpid()));
+  const fs::path ping_out = fs::temp_directory_path() / ("heslam_bench_ping_" + std::to_string(getpid()));
+  const std::string& config = runtime::default_dds_config();
+  const pid_t pong = spawn({"ddsperf", "-i", std::to_string(domain), "-D", std::to_string(seconds + 3), "pong"},
+                           pong_out, config);
+  const pid_t ping = spawn({"ddsperf", "-i", std::to_string(domain), "-D", std::to_string(seconds), "ping", "20Hz",
+                            "size", std::to_string(bytes)},
+                           ping_out, config);
+  if (ping == 0 || pong == 0) {
+    std::printf("%-18s ddsperf not found on PATH (apt install cyclonedds-tools)\n", name.c_str());
+    for (const pid_t pid : {ping, pong}) {
+      if (pid == 0) continue;
+      kill(pid, SIGKILL);
+      waitpid(pid, nullptr, 0);
+    }
+    return;
+  }
+  waitpid(ping, nullptr, 0);
+  kill(pong, SIGINT);
+  waitpid(pong, nullptr, 0);
+  std::ifstream in(ping_out);
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string output = text.str();
+  std::vector<double> medians_us, p99s_us;
+  const std::regex line("size [0-9]+ mean [0-9.]+us min [0-9.]+us 50% ([0-9.]+)us 90% [0-9.]+us 99% ([0-9.]+)us");
+  for (auto it = std::sregex_iterator(output.begin(), output.end(), line); it != std::sregex_iterator(); ++it) {
+    medians_us.push_back(std::stod((*it)[1]));
+    p99s_us.push_back(std::stod((*it)[2]));
+  }
+  fs::remove(pong_out);
+  fs::remove(ping_out);
+  std::printf("%-18s %8.0f KB %7zu s %4s %9.0f %9s %9.0f   (ddsperf ping/pong, RTT/2, tuned config)\n", name.c_str(),
+              static_cast<double>(bytes) / 1e3, medians_us.size(), "", percentile(medians_us, 0.5), "-",
+              percentile(p99s_us, 0.5));
+}
+
+int run(int argc, char** argv) {
+  runtime::install_shutdown_handlers();
+  runtime::CommonArgs common = runtime::parse_common_args(argc, argv, "bench-transport");
+  std::size_t frames = 200;
+  int ddsperf_seconds = 10;
+  fs::path bin_dir = fs::canonical("/proc/self/exe").parent_path();
+  fs::path euroc_dir = fs::path(HESLAM_SHARED_DATA) / "euroc_v101_head";
+  for (std::size_t i = 0; i < common.rest.size(); ++i) {
+    const std::string& arg = common.rest[i];
+    if (arg == "--frames" && i + 1 < common.rest.size()) {
+      frames = std::stoul(common.rest[++i]);
+    } else if (arg == "--bin" && i + 1 < common.rest.size()) {
+      bin_dir = common.rest[++i];
+    } else if (arg == "--ddsperf-seconds" && i + 1 < common.rest.size()) {
+      ddsperf_seconds = std::stoi(common.rest[++i]);
+    } else if (arg == "--euroc" && i + 1 < common.rest.size()) {
+      euroc_dir = common.rest[++i];
+    } else {
+      throw std::runtime_error(arg + ": unknown option (--frames N, --bin DIR, --euroc DIR, --ddsperf-seconds S, --domain D)");
+    }
+  }
+  const StereoDataset euroc = open_dataset(euroc_dir);
+  const fs::path kitti = make_kitti_sequence(euroc, euroc.frames.size());
+  std::printf("one-way latency heslam-replay -> subscriber, %zu frames each after %zu warm-up, 20 Hz, domain %d\n",
+              frames, kWarmupFrames, common.domain_id);
+  std::printf("%-18s %11s %7s %6s %9s %9s %9s %9s %9s\n", "stereo pair", "size", "frames", "lost", "median_us", "p90_us",
+              "p99_us", "max_us", "wake_p50");
+  std::fflush(stdout);
+  try {
+    print(measure("EuRoC 752x480", euroc_dir, bin_dir, common.domain_id, frames));
+    std::fflush(stdout);
+    print(measure("KITTI 1241x376", kitti, bin_dir, common.domain_id, frames));
+  } catch (...) {
+    fs::remove_all(kitti);
+    throw;
+  }
+  fs::remove_all(kitti);
+  if (ddsperf_seconds > 0) {
+    std::fflush(stdout);
+    run_ddsperf("ddsperf 722 KB", 752 * 480 * 2, common.domain_id, ddsperf_seconds);
+    std::fflush(stdout);
+    run_ddsperf("ddsperf 933 KB", 1241 * 376 * 2, common.domain_id, ddsperf_seconds);
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace heslam
+
+int main(int argc, char** argv) {
+  try {
+    return heslam::run(argc, argv);
+  } catch (const std::exception& error) {
+    std::cerr << "heslam-bench-transport: " << error.what() << "\n";
+    return 1;
+  }
+}

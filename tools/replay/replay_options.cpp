@@ -1,0 +1,93 @@
+// Parsing heslam-replay's command line (one clear line per bad option).
+#include "tools/replay/replay_options.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace heslam {
+
+namespace {
+
+double parse_double(const std::string& option, const std::string& text, double min_value) {
+  double value = 0.0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc{} || end != text.data() + text.size() || !std::isfinite(value) || value < min_value) {
+    char minimum[32];
+    std::snprintf(minimum, sizeof(minimum), "%g", min_value);
+    throw std::runtime_error(option + ": expected a number >= " + minimum + ", got '" + text + "'");
+  }
+  return value;
+}
+
+}  // namespace
+
+const char* replay_usage() {
+  return "usage: heslam-replay DATASET [options]\n"
+         "  Publishes an EuRoC ASL folder or a KITTI odometry sequence on camera/stereo and\n"
+         "  camera/calibration.\n"
+         "  --format euroc|kitti|auto   dataset layout (default auto)\n"
+         "  --rate R                    speed, 1 = real time (default), 0 = as fast as possible\n"
+         "  --lockstep                  publish frame n+1 only after the consumer's FrameDone for frame n\n"
+         "  --ack-timeout S             lockstep: give up after S s without a consumer/FrameDone (10)\n"
+         "  --wait S                    wait up to S s for a frame subscriber before frame 0 (2)\n"
+         "  --loop                      start over at the end (stamps keep increasing)\n"
+         "  --start-offset S            skip the first S seconds of the recording\n"
+         "  --duration S                replay only S seconds\n"
+         "  --start-paused              start paused (space on the TTY or SIGUSR2 resumes)\n"
+         "  --strict                    stop at the first missing/corrupt image or unpaired row\n"
+         "  --no-progress, --no-keyboard\n"
+         "  Pause/resume: space on the TTY, or SIGUSR1 (pause) / SIGUSR2 (resume).\n";
+}
+
+ReplayOptions parse_replay_options(const std::vector<std::string>& args) {
+  ReplayOptions options;
+  bool rate_given = false;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    auto value = [&]() -> const std::string& {
+      if (i + 1 >= args.size()) throw std::runtime_error(arg + ": missing value");
+      return args[++i];
+    };
+    if (arg == "--format") {
+      options.format = parse_dataset_format(value());
+    } else if (arg == "--rate") {
+      options.rate = parse_double(arg, value(), 0.0);
+      rate_given = true;
+    } else if (arg == "--lockstep") {
+      options.lockstep = true;
+    } else if (arg == "--ack-timeout") {
+      options.ack_timeout_s = parse_double(arg, value(), 0.001);
+    } else if (arg == "--wait") {
+      options.wait_subscriber_s = parse_double(arg, value(), 0.0);
+    } else if (arg == "--loop") {
+      options.loop = true;
+    } else if (arg == "--start-offset") {
+      options.start_offset_s = parse_double(arg, value(), 0.0);
+    } else if (arg == "--duration") {
+      options.duration_s = parse_double(arg, value(), 0.0);
+    } else if (arg == "--start-paused") {
+      options.start_paused = true;
+    } else if (arg == "--strict") {
+      options.strict = true;
+    } else if (arg == "--no-progress") {
+      options.progress = false;
+    } else if (arg == "--no-keyboard") {
+      options.keyboard = false;
+    } else if (!arg.empty() && arg.front() == '-') {
+      throw std::runtime_error(arg + ": unknown option (see --help)");
+    } else if (options.dataset.empty()) {
+      options.dataset = arg;
+    } else {
+      throw std::runtime_error(arg + ": unexpected second dataset argument (see --help)");
+    }
+  }
+  if (options.dataset.empty()) throw std::runtime_error("missing DATASET argument (see --help)");
+  if (options.lockstep && rate_given) {
+    throw std::runtime_error("--rate and --lockstep exclude each other (lockstep is paced by the consumer)");
+  }
+  return options;
+}
+
+}  // namespace heslam

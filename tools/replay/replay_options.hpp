@@ -1,0 +1,35 @@
+// heslam-replay's own command line: what to replay and how fast. The flags every tool shares
+// (--domain, --namespace, ...) are parsed first by runtime::parse_common_args.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tools/replay/dataset/stereo_dataset.hpp"
+
+namespace heslam {
+
+struct ReplayOptions {
+  std::filesystem::path dataset;
+  DatasetFormat format = DatasetFormat::kAuto;
+  double rate = 1.0;                  // --rate: 1 = real time, 0 = as fast as the transport allows
+  bool lockstep = false;              // --lockstep: frame n+1 after FrameDone(n)
+  bool loop = false;
+  double start_offset_s = 0.0;
+  double duration_s = 0.0;            // 0 = to the end
+  bool start_paused = false;
+  bool strict = false;                // --strict: a bad image or unpaired row stops the replay
+  double ack_timeout_s = 10.0;        // --ack-timeout: lockstep wait for a consumer / a FrameDone
+  double wait_subscriber_s = 2.0;     // --wait: before frame 0, wait this long for a frame reader
+  bool progress = true;               // --no-progress: no progress line even on a TTY
+  bool keyboard = true;               // --no-keyboard: do not read the TTY (space = pause)
+};
+
+// args: what parse_common_args left. Throws std::runtime_error naming the option and what was expected.
+ReplayOptions parse_replay_options(const std::vector<std::string>& args);
+
+const char* replay_usage();
+
+}  // namespace heslam

@@ -1,0 +1,350 @@
+// The replay loop: load a pair, wait until it is due (or acknowledged), publish, report progress.
+#include "tools/replay/replayer.hpp"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <optional>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "components/core/camera/stereo_rectifier.hpp"
+#include "runtime/participant.hpp"
+#include "runtime/reader.hpp"
+#include "runtime/shutdown.hpp"
+#include "runtime/status.hpp"
+#include "runtime/topics.hpp"
+#include "runtime/waitset.hpp"
+#include "runtime/writer.hpp"
+#include "tools/replay/dataset/stereo_images.hpp"
+#include "tools/replay/replay_controls.hpp"
+#include "tools/replay/replay_messages.hpp"
+#include "tools/replay/replay_pacer.hpp"
+#include "tools/replay/replay_progress.hpp"
+
+namespace heslam {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Pauses, keys and signals are noticed within this while waiting for a frame to be due.
+constexpr std::chrono::milliseconds kControlPollPeriod{20};
+// The TTY progress line is redrawn at most this often (a terminal cannot show more anyway).
+constexpr std::chrono::milliseconds kProgressPeriod{100};
+// At the end, reliable frames still in flight get this long to be acknowledged by readers.
+constexpr std::chrono::seconds kFinalAckTimeout{2};
+// Unpaired-row warnings printed one by one before summarising the rest.
+constexpr std::size_t kMaxListedWarnings = 5;
+// --loop keeps decoded pairs in memory up to this size (the EuRoC clip: 69 MB), so later passes
+// cost only the transport; longer recordings are decoded again on every pass.
+constexpr std::size_t kMaxLoopCacheBytes = std::size_t{512} << 20;
+// --loop with a single-frame recording: gap between passes.
+constexpr std::int64_t kSingleFrameLoopGapNs = 100'000'000;
+
+std::int64_t now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
+}
+
+double seconds_between(std::int64_t from_ns, std::int64_t to_ns) { return static_cast<double>(to_ns - from_ns) * 1e-9; }
+
+std::chrono::milliseconds to_ms(double seconds) {
+  return std::chrono::milliseconds(static_cast<std::int64_t>(seconds * 1000.0));
+}
+
+// The TTY progress line: redrawn in place, cleared before any other output.
+class ProgressLine {
+ public:
+  explicit ProgressLine(bool enabled) : enabled_(enabled && isatty(STDERR_FILENO)) {}
+  ~ProgressLine() { finish(); }
+
+  void update(const ReplayCounts& counts, bool force = false) {
+    if (!enabled_) return;
+    const auto now = Clock::now();
+    if (!force && now - last_draw_ < kProgressPeriod) return;
+    last_draw_ = now;
+    std::fprintf(stderr, "\r\033[K%s", format_progress_line(counts).c_str());
+    std::fflush(stderr);
+    drawn_ = true;
+  }
+  void clear() {
+    if (!drawn_) return;
+    std::fprintf(stderr, "\r\033[K");
+    drawn_ = false;
+  }
+  void finish() {
+    if (!drawn_) return;
+    std::fprintf(stderr, "\n");
+    drawn_ = false;
+  }
+
+ private:
+  bool enabled_;
+  bool drawn_ = false;
+  Clock::time_point last_draw_{};
+};
+
+class Replay {
+ public:
+  Replay(const runtime::CommonArgs& common, const ReplayOptions& options)
+      : options_(options),
+        log_(common.name, common.log_level),
+        controls_(options.keyboard),
+        dataset_(open(options)),
+        rectifier_(dataset_.calibration),
+        calibration_message_(dataset_.calibration, rectifier_.camera()),
+        participant_({.domain_id = common.domain_id, .dds_config = common.dds_config}),
+        topics_(common.ns),
+        calibration_writer_(participant_, topics_.calibration()),
+        frame_writer_(participant_, topics_.stereo()),
+        status_(participant_, topics_, common.name, stats_),
+        progress_(options.progress),
+        pacer_(options.rate) {
+    if (options_.lockstep) {
+      acks_.emplace(participant_, topics_.frame_done());
+      ack_waitset_.emplace(participant_);
+      ack_waitset_->attach(*acks_);
+    }
+    counts_.total = dataset_.frames.size();
+    counts_.unpaired_rows = static_cast<std::size_t>(dataset_.skipped_rows);
+  }
+
+  int run() {
+    announce();
+    calibration_writer_.write(calibration_message_.get());
+    status_.set_state(runtime::ComponentState::kRunning);
+    if (!wait_for_consumer()) return finish();
+
+    const std::int64_t first_stamp_ns = dataset_.frames.front().stamp_ns;
+    const std::int64_t pass_offset_step_ns =
+        dataset_.frames.size() > 1
+            ? (dataset_.frames.back().stamp_ns - first_stamp_ns) +
+                  (dataset_.frames.back().stamp_ns - first_stamp_ns) / static_cast<std::int64_t>(dataset_.frames.size() - 1)
+            : kSingleFrameLoopGapNs;
+    start_ns_ = now_ns();
+    if (options_.start_paused) set_paused(true);
+    std::int64_t pass_offset_ns = 0;
+    pacer_.start(first_stamp_ns, now_ns());
+    for (;;) {
+      counts_.pass_published = 0;
+      for (std::size_t index = 0; index < dataset_.frames.size(); ++index) {
+        const StereoFrameFiles& frame = dataset_.frames[index];
+        // Decode first, then wait: the frame leaves at its due time, not due time + PNG decoding.
+        std::optional<StereoImages> images = load(index);
+        if (!wait_until_due(frame.stamp_ns + pass_offset_ns)) return finish();
+        if (!images) continue;
+        publish(*images, frame, pass_offset_ns);
+        if (options_.lockstep && !wait_for_ack(seq_ - 1)) return finish();
+        if (quit_) return finish();
+      }
+      if (!options_.loop) break;
+      pass_offset_ns += pass_offset_step_ns;
+      ++counts_.pass;
+    }
+    return finish();
+  }
+
+ private:
+  static StereoDataset open(const ReplayOptions& options) {
+    DatasetOptions dataset_options;
+    dataset_options.format = options.format;
+    dataset_options.strict = options.strict;
+    StereoDataset dataset = open_dataset(options.dataset, dataset_options);
+    select_time_window(dataset, options.start_offset_s, options.duration_s);
+    return dataset;
+  }
+
+  void announce() {
+    for (std::size_t i = 0; i < dataset_.warnings.size() && i < kMaxListedWarnings; ++i) {
+      log_.warn("skipped row: ", dataset_.warnings[i]);
+    }
+    if (dataset_.warnings.size() > kMaxListedWarnings) {
+      log_.warn("skipped ", dataset_.warnings.size() - kMaxListedWarnings, " more unpaired rows");
+    }
+    char span[32];
+    std::snprintf(span, sizeof(span), "%.2f", dataset_.duration_s());
+    char rate[32];
+    std::snprintf(rate, sizeof(rate), "rate %g", options_.rate);
+    log_.info("replaying ", dataset_.root.string(), " (", to_string(dataset_.format), ", ", dataset_.frames.size(),
+              " frames, ", span, " s) on domain ", participant_.domain_id(), " as '", frame_writer_.name(), "', ",
+              options_.lockstep ? "lockstep" : rate);
+  }
+
+  // Lockstep: a consumer must read frames and write FrameDone. Rate mode: give readers a moment
+  // to match so the first frames are not lost to discovery.
+  bool wait_for_consumer() {
+    if (!options_.lockstep) {
+      if (!frame_writer_.wait_for_readers(1, to_ms(options_.wait_subscriber_s)) && options_.wait_subscriber_s > 0) {
+        log_.info("no subscriber of '", frame_writer_.name(), "' yet; publishing anyway");
+      }
+      return !runtime::shutdown_requested();
+    }
+    const auto deadline = Clock::now() + to_ms(options_.ack_timeout_s);
+    while (frame_writer_.matched_readers() < 1 || acks_->matched_writers() < 1) {
+      if (runtime::shutdown_requested()) return false;
+      if (Clock::now() >= deadline) {
+        throw std::runtime_error("--lockstep: no consumer within " + std::to_string(options_.ack_timeout_s) +
+                                 " s (need a reader of '" + frame_writer_.name() + "' and a writer of '" +
+                                 acks_->name() + "' on domain " + std::to_string(participant_.domain_id()) +
+                                 "; is the frontend running with the same --domain/--namespace?)");
+      }
+      std::this_thread::sleep_for(kControlPollPeriod);
+    }
+    return true;
+  }
+
+  void set_paused(bool paused) {
+    if (paused == pacer_.paused()) return;
+    const std::int64_t now = now_ns();
+    if (paused) {
+      pacer_.pause(now);
+      paused_since_ns_ = now;
+    } else {
+      pacer_.resume(now);
+      paused_total_ns_ += now - paused_since_ns_;
+    }
+    update_counts();
+    progress_.update(counts_, true);
+    if (!progress_enabled_on_tty()) log_.info(paused ? "paused" : "resumed");
+  }
+
+  bool progress_enabled_on_tty() const { return options_.progress && isatty(STDERR_FILENO); }
+
+  void handle_controls() {
+    for (const ReplayControl control : controls_.poll()) {
+      switch (control) {
+        case ReplayControl::kPause: set_paused(true); break;
+        case ReplayControl::kResume: set_paused(false); break;
+        case ReplayControl::kTogglePause: set_paused(!pacer_.paused()); break;
+        case ReplayControl::kQuit: quit_ = true; break;
+      }
+    }
+  }
+
+  // Sleeps until the frame is due (rate mode) and while paused; false when asked to stop.
+  bool wait_until_due(std::int64_t stamp_ns) {
+    for (;;) {
+      handle_controls();
+      if (quit_ || runtime::shutdown_requested()) return false;
+      const std::int64_t due_ns = options_.lockstep ? (pacer_.paused() ? INT64_MAX : 0) : pacer_.due_ns(stamp_ns);
+      const std::int64_t now = now_ns();
+      if (due_ns <= now) return true;
+      update_counts();
+      progress_.update(counts_);
+      const std::int64_t slice_ns = std::min<std::int64_t>(due_ns - now, std::chrono::nanoseconds(kControlPollPeriod).count());
+      std::this_thread::sleep_for(std::chrono::nanoseconds(slice_ns));
+    }
+  }
+
+  // The pair's images, or nothing when a file is missing or corrupt (counted; fatal with --strict).
+  // With --loop, a recording whose decoded pairs fit in kMaxLoopCacheBytes is decoded only once.
+  std::optional<StereoImages> load(std::size_t index) {
+    if (index < decoded_.size() && decoded_[index]) return decoded_[index];
+    try {
+      auto timer = stats_.time("load");
+      StereoImages images = load_stereo_images(dataset_.frames[index]);
+      if (options_.loop && decoded_.empty()) {
+        const std::size_t pair_bytes = images.left.total() * images.left.elemSize() * 2;
+        if (pair_bytes * dataset_.frames.size() <= kMaxLoopCacheBytes) decoded_.resize(dataset_.frames.size());
+      }
+      if (index < decoded_.size()) decoded_[index] = images;  // cv::Mat copies share the pixels
+      return images;
+    } catch (const std::runtime_error& error) {
+      if (options_.strict) throw std::runtime_error(std::string(error.what()) + " (--strict)");
+      ++counts_.skipped_images;
+      stats_.count("images_skipped");
+      progress_.clear();
+      log_.warn("skipped frame: ", error.what());
+      return std::nullopt;
+    }
+  }
+
+  void publish(const StereoImages& images, const StereoFrameFiles& frame, std::int64_t pass_offset_ns) {
+    const msg::StereoFrame message =
+        make_frame_message(images, frame.stamp_ns + pass_offset_ns, frame.right_stamp_ns + pass_offset_ns, seq_);
+    {
+      auto timer = stats_.time("publish");
+      if (frame_writer_.write(message) == runtime::WriteResult::kTimeout) {
+        log_.warn("frame ", seq_, ": write timed out (reader too slow)");
+      }
+    }
+    ++seq_;
+    ++counts_.published;
+    ++counts_.pass_published;
+    stats_.count("frames_published");
+    update_counts();
+    progress_.update(counts_);
+  }
+
+  // Lockstep: waits for FrameDone(seq); false when asked to stop. Throws when the consumer is silent.
+  bool wait_for_ack(std::uint64_t seq) {
+    auto timer = stats_.time("ack_wait");
+    const auto deadline = Clock::now() + to_ms(options_.ack_timeout_s);
+    for (;;) {
+      for (auto& received : acks_->take()) {
+        if (received.info.valid_data && received.sample->seq == seq) return true;
+      }
+      handle_controls();
+      if (quit_) return false;
+      const auto now = Clock::now();
+      if (now >= deadline) {
+        throw std::runtime_error("--lockstep: no FrameDone for frame seq " + std::to_string(seq) + " on '" +
+                                 acks_->name() + "' within " + std::to_string(options_.ack_timeout_s) +
+                                 " s (consumer stopped or too slow; raise --ack-timeout)");
+      }
+      const auto wait = std::min<Clock::duration>(deadline - now, kControlPollPeriod);
+      if (ack_waitset_->wait(wait) == runtime::Wake::kShutdown) return false;
+    }
+  }
+
+  void update_counts() {
+    const std::int64_t now = now_ns();
+    counts_.paused = pacer_.paused();
+    counts_.elapsed_s = seconds_between(start_ns_, now);
+    counts_.paused_s = seconds_between(0, paused_total_ns_ + (pacer_.paused() ? now - paused_since_ns_ : 0));
+  }
+
+  int finish() {
+    update_counts();
+    progress_.finish();
+    dds_wait_for_acks(frame_writer_.handle(), std::chrono::nanoseconds(kFinalAckTimeout).count());
+    status_.set_state(runtime::ComponentState::kShuttingDown);
+    log_.info(format_summary(counts_), runtime::shutdown_requested() || quit_ ? " (stopped early)" : "");
+    return 0;
+  }
+
+  ReplayOptions options_;
+  runtime::Logger log_;
+  ReplayControls controls_;  // first: SIGUSR1/2 must be handled before any reader can see the replay
+  StereoDataset dataset_;
+  StereoRectifier rectifier_;
+  CalibrationMessage calibration_message_;
+  runtime::Participant participant_;
+  runtime::Topics topics_;
+  runtime::Writer<msg::StereoCalibration> calibration_writer_;
+  runtime::Writer<msg::StereoFrame> frame_writer_;
+  std::optional<runtime::Reader<msg::FrameDone>> acks_;
+  std::optional<runtime::WaitSet> ack_waitset_;
+  runtime::Stats stats_;
+  runtime::StatusPublisher status_;
+  ProgressLine progress_;
+  ReplayPacer pacer_;
+  ReplayCounts counts_;
+  std::vector<std::optional<StereoImages>> decoded_;  // --loop cache, empty when not caching
+  std::uint64_t seq_ = 0;
+  std::int64_t start_ns_ = 0;
+  std::int64_t paused_since_ns_ = 0;
+  std::int64_t paused_total_ns_ = 0;
+  bool quit_ = false;
+};
+
+}  // namespace
+
+int run_replay(const runtime::CommonArgs& common, const ReplayOptions& options) {
+  Replay replay(common, options);
+  return replay.run();
+}
+
+}  // namespace heslam

@@ -1,0 +1,296 @@
+// YAML-like text of the project messages for heslam-spy echo.
+#include "tools/spy/message_format.hpp"
+
+#include <cstdio>
+#include <functional>
+#include <span>
+#include <sstream>
+
+#include "runtime/sequence.hpp"
+
+namespace heslam {
+
+namespace {
+
+// Summary mode shows this many elements of a long sequence: enough to see the shape of the data.
+constexpr std::size_t kPreviewElements = 3;
+// Full mode prints raw bytes (images, descriptors) in rows of this many.
+constexpr std::size_t kBytesPerRow = 32;
+
+std::string number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.9g", value);
+  return text;
+}
+
+template <typename T, std::size_t N>
+std::string array(const T (&values)[N]) {
+  std::string text = "[";
+  for (std::size_t i = 0; i < N; ++i) text += (i ? ", " : "") + number(static_cast<double>(values[i]));
+  return text + "]";
+}
+
+// Writes "key: value" lines with indentation.
+class Text {
+ public:
+  void line(int indent, const std::string& key, const std::string& value) {
+    out_ << std::string(2 * indent, ' ') << key << ": " << value << '\n';
+  }
+  void header(int indent, const std::string& key) { out_ << std::string(2 * indent, ' ') << key << ":\n"; }
+  void item(int indent, const std::string& value) { out_ << std::string(2 * indent, ' ') << "- " << value << '\n'; }
+  std::string str() const { return out_.str(); }
+
+ private:
+  std::ostringstream out_;
+};
+
+// A sequence: its length, then every element (full) or the first few.
+template <typename Element>
+void sequence(Text& text, int indent, const std::string& key, std::span<const Element> values,
+              const FormatOptions& options, const std::function<std::string(const Element&)>& format) {
+  const std::size_t shown = options.full ? values.size() : std::min(values.size(), kPreviewElements);
+  text.line(indent, key + "_count", std::to_string(values.size()));
+  if (values.empty()) return;
+  text.header(indent, key);
+  for (std::size_t i = 0; i < shown; ++i) text.item(indent + 1, format(values[i]));
+  if (shown < values.size()) text.item(indent + 1, "... (" + std::to_string(values.size() - shown) + " more, --full)");
+}
+
+void bytes(Text& text, int indent, const std::string& key, std::span<const std::uint8_t> values) {
+  text.header(indent, key);
+  for (std::size_t row = 0; row < values.size(); row += kBytesPerRow) {
+    std::string hex;
+    char byte[4];
+    for (std::size_t i = row; i < std::min(values.size(), row + kBytesPerRow); ++i) {
+      std::snprintf(byte, sizeof(byte), "%02x", values[i]);
+      hex += byte;
+    }
+    text.item(indent + 1, hex);
+  }
+}
+
+std::string pose(const msg::Pose& value) {
+  return "{position_m: " + array(value.position_m) + ", orientation_xyzw: " + array(value.orientation_xyzw) + "}";
+}
+
+std::string camera(const msg::RectifiedStereoCamera& value) {
+  return "{fx_px: " + number(value.fx_px) + ", fy_px: " + number(value.fy_px) + ", cx_px: " + number(value.cx_px) +
+         ", cy_px: " + number(value.cy_px) + ", baseline_m: " + number(value.baseline_m) + ", size: " +
+         std::to_string(value.width_px) + "x" + std::to_string(value.height_px) + "}";
+}
+
+const char* encoding_name(heslam_msg_ImageEncoding encoding) {
+  switch (encoding) {
+    case heslam_msg_ENCODING_MONO8: return "mono8";
+    case heslam_msg_ENCODING_BGR8: return "bgr8";
+  }
+  return "unknown";
+}
+
+std::string raw_camera(const msg::CameraModel& value) {
+  std::string distortion = "[";
+  const auto coefficients = runtime::view(value.distortion);
+  for (std::size_t i = 0; i < coefficients.size(); ++i) distortion += (i ? ", " : "") + number(coefficients[i]);
+  distortion += "]";
+  return "{size: " + std::to_string(value.width_px) + "x" + std::to_string(value.height_px) + ", fx_px: " +
+         number(value.fx_px) + ", fy_px: " + number(value.fy_px) + ", cx_px: " + number(value.cx_px) +
+         ", cy_px: " + number(value.cy_px) + ", distortion: " +
+         (value.distortion_model == heslam_msg_DISTORTION_RADIAL_TANGENTIAL ? "radtan " : "none ") + distortion +
+         ", T_BS: " + array(value.T_BS) + "}";
+}
+
+}  // namespace
+
+double mean_intensity(const msg::StereoFrame& frame, bool right) {
+  const auto pixels = runtime::view(right ? frame.right : frame.left);
+  if (pixels.empty()) return 0.0;
+  std::uint64_t sum = 0;
+  for (const std::uint8_t value : pixels) sum += value;
+  return static_cast<double>(sum) / static_cast<double>(pixels.size());
+}
+
+std::string format_message(const msg::StereoFrame& frame, const FormatOptions& options) {
+  Text text;
+  text.line(0, "seq", std::to_string(frame.seq));
+  text.line(0, "stamp_ns", std::to_string(frame.stamp_ns));
+  text.line(0, "stamp_right_ns", std::to_string(frame.stamp_right_ns));
+  text.line(0, "size", std::to_string(frame.width_px) + "x" + std::to_string(frame.height_px) + " " +
+                           encoding_name(frame.encoding));
+  char mean[64];
+  std::snprintf(mean, sizeof(mean), "%.2f / %.2f", mean_intensity(frame, false), mean_intensity(frame, true));
+  text.line(0, "mean_intensity_left_right", mean);
+  text.line(0, "bytes_left_right", std::to_string(frame.left._length) + " / " + std::to_string(frame.right._length));
+  if (options.full) {
+    bytes(text, 0, "left", runtime::view(frame.left));
+    bytes(text, 0, "right", runtime::view(frame.right));
+  }
+  return text.str();
+}
+
+std::string format_message(const msg::StereoCalibration& calibration, const FormatOptions& /*options*/) {
+  Text text;
+  text.line(0, "source", runtime::to_string(calibration.source));
+  text.line(0, "input_rectified", calibration.input_rectified ? "true" : "false");
+  text.line(0, "rate_hz", number(calibration.rate_hz));
+  text.line(0, "left", raw_camera(calibration.left));
+  text.line(0, "right", raw_camera(calibration.right));
+  if (calibration.has_explicit_rectification) {
+    const msg::ExplicitRectification& r = calibration.explicit_rectification;
+    text.header(0, "explicit_rectification");
+    text.line(1, "R_left", array(r.R_left));
+    text.line(1, "R_right", array(r.R_right));
+    text.line(1, "P_left", array(r.P_left));
+    text.line(1, "P_right", array(r.P_right));
+  }
+  text.line(0, "rectified", camera(calibration.rectified));
+  return text.str();
+}
+
+std::string format_message(const msg::Odometry& odometry, const FormatOptions& options) {
+  Text text;
+  const char* state = odometry.state == heslam_msg_TRACKING_OK         ? "OK"
+                      : odometry.state == heslam_msg_TRACKING_LOST     ? "LOST"
+                                                                       : "NOT_INITIALIZED";
+  text.line(0, "seq", std::to_string(odometry.seq));
+  text.line(0, "stamp_ns", std::to_string(odometry.stamp_ns));
+  text.line(0, "state", state);
+  text.line(0, "T_wc", pose(odometry.T_wc));
+  text.line(0, "reference_keyframe_id", std::to_string(odometry.reference_keyframe_id));
+  text.line(0, "T_ref_c", pose(odometry.T_ref_c));
+  text.line(0, "keypoints", std::to_string(odometry.keypoints));
+  text.line(0, "tracked_points", std::to_string(odometry.tracked_points));
+  text.line(0, "keyframe_created", odometry.keyframe_created ? "true" : "false");
+  FormatOptions all = options;
+  all.full = true;  // at most 16 stages: always all of them
+  sequence<msg::StageTime>(text, 0, "stage_times", runtime::view(odometry.stage_times), all,
+                           [](const msg::StageTime& stage) { return std::string(stage.stage) + ": " + number(stage.ms) + " ms"; });
+  return text.str();
+}
+
+std::string format_message(const msg::Keyframe& keyframe, const FormatOptions& options) {
+  Text text;
+  text.line(0, "id", std::to_string(keyframe.id));
+  text.line(0, "stamp_ns", std::to_string(keyframe.stamp_ns));
+  text.line(0, "frame_seq", std::to_string(keyframe.frame_seq));
+  text.line(0, "T_wc", pose(keyframe.T_wc));
+  text.line(0, "camera", camera(keyframe.camera));
+  text.line(0, "pyramid", std::to_string(keyframe.pyramid_levels) + " levels x " + number(keyframe.scale_factor));
+  sequence<msg::KeyframeKeypoint>(text, 0, "keypoints", runtime::view(keyframe.keypoints), options,
+                                  [](const msg::KeyframeKeypoint& k) {
+                                    return "{u_px: " + number(k.u_px) + ", v_px: " + number(k.v_px) +
+                                           ", u_right_px: " + number(k.u_right_px) + ", depth_m: " + number(k.depth_m) +
+                                           ", angle_deg: " + number(k.angle_deg) + ", octave: " + std::to_string(k.octave) + "}";
+                                  });
+  text.line(0, "descriptor_bytes", std::to_string(keyframe.descriptors._length));
+  if (options.full) bytes(text, 0, "descriptors", runtime::view(keyframe.descriptors));
+  std::size_t observed = 0;
+  for (const std::uint64_t id : runtime::view(keyframe.point_ids)) observed += id != 0 ? 1 : 0;
+  text.line(0, "observed_points", std::to_string(observed));
+  if (options.full) {
+    sequence<std::uint64_t>(text, 0, "point_ids", runtime::view(keyframe.point_ids), options,
+                            [](const std::uint64_t& id) { return std::to_string(id); });
+  }
+  sequence<msg::NewStereoPoint>(text, 0, "new_points", runtime::view(keyframe.new_points), options,
+                                [](const msg::NewStereoPoint& p) {
+                                  return "{id: " + std::to_string(p.id) + ", keypoint_index: " +
+                                         std::to_string(p.keypoint_index) + ", position_w_m: " + array(p.position_w_m) + "}";
+                                });
+  return text.str();
+}
+
+std::string format_message(const msg::KeyframeState& state, const FormatOptions& options) {
+  Text text;
+  text.line(0, "id", std::to_string(state.id));
+  text.line(0, "map_version", std::to_string(state.map_version));
+  text.line(0, "T_wc", pose(state.T_wc));
+  text.line(0, "parent_id", std::to_string(state.parent_id));
+  text.line(0, "culled", state.culled ? "true" : "false");
+  sequence<msg::CovisibleKeyframe>(text, 0, "covisible", runtime::view(state.covisible), options,
+                                   [](const msg::CovisibleKeyframe& c) {
+                                     return "{id: " + std::to_string(c.id) + ", weight: " + std::to_string(c.weight) + "}";
+                                   });
+  return text.str();
+}
+
+std::string format_message(const msg::MapPointState& point, const FormatOptions& options) {
+  Text text;
+  text.line(0, "id", std::to_string(point.id));
+  text.line(0, "map_version", std::to_string(point.map_version));
+  text.line(0, "position_w_m", array(point.position_w_m));
+  text.line(0, "normal_w", array(point.normal_w));
+  text.line(0, "distance_range_m", "[" + number(point.min_distance_m) + ", " + number(point.max_distance_m) + "]");
+  text.line(0, "reference_keyframe_id", std::to_string(point.reference_keyframe_id));
+  text.line(0, "culled", point.culled ? "true" : "false");
+  text.line(0, "merged_into", std::to_string(point.merged_into));
+  if (options.full) bytes(text, 0, "descriptor", std::span<const std::uint8_t>(point.descriptor, sizeof(point.descriptor)));
+  sequence<msg::PointObservation>(text, 0, "observations", runtime::view(point.observations), options,
+                                  [](const msg::PointObservation& o) {
+                                    return "{keyframe_id: " + std::to_string(o.keyframe_id) +
+                                           ", keypoint_index: " + std::to_string(o.keypoint_index) + "}";
+                                  });
+  return text.str();
+}
+
+std::string format_message(const msg::LoopCorrection& correction, const FormatOptions& options) {
+  Text text;
+  text.line(0, "id", std::to_string(correction.id));
+  text.line(0, "map_version", std::to_string(correction.map_version));
+  text.line(0, "loop_keyframe_id", std::to_string(correction.loop_keyframe_id));
+  text.line(0, "matched_keyframe_id", std::to_string(correction.matched_keyframe_id));
+  text.line(0, "T_matched_loop", pose(correction.T_matched_loop));
+  sequence<msg::CorrectedKeyframePose>(text, 0, "corrected_poses", runtime::view(correction.corrected_poses), options,
+                                       [](const msg::CorrectedKeyframePose& c) {
+                                         return "{keyframe_id: " + std::to_string(c.keyframe_id) + ", T_wc: " + pose(c.T_wc) + "}";
+                                       });
+  sequence<msg::PointMerge>(text, 0, "point_merges", runtime::view(correction.point_merges), options,
+                            [](const msg::PointMerge& m) {
+                              return "{from_id: " + std::to_string(m.from_id) + ", into_id: " + std::to_string(m.into_id) + "}";
+                            });
+  return text.str();
+}
+
+std::string format_message(const msg::FrameDone& done, const FormatOptions& /*options*/) {
+  Text text;
+  text.line(0, "seq", std::to_string(done.seq));
+  text.line(0, "stamp_ns", std::to_string(done.stamp_ns));
+  text.line(0, "component", runtime::to_string(done.component));
+  text.line(0, "keyframe_created", done.keyframe_created ? "true" : "false");
+  text.line(0, "keyframe_id", std::to_string(done.keyframe_id));
+  return text.str();
+}
+
+std::string format_message(const msg::KeyframeDone& done, const FormatOptions& /*options*/) {
+  Text text;
+  text.line(0, "keyframe_id", std::to_string(done.keyframe_id));
+  text.line(0, "component", runtime::to_string(done.component));
+  text.line(0, "map_version", std::to_string(done.map_version));
+  return text.str();
+}
+
+std::string format_message(const msg::ComponentStatus& status, const FormatOptions& options) {
+  Text text;
+  const char* state = status.state == heslam_msg_STATE_CONFIGURING   ? "CONFIGURING"
+                      : status.state == heslam_msg_STATE_RUNNING     ? "RUNNING"
+                      : status.state == heslam_msg_STATE_SHUTTING_DOWN ? "SHUTTING_DOWN"
+                                                                       : "FAILED";
+  text.line(0, "name", runtime::to_string(status.name));
+  text.line(0, "pid", std::to_string(status.pid));
+  text.line(0, "executable", runtime::to_string(status.executable));
+  text.line(0, "state", state);
+  text.line(0, "uptime_s", number(status.uptime_s));
+  text.line(0, "stamp_ns", std::to_string(status.stamp_ns));
+  text.line(0, "rss_mib", number(static_cast<double>(status.rss_bytes) / (1024.0 * 1024.0)));
+  FormatOptions all = options;
+  all.full = true;  // a handful of counters and stages: always all of them
+  sequence<msg::Counter>(text, 0, "counters", runtime::view(status.counters), all, [](const msg::Counter& c) {
+    return runtime::to_string(c.name) + ": " + std::to_string(c.value);
+  });
+  sequence<msg::StageStats>(text, 0, "stages", runtime::view(status.stages), all, [](const msg::StageStats& s) {
+    return runtime::to_string(s.name) + ": {count: " + std::to_string(s.count) + ", p50_ms: " + number(s.p50_ms) +
+           ", p90_ms: " + number(s.p90_ms) + ", p99_ms: " + number(s.p99_ms) + ", max_ms: " + number(s.max_ms) + "}";
+  });
+  if (status.message != nullptr && status.message[0] != '\0') text.line(0, "message", status.message);
+  return text.str();
+}
+
+}  // namespace heslam

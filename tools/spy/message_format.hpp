@@ -1,0 +1,30 @@
+// Human-readable text of every project message for `heslam-spy echo`, YAML-like as `ros2 topic echo`.
+// Summary mode (default) keeps large parts short: images become size, stamp and mean intensity;
+// long sequences show their length and first elements. Full mode prints every element.
+#pragma once
+
+#include <string>
+
+#include "runtime/messages.hpp"
+
+namespace heslam {
+
+struct FormatOptions {
+  bool full = false;  // --full: every element of every sequence, image bytes as hex rows
+};
+
+std::string format_message(const msg::StereoFrame& frame, const FormatOptions& options);
+std::string format_message(const msg::StereoCalibration& calibration, const FormatOptions& options);
+std::string format_message(const msg::Odometry& odometry, const FormatOptions& options);
+std::string format_message(const msg::Keyframe& keyframe, const FormatOptions& options);
+std::string format_message(const msg::KeyframeState& state, const FormatOptions& options);
+std::string format_message(const msg::MapPointState& point, const FormatOptions& options);
+std::string format_message(const msg::LoopCorrection& correction, const FormatOptions& options);
+std::string format_message(const msg::FrameDone& done, const FormatOptions& options);
+std::string format_message(const msg::KeyframeDone& done, const FormatOptions& options);
+std::string format_message(const msg::ComponentStatus& status, const FormatOptions& options);
+
+// Mean of all bytes (0 for none): the image summary's intensity.
+double mean_intensity(const msg::StereoFrame& frame, bool right);
+
+}  // namespace heslam
