@@ -1,0 +1,74 @@
+// Corrected poses, spanning-tree propagation, points moved with their reference keyframe, merges.
+#include "components/core/mapping/correction_application.hpp"
+
+#include <functional>
+
+#include "components/core/mapping/map_editing.hpp"
+#include "components/core/mapping/point_statistics.hpp"
+
+namespace heslam {
+
+int apply_loop_correction(Map& map, const LoopCorrection& correction,
+                          const std::map<KeyframeId, std::uint64_t>& created_version, MapChanges& changes) {
+  int skipped = 0;
+  std::map<KeyframeId, Pose3> old_T_wc;
+  for (const auto& [id, kf] : map.keyframes) old_T_wc.emplace(id, kf.T_wc);
+
+  std::map<KeyframeId, Pose3> new_T_wc;
+  for (const auto& [id, T_wc] : correction.corrected_T_wc) {
+    if (map.keyframe(id) == nullptr) {
+      ++skipped;
+      continue;
+    }
+    new_T_wc[id] = T_wc;
+  }
+
+  // Resolves a keyframe's new pose: corrected, propagated from its parent, or unchanged.
+  std::map<KeyframeId, bool> in_progress;
+  std::function<Pose3(KeyframeId)> resolve = [&](KeyframeId id) -> Pose3 {
+    if (auto it = new_T_wc.find(id); it != new_T_wc.end()) return it->second;
+    const Keyframe& kf = map.keyframes.at(id);
+    const auto created = created_version.find(id);
+    // Culled keyframes always ride on their parent: nobody else keeps them consistent.
+    const bool after_version =
+        kf.culled || (created != created_version.end() && created->second > correction.map_version);
+    Pose3 result = old_T_wc.at(id);
+    if (after_version && kf.parent != kNoId && map.keyframe(kf.parent) != nullptr && !in_progress[id]) {
+      in_progress[id] = true;  // guards a (corrupt) cyclic tree
+      const Pose3 parent_new = resolve(kf.parent);
+      result = parent_new * old_T_wc.at(kf.parent).inverse() * old_T_wc.at(id);
+    }
+    new_T_wc[id] = result;
+    return result;
+  };
+  for (const auto& [id, kf] : map.keyframes) resolve(id);
+
+  for (auto& [id, kf] : map.keyframes) {
+    const Pose3& T_new = new_T_wc.at(id);
+    if (T_new.matrix() != kf.T_wc.matrix()) changes.changed_keyframes.insert(id);
+    kf.T_wc = T_new;
+  }
+  for (auto& [id, point] : map.points) {
+    const auto ref_old = old_T_wc.find(point.reference_kf);
+    if (ref_old == old_T_wc.end()) continue;
+    const Pose3& ref_new = new_T_wc.at(point.reference_kf);
+    if (ref_new.matrix() == ref_old->second.matrix()) continue;
+    point.p_w = ref_new * (ref_old->second.inverse() * point.p_w);
+    changes.changed_points.insert(id);
+  }
+
+  for (const auto& [from, into] : correction.point_merges) {
+    if (map.point(from) == nullptr || map.point(into) == nullptr || from == into) {
+      ++skipped;
+      continue;
+    }
+    replace_point(map, from, into);
+    changes.removed_points[from] = into;
+    changes.changed_points.erase(from);
+    changes.changed_points.insert(into);
+  }
+  for (const PointId id : changes.changed_points) update_point_statistics(map, id);
+  return skipped;
+}
+
+}  // namespace heslam

@@ -1,0 +1,268 @@
+// The local mapper's per-keyframe pipeline and correction entry point.
+#include "components/core/mapping/local_mapper.hpp"
+
+#include <chrono>
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+#include "components/core/mapping/correction_application.hpp"
+#include "components/core/mapping/covisibility.hpp"
+#include "components/core/mapping/keyframe_culling.hpp"
+#include "components/core/mapping/local_bundle_adjustment.hpp"
+#include "components/core/mapping/map_editing.hpp"
+#include "components/core/mapping/point_fusion.hpp"
+#include "components/core/mapping/point_statistics.hpp"
+#include "components/core/mapping/triangulation.hpp"
+
+namespace heslam {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point& start) {
+  const auto now = Clock::now();
+  const double ms = std::chrono::duration<double, std::milli>(now - start).count();
+  start = now;
+  return ms;
+}
+
+void check_keyframe(const Map& map, const Keyframe& kf) {
+  const std::string name = "keyframe " + std::to_string(kf.id);
+  if (kf.id == kNoId) throw std::invalid_argument("keyframe: id 0 is reserved for 'no keyframe'");
+  if (map.keyframe(kf.id) != nullptr) throw std::invalid_argument(name + ": already in the map");
+  const std::size_t n = kf.features.keypoints.size();
+  if (kf.features.descriptors.size() != n || kf.features.u_right_px.size() != n || kf.features.depth_m.size() != n ||
+      kf.point_ids.size() != n) {
+    throw std::invalid_argument(name + ": keypoints, descriptors, u_right, depth and point_ids must have " +
+                                std::to_string(n) + " entries each");
+  }
+  for (const Keypoint& kp : kf.features.keypoints) {
+    if (kp.octave < 0 || kp.octave >= kf.features.pyramid.levels) {
+      throw std::invalid_argument(name + ": keypoint octave " + std::to_string(kp.octave) + " outside the pyramid");
+    }
+  }
+}
+
+}  // namespace
+
+LocalMapper::LocalMapper(const PinholeStereo& camera, const LocalMapperOptions& options)
+    : camera_(camera), options_(options) {}
+
+LocalMapper::LocalMapper(const PinholeStereo& camera, const LocalMapperOptions& options, MapSnapshot snapshot)
+    : camera_(camera), options_(options), map_(std::move(snapshot.map)), state_(std::move(snapshot.state)) {}
+
+PointId LocalMapper::resolve_merges(PointId id) const {
+  // Merge chains are short; the bound guards a corrupt (cyclic) table.
+  for (std::size_t hops = 0; hops <= state_.merged_into.size(); ++hops) {
+    const auto it = state_.merged_into.find(id);
+    if (it == state_.merged_into.end()) return id;
+    id = it->second;
+  }
+  return kNoId;
+}
+
+void LocalMapper::insert_keyframe(Keyframe kf, std::vector<MapPoint> new_points, MapChanges& changes) {
+  check_keyframe(map_, kf);
+  const KeyframeId kf_id = kf.id;
+  std::vector<PointId> references = std::move(kf.point_ids);
+  kf.point_ids.assign(references.size(), kNoId);
+  kf.parent = kNoId;
+  kf.covisible.clear();
+  kf.culled = false;
+  map_.keyframes.emplace(kf_id, std::move(kf));
+  state_.created_version[kf_id] = map_.version + 1;
+  changes.changed_keyframes.insert(kf_id);
+
+  std::vector<PointId> new_ids;
+  for (MapPoint& point : new_points) {
+    if (point.id == kNoId || map_.point(point.id) != nullptr || !point.p_w.allFinite()) {
+      ++changes.counts.rejected_observations;
+      continue;
+    }
+    point.observations.clear();
+    point.reference_kf = kf_id;
+    point.culled = false;
+    point.merged_into = kNoId;
+    state_.recent_points[point.id] = state_.keyframes_processed;
+    new_ids.push_back(point.id);
+    map_.points.emplace(point.id, std::move(point));
+  }
+
+  for (std::size_t i = 0; i < references.size(); ++i) {
+    if (references[i] == kNoId) continue;
+    const PointId id = resolve_merges(references[i]);
+    MapPoint* point = map_.point(id);
+    if (point == nullptr || observation_index(*point, kf_id) >= 0) {
+      ++changes.counts.rejected_observations;
+      continue;
+    }
+    add_observation(map_, id, kf_id, static_cast<int>(i));
+    changes.changed_points.insert(id);
+  }
+  // Frontend points nobody references are dropped: they would be unobserved.
+  for (const PointId id : new_ids) {
+    if (!map_.points.at(id).observations.empty()) continue;
+    state_.recent_points.erase(id);
+    map_.points.erase(id);
+    ++changes.counts.rejected_observations;
+  }
+  for (const PointId id : changes.changed_points) update_point_statistics(map_, id);
+  for (const KeyframeId id : update_connections(map_, kf_id, options_.covisibility)) {
+    changes.changed_keyframes.insert(id);
+  }
+}
+
+void LocalMapper::cull_recent_points(MapChanges& changes) {
+  const PointCullingOptions& o = options_.point_culling;
+  const std::uint64_t now = state_.keyframes_processed;
+  for (auto it = state_.recent_points.begin(); it != state_.recent_points.end();) {
+    const MapPoint* point = map_.point(it->first);
+    const std::uint64_t age = now - it->second;
+    bool erase_entry = false;
+    if (point == nullptr) {
+      erase_entry = true;
+    } else if (point->visible > 0 && static_cast<float>(point->found) < o.min_found_ratio * static_cast<float>(point->visible)) {
+      erase_point(map_, it->first);
+      changes.removed_points[it->first] = kNoId;
+      ++changes.counts.culled_points;
+      erase_entry = true;
+    } else if (age >= static_cast<std::uint64_t>(o.keyframes_before_obs_check) &&
+               observation_weight(map_, *point) <= o.min_observations) {
+      erase_point(map_, it->first);
+      changes.removed_points[it->first] = kNoId;
+      ++changes.counts.culled_points;
+      erase_entry = true;
+    } else if (age >= static_cast<std::uint64_t>(o.keyframes_until_mature)) {
+      erase_entry = true;
+    }
+    it = erase_entry ? state_.recent_points.erase(it) : std::next(it);
+  }
+}
+
+void LocalMapper::record_removed(const MapChanges& changes) {
+  for (const auto& [id, into] : changes.removed_points) {
+    state_.recent_points.erase(id);
+    if (into != kNoId) state_.merged_into[id] = into;
+  }
+}
+
+void LocalMapper::refresh_culled_keyframes(MapChanges& changes) {
+  std::map<KeyframeId, Pose3> resolved;
+  std::function<Pose3(KeyframeId, int)> pose_of = [&](KeyframeId id, int depth) -> Pose3 {
+    const Keyframe& kf = map_.keyframes.at(id);
+    const auto relative = state_.culled_T_pc.find(id);
+    if (relative == state_.culled_T_pc.end() || map_.keyframe(kf.parent) == nullptr ||
+        depth > static_cast<int>(state_.culled_T_pc.size())) {
+      return kf.T_wc;
+    }
+    if (auto it = resolved.find(id); it != resolved.end()) return it->second;
+    const Pose3 T_wc = pose_of(kf.parent, depth + 1) * relative->second;
+    resolved[id] = T_wc;
+    return T_wc;
+  };
+  for (const auto& [id, T_pc] : state_.culled_T_pc) {
+    Keyframe* kf = map_.keyframe(id);
+    if (kf == nullptr) continue;
+    const Pose3 T_wc = pose_of(id, 0);
+    if (T_wc.matrix() != kf->T_wc.matrix()) {
+      kf->T_wc = T_wc;
+      changes.changed_keyframes.insert(id);
+    }
+  }
+}
+
+MapChanges LocalMapper::process_keyframe(Keyframe kf, std::vector<MapPoint> new_points) {
+  MapChanges changes;
+  const auto start = Clock::now();
+  auto stage = start;
+  ++state_.keyframes_processed;
+  const KeyframeId kf_id = kf.id;
+  try {
+    insert_keyframe(std::move(kf), std::move(new_points), changes);
+  } catch (...) {
+    --state_.keyframes_processed;
+    throw;
+  }
+  state_.last_keyframe = kf_id;
+  changes.timings.insertion_ms = ms_since(stage);
+
+  cull_recent_points(changes);
+  changes.timings.point_culling_ms = ms_since(stage);
+
+  if (options_.enable_triangulation) {
+    const auto created = create_new_points(map_, kf_id, camera_, options_.triangulation, kMapperTag,
+                                           state_.next_point_counter);
+    for (const PointId id : created) {
+      state_.recent_points[id] = state_.keyframes_processed;
+      changes.changed_points.insert(id);
+    }
+    changes.counts.triangulated_points = static_cast<int>(created.size());
+  }
+  changes.timings.triangulation_ms = ms_since(stage);
+
+  if (options_.enable_fusion) {
+    changes.counts.fused_points = fuse_with_neighbours(map_, kf_id, camera_, options_.fusion, changes);
+  }
+  for (const KeyframeId id : update_connections(map_, kf_id, options_.covisibility)) {
+    changes.changed_keyframes.insert(id);
+  }
+  changes.timings.fusion_ms = ms_since(stage);
+
+  if (options_.enable_bundle_adjustment) {
+    const auto ba = local_bundle_adjustment(map_, kf_id, camera_, options_.bundle_adjustment, changes);
+    changes.counts.bundle_adjustment_outliers = ba.outliers_removed;
+    changes.counts.bundle_adjustment_aborted = ba.aborted;
+  }
+  changes.timings.bundle_adjustment_ms = ms_since(stage);
+
+  if (options_.enable_keyframe_culling) {
+    const auto culled = cull_redundant_neighbours(map_, kf_id, camera_, options_.keyframe_culling, changes);
+    for (const KeyframeId id : culled) {
+      const Keyframe& culled_kf = map_.keyframes.at(id);
+      const Keyframe* parent = map_.keyframe(culled_kf.parent);
+      if (parent != nullptr) state_.culled_T_pc[id] = parent->T_wc.inverse() * culled_kf.T_wc;
+    }
+    changes.counts.culled_keyframes = static_cast<int>(culled.size());
+  }
+  refresh_culled_keyframes(changes);
+  changes.timings.keyframe_culling_ms = ms_since(stage);
+
+  record_removed(changes);
+  for (const auto& [id, into] : changes.removed_points) changes.changed_points.erase(id);
+  ++map_.version;
+  changes.map_version = map_.version;
+  changes.timings.total_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  return changes;
+}
+
+MapChanges LocalMapper::apply_correction(const LoopCorrection& correction) {
+  MapChanges changes;
+  const auto start = Clock::now();
+  apply_loop_correction(map_, correction, state_.created_version, changes);
+  refresh_culled_keyframes(changes);
+  record_removed(changes);
+  for (const auto& [id, into] : changes.removed_points) changes.changed_points.erase(id);
+  // Merges change which keyframes share points.
+  std::set<KeyframeId> affected;
+  for (const auto& [from, into] : correction.point_merges) {
+    if (const MapPoint* point = map_.point(resolve_merges(into)); point != nullptr) {
+      for (const auto& [kf_id, index] : point->observations) affected.insert(kf_id);
+    }
+  }
+  for (const KeyframeId id : affected) {
+    for (const KeyframeId touched : update_connections(map_, id, options_.covisibility)) {
+      changes.changed_keyframes.insert(touched);
+    }
+  }
+  ++map_.version;
+  changes.map_version = map_.version;
+  changes.timings.total_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  return changes;
+}
+
+MapFileWriteStats LocalMapper::save(const std::filesystem::path& path, bool sync) const {
+  return save_map_file(path, map_, state_, sync);
+}
+
+}  // namespace heslam

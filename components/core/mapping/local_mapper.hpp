@@ -1,0 +1,57 @@
+// The local mapper: owner of the map after keyframe creation (ORB-SLAM2's LocalMapping thread as a
+// plain class; the DDS process in components/local_mapper/ wraps it).
+//
+// process_keyframe runs, in order: insertion (observations, point statistics, covisibility, spanning
+// tree), recent point culling, triangulation, fusion, local bundle adjustment and keyframe culling,
+// and returns what changed so the caller can publish exactly that. apply_correction applies a loop
+// closer's LoopCorrection. The map version is bumped once per call that changed anything.
+#pragma once
+
+#include <filesystem>
+#include <vector>
+
+#include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/map/map.hpp"
+#include "components/core/mapping/local_mapper_options.hpp"
+#include "components/core/mapping/loop_correction.hpp"
+#include "components/core/mapping/map_changes.hpp"
+#include "components/core/mapping/map_file.hpp"
+#include "components/core/mapping/mapper_state.hpp"
+
+namespace heslam {
+
+class LocalMapper {
+ public:
+  LocalMapper(const PinholeStereo& camera, const LocalMapperOptions& options);
+  // Resumes from a snapshot (map file load).
+  LocalMapper(const PinholeStereo& camera, const LocalMapperOptions& options, MapSnapshot snapshot);
+
+  // `kf.point_ids` may reference existing points and the `new_points` (the frontend's stereo points,
+  // each referenced by exactly the keypoint that created it). References to unknown points are
+  // dropped and counted; references to merged points follow the merge. Throws std::invalid_argument
+  // when the keyframe is malformed (duplicate id, mismatched vector sizes).
+  MapChanges process_keyframe(Keyframe kf, std::vector<MapPoint> new_points);
+
+  MapChanges apply_correction(const LoopCorrection& correction);
+
+  const Map& map() const { return map_; }
+  const MapperState& state() const { return state_; }
+  const PinholeStereo& camera() const { return camera_; }
+
+  // Snapshot of map + state (see map_file.hpp).
+  MapFileWriteStats save(const std::filesystem::path& path, bool sync = false) const;
+
+ private:
+  void insert_keyframe(Keyframe kf, std::vector<MapPoint> new_points, MapChanges& changes);
+  void cull_recent_points(MapChanges& changes);
+  void record_removed(const MapChanges& changes);
+  void refresh_culled_keyframes(MapChanges& changes);
+  PointId resolve_merges(PointId id) const;
+
+  PinholeStereo camera_;
+  LocalMapperOptions options_;
+  Map map_;
+  MapperState state_;
+};
+
+}  // namespace heslam

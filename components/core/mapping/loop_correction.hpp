@@ -1,0 +1,26 @@
+// A loop correction as the loop closer publishes it (mirrors the LoopCorrection IDL type).
+//
+// The poses were computed on map version `map_version`; keyframes the mapper created after that
+// version are not listed and follow their spanning-tree parent.
+#pragma once
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "components/core/geometry/pose.hpp"
+#include "components/core/map/map.hpp"
+
+namespace heslam {
+
+struct LoopCorrection {
+  std::uint64_t id = 0;
+  std::uint64_t map_version = 0;  // map version the correction was computed on
+  KeyframeId loop_kf = kNoId;     // the current keyframe that closed the loop
+  KeyframeId matched_kf = kNoId;  // the old keyframe it matched
+  Pose3 T_matched_loop = Pose3::Identity();  // loop keyframe in the matched keyframe's frame
+  std::vector<std::pair<KeyframeId, Pose3>> corrected_T_wc;  // new camera->world poses
+  std::vector<std::pair<PointId, PointId>> point_merges;     // (from, into): `from` is replaced
+};
+
+}  // namespace heslam

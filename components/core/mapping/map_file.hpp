@@ -1,0 +1,39 @@
+// Versioned binary snapshot of the mapper's map and bookkeeping (the mapper's persistence and the
+// map save / load feature).
+//
+// Layout (little-endian): "HESLAMAP", u32 format version, u32 reserved, u64 payload bytes, payload,
+// u64 FNV-1a checksum of the payload. A snapshot is written to "<path>.tmp" and renamed over
+// <path>, so a process killed mid-write leaves the previous snapshot intact.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+
+#include "components/core/map/map.hpp"
+#include "components/core/mapping/mapper_state.hpp"
+
+namespace heslam {
+
+inline constexpr std::uint32_t kMapFileFormatVersion = 1;
+
+struct MapSnapshot {
+  Map map;
+  MapperState state;
+};
+
+struct MapFileWriteStats {
+  std::uint64_t bytes = 0;
+  double serialize_ms = 0.0;
+  double write_ms = 0.0;  // write + (optional) fsync + rename
+};
+
+// Throws std::runtime_error ("map file <path>: <what>") when the file cannot be written.
+// `sync` forces the data to disk before the rename (durable across power loss, slower).
+MapFileWriteStats save_map_file(const std::filesystem::path& path, const Map& map, const MapperState& state,
+                                bool sync = false);
+
+// Throws std::runtime_error with one line naming the file and what is wrong (missing, bad magic,
+// unsupported version, truncated at which record, checksum mismatch).
+MapSnapshot load_map_file(const std::filesystem::path& path);
+
+}  // namespace heslam
