@@ -1,0 +1,115 @@
+// The heslam-eval executable: tables, JSON and plots from real files, and one-line errors with exit 1.
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "synthetic_trajectory.hpp"
+#include "test_support.hpp"
+#include "tools/eval/trajectory_io.hpp"
+
+namespace heslam::eval {
+namespace {
+
+struct ToolRun {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+std::string slurp(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+ToolRun run_eval(const std::string& arguments, const std::filesystem::path& dir) {
+  const auto out = dir / "stdout.txt";
+  const auto err = dir / "stderr.txt";
+  const std::string command = ((::heslam::test::bin_dir() / "heslam-eval").string() + " " + arguments + " >" +
+                               out.string() + " 2>" + err.string());
+  const int status = std::system(command.c_str());
+  ToolRun run;
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  run.out = slurp(out);
+  run.err = slurp(err);
+  return run;
+}
+
+TEST(EvalCli, ApeOnSyntheticFilesWritesTableJsonAndPlots) {
+  const auto dir = test::scratch_dir();
+  const Trajectory gt = test::figure_eight();
+  Trajectory est = gt;
+  for (std::size_t i = 0; i < est.size(); ++i) est.poses_wc[i].translation().z() += (i % 2 == 0 ? 0.1 : -0.1);
+  write_trajectory(dir / "gt.csv", gt, Format::euroc);
+  write_trajectory(dir / "est.txt", est, Format::heslam_default);
+  const ToolRun run = run_eval("ape --gt " + (dir / "gt.csv").string() + " --est " + (dir / "est.txt").string() +
+                               " --align none --json " + (dir / "ape.json").string() + " --plot " +
+                               (dir / "ape.png").string(),
+                           dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("APE: 400 pairs"), std::string::npos) << run.out;
+  const std::size_t rmse_row = run.out.find("  rmse ");
+  ASSERT_NE(rmse_row, std::string::npos) << run.out;
+  EXPECT_NEAR(std::stod(run.out.substr(rmse_row + 7)), 0.1, 1e-12) << run.out;
+  const std::string json = slurp(dir / "ape.json");
+  EXPECT_NE(json.find("\"metric\": \"ape\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"association\": \"time\""), std::string::npos) << json;
+  const cv::Mat png = cv::imread((dir / "ape.png").string());
+  ASSERT_FALSE(png.empty());
+  EXPECT_EQ(png.cols, 1400);
+  EXPECT_EQ(png.rows, 700);
+
+  const ToolRun rpe = run_eval("rpe --gt " + (dir / "gt.csv").string() + " --est " + (dir / "est.txt").string() +
+                               " --delta 10 --unit m --plot " + (dir / "rpe.svg").string(),
+                           dir);
+  ASSERT_EQ(rpe.exit_code, 0) << rpe.err;
+  const std::string svg = slurp(dir / "rpe.svg");
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  EXPECT_NE(svg.find("RPE translation [m]"), std::string::npos);
+  EXPECT_NE(svg.find("x [m]"), std::string::npos);
+}
+
+TEST(EvalCli, PublishedFiguresPrintInFull) {
+  HESLAM_REQUIRE_SHARED_DATA("trajectories");
+  const auto dir = test::scratch_dir();
+  const auto data = ::heslam::test::shared_dataset("trajectories");
+  const ToolRun kitti = run_eval("kitti --gt " + (data / "kitti_gt_poses/09.txt").string() + " --est " +
+                                 (data / "kitti_example_results/09.txt").string() + " --align sim3",
+                             dir);
+  ASSERT_EQ(kitti.exit_code, 0) << kitti.err;
+  EXPECT_NE(kitti.out.find("translation drift [%]:     2.88411251140"), std::string::npos) << kitti.out;
+  EXPECT_NE(kitti.out.find("ATE [m]:                   8.386619228786"), std::string::npos) << kitti.out;
+}
+
+TEST(EvalCli, BadInputIsOneLineAndExitOne) {
+  const auto dir = test::scratch_dir();
+  test::write_file(dir / "gt.txt", "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n");
+  test::write_file(dir / "bad.txt", "1.0 0 0 0 0 0 0 1\n\n2.0 0 0 0 nan? 0 0 1\n");
+  const ToolRun bad = run_eval("ape --gt " + (dir / "gt.txt").string() + " --est " + (dir / "bad.txt").string(), dir);
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_EQ(bad.err, "heslam-eval: " + (dir / "bad.txt").string() + ":3: expected a number in column 5, got 'nan?'\n");
+
+  const ToolRun unknown = run_eval("ate --gt a --est b", dir);
+  EXPECT_EQ(unknown.exit_code, 1);
+  EXPECT_EQ(unknown.err, "heslam-eval: unknown command 'ate' (expected ape, rpe or kitti)\n");
+
+  const ToolRun missing = run_eval("rpe --gt " + (dir / "gt.txt").string(), dir);
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_EQ(missing.err, "heslam-eval: missing --est FILE\n");
+
+  const ToolRun align = run_eval("ape --gt x --est y --align sim4", dir);
+  EXPECT_EQ(align.exit_code, 1);
+  EXPECT_NE(align.err.find("--align: expected none, origin, se3 or sim3, got 'sim4'"), std::string::npos);
+
+  const ToolRun help = run_eval("--help", dir);
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.out.find("usage: heslam-eval"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace heslam::eval

@@ -1,0 +1,77 @@
+// heslam-eval: trajectory evaluation (APE, RPE, KITTI drift) agreeing with evo and the KITTI devkit.
+#include <exception>
+#include <iostream>
+
+#include "tools/eval/app/cli_options.hpp"
+#include "tools/eval/app/table.hpp"
+#include "tools/eval/association.hpp"
+#include "tools/eval/json_output.hpp"
+#include "tools/eval/kitti_metrics.hpp"
+#include "tools/eval/plot.hpp"
+
+namespace {
+
+using namespace heslam::eval;
+
+// "folder/file": result files of different tools often share the file name (09.txt vs 09.txt).
+std::string short_name(const std::filesystem::path& path) {
+  const std::filesystem::path folder = path.parent_path().filename();
+  return folder.empty() ? path.filename().string() : (folder / path.filename()).string();
+}
+
+std::string plot_title(const app::CliOptions& options, const char* metric) {
+  return std::string(metric) + ": " + short_name(options.est_path) + " vs " + short_name(options.gt_path);
+}
+
+int run(const app::CliOptions& options) {
+  const Trajectory gt = read_trajectory(options.gt_path, options.gt_read);
+  const Trajectory est = read_trajectory(options.est_path, options.est_read);
+  std::cout << "gt:  " << options.gt_path.string() << " (" << gt.size() << " poses)\n"
+            << "est: " << options.est_path.string() << " (" << est.size() << " poses)\n";
+  JsonContext context{options.gt_path.string(), options.est_path.string(), gt.size(), est.size(), false,
+                      options.max_dt_s};
+
+  if (options.command == app::Command::kitti) {
+    const KittiResult kitti =
+        compute_kitti_metrics(gt, est, KittiOptions{.align = options.align.value_or(AlignMode::none)});
+    app::print_kitti(std::cout, kitti);
+    if (!options.json_path.empty()) write_text_file(options.json_path, to_json(kitti, context));
+    if (!options.plot_path.empty()) write_plot(options.plot_path, kitti_plot(kitti, plot_title(options, "KITTI")));
+    return 0;
+  }
+
+  const AlignedPair pair = associate(gt, est, AssociationOptions{options.max_dt_s, options.est_offset_s});
+  context.associated_by_time = pair.by_time;
+  std::cout << "associated " << pair.size() << " pairs by "
+            << (pair.by_time ? "time stamp" : "frame index") << "\n";
+  if (options.command == app::Command::ape) {
+    const ApeResult ape = compute_ape(pair, ApeOptions{.align = options.align.value_or(AlignMode::se3)});
+    app::print_ape(std::cout, ape);
+    if (!options.json_path.empty()) write_text_file(options.json_path, to_json(ape, context));
+    if (!options.plot_path.empty()) write_plot(options.plot_path, ape_plot(ape, plot_title(options, "APE")));
+  } else {
+    RpeOptions rpe_options = options.rpe;
+    rpe_options.align = options.align.value_or(AlignMode::none);
+    const RpeResult rpe = compute_rpe(pair, rpe_options);
+    app::print_rpe(std::cout, rpe);
+    if (!options.json_path.empty()) write_text_file(options.json_path, to_json(rpe, context));
+    if (!options.plot_path.empty()) write_plot(options.plot_path, rpe_plot(pair, rpe, plot_title(options, "RPE")));
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    const app::CliOptions options = app::parse_cli(argc, argv);
+    if (options.help) {
+      std::cout << app::usage();
+      return 0;
+    }
+    return run(options);
+  } catch (const std::exception& e) {
+    std::cerr << "heslam-eval: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,75 @@
+// Result tables: statistics as rows, translation and rotation as columns; full precision so that a
+// figure can be compared digit for digit with evo or kitti-odom-eval.
+#include "tools/eval/app/table.hpp"
+
+#include <cstdio>
+#include <ostream>
+#include <string>
+
+namespace heslam::eval::app {
+
+namespace {
+
+std::string format(const char* pattern, double a, double b) {
+  char buffer[160];
+  std::snprintf(buffer, sizeof buffer, pattern, a, b);
+  return buffer;
+}
+
+std::string format(const char* pattern, double a) {
+  char buffer[160];
+  std::snprintf(buffer, sizeof buffer, pattern, a);
+  return buffer;
+}
+
+void print_stats(std::ostream& out, const ErrorStats& t, const ErrorStats& r) {
+  out << "          " << "   translation [m]" << "    rotation [deg]\n";
+  const std::pair<const char*, std::pair<double, double>> rows[] = {
+      {"rmse", {t.rmse, r.rmse}}, {"mean", {t.mean, r.mean}}, {"median", {t.median, r.median}},
+      {"std", {t.std, r.std}},    {"min", {t.min, r.min}},    {"max", {t.max, r.max}},
+      {"sse", {t.sse, r.sse}}};
+  for (const auto& [name, values] : rows) {
+    char label[16];
+    std::snprintf(label, sizeof label, "  %-8s", name);
+    out << label << format("%18.12g%18.12g\n", values.first, values.second);
+  }
+}
+
+void print_alignment(std::ostream& out, AlignMode mode, const Sim3& S) {
+  out << "alignment: " << align_mode_name(mode);
+  if (mode == AlignMode::sim3) out << format(" (scale %.9g)", S.scale);
+  out << "\n";
+}
+
+}  // namespace
+
+void print_ape(std::ostream& out, const ApeResult& ape) {
+  out << "APE: " << ape.translation_m.count << " pairs, ";
+  print_alignment(out, ape.align, ape.alignment);
+  print_stats(out, ape.translation_m, ape.rotation_deg);
+}
+
+void print_rpe(std::ostream& out, const RpeResult& rpe) {
+  out << "RPE: delta " << format("%g", rpe.options.delta) << " " << delta_unit_name(rpe.options.unit)
+      << (rpe.options.all_pairs ? " (all pairs)" : "") << ", " << rpe.pairs.size() << " pairs, ";
+  print_alignment(out, rpe.options.align, Sim3{});
+  print_stats(out, rpe.translation_m, rpe.rotation_deg);
+}
+
+void print_kitti(std::ostream& out, const KittiResult& kitti) {
+  out << "KITTI: " << kitti.pairs << " frames, " << kitti.segments.size() << " sub-sequences, ";
+  print_alignment(out, kitti.align, kitti.alignment);
+  out << "  length [m]  segments  translation [%]  rotation [deg/100m]\n";
+  for (const KittiLengthError& l : kitti.per_length) {
+    char row[160];
+    std::snprintf(row, sizeof row, "  %10.0f  %8zu  %15.9g  %19.9g\n", l.length_m, l.segments,
+                  l.translation_error_percent, l.rotation_error_deg_per_100m);
+    out << row;
+  }
+  out << format("translation drift [%%]:     %.15g\n", kitti.translation_error_percent)
+      << format("rotation drift [deg/100m]: %.15g\n", kitti.rotation_error_deg_per_100m)
+      << format("ATE [m]:                   %.15g\n", kitti.ate_m)
+      << format("RPE [m] / [deg]:           %.15g / %.15g\n", kitti.rpe_m, kitti.rpe_deg);
+}
+
+}  // namespace heslam::eval::app
