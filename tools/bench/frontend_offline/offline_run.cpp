@@ -1,0 +1,148 @@
+// The offline frontend loop and its trajectory evaluation.
+#include "tools/bench/frontend_offline/offline_run.hpp"
+
+#include <chrono>
+#include <ctime>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <stdexcept>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "components/core/camera/stereo_calibration.hpp"
+#include "components/core/camera/stereo_rectifier.hpp"
+#include "tools/eval/alignment.hpp"
+
+namespace heslam::bench {
+namespace {
+
+// Distinct noise streams for the left and right image of one frame.
+constexpr std::uint64_t kRightImageSeedOffset = 0x100000000ULL;
+
+double thread_cpu_ms() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) * 1e3 + static_cast<double>(now.tv_nsec) * 1e-6;
+}
+
+double elapsed_ms(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since).count();
+}
+
+cv::Mat read_grey(const std::filesystem::path& png) {
+  cv::Mat image = cv::imread(png.string(), cv::IMREAD_GRAYSCALE);
+  if (image.empty()) throw std::runtime_error(png.string() + ": cannot read image (expected an 8-bit PNG)");
+  return image;
+}
+
+}  // namespace
+
+int OfflineRun::tracked_frames() const {
+  int n = 0;
+  for (const FrameRecord& f : frames) n += f.state == TrackingState::kOk ? 1 : 0;
+  return n;
+}
+
+OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& options) {
+  const StereoCalibration calibration = load_euroc_calibration(sequence.mav0_dir);
+  const StereoRectifier rectifier(calibration);
+  OfflineRun run;
+  run.camera = rectifier.camera();
+  StereoFeaturePipeline pipeline(run.camera, options.pipeline);
+  Tracker tracker(run.camera, options.tracker);
+
+  const std::size_t count = options.max_frames > 0
+                                ? std::min(sequence.frames.size(), static_cast<std::size_t>(options.max_frames))
+                                : sequence.frames.size();
+  cv::Mat left_rect;
+  cv::Mat right_rect;
+  for (std::size_t k = 0; k < count; ++k) {
+    const EurocFrame& input = sequence.frames[k];
+    cv::Mat left = read_grey(input.left_png);
+    cv::Mat right = read_grey(input.right_png);
+    apply_photometric_variant(left, options.variant, static_cast<std::uint64_t>(k));
+    apply_photometric_variant(right, options.variant, static_cast<std::uint64_t>(k) + kRightImageSeedOffset);
+
+    FrameRecord record;
+    record.stamp_ns = input.stamp_ns;
+    const auto start = std::chrono::steady_clock::now();
+    rectifier.rectify(left, right, left_rect, right_rect);
+    record.rectify_ms = elapsed_ms(start);
+    StereoFeatureTimings timings;
+    StereoFeatures features = pipeline.process(left_rect, right_rect, &timings);
+    record.he_ms = timings.he_ms;
+    record.extract_ms = timings.extract_ms;
+    record.stereo_ms = timings.stereo_ms;
+    record.features = static_cast<int>(features.size());
+    for (std::size_t i = 0; i < features.size(); ++i) record.stereo_features += features.has_stereo(i) ? 1 : 0;
+    const auto track_start = std::chrono::steady_clock::now();
+    const double track_cpu_start = thread_cpu_ms();
+    const TrackResult result = tracker.track(input.stamp_ns, k, std::move(features));
+    record.tracking_cpu_ms = thread_cpu_ms() - track_cpu_start;
+    record.tracking_ms = elapsed_ms(track_start);
+    record.total_ms = elapsed_ms(start);
+    record.state = result.state;
+    record.method = result.method;
+    record.T_wc = result.T_wc;
+    record.tracked_points = result.tracked_points;
+    record.keyframe = result.new_keyframe.has_value();
+    const auto truth = sequence.T_WB_by_stamp.find(input.stamp_ns);
+    if (truth != sequence.T_WB_by_stamp.end()) record.T_wc_truth = truth->second * rectifier.T_B_rect();
+    run.frames.push_back(record);
+  }
+  run.keyframes = static_cast<int>(tracker.local_map().keyframes.size());
+  run.map_points = static_cast<int>(tracker.local_map().points.size());
+  return run;
+}
+
+std::optional<AteResult> compute_ate_se3(const OfflineRun& run) {
+  std::vector<Eigen::Vector3d> estimate;
+  std::vector<Eigen::Vector3d> truth;
+  for (const FrameRecord& f : run.frames) {
+    if (f.state != TrackingState::kOk || !f.T_wc_truth) continue;
+    estimate.push_back(f.T_wc.translation());
+    truth.push_back(f.T_wc_truth->translation());
+  }
+  if (estimate.size() < 3) return std::nullopt;
+  const eval::Sim3 S = eval::umeyama(estimate, truth, /*with_scale=*/false);
+  AteResult ate;
+  double sum2 = 0.0;
+  for (std::size_t i = 0; i < estimate.size(); ++i) {
+    const double e = (S.R * estimate[i] + S.t - truth[i]).norm();
+    sum2 += e * e;
+    ate.max_m = std::max(ate.max_m, e);
+  }
+  ate.pairs = static_cast<int>(estimate.size());
+  ate.rmse_m = std::sqrt(sum2 / static_cast<double>(estimate.size()));
+  return ate;
+}
+
+double tracked_path_length_m(const OfflineRun& run) {
+  double length = 0.0;
+  const FrameRecord* previous = nullptr;
+  for (const FrameRecord& f : run.frames) {
+    if (f.state != TrackingState::kOk) continue;
+    if (previous != nullptr) length += (f.T_wc.translation() - previous->T_wc.translation()).norm();
+    previous = &f;
+  }
+  return length;
+}
+
+void write_tum_trajectory(const std::filesystem::path& path, const OfflineRun& run) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path.string() + ": cannot write the trajectory");
+  out << "# timestamp[s] tx ty tz qx qy qz qw (rectified left camera, tracked frames only)\n";
+  out << std::setprecision(9) << std::fixed;
+  for (const FrameRecord& f : run.frames) {
+    if (f.state != TrackingState::kOk) continue;
+    const Eigen::Quaterniond q(f.T_wc.rotation());
+    const Eigen::Vector3d t = f.T_wc.translation();
+    // Seconds printed from the integer nanoseconds: a double would round the last digits.
+    out << f.stamp_ns / 1'000'000'000 << '.' << std::setw(9) << std::setfill('0') << f.stamp_ns % 1'000'000'000
+        << std::setfill(' ') << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x()
+        << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
+  }
+}
+
+}  // namespace heslam::bench

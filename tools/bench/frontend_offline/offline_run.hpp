@@ -1,0 +1,70 @@
+// Runs the frontend's per-frame work (rectify -> HE -> ORB -> stereo -> track) over an EuRoC sequence
+// in one thread, without DDS, and evaluates the left-camera trajectory against the ground truth.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <vector>
+
+#include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/feature/stereo_feature_pipeline.hpp"
+#include "components/core/tracking/tracker.hpp"
+#include "tools/bench/frontend_offline/euroc_sequence.hpp"
+#include "tools/bench/frontend_offline/photometric_variant.hpp"
+
+namespace heslam::bench {
+
+struct OfflineRunOptions {
+  StereoFeaturePipelineOptions pipeline;
+  TrackerOptions tracker;
+  PhotometricVariant variant = PhotometricVariant::kNone;
+  int max_frames = 0;  // 0: the whole sequence
+};
+
+struct FrameRecord {
+  std::int64_t stamp_ns = 0;
+  TrackingState state = TrackingState::kNotInitialized;
+  TrackingMethod method = TrackingMethod::kNone;
+  Pose3 T_wc = Pose3::Identity();           // rectified left camera in the tracker's world
+  std::optional<Pose3> T_wc_truth;          // rectified left camera in the ground-truth world
+  int features = 0;
+  int stereo_features = 0;
+  int tracked_points = 0;
+  bool keyframe = false;
+  double rectify_ms = 0.0;
+  double he_ms = 0.0;
+  double extract_ms = 0.0;
+  double stereo_ms = 0.0;
+  double tracking_ms = 0.0;
+  double tracking_cpu_ms = 0.0;  // CPU time of the tracking call: what wall time would be on an idle core
+  double total_ms = 0.0;  // all of the above plus feature bookkeeping (image decoding excluded)
+};
+
+struct OfflineRun {
+  PinholeStereo camera;
+  std::vector<FrameRecord> frames;
+  int keyframes = 0;
+  int map_points = 0;
+
+  int tracked_frames() const;
+};
+
+// Throws std::runtime_error (one line naming the file) on unreadable calibration or images.
+OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& options);
+
+struct AteResult {
+  double rmse_m = 0.0;
+  double max_m = 0.0;
+  int pairs = 0;
+};
+// Absolute trajectory error of the tracked frames after SE(3) Umeyama alignment (no scale).
+std::optional<AteResult> compute_ate_se3(const OfflineRun& run);
+
+// Summed distance between consecutive tracked positions.
+double tracked_path_length_m(const OfflineRun& run);
+
+// TUM format (stamp_s tx ty tz qx qy qz qw), tracked frames only: lost frames are not invented.
+void write_tum_trajectory(const std::filesystem::path& path, const OfflineRun& run);
+
+}  // namespace heslam::bench
