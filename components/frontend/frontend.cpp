@@ -1,0 +1,240 @@
+// heslam-frontend's DDS side: readers, writers, lockstep acknowledgement, map-state mirroring.
+#include "components/frontend/frontend.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <string>
+
+#include "runtime/sequence.hpp"
+
+namespace heslam::frontend {
+namespace {
+
+// Wait granularity of the main loop: shutdown is also signalled through the waitset, this only
+// bounds how long a missed wake-up could delay it.
+constexpr std::chrono::milliseconds kWaitPeriod{200};
+// The publisher's rectified model and ours agree to this (both come from the same calibration; a
+// larger difference means mismatched builds or a different rectification).
+constexpr double kCameraTolerance = 1e-6;
+
+bool same_camera(const PinholeStereo& a, const PinholeStereo& b) {
+  return std::abs(a.fx_px - b.fx_px) < kCameraTolerance && std::abs(a.fy_px - b.fy_px) < kCameraTolerance &&
+         std::abs(a.cx_px - b.cx_px) < kCameraTolerance && std::abs(a.cy_px - b.cy_px) < kCameraTolerance &&
+         std::abs(a.baseline_m - b.baseline_m) < kCameraTolerance && a.width_px == b.width_px &&
+         a.height_px == b.height_px;
+}
+
+// Peak resident set size of this process (VmHWM in /proc/self/status), in bytes; 0 if unknown.
+std::uint64_t peak_resident_bytes() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) return std::stoull(line.substr(6)) * 1024;  // reported in kB
+  }
+  return 0;
+}
+
+// One summary line per stage, in pipeline order: the per-frame breakdown of the run.
+void log_stage_summary(const runtime::Logger& log, const runtime::Stats& stats) {
+  static const char* const kOrder[] = {"rectify", "he", "extract", "stereo", "features", "track_initial",
+                                       "track_local_map", "track_keyframe", "track", "total"};
+  const std::vector<runtime::StageSummary> stages = stats.stages();
+  for (const char* name : kOrder) {
+    for (const runtime::StageSummary& stage : stages) {
+      if (stage.name != name) continue;
+      std::ostringstream line;
+      line << std::fixed << std::setprecision(2) << "stage " << std::left << std::setw(16) << stage.name
+           << " median " << std::right << std::setw(7) << stage.p50_ms << " ms  p90 " << std::setw(7) << stage.p90_ms
+           << " ms  max " << std::setw(7) << stage.max_ms << " ms  (" << stage.count << " frames)";
+      log.info(line.str());
+    }
+  }
+  log.info("peak RSS ", peak_resident_bytes() / (1024 * 1024), " MiB");
+}
+
+}  // namespace
+
+Frontend::Frontend(const runtime::CommonArgs& args) : Component("frontend", args) {}
+
+void Frontend::configure(const runtime::Config& config) {
+  options_ = FrontendOptions::from_config(config);
+  waitset_ = std::make_unique<runtime::WaitSet>(participant());
+  calibration_reader_.emplace(participant(), topics().calibration());
+  frame_reader_.emplace(participant(), topics().stereo());
+  waitset_->attach(*calibration_reader_);
+  waitset_->attach(*frame_reader_);
+  if (options_.mapper_enabled) {
+    keyframe_state_reader_.emplace(participant(), topics().keyframe_states());
+    point_state_reader_.emplace(participant(), topics().map_points());
+    keyframe_done_reader_.emplace(participant(), topics().keyframe_done());
+    waitset_->attach(*keyframe_state_reader_);
+    waitset_->attach(*point_state_reader_);
+    waitset_->attach(*keyframe_done_reader_);
+  }
+  odometry_writer_.emplace(participant(), topics().odometry());
+  keyframe_writer_.emplace(participant(), topics().keyframes());
+  frame_done_writer_.emplace(participant(), topics().frame_done());
+  log().info("HE ", to_string(options_.features.he.mode), ", ", options_.features.orb.features, " ORB features, ",
+             options_.mapper_enabled ? "mirroring the local mapper's map" : "no local mapper (own map)",
+             options_.wait_for_mapper ? ", lockstep waits for the mapper" : "");
+}
+
+void Frontend::run() {
+  while (!shutdown_requested()) {
+    const runtime::Wake wake = waitset_->wait(kWaitPeriod);
+    if (wake == runtime::Wake::kShutdown) break;
+    take_calibration();
+    mirror_map_state();
+    take_frames();
+  }
+  const auto counters = stats().counters();
+  const auto count = [&](const char* name) { return counters.count(name) != 0 ? counters.at(name) : 0; };
+  log().info("processed ", count("frames"), " frames (", count("lost"), " lost, ", count("bad_frames"), " bad), ",
+             count("keyframes"), " keyframes");
+  log_stage_summary(log(), stats());
+}
+
+void Frontend::take_calibration() {
+  for (auto& received : calibration_reader_->take()) {
+    if (!received.info.valid_data) continue;
+    const msg::StereoCalibration& message = *received.sample;
+    const PinholeStereo announced = to_camera(message.rectified);
+    if (processor_ && calibration_camera_ && same_camera(*calibration_camera_, announced)) continue;
+    try {
+      const StereoCalibration calibration = to_calibration(message);
+      auto processor = std::make_unique<FrameProcessor>(calibration, options_);
+      if (announced.fx_px > 0.0 && !same_camera(processor->camera(), announced)) {
+        log().warn("calibration '", calibration.source, "': the publisher's rectified camera (fx ", announced.fx_px,
+                   ", baseline ", announced.baseline_m, " m) differs from ours (fx ", processor->camera().fx_px,
+                   ", baseline ", processor->camera().baseline_m, " m); using ours");
+      }
+      if (processor_) log().warn("calibration changed: tracking restarts with an empty map");
+      processor_ = std::move(processor);
+      calibration_camera_ = announced;
+      const PinholeStereo& camera = processor_->camera();
+      log().info("calibration '", calibration.source, "': rectified ", camera.width_px, "x", camera.height_px,
+                 ", fx ", camera.fx_px, " px, baseline ", camera.baseline_m, " m");
+    } catch (const std::exception& error) {
+      stats().count("bad_calibrations");
+      log().error(error.what());
+    }
+  }
+  while (processor_ && !pending_.empty()) {
+    runtime::Received<msg::StereoFrame> frame = std::move(pending_.front());
+    pending_.pop_front();
+    process_frame(*frame.sample);
+  }
+}
+
+void Frontend::take_frames() {
+  while (std::optional<runtime::Received<msg::StereoFrame>> received = frame_reader_->take_one()) {
+    if (!received->info.valid_data) continue;
+    if (!processor_) {
+      if (static_cast<int>(pending_.size()) >= options_.max_pending_frames) {
+        stats().count("frames_dropped_before_calibration");
+        pending_.pop_front();
+      }
+      pending_.push_back(std::move(*received));
+      continue;
+    }
+    process_frame(*received->sample);
+    if (shutdown_requested()) return;
+  }
+}
+
+void Frontend::process_frame(const msg::StereoFrame& frame) {
+  FrameOutput output;
+  try {
+    const GreyPair images = to_grey_images(frame);
+    output = processor_->process(frame.stamp_ns, frame.seq, images.left, images.right);
+  } catch (const std::exception& error) {
+    // A bad frame is skipped and counted; it is still acknowledged so a lockstep run goes on.
+    stats().count("bad_frames");
+    log().warn(error.what());
+    acknowledge(frame, nullptr);
+    return;
+  }
+  const TrackResult& result = output.result;
+  stats().count("frames");
+  if (result.state == TrackingState::kLost) stats().count("lost");
+  for (const StageTiming& timing : output.timings) stats().record_ms(timing.stage, timing.ms);
+
+  if (result.new_keyframe) {
+    stats().count("keyframes");
+    const KeyframeMessage keyframe(*result.new_keyframe, frame.seq, result.new_points, processor_->camera());
+    keyframe_writer_->write(keyframe.get());
+  }
+  const OdometryMessage odometry(frame.stamp_ns, frame.seq, result, output.keypoints, output.timings);
+  if (odometry_writer_->write(odometry.get()) == runtime::WriteResult::kTimeout) stats().count("odometry_timeouts");
+  log().debug("frame ", frame.seq, ": ", to_string(result.state), " (", to_string(result.method), "), ",
+              result.tracked_points, " points, ", output.keypoints, " keypoints (", output.stereo_keypoints, " stereo), ",
+              output.timings.back().ms, " ms");
+
+  if (result.new_keyframe && options_.wait_for_mapper && !wait_for_keyframe_done(result.new_keyframe->id)) {
+    stats().count("mapper_timeouts");
+    log().warn("keyframe ", result.new_keyframe->id, ": no KeyframeDone from the mapper within ",
+               options_.mapper_timeout.count(), " ms; going on without it");
+  }
+  acknowledge(frame, &output);
+}
+
+void Frontend::mirror_map_state() {
+  if (!options_.mapper_enabled) return;
+  Map* map = processor_ ? &processor_->tracker().local_map() : nullptr;
+  for (auto& received : keyframe_state_reader_->take()) {
+    if (map == nullptr) continue;  // nothing to mirror into yet: the mapper only knows our keyframes
+    // A dispose of a keyframe state is not a deletion: the mapper culls by state (culled flag), and
+    // Cyclone disposes every instance when the mapper's writer goes away (crash, restart, shutdown).
+    if (!received.info.valid_data) continue;
+    if (!apply_keyframe_state(*map, *received.sample)) stats().count("unknown_keyframe_states");
+  }
+  for (auto& received : point_state_reader_->take()) {
+    if (map == nullptr) continue;
+    if (!received.info.valid_data) {
+      // Removed by the mapper, or its writer went away (then its restart republishes the point):
+      // flag it culled, which the tracker skips and a later state revives.
+      if (received.info.disposed) {
+        if (MapPoint* point = map->point(received.sample->id)) point->culled = true;
+      }
+      continue;
+    }
+    apply_point_state(*map, *received.sample);
+  }
+  for (auto& received : keyframe_done_reader_->take()) {
+    if (received.info.valid_data) keyframes_done_.insert(received.sample->keyframe_id);
+  }
+}
+
+bool Frontend::wait_for_keyframe_done(KeyframeId id) {
+  const auto deadline = std::chrono::steady_clock::now() + options_.mapper_timeout;
+  for (;;) {
+    mirror_map_state();
+    if (keyframes_done_.erase(id) != 0) {
+      // The mapper publishes the keyframe's state before its KeyframeDone; take what is in flight.
+      mirror_map_state();
+      return true;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= deadline || shutdown_requested()) return false;
+    if (waitset_->wait(std::min<std::chrono::nanoseconds>(kWaitPeriod, deadline - now)) == runtime::Wake::kShutdown) {
+      return false;
+    }
+  }
+}
+
+void Frontend::acknowledge(const msg::StereoFrame& frame, const FrameOutput* output) {
+  msg::FrameDone done{};
+  done.seq = frame.seq;
+  done.stamp_ns = frame.stamp_ns;
+  done.component = runtime::borrow(name());
+  if (output != nullptr && output->result.new_keyframe) {
+    done.keyframe_created = true;
+    done.keyframe_id = output->result.new_keyframe->id;
+  }
+  frame_done_writer_->write(done);
+}
+
+}  // namespace heslam::frontend

@@ -1,0 +1,52 @@
+// heslam-frontend: the stereo tracking process. A thin DDS adapter over FrameProcessor (rectify ->
+// HE -> ORB -> stereo -> Tracker): takes the calibration and stereo frames, publishes odometry per
+// frame, immutable keyframes, FrameDone acknowledgements (lockstep) and its status; mirrors the local
+// mapper's keyframe / point state into the tracker's map when a mapper runs.
+#pragma once
+
+#include <deque>
+#include <memory>
+#include <optional>
+#include <set>
+
+#include "components/frontend/frame_processor.hpp"
+#include "components/frontend/frontend_options.hpp"
+#include "runtime/component.hpp"
+
+namespace heslam::frontend {
+
+class Frontend : public runtime::Component {
+ public:
+  explicit Frontend(const runtime::CommonArgs& args);
+
+ private:
+  void configure(const runtime::Config& config) override;
+  void run() override;
+
+  void take_calibration();
+  void take_frames();
+  void process_frame(const msg::StereoFrame& frame);
+  // Applies whatever map state the mapper published so far.
+  void mirror_map_state();
+  // Lockstep with a mapper: waits for its KeyframeDone(id), mirroring state meanwhile. False on
+  // timeout or shutdown.
+  bool wait_for_keyframe_done(KeyframeId id);
+  void acknowledge(const msg::StereoFrame& frame, const FrameOutput* output);
+
+  FrontendOptions options_;
+  std::optional<runtime::Reader<msg::StereoCalibration>> calibration_reader_;
+  std::optional<runtime::Reader<msg::StereoFrame>> frame_reader_;
+  std::optional<runtime::Reader<msg::KeyframeState>> keyframe_state_reader_;
+  std::optional<runtime::Reader<msg::MapPointState>> point_state_reader_;
+  std::optional<runtime::Reader<msg::KeyframeDone>> keyframe_done_reader_;
+  std::optional<runtime::Writer<msg::Odometry>> odometry_writer_;
+  std::optional<runtime::Writer<msg::Keyframe>> keyframe_writer_;
+  std::optional<runtime::Writer<msg::FrameDone>> frame_done_writer_;
+  std::unique_ptr<runtime::WaitSet> waitset_;
+  std::unique_ptr<FrameProcessor> processor_;  // from the first calibration
+  std::optional<PinholeStereo> calibration_camera_;
+  std::deque<runtime::Received<msg::StereoFrame>> pending_;  // frames before the calibration
+  std::set<KeyframeId> keyframes_done_;                      // KeyframeDone seen, not yet waited for
+};
+
+}  // namespace heslam::frontend

@@ -1,0 +1,113 @@
+// Reading FrontendOptions from the component's YAML config; defaults are the core structs' own.
+#include "components/frontend/frontend_options.hpp"
+
+#include <climits>
+
+namespace heslam::frontend {
+namespace {
+
+// Upper bounds that only catch typos (a value beyond them is certainly a mistake).
+constexpr int kMaxFeatures = 100000;
+constexpr int kMaxPyramidLevels = 16;
+constexpr int kMaxPixels = 1000;
+constexpr int kMaxCount = 100000;
+constexpr double kMaxTimeoutS = 3600.0;
+
+void read(const runtime::Config& c, const char* key, int& value, int min = 0, int max = kMaxCount) {
+  value = c.get_int(key, value, min, max);
+}
+void read(const runtime::Config& c, const char* key, float& value, double min, double max) {
+  value = static_cast<float>(c.get_double(key, value, min, max));
+}
+void read(const runtime::Config& c, const char* key, double& value, double min, double max) {
+  value = c.get_double(key, value, min, max);
+}
+void read(const runtime::Config& c, const char* key, bool& value) { value = c.get_bool(key, value); }
+
+void read_features(const runtime::Config& c, StereoFeaturePipelineOptions& o) {
+  HistogramEqualizerOptions& he = o.he;
+  he.mode = parse_he_mode(c.get_choice("he.mode", to_string(he.mode), {"none", "global", "clahe", "adaptive"}));
+  read(c, "he.clahe_clip_limit", he.clahe_clip_limit, 0.0, 1000.0);
+  read(c, "he.clahe_tiles_x", he.clahe_tiles_x, 1, 64);
+  read(c, "he.clahe_tiles_y", he.clahe_tiles_y, 1, 64);
+  read(c, "he.adaptive_on_below", he.adaptive_on_below, 0.0, 255.0);
+  read(c, "he.adaptive_off_above", he.adaptive_off_above, 0.0, 255.0);
+
+  OrbOptions& orb = o.orb;
+  read(c, "orb.features", orb.features, 1, kMaxFeatures);
+  read(c, "orb.scale_factor", orb.scale_factor, 1.01, 4.0);
+  read(c, "orb.levels", orb.levels, 1, kMaxPyramidLevels);
+  read(c, "orb.fast_threshold_initial", orb.fast_threshold_initial, 1, 255);
+  read(c, "orb.fast_threshold_min", orb.fast_threshold_min, 1, 255);
+  read(c, "orb.cell_size_px", orb.cell_size_px, 8.0, kMaxPixels);
+  read(c, "orb.features_by_area", orb.features_by_area);
+
+  StereoMatcherOptions& stereo = o.stereo;
+  read(c, "stereo.max_distance", stereo.max_distance, 0, 256);
+  read(c, "stereo.row_band_px", stereo.row_band_px, 0.0, kMaxPixels);
+  read(c, "stereo.sad_half_window_px", stereo.sad_half_window_px, 1, 32);
+  read(c, "stereo.sad_search_px", stereo.sad_search_px, 0, 64);
+  read(c, "stereo.min_depth_baselines", stereo.min_depth_baselines, 0.01, 1000.0);
+  read(c, "stereo.sad_outlier_factor", stereo.sad_outlier_factor, 0.0, 1000.0);
+
+  read(c, "pipeline.parallel", o.parallel);
+}
+
+void read_tracker(const runtime::Config& c, TrackerOptions& t) {
+  read(c, "tracker.min_stereo_points_to_initialize", t.min_stereo_points_to_initialize);
+  read(c, "tracker.close_depth_baselines", t.close_depth_baselines, 1.0, 1000.0);
+  read(c, "tracker.descriptor_threshold_high", t.descriptor_threshold_high, 0, 256);
+  read(c, "tracker.descriptor_threshold_low", t.descriptor_threshold_low, 0, 256);
+  read(c, "tracker.check_orientation", t.check_orientation);
+  read(c, "tracker.motion_search_radius_px", t.motion_search_radius_px, 0.5, kMaxPixels);
+  read(c, "tracker.min_motion_matches", t.min_motion_matches);
+  read(c, "tracker.reference_search_radius_px", t.reference_search_radius_px, 0.5, kMaxPixels);
+  read(c, "tracker.reference_ratio", t.reference_ratio, 0.0, 1.0);
+  read(c, "tracker.min_reference_matches", t.min_reference_matches);
+  read(c, "tracker.min_pose_inliers", t.min_pose_inliers);
+  read(c, "tracker.local_search_radius_px", t.local_search_radius_px, 0.5, kMaxPixels);
+  read(c, "tracker.local_search_radius_relocalized_px", t.local_search_radius_relocalized_px, 0.5, kMaxPixels);
+  read(c, "tracker.local_ratio", t.local_ratio, 0.0, 1.0);
+  read(c, "tracker.min_view_cosine", t.min_view_cosine, -1.0, 1.0);
+  read(c, "tracker.local_map_max_keyframes", t.local_map_max_keyframes, 1);
+  read(c, "tracker.local_map_neighbours_per_keyframe", t.local_map_neighbours_per_keyframe);
+  read(c, "tracker.min_local_map_inliers", t.min_local_map_inliers);
+  read(c, "tracker.min_local_map_inliers_after_relocalization", t.min_local_map_inliers_after_relocalization);
+  read(c, "tracker.pose_optimization_rounds", t.pose_optimization_rounds, 1, 100);
+  read(c, "tracker.pose_optimization_iterations", t.pose_optimization_iterations, 1, 1000);
+  read(c, "tracker.max_frames_between_keyframes", t.max_frames_between_keyframes, 1);
+  read(c, "tracker.min_frames_between_keyframes", t.min_frames_between_keyframes);
+  read(c, "tracker.close_tracked_needed", t.close_tracked_needed);
+  read(c, "tracker.close_untracked_enough", t.close_untracked_enough);
+  read(c, "tracker.reference_ratio_stereo", t.reference_ratio_stereo, 0.0, 1.0);
+  read(c, "tracker.reference_ratio_single_keyframe", t.reference_ratio_single_keyframe, 0.0, 1.0);
+  read(c, "tracker.min_keyframe_inliers", t.min_keyframe_inliers);
+  read(c, "tracker.new_keyframe_min_points", t.new_keyframe_min_points);
+  read(c, "tracker.relocalization_keyframes", t.relocalization_keyframes, 1);
+  read(c, "tracker.relocalization_ratio", t.relocalization_ratio, 0.0, 1.0);
+  read(c, "tracker.min_relocalization_matches", t.min_relocalization_matches);
+  read(c, "tracker.min_relocalization_inliers", t.min_relocalization_inliers);
+  t.ransac_seed = static_cast<std::uint64_t>(c.get_int("tracker.ransac_seed", static_cast<int>(t.ransac_seed), 0, INT_MAX));
+}
+
+}  // namespace
+
+FrontendOptions FrontendOptions::from_config(const runtime::Config& config) {
+  FrontendOptions options;
+  read_features(config, options.features);
+  read_tracker(config, options.tracker);
+  read(config, "lockstep.wait_for_mapper", options.wait_for_mapper);
+  options.mapper_enabled = config.get_bool("mapper.enabled", options.wait_for_mapper);
+  options.wait_for_mapper = options.wait_for_mapper && options.mapper_enabled;
+  double timeout_s = std::chrono::duration<double>(options.mapper_timeout).count();
+  read(config, "lockstep.mapper_timeout_s", timeout_s, 0.1, kMaxTimeoutS);
+  options.mapper_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));
+  read(config, "frames.max_pending", options.max_pending_frames, 1, 1000);
+
+  // With a mapper the frontend mirrors the map instead of maintaining it; its ids stay the frontend's.
+  options.tracker.maintain_map = !options.mapper_enabled;
+  options.tracker.id_tag = kFrontendTag;
+  return options;
+}
+
+}  // namespace heslam::frontend

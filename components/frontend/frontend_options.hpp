@@ -1,0 +1,35 @@
+// Options of heslam-frontend, read from its YAML config (config/frontend/*.yaml). Every field is
+// optional; a missing field keeps the core library's default (docs/frontend.md lists them all), so
+// the frontend with no config runs exactly the chain the offline harness runs.
+#pragma once
+
+#include <chrono>
+
+#include "components/core/feature/stereo_feature_pipeline.hpp"
+#include "components/core/map/map.hpp"
+#include "components/core/tracking/tracker_options.hpp"
+#include "runtime/config.hpp"
+
+namespace heslam::frontend {
+
+struct FrontendOptions {
+  StereoFeaturePipelineOptions features;  // he.*, orb.*, stereo.*, pipeline.parallel
+  TrackerOptions tracker;                 // tracker.*
+
+  // mapper.enabled: a local mapper owns the map. The frontend then mirrors map/keyframe_states and
+  // map/points into its tracker and does not maintain the map itself (TrackerOptions::maintain_map).
+  bool mapper_enabled = false;
+  // lockstep.wait_for_mapper: before acknowledging a frame that created a keyframe, wait for the
+  // mapper's KeyframeDone of that keyframe (deterministic runs with a mapper). Implies mapper_enabled.
+  bool wait_for_mapper = false;
+  // lockstep.mapper_timeout_s: how long to wait for that KeyframeDone before giving up (warned,
+  // counted) and acknowledging anyway, so a dead mapper cannot hang the run.
+  std::chrono::milliseconds mapper_timeout{30000};
+  // frames.max_pending: frames that arrive before the calibration are kept (oldest dropped beyond).
+  int max_pending_frames = 8;
+
+  // Throws std::runtime_error (one line: file, field, expectation) on a bad field.
+  static FrontendOptions from_config(const runtime::Config& config);
+};
+
+}  // namespace heslam::frontend

@@ -1,0 +1,100 @@
+// The ONE place where the frontend (and the recorder) convert between IDL samples and core types:
+// poses, calibration, stereo images, odometry, keyframes, and the mapper's keyframe / point state
+// mirrored into the tracker's local map.
+//
+// Outgoing messages borrow their sequences from buffers owned by the *Message classes below, so a
+// message object must outlive the write() that sends it. Incoming conversions copy what they keep.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/camera/stereo_calibration.hpp"
+#include "components/core/geometry/pose.hpp"
+#include "components/core/map/map.hpp"
+#include "components/core/tracking/tracker.hpp"
+#include "runtime/messages.hpp"
+
+namespace heslam::frontend {
+
+// --- poses ---
+msg::Pose to_message(const Pose3& T_ab);
+Pose3 to_pose(const msg::Pose& pose);  // the quaternion is normalised (it crossed a wire)
+
+// --- camera input ---
+// Throws std::runtime_error naming the calibration source and field when the message is unusable.
+StereoCalibration to_calibration(const msg::StereoCalibration& message);
+PinholeStereo to_camera(const msg::RectifiedStereoCamera& message);
+msg::RectifiedStereoCamera to_message(const PinholeStereo& camera);
+
+// The raw images of a frame as 8-bit grey. MONO8 pixels are wrapped without a copy (valid while the
+// message lives); BGR8 is converted. Throws std::runtime_error naming the frame when the byte counts
+// do not match width x height x channels.
+struct GreyPair {
+  cv::Mat left;
+  cv::Mat right;
+};
+GreyPair to_grey_images(const msg::StereoFrame& frame);
+
+// --- odometry ---
+struct StageTiming {
+  std::string stage;  // at most 31 characters (IDL string<31>); longer names are cut
+  double ms = 0.0;
+};
+
+class OdometryMessage {
+ public:
+  OdometryMessage(std::int64_t stamp_ns, std::uint64_t seq, const TrackResult& result, std::uint32_t keypoints,
+                  const std::vector<StageTiming>& timings);
+  OdometryMessage(const OdometryMessage&) = delete;
+  OdometryMessage& operator=(const OdometryMessage&) = delete;
+  const msg::Odometry& get() const { return message_; }
+
+ private:
+  std::vector<msg::StageTime> stage_times_;
+  msg::Odometry message_{};
+};
+
+heslam_msg_TrackingState to_message(TrackingState state);
+
+// --- keyframes (frontend -> mapper, recorder) ---
+class KeyframeMessage {
+ public:
+  KeyframeMessage(const Keyframe& keyframe, std::uint64_t frame_seq, const std::vector<MapPoint>& new_points,
+                  const PinholeStereo& camera);
+  KeyframeMessage(const KeyframeMessage&) = delete;
+  KeyframeMessage& operator=(const KeyframeMessage&) = delete;
+  const msg::Keyframe& get() const { return message_; }
+
+ private:
+  std::vector<msg::KeyframeKeypoint> keypoints_;
+  std::vector<std::uint8_t> descriptors_;
+  std::vector<std::uint64_t> point_ids_;
+  std::vector<msg::NewStereoPoint> new_points_;
+  msg::Keyframe message_{};
+};
+
+// A keyframe sample back into core types (the features, point ids and new points), for readers that
+// rebuild a map from the keyframes topic. Throws std::runtime_error when sequence lengths disagree.
+struct DecodedKeyframe {
+  Keyframe keyframe;
+  std::vector<MapPoint> new_points;  // position and creating observation only
+};
+DecodedKeyframe to_keyframe(const msg::Keyframe& message);
+
+// --- the mapper's state mirrored into the tracker's map ---
+// Refined pose, spanning-tree parent, covisibility and culled flag of a keyframe the map holds (a
+// culled keyframe stays, flagged). Returns false when the keyframe is unknown here (state ignored).
+bool apply_keyframe_state(Map& map, const msg::KeyframeState& state);
+// Creates or updates the point (a culled one stays, flagged); a merged point is removed and the
+// observing keyframes' point ids are pointed at the point it merged into.
+void apply_point_state(Map& map, const msg::MapPointState& state);
+// Removes a point; the keyframes observing it see `replacement` instead (kNoId: nothing).
+void erase_point(Map& map, PointId id, PointId replacement = kNoId);
+
+}  // namespace heslam::frontend

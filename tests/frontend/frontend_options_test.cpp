@@ -1,0 +1,83 @@
+// Frontend options: no config = the core defaults (the offline chain); fields map to the core structs;
+// bad fields are one clear line.
+#include <gtest/gtest.h>
+
+#include "components/frontend/frontend_options.hpp"
+#include "runtime/config.hpp"
+
+namespace heslam::frontend {
+namespace {
+
+TEST(FrontendOptions, EmptyConfigKeepsTheCoreDefaults) {
+  const FrontendOptions options = FrontendOptions::from_config(runtime::Config::empty());
+  const StereoFeaturePipelineOptions features;
+  const TrackerOptions tracker;
+  EXPECT_EQ(options.features.he.mode, features.he.mode);
+  EXPECT_EQ(options.features.orb.features, features.orb.features);
+  EXPECT_EQ(options.features.orb.levels, features.orb.levels);
+  EXPECT_EQ(options.features.stereo.max_distance, features.stereo.max_distance);
+  EXPECT_EQ(options.features.parallel, features.parallel);
+  EXPECT_EQ(options.tracker.max_frames_between_keyframes, tracker.max_frames_between_keyframes);
+  EXPECT_EQ(options.tracker.ransac_seed, tracker.ransac_seed);
+  EXPECT_TRUE(options.tracker.maintain_map);
+  EXPECT_FALSE(options.mapper_enabled);
+  EXPECT_FALSE(options.wait_for_mapper);
+}
+
+TEST(FrontendOptions, FieldsReachTheCoreOptions) {
+  const auto config = runtime::Config::parse(
+      "he:\n  mode: clahe\norb:\n  features: 2000\ntracker:\n  max_frames_between_keyframes: 10\n"
+      "lockstep:\n  wait_for_mapper: true\n  mapper_timeout_s: 2.5\n",
+      "test.yaml");
+  const FrontendOptions options = FrontendOptions::from_config(config);
+  config.reject_unknown();
+  EXPECT_EQ(options.features.he.mode, HeMode::kClahe);
+  EXPECT_EQ(options.features.orb.features, 2000);
+  EXPECT_EQ(options.tracker.max_frames_between_keyframes, 10);
+  EXPECT_TRUE(options.mapper_enabled);  // waiting for a mapper implies one
+  EXPECT_TRUE(options.wait_for_mapper);
+  EXPECT_FALSE(options.tracker.maintain_map);  // the mapper owns the map
+  EXPECT_EQ(options.mapper_timeout.count(), 2500);
+}
+
+TEST(FrontendOptions, BadFieldIsOneLineNamingFileAndField) {
+  const auto config = runtime::Config::parse("orb:\n  levels: 40\n", "frontend.yaml");
+  try {
+    FrontendOptions::from_config(config);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& error) {
+    const std::string what = error.what();
+    EXPECT_NE(what.find("frontend.yaml"), std::string::npos) << what;
+    EXPECT_NE(what.find("orb.levels"), std::string::npos) << what;
+  }
+  const auto typo = runtime::Config::parse("orb:\n  levle: 4\n", "frontend.yaml");
+  FrontendOptions::from_config(typo);
+  EXPECT_THROW(typo.reject_unknown(), std::runtime_error);
+}
+
+// The EuRoC and synth configs must not pin values that the core's defaults have since changed:
+// they give exactly the options of no config (the offline harness's chain).
+TEST(FrontendOptions, EurocAndSynthConfigsAreTheCoreDefaults) {
+  const FrontendOptions defaults = FrontendOptions::from_config(runtime::Config::empty());
+  for (const char* name : {"euroc", "synth"}) {
+    const FrontendOptions options = FrontendOptions::from_config(
+        runtime::Config::load(std::filesystem::path(HESLAM_SOURCE_DIR) / "config/frontend" / (std::string(name) + ".yaml")));
+    EXPECT_EQ(options.features.he.mode, defaults.features.he.mode) << name;
+    EXPECT_EQ(options.features.orb.features, defaults.features.orb.features) << name;
+    EXPECT_EQ(options.features.stereo.max_distance, defaults.features.stereo.max_distance) << name;
+    EXPECT_EQ(options.tracker.max_frames_between_keyframes, defaults.tracker.max_frames_between_keyframes) << name;
+    EXPECT_EQ(options.mapper_enabled, defaults.mapper_enabled) << name;
+  }
+}
+
+TEST(FrontendOptions, ShippedConfigsLoad) {
+  for (const char* name : {"euroc", "euroc_mapper", "kitti", "synth"}) {
+    const auto config = runtime::Config::load(std::filesystem::path(HESLAM_SOURCE_DIR) / "config/frontend" /
+                                              (std::string(name) + ".yaml"));
+    EXPECT_NO_THROW(FrontendOptions::from_config(config)) << name;
+    EXPECT_NO_THROW(config.reject_unknown()) << name;
+  }
+}
+
+}  // namespace
+}  // namespace heslam::frontend

@@ -1,0 +1,113 @@
+// The recorder's trajectory rebuilding: frames follow their reference keyframe's final pose (as
+// ORB-SLAM2 saves it), culled keyframes follow their parent, untracked frames are listed, not invented.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "tools/eval/trajectory_io.hpp"
+#include "tools/recorder/recorder.hpp"
+#include "tools/recorder/trajectory_recorder.hpp"
+
+namespace heslam::recorder {
+namespace {
+
+Pose3 translation(double x, double y, double z) {
+  Pose3 T = Pose3::Identity();
+  T.translation() = Eigen::Vector3d(x, y, z);
+  return T;
+}
+
+RecordedFrame tracked(std::uint64_t seq, KeyframeId reference, const Pose3& T_ref_c, const Pose3& T_wc) {
+  RecordedFrame frame;
+  frame.seq = seq;
+  frame.stamp_ns = 1'000'000'000 + static_cast<std::int64_t>(seq) * 50'000'000;
+  frame.tracked = true;
+  frame.state = "OK";
+  frame.reference = reference;
+  frame.T_ref_c = T_ref_c;
+  frame.T_wc = T_wc;
+  return frame;
+}
+
+TEST(TrajectoryRecorder, UnmovedReferenceKeepsTheOdometryPoseBitForBit) {
+  TrajectoryRecorder recorder;
+  Pose3 T_wc = translation(0.1, 0.2, 0.3);
+  T_wc.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Pose3 T_wk = translation(1, 0, 0);
+  recorder.add_keyframe(1, 0, 0, T_wk);
+  recorder.add_frame(tracked(0, 1, T_wk.inverse() * T_wc, T_wc));
+  const RecordedTrajectories out = recorder.build();
+  ASSERT_EQ(out.frames.size(), 1u);
+  EXPECT_EQ(out.frames.poses_wc[0].matrix(), T_wc.matrix());
+  EXPECT_DOUBLE_EQ(out.frames.stamps_s[0], 1.0);
+}
+
+TEST(TrajectoryRecorder, RefinedReferenceMovesItsFrames) {
+  TrajectoryRecorder recorder;
+  recorder.add_keyframe(1, 0, 0, translation(1, 0, 0));
+  recorder.add_frame(tracked(3, 1, translation(0, 0.5, 0), translation(1, 0.5, 0)));
+  recorder.update_keyframe(1, translation(1.5, 0, 0), kNoId, false);  // the mapper refined it
+  const RecordedTrajectories out = recorder.build();
+  ASSERT_EQ(out.frames.size(), 1u);
+  EXPECT_TRUE(out.frames.poses_wc[0].translation().isApprox(Eigen::Vector3d(1.5, 0.5, 0)));
+  EXPECT_EQ(out.frames.frame_ids[0], 3);
+  ASSERT_EQ(out.keyframes.size(), 1u);
+  EXPECT_TRUE(out.keyframes.poses_wc[0].translation().isApprox(Eigen::Vector3d(1.5, 0, 0)));
+}
+
+TEST(TrajectoryRecorder, CulledKeyframeFollowsItsParent) {
+  TrajectoryRecorder recorder;
+  recorder.add_keyframe(1, 0, 0, translation(0, 0, 0));
+  recorder.add_keyframe(2, 10, 5, translation(1, 0, 0));
+  recorder.add_frame(tracked(6, 2, translation(0, 0, 1), translation(1, 0, 1)));
+  recorder.update_keyframe(2, translation(1, 0, 0), 1, true);  // culled, parent 1
+  recorder.update_keyframe(1, translation(0, 2, 0), kNoId, false);  // parent moved afterwards
+  const RecordedTrajectories out = recorder.build();
+  ASSERT_EQ(out.frames.size(), 1u);
+  EXPECT_TRUE(out.frames.poses_wc[0].translation().isApprox(Eigen::Vector3d(1, 2, 1)));
+  EXPECT_EQ(out.keyframes.size(), 1u);  // culled keyframes are not in the keyframe trajectory
+}
+
+TEST(TrajectoryRecorder, UntrackedFramesAreListedNotInvented) {
+  TrajectoryRecorder recorder;
+  recorder.add_keyframe(1, 0, 0, Pose3::Identity());
+  recorder.add_frame(tracked(0, 1, Pose3::Identity(), Pose3::Identity()));
+  RecordedFrame lost;
+  lost.seq = 1;
+  lost.stamp_ns = 5;
+  lost.state = "LOST";
+  recorder.add_frame(lost);
+  recorder.add_frame(tracked(2, 7, Pose3::Identity(), translation(0, 0, 2)));  // keyframe 7 never arrived
+  const RecordedTrajectories out = recorder.build();
+  EXPECT_EQ(out.frames.size(), 2u);
+  ASSERT_EQ(out.lost.size(), 1u);
+  EXPECT_EQ(out.lost[0].seq, 1u);
+  EXPECT_EQ(out.lost[0].state, "LOST");
+  EXPECT_EQ(out.frames_without_reference, 1);
+  EXPECT_EQ(out.frames.poses_wc[1].translation().z(), 2.0);
+}
+
+TEST(RecorderFiles, WritesTrajectoryKeyframesAndLostListInTheChosenFormat) {
+  const auto dir = std::filesystem::temp_directory_path() / ("heslam_recorder_test_" + std::to_string(getpid()));
+  std::filesystem::remove_all(dir);
+  TrajectoryRecorder recorder;
+  recorder.add_keyframe(1, 1'000'000'000, 0, translation(0, 0, 0));
+  recorder.add_frame(tracked(0, 1, translation(0, 0, 0), translation(0, 0, 0)));
+  recorder.add_frame(tracked(1, 1, translation(0.1, 0, 0), translation(0.1, 0, 0)));
+  const RecorderOptions options =
+      RecorderOptions::from(runtime::Config::empty(), {"--output", (dir / "sub/run.csv").string(), "--format", "euroc"});
+  EXPECT_EQ(options.keyframe_output, dir / "sub/run.keyframes.csv");
+  EXPECT_EQ(options.lost_output, dir / "sub/run.lost.txt");
+  write_recording(recorder.build(), options);
+  const eval::Trajectory back = eval::read_trajectory(options.output);
+  ASSERT_EQ(back.size(), 2u);
+  EXPECT_NEAR(back.poses_wc[1].translation().x(), 0.1, 1e-12);
+  EXPECT_TRUE(std::filesystem::exists(options.lost_output));
+  std::filesystem::remove_all(dir);
+
+  EXPECT_THROW(RecorderOptions::from(runtime::Config::empty(), {"--format", "ply"}), std::runtime_error);
+  EXPECT_THROW(RecorderOptions::from(runtime::Config::empty(), {"--output"}), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace heslam::recorder

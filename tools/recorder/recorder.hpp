@@ -1,0 +1,55 @@
+// heslam-recorder: records odometry, keyframes and keyframe states, and at shutdown (after draining
+// its readers) writes the full trajectory, the keyframe trajectory and the list of untracked frames.
+//
+//   heslam-recorder [--output FILE] [--format tum|kitti|euroc] [--keyframes FILE] [--lost FILE]
+//
+// Config fields (same names): output, format, keyframe_output, lost_output; flags win over them.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "runtime/component.hpp"
+#include "tools/eval/trajectory_io.hpp"
+#include "tools/recorder/trajectory_recorder.hpp"
+
+namespace heslam::recorder {
+
+struct RecorderOptions {
+  std::filesystem::path output = "trajectory.txt";
+  eval::Format format = eval::Format::tum;
+  std::filesystem::path keyframe_output;  // empty: <output stem>.keyframes<ext>
+  std::filesystem::path lost_output;      // empty: <output stem>.lost.txt
+
+  // Throws std::runtime_error naming the field or flag on a bad value.
+  static RecorderOptions from(const runtime::Config& config, const std::vector<std::string>& flags);
+};
+
+// "<dir>/<stem><suffix>" next to output, e.g. traj.txt -> traj.keyframes.txt.
+std::filesystem::path sibling_path(const std::filesystem::path& output, const std::string& suffix);
+
+// Writes the three files; creates the output folders. Throws std::runtime_error on I/O errors.
+void write_recording(const RecordedTrajectories& recording, const RecorderOptions& options);
+
+class Recorder : public runtime::Component {
+ public:
+  explicit Recorder(const runtime::CommonArgs& args);
+
+ private:
+  void configure(const runtime::Config& config) override;
+  void run() override;
+  void on_shutdown() override;
+  bool accepts_positional_args() const override { return true; }
+  // Takes everything the readers hold; returns the number of samples taken.
+  std::size_t drain();
+
+  RecorderOptions options_;
+  TrajectoryRecorder recorder_;
+  std::optional<runtime::Reader<msg::Odometry>> odometry_reader_;
+  std::optional<runtime::Reader<msg::Keyframe>> keyframe_reader_;
+  std::optional<runtime::Reader<msg::KeyframeState>> keyframe_state_reader_;
+  std::unique_ptr<runtime::WaitSet> waitset_;
+};
+
+}  // namespace heslam::recorder

@@ -1,0 +1,91 @@
+// Rebuilding the trajectory from reference keyframes at the end of a run.
+#include "tools/recorder/trajectory_recorder.hpp"
+
+#include <algorithm>
+
+namespace heslam::recorder {
+namespace {
+
+// A parent chain longer than this is a cycle in corrupt state, not a real spanning tree walk.
+constexpr int kMaxParentDepth = 100000;
+constexpr double kNsPerSecond = 1e9;
+
+bool bit_equal(const Pose3& a, const Pose3& b) { return a.matrix() == b.matrix(); }
+
+}  // namespace
+
+void TrajectoryRecorder::add_frame(const RecordedFrame& frame) { frames_[frame.seq] = frame; }
+
+void TrajectoryRecorder::add_keyframe(KeyframeId id, std::int64_t stamp_ns, std::uint64_t frame_seq,
+                                      const Pose3& T_wc) {
+  auto [it, inserted] = keyframes_.try_emplace(id);
+  KeyframeRecord& record = it->second;
+  record.stamp_ns = stamp_ns;
+  record.frame_seq = frame_seq;
+  record.T_wc_initial = T_wc;
+  if (inserted) record.T_wc = T_wc;  // a state that arrived first already holds the refined pose
+}
+
+void TrajectoryRecorder::update_keyframe(KeyframeId id, const Pose3& T_wc, KeyframeId parent, bool culled) {
+  auto [it, inserted] = keyframes_.try_emplace(id);
+  KeyframeRecord& record = it->second;
+  if (inserted) record.T_wc_initial = T_wc;
+  if (record.culled) return;  // frozen relative to its parent
+  record.T_wc = T_wc;
+  record.parent = parent;
+  if (culled) cull(record);
+}
+
+void TrajectoryRecorder::cull(KeyframeRecord& record) {
+  record.culled = true;
+  auto parent = keyframes_.find(record.parent);
+  if (record.parent != kNoId && parent != keyframes_.end()) {
+    record.T_parent_kf = parent->second.T_wc.inverse() * record.T_wc;
+  }
+}
+
+std::optional<Pose3> TrajectoryRecorder::final_pose(KeyframeId id, int depth) const {
+  auto it = keyframes_.find(id);
+  if (it == keyframes_.end() || depth > kMaxParentDepth) return std::nullopt;
+  const KeyframeRecord& record = it->second;
+  if (!record.culled || !record.T_parent_kf) return record.T_wc;
+  const std::optional<Pose3> parent = final_pose(record.parent, depth + 1);
+  if (!parent) return record.T_wc;
+  return *parent * *record.T_parent_kf;
+}
+
+RecordedTrajectories TrajectoryRecorder::build() const {
+  RecordedTrajectories out;
+  out.frames.name = "frames";
+  out.keyframes.name = "keyframes";
+  for (const auto& [seq, frame] : frames_) {
+    if (!frame.tracked) {
+      out.lost.push_back({seq, frame.stamp_ns, frame.state});
+      continue;
+    }
+    Pose3 T_wc = frame.T_wc;
+    auto keyframe = keyframes_.find(frame.reference);
+    const std::optional<Pose3> reference = final_pose(frame.reference);
+    if (!reference) {
+      ++out.frames_without_reference;
+    } else if (keyframe->second.culled || !bit_equal(*reference, keyframe->second.T_wc_initial)) {
+      // The reference moved (refined, corrected, culled): re-express the frame with its final pose.
+      // An unmoved reference keeps the tracker's own pose, bit for bit (same value up to rounding).
+      T_wc = *reference * frame.T_ref_c;
+    }
+    out.frames.push_back(T_wc, static_cast<std::int64_t>(seq), static_cast<double>(frame.stamp_ns) / kNsPerSecond);
+  }
+  std::vector<std::pair<std::int64_t, KeyframeId>> by_stamp;
+  for (const auto& [id, record] : keyframes_) {
+    if (!record.culled) by_stamp.emplace_back(record.stamp_ns, id);
+  }
+  std::sort(by_stamp.begin(), by_stamp.end());
+  for (const auto& [stamp_ns, id] : by_stamp) {
+    const KeyframeRecord& record = keyframes_.at(id);
+    out.keyframes.push_back(record.T_wc, static_cast<std::int64_t>(record.frame_seq),
+                            static_cast<double>(stamp_ns) / kNsPerSecond);
+  }
+  return out;
+}
+
+}  // namespace heslam::recorder

@@ -1,0 +1,75 @@
+// The recorder's bookkeeping without DDS: frames (reference keyframe + relative pose), keyframes and
+// their latest poses, turned at the end into the full trajectory as ORB-SLAM2 saves it — each
+// frame's pose = final pose of its reference keyframe * T_ref_c — plus the keyframe trajectory and
+// the list of frames that have no pose (lost / not initialized), which are never invented.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "components/core/geometry/pose.hpp"
+#include "components/core/map/map.hpp"
+#include "tools/eval/trajectory.hpp"
+
+namespace heslam::recorder {
+
+struct RecordedFrame {
+  std::int64_t stamp_ns = 0;
+  std::uint64_t seq = 0;
+  bool tracked = false;       // state OK: the pose fields are meaningful
+  std::string state;          // for the lost list: "LOST", "NOT_INITIALIZED"
+  KeyframeId reference = kNoId;
+  Pose3 T_ref_c = Pose3::Identity();
+  Pose3 T_wc = Pose3::Identity();  // as estimated at the time (fallback when the reference is unknown)
+};
+
+struct LostFrame {
+  std::uint64_t seq = 0;
+  std::int64_t stamp_ns = 0;
+  std::string state;
+};
+
+struct RecordedTrajectories {
+  eval::Trajectory frames;     // tracked frames in seq order; frame ids = seq
+  eval::Trajectory keyframes;  // non-culled keyframes in stamp order; frame ids = their frame seq
+  std::vector<LostFrame> lost;
+  int frames_without_reference = 0;  // tracked frames whose keyframe never arrived (odometry pose used)
+};
+
+class TrajectoryRecorder {
+ public:
+  // A frame's odometry. A later sample with the same seq replaces the earlier one.
+  void add_frame(const RecordedFrame& frame);
+  // A keyframe as created (its initial pose).
+  void add_keyframe(KeyframeId id, std::int64_t stamp_ns, std::uint64_t frame_seq, const Pose3& T_wc);
+  // The mapper's latest state of a keyframe. A culled keyframe keeps its pose relative to its parent
+  // from then on (ORB-SLAM2's Tcp), so frames referencing it follow the parent.
+  void update_keyframe(KeyframeId id, const Pose3& T_wc, KeyframeId parent, bool culled);
+
+  RecordedTrajectories build() const;
+
+  std::size_t frame_count() const { return frames_.size(); }
+  std::size_t keyframe_count() const { return keyframes_.size(); }
+
+ private:
+  struct KeyframeRecord {
+    std::int64_t stamp_ns = 0;
+    std::uint64_t frame_seq = 0;
+    Pose3 T_wc_initial = Pose3::Identity();
+    Pose3 T_wc = Pose3::Identity();
+    KeyframeId parent = kNoId;
+    bool culled = false;
+    std::optional<Pose3> T_parent_kf;  // fixed when culled
+  };
+  // The keyframe's final pose, following culled keyframes up their parents; nullopt when unknown.
+  std::optional<Pose3> final_pose(KeyframeId id, int depth = 0) const;
+  void cull(KeyframeRecord& record);
+
+  std::map<std::uint64_t, RecordedFrame> frames_;    // by seq
+  std::map<KeyframeId, KeyframeRecord> keyframes_;   // by id
+};
+
+}  // namespace heslam::recorder
