@@ -1,0 +1,379 @@
+// heslam-local-mapper's DDS side (see mapper_node.hpp).
+#include "components/local_mapper/mapper_node.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <fstream>
+#include <iomanip>
+#include <iterator>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include "components/local_mapper/message_adapter.hpp"
+#include "runtime/sequence.hpp"
+
+namespace heslam::local_mapper {
+namespace {
+
+// Wait granularity of the main loop: shutdown is also signalled through the waitset, this only
+// bounds how long a missed wake-up could delay it.
+constexpr std::chrono::milliseconds kWaitPeriod{200};
+// /proc/<pid>/stat field holding the process start time (clock ticks since boot), see proc(5).
+constexpr int kStatStartTimeField = 22;
+
+// The per-keyframe stages in pipeline order (status percentiles and the final summary).
+constexpr const char* kStageOrder[] = {"insertion", "point_culling",  "triangulation", "fusion", "local_ba",
+                                       "keyframe_culling", "mapping_total", "map_save",      "publish"};
+
+std::uint64_t counter(const std::map<std::string, std::uint64_t>& counters, const char* name) {
+  const auto it = counters.find(name);
+  return it == counters.end() ? 0 : it->second;
+}
+
+}  // namespace
+
+MapperNode::MapperNode(const runtime::CommonArgs& args) : Component("local_mapper", args) {}
+
+void MapperNode::configure(const runtime::Config& config) {
+  options_ = MapperProcessOptions::from_config(config, args().rest);
+  waitset_ = std::make_unique<runtime::WaitSet>(participant());
+  keyframe_reader_.emplace(participant(), topics().keyframes());
+  correction_reader_.emplace(participant(), topics().loop_corrections());
+  waitset_->attach(*keyframe_reader_);
+  waitset_->attach(*correction_reader_);
+  // The map outlives this process: a mapper that exits (or is restarted) must not make the readers
+  // delete every keyframe and point (the recorder would lose the refined keyframe poses).
+  keyframe_state_writer_.emplace(participant(), topics().keyframe_states(),
+                                 runtime::Qos(runtime::QosRole::kMapState).keep_instances_on_writer_exit());
+  point_state_writer_.emplace(participant(), topics().map_points(),
+                              runtime::Qos(runtime::QosRole::kMapState).keep_instances_on_writer_exit());
+  keyframe_done_writer_.emplace(participant(), topics().keyframe_done());
+  load_initial_map();
+  log().info(options_.map_file.empty() ? std::string("no map file (map not persisted)")
+                                       : "map file " + options_.map_file.string() + ", saved every " +
+                                             std::to_string(options_.save_every_keyframes) + " keyframe(s)");
+}
+
+// Identity of the run: the parent process (heslam-supervisor execs its components, so the parent is
+// the supervisor) by pid and start time, which together never repeat on one machine.
+std::string MapperNode::run_id() {
+  const pid_t parent = getppid();
+  std::ifstream stat("/proc/" + std::to_string(parent) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+  // Field 22 (starttime) counted after the ')' closing the command name, which may contain spaces.
+  const std::size_t close = text.rfind(')');
+  std::istringstream fields(close == std::string::npos ? std::string() : text.substr(close + 1));
+  std::string field;
+  for (int index = 3; index <= kStatStartTimeField && fields >> field; ++index) {}
+  return std::to_string(parent) + ":" + field;
+}
+
+std::filesystem::path MapperNode::sidecar(const char* suffix) const {
+  std::filesystem::path path = options_.map_file;
+  path += suffix;
+  return path;
+}
+
+void MapperNode::load_initial_map() {
+  bool resume = false;
+  if (!options_.map_file.empty()) {
+    const std::string current_run = run_id();
+    std::ifstream in(sidecar(".run"));
+    std::string file_run;
+    std::getline(in, file_run);
+    resume = std::filesystem::exists(options_.map_file) && file_run == current_run;
+    if (!resume) {
+      // A map file of an earlier run is replaced, not continued: remove it now so a restart of THIS
+      // run before our first save starts from scratch too (and re-maps from the DDS keyframes).
+      if (std::filesystem::exists(options_.map_file)) {
+        log().info("map file ", options_.map_file.string(), " is from an earlier run; starting a new map");
+      }
+      std::filesystem::remove(options_.map_file);
+      std::filesystem::remove(sidecar(".corrections"));
+      std::ofstream run_file(sidecar(".run"), std::ios::trunc);
+      run_file << current_run << "\n";
+      if (!run_file) throw std::runtime_error("map file " + options_.map_file.string() + ": cannot write beside it");
+    }
+  }
+  if (resume) {
+    try {
+      loaded_ = load_map_file(options_.map_file);
+    } catch (const std::exception& error) {
+      // Unusable (e.g. a disk problem): re-map from the keyframes DDS still holds instead of failing
+      // again on every restart.
+      log().warn(error.what(), "; starting a new map");
+      stats().count("unreadable_map_files");
+      resume = false;
+    }
+  }
+  if (resume) {
+    loaded_is_resume_ = true;
+    load_applied_corrections();
+    log().info("resuming from ", options_.map_file.string(), ": ", loaded_->map.keyframes.size(), " keyframes, ",
+               loaded_->map.points.size(), " points, map version ", loaded_->map.version);
+  } else if (!options_.load_map.empty()) {
+    loaded_ = load_map_file(options_.load_map);
+    log().info("loaded ", options_.load_map.string(), ": ", loaded_->map.keyframes.size(), " keyframes, ",
+               loaded_->map.points.size(), " points, map version ", loaded_->map.version);
+    // An explicitly loaded map is published right away (a viewer or a frontend may want it before
+    // any keyframe arrives); a resumed one only once the run's keyframes confirm it is this run's.
+    publish_all(loaded_->map);
+  }
+}
+
+void MapperNode::run() {
+  while (!shutdown_requested()) {
+    if (waitset_->wait(kWaitPeriod) == runtime::Wake::kShutdown) break;
+    take_keyframes();
+    take_corrections();
+    process_pending();
+    apply_corrections();
+  }
+  if (mapper_ && unsaved_keyframes_ > 0) save();
+  log_summary();
+}
+
+void MapperNode::take_keyframes() {
+  for (auto& received : keyframe_reader_->take()) {
+    if (!received.info.valid_data) continue;  // a frontend that left: its keyframes stay in the map
+    const msg::Keyframe& message = *received.sample;
+    try {
+      PendingKeyframe keyframe{frontend::to_keyframe(message), frontend::to_camera(message.camera)};
+      if (!(keyframe.camera.fx_px > 0.0) || !(keyframe.camera.baseline_m > 0.0)) {
+        throw std::runtime_error("keyframe " + std::to_string(message.id) + ": camera fx " +
+                                 std::to_string(keyframe.camera.fx_px) + " px, baseline " +
+                                 std::to_string(keyframe.camera.baseline_m) + " m (expected both > 0)");
+      }
+      pending_.insert_or_assign(message.id, std::move(keyframe));
+    } catch (const std::exception& error) {
+      stats().count("bad_keyframes");
+      log().warn(error.what());
+      acknowledge(message.id);  // a lockstep frontend must not wait for a keyframe we cannot use
+    }
+  }
+}
+
+void MapperNode::take_corrections() {
+  for (auto& received : correction_reader_->take()) {
+    if (!received.info.valid_data) continue;
+    try {
+      LoopCorrection correction = to_loop_correction(*received.sample);
+      if (applied_corrections_.count(correction.id) != 0) continue;  // replayed to us after a restart
+      pending_corrections_.insert_or_assign(correction.id, std::move(correction));
+    } catch (const std::exception& error) {
+      stats().count("bad_corrections");
+      log().warn(error.what());
+    }
+  }
+}
+
+void MapperNode::process_pending() {
+  while (!pending_.empty() && !shutdown_requested()) {
+    PendingKeyframe keyframe = std::move(pending_.begin()->second);
+    pending_.erase(pending_.begin());
+    process_keyframe(std::move(keyframe));
+  }
+}
+
+void MapperNode::start_mapper(const PendingKeyframe& first) {
+  const Keyframe& kf = first.decoded.keyframe;
+  if (loaded_ && loaded_is_resume_) {
+    // The resumed file must belong to this run: the keyframe either is in it with the same stamp, or
+    // is newer than everything in it.
+    const Map& map = loaded_->map;
+    const Keyframe* known = map.keyframe(kf.id);
+    const bool newer = map.keyframes.empty() || kf.id > map.keyframes.rbegin()->first;
+    if ((known != nullptr && known->stamp_ns != kf.stamp_ns) || (known == nullptr && !newer)) {
+      log().warn("map file ", options_.map_file.string(), " is from another run (keyframe ", kf.id,
+                 known != nullptr ? " has another stamp there" : " is older than its keyframes",
+                 "); starting a new map");
+      stats().count("stale_map_files");
+      loaded_.reset();
+      applied_corrections_.clear();
+      std::filesystem::remove(sidecar(".corrections"));
+    }
+  }
+  if (loaded_) {
+    mapper_ = std::make_unique<LocalMapper>(first.camera, options_.mapper, std::move(*loaded_));
+    loaded_.reset();
+    if (loaded_is_resume_) publish_all(mapper_->map());
+  } else {
+    mapper_ = std::make_unique<LocalMapper>(first.camera, options_.mapper);
+  }
+  log().info("camera fx ", first.camera.fx_px, " px, baseline ", first.camera.baseline_m, " m; ",
+             mapper_->map().keyframes.size(), " keyframes in the map");
+}
+
+void MapperNode::process_keyframe(PendingKeyframe keyframe) {
+  if (!mapper_) start_mapper(keyframe);
+  const KeyframeId id = keyframe.decoded.keyframe.id;
+  if (const Keyframe* known = mapper_->map().keyframe(id); known != nullptr) {
+    if (known->stamp_ns != keyframe.decoded.keyframe.stamp_ns) {
+      stats().count("duplicate_keyframe_ids");
+      log().warn("keyframe ", id, ": id already in the map with stamp ", known->stamp_ns, " ns, received with ",
+                 keyframe.decoded.keyframe.stamp_ns, " ns; ignored");
+      acknowledge(id);
+    } else {
+      stats().count("keyframes_already_mapped");
+      // After a restart the frontend may be waiting for the last keyframe we mapped before dying.
+      if (id == mapper_->state().last_keyframe) acknowledge(id);
+    }
+    return;
+  }
+  MapChanges changes;
+  try {
+    changes = mapper_->process_keyframe(std::move(keyframe.decoded.keyframe), std::move(keyframe.decoded.new_points));
+  } catch (const std::invalid_argument& error) {
+    stats().count("bad_keyframes");
+    log().warn(error.what());
+    acknowledge(id);
+    return;
+  }
+  record(changes);
+  if (++unsaved_keyframes_ >= options_.save_every_keyframes) save();
+  publish(changes);
+  acknowledge(id);
+  log().debug("keyframe ", id, ": ", changes.timings.total_ms, " ms, ", changes.counts.triangulated_points,
+              " new points, ", changes.counts.culled_points, " culled points, ", changes.counts.culled_keyframes,
+              " culled keyframes, ", changes.changed_points.size(), " points changed");
+}
+
+void MapperNode::apply_corrections() {
+  if (!mapper_) return;  // corrections wait for the map (and its camera) to exist
+  while (!pending_corrections_.empty()) {
+    const LoopCorrection correction = std::move(pending_corrections_.begin()->second);
+    pending_corrections_.erase(pending_corrections_.begin());
+    const MapChanges changes = mapper_->apply_correction(correction);
+    stats().count("corrections");
+    stats().record_ms("correction", changes.timings.total_ms);
+    save();
+    remember_applied_correction(correction.id);
+    publish(changes);
+    log().info("loop correction ", correction.id, " (keyframe ", correction.loop_kf, " -> ", correction.matched_kf,
+               "): ", changes.changed_keyframes.size(), " keyframes and ", changes.changed_points.size(),
+               " points moved, ", changes.removed_points.size(), " points merged");
+  }
+}
+
+void MapperNode::record(const MapChanges& changes) {
+  const LocalMapperTimings& t = changes.timings;
+  stats().count("keyframes");
+  stats().record_ms("insertion", t.insertion_ms);
+  stats().record_ms("point_culling", t.point_culling_ms);
+  stats().record_ms("triangulation", t.triangulation_ms);
+  stats().record_ms("fusion", t.fusion_ms);
+  stats().record_ms("local_ba", t.bundle_adjustment_ms);
+  stats().record_ms("keyframe_culling", t.keyframe_culling_ms);
+  stats().record_ms("mapping_total", t.total_ms);
+  const LocalMapperCounts& c = changes.counts;
+  stats().count("triangulated_points", static_cast<std::uint64_t>(c.triangulated_points));
+  stats().count("fused_points", static_cast<std::uint64_t>(c.fused_points));
+  stats().count("culled_points", static_cast<std::uint64_t>(c.culled_points));
+  stats().count("culled_keyframes", static_cast<std::uint64_t>(c.culled_keyframes));
+  stats().count("ba_outliers", static_cast<std::uint64_t>(c.bundle_adjustment_outliers));
+  stats().count("rejected_observations", static_cast<std::uint64_t>(c.rejected_observations));
+}
+
+void MapperNode::save() {
+  unsaved_keyframes_ = 0;
+  if (options_.map_file.empty() || !mapper_) return;
+  const auto timer = stats().time("map_save");
+  last_save_ = mapper_->save(options_.map_file, options_.sync_writes);
+  stats().count("map_saves");
+}
+
+void MapperNode::publish(const MapChanges& changes) {
+  const auto timer = stats().time("publish");
+  const Map& map = mapper_->map();
+  for (const KeyframeId id : changes.changed_keyframes) {
+    if (const Keyframe* keyframe = map.keyframe(id); keyframe != nullptr) {
+      keyframe_state_writer_->write(to_state_message(*keyframe, map.version, covisible_buffer_));
+    }
+  }
+  for (const PointId id : changes.changed_points) {
+    if (const MapPoint* point = map.point(id); point != nullptr) {
+      point_state_writer_->write(to_state_message(*point, map.version, observation_buffer_));
+    }
+  }
+  for (const auto& [id, into] : changes.removed_points) {
+    const msg::MapPointState last = merged_state_message(id, into, map.version);
+    if (into != kNoId) point_state_writer_->write(last);  // readers redirect observations to `into`
+    point_state_writer_->dispose(last);
+    stats().count("disposed_points");
+  }
+}
+
+void MapperNode::publish_all(const Map& map) {
+  const auto timer = stats().time("publish");
+  for (const auto& [id, keyframe] : map.keyframes) {
+    keyframe_state_writer_->write(to_state_message(keyframe, map.version, covisible_buffer_));
+  }
+  for (const auto& [id, point] : map.points) {
+    point_state_writer_->write(to_state_message(point, map.version, observation_buffer_));
+  }
+  log().info("published the state of ", map.keyframes.size(), " keyframes and ", map.points.size(), " points");
+}
+
+void MapperNode::acknowledge(KeyframeId id) {
+  // Discovery is asynchronous: wait once for the lockstep reader (the frontend) so the first
+  // acknowledgement after a (re)start is not lost; later ones never wait.
+  if (!reader_wait_done_) {
+    reader_wait_done_ = true;
+    if (keyframe_done_writer_->matched_readers() == 0) {
+      keyframe_done_writer_->wait_for_readers(1, options_.reader_wait);
+    }
+  }
+  msg::KeyframeDone done{};
+  done.keyframe_id = id;
+  done.component = runtime::borrow(name());
+  done.map_version = mapper_ ? mapper_->map().version : 0;
+  keyframe_done_writer_->write(done);
+}
+
+void MapperNode::load_applied_corrections() {
+  std::ifstream in(sidecar(".corrections"));
+  for (std::uint64_t id = 0; in >> id;) applied_corrections_.insert(id);
+}
+
+void MapperNode::remember_applied_correction(std::uint64_t id) {
+  applied_corrections_.insert(id);
+  if (options_.map_file.empty()) return;
+  // Appended after the map was saved: a kill between the two re-applies the correction once, which
+  // moves keyframes to the poses it lists again (the same poses) and repeats no merge (merged points
+  // are gone).
+  std::ofstream(sidecar(".corrections"), std::ios::app) << id << "\n";
+}
+
+void MapperNode::log_summary() {
+  const auto counters = stats().counters();
+  std::ostringstream totals;
+  totals << "mapped " << counter(counters, "keyframes") << " keyframes (" << counter(counters, "keyframes_already_mapped")
+         << " already in the map file, " << counter(counters, "bad_keyframes") << " bad), "
+         << counter(counters, "triangulated_points") << " points triangulated, " << counter(counters, "culled_points")
+         << " culled, " << counter(counters, "culled_keyframes") << " keyframes culled, "
+         << counter(counters, "corrections") << " corrections";
+  log().info(totals.str());
+  if (mapper_) {
+    log().info("map: ", mapper_->map().keyframes.size(), " keyframes, ", mapper_->map().points.size(),
+               " points, version ", mapper_->map().version);
+  }
+  const std::vector<runtime::StageSummary> stages = stats().stages();
+  for (const char* name : kStageOrder) {
+    for (const runtime::StageSummary& stage : stages) {
+      if (stage.name != name) continue;
+      std::ostringstream line;
+      line << std::fixed << std::setprecision(2) << "stage " << std::left << std::setw(16) << stage.name
+           << " median " << std::right << std::setw(7) << stage.p50_ms << " ms  p90 " << std::setw(7) << stage.p90_ms
+           << " ms  max " << std::setw(7) << stage.max_ms << " ms  (" << stage.count << " keyframes)";
+      log().info(line.str());
+    }
+  }
+  if (last_save_.bytes > 0) {
+    log().info("map file ", options_.map_file.string(), ": ", last_save_.bytes, " bytes (last snapshot: serialize ",
+               last_save_.serialize_ms, " ms, write ", last_save_.write_ms, " ms)");
+  }
+}
+
+}  // namespace heslam::local_mapper

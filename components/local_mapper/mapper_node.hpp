@@ -1,0 +1,87 @@
+// heslam-local-mapper's DDS side: takes Keyframe samples (transient-local, keyed) and LoopCorrection
+// samples, runs the core LocalMapper on them in keyframe-id order, persists the map, publishes
+// KeyframeState / MapPointState for exactly what changed (removed points disposed) and a KeyframeDone
+// per keyframe (lockstep).
+//
+// Restart: with a map_file that this run (same heslam-supervisor) wrote, the mapper resumes from it;
+// a file of an earlier run is replaced. The Keyframe samples DDS still
+// holds arrive again; those the file has are skipped (the last one is acknowledged again, a waiting
+// frontend may need it), the others are processed, so a kill -9 loses no keyframe. A file from a
+// different run (same keyframe id, different stamp) is discarded with a warning.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/mapping/local_mapper.hpp"
+#include "components/frontend/message_adapter.hpp"
+#include "components/local_mapper/mapper_process_options.hpp"
+#include "runtime/component.hpp"
+
+namespace heslam::local_mapper {
+
+class MapperNode : public runtime::Component {
+ public:
+  explicit MapperNode(const runtime::CommonArgs& args);
+
+ private:
+  struct PendingKeyframe {
+    frontend::DecodedKeyframe decoded;
+    PinholeStereo camera;
+  };
+
+  void configure(const runtime::Config& config) override;
+  void run() override;
+  bool accepts_positional_args() const override { return true; }
+
+  void load_initial_map();
+  void take_keyframes();
+  void take_corrections();
+  void process_pending();
+  void process_keyframe(PendingKeyframe keyframe);
+  void start_mapper(const PendingKeyframe& first);
+  void apply_corrections();
+
+  void record(const MapChanges& changes);
+  void save();
+  void publish(const MapChanges& changes);
+  void publish_all(const Map& map);
+  void acknowledge(KeyframeId id);
+  void log_summary();
+
+  static std::string run_id();
+  // options_.map_file + suffix: ".run" (the run that wrote it), ".corrections" (applied ids).
+  std::filesystem::path sidecar(const char* suffix) const;
+  void load_applied_corrections();
+  void remember_applied_correction(std::uint64_t id);
+
+  MapperProcessOptions options_;
+  std::unique_ptr<runtime::WaitSet> waitset_;
+  std::optional<runtime::Reader<msg::Keyframe>> keyframe_reader_;
+  std::optional<runtime::Reader<msg::LoopCorrection>> correction_reader_;
+  std::optional<runtime::Writer<msg::KeyframeState>> keyframe_state_writer_;
+  std::optional<runtime::Writer<msg::MapPointState>> point_state_writer_;
+  std::optional<runtime::Writer<msg::KeyframeDone>> keyframe_done_writer_;
+
+  // A loaded map waits here for the first keyframe (which brings the camera the mapper needs).
+  std::optional<MapSnapshot> loaded_;
+  bool loaded_is_resume_ = false;  // from map_file (checked against the run) rather than load_map
+  std::unique_ptr<LocalMapper> mapper_;
+  std::map<KeyframeId, PendingKeyframe> pending_;          // taken, not yet processed; id order
+  std::map<std::uint64_t, LoopCorrection> pending_corrections_;
+  std::set<std::uint64_t> applied_corrections_;            // ids; persisted beside the map file
+  int unsaved_keyframes_ = 0;
+  bool reader_wait_done_ = false;
+  MapFileWriteStats last_save_;
+
+  std::vector<msg::CovisibleKeyframe> covisible_buffer_;
+  std::vector<msg::PointObservation> observation_buffer_;
+};
+
+}  // namespace heslam::local_mapper

@@ -1,0 +1,65 @@
+// Config and command-line reading of heslam-local-mapper's options.
+#include "components/local_mapper/mapper_process_options.hpp"
+
+#include <stdexcept>
+
+namespace heslam::local_mapper {
+namespace {
+
+// Bounds of the numeric options: wide enough for any sensible tuning, tight enough to reject typos.
+constexpr int kMaxIterations = 1000;
+constexpr int kMaxNeighbours = 100;
+constexpr int kMaxThreads = 64;
+constexpr int kMaxSharedPoints = 1000;
+constexpr int kMaxSaveEvery = 1000000;
+constexpr double kMaxReaderWaitS = 60.0;
+
+std::filesystem::path command_line_path(const std::vector<std::string>& rest, std::size_t& i) {
+  if (i + 1 >= rest.size()) throw std::runtime_error("argument '" + rest[i] + "': expected a file after it");
+  return rest[++i];
+}
+
+}  // namespace
+
+MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& config,
+                                                       const std::vector<std::string>& rest) {
+  MapperProcessOptions o;
+  LocalMapperOptions& m = o.mapper;
+  // An empty string means "none" (get_path would resolve it to the config folder).
+  if (!config.get_string("map_file", "").empty()) o.map_file = config.get_path("map_file", {});
+  if (!config.get_string("load_map", "").empty()) o.load_map = config.get_path("load_map", {});
+  o.save_every_keyframes = config.get_int("save_every_keyframes", o.save_every_keyframes, 1, kMaxSaveEvery);
+  o.sync_writes = config.get_bool("sync_writes", o.sync_writes);
+  const double reader_wait_s = config.get_double("lockstep.reader_wait_s", 2.0, 0.0, kMaxReaderWaitS);
+  o.reader_wait = std::chrono::milliseconds(static_cast<long long>(reader_wait_s * 1000.0));
+
+  m.covisibility.min_shared_points =
+      config.get_int("covisibility.min_shared_points", m.covisibility.min_shared_points, 1, kMaxSharedPoints);
+  m.enable_triangulation = config.get_bool("triangulation.enabled", m.enable_triangulation);
+  m.triangulation.neighbours = config.get_int("triangulation.neighbours", m.triangulation.neighbours, 1, kMaxNeighbours);
+  m.enable_fusion = config.get_bool("fusion.enabled", m.enable_fusion);
+  m.fusion.neighbours = config.get_int("fusion.neighbours", m.fusion.neighbours, 1, kMaxNeighbours);
+  m.enable_bundle_adjustment = config.get_bool("bundle_adjustment.enabled", m.enable_bundle_adjustment);
+  m.bundle_adjustment.first_pass_iterations = config.get_int(
+      "bundle_adjustment.first_pass_iterations", m.bundle_adjustment.first_pass_iterations, 1, kMaxIterations);
+  m.bundle_adjustment.second_pass_iterations = config.get_int(
+      "bundle_adjustment.second_pass_iterations", m.bundle_adjustment.second_pass_iterations, 0, kMaxIterations);
+  m.bundle_adjustment.num_threads =
+      config.get_int("bundle_adjustment.threads", m.bundle_adjustment.num_threads, 1, kMaxThreads);
+  m.enable_keyframe_culling = config.get_bool("keyframe_culling.enabled", m.enable_keyframe_culling);
+  m.keyframe_culling.redundant_ratio =
+      config.get_double("keyframe_culling.redundant_ratio", m.keyframe_culling.redundant_ratio, 0.0, 1.0);
+
+  for (std::size_t i = 0; i < rest.size(); ++i) {
+    if (rest[i] == "--map-file") {
+      o.map_file = command_line_path(rest, i);
+    } else if (rest[i] == "--load-map") {
+      o.load_map = command_line_path(rest, i);
+    } else {
+      throw std::runtime_error("unknown argument '" + rest[i] + "' (expected --map-file FILE, --load-map FILE)");
+    }
+  }
+  return o;
+}
+
+}  // namespace heslam::local_mapper

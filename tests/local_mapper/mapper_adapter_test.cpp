@@ -1,0 +1,159 @@
+// heslam-local-mapper's DDS-free parts: the IDL adapter (states out, corrections in) checked against
+// the frontend's mirror functions, which are what actually consumes these samples, and the options.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "components/frontend/message_adapter.hpp"
+#include "components/local_mapper/mapper_process_options.hpp"
+#include "components/local_mapper/message_adapter.hpp"
+#include "runtime/sequence.hpp"
+
+namespace heslam::local_mapper {
+namespace {
+
+Pose3 pose(double angle_rad, const Eigen::Vector3d& t) {
+  Pose3 T = Pose3::Identity();
+  T.linear() = Eigen::AngleAxisd(angle_rad, Eigen::Vector3d(0.2, -0.5, 1.0).normalized()).toRotationMatrix();
+  T.translation() = t;
+  return T;
+}
+
+// Largest element difference of two poses (Eigen's isApprox on Isometry trips a GCC 12 false
+// -Wmaybe-uninitialized with -march=native).
+double pose_difference(const Pose3& a, const Pose3& b) {
+  double worst = 0.0;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) worst = std::max(worst, std::abs(a.matrix()(r, c) - b.matrix()(r, c)));
+  return worst;
+}
+
+// A mirror map holding keyframe 7 with 4 keypoints, as the frontend has it before the mapper speaks.
+Map mirror_with_keyframe(KeyframeId id) {
+  Map map;
+  Keyframe& kf = map.keyframes[id];
+  kf.id = id;
+  kf.point_ids.assign(4, kNoId);
+  return map;
+}
+
+TEST(MapperAdapter, KeyframeStateRoundTripsThroughTheFrontendMirror) {
+  Keyframe keyframe;
+  keyframe.id = 7;
+  keyframe.T_wc = pose(0.3, {1.0, -2.0, 0.5});
+  keyframe.parent = 3;
+  keyframe.covisible = {{3, 120}, {5, 40}};
+  keyframe.culled = true;
+  std::vector<msg::CovisibleKeyframe> buffer;
+  const msg::KeyframeState message = to_state_message(keyframe, 42, buffer);
+  EXPECT_EQ(message.map_version, 42u);
+
+  Map mirror = mirror_with_keyframe(7);
+  ASSERT_TRUE(frontend::apply_keyframe_state(mirror, message));
+  const Keyframe& mirrored = mirror.keyframes.at(7);
+  EXPECT_LT(pose_difference(mirrored.T_wc, keyframe.T_wc), 1e-12);
+  EXPECT_EQ(mirrored.parent, 3u);
+  EXPECT_EQ(mirrored.covisible, keyframe.covisible);
+  EXPECT_TRUE(mirrored.culled);
+  EXPECT_EQ(mirror.version, 42u);
+}
+
+TEST(MapperAdapter, PointStateRoundTripsAndMergeRedirectsObservations) {
+  MapPoint point;
+  point.id = 100;
+  point.p_w = {1.5, -0.25, 4.0};
+  for (std::size_t i = 0; i < point.descriptor.size(); ++i) point.descriptor[i] = static_cast<std::uint8_t>(3 * i + 1);
+  point.normal = Eigen::Vector3d(0.0, 0.6, 0.8);
+  point.min_distance_m = 1.25f;
+  point.max_distance_m = 9.5f;
+  point.reference_kf = 7;
+  point.observations = {{7, 2}};
+  std::vector<msg::PointObservation> buffer;
+  Map mirror = mirror_with_keyframe(7);
+  frontend::apply_point_state(mirror, to_state_message(point, 9, buffer));
+  const MapPoint& mirrored = mirror.points.at(100);
+  EXPECT_EQ(mirrored.p_w, point.p_w);
+  EXPECT_EQ(mirrored.descriptor, point.descriptor);
+  EXPECT_TRUE(mirrored.normal.isApprox(point.normal, 1e-7));
+  EXPECT_EQ(mirrored.min_distance_m, 1.25f);
+  EXPECT_EQ(mirrored.max_distance_m, 9.5f);
+  EXPECT_EQ(mirrored.reference_kf, 7u);
+  EXPECT_EQ(mirrored.observations, point.observations);
+  EXPECT_EQ(mirror.keyframes.at(7).point_ids[2], 100u);  // the keyframe now sees the point
+
+  // Point 100 merges into 200: the mirror drops it and the keyframe's keypoint follows the merge.
+  MapPoint into = point;
+  into.id = 200;
+  into.observations = {{7, 3}};
+  frontend::apply_point_state(mirror, to_state_message(into, 10, buffer));
+  frontend::apply_point_state(mirror, merged_state_message(100, 200, 10));
+  EXPECT_EQ(mirror.points.count(100), 0u);
+  EXPECT_EQ(mirror.keyframes.at(7).point_ids[2], 200u);
+}
+
+TEST(MapperAdapter, LoopCorrectionIsConvertedAndBadOnesAreRejectedWithTheirId) {
+  std::vector<msg::CorrectedKeyframePose> poses(2);
+  poses[0].keyframe_id = 4;
+  poses[0].T_wc = frontend::to_message(pose(0.1, {1, 2, 3}));
+  poses[1].keyframe_id = 9;
+  poses[1].T_wc = frontend::to_message(pose(-0.2, {0, 0, 1}));
+  std::vector<msg::PointMerge> merges{{11, 22}};
+  msg::LoopCorrection message{};
+  message.id = 5;
+  message.map_version = 30;
+  message.loop_keyframe_id = 9;
+  message.matched_keyframe_id = 4;
+  message.T_matched_loop = frontend::to_message(pose(0.05, {0.1, 0, 0}));
+  runtime::borrow(message.corrected_poses, poses);
+  runtime::borrow(message.point_merges, merges);
+  const LoopCorrection correction = to_loop_correction(message);
+  EXPECT_EQ(correction.id, 5u);
+  EXPECT_EQ(correction.map_version, 30u);
+  EXPECT_EQ(correction.loop_kf, 9u);
+  EXPECT_EQ(correction.matched_kf, 4u);
+  ASSERT_EQ(correction.corrected_T_wc.size(), 2u);
+  EXPECT_EQ(correction.corrected_T_wc[1].first, 9u);
+  EXPECT_LT(pose_difference(correction.corrected_T_wc[1].second, pose(-0.2, {0, 0, 1})), 1e-12);
+  ASSERT_EQ(correction.point_merges.size(), 1u);
+  EXPECT_EQ(correction.point_merges[0], (std::pair<PointId, PointId>(11, 22)));
+
+  merges[0].into_id = 11;  // a point merging into itself
+  try {
+    to_loop_correction(message);
+    FAIL() << "expected a rejection";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("loop correction 5"), std::string::npos) << error.what();
+  }
+}
+
+TEST(MapperOptions, ConfigAndCommandLine) {
+  const runtime::Config config = runtime::Config::parse(
+      "bundle_adjustment: {threads: 2, second_pass_iterations: 4}\nsave_every_keyframes: 3\n"
+      "fusion: {enabled: false}\nmap_file: \"\"\n",
+      "mapper.yaml");
+  const MapperProcessOptions options = MapperProcessOptions::from_config(config, {"--map-file", "/tmp/a.map"});
+  EXPECT_EQ(options.mapper.bundle_adjustment.num_threads, 2);
+  EXPECT_EQ(options.mapper.bundle_adjustment.second_pass_iterations, 4);
+  EXPECT_EQ(options.mapper.bundle_adjustment.first_pass_iterations, 5);  // ORB-SLAM2 default kept
+  EXPECT_FALSE(options.mapper.enable_fusion);
+  EXPECT_EQ(options.save_every_keyframes, 3);
+  EXPECT_EQ(options.map_file, "/tmp/a.map");
+  EXPECT_TRUE(options.load_map.empty());
+
+  const runtime::Config bad = runtime::Config::parse("bundle_adjustment: {threads: 0}\n", "mapper.yaml");
+  try {
+    MapperProcessOptions::from_config(bad, {});
+    FAIL() << "expected a rejection";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("bundle_adjustment.threads"), std::string::npos) << error.what();
+  }
+  EXPECT_THROW(MapperProcessOptions::from_config(runtime::Config::empty(), {"--load-map"}), std::runtime_error);
+  EXPECT_THROW(MapperProcessOptions::from_config(runtime::Config::empty(), {"--bogus"}), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace heslam::local_mapper
