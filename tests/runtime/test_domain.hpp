@@ -2,11 +2,10 @@
 // running in parallel never share a domain).
 #pragma once
 
-#include <unistd.h>
+#include "test_support.hpp"
 
 namespace heslam::test {
 
-// 1..230: Cyclone allows up to 232; 0 is left to users' interactive runs.
-inline int test_domain_id() { return 1 + static_cast<int>(getpid() % 230); }
+inline int test_domain_id() { return exclusive_domain_id(); }
 
 }  // namespace heslam::test

@@ -1,7 +1,12 @@
 // Helpers every test may use: where the shared real data is, and a skip when it is absent.
 #pragma once
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -16,6 +21,29 @@ inline std::filesystem::path source_dir() { return HESLAM_SOURCE_DIR; }
 inline std::filesystem::path shared_dataset(const std::string& name) {
   const auto dir = shared_data() / name;
   return std::filesystem::exists(dir) ? dir : std::filesystem::path{};
+}
+
+// A DDS domain id (1..230) that no other test process on this machine holds. ctest runs tests in
+// parallel and a pid-derived id alone can collide; a lock per id, held until this process exits,
+// makes the choice exclusive. The same id is returned for every call within one process.
+inline int exclusive_domain_id() {
+  static const int domain_id = [] {
+    constexpr int kFirstDomain = 1;
+    constexpr int kDomainCount = 230;  // Cyclone allows up to 232; 0 is left to interactive runs
+    const std::filesystem::path lock_dir = std::filesystem::temp_directory_path() / "heslam-test-domains";
+    std::filesystem::create_directories(lock_dir);
+    const int start = static_cast<int>(getpid() % kDomainCount);
+    for (int i = 0; i < kDomainCount; ++i) {
+      const int id = kFirstDomain + (start + i) % kDomainCount;
+      const auto lock_file = lock_dir / (std::to_string(id) + ".lock");
+      const int fd = ::open(lock_file.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0666);
+      if (fd < 0) continue;
+      if (::flock(fd, LOCK_EX | LOCK_NB) == 0) return id;  // fd stays open: the lock lives with us
+      ::close(fd);
+    }
+    throw std::runtime_error("no free DDS test domain in 1..230 (all locked under " + lock_dir.string() + ")");
+  }();
+  return domain_id;
 }
 
 }  // namespace heslam::test

@@ -33,7 +33,7 @@ constexpr const char* kClip = "euroc_v101_head";
 constexpr std::size_t kClipPairs = 95;
 
 // A domain per test process (ctest runs each test as its own process, possibly two at a time).
-int test_domain(int salt) { return 1 + static_cast<int>((getpid() * 7 + salt) % 230); }
+int test_domain(int /*salt*/) { return heslam::test::exclusive_domain_id(); }
 
 class ReplaySpy : public ::testing::Test {
  protected:
