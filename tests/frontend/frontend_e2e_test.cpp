@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "test_support.hpp"
-#include "tests/tools/child_process.hpp"
+#include "child_process.hpp"
 #include "tools/bench/frontend_offline/offline_run.hpp"
 #include "tools/eval/ape.hpp"
 #include "tools/eval/trajectory_io.hpp"
@@ -40,23 +40,6 @@ std::string read_text(const fs::path& path) {
   text << in.rdbuf();
   return text.str();
 }
-
-// A scratch folder per test process, removed when the test passes (kept for a look when it fails).
-class ScratchDir {
- public:
-  explicit ScratchDir(const std::string& label)
-      : path_(fs::temp_directory_path() / ("heslam_frontend_e2e_" + label + "_" + std::to_string(getpid()))) {
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~ScratchDir() {
-    if (!::testing::Test::HasFailure()) fs::remove_all(path_);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 struct PipelineRun {
   int exit_code = -1;
@@ -111,7 +94,7 @@ int lost_entries(const fs::path& lost) {
 TEST(FrontendEndToEnd, EurocMh01TracksEveryFrameAndMatchesTheOfflineChain) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
-  const ScratchDir dir("mh01");
+  const test::ScratchDir dir("mh01");
   const PipelineRun run = run_pipeline("euroc", dataset, dir.path(), "mh01");
   ASSERT_EQ(run.exit_code, 0) << run.output;
 
@@ -144,7 +127,7 @@ TEST(FrontendEndToEnd, EurocMh01TracksEveryFrameAndMatchesTheOfflineChain) {
 TEST(FrontendEndToEnd, TwoLockstepRunsWriteIdenticalTrajectoryFiles) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
-  const ScratchDir dir("determinism");
+  const test::ScratchDir dir("determinism");
   const PipelineRun first = run_pipeline("euroc", dataset, dir.path(), "first");
   ASSERT_EQ(first.exit_code, 0) << first.output;
   const PipelineRun second = run_pipeline("euroc", dataset, dir.path(), "second");
@@ -163,7 +146,7 @@ TEST(FrontendEndToEnd, WithLocalMapperDeterministicAndWithinFourMillimetres) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   if (!fs::exists(test::bin_dir() / "heslam-local-mapper")) GTEST_SKIP() << "heslam-local-mapper not built";
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
-  const ScratchDir dir("mapper");
+  const test::ScratchDir dir("mapper");
   const PipelineRun first = run_pipeline("euroc_mapper", dataset, dir.path(), "first");
   ASSERT_EQ(first.exit_code, 0) << first.output;
   const PipelineRun second = run_pipeline("euroc_mapper", dataset, dir.path(), "second");
@@ -184,7 +167,7 @@ TEST(FrontendEndToEnd, WithLocalMapperDeterministicAndWithinFourMillimetres) {
 TEST(FrontendEndToEnd, EurocV101StillCameraStaysStill) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_v101_head");
   const fs::path dataset = test::shared_dataset("euroc_v101_head");
-  const ScratchDir dir("v101");
+  const test::ScratchDir dir("v101");
   const PipelineRun run = run_pipeline("euroc", dataset, dir.path(), "v101");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const eval::Trajectory estimate = eval::read_trajectory(run.trajectory);
@@ -203,7 +186,7 @@ TEST(FrontendEndToEnd, EurocV101StillCameraStaysStill) {
 }
 
 TEST(FrontendEndToEnd, SyntheticRoomAteWithinOnePercentOfPathLength) {
-  const ScratchDir dir("synth");
+  const test::ScratchDir dir("synth");
   const fs::path dataset = dir.path() / "room";
   test::ChildProcess synth(test::bin_dir() / "heslam-synth",
                            {"--preset", "room", "--frames", "120", "--threads", "2", "--out", dataset.string()},
@@ -224,7 +207,7 @@ TEST(FrontendEndToEnd, SyntheticRoomAteWithinOnePercentOfPathLength) {
 }
 
 TEST(FrontendProcess, BadConfigFieldExitsWithOneLine) {
-  const ScratchDir dir("badconfig");
+  const test::ScratchDir dir("badconfig");
   const fs::path config = dir.path() / "frontend.yaml";
   std::ofstream(config) << "orb:\n  levels: 40\n";
   test::ChildProcess frontend(test::bin_dir() / "heslam-frontend",
@@ -237,7 +220,7 @@ TEST(FrontendProcess, BadConfigFieldExitsWithOneLine) {
 }
 
 TEST(FrontendProcess, ShippedPipelinesPassTheSupervisorCheck) {
-  const ScratchDir dir("check");
+  const test::ScratchDir dir("check");
   for (const char* pipeline : {"euroc", "kitti", "synth"}) {
     test::ChildProcess check(test::bin_dir() / "heslam-supervisor",
                              {(test::source_dir() / "config/pipelines" / (std::string(pipeline) + ".yaml")).string(),

@@ -24,7 +24,7 @@
 
 #include "components/core/mapping/map_file.hpp"
 #include "test_support.hpp"
-#include "tests/tools/child_process.hpp"
+#include "child_process.hpp"
 #include "tools/eval/ape.hpp"
 #include "tools/eval/trajectory_io.hpp"
 
@@ -43,22 +43,6 @@ constexpr std::size_t kKeyframesBeforeKill = 6;
 constexpr const char* kMapperComm = "heslam-local-ma";
 
 int test_domain() { return heslam::test::exclusive_domain_id(); }
-
-class ScratchDir {
- public:
-  explicit ScratchDir(const std::string& label)
-      : path_(fs::temp_directory_path() / ("heslam_local_mapper_e2e_" + label + "_" + std::to_string(getpid()))) {
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~ScratchDir() {
-    if (!::testing::Test::HasFailure()) fs::remove_all(path_);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 std::unique_ptr<test::ChildProcess> start_pipeline(const std::string& pipeline, const fs::path& dataset,
                                                    const fs::path& dir, const std::string& label, int domain) {
@@ -125,7 +109,7 @@ std::size_t keyframes_in(const fs::path& map_file) {
 TEST(LocalMapperEndToEnd, EurocMh01LockstepWithMapperBeatsFrontendAlone) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
-  const ScratchDir dir("mh01");
+  const test::ScratchDir dir("mh01");
 
   auto with_mapper = start_pipeline("euroc_mapper", dataset, dir.path(), "mapper", test_domain());
   ASSERT_EQ(finish(*with_mapper), 0) << with_mapper->out() << with_mapper->err();
@@ -155,7 +139,7 @@ TEST(LocalMapperEndToEnd, EurocMh01LockstepWithMapperBeatsFrontendAlone) {
 TEST(LocalMapperEndToEnd, KilledMapperIsRestartedResumesAndLosesNoKeyframe) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
-  const ScratchDir dir("kill");
+  const test::ScratchDir dir("kill");
   const fs::path map_file = dir.path() / "fault.txt.map";
 
   auto supervisor = start_pipeline("euroc_mapper", dataset, dir.path(), "fault", test_domain());
@@ -200,7 +184,7 @@ TEST(LocalMapperEndToEnd, KilledMapperIsRestartedResumesAndLosesNoKeyframe) {
 }
 
 TEST(LocalMapperEndToEnd, SyntheticRoomWithMapperBeatsFrontendAlone) {
-  const ScratchDir dir("room");
+  const test::ScratchDir dir("room");
   const fs::path dataset = dir.path() / "room";
   test::ChildProcess synth(test::bin_dir() / "heslam-synth",
                            {"--preset", "room", "--frames", "120", "--threads", "2", "--out", dataset.string()},
@@ -222,7 +206,7 @@ TEST(LocalMapperEndToEnd, SyntheticRoomWithMapperBeatsFrontendAlone) {
 }
 
 TEST(LocalMapperProcess, BadConfigFieldExitsWithOneLine) {
-  const ScratchDir dir("badconfig");
+  const test::ScratchDir dir("badconfig");
   const fs::path config = dir.path() / "mapper.yaml";
   std::ofstream(config) << "bundle_adjustment:\n  threads: 0\n";
   test::ChildProcess mapper(test::bin_dir() / "heslam-local-mapper",
@@ -236,7 +220,7 @@ TEST(LocalMapperProcess, BadConfigFieldExitsWithOneLine) {
 }
 
 TEST(LocalMapperProcess, CorruptMapFileToLoadExitsWithOneLine) {
-  const ScratchDir dir("corrupt");
+  const test::ScratchDir dir("corrupt");
   const fs::path map = dir.path() / "broken.map";
   std::ofstream(map) << "not a map";
   test::ChildProcess mapper(test::bin_dir() / "heslam-local-mapper",
@@ -247,7 +231,7 @@ TEST(LocalMapperProcess, CorruptMapFileToLoadExitsWithOneLine) {
 }
 
 TEST(LocalMapperProcess, MapFileOfAnEarlierRunIsReplacedNotResumed) {
-  const ScratchDir dir("stale");
+  const test::ScratchDir dir("stale");
   const fs::path map = dir.path() / "old.map";
   std::ofstream(map) << "an earlier run's map";
   std::ofstream(dir.path() / "old.map.run") << "1:1\n";  // not our parent: another run
@@ -270,7 +254,7 @@ TEST(LocalMapperProcess, MapFileOfAnEarlierRunIsReplacedNotResumed) {
 }
 
 TEST(LocalMapperProcess, ShippedMapperPipelinesPassTheSupervisorCheck) {
-  const ScratchDir dir("check");
+  const test::ScratchDir dir("check");
   for (const char* pipeline : {"euroc_mapper", "synth_mapper"}) {
     test::ChildProcess check(test::bin_dir() / "heslam-supervisor",
                              {(test::source_dir() / "config/pipelines" / (std::string(pipeline) + ".yaml")).string(),

@@ -23,6 +23,25 @@ inline std::filesystem::path shared_dataset(const std::string& name) {
   return std::filesystem::exists(dir) ? dir : std::filesystem::path{};
 }
 
+// A scratch folder per test process, removed when the test passes (kept for a look when it fails).
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& label)
+      : path_(std::filesystem::temp_directory_path() / ("heslam_test_" + label + "_" + std::to_string(getpid()))) {
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~ScratchDir() {
+    if (!::testing::Test::HasFailure()) std::filesystem::remove_all(path_);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
 // A DDS domain id (1..230) that no other test process on this machine holds. ctest runs tests in
 // parallel and a pid-derived id alone can collide; a lock per id, held until this process exits,
 // makes the choice exclusive. The same id is returned for every call within one process.
