@@ -186,8 +186,8 @@ void Frontend::mirror_map_state() {
   Map* map = processor_ ? &processor_->tracker().local_map() : nullptr;
   for (auto& received : keyframe_state_reader_->take()) {
     if (map == nullptr) continue;  // nothing to mirror into yet: the mapper only knows our keyframes
-    // A dispose of a keyframe state is not a deletion: the mapper culls by state (culled flag), and
-    // Cyclone disposes every instance when the mapper's writer goes away (crash, restart, shutdown).
+    // Invalid-data samples (disposes, no-writer notices) carry no state: the mapper culls keyframes
+    // by flag and its writers keep their instances when it exits or restarts.
     if (!received.info.valid_data) continue;
     if (!apply_keyframe_state(*map, *received.sample)) stats().count("unknown_keyframe_states");
   }

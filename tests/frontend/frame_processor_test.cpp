@@ -5,11 +5,12 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "components/core/camera/stereo_calibration.hpp"
+#include "components/core/camera/stereo_rectifier.hpp"
 #include "components/frontend/frame_processor.hpp"
 #include "runtime/config.hpp"
-#include "runtime/sequence.hpp"
 #include "test_support.hpp"
 #include "tools/bench/frontend_offline/offline_run.hpp"
+#include "tools/replay/replay_messages.hpp"
 
 namespace heslam::frontend {
 namespace {
@@ -43,25 +44,8 @@ namespace {
 TEST(FrameProcessor, CalibrationThroughTheMessageRectifiesTheSame) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_v101_head");
   const StereoCalibration calibration = load_euroc_calibration(test::shared_dataset("euroc_v101_head") / "mav0");
-  msg::StereoCalibration message{};
-  std::vector<double> left_distortion = calibration.left.distortion;
-  std::vector<double> right_distortion = calibration.right.distortion;
-  const auto fill = [](const CameraModel& camera, std::vector<double>& distortion, msg::CameraModel& out) {
-    out.width_px = static_cast<std::uint32_t>(camera.width_px);
-    out.height_px = static_cast<std::uint32_t>(camera.height_px);
-    out.fx_px = camera.fx_px;
-    out.fy_px = camera.fy_px;
-    out.cx_px = camera.cx_px;
-    out.cy_px = camera.cy_px;
-    out.distortion_model = camera.distortion_model == DistortionModel::kRadialTangential
-                               ? heslam_msg_DISTORTION_RADIAL_TANGENTIAL
-                               : heslam_msg_DISTORTION_NONE;
-    runtime::borrow(out.distortion, distortion);
-    for (int i = 0; i < 16; ++i) out.T_BS[i] = camera.T_BS.matrix()(i / 4, i % 4);
-  };
-  fill(calibration.left, left_distortion, message.left);
-  fill(calibration.right, right_distortion, message.right);
-  const StereoCalibration back = to_calibration(message);
+  const CalibrationMessage message(calibration, StereoRectifier(calibration).camera());
+  const StereoCalibration back = to_calibration(message.get());
   EXPECT_EQ(back.left.T_BS.matrix(), calibration.left.T_BS.matrix());
   EXPECT_EQ(back.right.T_BS.matrix(), calibration.right.T_BS.matrix());
   const FrontendOptions options = FrontendOptions::from_config(runtime::Config::empty());

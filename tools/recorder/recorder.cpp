@@ -106,8 +106,8 @@ std::size_t Recorder::drain() {
   for (auto& received : keyframe_state_reader_->take()) {
     ++taken;
     const msg::KeyframeState& state = *received.sample;
-    // Disposes are not deletions here: the mapper culls by state, and Cyclone disposes every
-    // instance when the mapper's writer goes away (it stops before the recorder, or restarts).
+    // Invalid-data samples (disposes, no-writer notices) carry no state: the mapper culls keyframes
+    // by flag and its writers keep their instances when it exits or restarts.
     if (!received.info.valid_data) continue;
     recorder_.update_keyframe(state.id, frontend::to_pose(state.T_wc), state.parent_id, state.culled);
   }
