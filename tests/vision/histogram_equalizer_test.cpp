@@ -34,12 +34,40 @@ TEST(HistogramEqualizer, GlobalIsTheCdfOfTheJointHistogram) {
   EXPECT_TRUE(equalizer.active());
 }
 
+TEST(HistogramEqualizer, ClippedLimitsTheStretchOfDominantLevels) {
+  // Left: all 10; right: half 20, half 30 (512 pixels, mean bin 2). Global HE maps 10 -> 128,
+  // 20 -> 191, 30 -> 255. Clipped at 2 x mean = 4 per bin: the excess 500 is spread as 1 to every bin
+  // and 1 more to bins 0..243, so the three levels hold 6 each and the cdf gives 10 -> 13, 20 -> 25,
+  // 30 -> 37 (y = (255 cdf + n/2) / n).
+  const cv::Mat left(16, 16, CV_8UC1, cv::Scalar(10));
+  cv::Mat right(16, 16, CV_8UC1, cv::Scalar(20));
+  right.rowRange(8, 16).setTo(30);
+  HistogramEqualizerOptions options = with_mode(HeMode::kClipped);
+  options.global_clip_limit = 2.0;
+  cv::Mat left_out, right_out;
+  HistogramEqualizer equalizer(options);
+  equalizer.equalize(left, right, left_out, right_out);
+  EXPECT_EQ(left_out.at<std::uint8_t>(0, 0), 13);
+  EXPECT_EQ(right_out.at<std::uint8_t>(0, 0), 25);
+  EXPECT_EQ(right_out.at<std::uint8_t>(15, 15), 37);
+  EXPECT_TRUE(equalizer.active());
+
+  // A clip limit above every bin leaves the paper's global mapping.
+  options.global_clip_limit = 1000.0;
+  cv::Mat global_left, global_right;
+  HistogramEqualizer(with_mode(HeMode::kGlobal)).equalize(left, right, global_left, global_right);
+  HistogramEqualizer(options).equalize(left, right, left_out, right_out);
+  EXPECT_EQ(cv::norm(left_out, global_left, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(right_out, global_right, cv::NORM_INF), 0.0);
+  EXPECT_EQ(global_left.at<std::uint8_t>(0, 0), 128);
+}
+
 TEST(HistogramEqualizer, BothImagesGetTheSameMapping) {
   HESLAM_REQUIRE_TEXTURE();
   const cv::Mat texture = test::load_texture();
   const cv::Mat left = texture(cv::Rect(0, 0, 400, 300)).clone();
   cv::Mat right = texture(cv::Rect(200, 200, 400, 300)).clone();
-  for (const HeMode mode : {HeMode::kGlobal, HeMode::kClahe}) {
+  for (const HeMode mode : {HeMode::kGlobal, HeMode::kClipped, HeMode::kClahe}) {
     cv::Mat left_out, right_out;
     HistogramEqualizer(with_mode(mode)).equalize(left, right, left_out, right_out);
     // Same input value at the same pixel position -> same output value in both images.
@@ -180,14 +208,14 @@ TEST(HistogramEqualizer, DarkAndFlatEurocFramesKeepTheirFeatures) {
     flat.push_back({degrade(p.left, false), degrade(p.right, false)});
   }
   std::printf("%-9s %-9s %9s %9s   (3 EuRoC MH01 pairs, 1200 features each)\n", "HE", "images", "features", "stereo");
-  for (const HeMode mode : {HeMode::kNone, HeMode::kGlobal, HeMode::kAdaptive, HeMode::kClahe}) {
+  for (const HeMode mode : {HeMode::kNone, HeMode::kGlobal, HeMode::kClipped, HeMode::kAdaptive, HeMode::kClahe}) {
     const Counts base = count(camera, mode, original);
     std::printf("%-9s %-9s %9zu %9zu\n", to_string(mode), "original", base.features, base.stereo);
     for (const auto& [name, pairs] : {std::pair{"dark", &dark}, std::pair{"flat", &flat}}) {
       const Counts c = count(camera, mode, *pairs);
       std::printf("%-9s %-9s %9zu %9zu  (%3.0f %% / %3.0f %% of original)\n", to_string(mode), name, c.features, c.stereo,
                   100.0 * c.features / base.features, 100.0 * c.stereo / base.stereo);
-      if (mode == HeMode::kGlobal || mode == HeMode::kAdaptive) {
+      if (mode == HeMode::kGlobal || mode == HeMode::kClipped || mode == HeMode::kAdaptive) {
         EXPECT_GE(c.features, 0.8 * base.features) << to_string(mode) << " " << name;
         EXPECT_GE(c.stereo, 0.8 * base.stereo) << to_string(mode) << " " << name;
       }

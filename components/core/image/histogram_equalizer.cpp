@@ -48,6 +48,28 @@ Lut cdf_lut(const Histogram& histogram) {
   return lut;
 }
 
+// Clips every bin at clip_limit x the mean bin count and spreads the excess evenly over all bins,
+// as cv::CLAHE does per tile. `count` is the number of pixels in the histogram.
+void clip_histogram(Histogram& histogram, double clip_limit, std::uint64_t count) {
+  const auto clip = std::max<std::uint32_t>(1u, static_cast<std::uint32_t>(clip_limit * count / kLevels));
+  std::uint32_t excess = 0;
+  for (std::uint32_t& bin : histogram) {
+    if (bin > clip) {
+      excess += bin - clip;
+      bin = clip;
+    }
+  }
+  const std::uint32_t batch = excess / kLevels;
+  const std::uint32_t residual = excess - batch * kLevels;
+  for (std::uint32_t& bin : histogram) bin += batch;
+  if (residual > 0) {
+    const std::uint32_t step = std::max<std::uint32_t>(kLevels / residual, 1u);
+    for (std::uint32_t v = 0, given = 0; v < static_cast<std::uint32_t>(kLevels) && given < residual; v += step, ++given) {
+      ++histogram[v];
+    }
+  }
+}
+
 void apply_lut(const cv::Mat& in, cv::Mat& out, const Lut& lut) {
   cv::LUT(in, cv::Mat(1, kLevels, CV_8U, const_cast<std::uint8_t*>(lut.data())), out);
 }
@@ -79,7 +101,8 @@ HeMode parse_he_mode(const std::string& name) {
   if (name == "global") return HeMode::kGlobal;
   if (name == "clahe") return HeMode::kClahe;
   if (name == "adaptive") return HeMode::kAdaptive;
-  throw std::invalid_argument("HE mode '" + name + "': expected none | global | clahe | adaptive");
+  if (name == "clipped") return HeMode::kClipped;
+  throw std::invalid_argument("HE mode '" + name + "': expected none | global | clipped | clahe | adaptive");
 }
 
 const char* to_string(HeMode mode) {
@@ -88,6 +111,7 @@ const char* to_string(HeMode mode) {
     case HeMode::kGlobal: return "global";
     case HeMode::kClahe: return "clahe";
     case HeMode::kAdaptive: return "adaptive";
+    case HeMode::kClipped: return "clipped";
   }
   return "unknown";
 }
@@ -99,14 +123,16 @@ HistogramEqualizerOptions HistogramEqualizerOptions::from_yaml(const cv::FileNod
   try {
     o.mode = parse_he_mode(mode);
   } catch (const std::invalid_argument&) {
-    yaml_option::fail(source, "HE.mode", "none | global | clahe | adaptive, got '" + mode + "'");
+    yaml_option::fail(source, "HE.mode", "none | global | clipped | clahe | adaptive, got '" + mode + "'");
   }
   yaml_option::read(root, "HE.clipLimit", source, o.clahe_clip_limit);
+  yaml_option::read(root, "HE.globalClipLimit", source, o.global_clip_limit);
   yaml_option::read(root, "HE.tilesX", source, o.clahe_tiles_x);
   yaml_option::read(root, "HE.tilesY", source, o.clahe_tiles_y);
   yaml_option::read(root, "HE.adaptiveOnBelow", source, o.adaptive_on_below);
   yaml_option::read(root, "HE.adaptiveOffAbove", source, o.adaptive_off_above);
   if (!(o.clahe_clip_limit > 0.0)) yaml_option::fail(source, "HE.clipLimit", "a positive number");
+  if (!(o.global_clip_limit > 0.0)) yaml_option::fail(source, "HE.globalClipLimit", "a positive number");
   if (o.clahe_tiles_x < 1) yaml_option::fail(source, "HE.tilesX", "an integer >= 1");
   if (o.clahe_tiles_y < 1) yaml_option::fail(source, "HE.tilesY", "an integer >= 1");
   if (o.adaptive_off_above < o.adaptive_on_below) {
@@ -116,7 +142,7 @@ HistogramEqualizerOptions HistogramEqualizerOptions::from_yaml(const cv::FileNod
 }
 
 HistogramEqualizer::HistogramEqualizer(const HistogramEqualizerOptions& options)
-    : options_(options), active_(options.mode == HeMode::kGlobal || options.mode == HeMode::kClahe) {}
+    : options_(options), active_(options.mode != HeMode::kNone && options.mode != HeMode::kAdaptive) {}
 
 void HistogramEqualizer::equalize(const cv::Mat& left, const cv::Mat& right, cv::Mat& left_out, cv::Mat& right_out) {
   check_pair(left, right);
@@ -129,6 +155,7 @@ void HistogramEqualizer::equalize(const cv::Mat& left, const cv::Mat& right, cv:
       last_contrast_ = equalize_clahe(left, right, left_out, right_out);
       return;
     case HeMode::kGlobal:
+    case HeMode::kClipped:
     case HeMode::kAdaptive: {
       Histogram histogram{};
       accumulate_histogram(left, cv::Rect(0, 0, left.cols, left.rows), histogram);
@@ -151,7 +178,12 @@ void HistogramEqualizer::equalize(const cv::Mat& left, const cv::Mat& right, cv:
 
 void HistogramEqualizer::equalize_global(const cv::Mat& left, const cv::Mat& right, cv::Mat& left_out,
                                          cv::Mat& right_out, const Histogram& histogram) const {
-  const Lut lut = cdf_lut(histogram);
+  Histogram equalized = histogram;
+  if (options_.mode == HeMode::kClipped) {
+    clip_histogram(equalized, options_.global_clip_limit,
+                   static_cast<std::uint64_t>(left.total()) + static_cast<std::uint64_t>(right.total()));
+  }
+  const Lut lut = cdf_lut(equalized);
   apply_lut(left, left_out, lut);
   apply_lut(right, right_out, lut);
 }
@@ -175,26 +207,7 @@ double HistogramEqualizer::equalize_clahe(const cv::Mat& left, const cv::Mat& ri
         accumulate_histogram(right, roi, h);
       }
       for (int v = 0; v < kLevels; ++v) all[v] += h[v];
-      const std::uint32_t count = 2u * static_cast<std::uint32_t>(std::max(roi.area(), 0));
-      // Clip every bin at clip_limit x the mean bin count and spread the excess evenly (cv::CLAHE).
-      const auto clip = std::max<std::uint32_t>(
-          1u, static_cast<std::uint32_t>(options_.clahe_clip_limit * count / kLevels));
-      std::uint32_t excess = 0;
-      for (std::uint32_t& bin : h) {
-        if (bin > clip) {
-          excess += bin - clip;
-          bin = clip;
-        }
-      }
-      const std::uint32_t batch = excess / kLevels;
-      const std::uint32_t residual = excess - batch * kLevels;
-      for (std::uint32_t& bin : h) bin += batch;
-      if (residual > 0) {
-        const std::uint32_t step = std::max<std::uint32_t>(kLevels / residual, 1u);
-        for (std::uint32_t v = 0, given = 0; v < static_cast<std::uint32_t>(kLevels) && given < residual; v += step, ++given) {
-          ++h[v];
-        }
-      }
+      clip_histogram(h, options_.clahe_clip_limit, 2u * static_cast<std::uint64_t>(std::max(roi.area(), 0)));
       luts[static_cast<std::size_t>(ty * tiles_x + tx)] = cdf_lut(h);
     }
   }

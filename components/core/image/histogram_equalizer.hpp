@@ -2,7 +2,9 @@
 // with ONE mapping for both images (from their joint histogram) so stereo SAD matching stays
 // photometrically consistent.
 //
-// Modes: none; global (the paper: y = 255 * cdf(x)); clahe (contrast-limited, per tile, bilinear
+// Modes: none; global (the paper: y = 255 * cdf(x)); clipped (global with the histogram clipped at
+// a multiple of its mean bin, so a few dominant grey levels -- sky, a white wall, a dark floor -- do
+// not stretch their neighbourhood into noise; the default, see docs/vision.md); clahe (contrast-limited, per tile, bilinear
 // between tiles, tile LUTs from both images); adaptive (global HE only while the pair's contrast is
 // low, switched with hysteresis so it does not flicker from frame to frame).
 #pragma once
@@ -15,14 +17,17 @@
 
 namespace heslam {
 
-enum class HeMode { kNone, kGlobal, kClahe, kAdaptive };
+enum class HeMode { kNone, kGlobal, kClahe, kAdaptive, kClipped };
 
-// "none" | "global" | "clahe" | "adaptive"; throws std::invalid_argument on anything else.
+// "none" | "global" | "clipped" | "clahe" | "adaptive"; throws std::invalid_argument on anything else.
 HeMode parse_he_mode(const std::string& name);
 const char* to_string(HeMode mode);
 
 struct HistogramEqualizerOptions {
-  HeMode mode = HeMode::kGlobal;  // the paper's method
+  HeMode mode = HeMode::kClipped;  // the paper's global HE, clipped (measured best on EuRoC, docs/vision.md)
+  // Clipped: a bin of the pair's joint histogram is clipped at global_clip_limit x (mean bin count)
+  // and the excess spread over all bins before the cdf mapping.
+  double global_clip_limit = 2.0;
   // CLAHE: a histogram bin is clipped at clip_limit x (mean bin count), as cv::createCLAHE.
   double clahe_clip_limit = 2.0;
   int clahe_tiles_x = 8;
@@ -34,7 +39,7 @@ struct HistogramEqualizerOptions {
   double adaptive_on_below = 25.0;
   double adaptive_off_above = 35.0;
 
-  // Reads HE.mode, HE.clipLimit, HE.tilesX, HE.tilesY, HE.adaptiveOnBelow, HE.adaptiveOffAbove.
+  // Reads HE.mode, HE.globalClipLimit, HE.clipLimit, HE.tilesX, HE.tilesY, HE.adaptiveOnBelow, HE.adaptiveOffAbove.
   static HistogramEqualizerOptions from_yaml(const cv::FileNode& root, const std::string& source);
 };
 
