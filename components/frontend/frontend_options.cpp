@@ -26,7 +26,8 @@ void read(const runtime::Config& c, const char* key, bool& value) { value = c.ge
 
 void read_features(const runtime::Config& c, StereoFeaturePipelineOptions& o) {
   HistogramEqualizerOptions& he = o.he;
-  he.mode = parse_he_mode(c.get_choice("he.mode", to_string(he.mode), {"none", "global", "clahe", "adaptive"}));
+  he.mode = parse_he_mode(c.get_choice("he.mode", to_string(he.mode), {"none", "global", "clipped", "clahe", "adaptive"}));
+  read(c, "he.global_clip_limit", he.global_clip_limit, 0.01, 1000.0);
   read(c, "he.clahe_clip_limit", he.clahe_clip_limit, 0.0, 1000.0);
   read(c, "he.clahe_tiles_x", he.clahe_tiles_x, 1, 64);
   read(c, "he.clahe_tiles_y", he.clahe_tiles_y, 1, 64);
@@ -75,6 +76,7 @@ void read_tracker(const runtime::Config& c, TrackerOptions& t) {
   read(c, "tracker.min_local_map_inliers_after_relocalization", t.min_local_map_inliers_after_relocalization);
   read(c, "tracker.pose_optimization_rounds", t.pose_optimization_rounds, 1, 100);
   read(c, "tracker.pose_optimization_iterations", t.pose_optimization_iterations, 1, 1000);
+  read(c, "tracker.disparity_sigma_ratio", t.disparity_sigma_ratio, 0.01, 100.0);
   read(c, "tracker.max_frames_between_keyframes", t.max_frames_between_keyframes, 1);
   read(c, "tracker.min_frames_between_keyframes", t.min_frames_between_keyframes);
   read(c, "tracker.close_tracked_needed", t.close_tracked_needed);

@@ -44,6 +44,8 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
       "bundle_adjustment.first_pass_iterations", m.bundle_adjustment.first_pass_iterations, 1, kMaxIterations);
   m.bundle_adjustment.second_pass_iterations = config.get_int(
       "bundle_adjustment.second_pass_iterations", m.bundle_adjustment.second_pass_iterations, 0, kMaxIterations);
+  m.bundle_adjustment.disparity_sigma_ratio = config.get_double(
+      "bundle_adjustment.disparity_sigma_ratio", m.bundle_adjustment.disparity_sigma_ratio, 0.01, 100.0);
   m.bundle_adjustment.num_threads =
       config.get_int("bundle_adjustment.threads", m.bundle_adjustment.num_threads, 1, kMaxThreads);
   m.enable_keyframe_culling = config.get_bool("keyframe_culling.enabled", m.enable_keyframe_culling);

@@ -78,6 +78,10 @@ inline Pose3 circle_pose(int k, double step_rad = 0.12, double radius_m = 0.6) {
 
 struct ViewOptions {
   double pixel_noise_px = 0.5;   // per coordinate, level 0
+  // Disparity noise over pixel noise. Our stereo matcher measures the disparity by SAD on a patch
+  // around the LEFT keypoint, so the right coordinate is u - disparity: its error is the left
+  // keypoint's plus an independent, smaller disparity error (the BA model, motion_only_ba.hpp).
+  double disparity_noise_ratio = 0.5;
   double stereo_fraction = 1.0;  // share of keypoints with a stereo match
   double max_stereo_depth_m = 8.0;
   int max_octave = 2;            // keypoint octave = min(the point's octave, max_octave)
@@ -106,8 +110,8 @@ inline SyntheticView make_view(const SyntheticWorld& world, KeyframeId id, const
   kf.T_wc = T_wc;
   StereoFeatures& f = kf.features;
   const Pose3 T_cw = T_wc.inverse();
-  // u_right_true: the right image's keypoint before noise; it is detected independently of the left.
-  const auto add = [&](double u, double v, double u_right_true, double depth, int octave, const Descriptor& d,
+  // disparity_true: bf / depth before noise.
+  const auto add = [&](double u, double v, double disparity_true, double depth, int octave, const Descriptor& d,
                        float angle, int truth) {
     Keypoint kp;
     kp.u_px = static_cast<float>(u);
@@ -118,7 +122,10 @@ inline SyntheticView make_view(const SyntheticWorld& world, KeyframeId id, const
     f.keypoints.push_back(kp);
     f.descriptors.push_back(d);
     const bool stereo = depth > 0.0 && depth < options.max_stereo_depth_m && unit(rng) < options.stereo_fraction;
-    f.u_right_px.push_back(stereo ? static_cast<float>(u_right_true + noise(rng) * f.pyramid.scale[octave]) : kNoStereo);
+    const auto measured_disparity = [&] {
+      return disparity_true + noise(rng) * options.disparity_noise_ratio * f.pyramid.scale[static_cast<std::size_t>(octave)];
+    };
+    f.u_right_px.push_back(stereo ? static_cast<float>(u - measured_disparity()) : kNoStereo);
     f.depth_m.push_back(stereo ? static_cast<float>(camera.bf() / (u - f.u_right_px.back())) : kNoStereo);
     view.truth.push_back(truth);
   };
@@ -136,7 +143,7 @@ inline SyntheticView make_view(const SyntheticWorld& world, KeyframeId id, const
       const int b = bit(rng);
       d[static_cast<std::size_t>(b / 8)] ^= static_cast<std::uint8_t>(1u << (b % 8));
     }
-    add(u, v, camera.u_right(p_c), p_c.z(), octave, d, world.angles_deg[i], static_cast<int>(i));
+    add(u, v, camera.bf() / p_c.z(), p_c.z(), octave, d, world.angles_deg[i], static_cast<int>(i));
   }
   for (int c = 0; c < options.clutter; ++c) {
     Descriptor d;

@@ -78,6 +78,32 @@ TEST(MotionOnlyBa, ExactObservationsGiveExactPose) {
   EXPECT_EQ(result.inliers, 50);
 }
 
+// The stereo residual is (u, v, disparity) with the disparity whitened by disparity_sigma_ratio x the
+// keypoint sigma: a 1.5 px disparity error alone has chi2 (1.5 / 0.5)^2 = 9 > 7.815 at ratio 0.5
+// (outlier) and 2.25 at ratio 1 (inlier), whatever u is.
+TEST(MotionOnlyBa, DisparityErrorIsWhitenedByItsOwnSigma) {
+  const PinholeStereo camera = test::synthetic_camera();
+  const Pose3 T_cw = Pose3::Identity();
+  Problem problem = make_problem(camera, T_cw, 60, 0.0, 5);
+  for (auto& obs : problem.observations) {  // exact observations, every one stereo
+    const Eigen::Vector3d p_c = T_cw * obs.p_w;
+    obs.u_px = camera.project(p_c).x();
+    obs.v_px = camera.project(p_c).y();
+    obs.u_right_px = camera.u_right(p_c);
+  }
+  problem.observations[0].u_right_px -= 1.5;  // disparity 1.5 px too large, u and v exact
+  for (const double ratio : {0.5, 1.0}) {
+    MotionOnlyBaOptions options;
+    options.disparity_sigma_ratio = ratio;
+    const MotionOnlyBaResult result = optimize_pose(camera, problem.observations, T_cw, options);
+    EXPECT_EQ(result.outlier[0], ratio == 0.5) << "ratio " << ratio;
+    EXPECT_LT((result.T_cw.translation() - T_cw.translation()).norm(), 1e-3) << "ratio " << ratio;
+  }
+  MotionOnlyBaOptions bad;
+  bad.disparity_sigma_ratio = 0.0;
+  EXPECT_THROW(optimize_pose(camera, problem.observations, T_cw, bad), std::invalid_argument);
+}
+
 TEST(MotionOnlyBa, EmptyInputLeavesGuess) {
   const Pose3 guess = Pose3(Eigen::Translation3d(1, 2, 3));
   const MotionOnlyBaResult result = optimize_pose(test::synthetic_camera(), {}, guess);

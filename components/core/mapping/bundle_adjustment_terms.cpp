@@ -84,9 +84,10 @@ bool PoseManifold::MinusJacobian(const double*, double* jacobian) const {
 }
 
 ReprojectionCost::ReprojectionCost(const PinholeStereo& camera, double u_px, double v_px, double u_right_px,
-                                   double inv_sigma, bool stereo)
+                                   double inv_sigma, bool stereo, double disparity_sigma_ratio)
     : fx_(camera.fx_px), fy_(camera.fy_px), cx_(camera.cx_px), cy_(camera.cy_px), bf_(camera.bf()), u_(u_px),
-      v_(v_px), u_right_(u_right_px), weight_(inv_sigma), stereo_(stereo) {
+      v_(v_px), disparity_(u_px - u_right_px), weight_(inv_sigma), disparity_weight_(inv_sigma / disparity_sigma_ratio),
+      stereo_(stereo) {
   set_num_residuals(stereo ? 3 : 2);
   mutable_parameter_block_sizes()->push_back(7);
   mutable_parameter_block_sizes()->push_back(3);
@@ -102,7 +103,7 @@ bool ReprojectionCost::Evaluate(const double* const* parameters, double* residua
   const double u_hat = fx_ * p_c.x() * inv_z + cx_;
   residuals[0] = weight_ * (u_hat - u_);
   residuals[1] = weight_ * (fy_ * p_c.y() * inv_z + cy_ - v_);
-  if (stereo_) residuals[2] = weight_ * (u_hat - bf_ * inv_z - u_right_);
+  if (stereo_) residuals[2] = disparity_weight_ * (bf_ * inv_z - disparity_);
   if (jacobians == nullptr) return true;
 
   // d residual / d p_c, whitened.
@@ -110,8 +111,9 @@ bool ReprojectionCost::Evaluate(const double* const* parameters, double* residua
   const double inv_z2 = inv_z * inv_z;
   J_pc << fx_ * inv_z, 0.0, -fx_ * p_c.x() * inv_z2,
           0.0, fy_ * inv_z, -fy_ * p_c.y() * inv_z2,
-          fx_ * inv_z, 0.0, -(fx_ * p_c.x() - bf_) * inv_z2;
-  J_pc *= weight_;
+          0.0, 0.0, -bf_ * inv_z2;
+  J_pc.topRows<2>() *= weight_;
+  J_pc.row(2) *= disparity_weight_;
   const int rows = stereo_ ? 3 : 2;
   if (jacobians[0] != nullptr) {
     // p_c(w, r) = Exp(w) R p + t + r  =>  d/dw = -[R p]x, d/dr = I.

@@ -33,15 +33,17 @@ class PoseManifold : public ceres::Manifold {
   bool MinusJacobian(const double* x, double* jacobian) const override;
 };
 
-// Whitened (u, v) or (u, v, u_right) residual of one observation; `stereo` selects 3 residuals.
+// Whitened (u, v) or (u, v, disparity) residual of one observation; `stereo` selects 3 residuals.
+// The disparity error (bf / z against u - u_right) has its own weight, inv_sigma / disparity_sigma_ratio,
+// as in the tracker's motion-only BA (motion_only_ba.hpp), so frontend and mapper agree on the model.
 class ReprojectionCost : public ceres::CostFunction {
  public:
   ReprojectionCost(const PinholeStereo& camera, double u_px, double v_px, double u_right_px, double inv_sigma,
-                   bool stereo);
+                   bool stereo, double disparity_sigma_ratio);
   bool Evaluate(const double* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
-  double fx_, fy_, cx_, cy_, bf_, u_, v_, u_right_, weight_;
+  double fx_, fy_, cx_, cy_, bf_, u_, v_, disparity_, weight_, disparity_weight_;
   bool stereo_;
 };
 

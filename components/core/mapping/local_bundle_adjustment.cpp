@@ -117,7 +117,8 @@ LocalBundleAdjustmentResult local_bundle_adjustment(Map& map, KeyframeId kf_id, 
       const double inv_sigma = std::sqrt(observer.features.pyramid.inv_sigma2[static_cast<std::size_t>(kp.octave)]);
       auto* loss = new ceres::HuberLoss(std::sqrt(obs.chi2_threshold));
       auto* cost = new ReprojectionCost(camera, kp.u_px, kp.v_px,
-                                        obs.stereo ? observer.features.u_right_px[i] : 0.0, inv_sigma, obs.stereo);
+                                        obs.stereo ? observer.features.u_right_px[i] : 0.0, inv_sigma, obs.stereo,
+                                        options.disparity_sigma_ratio);
       // Ceres takes ownership of cost and loss (the problem's default ownership).
       obs.block = problem.AddResidualBlock(cost, loss, pose_of(obs.kf_id).data(), point_of(obs.point_id).data());
     }
@@ -139,8 +140,9 @@ LocalBundleAdjustmentResult local_bundle_adjustment(Map& map, KeyframeId kf_id, 
     const Eigen::Vector2d uv = camera.project(pc);
     double error2 = (uv - Eigen::Vector2d(kp.u_px, kp.v_px)).squaredNorm();
     if (obs.stereo) {
-      const double du = camera.u_right(pc) - observer.features.u_right_px[i];
-      error2 += du * du;
+      const double disparity = kp.u_px - observer.features.u_right_px[i];
+      const double dd = (camera.bf() / pc.z() - disparity) / options.disparity_sigma_ratio;
+      error2 += dd * dd;
     }
     chi2 = error2 * observer.features.pyramid.inv_sigma2[static_cast<std::size_t>(kp.octave)];
     return true;

@@ -42,6 +42,9 @@ struct LocalBundleAdjustmentOptions {
   int second_pass_iterations = 10;
   float mono_chi2 = 5.991f;
   float stereo_chi2 = 7.815f;
+  // Disparity sigma / keypoint sigma of stereo observations; the tracker's motion-only BA uses the
+  // same model (tracker.disparity_sigma_ratio), docs/tracking.md has the measurements.
+  double disparity_sigma_ratio = 0.5;
   int num_threads = 1;              // the machine is shared; the mapper is one process of several
   // Set by another thread to stop early (real-time mode: a new keyframe arrived). Results so far are
   // kept. nullptr = never abort (lockstep mode).

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <stdexcept>
 
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
@@ -42,9 +43,14 @@ struct MonoResidual {
   double sqrt_info_ = 1.0;
 };
 
+// Stereo: (u, v) as mono plus the disparity error, whitened by its own sigma (a fraction of the
+// keypoint's). Disparity comes from SAD subpixel refinement and is more precise than the keypoint
+// position; a u_right residual would repeat the u error in the third component (u_right = u - d).
 struct StereoResidual {
-  StereoResidual(const PinholeStereo& camera, const PoseObservation& obs) : camera_(camera), obs_(obs) {
+  StereoResidual(const PinholeStereo& camera, const PoseObservation& obs, double disparity_sigma_ratio)
+      : camera_(camera), obs_(obs) {
     sqrt_info_ = std::sqrt(obs.inv_sigma2);
+    disparity_sqrt_info_ = sqrt_info_ / disparity_sigma_ratio;
   }
   template <typename T>
   bool operator()(const T* pose, T* residual) const {
@@ -54,12 +60,13 @@ struct StereoResidual {
     const T u = T(camera_.fx_px) * p_c[0] * inv_z + T(camera_.cx_px);
     residual[0] = (u - T(obs_.u_px)) * T(sqrt_info_);
     residual[1] = (T(camera_.fy_px) * p_c[1] * inv_z + T(camera_.cy_px) - T(obs_.v_px)) * T(sqrt_info_);
-    residual[2] = (u - T(camera_.bf()) * inv_z - T(obs_.u_right_px)) * T(sqrt_info_);
+    residual[2] = (T(camera_.bf()) * inv_z - T(obs_.u_px - obs_.u_right_px)) * T(disparity_sqrt_info_);
     return true;
   }
   PinholeStereo camera_;
   PoseObservation obs_;
   double sqrt_info_ = 1.0;
+  double disparity_sqrt_info_ = 1.0;
 };
 
 void pose_to_params(const Pose3& T_cw, double* params) {
@@ -80,14 +87,15 @@ Pose3 params_to_pose(const double* params) {
 }
 
 // Chi-square error (squared whitened residual) of one observation at pose T_cw; infinite behind the camera.
-double chi2_error(const PinholeStereo& camera, const PoseObservation& obs, const Pose3& T_cw) {
+double chi2_error(const PinholeStereo& camera, const PoseObservation& obs, const Pose3& T_cw,
+                  double disparity_sigma_ratio) {
   const Eigen::Vector3d p_c = T_cw * obs.p_w;
   if (p_c.z() <= 0.0) return std::numeric_limits<double>::infinity();
   const Eigen::Vector2d uv = camera.project(p_c);
   double e2 = (uv.x() - obs.u_px) * (uv.x() - obs.u_px) + (uv.y() - obs.v_px) * (uv.y() - obs.v_px);
   if (obs.stereo()) {
-    const double ur = uv.x() - camera.bf() / p_c.z();
-    e2 += (ur - obs.u_right_px) * (ur - obs.u_right_px);
+    const double disparity_error = (camera.bf() / p_c.z() - (obs.u_px - obs.u_right_px)) / disparity_sigma_ratio;
+    e2 += disparity_error * disparity_error;
   }
   return e2 * obs.inv_sigma2;
 }
@@ -98,6 +106,9 @@ MotionOnlyBaResult optimize_pose(const PinholeStereo& camera, const std::vector<
                                  const Pose3& T_cw_guess, const MotionOnlyBaOptions& options) {
   MotionOnlyBaResult result;
   result.T_cw = T_cw_guess;
+  if (!(options.disparity_sigma_ratio > 0.0)) {
+    throw std::invalid_argument("MotionOnlyBaOptions.disparity_sigma_ratio: expected > 0");
+  }
   result.outlier.assign(observations.size(), false);
   if (observations.empty()) return result;
 
@@ -105,7 +116,7 @@ MotionOnlyBaResult optimize_pose(const PinholeStereo& camera, const std::vector<
   costs.reserve(observations.size());
   for (const PoseObservation& obs : observations) {
     if (obs.stereo()) {
-      costs.emplace_back(new ceres::AutoDiffCostFunction<StereoResidual, 3, 6>(new StereoResidual(camera, obs)));
+      costs.emplace_back(new ceres::AutoDiffCostFunction<StereoResidual, 3, 6>(new StereoResidual(camera, obs, options.disparity_sigma_ratio)));
     } else {
       costs.emplace_back(new ceres::AutoDiffCostFunction<MonoResidual, 2, 6>(new MonoResidual(camera, obs)));
     }
@@ -148,7 +159,7 @@ MotionOnlyBaResult optimize_pose(const PinholeStereo& camera, const std::vector<
     const Pose3 T_cw = params_to_pose(params);
     for (std::size_t i = 0; i < observations.size(); ++i) {
       const double threshold = observations[i].stereo() ? options.chi2_stereo : options.chi2_mono;
-      result.outlier[i] = !(chi2_error(camera, observations[i], T_cw) <= threshold);
+      result.outlier[i] = !(chi2_error(camera, observations[i], T_cw, options.disparity_sigma_ratio) <= threshold);
     }
   }
   result.T_cw = params_to_pose(params);

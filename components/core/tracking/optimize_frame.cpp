@@ -30,6 +30,7 @@ int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camer
   MotionOnlyBaOptions ba;
   ba.rounds = options.pose_optimization_rounds;
   ba.iterations_per_round = options.pose_optimization_iterations;
+  ba.disparity_sigma_ratio = options.disparity_sigma_ratio;
   const MotionOnlyBaResult result = optimize_pose(camera, observations, frame.T_cw(), ba);
   frame.T_wc = result.T_cw.inverse();
   for (std::size_t k = 0; k < keypoint_of.size(); ++k) frame.outlier[keypoint_of[k]] = result.outlier[k];

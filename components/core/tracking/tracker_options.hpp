@@ -50,6 +50,7 @@ struct TrackerOptions {
   // --- motion-only bundle adjustment ---
   int pose_optimization_rounds = 4;      // outlier reclassification rounds
   int pose_optimization_iterations = 10;  // Levenberg-Marquardt iterations per round
+  double disparity_sigma_ratio = 0.5;     // disparity sigma / keypoint sigma in motion-only BA (motion_only_ba.hpp)
 
   // --- keyframe decision (ORB-SLAM2 NeedNewKeyFrame, stereo) ---
   int max_frames_between_keyframes = 20;  // = camera fps in ORB-SLAM2: at least one keyframe a second

@@ -3,7 +3,7 @@
 // per-stage time breakdown (median / p90) and, when the folder has ground truth, the SE(3) ATE.
 //
 // usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]
-//                                [--he none|global|clahe|adaptive] [--variant none|dark|low_contrast]
+//                                [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast]
 //                                [--frames N]
 #include <algorithm>
 #include <cstdio>
@@ -21,7 +21,7 @@ using heslam::bench::FrameRecord;
 
 constexpr const char* kUsage =
     "usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]\n"
-    "       [--he none|global|clahe|adaptive] [--variant none|dark|low_contrast] [--frames N]\n";
+    "       [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast] [--frames N]\n";
 
 double percentile(std::vector<double> values, double fraction) {
   if (values.empty()) return 0.0;
@@ -39,6 +39,10 @@ void print_stage(const char* name, const std::vector<FrameRecord>& frames, doubl
 int run(int argc, char** argv) {
   if (argc < 2) throw std::runtime_error(std::string("missing DATASET\n") + kUsage);
   std::string dataset = argv[1];
+  if (dataset == "--help" || dataset == "-h") {
+    std::fputs(kUsage, stdout);
+    return 0;
+  }
   std::string output;
   std::string settings;
   heslam::bench::OfflineRunOptions options;
@@ -66,7 +70,7 @@ int run(int argc, char** argv) {
     try {
       options.pipeline.he.mode = heslam::parse_he_mode(he_mode);
     } catch (const std::invalid_argument&) {
-      throw std::runtime_error("--he: expected none, global, clahe or adaptive, got '" + he_mode + "'");
+      throw std::runtime_error("--he: expected none, global, clipped, clahe or adaptive, got '" + he_mode + "'");
     }
   }
 
@@ -102,7 +106,7 @@ int run(int argc, char** argv) {
     }
   }
   if (const auto ate = heslam::bench::compute_ate_se3(result)) {
-    std::printf("ATE (SE3 Umeyama, %d poses): rmse %.4f m, max %.4f m; path length %.3f m\n", ate->pairs, ate->rmse_m,
+    std::printf("ATE (SE3 Umeyama, %d poses): rmse %.5f m, max %.4f m; path length %.3f m\n", ate->pairs, ate->rmse_m,
                 ate->max_m, heslam::bench::tracked_path_length_m(result));
   } else {
     std::printf("path length %.3f m (no ground truth)\n", heslam::bench::tracked_path_length_m(result));
