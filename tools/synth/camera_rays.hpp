@@ -33,6 +33,9 @@ class CameraRays {
   bool distorted() const { return distorted_; }
   float x(int index) const { return x_[static_cast<std::size_t>(index)]; }
   float y(int index) const { return y_[static_cast<std::size_t>(index)]; }
+  // Row-major arrays of x(i) and y(i), for loops over a row.
+  const float* xs() const { return x_.data(); }
+  const float* ys() const { return y_.data(); }
   // Normalized-plane distance between neighbouring pixels here (for texture footprints).
   float step(int index) const { return step_[static_cast<std::size_t>(index)]; }
   float vignetting_gain(int index) const { return vignette_[static_cast<std::size_t>(index)]; }

@@ -152,25 +152,34 @@ void Renderer::render(const Pose3& T_wc, cv::Mat& radiance, cv::Mat* depth_m) {
   std::fill(depth_.begin(), depth_.end(), 1e30f);
   std::fill(hit_.begin(), hit_.end(), -1);
 
-  // Visibility: per tile, every quad whose projection overlaps it, in scene order.
+  // Visibility: per tile, every quad whose projection overlaps it, in scene order. The row loop is
+  // branch-free (a hit is a mask, the z-buffer update a select) so the compiler vectorizes it; the
+  // result is the same as testing and skipping pixel by pixel.
   for (const CameraRays::Tile& tile : rays_.tiles()) {
     for (std::size_t k = 0; k < cam_quads_.size(); ++k) {
       const CameraQuad& q = cam_quads_[k];
       if (q.x_max < tile.x_min || q.x_min > tile.x_max || q.y_max < tile.y_min || q.y_min > tile.y_max) continue;
+      const float nx = q.n.x(), ny = q.n.y(), nz = q.n.z(), n_o = q.n_o;
+      const float ux = q.u.x(), uy = q.u.y(), uz = q.u.z(), u_o = q.u_o, size_u = q.size_u;
+      const float vx = q.v.x(), vy = q.v.y(), vz = q.v.z(), v_o = q.v_o, size_v = q.size_v;
+      const int id = static_cast<int>(k);
+      const int n = tile.c1 - tile.c0;
       for (int r = tile.r0; r < tile.r1; ++r) {
-        for (int c = tile.c0; c < tile.c1; ++c) {
-          const int i = r * w + c;
-          const float x = rays_.x(i), y = rays_.y(i);
-          const float nd = q.n.x() * x + q.n.y() * y + q.n.z();
-          if (std::abs(nd) < kMinCosine) continue;
-          const float t = q.n_o / nd;
-          float& zbuf = depth_[static_cast<std::size_t>(i)];
-          if (t < kNearM || t >= zbuf) continue;
-          const float a = t * (q.u.x() * x + q.u.y() * y + q.u.z()) - q.u_o;
-          const float b = t * (q.v.x() * x + q.v.y() * y + q.v.z()) - q.v_o;
-          if (a < 0 || b < 0 || a > q.size_u || b > q.size_v) continue;
-          zbuf = t;
-          hit_[static_cast<std::size_t>(i)] = static_cast<int>(k);
+        const std::size_t first = static_cast<std::size_t>(r * w + tile.c0);
+        const float* __restrict xs = rays_.xs() + first;
+        const float* __restrict ys = rays_.ys() + first;
+        float* __restrict zbuf = depth_.data() + first;
+        int* __restrict hit = hit_.data() + first;
+        for (int c = 0; c < n; ++c) {
+          const float x = xs[c], y = ys[c];
+          const float nd = nx * x + ny * y + nz;
+          const float t = n_o / nd;
+          const float a = t * (ux * x + uy * y + uz) - u_o;
+          const float b = t * (vx * x + vy * y + vz) - v_o;
+          const bool visible = std::fabs(nd) >= kMinCosine && t >= kNearM && t < zbuf[c] && a >= 0.0f && b >= 0.0f &&
+                               a <= size_u && b <= size_v;
+          zbuf[c] = visible ? t : zbuf[c];
+          hit[c] = visible ? id : hit[c];
         }
       }
     }
