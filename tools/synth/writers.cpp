@@ -87,50 +87,58 @@ void write_euroc_sensor_yaml(const fs::path& file, const SequenceRenderer& r, in
   }
 }
 
-// ORB-SLAM2 stereo settings: the same file works for stereo_euroc (LEFT/RIGHT rectification) and
-// stereo_kitti (rectified intrinsics only). ORB parameters are ORB-SLAM2's defaults.
+// ORB-SLAM2 stereo settings: the same file works for stereo_euroc and stereo_kitti. stereo_euroc
+// refuses to start unless LEFT/RIGHT .K .D .R .P .width .height are all present, and rectifies every
+// image with them, so they are written for every sequence: from cv::stereoRectify when the images
+// are distorted, the identity rectification (D = 0, R = I, P = [K | 0] and [K | -fx b]) when they
+// are ideal pinhole images. stereo_kitti reads only Camera.*. ORB parameters are ORB-SLAM2's defaults.
 void write_orbslam_settings(const fs::path& file, const SequenceRenderer& r) {
   const CameraSpec& c = r.preset().camera;
   auto out = open_out(file);
   cv::Mat K = (cv::Mat_<double>(3, 3) << c.fx_px, 0, c.cx_px, 0, c.fy_px, c.cy_px, 0, 0, 1);
   cv::Mat D = cv::Mat::zeros(1, 5, CV_64F);
-  if (r.distortion_applied())
+  cv::Mat R1 = cv::Mat::eye(3, 3, CV_64F), R2 = R1.clone();
+  cv::Mat P1 = (cv::Mat_<double>(3, 4) << c.fx_px, 0, c.cx_px, 0, 0, c.fy_px, c.cy_px, 0, 0, 0, 1, 0);
+  cv::Mat P2 = P1.clone();
+  P2.at<double>(0, 3) = -c.fx_px * c.baseline_m;
+  if (r.distortion_applied()) {
     for (int i = 0; i < 4; ++i) D.at<double>(0, i) = c.distortion[static_cast<std::size_t>(i)];
-  cv::Mat R1 = cv::Mat::eye(3, 3, CV_64F), R2 = R1.clone(), P1, P2, Q;
-  // p_right = R p_left + T: the right camera is baseline_m along +x, so T = (-b, 0, 0).
-  const cv::Mat R = cv::Mat::eye(3, 3, CV_64F);
-  const cv::Mat T = (cv::Mat_<double>(3, 1) << -c.baseline_m, 0, 0);
-  cv::stereoRectify(K, D, K, D, cv::Size(c.width_px, c.height_px), R, T, R1, R2, P1, P2, Q,
-                    cv::CALIB_ZERO_DISPARITY, 0);
-  const double fx = r.distortion_applied() ? P1.at<double>(0, 0) : c.fx_px;
-  const double fy = r.distortion_applied() ? P1.at<double>(1, 1) : c.fy_px;
-  const double cx = r.distortion_applied() ? P1.at<double>(0, 2) : c.cx_px;
-  const double cy = r.distortion_applied() ? P1.at<double>(1, 2) : c.cy_px;
+    // p_right = R p_left + T: the right camera is baseline_m along +x, so T = (-b, 0, 0).
+    const cv::Mat R = cv::Mat::eye(3, 3, CV_64F);
+    const cv::Mat T = (cv::Mat_<double>(3, 1) << -c.baseline_m, 0, 0);
+    cv::Mat Q;
+    cv::stereoRectify(K, D, K, D, cv::Size(c.width_px, c.height_px), R, T, R1, R2, P1, P2, Q,
+                      cv::CALIB_ZERO_DISPARITY, 0);
+  }
+  const double fx = P1.at<double>(0, 0);
+  const double fy = P1.at<double>(1, 1);
+  const double cx = P1.at<double>(0, 2);
+  const double cy = P1.at<double>(1, 2);
   out << "%YAML:1.0\n\n# ORB-SLAM2 stereo settings for a heslam-synth sequence (preset " << r.preset().name << ").\n"
+      << "# stereo_euroc VOC THIS_FILE SEQ/mav0/cam0/data SEQ/mav0/cam1/data SEQ/timestamps.txt\n"
+      << "# stereo_kitti VOC THIS_FILE SEQ (KITTI layout)\n"
       << fmt("Camera.fx: %.9g\nCamera.fy: %.9g\nCamera.cx: %.9g\nCamera.cy: %.9g\n\n", fx, fy, cx, cy)
       << "Camera.k1: 0.0\nCamera.k2: 0.0\nCamera.p1: 0.0\nCamera.p2: 0.0\n\n"
       << "Camera.width: " << c.width_px << "\nCamera.height: " << c.height_px << "\n\n"
       << fmt("Camera.fps: %g\n\n# stereo baseline times fx\nCamera.bf: %.9g\n\n", c.rate_hz, fx * c.baseline_m)
       << "# Color order of the images (0: BGR, 1: RGB. It is ignored if images are grayscale)\nCamera.RGB: 1\n\n"
       << "# Close/Far threshold. Baseline times.\nThDepth: 35\n\n";
-  if (r.distortion_applied()) {
-    auto mat = [&](const char* name, const cv::Mat& m) {
-      out << name << ": !!opencv-matrix\n   rows: " << m.rows << "\n   cols: " << m.cols << "\n   dt: d\n   data: [";
-      for (int i = 0; i < m.rows * m.cols; ++i) out << (i ? ", " : "") << fmt("%.12g", m.at<double>(i / m.cols, i % m.cols));
-      out << "]\n";
-    };
-    out << "LEFT.height: " << c.height_px << "\nLEFT.width: " << c.width_px << "\n";
-    mat("LEFT.D", D);
-    mat("LEFT.K", K);
-    mat("LEFT.R", R1);
-    mat("LEFT.P", P1);
-    out << "\nRIGHT.height: " << c.height_px << "\nRIGHT.width: " << c.width_px << "\n";
-    mat("RIGHT.D", D);
-    mat("RIGHT.K", K);
-    mat("RIGHT.R", R2);
-    mat("RIGHT.P", P2);
-    out << "\n";
-  }
+  auto mat = [&](const char* name, const cv::Mat& m) {
+    out << name << ": !!opencv-matrix\n   rows: " << m.rows << "\n   cols: " << m.cols << "\n   dt: d\n   data: [";
+    for (int i = 0; i < m.rows * m.cols; ++i) out << (i ? ", " : "") << fmt("%.12g", m.at<double>(i / m.cols, i % m.cols));
+    out << "]\n";
+  };
+  out << "LEFT.height: " << c.height_px << "\nLEFT.width: " << c.width_px << "\n";
+  mat("LEFT.D", D);
+  mat("LEFT.K", K);
+  mat("LEFT.R", R1);
+  mat("LEFT.P", P1);
+  out << "\nRIGHT.height: " << c.height_px << "\nRIGHT.width: " << c.width_px << "\n";
+  mat("RIGHT.D", D);
+  mat("RIGHT.K", K);
+  mat("RIGHT.R", R2);
+  mat("RIGHT.P", P2);
+  out << "\n";
   out << "ORBextractor.nFeatures: 1200\nORBextractor.scaleFactor: 1.2\nORBextractor.nLevels: 8\n"
       << "ORBextractor.iniThFAST: 20\nORBextractor.minThFAST: 7\n\n"
       << "Viewer.KeyFrameSize: 0.05\nViewer.KeyFrameLineWidth: 1\nViewer.GraphLineWidth: 0.9\nViewer.PointSize: 2\n"
