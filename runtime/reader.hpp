@@ -67,6 +67,17 @@ class Reader {
     }
   }
 
+  // Whether a sample is waiting that has not been taken (non-destructive: nothing is read or taken).
+  // For work that should yield to new input, e.g. a real-time bundle adjustment.
+  bool has_unread() {
+    if (!unread_condition_) {
+      unread_condition_ = Entity(check_dds(
+          dds_create_readcondition(entity_.get(), DDS_NOT_READ_SAMPLE_STATE | DDS_ANY_VIEW_STATE | DDS_ANY_INSTANCE_STATE),
+          "topic '" + name() + "': cannot create read condition"));
+    }
+    return check_dds(dds_triggered(unread_condition_.get()), "topic '" + name() + "': read condition") > 0;
+  }
+
   // Writers currently matched.
   int matched_writers() const {
     dds_subscription_matched_status_t status{};
@@ -95,6 +106,7 @@ class Reader {
 
   Topic<T> topic_;
   Entity entity_;
+  Entity unread_condition_;  // created by the first has_unread(); a child of entity_
   uint64_t schema_mismatches_ = 0;
 };
 

@@ -94,6 +94,9 @@ void Frontend::run() {
   const auto count = [&](const char* name) { return counters.count(name) != 0 ? counters.at(name) : 0; };
   log().info("processed ", count("frames"), " frames (", count("lost"), " lost, ", count("bad_frames"), " bad), ",
              count("keyframes"), " keyframes");
+  if (count("frames_missed") > 0) {
+    log().warn(count("frames_missed"), " frames missed: published while this frontend was busy, only the newest kept");
+  }
   log_stage_summary(log(), stats());
 }
 
@@ -146,6 +149,8 @@ void Frontend::take_frames() {
 }
 
 void Frontend::process_frame(const msg::StereoFrame& frame) {
+  if (last_seq_ && frame.seq > *last_seq_ + 1) stats().count("frames_missed", frame.seq - *last_seq_ - 1);
+  last_seq_ = frame.seq;
   FrameOutput output;
   try {
     const GreyPair images = to_grey_images(frame);

@@ -46,6 +46,9 @@ class Frontend : public runtime::Component {
   std::unique_ptr<FrameProcessor> processor_;  // from the first calibration
   std::optional<PinholeStereo> calibration_camera_;
   std::deque<runtime::Received<msg::StereoFrame>> pending_;  // frames before the calibration
+  // Seq of the last frame processed: a jump counts the frames in between as missed (a real-time
+  // publisher outran us and the image reader kept only the newest), so a drop is never silent.
+  std::optional<std::uint64_t> last_seq_;
   std::set<KeyframeId> keyframes_done_;                      // KeyframeDone seen, not yet waited for
 };
 

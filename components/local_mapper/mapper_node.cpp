@@ -50,10 +50,18 @@ void MapperNode::configure(const runtime::Config& config) {
   point_state_writer_.emplace(participant(), topics().map_points(),
                               runtime::Qos(runtime::QosRole::kMapState).keep_instances_on_writer_exit());
   keyframe_done_writer_.emplace(participant(), topics().keyframe_done());
+  if (options_.real_time) {
+    // Taken-but-queued keyframes count too: with a backlog, finishing this BA only delays them.
+    options_.mapper.bundle_adjustment.stop_requested = [this] {
+      return !pending_.empty() || keyframe_reader_->has_unread();
+    };
+  }
   load_initial_map();
   log().info(options_.map_file.empty() ? std::string("no map file (map not persisted)")
                                        : "map file " + options_.map_file.string() + ", saved every " +
-                                             std::to_string(options_.save_every_keyframes) + " keyframe(s)");
+                                             std::to_string(options_.save_every_keyframes) + " keyframe(s)",
+             options_.real_time ? "; real-time: local BA stops when a new keyframe waits"
+                                : "; local BA always completes");
 }
 
 // Identity of the run: the parent process (heslam-supervisor execs its components, so the parent is
@@ -273,6 +281,7 @@ void MapperNode::record(const MapChanges& changes) {
   stats().count("culled_points", static_cast<std::uint64_t>(c.culled_points));
   stats().count("culled_keyframes", static_cast<std::uint64_t>(c.culled_keyframes));
   stats().count("ba_outliers", static_cast<std::uint64_t>(c.bundle_adjustment_outliers));
+  if (c.bundle_adjustment_aborted) stats().count("ba_stopped_early");
   stats().count("rejected_observations", static_cast<std::uint64_t>(c.rejected_observations));
 }
 
@@ -354,6 +363,7 @@ void MapperNode::log_summary() {
          << counter(counters, "triangulated_points") << " points triangulated, " << counter(counters, "culled_points")
          << " culled, " << counter(counters, "culled_keyframes") << " keyframes culled, "
          << counter(counters, "corrections") << " corrections";
+  if (options_.real_time) totals << "; " << counter(counters, "ba_stopped_early") << " local BAs stopped early";
   log().info(totals.str());
   if (mapper_) {
     log().info("map: ", mapper_->map().keyframes.size(), " keyframes, ", mapper_->map().points.size(),

@@ -28,6 +28,7 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
   // An empty string means "none" (get_path would resolve it to the config folder).
   if (!config.get_string("map_file", "").empty()) o.map_file = config.get_path("map_file", {});
   if (!config.get_string("load_map", "").empty()) o.load_map = config.get_path("load_map", {});
+  o.real_time = config.get_bool("real_time", o.real_time);
   o.save_every_keyframes = config.get_int("save_every_keyframes", o.save_every_keyframes, 1, kMaxSaveEvery);
   o.sync_writes = config.get_bool("sync_writes", o.sync_writes);
   const double reader_wait_s = config.get_double("lockstep.reader_wait_s", 2.0, 0.0, kMaxReaderWaitS);

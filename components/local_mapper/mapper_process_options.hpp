@@ -29,6 +29,10 @@ struct MapperProcessOptions {
   // lockstep.reader_wait_s: before the first KeyframeDone, wait up to this long for the frontend's
   // reader to match (discovery is asynchronous; an acknowledgement written before is lost).
   std::chrono::milliseconds reader_wait{2000};
+  // real_time: a local BA stops after the iteration in which a new keyframe is waiting (taken or
+  // not yet taken), as ORB-SLAM2's local mapping does; the frontend is not held up by mapping. Off
+  // (the default, and what lockstep runs need): every BA runs to completion, so runs are repeatable.
+  bool real_time = false;
 
   // Reads the config, then `--map-file FILE` / `--load-map FILE` from `rest` (the command line wins).
   // Throws std::runtime_error naming the config file and field, or the bad argument.

@@ -255,9 +255,35 @@ TEST(LocalMapperProcess, MapFileOfAnEarlierRunIsReplacedNotResumed) {
   EXPECT_EQ(run.rfind(std::to_string(getpid()) + ":", 0), 0u) << run;  // the test process is the parent
 }
 
+// Real time, as a live camera runs: replay at the recording's rate (20 Hz) without acknowledgements,
+// the frontend never waits for the mapper, the mapper's BA may stop for a new keyframe. Timing
+// decides what each process sees, so the bounds are loose: a frame the frontend could not keep up
+// with is counted as missed (never silently), and on this clip it normally misses none.
+TEST(LocalMapperEndToEnd, EurocMh01RealTimeTracksAtTheRecordedRate) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
+  const test::ScratchDir dir("realtime");
+  auto run = start_pipeline("euroc_realtime", dataset, dir.path(), "rt", test_domain());
+  ASSERT_EQ(finish(*run), 0) << run->out() << run->err();
+  const std::string output = run->out() + run->err();
+  EXPECT_NE(output.find("real-time: local BA stops when a new keyframe waits"), std::string::npos) << output;
+  const eval::Trajectory estimate = eval::read_trajectory(dir.path() / "rt.txt");
+  static const std::regex missed_line(R"((\d+) frames missed)");
+  std::smatch match;
+  const int missed = std::regex_search(output, match, missed_line) ? std::stoi(match[1]) : 0;
+  const double ate_m = ate_rmse_m(dataset, dir.path() / "rt.txt");
+  std::printf("[ figures  ] euroc_mh01_handheld real time (20 Hz): %zu poses, %d frames missed, ATE rmse %.3f mm\n",
+              estimate.size(), missed, ate_m * 1e3);
+  static const std::regex summary(R"(processed (\d+) frames)");
+  ASSERT_TRUE(std::regex_search(output, match, summary)) << output;
+  EXPECT_EQ(std::stoi(match[1]) + missed, 160) << output;  // every published frame processed or counted
+  EXPECT_GE(estimate.size(), 144u) << output;              // 90 % tracked even on a loaded box
+  EXPECT_LT(ate_m, 0.006);
+}
+
 TEST(LocalMapperProcess, ShippedMapperPipelinesPassTheSupervisorCheck) {
   const test::ScratchDir dir("check");
-  for (const char* pipeline : {"euroc_mapper", "synth_mapper"}) {
+  for (const char* pipeline : {"euroc_mapper", "euroc_realtime", "synth_mapper"}) {
     test::ChildProcess check(test::bin_dir() / "heslam-supervisor",
                              {(test::source_dir() / "config/pipelines" / (std::string(pipeline) + ".yaml")).string(),
                               "--check", "--arg", "dataset=/tmp", "--arg", "output=/tmp/x.txt"},

@@ -187,6 +187,26 @@ TEST_F(PubSub, LateJoinerGetsEveryKeyframeAndDisposesArrive) {
   EXPECT_EQ(notice->sample->id, 7u);  // the key is filled in on invalid samples
 }
 
+// has_unread: true while a sample waits, without consuming it (the real-time mapper's BA asks it
+// every iteration; the keyframe must still be there to take afterwards).
+TEST_F(PubSub, HasUnreadSeesAWaitingSampleWithoutTakingIt) {
+  Writer<msg::KeyframeDone> writer(participant, topics.keyframe_done());
+  Reader<msg::KeyframeDone> reader(participant, topics.keyframe_done());
+  ASSERT_TRUE(writer.wait_for_readers(1, kDeadline));
+  EXPECT_FALSE(reader.has_unread());
+  msg::KeyframeDone done{};
+  done.keyframe_id = 42;
+  ASSERT_EQ(writer.write(done), WriteResult::kOk);
+  const auto deadline = std::chrono::steady_clock::now() + kDeadline;
+  while (!reader.has_unread() && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(1ms);
+  ASSERT_TRUE(reader.has_unread());
+  EXPECT_TRUE(reader.has_unread());  // asking again does not consume it
+  auto received = reader.take_one();
+  ASSERT_TRUE(received);
+  EXPECT_EQ(received->sample->keyframe_id, 42u);
+  EXPECT_FALSE(reader.has_unread());
+}
+
 TEST_F(PubSub, SampleFromAnotherSchemaIsDroppedAndCounted) {
   Writer<msg::FrameDone> writer(participant, topics.frame_done());
   Reader<msg::FrameDone> reader(participant, topics.frame_done());

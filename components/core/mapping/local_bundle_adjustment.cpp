@@ -2,6 +2,7 @@
 #include "components/core/mapping/local_bundle_adjustment.hpp"
 
 #include <array>
+#include <functional>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -26,21 +27,20 @@ struct Observation {
   bool inlier = true;
 };
 
-// Stops the solver when the abort flag is raised; the parameters reached so far are kept.
-class AbortCallback : public ceres::IterationCallback {
+// Stops the solver after an iteration once a stop is requested; the parameters reached so far are kept.
+class StopCallback : public ceres::IterationCallback {
  public:
-  explicit AbortCallback(const std::atomic<bool>* abort) : abort_(abort) {}
+  explicit StopCallback(const std::function<bool()>& stop_requested) : stop_requested_(stop_requested) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
-    return abort_ != nullptr && abort_->load() ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
+    if (stop_requested_ && stop_requested_()) stopped_ = true;
+    return stopped_ ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
   }
+  bool stopped() const { return stopped_; }
 
  private:
-  const std::atomic<bool>* abort_;
+  const std::function<bool()>& stop_requested_;
+  bool stopped_ = false;
 };
-
-bool aborted(const LocalBundleAdjustmentOptions& options) {
-  return options.abort != nullptr && options.abort->load();
-}
 
 }  // namespace
 
@@ -176,12 +176,12 @@ LocalBundleAdjustmentResult local_bundle_adjustment(Map& map, KeyframeId kf_id, 
   ceres::Problem problem(problem_options);
   build_problem(problem);
 
-  AbortCallback abort_callback(options.abort);
+  StopCallback stop_callback(options.stop_requested);
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::DENSE_SCHUR;
   solver_options.num_threads = options.num_threads;
   solver_options.logging_type = ceres::SILENT;
-  solver_options.callbacks.push_back(&abort_callback);
+  solver_options.callbacks.push_back(&stop_callback);
   auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
   for (Eigen::Vector3d& p : point_storage) {
     if (problem.HasParameterBlock(p.data())) ordering->AddElementToGroup(p.data(), 0);
@@ -194,8 +194,8 @@ LocalBundleAdjustmentResult local_bundle_adjustment(Map& map, KeyframeId kf_id, 
 
   solver_options.max_num_iterations = options.first_pass_iterations;
   ceres::Solve(solver_options, &problem, &summary);
-  result.aborted = aborted(options);
-  if (!result.aborted) {
+  // As ORB-SLAM2: a stop requested during the first pass also skips the second.
+  if (!stop_callback.stopped()) {
     // Second pass on the inliers of the first. ORB-SLAM2 also drops the robust kernel here; the
     // Huber kernel is kept instead (so the problem is reused, not rebuilt): every remaining residual
     // starts inside the kernel's quadratic region, where the two are identical.
@@ -207,8 +207,8 @@ LocalBundleAdjustmentResult local_bundle_adjustment(Map& map, KeyframeId kf_id, 
     }
     solver_options.max_num_iterations = options.second_pass_iterations;
     ceres::Solve(solver_options, &problem, &summary);
-    result.aborted = aborted(options);
   }
+  result.aborted = stop_callback.stopped();
 
   // Write back, then unlink the observations that are still outliers.
   for (const KeyframeId id : free_kfs) {

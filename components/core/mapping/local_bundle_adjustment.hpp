@@ -23,7 +23,7 @@ struct LocalBundleAdjustmentResult {
   int points = 0;
   int observations = 0;
   int outliers_removed = 0;        // observations unlinked after the second pass
-  bool aborted = false;            // the abort flag stopped it; the state reached so far is kept
+  bool aborted = false;            // stop_requested stopped it; the state reached so far is kept
   double initial_rms_px = 0.0;     // RMS of the whitened residual over all observations, before
   double final_rms_px = 0.0;       // ... and after, over the inliers
 };

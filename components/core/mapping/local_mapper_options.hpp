@@ -1,7 +1,7 @@
 // Tunables of the local mapper, one struct per stage, with ORB-SLAM2's values as documented defaults.
 #pragma once
 
-#include <atomic>
+#include <functional>
 
 namespace heslam {
 
@@ -46,9 +46,10 @@ struct LocalBundleAdjustmentOptions {
   // same model (tracker.disparity_sigma_ratio), docs/tracking.md has the measurements.
   double disparity_sigma_ratio = 0.5;
   int num_threads = 1;              // the machine is shared; the mapper is one process of several
-  // Set by another thread to stop early (real-time mode: a new keyframe arrived). Results so far are
-  // kept. nullptr = never abort (lockstep mode).
-  const std::atomic<bool>* abort = nullptr;
+  // Real-time mode: asked after every solver iteration; true stops the BA there (a new keyframe is
+  // waiting, as ORB-SLAM2's abort flag). The state reached so far is kept and outliers are still
+  // removed; the second pass is skipped. Empty = never stop (lockstep: always complete).
+  std::function<bool()> stop_requested;
 };
 
 struct KeyframeCullingOptions {
