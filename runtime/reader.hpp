@@ -47,13 +47,23 @@ class Reader {
 
   // Takes the oldest sample, or nothing when the reader is empty.
   std::optional<Received<T>> take_one() {
+    Received<T> received;
+    if (!take_into(received)) return std::nullopt;
+    return received;
+  }
+
+  // Takes the oldest sample into `received`, reusing its buffers: Cyclone deserializes into the
+  // sequences and strings already there, growing them only when too small, so a stream of 722 KB
+  // stereo pairs allocates nothing per frame. Returns false when the reader is empty (`received`
+  // then holds nothing new to use). On an invalid-data sample only the key fields are current; the others keep
+  // the previous sample's values (check info.valid_data). `received` must not be a moved-from object.
+  bool take_into(Received<T>& received) {
     for (;;) {
-      Received<T> received;
       void* buffer = received.sample.get();
       dds_sample_info_t info{};
       const dds_return_t n = dds_take(entity_.get(), &buffer, &info, 1, 1);
       check_dds(n, "topic '" + name() + "': take failed");
-      if (n == 0) return std::nullopt;
+      if (n == 0) return false;
       received.info.valid_data = info.valid_data;
       received.info.disposed = info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED;
       received.info.no_writers = info.instance_state == DDS_IST_NOT_ALIVE_NO_WRITERS;
@@ -63,7 +73,7 @@ class Reader {
         if (schema_mismatches_++ == 0) std::cerr << schema_mismatch_message(name(), received.sample->schema_version) << "\n";
         continue;
       }
-      return received;
+      return true;
     }
   }
 

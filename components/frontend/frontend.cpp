@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "runtime/sequence.hpp"
 
@@ -133,17 +134,18 @@ void Frontend::take_calibration() {
 }
 
 void Frontend::take_frames() {
-  while (std::optional<runtime::Received<msg::StereoFrame>> received = frame_reader_->take_one()) {
-    if (!received->info.valid_data) continue;
+  // Into one reused sample: a 722 KB pair per frame without an allocation (Reader::take_into).
+  while (frame_reader_->take_into(frame_)) {
+    if (!frame_.info.valid_data) continue;
     if (!processor_) {
       if (static_cast<int>(pending_.size()) >= options_.max_pending_frames) {
         stats().count("frames_dropped_before_calibration");
         pending_.pop_front();
       }
-      pending_.push_back(std::move(*received));
+      pending_.push_back(std::exchange(frame_, runtime::Received<msg::StereoFrame>{}));
       continue;
     }
-    process_frame(*received->sample);
+    process_frame(*frame_.sample);
     if (shutdown_requested()) return;
   }
 }

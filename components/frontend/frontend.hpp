@@ -46,6 +46,7 @@ class Frontend : public runtime::Component {
   std::unique_ptr<FrameProcessor> processor_;  // from the first calibration
   std::optional<PinholeStereo> calibration_camera_;
   std::deque<runtime::Received<msg::StereoFrame>> pending_;  // frames before the calibration
+  runtime::Received<msg::StereoFrame> frame_;                // taken into, buffers reused frame to frame
   // Seq of the last frame processed: a jump counts the frames in between as missed (a real-time
   // publisher outran us and the image reader kept only the newest), so a drop is never silent.
   std::optional<std::uint64_t> last_seq_;

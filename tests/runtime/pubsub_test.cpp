@@ -75,6 +75,53 @@ TEST_F(PubSub, StereoFrameArrivesByteExact) {
   EXPECT_TRUE(std::equal(got_right.begin(), got_right.end(), right.begin(), right.end()));
 }
 
+// take_into: one Received reused for a stream of frames whose sizes grow, shrink and vanish; every
+// frame arrives exact, and a frame no larger than the buffer is taken without a new allocation.
+TEST_F(PubSub, TakeIntoReusesTheSampleBuffersAndStaysExact) {
+  Writer<msg::StereoFrame> writer(participant, topics.stereo(), Qos(QosRole::kImages).keep_last(8));
+  Reader<msg::StereoFrame> reader(participant, topics.stereo(), Qos(QosRole::kImages).keep_last(8));
+  ASSERT_TRUE(writer.wait_for_readers(1, kDeadline));
+  const std::vector<uint32_t> widths{752, 752, 1241, 320, 0, 752};  // height 4 rows each
+  for (std::size_t k = 0; k < widths.size(); ++k) {
+    std::vector<uint8_t> left(widths[k] * 4), right(widths[k] * 4);
+    std::iota(left.begin(), left.end(), static_cast<uint8_t>(k));
+    std::iota(right.begin(), right.end(), static_cast<uint8_t>(3 * k + 1));
+    msg::StereoFrame frame{};
+    frame.seq = k;
+    frame.width_px = widths[k];
+    frame.height_px = 4;
+    frame.encoding = heslam_msg_ENCODING_MONO8;
+    borrow(frame.left, left);
+    borrow(frame.right, right);
+    ASSERT_EQ(writer.write(frame), WriteResult::kOk);
+  }
+  Received<msg::StereoFrame> received;
+  WaitSet waitset(participant);
+  waitset.attach(reader);
+  const auto deadline = std::chrono::steady_clock::now() + kDeadline;
+  const uint8_t* previous_buffer = nullptr;
+  uint32_t previous_capacity = 0;
+  for (std::size_t k = 0; k < widths.size(); ++k) {
+    while (!reader.take_into(received) && std::chrono::steady_clock::now() < deadline) waitset.wait(100ms);
+    ASSERT_TRUE(received.info.valid_data) << "frame " << k;
+    const msg::StereoFrame& got = *received.sample;
+    ASSERT_EQ(got.seq, k);
+    ASSERT_EQ(got.left._length, widths[k] * 4) << "frame " << k;
+    for (uint32_t i = 0; i < got.left._length; ++i) {
+      ASSERT_EQ(got.left._buffer[i], static_cast<uint8_t>(k + i)) << "frame " << k << " byte " << i;
+      ASSERT_EQ(got.right._buffer[i], static_cast<uint8_t>(3 * k + 1 + i)) << "frame " << k << " byte " << i;
+    }
+    if (previous_buffer != nullptr && got.left._length > 0 && got.left._length <= previous_capacity) {
+      EXPECT_EQ(got.left._buffer, previous_buffer) << "frame " << k << ": reallocated although it fitted";
+    }
+    if (got.left._buffer != nullptr) {
+      previous_buffer = got.left._buffer;
+      previous_capacity = std::max(previous_capacity, got.left._maximum);
+    }
+  }
+  EXPECT_FALSE(reader.take_into(received));
+}
+
 TEST_F(PubSub, KeyframeWithNestedSequencesRoundTrips) {
   Writer<msg::Keyframe> writer(participant, topics.keyframes());
   Reader<msg::Keyframe> reader(participant, topics.keyframes());

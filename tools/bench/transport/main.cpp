@@ -9,6 +9,7 @@
 // (allocation + deserialisation into the owned sample).
 //
 //   heslam-bench-transport [--frames N] [--domain D] [--bin DIR] [--euroc DIR] [--ddsperf-seconds S]
+//                          [--take reuse|fresh]   (reuse, the default: take_into one sample, as the frontend)
 //
 // For reference it then runs Cyclone's `ddsperf` ping/pong (when on PATH) with the same sample sizes,
 // 20 Hz and the same (project) Cyclone configuration; ddsperf reports half the round trip per second,
@@ -106,7 +107,7 @@ double percentile(std::vector<double> values, double p) {
 }
 
 Result measure(const std::string& name, const fs::path& dataset, const fs::path& bin_dir, int domain,
-               std::size_t frames) {
+               std::size_t frames, bool reuse_buffers) {
   runtime::Participant participant({.domain_id = domain, .dds_config = ""});
   const runtime::Topics topics;
   runtime::Reader<msg::StereoFrame> reader(participant, topics.stereo());
@@ -127,6 +128,7 @@ Result measure(const std::string& name, const fs::path& dataset, const fs::path&
   Result result;
   result.name = name;
   std::size_t received = 0;
+  runtime::Received<msg::StereoFrame> reused;
   auto last_frame = std::chrono::steady_clock::now();
   while (result.latencies_us.size() < frames && !runtime::shutdown_requested()) {
     if (std::chrono::steady_clock::now() - last_frame > kNoFrameTimeout) {
@@ -137,7 +139,10 @@ Result measure(const std::string& name, const fs::path& dataset, const fs::path&
     if (waitset.wait(std::chrono::milliseconds(100)) != runtime::Wake::kData) continue;
     const std::int64_t wake_ns = realtime_ns();
     bool first_of_wake = true;
-    for (auto& frame : reader.take()) {
+    // reuse: take_into one Received, as the frontend does; fresh: a new sample (and allocation) per take.
+    runtime::Received<msg::StereoFrame> fresh;
+    runtime::Received<msg::StereoFrame>& frame = reuse_buffers ? reused : fresh;
+    while (reader.take_into(frame)) {
       const std::int64_t now_ns = realtime_ns();
       if (!frame.info.valid_data) continue;
       last_frame = std::chrono::steady_clock::now();
@@ -148,6 +153,7 @@ Result measure(const std::string& name, const fs::path& dataset, const fs::path&
       result.latencies_us.push_back(static_cast<double>(now_ns - frame.info.source_stamp_ns) * 1e-3);
       if (first_of_wake) result.wake_latencies_us.push_back(static_cast<double>(wake_ns - frame.info.source_stamp_ns) * 1e-3);
       first_of_wake = false;
+      if (!reuse_buffers) fresh = runtime::Received<msg::StereoFrame>{};
     }
   }
   kill(replay, SIGINT);
@@ -229,6 +235,7 @@ int run(int argc, char** argv) {
   runtime::CommonArgs common = runtime::parse_common_args(argc, argv, "bench-transport");
   std::size_t frames = 200;
   int ddsperf_seconds = 10;
+  bool reuse_buffers = true;
   fs::path bin_dir = fs::canonical("/proc/self/exe").parent_path();
   fs::path euroc_dir = fs::path(HESLAM_SHARED_DATA) / "euroc_v101_head";
   for (std::size_t i = 0; i < common.rest.size(); ++i) {
@@ -241,21 +248,25 @@ int run(int argc, char** argv) {
       ddsperf_seconds = std::stoi(common.rest[++i]);
     } else if (arg == "--euroc" && i + 1 < common.rest.size()) {
       euroc_dir = common.rest[++i];
+    } else if (arg == "--take" && i + 1 < common.rest.size() &&
+               (common.rest[i + 1] == "reuse" || common.rest[i + 1] == "fresh")) {
+      reuse_buffers = common.rest[++i] == "reuse";
     } else {
-      throw std::runtime_error(arg + ": unknown option (--frames N, --bin DIR, --euroc DIR, --ddsperf-seconds S, --domain D)");
+      throw std::runtime_error(arg + ": unknown option (--frames N, --bin DIR, --euroc DIR, --ddsperf-seconds S, --take reuse|fresh, --domain D)");
     }
   }
   const StereoDataset euroc = open_dataset(euroc_dir);
   const fs::path kitti = make_kitti_sequence(euroc, euroc.frames.size());
-  std::printf("one-way latency heslam-replay -> subscriber, %zu frames each after %zu warm-up, 20 Hz, domain %d\n",
-              frames, kWarmupFrames, common.domain_id);
+  std::printf("one-way latency heslam-replay -> subscriber, %zu frames each after %zu warm-up, 20 Hz, domain %d, "
+              "take %s\n",
+              frames, kWarmupFrames, common.domain_id, reuse_buffers ? "reuse (take_into)" : "fresh sample per frame");
   std::printf("%-18s %11s %7s %6s %9s %9s %9s %9s %9s\n", "stereo pair", "size", "frames", "lost", "median_us", "p90_us",
               "p99_us", "max_us", "wake_p50");
   std::fflush(stdout);
   try {
-    print(measure("EuRoC 752x480", euroc_dir, bin_dir, common.domain_id, frames));
+    print(measure("EuRoC 752x480", euroc_dir, bin_dir, common.domain_id, frames, reuse_buffers));
     std::fflush(stdout);
-    print(measure("KITTI 1241x376", kitti, bin_dir, common.domain_id, frames));
+    print(measure("KITTI 1241x376", kitti, bin_dir, common.domain_id, frames, reuse_buffers));
   } catch (...) {
     fs::remove_all(kitti);
     throw;
