@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "runtime/entity.hpp"
 #include "runtime/qos.hpp"
@@ -44,6 +45,21 @@ class Writer {
     dds_publication_matched_status_t status{};
     check_dds(dds_get_publication_matched_status(entity_.get(), &status), "topic '" + name() + "': matched status");
     return static_cast<int>(status.current_count);
+  }
+
+  // Instance handles of the readers currently matched: a handle not seen before is a reader that
+  // (re)appeared, e.g. a restarted consumer.
+  std::vector<dds_instance_handle_t> matched_reader_handles() const {
+    std::vector<dds_instance_handle_t> handles(16);
+    for (;;) {
+      const dds_return_t n = check_dds(dds_get_matched_subscriptions(entity_.get(), handles.data(), handles.size()),
+                                       "topic '" + name() + "': matched subscriptions");
+      if (static_cast<std::size_t>(n) <= handles.size()) {
+        handles.resize(static_cast<std::size_t>(n));
+        return handles;
+      }
+      handles.resize(static_cast<std::size_t>(n));  // more matched than room: ask again with enough
+    }
   }
 
   // Polls until at least count readers matched; false on timeout.

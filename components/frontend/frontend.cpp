@@ -7,8 +7,10 @@
 #include <iomanip>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <utility>
 
+#include "components/core/mapping/map_file.hpp"
 #include "runtime/sequence.hpp"
 
 namespace heslam::frontend {
@@ -17,6 +19,12 @@ namespace {
 // Wait granularity of the main loop: shutdown is also signalled through the waitset, this only
 // bounds how long a missed wake-up could delay it.
 constexpr std::chrono::milliseconds kWaitPeriod{200};
+// Before a calibration arrives, how often to look again while map states wait in their readers.
+constexpr std::chrono::milliseconds kNoCalibrationPoll{5};
+// How long a restarted frontend waits for the mapper's stored map state to start arriving, and then
+// for the rest of it (one burst on loopback; a late state is applied with the next frame anyway).
+constexpr std::chrono::milliseconds kMapHistoryWait{2000};
+constexpr std::chrono::milliseconds kMapHistorySettle{100};
 // The publisher's rectified model and ours agree to this (both come from the same calibration; a
 // larger difference means mismatched builds or a different rectification).
 constexpr double kCameraTolerance = 1e-6;
@@ -61,7 +69,7 @@ void log_stage_summary(const runtime::Logger& log, const runtime::Stats& stats) 
 Frontend::Frontend(const runtime::CommonArgs& args) : Component("frontend", args) {}
 
 void Frontend::configure(const runtime::Config& config) {
-  options_ = FrontendOptions::from_config(config);
+  options_ = FrontendOptions::from_config(config, args().rest);
   waitset_ = std::make_unique<runtime::WaitSet>(participant());
   calibration_reader_.emplace(participant(), topics().calibration());
   frame_reader_.emplace(participant(), topics().stereo());
@@ -90,11 +98,17 @@ void Frontend::run() {
     take_calibration();
     mirror_map_state();
     take_frames();
+    // Map states wait in their readers until a calibration gives us a map to mirror them into;
+    // their data-available status stays set meanwhile, so do not spin on it.
+    if (!processor_ && wake == runtime::Wake::kData) std::this_thread::sleep_for(kNoCalibrationPoll);
   }
   const auto counters = stats().counters();
   const auto count = [&](const char* name) { return counters.count(name) != 0 ? counters.at(name) : 0; };
   log().info("processed ", count("frames"), " frames (", count("lost"), " lost, ", count("bad_frames"), " bad), ",
              count("keyframes"), " keyframes");
+  if (count("frames_already_processed") > 0) {
+    log().info(count("frames_already_processed"), " frames published again were acknowledged without tracking them twice");
+  }
   if (count("frames_missed") > 0) {
     log().warn(count("frames_missed"), " frames missed: published while this frontend was busy, only the newest kept");
   }
@@ -118,6 +132,7 @@ void Frontend::take_calibration() {
       if (processor_) log().warn("calibration changed: tracking restarts with an empty map");
       processor_ = std::move(processor);
       calibration_camera_ = announced;
+      if (options_.mapper_enabled) resume_in_mapper_map();
       const PinholeStereo& camera = processor_->camera();
       log().info("calibration '", calibration.source, "': rectified ", camera.width_px, "x", camera.height_px,
                  ", fx ", camera.fx_px, " px, baseline ", camera.baseline_m, " m");
@@ -126,14 +141,47 @@ void Frontend::take_calibration() {
       log().error(error.what());
     }
   }
-  while (processor_ && !pending_.empty()) {
-    runtime::Received<msg::StereoFrame> frame = std::move(pending_.front());
-    pending_.pop_front();
-    process_frame(*frame.sample);
+}
+
+void Frontend::resume_in_mapper_map() {
+  // A restarted frontend: the mapper's map must be in the tracker before the first frame, or that
+  // frame would start a second map.
+  Tracker& tracker = processor_->tracker();
+  // Only a restart can find the mapper's map file: the mapper writes it after its first keyframe,
+  // and the frontend starts before that. Then wait for the mapper's stored states (transient-local:
+  // they arrive shortly after its writers match) before the first frame is tracked.
+  std::error_code error_code;
+  if (options_.mapper_map_file.empty() || !std::filesystem::exists(options_.mapper_map_file, error_code)) return;
+  const auto deadline = std::chrono::steady_clock::now() + kMapHistoryWait;
+  keyframe_state_reader_->wait_for_writers(1, kMapHistoryWait);
+  while (!keyframe_state_reader_->has_unread() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(kNoCalibrationPoll);
+  }
+  // States waiting: the mapper holds this run's map. They carry poses and links, not features: the
+  // keyframes themselves come from its map file, the states then bring them up to date.
+  if (keyframe_state_reader_->has_unread()) {
+    std::this_thread::sleep_for(kMapHistorySettle);
+    try {
+      tracker.local_map() = load_map_file(options_.mapper_map_file).map;
+    } catch (const std::exception& error) {
+      stats().count("unreadable_mapper_map_files");
+      log().warn(error.what(), "; starting a new map");
+    }
+  }
+  mirror_map_state();
+  if (tracker.resume_in_map()) {
+    stats().count("resumed_in_map");
+    log().info("resuming in the local mapper's map (", tracker.local_map().keyframes.size(), " keyframes, ",
+               tracker.local_map().points.size(), " points): relocalizing instead of starting a new map");
   }
 }
 
 void Frontend::take_frames() {
+  while (processor_ && !pending_.empty()) {  // frames that arrived before the calibration
+    runtime::Received<msg::StereoFrame> frame = std::move(pending_.front());
+    pending_.pop_front();
+    process_frame(*frame.sample);
+  }
   // Into one reused sample: a 722 KB pair per frame without an allocation (Reader::take_into).
   while (frame_reader_->take_into(frame_)) {
     if (!frame_.info.valid_data) continue;
@@ -151,6 +199,13 @@ void Frontend::take_frames() {
 }
 
 void Frontend::process_frame(const msg::StereoFrame& frame) {
+  if (last_seq_ && frame.seq <= *last_seq_) {
+    // Published again (a publisher that restarted, or one re-sending for a restarted consumer): it
+    // was tracked already; acknowledge so a lockstep publisher goes on, do not track it twice.
+    stats().count("frames_already_processed");
+    acknowledge(frame, nullptr);
+    return;
+  }
   if (last_seq_ && frame.seq > *last_seq_ + 1) stats().count("frames_missed", frame.seq - *last_seq_ - 1);
   last_seq_ = frame.seq;
   FrameOutput output;
@@ -190,16 +245,20 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
 
 void Frontend::mirror_map_state() {
   if (!options_.mapper_enabled) return;
-  Map* map = processor_ ? &processor_->tracker().local_map() : nullptr;
+  for (auto& received : keyframe_done_reader_->take()) {
+    if (received.info.valid_data) keyframes_done_.insert(received.sample->keyframe_id);
+  }
+  // Without a processor there is no map to mirror into yet: the states stay in their readers
+  // (keep-last per keyframe / point), so a restarted frontend still gets the whole map.
+  if (!processor_) return;
+  Map* map = &processor_->tracker().local_map();
   for (auto& received : keyframe_state_reader_->take()) {
-    if (map == nullptr) continue;  // nothing to mirror into yet: the mapper only knows our keyframes
     // Invalid-data samples (disposes, no-writer notices) carry no state: the mapper culls keyframes
     // by flag and its writers keep their instances when it exits or restarts.
     if (!received.info.valid_data) continue;
     if (!apply_keyframe_state(*map, *received.sample)) stats().count("unknown_keyframe_states");
   }
   for (auto& received : point_state_reader_->take()) {
-    if (map == nullptr) continue;
     if (!received.info.valid_data) {
       // Removed by the mapper, or its writer went away (then its restart republishes the point):
       // flag it culled, which the tracker skips and a later state revives.
@@ -209,9 +268,6 @@ void Frontend::mirror_map_state() {
       continue;
     }
     apply_point_state(*map, *received.sample);
-  }
-  for (auto& received : keyframe_done_reader_->take()) {
-    if (received.info.valid_data) keyframes_done_.insert(received.sample->keyframe_id);
   }
 }
 

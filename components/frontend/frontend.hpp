@@ -22,12 +22,16 @@ class Frontend : public runtime::Component {
  private:
   void configure(const runtime::Config& config) override;
   void run() override;
+  bool accepts_positional_args() const override { return true; }  // --mapper-map-file FILE
 
   void take_calibration();
   void take_frames();
   void process_frame(const msg::StereoFrame& frame);
   // Applies whatever map state the mapper published so far.
   void mirror_map_state();
+  // With a mapper: mirror its stored map into a new processor's tracker and, when it holds
+  // keyframes (this frontend was restarted), relocalize in it instead of starting a new map.
+  void resume_in_mapper_map();
   // Lockstep with a mapper: waits for its KeyframeDone(id), mirroring state meanwhile. False on
   // timeout or shutdown.
   bool wait_for_keyframe_done(KeyframeId id);

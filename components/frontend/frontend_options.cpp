@@ -2,6 +2,7 @@
 #include "components/frontend/frontend_options.hpp"
 
 #include <climits>
+#include <stdexcept>
 
 namespace heslam::frontend {
 namespace {
@@ -94,7 +95,7 @@ void read_tracker(const runtime::Config& c, TrackerOptions& t) {
 
 }  // namespace
 
-FrontendOptions FrontendOptions::from_config(const runtime::Config& config) {
+FrontendOptions FrontendOptions::from_config(const runtime::Config& config, const std::vector<std::string>& rest) {
   FrontendOptions options;
   read_features(config, options.features);
   read_tracker(config, options.tracker);
@@ -105,6 +106,14 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config) {
   read(config, "lockstep.mapper_timeout_s", timeout_s, 0.1, kMaxTimeoutS);
   options.mapper_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));
   read(config, "frames.max_pending", options.max_pending_frames, 1, 1000);
+  options.mapper_map_file = config.get_string("mapper.map_file", "");
+  for (std::size_t i = 0; i < rest.size(); ++i) {
+    if (rest[i] == "--mapper-map-file" && i + 1 < rest.size()) {
+      options.mapper_map_file = rest[++i];
+    } else {
+      throw std::runtime_error("unknown argument '" + rest[i] + "' (expected --mapper-map-file FILE)");
+    }
+  }
 
   // With a mapper the frontend mirrors the map instead of maintaining it; its ids stay the frontend's.
   options.tracker.maintain_map = !options.mapper_enabled;

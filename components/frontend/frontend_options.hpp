@@ -4,6 +4,9 @@
 #pragma once
 
 #include <chrono>
+#include <filesystem>
+#include <string>
+#include <vector>
 
 #include "components/core/feature/stereo_feature_pipeline.hpp"
 #include "components/core/map/map.hpp"
@@ -25,11 +28,17 @@ struct FrontendOptions {
   // lockstep.mapper_timeout_s: how long to wait for that KeyframeDone before giving up (warned,
   // counted) and acknowledging anyway, so a dead mapper cannot hang the run.
   std::chrono::milliseconds mapper_timeout{30000};
+  // mapper.map_file / --mapper-map-file FILE: the local mapper's map file. A frontend restarted while
+  // the mapper holds a map loads the keyframes (features included, which the state topics do not
+  // carry) from it, then relocalizes in that map (ARCHITECTURE.md, Recovery). Empty: a restarted
+  // frontend starts a new map.
+  std::filesystem::path mapper_map_file;
   // frames.max_pending: frames that arrive before the calibration are kept (oldest dropped beyond).
   int max_pending_frames = 8;
 
   // Throws std::runtime_error (one line: file, field, expectation) on a bad field.
-  static FrontendOptions from_config(const runtime::Config& config);
+  // `rest`: the command line's own arguments (--mapper-map-file FILE), which win over the config.
+  static FrontendOptions from_config(const runtime::Config& config, const std::vector<std::string>& rest = {});
 };
 
 }  // namespace heslam::frontend

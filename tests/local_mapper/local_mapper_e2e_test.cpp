@@ -41,6 +41,8 @@ constexpr std::chrono::seconds kStopTimeout{20};
 constexpr std::size_t kKeyframesBeforeKill = 6;
 // /proc/<pid>/comm holds the first 15 characters of the executable name.
 constexpr const char* kMapperComm = "heslam-local-ma";
+constexpr const char* kFrontendComm = "heslam-frontend";
+constexpr const char* kReplayComm = "heslam-replay";
 
 int test_domain() { return heslam::test::exclusive_domain_id(); }
 
@@ -80,8 +82,8 @@ int frontend_keyframes(const std::string& output) {
   return std::regex_search(output, match, summary) ? std::stoi(match[2]) : -1;
 }
 
-// The pid of the supervisor's child running heslam-local-mapper, 0 if there is none (yet).
-pid_t mapper_pid(pid_t supervisor) {
+// The pid of the supervisor's child whose /proc comm is `comm`, 0 if there is none (yet).
+pid_t child_pid(pid_t supervisor, const std::string& comm) {
   for (const fs::directory_entry& entry : fs::directory_iterator("/proc")) {
     const std::string name = entry.path().filename().string();
     if (name.find_first_not_of("0123456789") != std::string::npos) continue;
@@ -93,7 +95,7 @@ pid_t mapper_pid(pid_t supervisor) {
     char state = 0;
     pid_t parent = 0;
     rest >> state >> parent;
-    if (parent == supervisor && text.substr(open + 1, close - open - 1) == kMapperComm) return std::stoi(name);
+    if (parent == supervisor && text.substr(open + 1, close - open - 1) == comm) return std::stoi(name);
   }
   return 0;
 }
@@ -150,7 +152,7 @@ TEST(LocalMapperEndToEnd, KilledMapperIsRestartedResumesAndLosesNoKeyframe) {
   pid_t killed = 0;
   while (killed == 0 && std::chrono::steady_clock::now() < deadline && !supervisor->wait(std::chrono::milliseconds(0))) {
     if (keyframes_in(map_file) >= kKeyframesBeforeKill) {
-      const pid_t pid = mapper_pid(supervisor->pid());
+      const pid_t pid = child_pid(supervisor->pid(), kMapperComm);
       if (pid > 0 && kill(pid, SIGKILL) == 0) killed = pid;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -182,6 +184,62 @@ TEST(LocalMapperEndToEnd, KilledMapperIsRestartedResumesAndLosesNoKeyframe) {
   std::printf("[ figures  ] mapper killed at %zu keyframes, restarted: %zu keyframes in the final map, %zu points, "
               "ATE rmse %.3f mm\n",
               keyframes_at_kill, map.map.keyframes.size(), map.map.points.size(), ate_m * 1e3);
+  EXPECT_LT(ate_m, 0.0045);
+}
+
+// Runs euroc_mapper on MH01, kills `comm` with SIGKILL once the map holds kKeyframesBeforeKill
+// keyframes, and returns the supervisor's output after the run; the trajectory is in dir/label.txt.
+std::string run_and_kill(const fs::path& dataset, const fs::path& dir, const std::string& label, const char* comm) {
+  auto supervisor = start_pipeline("euroc_mapper", dataset, dir, label, test_domain());
+  const fs::path map_file = dir / (label + ".txt.map");
+  const auto deadline = std::chrono::steady_clock::now() + kPipelineTimeout;
+  pid_t killed = 0;
+  while (killed == 0 && std::chrono::steady_clock::now() < deadline && !supervisor->wait(std::chrono::milliseconds(0))) {
+    if (keyframes_in(map_file) >= kKeyframesBeforeKill) {
+      const pid_t pid = child_pid(supervisor->pid(), comm);
+      if (pid > 0 && kill(pid, SIGKILL) == 0) killed = pid;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_NE(killed, 0) << comm << " was never killed: " << supervisor->out() << supervisor->err();
+  EXPECT_EQ(finish(*supervisor), 0) << supervisor->out() << supervisor->err();
+  return supervisor->out() + supervisor->err();
+}
+
+// ARCHITECTURE.md, Recovery: the frontend, killed mid-run, is restarted, loads the mapper's map
+// file, relocalizes in it, gets the frame it lost again from the replay, and the run completes
+// with every frame, in the same map.
+TEST(LocalMapperEndToEnd, KilledFrontendIsRestartedRelocalizesAndLosesNoFrame) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
+  const test::ScratchDir dir("kill_frontend");
+  const std::string output = run_and_kill(dataset, dir.path(), "fault", kFrontendComm);
+  EXPECT_NE(output.find("restarted frontend"), std::string::npos) << output;
+  EXPECT_NE(output.find("resuming in the local mapper's map"), std::string::npos) << output;
+  EXPECT_NE(output.find("publishing it again"), std::string::npos) << output;
+  const eval::Trajectory estimate = eval::read_trajectory(dir.path() / "fault.txt");
+  ASSERT_EQ(estimate.size(), 160u) << output;
+  // One map: a second one would be a different world frame and wreck the ATE.
+  const double ate_m = ate_rmse_m(dataset, dir.path() / "fault.txt");
+  std::printf("[ figures  ] frontend killed at %zu keyframes, restarted and relocalized: 160/160 frames, ATE rmse "
+              "%.3f mm\n", kKeyframesBeforeKill, ate_m * 1e3);
+  EXPECT_LT(ate_m, 0.0045);
+}
+
+// The replay, killed mid-run, starts again from its first frame; the frontend acknowledges the
+// frames it already tracked without tracking them again; the run completes as if never killed.
+TEST(LocalMapperEndToEnd, KilledReplayIsRestartedAndTheRunContinues) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
+  const test::ScratchDir dir("kill_replay");
+  const std::string output = run_and_kill(dataset, dir.path(), "fault", kReplayComm);
+  EXPECT_NE(output.find("restarted replay"), std::string::npos) << output;
+  const eval::Trajectory estimate = eval::read_trajectory(dir.path() / "fault.txt");
+  ASSERT_EQ(estimate.size(), 160u) << output;
+  EXPECT_NE(output.find("processed 160 frames"), std::string::npos) << output;  // none tracked twice
+  const double ate_m = ate_rmse_m(dataset, dir.path() / "fault.txt");
+  std::printf("[ figures  ] replay killed at %zu keyframes, restarted: 160/160 frames, ATE rmse %.3f mm\n",
+              kKeyframesBeforeKill, ate_m * 1e3);
   EXPECT_LT(ate_m, 0.0045);
 }
 

@@ -146,5 +146,46 @@ TEST(TrackerSynthetic, GarbageFrameIsLostThenRelocalizesAfterAJump) {
   EXPECT_LT(test::rotation_error_deg(back.T_wc, truth_in_first_camera(jump)), 0.2);
 }
 
+// A restarted frontend: a new tracker handed the map of the first one resumes in it. Its first frame
+// is relocalized in that map (the same world frame, not a new origin), and its new keyframe ids
+// continue past the map's.
+TEST(TrackerSynthetic, ResumeInMapRelocalizesInTheOldMapAndContinuesIds) {
+  const PinholeStereo camera = test::synthetic_camera();
+  const auto points = test::make_points(4000, 31);
+  Tracker first(camera, TrackerOptions{});
+  int k = 0;
+  for (; k < 40; ++k) {
+    ASSERT_EQ(first.track(k * kFramePeriodNs, static_cast<std::uint64_t>(k),
+                          test::make_frame(points, camera, test::trajectory_pose(k), 500 + static_cast<std::uint64_t>(k)))
+                  .state,
+              TrackingState::kOk);
+  }
+  const KeyframeId last_id = first.local_map().keyframes.rbegin()->first;
+
+  Tracker restarted(camera, TrackerOptions{});
+  EXPECT_FALSE(restarted.resume_in_map());  // nothing to resume in
+  restarted.local_map() = first.local_map();
+  ASSERT_TRUE(restarted.resume_in_map());
+  EXPECT_EQ(restarted.state(), TrackingState::kLost);
+  EXPECT_FALSE(restarted.resume_in_map());  // once
+
+  const TrackResult back = restarted.track(k * kFramePeriodNs, static_cast<std::uint64_t>(k),
+                                           test::make_frame(points, camera, test::trajectory_pose(k), 77));
+  ASSERT_EQ(back.state, TrackingState::kOk);
+  EXPECT_EQ(back.method, TrackingMethod::kRelocalization);
+  EXPECT_LT((back.T_wc.translation() - truth_in_first_camera(k).translation()).norm(), 0.02);
+  // Tracks on and makes keyframes with ids after the old map's.
+  KeyframeId new_id = kNoId;
+  for (++k; k < kFrames && new_id == kNoId; ++k) {
+    const TrackResult r = restarted.track(k * kFramePeriodNs, static_cast<std::uint64_t>(k),
+                                          test::make_frame(points, camera, test::trajectory_pose(k), 900 + static_cast<std::uint64_t>(k)));
+    ASSERT_EQ(r.state, TrackingState::kOk) << "frame " << k;
+    if (r.new_keyframe) new_id = r.new_keyframe->id;
+  }
+  ASSERT_NE(new_id, kNoId);
+  EXPECT_GT(new_id, last_id);
+  EXPECT_EQ(creator_of(new_id), creator_of(last_id));
+}
+
 }  // namespace
 }  // namespace heslam

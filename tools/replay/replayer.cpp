@@ -3,8 +3,10 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <thread>
@@ -136,7 +138,9 @@ class Replay {
         if (!wait_until_due(frame.stamp_ns + pass_offset_ns)) return finish();
         if (!images) continue;
         publish(*images, frame, pass_offset_ns);
-        if (options_.lockstep && !wait_for_ack(seq_ - 1)) return finish();
+        if (options_.lockstep && !wait_for_ack(seq_ - 1, [&] { republish(*images, frame, pass_offset_ns, seq_ - 1); })) {
+          return finish();
+        }
         if (quit_) return finish();
       }
       if (!options_.loop) break;
@@ -278,14 +282,39 @@ class Replay {
     progress_.update(counts_);
   }
 
+  // The same frame again (same seq), for a consumer that appeared after it was published.
+  void republish(const StereoImages& images, const StereoFrameFiles& frame, std::int64_t pass_offset_ns,
+                 std::uint64_t seq) {
+    const msg::StereoFrame message =
+        make_frame_message(images, frame.stamp_ns + pass_offset_ns, frame.right_stamp_ns + pass_offset_ns, seq);
+    if (frame_writer_.write(message) == runtime::WriteResult::kTimeout) {
+      log_.warn("frame ", seq, ": write timed out (reader too slow)");
+    }
+    stats_.count("frames_republished");
+  }
+
   // Lockstep: waits for FrameDone(seq); false when asked to stop. Throws when the consumer is silent.
-  bool wait_for_ack(std::uint64_t seq) {
+  // A reader of the frames that matches while we wait (a consumer restarted after a crash: the
+  // frame was lost with the old process) gets the frame again through `republish`; consumers
+  // acknowledge a seq they already processed without processing it again.
+  bool wait_for_ack(std::uint64_t seq, const std::function<void()>& republish_frame) {
     auto timer = stats_.time("ack_wait");
     const auto deadline = Clock::now() + to_ms(options_.ack_timeout_s);
+    std::vector<dds_instance_handle_t> readers = frame_writer_.matched_reader_handles();
+    std::sort(readers.begin(), readers.end());
     for (;;) {
       for (auto& received : acks_->take()) {
         if (received.info.valid_data && received.sample->seq == seq) return true;
       }
+      std::vector<dds_instance_handle_t> now_matched = frame_writer_.matched_reader_handles();
+      std::sort(now_matched.begin(), now_matched.end());
+      if (!std::includes(readers.begin(), readers.end(), now_matched.begin(), now_matched.end())) {
+        progress_.clear();
+        log_.info("frame seq ", seq, ": a new reader of '", frame_writer_.name(),
+                  "' appeared while waiting for its FrameDone (a restarted consumer?); publishing it again");
+        republish_frame();
+      }
+      readers = std::move(now_matched);
       handle_controls();
       if (quit_) return false;
       const auto now = Clock::now();

@@ -2,6 +2,7 @@
 // local map tracking, keyframe decision.
 #include "components/core/tracking/tracker.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -19,6 +20,9 @@ namespace {
 
 // ORB-SLAM2 doubles the motion-model window once before giving up on it.
 constexpr float kMotionRetryFactor = 2.f;
+// A resumed tracker's ids skip this many past the map's largest: room for every keyframe and point
+// the previous process may have published that the mapper had not stored when it died.
+constexpr std::uint64_t kResumeIdGap = std::uint64_t{1} << 32;
 // For two frames after a relocalization the motion model is not trusted (no velocity yet).
 constexpr int kFramesWithoutMotionModelAfterRelocalization = 2;
 
@@ -146,6 +150,24 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
   last_frame_ = std::move(frame);
   result.timings.total_ms = elapsed_ms(start);
   return result;
+}
+
+bool Tracker::resume_in_map() {
+  if (state_ != TrackingState::kNotInitialized || map_.keyframes.empty()) return false;
+  const auto counter_of = [](std::uint64_t id) -> std::uint64_t { return id & ((std::uint64_t{1} << 56) - 1); };
+  std::uint64_t keyframes = 0;
+  std::uint64_t points = 0;
+  for (const auto& [id, keyframe] : map_.keyframes) {
+    if (creator_of(id) == options_.id_tag) keyframes = std::max(keyframes, counter_of(id));
+  }
+  for (const auto& [id, point] : map_.points) {
+    if (creator_of(id) == options_.id_tag) points = std::max(points, counter_of(id));
+  }
+  keyframe_counter_ = keyframes + kResumeIdGap;
+  point_counter_ = points + kResumeIdGap;
+  reference_kf_ = map_.keyframes.rbegin()->first;
+  state_ = TrackingState::kLost;  // the next frame goes to relocalization
+  return true;
 }
 
 bool Tracker::initialize(Frame& frame, TrackResult& result) {

@@ -60,6 +60,13 @@ class Tracker {
   // Whether the local mapper can take a keyframe now (real-time mode); lockstep keeps it true.
   void set_mapper_idle(bool idle) { mapper_idle_ = idle; }
 
+  // After a restart inside an existing map (a restarted frontend that mirrored the local mapper's
+  // map into local_map()): the next frame is relocalized in that map instead of starting a new one,
+  // and keyframe / point ids continue after this creator's largest ids in it plus a gap, so they
+  // cannot collide with ids the previous process published that the map does not hold yet.
+  // Returns false (and changes nothing) when the map holds no keyframe or tracking already started.
+  bool resume_in_map();
+
   Map& local_map() { return map_; }
   const Map& local_map() const { return map_; }
   TrackingState state() const { return state_; }
