@@ -140,28 +140,42 @@ TEST(LocalMapperEndToEnd, EurocMh01LockstepWithMapperNoWorseThanFrontendAlone) {
   EXPECT_LT(mapper_ate_m, 0.0040);
 }
 
+struct KilledRun {
+  std::string output;                 // the supervisor's, after the run
+  std::size_t keyframes_at_kill = 0;  // in the map file when the process was killed
+};
+
+// Runs euroc_mapper on MH01, kills the supervisor's child `comm` with SIGKILL once the map file
+// holds kKeyframesBeforeKill keyframes (mid-run), and waits for the run to end; the trajectory is
+// in dir/label.txt, the map in dir/label.txt.map.
+KilledRun run_and_kill(const fs::path& dataset, const fs::path& dir, const std::string& label, const char* comm) {
+  auto supervisor = start_pipeline("euroc_mapper", dataset, dir, label, test_domain());
+  const fs::path map_file = dir / (label + ".txt.map");
+  const auto deadline = std::chrono::steady_clock::now() + kPipelineTimeout;
+  pid_t killed = 0;
+  KilledRun run;
+  while (killed == 0 && std::chrono::steady_clock::now() < deadline && !supervisor->wait(std::chrono::milliseconds(0))) {
+    if (keyframes_in(map_file) >= kKeyframesBeforeKill) {
+      const pid_t pid = child_pid(supervisor->pid(), comm);
+      if (pid > 0 && kill(pid, SIGKILL) == 0) killed = pid;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  run.keyframes_at_kill = keyframes_in(map_file);
+  EXPECT_NE(killed, 0) << comm << " was never killed: " << supervisor->out() << supervisor->err();
+  EXPECT_EQ(finish(*supervisor), 0) << supervisor->out() << supervisor->err();
+  run.output = supervisor->out() + supervisor->err();
+  return run;
+}
+
 TEST(LocalMapperEndToEnd, KilledMapperIsRestartedResumesAndLosesNoKeyframe) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
   const test::ScratchDir dir("kill");
   const fs::path map_file = dir.path() / "fault.txt.map";
-
-  auto supervisor = start_pipeline("euroc_mapper", dataset, dir.path(), "fault", test_domain());
-  // Mid-run: once the map file holds a few keyframes, kill the mapper the hard way.
-  const auto deadline = std::chrono::steady_clock::now() + kPipelineTimeout;
-  pid_t killed = 0;
-  while (killed == 0 && std::chrono::steady_clock::now() < deadline && !supervisor->wait(std::chrono::milliseconds(0))) {
-    if (keyframes_in(map_file) >= kKeyframesBeforeKill) {
-      const pid_t pid = child_pid(supervisor->pid(), kMapperComm);
-      if (pid > 0 && kill(pid, SIGKILL) == 0) killed = pid;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  ASSERT_NE(killed, 0) << "the mapper was never killed: " << supervisor->out() << supervisor->err();
-  const std::size_t keyframes_at_kill = keyframes_in(map_file);
-
-  ASSERT_EQ(finish(*supervisor), 0) << supervisor->out() << supervisor->err();
-  const std::string output = supervisor->out() + supervisor->err();
+  const KilledRun run = run_and_kill(dataset, dir.path(), "fault", kMapperComm);
+  const std::size_t keyframes_at_kill = run.keyframes_at_kill;
+  const std::string& output = run.output;
   EXPECT_NE(output.find("restarting"), std::string::npos) << output;
   EXPECT_NE(output.find("resuming from"), std::string::npos) << output;
 
@@ -187,25 +201,6 @@ TEST(LocalMapperEndToEnd, KilledMapperIsRestartedResumesAndLosesNoKeyframe) {
   EXPECT_LT(ate_m, 0.0045);
 }
 
-// Runs euroc_mapper on MH01, kills `comm` with SIGKILL once the map holds kKeyframesBeforeKill
-// keyframes, and returns the supervisor's output after the run; the trajectory is in dir/label.txt.
-std::string run_and_kill(const fs::path& dataset, const fs::path& dir, const std::string& label, const char* comm) {
-  auto supervisor = start_pipeline("euroc_mapper", dataset, dir, label, test_domain());
-  const fs::path map_file = dir / (label + ".txt.map");
-  const auto deadline = std::chrono::steady_clock::now() + kPipelineTimeout;
-  pid_t killed = 0;
-  while (killed == 0 && std::chrono::steady_clock::now() < deadline && !supervisor->wait(std::chrono::milliseconds(0))) {
-    if (keyframes_in(map_file) >= kKeyframesBeforeKill) {
-      const pid_t pid = child_pid(supervisor->pid(), comm);
-      if (pid > 0 && kill(pid, SIGKILL) == 0) killed = pid;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  EXPECT_NE(killed, 0) << comm << " was never killed: " << supervisor->out() << supervisor->err();
-  EXPECT_EQ(finish(*supervisor), 0) << supervisor->out() << supervisor->err();
-  return supervisor->out() + supervisor->err();
-}
-
 // ARCHITECTURE.md, Recovery: the frontend, killed mid-run, is restarted, loads the mapper's map
 // file, relocalizes in it, gets the frame it lost again from the replay, and the run completes
 // with every frame, in the same map.
@@ -213,7 +208,8 @@ TEST(LocalMapperEndToEnd, KilledFrontendIsRestartedRelocalizesAndLosesNoFrame) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
   const test::ScratchDir dir("kill_frontend");
-  const std::string output = run_and_kill(dataset, dir.path(), "fault", kFrontendComm);
+  const KilledRun run = run_and_kill(dataset, dir.path(), "fault", kFrontendComm);
+  const std::string& output = run.output;
   EXPECT_NE(output.find("restarted frontend"), std::string::npos) << output;
   EXPECT_NE(output.find("resuming in the local mapper's map"), std::string::npos) << output;
   EXPECT_NE(output.find("publishing it again"), std::string::npos) << output;
@@ -222,7 +218,7 @@ TEST(LocalMapperEndToEnd, KilledFrontendIsRestartedRelocalizesAndLosesNoFrame) {
   // One map: a second one would be a different world frame and wreck the ATE.
   const double ate_m = ate_rmse_m(dataset, dir.path() / "fault.txt");
   std::printf("[ figures  ] frontend killed at %zu keyframes, restarted and relocalized: 160/160 frames, ATE rmse "
-              "%.3f mm\n", kKeyframesBeforeKill, ate_m * 1e3);
+              "%.3f mm\n", run.keyframes_at_kill, ate_m * 1e3);
   EXPECT_LT(ate_m, 0.0045);
 }
 
@@ -232,14 +228,15 @@ TEST(LocalMapperEndToEnd, KilledReplayIsRestartedAndTheRunContinues) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
   const test::ScratchDir dir("kill_replay");
-  const std::string output = run_and_kill(dataset, dir.path(), "fault", kReplayComm);
+  const KilledRun run = run_and_kill(dataset, dir.path(), "fault", kReplayComm);
+  const std::string& output = run.output;
   EXPECT_NE(output.find("restarted replay"), std::string::npos) << output;
   const eval::Trajectory estimate = eval::read_trajectory(dir.path() / "fault.txt");
   ASSERT_EQ(estimate.size(), 160u) << output;
   EXPECT_NE(output.find("processed 160 frames"), std::string::npos) << output;  // none tracked twice
   const double ate_m = ate_rmse_m(dataset, dir.path() / "fault.txt");
   std::printf("[ figures  ] replay killed at %zu keyframes, restarted: 160/160 frames, ATE rmse %.3f mm\n",
-              kKeyframesBeforeKill, ate_m * 1e3);
+              run.keyframes_at_kill, ate_m * 1e3);
   EXPECT_LT(ate_m, 0.0045);
 }
 
