@@ -147,9 +147,10 @@ void Frontend::resume_in_mapper_map() {
   // A restarted frontend: the mapper's map must be in the tracker before the first frame, or that
   // frame would start a second map.
   Tracker& tracker = processor_->tracker();
-  // Only a restart can find the mapper's map file: the mapper writes it after its first keyframe,
-  // and the frontend starts before that. Then wait for the mapper's stored states (transient-local:
-  // they arrive shortly after its writers match) before the first frame is tracked.
+  // The mapper's map file exists at our start only after a restart, or when the mapper started
+  // from a saved map (--load-map); on a fresh run it writes it after the first keyframe, and the
+  // frontend starts before. Then wait for the mapper's stored states (transient-local: they arrive
+  // shortly after its writers match) before the first frame is tracked.
   std::error_code error_code;
   if (options_.mapper_map_file.empty() || !std::filesystem::exists(options_.mapper_map_file, error_code)) return;
   const auto deadline = std::chrono::steady_clock::now() + kMapHistoryWait;

@@ -128,6 +128,11 @@ void MapperNode::load_initial_map() {
     // An explicitly loaded map is published right away (a viewer or a frontend may want it before
     // any keyframe arrives); a resumed one only once the run's keyframes confirm it is this run's.
     publish_all(loaded_->map);
+    // ... and it is this run's map from now on: in the map file at once, so a frontend finds its
+    // keyframes there (the state topics carry no features) and a restart resumes from it.
+    if (!options_.map_file.empty()) {
+      save_map_file(options_.map_file, loaded_->map, loaded_->state, options_.sync_writes);
+    }
   }
 }
 
