@@ -12,7 +12,8 @@ using std::chrono::milliseconds;
 constexpr milliseconds kImageMaxBlocking{100};
 // Frames kept per reader: enough to absorb a hiccup, few enough that a slow frontend sees fresh data.
 constexpr int32_t kImageDepth = 4;
-// Odometry kept per reader: ~5 s at 20 Hz so a recorder never loses poses to a short stall.
+// Odometry kept per reader, and replayed to a late (restarted) reader: ~5 s at 20 Hz, so a recorder
+// loses no pose to a short stall or to its own restart.
 constexpr int32_t kOdometryDepth = 100;
 // Corrections are rare and precious; KEEP_ALL with a short block, replay the last 100 to late joiners
 // (replay depth comes from durability_service, not history: findings pitfall 7).
@@ -44,9 +45,13 @@ void apply(dds_qos_t* qos, QosRole role) {
                                   DDS_LENGTH_UNLIMITED);
       break;
     case QosRole::kOdometry:
+      // Transient-local: a recorder restarted mid-run gets the frames published while it was down
+      // (its journal holds the earlier ones); durability_service depth must match (pitfall 7).
       dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(kDefaultMaxBlocking.count()));
-      dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
+      dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
       dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, kOdometryDepth);
+      dds_qset_durability_service(qos, 0, DDS_HISTORY_KEEP_LAST, kOdometryDepth, DDS_LENGTH_UNLIMITED,
+                                  DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
       break;
     case QosRole::kCorrections:
       dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(kCorrectionMaxBlocking.count()));

@@ -1,17 +1,15 @@
 // heslam-local-mapper's DDS side (see mapper_node.hpp).
 #include "components/local_mapper/mapper_node.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <fstream>
 #include <iomanip>
-#include <iterator>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 
 #include "components/local_mapper/message_adapter.hpp"
+#include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
 
 namespace heslam::local_mapper {
@@ -20,8 +18,6 @@ namespace {
 // Wait granularity of the main loop: shutdown is also signalled through the waitset, this only
 // bounds how long a missed wake-up could delay it.
 constexpr std::chrono::milliseconds kWaitPeriod{200};
-// /proc/<pid>/stat field holding the process start time (clock ticks since boot), see proc(5).
-constexpr int kStatStartTimeField = 22;
 
 // The per-keyframe stages in pipeline order (status percentiles and the final summary).
 constexpr const char* kStageOrder[] = {"insertion", "point_culling",  "triangulation", "fusion", "local_ba",
@@ -64,20 +60,6 @@ void MapperNode::configure(const runtime::Config& config) {
                                 : "; local BA always completes");
 }
 
-// Identity of the run: the parent process (heslam-supervisor execs its components, so the parent is
-// the supervisor) by pid and start time, which together never repeat on one machine.
-std::string MapperNode::run_id() {
-  const pid_t parent = getppid();
-  std::ifstream stat("/proc/" + std::to_string(parent) + "/stat");
-  std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
-  // Field 22 (starttime) counted after the ')' closing the command name, which may contain spaces.
-  const std::size_t close = text.rfind(')');
-  std::istringstream fields(close == std::string::npos ? std::string() : text.substr(close + 1));
-  std::string field;
-  for (int index = 3; index <= kStatStartTimeField && fields >> field; ++index) {}
-  return std::to_string(parent) + ":" + field;
-}
-
 std::filesystem::path MapperNode::sidecar(const char* suffix) const {
   std::filesystem::path path = options_.map_file;
   path += suffix;
@@ -87,7 +69,7 @@ std::filesystem::path MapperNode::sidecar(const char* suffix) const {
 void MapperNode::load_initial_map() {
   bool resume = false;
   if (!options_.map_file.empty()) {
-    const std::string current_run = run_id();
+    const std::string current_run = runtime::supervisor_run_id();
     std::ifstream in(sidecar(".run"));
     std::string file_run;
     std::getline(in, file_run);

@@ -55,7 +55,6 @@ class MapperNode : public runtime::Component {
   void acknowledge(KeyframeId id);
   void log_summary();
 
-  static std::string run_id();
   // options_.map_file + suffix: ".run" (the run that wrote it), ".corrections" (applied ids).
   std::filesystem::path sidecar(const char* suffix) const;
   void load_applied_corrections();

@@ -2,9 +2,12 @@
 // ORB-SLAM2 saves it), culled keyframes follow their parent, untracked frames are listed, not invented.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 
 #include "tools/eval/trajectory_io.hpp"
+#include "tools/recorder/frame_journal.hpp"
 #include "tools/recorder/recorder.hpp"
 #include "tools/recorder/trajectory_recorder.hpp"
 
@@ -107,6 +110,59 @@ TEST(RecorderFiles, WritesTrajectoryKeyframesAndLostListInTheChosenFormat) {
 
   EXPECT_THROW(RecorderOptions::from(runtime::Config::empty(), {"--format", "ply"}), std::runtime_error);
   EXPECT_THROW(RecorderOptions::from(runtime::Config::empty(), {"--output"}), std::runtime_error);
+}
+
+// Largest element difference of two poses (a plain loop: GCC 12 warns falsely on Eigen's AVX-512
+// reductions here).
+double max_abs_difference(const Pose3& a, const Pose3& b) {
+  double largest = 0.0;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) largest = std::max(largest, std::abs(a.matrix()(r, c) - b.matrix()(r, c)));
+  }
+  return largest;
+}
+
+// The journal a killed recorder resumes from: frames come back exactly (poses bit for bit through
+// %.17g), a torn last line is skipped and counted, and a journal of another run is replaced.
+TEST(FrameJournal, RoundTripsFramesExactlyAndSkipsATornLine) {
+  const std::filesystem::path path = std::filesystem::temp_directory_path() / "heslam_frame_journal_test.journal";
+  std::filesystem::remove(path);
+  Pose3 rotated = translation(0.1, -0.2, 3.0);
+  rotated.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  RecordedFrame lost;
+  lost.seq = 3;
+  lost.stamp_ns = 1'150'000'000;
+  lost.state = "LOST";
+  {
+    FrameJournal journal(path);
+    EXPECT_TRUE(journal.open_for_run("run-a").frames.empty());
+    journal.append(tracked(1, 7, rotated, translation(1, 2, 3)));
+    journal.append(tracked(2, 7, translation(0, 0, 0.5), rotated));
+    journal.append(lost);
+  }
+  std::ofstream(path, std::ios::app) << "4 1200000000 1 OK 7 0.1 0.2";  // killed mid-write
+  {
+    FrameJournal journal(path);
+    const FrameJournal::Opened opened = journal.open_for_run("run-a");
+    ASSERT_EQ(opened.frames.size(), 3u);
+    EXPECT_EQ(opened.torn_lines, 1);
+    EXPECT_EQ(opened.frames[0].seq, 1u);
+    EXPECT_EQ(opened.frames[0].reference, 7u);
+    EXPECT_TRUE(opened.frames[0].tracked);
+    EXPECT_LT(max_abs_difference(opened.frames[0].T_ref_c, rotated), 1e-15);
+    EXPECT_LT(max_abs_difference(opened.frames[1].T_wc, rotated), 1e-15);
+    EXPECT_FALSE(opened.frames[2].tracked);
+    EXPECT_EQ(opened.frames[2].state, "LOST");
+    EXPECT_EQ(opened.frames[2].stamp_ns, 1'150'000'000);
+  }
+  {
+    FrameJournal journal(path);
+    EXPECT_TRUE(journal.open_for_run("run-b").frames.empty());  // another run: replaced
+  }
+  FrameJournal journal(path);
+  EXPECT_TRUE(journal.open_for_run("run-a").frames.empty());  // ... and gone for good
+  journal.remove();
+  EXPECT_FALSE(std::filesystem::exists(path));
 }
 
 }  // namespace

@@ -43,6 +43,7 @@ constexpr std::size_t kKeyframesBeforeKill = 6;
 constexpr const char* kMapperComm = "heslam-local-ma";
 constexpr const char* kFrontendComm = "heslam-frontend";
 constexpr const char* kReplayComm = "heslam-replay";
+constexpr const char* kRecorderComm = "heslam-recorder";
 
 int test_domain() { return heslam::test::exclusive_domain_id(); }
 
@@ -236,6 +237,25 @@ TEST(LocalMapperEndToEnd, KilledReplayIsRestartedAndTheRunContinues) {
   EXPECT_NE(output.find("processed 160 frames"), std::string::npos) << output;  // none tracked twice
   const double ate_m = ate_rmse_m(dataset, dir.path() / "fault.txt");
   std::printf("[ figures  ] replay killed at %zu keyframes, restarted: 160/160 frames, ATE rmse %.3f mm\n",
+              run.keyframes_at_kill, ate_m * 1e3);
+  EXPECT_LT(ate_m, 0.0045);
+}
+
+// The recorder, killed mid-run, resumes from its journal; the odometry published while it was down
+// comes again from the frontend's transient-local writer; the trajectory has every frame.
+TEST(LocalMapperEndToEnd, KilledRecorderIsRestartedAndTheTrajectoryHasEveryFrame) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
+  const test::ScratchDir dir("kill_recorder");
+  const KilledRun run = run_and_kill(dataset, dir.path(), "fault", kRecorderComm);
+  const std::string& output = run.output;
+  EXPECT_NE(output.find("restarted recorder"), std::string::npos) << output;
+  EXPECT_NE(output.find("frames from"), std::string::npos) << output;  // "resuming: N frames from ..."
+  const eval::Trajectory estimate = eval::read_trajectory(dir.path() / "fault.txt");
+  ASSERT_EQ(estimate.size(), 160u) << output;
+  EXPECT_FALSE(fs::exists(dir.path() / "fault.journal"));  // removed once the outputs are written
+  const double ate_m = ate_rmse_m(dataset, dir.path() / "fault.txt");
+  std::printf("[ figures  ] recorder killed at %zu keyframes, restarted: 160/160 frames, ATE rmse %.3f mm\n",
               run.keyframes_at_kill, ate_m * 1e3);
   EXPECT_LT(ate_m, 0.0045);
 }

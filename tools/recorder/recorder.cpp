@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "components/frontend/message_adapter.hpp"
+#include "runtime/run_id.hpp"
 
 namespace heslam::recorder {
 namespace {
@@ -85,6 +86,17 @@ void Recorder::configure(const runtime::Config& config) {
   waitset_->attach(*keyframe_reader_);
   waitset_->attach(*keyframe_state_reader_);
   log().info("recording to ", options_.output.string(), " (", eval::format_name(options_.format), ")");
+  // A restart of this run (kill -9, crash) resumes with every frame recorded before; keyframes come
+  // back on their own (transient-local), and odometry published while we were down is replayed to
+  // us by the frontend's writer (transient-local, the last 100 frames).
+  journal_.emplace(sibling_path(options_.output, ".journal"));
+  const FrameJournal::Opened resumed = journal_->open_for_run(runtime::supervisor_run_id());
+  for (const RecordedFrame& frame : resumed.frames) recorder_.add_frame(frame);
+  if (!resumed.frames.empty() || resumed.torn_lines > 0) {
+    stats().count("journal_frames", resumed.frames.size());
+    log().info("resuming: ", resumed.frames.size(), " frames from ", journal_->path().string(),
+               resumed.torn_lines > 0 ? " (" + std::to_string(resumed.torn_lines) + " torn lines skipped)" : "");
+  }
 }
 
 void Recorder::run() {
@@ -124,6 +136,7 @@ std::size_t Recorder::drain() {
     frame.T_ref_c = frontend::to_pose(odometry.T_ref_c);
     frame.T_wc = frontend::to_pose(odometry.T_wc);
     recorder_.add_frame(frame);
+    journal_->append(frame);
     stats().count(frame.tracked ? "frames" : "frames_untracked");
   }
   return taken;
@@ -137,6 +150,7 @@ void Recorder::on_shutdown() {
   }
   const RecordedTrajectories recording = recorder_.build();
   write_recording(recording, options_);
+  journal_->remove();  // the outputs hold everything now
   if (recording.frames_without_reference > 0) {
     log().warn(recording.frames_without_reference, " frames referenced a keyframe that never arrived (odometry pose used)");
   }

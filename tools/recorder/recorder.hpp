@@ -12,6 +12,7 @@
 
 #include "runtime/component.hpp"
 #include "tools/eval/trajectory_io.hpp"
+#include "tools/recorder/frame_journal.hpp"
 #include "tools/recorder/trajectory_recorder.hpp"
 
 namespace heslam::recorder {
@@ -46,6 +47,7 @@ class Recorder : public runtime::Component {
 
   RecorderOptions options_;
   TrajectoryRecorder recorder_;
+  std::optional<FrameJournal> journal_;  // OUTPUT stem + .journal: survives a kill -9 of this process
   std::optional<runtime::Reader<msg::Odometry>> odometry_reader_;
   std::optional<runtime::Reader<msg::Keyframe>> keyframe_reader_;
   std::optional<runtime::Reader<msg::KeyframeState>> keyframe_state_reader_;
