@@ -36,6 +36,7 @@ class CameraRays {
   // Row-major arrays of x(i) and y(i), for loops over a row.
   const float* xs() const { return x_.data(); }
   const float* ys() const { return y_.data(); }
+  const float* steps() const { return step_.data(); }
   // Normalized-plane distance between neighbouring pixels here (for texture footprints).
   float step(int index) const { return step_[static_cast<std::size_t>(index)]; }
   float vignetting_gain(int index) const { return vignette_[static_cast<std::size_t>(index)]; }

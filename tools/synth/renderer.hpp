@@ -38,11 +38,18 @@ class Renderer {
   // Nearest hit of ray (x, y, 1) among `candidates` (indices into cam_quads_); returns -1 for none.
   int trace(float x, float y, const int* candidates, int count, float& t_hit) const;
   float shade(const CameraQuad& q, float x, float y, float t, float step) const;
+  // Radiance of `count` interior pixels from row-major index `first`, all on quad `q`, into `out`.
+  void shade_run(const CameraQuad& q, int first, int count, float* out);
+  // Texture coordinates of the ray (x, y) hitting q at depth t, and the pixel footprint in texels
+  // (its major axis), for a pixel whose neighbours are `step` apart on the normalized plane.
+  static float footprint_texels(const CameraQuad& q, float x, float y, float t, float step, float& s_texel,
+                                float& t_texel);
   float sky(const Eigen::Matrix3f& R_wc, float x, float y) const;
 
   const Scene& scene_;
   const CameraRays& rays_;
   std::vector<CameraQuad> cam_quads_;
+  std::vector<float> run_s_, run_t_, run_footprint_;  // shade_run's per-pixel scratch
   std::vector<float> depth_;
   std::vector<int> hit_;  // index into cam_quads_, -1 = sky
 };
