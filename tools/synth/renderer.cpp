@@ -1,4 +1,4 @@
-// Scene radiance by per-pixel ray / quad intersection, trilinear anisotropic texturing and
+// Scene radiance by per-pixel ray / quad intersection, trilinear mip-mapped texturing and
 // silhouette supersampling.
 #include "tools/synth/renderer.hpp"
 

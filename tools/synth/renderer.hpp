@@ -1,5 +1,5 @@
 // Renders the scene radiance seen by one camera: per-pixel inverse mapping (ray / plane intersection
-// with a depth test, tile-culled), mip-mapped anisotropic texture filtering, and 4x supersampling of
+// with a depth test, tile-culled), mip-mapped trilinear texture filtering, and 4x supersampling of
 // pixels on object silhouettes so edges are anti-aliased like a real lens + sensor would blur them.
 #pragma once
 
