@@ -7,9 +7,9 @@
 #include <numbers>
 #include <stdexcept>
 
-#include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "components/core/feature/fast_score_map.hpp"
 #include "components/core/feature/orb_pattern.hpp"
 #include "components/core/feature/quadtree_distribution.hpp"
 #include "components/core/image/yaml_option.hpp"
@@ -22,9 +22,8 @@ constexpr int kOrientationRadiusPx = 15;
 // Keypoints are detected this far from the level edge (ORB-SLAM2: EDGE_THRESHOLD - 3): the
 // orientation patch (radius 15) then lies inside the level image.
 constexpr int kDetectionMarginPx = kOrbBorderPx - 3;
-// FAST's Bresenham circle has radius 3: cv::FAST does not report corners closer than this to the edge
-// of the image it is given.
-constexpr int kFastRadiusPx = 3;
+// FAST's Bresenham circle radius.
+constexpr int kFastRadiusPx = FastScoreMap::kRadiusPx;
 // Descriptor smoothing (ORB-SLAM2): 7x7 Gaussian, sigma 2, against BRIEF's noise sensitivity.
 constexpr int kBlurSizePx = 7;
 constexpr double kBlurSigmaPx = 2.0;
@@ -80,6 +79,8 @@ OrbExtractor::OrbExtractor(const OrbOptions& options)
   level_.resize(static_cast<std::size_t>(options.levels));
   blurred_.resize(static_cast<std::size_t>(options.levels));
   level_keypoints_.resize(static_cast<std::size_t>(options.levels));
+  score_maps_.resize(static_cast<std::size_t>(options.levels));
+  level_points_.resize(static_cast<std::size_t>(options.levels));
   level_features_.resize(static_cast<std::size_t>(options.levels));
 }
 
@@ -128,21 +129,19 @@ void OrbExtractor::detect_level(int level) {
   const int cell_w = (width + cols - 1) / cols;
   const int cell_h = (height + rows - 1) / rows;
 
-  // FAST with the initial threshold once over the whole area (the same corners as per cell, without
-  // the per-call overhead), then the fallback threshold only in the cells that found nothing.
-  std::vector<cv::KeyPoint> corners;
-  const cv::Rect area(min_x - kFastRadiusPx, min_y - kFastRadiusPx, width + 2 * kFastRadiusPx,
-                      height + 2 * kFastRadiusPx);
-  cv::FAST(image(area), corners, options_.fast_threshold_initial, /*nonmaxSuppression=*/true);
-  std::vector<ScoredPoint> points;
-  points.reserve(corners.size() + 256);
+  // FAST scores of the whole area in one pass; corners at the initial threshold over the area, then
+  // at the fallback threshold in the cells that found none (each cell suppressing non-maxima among its
+  // own pixels, as ORB-SLAM2's per-cell cv::FAST calls do).
+  FastScoreMap& scores = score_maps_[static_cast<std::size_t>(level)];
+  const cv::Rect area(min_x, min_y, width, height);
+  scores.compute(image, area);
+  std::vector<ScoredPoint>& points = level_points_[static_cast<std::size_t>(level)];
+  points.clear();
+  scores.corners(area, options_.fast_threshold_initial, points);
   std::vector<std::uint8_t> cell_found(static_cast<std::size_t>(cols * rows), 0);
-  for (const cv::KeyPoint& c : corners) {
-    const float x = c.pt.x + static_cast<float>(area.x);
-    const float y = c.pt.y + static_cast<float>(area.y);
-    points.push_back({x, y, c.response});
-    const int col = std::min((static_cast<int>(x) - min_x) / cell_w, cols - 1);
-    const int row = std::min((static_cast<int>(y) - min_y) / cell_h, rows - 1);
+  for (const ScoredPoint& p : points) {
+    const int col = std::min((static_cast<int>(p.x) - min_x) / cell_w, cols - 1);
+    const int row = std::min((static_cast<int>(p.y) - min_y) / cell_h, rows - 1);
     cell_found[static_cast<std::size_t>(row * cols + col)] = 1;
   }
   for (int row = 0; row < rows; ++row) {
@@ -153,13 +152,7 @@ void OrbExtractor::detect_level(int level) {
       const int x1 = std::min(x0 + cell_w, max_x);
       const int y1 = std::min(y0 + cell_h, max_y);
       if (x1 - x0 < 1 || y1 - y0 < 1) continue;
-      const cv::Rect cell(x0 - kFastRadiusPx, y0 - kFastRadiusPx, x1 - x0 + 2 * kFastRadiusPx,
-                          y1 - y0 + 2 * kFastRadiusPx);
-      corners.clear();
-      cv::FAST(image(cell), corners, options_.fast_threshold_min, /*nonmaxSuppression=*/true);
-      for (const cv::KeyPoint& c : corners) {
-        points.push_back({c.pt.x + static_cast<float>(cell.x), c.pt.y + static_cast<float>(cell.y), c.response});
-      }
+      scores.corners(cv::Rect(x0, y0, x1 - x0, y1 - y0), options_.fast_threshold_min, points);
     }
   }
 

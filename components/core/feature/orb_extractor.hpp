@@ -8,6 +8,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "components/core/feature/fast_score_map.hpp"
 #include "components/core/feature/features.hpp"
 
 namespace heslam {
@@ -86,6 +87,8 @@ class OrbExtractor {
   std::vector<cv::Mat> level_;    // ROI of padded_ without border
   std::vector<cv::Mat> blurred_;  // padded_ blurred for the descriptors
   cv::Mat resize_scratch_;
+  std::vector<FastScoreMap> score_maps_;                // FAST scores per level (reused buffers)
+  std::vector<std::vector<ScoredPoint>> level_points_;  // FAST corners per level before distribution
   std::vector<std::vector<LevelKeypoint>> level_keypoints_;
   std::vector<OrbFeatures> level_features_;  // keypoints and descriptors per level (no pyramid)
 };

@@ -1,0 +1,170 @@
+// FAST-9 score map: the arc test and OpenCV's cornerScore as one branch-free min/max network over
+// saturated differences, for 64, 32 or 16 pixels at a time (AVX-512BW, AVX2, SSE2; scalar elsewhere).
+#include "components/core/feature/fast_score_map.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cstddef>
+#include <stdexcept>
+
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
+namespace heslam {
+namespace {
+
+// The 16-pixel Bresenham circle of radius 3 in circular order (as cv::FAST's TYPE_9_16), (dx, dy).
+constexpr std::array<std::array<int, 2>, 16> kCircle = {{{0, 3}, {1, 3}, {2, 2}, {3, 1}, {3, 0}, {3, -1},
+                                                         {2, -2}, {1, -3}, {0, -3}, {-1, -3}, {-2, -2},
+                                                         {-3, -1}, {-3, 0}, {-3, 1}, {-2, 2}, {-1, 3}}};
+constexpr int kArcLength = 9;  // FAST-9: the contiguous arc that makes a corner
+static_assert(kArcLength == 9, "arc_strength below is written for arcs of 9 = 8 + 1");
+
+struct ScalarLanes {
+  using V = std::uint8_t;
+  static constexpr int kWidth = 1;
+  static V load(const std::uint8_t* p) { return *p; }
+  static void store(std::uint8_t* p, V v) { *p = v; }
+  static V min(V a, V b) { return std::min(a, b); }
+  static V max(V a, V b) { return std::max(a, b); }
+  static V subs(V a, V b) { return static_cast<V>(a > b ? a - b : 0); }
+  static V splat(std::uint8_t x) { return x; }
+};
+
+#if defined(__AVX512BW__)
+struct SimdLanes {
+  using V = __m512i;
+  static constexpr int kWidth = 64;
+  static V load(const std::uint8_t* p) { return _mm512_loadu_si512(p); }
+  static void store(std::uint8_t* p, V v) { _mm512_storeu_si512(p, v); }
+  static V min(V a, V b) { return _mm512_min_epu8(a, b); }
+  static V max(V a, V b) { return _mm512_max_epu8(a, b); }
+  static V subs(V a, V b) { return _mm512_subs_epu8(a, b); }
+  static V splat(std::uint8_t x) { return _mm512_set1_epi8(static_cast<char>(x)); }
+};
+#elif defined(__AVX2__)
+struct SimdLanes {
+  using V = __m256i;
+  static constexpr int kWidth = 32;
+  static V load(const std::uint8_t* p) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p)); }
+  static void store(std::uint8_t* p, V v) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(p), v); }
+  static V min(V a, V b) { return _mm256_min_epu8(a, b); }
+  static V max(V a, V b) { return _mm256_max_epu8(a, b); }
+  static V subs(V a, V b) { return _mm256_subs_epu8(a, b); }
+  static V splat(std::uint8_t x) { return _mm256_set1_epi8(static_cast<char>(x)); }
+};
+#elif defined(__SSE2__)
+struct SimdLanes {
+  using V = __m128i;
+  static constexpr int kWidth = 16;
+  static V load(const std::uint8_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p)); }
+  static void store(std::uint8_t* p, V v) { _mm_storeu_si128(reinterpret_cast<__m128i*>(p), v); }
+  static V min(V a, V b) { return _mm_min_epu8(a, b); }
+  static V max(V a, V b) { return _mm_max_epu8(a, b); }
+  static V subs(V a, V b) { return _mm_subs_epu8(a, b); }
+  static V splat(std::uint8_t x) { return _mm_set1_epi8(static_cast<char>(x)); }
+};
+#else
+using SimdLanes = ScalarLanes;
+#endif
+
+// max over the 16 arcs of 9 contiguous circle pixels of the arc's smallest difference: the largest
+// threshold t' for which this polarity's arc test passes with "difference >= t'".
+template <class L>
+typename L::V arc_strength(const typename L::V (&d)[16]) {
+  // Plain arrays: std::array of a vector type drops its alignment attribute.
+  typename L::V min2[16];
+  typename L::V min4[16];
+  for (int k = 0; k < 16; ++k) min2[k] = L::min(d[k], d[(k + 1) & 15]);
+  for (int k = 0; k < 16; ++k) min4[k] = L::min(min2[k], min2[(k + 2) & 15]);
+  typename L::V best = L::splat(0);
+  for (int k = 0; k < 16; ++k) {
+    const typename L::V min8 = L::min(min4[k], min4[(k + 4) & 15]);
+    best = L::max(best, L::min(min8, d[(k + 8) & 15]));
+  }
+  return best;
+}
+
+// Scores of L::kWidth consecutive pixels starting at `centre`. A corner at threshold t has an arc
+// whose differences all exceed t, i.e. strength >= t + 1; cv::FAST reports strength - 1 as its score.
+template <class L>
+void score_lanes(const std::uint8_t* centre, const std::array<std::ptrdiff_t, 16>& offsets, std::uint8_t* out) {
+  const typename L::V v = L::load(centre);
+  typename L::V darker[16];
+  typename L::V brighter[16];
+  for (int k = 0; k < 16; ++k) {
+    const typename L::V p = L::load(centre + offsets[k]);
+    darker[k] = L::subs(v, p);
+    brighter[k] = L::subs(p, v);
+  }
+  const typename L::V strength = L::max(arc_strength<L>(darker), arc_strength<L>(brighter));
+  L::store(out, L::subs(strength, L::splat(1)));
+}
+
+}  // namespace
+
+void FastScoreMap::compute(const cv::Mat& image, const cv::Rect& area) {
+  if (image.type() != CV_8UC1) throw std::invalid_argument("FastScoreMap: expected an 8-bit grey image");
+  // The circle reads kRadiusPx around the area; a view into a larger (padded) image may read its
+  // parent's pixels, as cv::FAST on a sub-image does.
+  cv::Size whole;
+  cv::Point offset;
+  image.locateROI(whole, offset);
+  const cv::Rect readable(-offset.x + kRadiusPx, -offset.y + kRadiusPx, whole.width - 2 * kRadiusPx,
+                          whole.height - 2 * kRadiusPx);
+  if (area.width <= 0 || area.height <= 0 || (area & readable) != area) {
+    throw std::invalid_argument("FastScoreMap: the area and a 3-pixel ring around it must lie inside the image");
+  }
+  area_ = area;
+  score_.resize(static_cast<std::size_t>(area.width) * static_cast<std::size_t>(area.height));
+  const auto step = static_cast<std::ptrdiff_t>(image.step1());
+  std::array<std::ptrdiff_t, 16> offsets;
+  for (int k = 0; k < 16; ++k) offsets[k] = kCircle[k][0] + kCircle[k][1] * step;
+
+  constexpr int lanes = SimdLanes::kWidth;
+  for (int row = 0; row < area.height; ++row) {
+    const std::uint8_t* centre = image.ptr<std::uint8_t>(area.y + row) + area.x;
+    std::uint8_t* out = &score_[static_cast<std::size_t>(row) * static_cast<std::size_t>(area.width)];
+    int x = 0;
+    for (; x + lanes <= area.width; x += lanes) score_lanes<SimdLanes>(centre + x, offsets, out + x);
+    if (x == area.width) continue;
+    if (area.width >= lanes) {
+      // The tail as one more full vector ending at the last pixel: a few pixels are scored twice.
+      score_lanes<SimdLanes>(centre + area.width - lanes, offsets, out + area.width - lanes);
+    } else {
+      for (; x < area.width; ++x) score_lanes<ScalarLanes>(centre + x, offsets, out + x);
+    }
+  }
+}
+
+void FastScoreMap::corners(const cv::Rect& region, int threshold, std::vector<ScoredPoint>& out) const {
+  if ((region & area_) != region) throw std::invalid_argument("FastScoreMap::corners: region outside the scored area");
+  if (threshold < 1) throw std::invalid_argument("FastScoreMap::corners: expected threshold >= 1");
+  if (region.width <= 0 || region.height <= 0) return;
+  const auto t = static_cast<std::uint8_t>(std::min(threshold, 255));
+  const auto stride = static_cast<std::ptrdiff_t>(area_.width);
+  const int last_x = region.width - 1;
+  for (int y = region.y; y < region.y + region.height; ++y) {
+    const std::uint8_t* row = &score_[static_cast<std::size_t>(y - area_.y) * static_cast<std::size_t>(stride) +
+                                      static_cast<std::size_t>(region.x - area_.x)];
+    // cv::FAST on the region sees no corners outside it: those neighbours count as 0 and a
+    // candidate (score >= t >= 1) beats them, so they are simply not compared.
+    const bool has_up = y > region.y;
+    const bool has_down = y + 1 < region.y + region.height;
+    for (int i = 0; i <= last_x; ++i) {
+      const std::uint8_t s = row[i];
+      if (s < t) continue;
+      const int lo = i > 0 ? -1 : 0;
+      const int hi = i < last_x ? 1 : 0;
+      bool is_max = (lo == 0 || s > row[i - 1]) && (hi == 0 || s > row[i + 1]);
+      for (int dx = lo; is_max && dx <= hi; ++dx) {
+        if (has_up && !(s > row[i + dx - stride])) is_max = false;
+        if (has_down && !(s > row[i + dx + stride])) is_max = false;
+      }
+      if (is_max) out.push_back({static_cast<float>(region.x + i), static_cast<float>(y), static_cast<float>(s)});
+    }
+  }
+}
+
+}  // namespace heslam
