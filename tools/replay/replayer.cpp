@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 #include <functional>
+#include <future>
 #include <optional>
 #include <stdexcept>
 #include <thread>
@@ -45,6 +46,13 @@ constexpr std::size_t kMaxListedWarnings = 5;
 constexpr std::size_t kMaxLoopCacheBytes = std::size_t{512} << 20;
 // --loop with a single-frame recording: gap between passes.
 constexpr std::int64_t kSingleFrameLoopGapNs = 100'000'000;
+
+// A pair decoded on the helper thread, or why it could not be.
+struct DecodedPair {
+  std::optional<StereoImages> images;
+  std::string error;
+  double decode_ms = 0.0;
+};
 
 std::int64_t now_ns() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
@@ -129,12 +137,15 @@ class Replay {
     if (options_.start_paused) set_paused(true);
     std::int64_t pass_offset_ns = 0;
     pacer_.start(first_stamp_ns, now_ns());
+    std::future<DecodedPair> next_pair = decode_ahead(0);
     for (;;) {
       counts_.pass_published = 0;
       for (std::size_t index = 0; index < dataset_.frames.size(); ++index) {
         const StereoFrameFiles& frame = dataset_.frames[index];
-        // Decode first, then wait: the frame leaves at its due time, not due time + PNG decoding.
-        std::optional<StereoImages> images = load(index);
+        // Decoded ahead, then wait: the frame leaves at its due time, not due time + PNG decoding.
+        std::optional<StereoImages> images = load(index, next_pair);
+        const std::size_t following = index + 1 < dataset_.frames.size() ? index + 1 : 0;
+        if (following != 0 || options_.loop) next_pair = decode_ahead(following);
         if (!wait_until_due(frame.stamp_ns + pass_offset_ns)) return finish();
         if (!images) continue;
         publish(*images, frame, pass_offset_ns);
@@ -242,27 +253,48 @@ class Replay {
     }
   }
 
+  bool is_cached(std::size_t index) const { return index < decoded_.size() && decoded_[index].has_value(); }
+
+  // Starts decoding pair `index` on a helper thread while this one waits for the current pair's due
+  // time or acknowledgement. The publishing thread then does no decoding: the scheduler does not
+  // charge it the CPU time, so it is not preempted in the middle of a frame's datagrams (measured:
+  // decoding on this thread made each 722 KB write take about 3 ms instead of 0.3-0.5 ms).
+  std::future<DecodedPair> decode_ahead(std::size_t index) const {
+    if (is_cached(index)) return {};
+    return std::async(std::launch::async, [files = dataset_.frames[index]] {
+      DecodedPair pair;
+      const auto start = Clock::now();
+      try {
+        pair.images = load_stereo_images(files);
+      } catch (const std::exception& error) {
+        pair.error = error.what();
+      }
+      pair.decode_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+      return pair;
+    });
+  }
+
   // The pair's images, or nothing when a file is missing or corrupt (counted; fatal with --strict).
   // With --loop, a recording whose decoded pairs fit in kMaxLoopCacheBytes is decoded only once.
-  std::optional<StereoImages> load(std::size_t index) {
-    if (index < decoded_.size() && decoded_[index]) return decoded_[index];
-    try {
-      auto timer = stats_.time("load");
-      StereoImages images = load_stereo_images(dataset_.frames[index]);
-      if (options_.loop && decoded_.empty()) {
-        const std::size_t pair_bytes = images.left.total() * images.left.elemSize() * 2;
-        if (pair_bytes * dataset_.frames.size() <= kMaxLoopCacheBytes) decoded_.resize(dataset_.frames.size());
-      }
-      if (index < decoded_.size()) decoded_[index] = images;  // cv::Mat copies share the pixels
-      return images;
-    } catch (const std::runtime_error& error) {
-      if (options_.strict) throw std::runtime_error(std::string(error.what()) + " (--strict)");
+  std::optional<StereoImages> load(std::size_t index, std::future<DecodedPair>& pending) {
+    if (is_cached(index)) return decoded_[index];
+    DecodedPair pair = pending.valid() ? pending.get() : decode_ahead(index).get();
+    if (!pair.images) {
+      if (options_.strict) throw std::runtime_error(pair.error + " (--strict)");
       ++counts_.skipped_images;
       stats_.count("images_skipped");
       progress_.clear();
-      log_.warn("skipped frame: ", error.what());
+      log_.warn("skipped frame: ", pair.error);
       return std::nullopt;
     }
+    stats_.record_ms("load", pair.decode_ms);
+    const StereoImages& images = *pair.images;
+    if (options_.loop && decoded_.empty()) {
+      const std::size_t pair_bytes = images.left.total() * images.left.elemSize() * 2;
+      if (pair_bytes * dataset_.frames.size() <= kMaxLoopCacheBytes) decoded_.resize(dataset_.frames.size());
+    }
+    if (index < decoded_.size()) decoded_[index] = images;  // cv::Mat copies share the pixels
+    return pair.images;
   }
 
   void publish(const StereoImages& images, const StereoFrameFiles& frame, std::int64_t pass_offset_ns) {
