@@ -44,6 +44,12 @@ constexpr std::size_t kMaxListedWarnings = 5;
 // --loop keeps decoded pairs in memory up to this size (the EuRoC clip: 69 MB), so later passes
 // cost only the transport; longer recordings are decoded again on every pass.
 constexpr std::size_t kMaxLoopCacheBytes = std::size_t{512} << 20;
+// In rate mode a pair is decoded this long before it is due: twice the running estimate of one
+// pair's decoding (weight of the newest: kDecodeEstimateWeight) plus a margin.
+constexpr double kDecodeLeadFactor = 2.0;
+constexpr std::int64_t kDecodeLeadMarginNs = 2'000'000;
+constexpr double kInitialDecodeEstimateMs = 10.0;
+constexpr double kDecodeEstimateWeight = 0.2;
 // --loop with a single-frame recording: gap between passes.
 constexpr std::int64_t kSingleFrameLoopGapNs = 100'000'000;
 
@@ -137,15 +143,18 @@ class Replay {
     if (options_.start_paused) set_paused(true);
     std::int64_t pass_offset_ns = 0;
     pacer_.start(first_stamp_ns, now_ns());
-    std::future<DecodedPair> next_pair = decode_ahead(0);
     for (;;) {
       counts_.pass_published = 0;
       for (std::size_t index = 0; index < dataset_.frames.size(); ++index) {
         const StereoFrameFiles& frame = dataset_.frames[index];
-        // Decoded ahead, then wait: the frame leaves at its due time, not due time + PNG decoding.
-        std::optional<StereoImages> images = load(index, next_pair);
-        const std::size_t following = index + 1 < dataset_.frames.size() ? index + 1 : 0;
-        if (following != 0 || options_.loop) next_pair = decode_ahead(following);
+        // Decode shortly before the frame is due (in lockstep: once the previous one is acknowledged),
+        // then wait: it leaves at its due time, not due time + PNG decoding, and the decoding does
+        // not compete for the cores with the consumers' work on the previous frame.
+        if (!options_.lockstep && !is_cached(index) &&
+            !wait_until_due(frame.stamp_ns + pass_offset_ns, decode_lead_ns())) {
+          return finish();
+        }
+        std::optional<StereoImages> images = load(index);
         if (!wait_until_due(frame.stamp_ns + pass_offset_ns)) return finish();
         if (!images) continue;
         publish(*images, frame, pass_offset_ns);
@@ -238,12 +247,14 @@ class Replay {
     }
   }
 
-  // Sleeps until the frame is due (rate mode) and while paused; false when asked to stop.
-  bool wait_until_due(std::int64_t stamp_ns) {
+  // Sleeps until `lead_ns` before the frame is due (rate mode) and while paused; false when asked
+  // to stop.
+  bool wait_until_due(std::int64_t stamp_ns, std::int64_t lead_ns = 0) {
     for (;;) {
       handle_controls();
       if (quit_ || runtime::shutdown_requested()) return false;
-      const std::int64_t due_ns = options_.lockstep ? (pacer_.paused() ? INT64_MAX : 0) : pacer_.due_ns(stamp_ns);
+      const std::int64_t due_ns =
+          options_.lockstep ? (pacer_.paused() ? INT64_MAX : 0) : pacer_.due_ns(stamp_ns) - lead_ns;
       const std::int64_t now = now_ns();
       if (due_ns <= now) return true;
       update_counts();
@@ -255,12 +266,15 @@ class Replay {
 
   bool is_cached(std::size_t index) const { return index < decoded_.size() && decoded_[index].has_value(); }
 
-  // Starts decoding pair `index` on a helper thread while this one waits for the current pair's due
-  // time or acknowledgement. The publishing thread then does no decoding: the scheduler does not
-  // charge it the CPU time, so it is not preempted in the middle of a frame's datagrams (measured:
-  // decoding on this thread made each 722 KB write take about 3 ms instead of 0.3-0.5 ms).
-  std::future<DecodedPair> decode_ahead(std::size_t index) const {
-    if (is_cached(index)) return {};
+  std::int64_t decode_lead_ns() const {
+    return static_cast<std::int64_t>(kDecodeLeadFactor * decode_estimate_ms_ * 1e6) + kDecodeLeadMarginNs;
+  }
+
+  // Decodes pair `index` on a helper thread while this one waits. The publishing thread then does
+  // no decoding: the scheduler does not charge it that CPU time, so a subscriber's wake-up does not
+  // preempt it between the datagrams of a frame (measured: decoding on this thread made each 722 KB
+  // write take about 3 ms instead of 0.3-0.5 ms).
+  std::future<DecodedPair> decode_on_helper(std::size_t index) const {
     return std::async(std::launch::async, [files = dataset_.frames[index]] {
       DecodedPair pair;
       const auto start = Clock::now();
@@ -276,9 +290,9 @@ class Replay {
 
   // The pair's images, or nothing when a file is missing or corrupt (counted; fatal with --strict).
   // With --loop, a recording whose decoded pairs fit in kMaxLoopCacheBytes is decoded only once.
-  std::optional<StereoImages> load(std::size_t index, std::future<DecodedPair>& pending) {
+  std::optional<StereoImages> load(std::size_t index) {
     if (is_cached(index)) return decoded_[index];
-    DecodedPair pair = pending.valid() ? pending.get() : decode_ahead(index).get();
+    DecodedPair pair = decode_on_helper(index).get();
     if (!pair.images) {
       if (options_.strict) throw std::runtime_error(pair.error + " (--strict)");
       ++counts_.skipped_images;
@@ -288,6 +302,7 @@ class Replay {
       return std::nullopt;
     }
     stats_.record_ms("load", pair.decode_ms);
+    decode_estimate_ms_ += kDecodeEstimateWeight * (pair.decode_ms - decode_estimate_ms_);
     const StereoImages& images = *pair.images;
     if (options_.loop && decoded_.empty()) {
       const std::size_t pair_bytes = images.left.total() * images.left.elemSize() * 2;
@@ -395,6 +410,7 @@ class Replay {
   ReplayCounts counts_;
   std::vector<std::optional<StereoImages>> decoded_;  // --loop cache, empty when not caching
   std::uint64_t seq_ = 0;
+  double decode_estimate_ms_ = kInitialDecodeEstimateMs;
   std::int64_t start_ns_ = 0;
   std::int64_t paused_since_ns_ = 0;
   std::int64_t paused_total_ns_ = 0;
