@@ -18,8 +18,6 @@ namespace {
 constexpr std::array<std::array<int, 2>, 16> kCircle = {{{0, 3}, {1, 3}, {2, 2}, {3, 1}, {3, 0}, {3, -1},
                                                          {2, -2}, {1, -3}, {0, -3}, {-1, -3}, {-2, -2},
                                                          {-3, -1}, {-3, 0}, {-3, 1}, {-2, 2}, {-1, 3}}};
-constexpr int kArcLength = 9;  // FAST-9: the contiguous arc that makes a corner
-static_assert(kArcLength == 9, "arc_strength below is written for arcs of 9 = 8 + 1");
 
 struct ScalarLanes {
   using V = std::uint8_t;
@@ -69,8 +67,9 @@ struct SimdLanes {
 using SimdLanes = ScalarLanes;
 #endif
 
-// max over the 16 arcs of 9 contiguous circle pixels of the arc's smallest difference: the largest
-// threshold t' for which this polarity's arc test passes with "difference >= t'".
+// FAST-9: max over the 16 arcs of 9 contiguous circle pixels of the arc's smallest difference, i.e.
+// the largest t' for which this polarity's arc test passes with "difference >= t'". Arcs of 9 are
+// built as 8 (= 2 x 4 = 2 x 2 x 2) plus 1.
 template <class L>
 typename L::V arc_strength(const typename L::V (&d)[16]) {
   // Plain arrays: std::array of a vector type drops its alignment attribute.
