@@ -61,9 +61,15 @@ void apply(dds_qos_t* qos, QosRole role) {
                                   DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
       break;
     case QosRole::kLockstep:
+      // Transient-local: discovery matches each direction on its own, so a consumer can take its first
+      // frame before its ack writer has matched the publisher's ack reader; a volatile ack written
+      // then is lost and the lockstep run stalls. The reader gets the recent acks when it matches
+      // (durability_service depth must match, pitfall 7); acks are per seq, so a replayed one is harmless.
       dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(kDefaultMaxBlocking.count()));
-      dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
+      dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
       dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, kLockstepDepth);
+      dds_qset_durability_service(qos, 0, DDS_HISTORY_KEEP_LAST, kLockstepDepth, DDS_LENGTH_UNLIMITED,
+                                  DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
       break;
     case QosRole::kStatus:
       dds_qset_reliability(qos, DDS_RELIABILITY_BEST_EFFORT, 0);

@@ -234,6 +234,25 @@ TEST_F(PubSub, LateJoinerGetsEveryKeyframeAndDisposesArrive) {
   EXPECT_EQ(notice->sample->id, 7u);  // the key is filled in on invalid samples
 }
 
+// A lockstep consumer can write its first ack before its writer has matched the publisher's ack
+// reader (discovery matches each direction on its own); the ack must still arrive.
+TEST_F(PubSub, LockstepAckWrittenBeforeTheReaderExistsArrives) {
+  Writer<msg::FrameDone> writer(participant, topics.frame_done());
+  for (uint64_t seq = 0; seq < 3; ++seq) {
+    msg::FrameDone done{};
+    done.seq = seq;
+    ASSERT_EQ(writer.write(done), WriteResult::kOk);
+  }
+  Reader<msg::FrameDone> late(participant, topics.frame_done());
+  std::vector<uint64_t> seqs;
+  const auto deadline = std::chrono::steady_clock::now() + kDeadline;
+  while (seqs.size() < 3 && std::chrono::steady_clock::now() < deadline) {
+    for (auto& received : late.take()) seqs.push_back(received.sample->seq);
+    std::this_thread::sleep_for(10ms);
+  }
+  EXPECT_EQ(seqs, (std::vector<uint64_t>{0, 1, 2}));
+}
+
 // has_unread: true while a sample waits, without consuming it (the real-time mapper's BA asks it
 // every iteration; the keyframe must still be there to take afterwards).
 TEST_F(PubSub, HasUnreadSeesAWaitingSampleWithoutTakingIt) {

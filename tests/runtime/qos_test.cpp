@@ -61,6 +61,16 @@ TEST(Qos, CorrectionsKeepAllAndReplayAHundred) {
   EXPECT_EQ(replay_depth(qos), 100);
 }
 
+TEST(Qos, LockstepAcksAreTransientLocalWithMatchingReplayDepth) {
+  const Qos qos(QosRole::kLockstep);
+  const Read r = read(qos);
+  EXPECT_EQ(r.reliability, DDS_RELIABILITY_RELIABLE);
+  EXPECT_EQ(r.durability, DDS_DURABILITY_TRANSIENT_LOCAL);
+  EXPECT_EQ(r.history, DDS_HISTORY_KEEP_LAST);
+  EXPECT_EQ(r.depth, 64);
+  EXPECT_EQ(replay_depth(qos), 64);
+}
+
 TEST(Qos, StatusAndSpyAreBestEffortKeepLastOne) {
   for (QosRole role : {QosRole::kStatus, QosRole::kSpy}) {
     const Read r = read(Qos(role));
