@@ -223,6 +223,8 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
   const TrackResult& result = output.result;
   stats().count("frames");
   if (result.state == TrackingState::kLost) stats().count("lost");
+  if (result.motion == FrameMotion::kStill) stats().count("still_frames");
+  if (result.motion == FrameMotion::kRotatingInPlace) stats().count("rotating_in_place_frames");
   for (const StageTiming& timing : output.timings) stats().record_ms(timing.stage, timing.ms);
 
   if (result.new_keyframe) {

@@ -178,11 +178,12 @@ TEST(FrontendEndToEnd, EurocV101StillCameraStaysStill) {
   std::printf("[ figures  ] euroc_v101_head over DDS: path length %.1f mm, max distance from start %.1f mm, "
               "ATE rmse %.2f mm\n",
               estimate.path_length_m() * 1e3, max_distance_m * 1e3, ape.translation_m.rmse * 1e3);
-  // The ground truth moves 17 mm. Target path length < 5 mm is NOT met by the tracker (it measures
-  // ~0.1 m of frame-to-frame jitter, see tests/tracking); what holds is that the camera stays within
-  // a few millimetres of where it started and the ATE is about a millimetre.
-  EXPECT_LT(max_distance_m, 0.02);
-  EXPECT_LT(ape.translation_m.rmse, 0.003);
+  // Target: path length < 5 mm (measured 2.9 mm; 63 mm of per-frame jitter before the tracker's
+  // stationary test, tests/tracking/test_stationary.cpp). The vehicle rocks by 0.15 degrees in this
+  // clip: the test keeps the camera centre on those frames, so the rotation is not read as translation.
+  EXPECT_LT(estimate.path_length_m(), 0.005);
+  EXPECT_LT(max_distance_m, 0.005);
+  EXPECT_LT(ape.translation_m.rmse, 0.002);
 }
 
 TEST(FrontendEndToEnd, SyntheticRoomAteWithinOnePercentOfPathLength) {

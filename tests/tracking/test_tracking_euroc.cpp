@@ -44,7 +44,8 @@ TEST(TrackingEuroc, Mh01HandheldEveryFrameTrackedWithMillimetreAte) {
   EXPECT_EQ(frames, 160);
   EXPECT_EQ(tracked, frames);
   // Target 4.0 mm (ORB-SLAM2/3 with local mapping: 3.6 mm). This tracker alone, without local BA,
-  // with the default clipped HE and the disparity residual measures 3.78 mm (global HE: 4.2 mm).
+  // with the default clipped HE and the disparity residual measures 3.83 mm (global HE: 4.2 mm; 3.78 mm
+  // without the stationary test, which keeps the camera centre on 3 slow frames here).
   // Lockstep-deterministic, so the margin is not eaten by run-to-run noise.
   EXPECT_LT(ate, 0.0040);
 }
@@ -66,21 +67,28 @@ TEST(TrackingEuroc, V101StillCameraEstimatedStill) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_v101_head");
   const OfflineRun run = run_clip("euroc_v101_head", HeMode::kClipped, PhotometricVariant::kNone);
   EXPECT_EQ(run.tracked_frames(), static_cast<int>(run.frames.size()));
+  int still = 0;
+  int rotating = 0;
+  for (const auto& f : run.frames) {
+    still += f.motion == FrameMotion::kStill ? 1 : 0;
+    rotating += f.motion == FrameMotion::kRotatingInPlace ? 1 : 0;
+  }
   double max_drift_m = 0.0;
   for (const auto& f : run.frames) max_drift_m = std::max(max_drift_m, f.T_wc.translation().norm());
   const double path_m = bench::tracked_path_length_m(run);
   const auto ate = bench::compute_ate_se3(run);
   ASSERT_TRUE(ate.has_value());
   std::printf("[ figures  ] euroc_v101_head: %d/%zu tracked, path length %.1f mm, max distance from start %.1f mm, "
-              "ATE rmse %.2f mm\n",
-              run.tracked_frames(), run.frames.size(), path_m * 1e3, max_drift_m * 1e3, ate->rmse_m * 1e3);
-  // The ground truth moves 17 mm in this clip. Target: path length < 5 mm, NOT met: measured 63 mm
-  // (global HE with the u_right residual: 126 mm), i.e. frame-to-frame jitter of ~0.7 mm
-  // (independent per-frame pose noise against one keyframe), not drift: the camera never strays
-  // more than a few millimetres from the start and the ATE is 0.9 mm.
-  EXPECT_LT(max_drift_m, 0.02);
-  EXPECT_LT(ate->rmse_m, 0.002);
-  EXPECT_LT(path_m, 0.1);
+              "ATE rmse %.2f mm; stationary test: %d still, %d rotating in place\n",
+              run.tracked_frames(), run.frames.size(), path_m * 1e3, max_drift_m * 1e3, ate->rmse_m * 1e3, still,
+              rotating);
+  // Target: path length < 5 mm; measured 2.9 mm (71 frames still, 21 rotating in place). Without the
+  // stationary test it is 63 mm: per-frame pose noise of ~0.7 mm against one keyframe, most of it the
+  // vehicle's real rocking (0.15 degrees over the clip, up to 0.11 degrees a frame) read partly as
+  // translation. The ground truth's own path is 17 mm (vicon2gt noise and that rocking).
+  EXPECT_LT(path_m, 0.005);
+  EXPECT_LT(max_drift_m, 0.005);
+  EXPECT_LT(ate->rmse_m, 0.0015);
 }
 
 TEST(TrackingEuroc, DarkWithGlobalHe) {

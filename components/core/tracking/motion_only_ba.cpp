@@ -86,9 +86,10 @@ Pose3 params_to_pose(const double* params) {
   return T;
 }
 
-// Chi-square error (squared whitened residual) of one observation at pose T_cw; infinite behind the camera.
-double chi2_error(const PinholeStereo& camera, const PoseObservation& obs, const Pose3& T_cw,
-                  double disparity_sigma_ratio) {
+}  // namespace
+
+double observation_chi2(const PinholeStereo& camera, const PoseObservation& obs, const Pose3& T_cw,
+                        double disparity_sigma_ratio) {
   const Eigen::Vector3d p_c = T_cw * obs.p_w;
   if (p_c.z() <= 0.0) return std::numeric_limits<double>::infinity();
   const Eigen::Vector2d uv = camera.project(p_c);
@@ -99,8 +100,6 @@ double chi2_error(const PinholeStereo& camera, const PoseObservation& obs, const
   }
   return e2 * obs.inv_sigma2;
 }
-
-}  // namespace
 
 MotionOnlyBaResult optimize_pose(const PinholeStereo& camera, const std::vector<PoseObservation>& observations,
                                  const Pose3& T_cw_guess, const MotionOnlyBaOptions& options) {
@@ -159,7 +158,7 @@ MotionOnlyBaResult optimize_pose(const PinholeStereo& camera, const std::vector<
     const Pose3 T_cw = params_to_pose(params);
     for (std::size_t i = 0; i < observations.size(); ++i) {
       const double threshold = observations[i].stereo() ? options.chi2_stereo : options.chi2_mono;
-      result.outlier[i] = !(chi2_error(camera, observations[i], T_cw, options.disparity_sigma_ratio) <= threshold);
+      result.outlier[i] = !(observation_chi2(camera, observations[i], T_cw, options.disparity_sigma_ratio) <= threshold);
     }
   }
   result.T_cw = params_to_pose(params);

@@ -47,4 +47,9 @@ struct MotionOnlyBaResult {
 MotionOnlyBaResult optimize_pose(const PinholeStereo& camera, const std::vector<PoseObservation>& observations,
                                  const Pose3& T_cw_guess, const MotionOnlyBaOptions& options = {});
 
+// Squared whitened residual of one observation at pose T_cw (the chi-square the rounds classify by);
+// infinite when the point is behind the camera.
+double observation_chi2(const PinholeStereo& camera, const PoseObservation& observation, const Pose3& T_cw,
+                        double disparity_sigma_ratio);
+
 }  // namespace heslam

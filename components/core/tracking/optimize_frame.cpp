@@ -1,21 +1,16 @@
 // Frame <-> motion-only BA glue.
 #include "components/core/tracking/optimize_frame.hpp"
 
-#include "components/core/tracking/motion_only_ba.hpp"
-
 namespace heslam {
 
-int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camera, const TrackerOptions& options) {
+std::vector<PoseObservation> frame_observations(const Frame& frame, const Map& map,
+                                                std::vector<std::size_t>* keypoint_of) {
   std::vector<PoseObservation> observations;
-  std::vector<std::size_t> keypoint_of;
+  if (keypoint_of != nullptr) keypoint_of->clear();
   for (std::size_t i = 0; i < frame.size(); ++i) {
-    frame.outlier[i] = false;
-    if (frame.point_ids[i] == kNoId) continue;
+    if (frame.point_ids[i] == kNoId || frame.outlier[i]) continue;
     const MapPoint* point = map.point(frame.point_ids[i]);
-    if (point == nullptr) {
-      frame.point_ids[i] = kNoId;
-      continue;
-    }
+    if (point == nullptr) continue;
     const Keypoint& kp = frame.features.keypoints[i];
     PoseObservation obs;
     obs.p_w = point->p_w;
@@ -24,8 +19,18 @@ int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camer
     obs.u_right_px = frame.features.has_stereo(i) ? frame.features.u_right_px[i] : -1.0;
     obs.inv_sigma2 = frame.features.pyramid.inv_sigma2[static_cast<std::size_t>(kp.octave)];
     observations.push_back(obs);
-    keypoint_of.push_back(i);
+    if (keypoint_of != nullptr) keypoint_of->push_back(i);
   }
+  return observations;
+}
+
+int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camera, const TrackerOptions& options) {
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    frame.outlier[i] = false;
+    if (frame.point_ids[i] != kNoId && map.point(frame.point_ids[i]) == nullptr) frame.point_ids[i] = kNoId;
+  }
+  std::vector<std::size_t> keypoint_of;
+  const std::vector<PoseObservation> observations = frame_observations(frame, map, &keypoint_of);
   if (observations.empty()) return 0;
   MotionOnlyBaOptions ba;
   ba.rounds = options.pose_optimization_rounds;
@@ -35,6 +40,16 @@ int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camer
   frame.T_wc = result.T_cw.inverse();
   for (std::size_t k = 0; k < keypoint_of.size(); ++k) frame.outlier[keypoint_of[k]] = result.outlier[k];
   return result.inliers;
+}
+
+double frame_chi2(const Frame& frame, const Map& map, const PinholeStereo& camera, const TrackerOptions& options,
+                  const Pose3& T_wc) {
+  const Pose3 T_cw = T_wc.inverse();
+  double sum = 0.0;
+  for (const PoseObservation& obs : frame_observations(frame, map)) {
+    sum += observation_chi2(camera, obs, T_cw, options.disparity_sigma_ratio);
+  }
+  return sum;
 }
 
 }  // namespace heslam

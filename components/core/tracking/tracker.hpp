@@ -15,6 +15,7 @@
 #include "components/core/geometry/pose.hpp"
 #include "components/core/map/map.hpp"
 #include "components/core/tracking/frame.hpp"
+#include "components/core/tracking/stationary_test.hpp"
 #include "components/core/tracking/tracker_options.hpp"
 
 namespace heslam {
@@ -42,6 +43,7 @@ struct TrackResult {
   Pose3 T_ref_c = Pose3::Identity();  // current camera in the reference keyframe's frame
   int tracked_points = 0;             // inlier map points after the local map search
   int tracked_stereo = 0;             // ... of which with a stereo observation
+  FrameMotion motion = FrameMotion::kMoving;  // still / rotating in place: the stationary test held (part of) the last pose
   std::optional<Keyframe> new_keyframe;
   std::vector<MapPoint> new_points;   // created with new_keyframe
   TrackTimings timings;

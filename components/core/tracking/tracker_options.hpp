@@ -51,6 +51,15 @@ struct TrackerOptions {
   int pose_optimization_rounds = 4;      // outlier reclassification rounds
   int pose_optimization_iterations = 10;  // Levenberg-Marquardt iterations per round
   double disparity_sigma_ratio = 0.5;     // disparity sigma / keypoint sigma in motion-only BA (motion_only_ba.hpp)
+  // --- stationary test (stationary_test.hpp; not in ORB-SLAM2) ---
+  // A frame whose observations cannot tell its optimized pose from the last pose keeps the last pose
+  // (chi2 increase below this; chi-square 6 dof, 16.81 = 99 %), so a still camera is estimated still.
+  // 0 disables the test.
+  double stationary_test_chi2 = 16.81;
+  // Else, a frame whose observations cannot tell it from a rotation about the last camera centre
+  // keeps that centre (chi-square 3 dof, 11.34 = 99 %): a camera turning in place does not pick up
+  // translation noise from the rotation. 0 disables this second test.
+  double rotation_only_test_chi2 = 11.34;
 
   // --- keyframe decision (ORB-SLAM2 NeedNewKeyFrame, stereo) ---
   int max_frames_between_keyframes = 20;  // = camera fps in ORB-SLAM2: at least one keyframe a second

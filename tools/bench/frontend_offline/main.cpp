@@ -4,7 +4,7 @@
 //
 // usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]
 //                                [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast]
-//                                [--frames N]
+//                                [--frames N] [--stationary-chi2 X] [--rotation-chi2 X]
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -21,7 +21,8 @@ using heslam::bench::FrameRecord;
 
 constexpr const char* kUsage =
     "usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]\n"
-    "       [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast] [--frames N]\n";
+    "       [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast] [--frames N]\n"
+    "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n";
 
 double percentile(std::vector<double> values, double fraction) {
   if (values.empty()) return 0.0;
@@ -61,6 +62,10 @@ int run(int argc, char** argv) {
       options.variant = heslam::bench::parse_photometric_variant(value);
     } else if (arg == "--frames") {
       options.max_frames = std::stoi(value);
+    } else if (arg == "--stationary-chi2") {
+      options.tracker.stationary_test_chi2 = std::stod(value);
+    } else if (arg == "--rotation-chi2") {
+      options.tracker.rotation_only_test_chi2 = std::stod(value);
     } else {
       throw std::runtime_error("unknown option " + arg + "\n" + kUsage);
     }
@@ -84,11 +89,17 @@ int run(int argc, char** argv) {
               heslam::to_string(options.pipeline.he.mode), heslam::bench::to_string(options.variant));
   std::vector<double> features;
   std::vector<double> stereo;
+  int still = 0;
+  int rotating = 0;
   for (const FrameRecord& f : result.frames) {
     features.push_back(f.features);
     stereo.push_back(f.stereo_features);
+    still += f.motion == heslam::FrameMotion::kStill ? 1 : 0;
+    rotating += f.motion == heslam::FrameMotion::kRotatingInPlace ? 1 : 0;
   }
   std::printf("features per frame: median %.0f (stereo %.0f)\n", percentile(features, 0.5), percentile(stereo, 0.5));
+  std::printf("stationary test: %d frames still (last pose kept), %d rotating in place (last centre kept)\n", still,
+              rotating);
   std::printf("per-frame time (image decoding excluded):\n");
   print_stage("rectify", result.frames, &FrameRecord::rectify_ms);
   print_stage("he", result.frames, &FrameRecord::he_ms);
@@ -100,9 +111,9 @@ int run(int argc, char** argv) {
   if (std::getenv("HESLAM_FRONTEND_OFFLINE_PER_FRAME") != nullptr) {
     for (std::size_t k = 0; k < result.frames.size(); ++k) {
       const FrameRecord& f = result.frames[k];
-      std::printf("frame %3zu %-8s %-18s tracked %4d features %4d stereo %4d%s\n", k, heslam::to_string(f.state),
+      std::printf("frame %3zu %-8s %-18s tracked %4d features %4d stereo %4d%s %s\n", k, heslam::to_string(f.state),
                   heslam::to_string(f.method), f.tracked_points, f.features, f.stereo_features,
-                  f.keyframe ? " keyframe" : "");
+                  f.keyframe ? " keyframe" : "", f.motion != heslam::FrameMotion::kMoving ? heslam::to_string(f.motion) : "");
     }
   }
   if (const auto ate = heslam::bench::compute_ate_se3(result)) {

@@ -32,6 +32,7 @@ struct FrameRecord {
   int stereo_features = 0;
   int tracked_points = 0;
   bool keyframe = false;
+  FrameMotion motion = FrameMotion::kMoving;  // the tracker's stationary test
   double rectify_ms = 0.0;
   double he_ms = 0.0;
   double extract_ms = 0.0;
