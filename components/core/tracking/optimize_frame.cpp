@@ -42,14 +42,4 @@ int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camer
   return result.inliers;
 }
 
-double frame_chi2(const Frame& frame, const Map& map, const PinholeStereo& camera, const TrackerOptions& options,
-                  const Pose3& T_wc) {
-  const Pose3 T_cw = T_wc.inverse();
-  double sum = 0.0;
-  for (const PoseObservation& obs : frame_observations(frame, map)) {
-    sum += observation_chi2(camera, obs, T_cw, options.disparity_sigma_ratio);
-  }
-  return sum;
-}
-
 }  // namespace heslam

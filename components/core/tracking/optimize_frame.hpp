@@ -22,9 +22,4 @@ int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camer
 std::vector<PoseObservation> frame_observations(const Frame& frame, const Map& map,
                                                 std::vector<std::size_t>* keypoint_of = nullptr);
 
-// Sum of the whitened squared reprojection errors (the BA's chi-square, without a robust kernel) of
-// the frame's matched, non-outlier keypoints if the camera were at T_wc.
-double frame_chi2(const Frame& frame, const Map& map, const PinholeStereo& camera, const TrackerOptions& options,
-                  const Pose3& T_wc);
-
 }  // namespace heslam

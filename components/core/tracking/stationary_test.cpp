@@ -6,6 +6,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "components/core/tracking/motion_only_ba.hpp"
 #include "components/core/tracking/optimize_frame.hpp"
 
 namespace heslam {
@@ -18,10 +19,9 @@ constexpr double kRotationStepConverged = 1e-10;  // radians
 // The rotation about the last camera centre that best explains the observations (least squares,
 // whitened as in the motion-only BA; the observations are inliers already, so no robust kernel).
 // Points are expressed in the last camera's frame, p_c = R * q; R is updated on the left.
-Pose3 rotation_about_centre(const Frame& frame, const Map& map, const PinholeStereo& camera,
+Pose3 rotation_about_centre(std::vector<PoseObservation> observations, const PinholeStereo& camera,
                             const TrackerOptions& options, const Pose3& T_wc_last) {
   const Pose3 T_cw_last = T_wc_last.inverse();
-  std::vector<PoseObservation> observations = frame_observations(frame, map);
   for (PoseObservation& obs : observations) obs.p_w = T_cw_last * obs.p_w;
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   for (int iteration = 0; iteration < kRotationIterations; ++iteration) {
@@ -74,15 +74,18 @@ StationaryTestResult test_stationary(const Frame& frame, const Map& map, const P
                                      const TrackerOptions& options, const Pose3& T_wc_last) {
   StationaryTestResult result{FrameMotion::kMoving, frame.T_wc};
   if (!(options.stationary_test_chi2 > 0.0)) return result;
-  const double at_optimum = frame_chi2(frame, map, camera, options, frame.T_wc);
-  if (frame_chi2(frame, map, camera, options, T_wc_last) - at_optimum < options.stationary_test_chi2) {
-    return {FrameMotion::kStill, T_wc_last};
-  }
+  const std::vector<PoseObservation> observations = frame_observations(frame, map);
+  const auto chi2_at = [&](const Pose3& T_wc) {
+    const Pose3 T_cw = T_wc.inverse();
+    double sum = 0.0;
+    for (const PoseObservation& obs : observations) sum += observation_chi2(camera, obs, T_cw, options.disparity_sigma_ratio);
+    return sum;
+  };
+  const double at_optimum = chi2_at(frame.T_wc);
+  if (chi2_at(T_wc_last) - at_optimum < options.stationary_test_chi2) return {FrameMotion::kStill, T_wc_last};
   if (!(options.rotation_only_test_chi2 > 0.0)) return result;
-  const Pose3 rotated = rotation_about_centre(frame, map, camera, options, T_wc_last);
-  if (frame_chi2(frame, map, camera, options, rotated) - at_optimum < options.rotation_only_test_chi2) {
-    return {FrameMotion::kRotatingInPlace, rotated};
-  }
+  const Pose3 rotated = rotation_about_centre(observations, camera, options, T_wc_last);
+  if (chi2_at(rotated) - at_optimum < options.rotation_only_test_chi2) return {FrameMotion::kRotatingInPlace, rotated};
   return result;
 }
 
