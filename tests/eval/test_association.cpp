@@ -51,6 +51,60 @@ TEST(EvalAssociation, OffsetShiftsTheEstimateClock) {
   EXPECT_EQ(pair.size(), 3u);
 }
 
+// A ground truth at 10 Hz moving at constant velocity and turning at a constant rate about one axis:
+// linear position and slerp interpolation are exact there.
+Pose3 constant_twist(double t_s) {
+  Pose3 T = Pose3::Identity();
+  T.linear() = Eigen::AngleAxisd(0.3 * t_s, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(1.0, -0.5, 0.25) * t_s;
+  return T;
+}
+
+TEST(EvalAssociation, InterpolatesTheGroundTruthAtTheEstimateStampsPlusOffset) {
+  Trajectory gt;
+  gt.name = "gt";
+  for (int k = 0; k <= 10; ++k) gt.push_back(constant_twist(0.1 * k), k, 0.1 * k);
+  Trajectory est;
+  est.name = "est";
+  for (const double s : {-0.05, 0.0, 0.033, 0.5, 0.977, 0.99}) est.push_back(Pose3::Identity(), 0, s);
+  const AlignedPair pair =
+      associate(gt, est, AssociationOptions{.est_offset_s = 0.02, .interpolate_gt = true});
+  // -0.05 + 0.02 is before the ground truth, 0.99 + 0.02 after it.
+  EXPECT_EQ(pair.est_rows, (std::vector<std::size_t>{1, 2, 3, 4}));
+  EXPECT_EQ(pair.gt_rows, (std::vector<std::size_t>{0, 0, 5, 9}));
+  ASSERT_EQ(pair.gt.size(), 4u);
+  for (std::size_t k = 0; k < pair.size(); ++k) {
+    const double t_s = pair.est.stamps_s[k] + 0.02;
+    EXPECT_DOUBLE_EQ(pair.gt.stamps_s[k], t_s);
+    const Pose3 expected = constant_twist(t_s);
+    EXPECT_LT((pair.gt.poses_wc[k].translation() - expected.translation()).norm(), 1e-12) << k;
+    EXPECT_TRUE(pair.gt.poses_wc[k].rotation().isApprox(expected.rotation(), 1e-12)) << k;
+  }
+}
+
+TEST(EvalAssociation, InterpolationTakesAStampWithinAMicrosecondAsTheGroundTruthsOwn) {
+  Trajectory gt;
+  gt.name = "gt";
+  for (int k = 0; k <= 2; ++k) gt.push_back(constant_twist(0.1 * k), k, 1403636584.763555584 + 0.1 * k);
+  Trajectory est;
+  est.name = "est";
+  est.push_back(Pose3::Identity(), 0, 1403636584.763555527);  // the same stamp, written with 57 ns less
+  const AlignedPair pair = associate(gt, est, AssociationOptions{.interpolate_gt = true});
+  ASSERT_EQ(pair.size(), 1u);
+  EXPECT_EQ(pair.gt_rows[0], 0u);
+}
+
+TEST(EvalAssociation, InterpolationDoesNotBridgeAGap) {
+  Trajectory gt;
+  gt.name = "gt";
+  for (const double s : {0.0, 0.1, 0.5, 0.6}) gt.push_back(constant_twist(s), 0, s);
+  Trajectory est;
+  est.name = "est";
+  for (const double s : {0.05, 0.3, 0.55}) est.push_back(Pose3::Identity(), 0, s);
+  const AlignedPair pair = associate(gt, est, AssociationOptions{.interpolate_gt = true, .max_gap_s = 0.2});
+  EXPECT_EQ(pair.est_rows, (std::vector<std::size_t>{0, 2}));
+}
+
 TEST(EvalAssociation, ByFrameIndexWithoutStamps) {
   const Trajectory gt = test::straight_line(10, 1.0);
   Trajectory est = test::straight_line(10, 1.0);

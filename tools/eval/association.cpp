@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <Eigen/Geometry>
+
 namespace heslam::eval {
 
 namespace {
@@ -45,6 +47,38 @@ void associate_by_time(const Trajectory& gt, const Trajectory& est, const Associ
   }
 }
 
+// Stamps this close are one instant: files store seconds as text, and a double at 1.4e9 s (EuRoC
+// stamps) resolves 0.24 microseconds, so the same camera stamp written by two tools can differ by that.
+constexpr double kSameInstantS = 1e-6;
+
+// The estimate's stamps are the pairs' stamps; gt holds the interpolated poses (pair.gt is built here).
+void associate_by_interpolation(const Trajectory& gt, const Trajectory& est, const AssociationOptions& options,
+                                AlignedPair& pair) {
+  pair.gt.name = gt.name + " (interpolated)";
+  for (std::size_t j = 0; j < est.size(); ++j) {
+    const double t_s = est.stamps_s[j] + options.est_offset_s;
+    const auto after = std::lower_bound(gt.stamps_s.begin(), gt.stamps_s.end(), t_s - kSameInstantS);
+    if (after == gt.stamps_s.end()) continue;
+    std::size_t i = static_cast<std::size_t>(after - gt.stamps_s.begin());
+    Pose3 T_wc = gt.poses_wc[i];
+    if (std::abs(*after - t_s) > kSameInstantS) {
+      if (i == 0) continue;
+      --i;  // gt stamp i < t_s < gt stamp i + 1
+      const double span_s = gt.stamps_s[i + 1] - gt.stamps_s[i];
+      if (span_s > options.max_gap_s) continue;
+      const double a = (t_s - gt.stamps_s[i]) / span_s;
+      const Eigen::Quaterniond q0(gt.poses_wc[i].rotation());
+      const Eigen::Quaterniond q1(gt.poses_wc[i + 1].rotation());
+      T_wc = Pose3::Identity();
+      T_wc.linear() = q0.slerp(a, q1).toRotationMatrix();
+      T_wc.translation() = (1.0 - a) * gt.poses_wc[i].translation() + a * gt.poses_wc[i + 1].translation();
+    }
+    pair.gt.push_back(T_wc, static_cast<std::int64_t>(pair.gt.size()), t_s);
+    pair.gt_rows.push_back(i);
+    pair.est_rows.push_back(j);
+  }
+}
+
 void associate_by_frame_id(const Trajectory& gt, const Trajectory& est, AlignedPair& pair) {
   std::map<std::int64_t, std::size_t> gt_row_of_id;
   for (std::size_t i = 0; i < gt.size(); ++i) gt_row_of_id.emplace(gt.frame_ids[i], i);
@@ -68,7 +102,9 @@ AlignedPair associate(const Trajectory& gt, const Trajectory& est, const Associa
   }
   AlignedPair pair;
   pair.by_time = gt.has_stamps();
-  if (pair.by_time) {
+  if (pair.by_time && options.interpolate_gt) {
+    associate_by_interpolation(gt, est, options, pair);
+  } else if (pair.by_time) {
     associate_by_time(gt, est, options, pair);
   } else {
     associate_by_frame_id(gt, est, pair);
@@ -76,10 +112,11 @@ AlignedPair associate(const Trajectory& gt, const Trajectory& est, const Associa
   if (pair.gt_rows.empty()) {
     throw std::runtime_error(
         "no overlap between " + gt.name + " and " + est.name +
-        (pair.by_time ? " (no stamps within " + std::to_string(options.max_dt_s) + " s)"
+        (pair.by_time ? (options.interpolate_gt ? " (no estimate stamp inside the ground truth's time span)"
+                                                : " (no stamps within " + std::to_string(options.max_dt_s) + " s)")
                       : " (no common frame index)"));
   }
-  pair.gt = gt.subset(pair.gt_rows);
+  if (!(pair.by_time && options.interpolate_gt)) pair.gt = gt.subset(pair.gt_rows);
   pair.est = est.subset(pair.est_rows);
   return pair;
 }

@@ -8,6 +8,11 @@
 // with the nearest stamp of the longer one (earliest on ties) when |dt| <= max_dt_s; a pose of the
 // longer one may be used twice. Frame-index association pairs poses with equal frame ids (KITTI files
 // of the same sequence, with or without the leading index column).
+// Interpolation (interpolate_gt): every estimate pose is paired with the ground truth interpolated at
+// its stamp (plus est_offset_s) between the two ground-truth poses around it: linear in position,
+// slerp in rotation. For a ground truth at another rate than the estimate, or to shift the estimate's
+// clock by less than the ground truth's period. Stamps outside the ground truth, or inside a gap of
+// more than max_gap_s between two ground-truth poses, are not paired.
 // Throws std::runtime_error when nothing overlaps, or when only one side has stamps.
 #pragma once
 
@@ -23,12 +28,16 @@ struct AssociationOptions {
   double max_dt_s = 0.01;
   // Added to the estimate's stamps before matching (clock offset of the estimate).
   double est_offset_s = 0.0;
+  // Pair by interpolating the ground truth at the estimate's stamps instead of the nearest stamp.
+  bool interpolate_gt = false;
+  // With interpolate_gt: the longest gap between two ground-truth poses that is interpolated across.
+  double max_gap_s = 0.2;
 };
 
 struct AlignedPair {
   Trajectory gt;
   Trajectory est;
-  // Rows of the input files the pairs came from.
+  // Rows of the input files the pairs came from (interpolated: the ground-truth pose before the stamp).
   std::vector<std::size_t> gt_rows;
   std::vector<std::size_t> est_rows;
   bool by_time = false;

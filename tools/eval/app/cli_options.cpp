@@ -38,9 +38,12 @@ const char* usage() {
          "  --times FILE                  times.txt for KITTI pose files (both sides)\n"
          "  --gt-times, --est-times FILE  times.txt for one side only\n"
          "  --extrinsic sensor.yaml       EuRoC T_BS: ground truth body poses -> camera poses\n"
+         "  --est-extrinsic sensor.yaml   the same for an estimate in EuRoC body poses\n"
          "  --align none|origin|se3|sim3  alignment of the estimate to the ground truth\n"
          "  --max-dt S                    largest stamp difference when associating by time (0.01)\n"
          "  --offset S                    added to the estimate's stamps before associating (0)\n"
+         "  --interpolate-gt              pair each estimate pose with the ground truth interpolated at its\n"
+         "                                stamp (+ offset): linear position, slerp rotation\n"
          "  --delta N  --unit frames|m  --all-pairs   RPE pairs (delta 1, frames)\n"
          "  --json FILE                   write the results as JSON\n"
          "  --plot FILE.png|FILE.svg      top view of the aligned trajectories and the error over time\n";
@@ -72,6 +75,10 @@ CliOptions parse_cli(int argc, char** argv) {
       options.rpe.all_pairs = true;
       continue;
     }
+    if (flag == "--interpolate-gt") {
+      options.interpolate_gt = true;
+      continue;
+    }
     if (i + 1 >= args.size()) throw std::runtime_error(std::string(flag) + ": missing value");
     const std::string_view value = args[++i];
     if (flag == "--gt") options.gt_path = value;
@@ -82,6 +89,7 @@ CliOptions parse_cli(int argc, char** argv) {
     else if (flag == "--gt-times") options.gt_read.times_path = value;
     else if (flag == "--est-times") options.est_read.times_path = value;
     else if (flag == "--extrinsic") options.gt_read.extrinsic_path = value;
+    else if (flag == "--est-extrinsic") options.est_read.extrinsic_path = value;
     else if (flag == "--align") {
       options.align = parse_align_mode(value);
       if (!options.align) throw std::runtime_error("--align: expected none, origin, se3 or sim3, got '" + std::string(value) + "'");

@@ -23,6 +23,7 @@ struct CliOptions {
   std::optional<AlignMode> align;
   double max_dt_s = 0.01;
   double est_offset_s = 0.0;
+  bool interpolate_gt = false;
   RpeOptions rpe;
   std::filesystem::path json_path;
   std::filesystem::path plot_path;

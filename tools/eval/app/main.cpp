@@ -40,10 +40,14 @@ int run(const app::CliOptions& options) {
     return 0;
   }
 
-  const AlignedPair pair = associate(gt, est, AssociationOptions{options.max_dt_s, options.est_offset_s});
+  const AlignedPair pair =
+      associate(gt, est, AssociationOptions{.max_dt_s = options.max_dt_s, .est_offset_s = options.est_offset_s,
+                                            .interpolate_gt = options.interpolate_gt});
   context.associated_by_time = pair.by_time;
   std::cout << "associated " << pair.size() << " pairs by "
-            << (pair.by_time ? "time stamp" : "frame index") << "\n";
+            << (pair.by_time ? (options.interpolate_gt ? "time stamp, ground truth interpolated" : "time stamp")
+                             : "frame index")
+            << "\n";
   if (options.command == app::Command::ape) {
     const ApeResult ape = compute_ape(pair, ApeOptions{.align = options.align.value_or(AlignMode::se3)});
     app::print_ape(std::cout, ape);
