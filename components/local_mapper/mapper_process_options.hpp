@@ -27,7 +27,8 @@ struct MapperProcessOptions {
   // sync_writes: fsync each snapshot before its rename (durable across power loss; slower).
   bool sync_writes = false;
   // lockstep.reader_wait_s: before the first KeyframeDone, wait up to this long for the frontend's
-  // reader to match (discovery is asynchronous; an acknowledgement written before is lost).
+  // reader to match. Lockstep acks are transient-local, so one written earlier still arrives; this
+  // stays as a cheap guard.
   std::chrono::milliseconds reader_wait{2000};
   // real_time: a local BA stops after the iteration in which a new keyframe is waiting (taken or
   // not yet taken), as ORB-SLAM2's local mapping does; the frontend is not held up by mapping. Off
