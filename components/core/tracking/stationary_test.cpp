@@ -50,9 +50,8 @@ Pose3 rotation_about_centre(std::vector<PoseObservation> observations, const Pin
       }
     }
     const Eigen::Vector3d omega = H.ldlt().solve(-g);
-    if (!omega.allFinite()) break;
+    if (!omega.allFinite() || omega.norm() < kRotationStepConverged) break;
     R = Eigen::AngleAxisd(omega.norm(), omega.normalized()).toRotationMatrix() * R;
-    if (omega.norm() < kRotationStepConverged) break;
   }
   Pose3 R_c_last = Pose3::Identity();
   R_c_last.linear() = R;

@@ -123,8 +123,6 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
       const StationaryTestResult stationary = test_stationary(frame, map_, camera_, options_, last_frame_.T_wc);
       result.motion = stationary.motion;
       frame.T_wc = stationary.T_wc;
-    }
-    if (last_frame_tracked) {
       velocity_ = last_frame_.T_wc.inverse() * frame.T_wc;
     } else {
       velocity_.reset();  // the last frame had no pose: no velocity until two frames in a row are tracked
