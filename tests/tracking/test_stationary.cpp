@@ -1,6 +1,7 @@
 // The stationary test (stationary_test.hpp) inside the tracker, on synthetic stereo worlds with a
 // known trajectory: a still camera keeps its pose exactly, a camera turning in place keeps its centre,
-// slow motion is released instead of accumulated, and a moving camera is never held.
+// slow motion is released instead of accumulated, keyframes are never held, and a moving camera is
+// never held.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -102,6 +103,26 @@ TEST(StationaryTest, SlowCreepIsReleasedNotAccumulated) {
   EXPECT_LT(with.max_position_error_m, 0.006);
   const Pose3 last_truth = creeping(0).inverse() * creeping(frames - 1);
   EXPECT_LT((with.results.back().T_wc.translation() - last_truth.translation()).norm(), 0.006);
+}
+
+// New points are created from a keyframe's pose, so a frame that becomes a keyframe keeps its
+// optimized pose. A still camera made to insert a keyframe on every frame (the "close points"
+// rule forced on) would otherwise hold every one of them.
+TEST(StationaryTest, KeyframesAreNeverHeld) {
+  TrackerOptions options;
+  options.close_tracked_needed = 1 << 30;
+  options.close_untracked_enough = -1;
+  const TrackedRun with = track_camera(still_camera, 20, options);
+  int keyframes = 0;
+  for (std::size_t k = 1; k < with.results.size(); ++k) {
+    const TrackResult& r = with.results[k];
+    if (!r.new_keyframe) continue;
+    ++keyframes;
+    EXPECT_EQ(r.motion, FrameMotion::kMoving) << "frame " << k;
+    EXPECT_TRUE(r.new_keyframe->T_wc.translation() == r.T_wc.translation()) << "frame " << k;
+  }
+  EXPECT_EQ(keyframes, 19);
+  EXPECT_EQ(with.still + with.rotating, 0);
 }
 
 TEST(StationaryTest, MovingCameraIsNeverHeld) {

@@ -119,14 +119,9 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
 
   if (ok) {
     state_ = TrackingState::kOk;
-    if (last_frame_tracked) {
-      const StationaryTestResult stationary = test_stationary(frame, map_, camera_, options_, last_frame_.T_wc);
-      result.motion = stationary.motion;
-      frame.T_wc = stationary.T_wc;
-      velocity_ = last_frame_.T_wc.inverse() * frame.T_wc;
-    } else {
-      velocity_.reset();  // the last frame had no pose: no velocity until two frames in a row are tracked
-    }
+    // On the frame's inliers, before keyframe creation adds its new points to the matches.
+    std::optional<StationaryTestResult> stationary;
+    if (last_frame_tracked) stationary = test_stationary(frame, map_, camera_, options_, last_frame_.T_wc);
     // Counted before keyframe creation adds the new stereo points to the frame's matches.
     for (std::size_t i = 0; i < frame.size(); ++i) {
       if (frame.point_ids[i] != kNoId && frame.features.has_stereo(i)) ++result.tracked_stereo;
@@ -136,6 +131,17 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
     const auto keyframe_start = std::chrono::steady_clock::now();
     maybe_insert_keyframe(frame, inliers, result);
     result.timings.keyframe_ms = elapsed_ms(keyframe_start);
+    // A held pose is this frame's output, not an anchor for new map points: a frame that became a
+    // keyframe keeps its optimized pose, from which its points were created.
+    if (stationary && !result.new_keyframe) {
+      result.motion = stationary->motion;
+      frame.T_wc = stationary->T_wc;
+    }
+    if (last_frame_tracked) {
+      velocity_ = last_frame_.T_wc.inverse() * frame.T_wc;
+    } else {
+      velocity_.reset();  // the last frame had no pose: no velocity until two frames in a row are tracked
+    }
     result.T_wc = frame.T_wc;
   } else {
     state_ = TrackingState::kLost;
