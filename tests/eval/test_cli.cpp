@@ -1,4 +1,6 @@
 // The heslam-eval executable: tables, JSON and plots from real files, and one-line errors with exit 1.
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -49,7 +51,7 @@ TEST(EvalCli, ApeOnSyntheticFilesWritesTableJsonAndPlots) {
   write_trajectory(dir / "est.txt", est, Format::heslam_default);
   const ToolRun run = run_eval("ape --gt " + (dir / "gt.csv").string() + " --est " + (dir / "est.txt").string() +
                                " --align none --json " + (dir / "ape.json").string() + " --plot " +
-                               (dir / "ape.png").string(),
+                               (dir / "ape.png").string() + " --errors " + (dir / "ape_errors.txt").string(),
                            dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.out.find("APE: 400 pairs"), std::string::npos) << run.out;
@@ -63,11 +65,38 @@ TEST(EvalCli, ApeOnSyntheticFilesWritesTableJsonAndPlots) {
   ASSERT_FALSE(png.empty());
   EXPECT_EQ(png.cols, 1400);
   EXPECT_EQ(png.rows, 700);
+  // --errors: a header, then one row per pair with the error vector (estimate - ground truth).
+  std::istringstream errors(slurp(dir / "ape_errors.txt"));
+  std::string header;
+  std::getline(errors, header);
+  EXPECT_EQ(header, "# est_row stamp_s translation_error_m dx_m dy_m dz_m rotation_error_deg");
+  std::size_t rows = 0;
+  for (std::string line; std::getline(errors, line); ++rows) {
+    std::istringstream fields(line);
+    std::size_t est_row = 0;
+    double stamp = 0, error = 0, dx = 0, dy = 0, dz = 0, rotation = 0;
+    ASSERT_TRUE(fields >> est_row >> stamp >> error >> dx >> dy >> dz >> rotation) << line;
+    EXPECT_EQ(est_row, rows);
+    EXPECT_DOUBLE_EQ(stamp, gt.stamps_s[rows]);
+    EXPECT_NEAR(error, 0.1, 1e-9);
+    EXPECT_NEAR(dz, rows % 2 == 0 ? 0.1 : -0.1, 1e-9);
+    EXPECT_NEAR(std::abs(dx) + std::abs(dy) + rotation, 0.0, 1e-9);
+  }
+  EXPECT_EQ(rows, 400u);
 
   const ToolRun rpe = run_eval("rpe --gt " + (dir / "gt.csv").string() + " --est " + (dir / "est.txt").string() +
-                               " --delta 10 --unit m --plot " + (dir / "rpe.svg").string(),
+                               " --delta 10 --unit m --plot " + (dir / "rpe.svg").string() + " --errors " +
+                               (dir / "rpe_errors.txt").string(),
                            dir);
   ASSERT_EQ(rpe.exit_code, 0) << rpe.err;
+  const std::string rpe_errors = slurp(dir / "rpe_errors.txt");
+  EXPECT_EQ(rpe_errors.rfind("# est_row_i est_row_j stamp_i_s stamp_j_s translation_error_m rotation_error_deg\n", 0), 0u);
+  const std::size_t pairs_end = rpe.out.find(" pairs, ");
+  ASSERT_NE(pairs_end, std::string::npos) << rpe.out;
+  const std::size_t pairs_begin = rpe.out.rfind(' ', pairs_end - 1) + 1;
+  const std::size_t rpe_pairs_printed = std::stoul(rpe.out.substr(pairs_begin, pairs_end - pairs_begin));
+  EXPECT_GT(rpe_pairs_printed, 0u);
+  EXPECT_EQ(static_cast<std::size_t>(std::count(rpe_errors.begin(), rpe_errors.end(), '\n')), rpe_pairs_printed + 1);
   const std::string svg = slurp(dir / "rpe.svg");
   EXPECT_EQ(svg.rfind("<svg", 0), 0u);
   EXPECT_NE(svg.find("RPE translation [m]"), std::string::npos);
@@ -132,6 +161,10 @@ TEST(EvalCli, BadInputIsOneLineAndExitOne) {
   const ToolRun align = run_eval("ape --gt x --est y --align sim4", dir);
   EXPECT_EQ(align.exit_code, 1);
   EXPECT_NE(align.err.find("--align: expected none, origin, se3 or sim3, got 'sim4'"), std::string::npos);
+
+  const ToolRun errors = run_eval("kitti --gt x --est y --errors e.txt", dir);
+  EXPECT_EQ(errors.exit_code, 1);
+  EXPECT_EQ(errors.err, "heslam-eval: --errors: only for ape and rpe (kitti reports per-length segments)\n");
 
   const ToolRun help = run_eval("--help", dir);
   EXPECT_EQ(help.exit_code, 0);

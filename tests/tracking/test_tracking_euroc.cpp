@@ -63,6 +63,24 @@ TEST(TrackingEuroc, Mh01HandheldTwoRunsBitIdentical) {
   EXPECT_EQ(a.map_points, b.map_points);
 }
 
+// --first-frame: the run initializes at frame K of the sequence (docs/benchmarks.md uses it to show
+// that MH01's early error does not depend on where the map starts).
+TEST(TrackingEuroc, RunStartsAtTheFirstFrameAsked) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const auto sequence = bench::load_euroc_sequence(test::shared_dataset("euroc_mh01_handheld"));
+  OfflineRunOptions options;
+  options.first_frame = 120;
+  options.max_frames = 10;
+  const OfflineRun run = bench::run_offline(sequence, options);
+  ASSERT_EQ(run.frames.size(), 10u);
+  EXPECT_EQ(run.frames.front().stamp_ns, sequence.frames[120].stamp_ns);
+  EXPECT_EQ(run.frames.back().stamp_ns, sequence.frames[129].stamp_ns);
+  EXPECT_EQ(run.tracked_frames(), 10);
+  options.first_frame = 155;
+  options.max_frames = 0;
+  EXPECT_EQ(bench::run_offline(sequence, options).frames.size(), 5u);  // to the end of the sequence
+}
+
 TEST(TrackingEuroc, V101StillCameraEstimatedStill) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_v101_head");
   const OfflineRun run = run_clip("euroc_v101_head", HeMode::kClipped, PhotometricVariant::kNone);

@@ -4,13 +4,15 @@
 //
 // usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]
 //                                [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast]
-//                                [--frames N] [--stationary-chi2 X] [--rotation-chi2 X]
+//                                [--first-frame K] [--frames N] [--stationary-chi2 X] [--rotation-chi2 X]
 #include <algorithm>
+#include <charconv>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "tools/bench/frontend_offline/offline_run.hpp"
@@ -21,7 +23,8 @@ using heslam::bench::FrameRecord;
 
 constexpr const char* kUsage =
     "usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]\n"
-    "       [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast] [--frames N]\n"
+    "       [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast]\n"
+    "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
     "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n";
 
 double percentile(std::vector<double> values, double fraction) {
@@ -35,6 +38,17 @@ void print_stage(const char* name, const std::vector<FrameRecord>& frames, doubl
   std::vector<double> values;
   for (const FrameRecord& f : frames) values.push_back(f.*field);
   std::printf("  %-10s median %7.2f ms   p90 %7.2f ms\n", name, percentile(values, 0.5), percentile(values, 0.9));
+}
+
+// A whole-string number for `flag`, or a one-line error naming it.
+template <typename T>
+T parse_number(const std::string& flag, const std::string& value) {
+  T number{};
+  const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), number);
+  if (error != std::errc{} || end != value.data() + value.size()) {
+    throw std::runtime_error(flag + ": expected a number, got '" + value + "'");
+  }
+  return number;
 }
 
 int run(int argc, char** argv) {
@@ -60,12 +74,14 @@ int run(int argc, char** argv) {
       he_mode = value;
     } else if (arg == "--variant") {
       options.variant = heslam::bench::parse_photometric_variant(value);
+    } else if (arg == "--first-frame") {
+      options.first_frame = parse_number<int>(arg, value);
     } else if (arg == "--frames") {
-      options.max_frames = std::stoi(value);
+      options.max_frames = parse_number<int>(arg, value);
     } else if (arg == "--stationary-chi2") {
-      options.tracker.stationary_test_chi2 = std::stod(value);
+      options.tracker.stationary_test_chi2 = parse_number<double>(arg, value);
     } else if (arg == "--rotation-chi2") {
-      options.tracker.rotation_only_test_chi2 = std::stod(value);
+      options.tracker.rotation_only_test_chi2 = parse_number<double>(arg, value);
     } else {
       throw std::runtime_error("unknown option " + arg + "\n" + kUsage);
     }

@@ -52,12 +52,14 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
   StereoFeaturePipeline pipeline(run.camera, options.pipeline);
   Tracker tracker(run.camera, options.tracker);
 
-  const std::size_t count = options.max_frames > 0
-                                ? std::min(sequence.frames.size(), static_cast<std::size_t>(options.max_frames))
-                                : sequence.frames.size();
+  const std::size_t first = std::min(sequence.frames.size(), static_cast<std::size_t>(std::max(options.first_frame, 0)));
+  const std::size_t available = sequence.frames.size() - first;
+  const std::size_t count =
+      options.max_frames > 0 ? std::min(available, static_cast<std::size_t>(options.max_frames)) : available;
   cv::Mat left_rect;
   cv::Mat right_rect;
-  for (std::size_t k = 0; k < count; ++k) {
+  // k is the frame's index in the sequence, so a run that skips frames sees the same noise per frame.
+  for (std::size_t k = first; k < first + count; ++k) {
     const EurocFrame& input = sequence.frames[k];
     cv::Mat left = read_grey(input.left_png);
     cv::Mat right = read_grey(input.right_png);

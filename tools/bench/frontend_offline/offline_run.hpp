@@ -19,7 +19,8 @@ struct OfflineRunOptions {
   StereoFeaturePipelineOptions pipeline;
   TrackerOptions tracker;
   PhotometricVariant variant = PhotometricVariant::kNone;
-  int max_frames = 0;  // 0: the whole sequence
+  int first_frame = 0;  // frames of the sequence skipped: the run starts (initializes) here
+  int max_frames = 0;   // 0: the whole sequence
 };
 
 struct FrameRecord {

@@ -46,7 +46,9 @@ const char* usage() {
          "                                stamp (+ offset): linear position, slerp rotation\n"
          "  --delta N  --unit frames|m  --all-pairs   RPE pairs (delta 1, frames)\n"
          "  --json FILE                   write the results as JSON\n"
-         "  --plot FILE.png|FILE.svg      top view of the aligned trajectories and the error over time\n";
+         "  --plot FILE.png|FILE.svg      top view of the aligned trajectories and the error over time\n"
+         "  --errors FILE                 ape / rpe: one row per pair (stamps, errors; ape also the error\n"
+         "                                vector), to plot or to look at a stretch of the run\n";
 }
 
 CliOptions parse_cli(int argc, char** argv) {
@@ -104,10 +106,14 @@ CliOptions parse_cli(int argc, char** argv) {
       options.rpe.unit = *unit;
     } else if (flag == "--json") options.json_path = value;
     else if (flag == "--plot") options.plot_path = value;
+    else if (flag == "--errors") options.errors_path = value;
     else throw std::runtime_error("unknown option '" + std::string(flag) + "'; see --help");
   }
   if (options.gt_path.empty()) throw std::runtime_error("missing --gt FILE");
   if (options.est_path.empty()) throw std::runtime_error("missing --est FILE");
+  if (!options.errors_path.empty() && options.command == Command::kitti) {
+    throw std::runtime_error("--errors: only for ape and rpe (kitti reports per-length segments)");
+  }
   // --times belongs to whichever side is a KITTI pose file.
   if (!times_both.empty()) {
     for (auto [path, read] : {std::pair{&options.gt_path, &options.gt_read}, std::pair{&options.est_path, &options.est_read}}) {

@@ -27,6 +27,7 @@ struct CliOptions {
   RpeOptions rpe;
   std::filesystem::path json_path;
   std::filesystem::path plot_path;
+  std::filesystem::path errors_path;
   bool help = false;
 };
 

@@ -53,6 +53,7 @@ int run(const app::CliOptions& options) {
     app::print_ape(std::cout, ape);
     if (!options.json_path.empty()) write_text_file(options.json_path, to_json(ape, context));
     if (!options.plot_path.empty()) write_plot(options.plot_path, ape_plot(ape, plot_title(options, "APE")));
+    if (!options.errors_path.empty()) write_text_file(options.errors_path, app::ape_error_rows(ape, pair));
   } else {
     RpeOptions rpe_options = options.rpe;
     rpe_options.align = options.align.value_or(AlignMode::none);
@@ -60,6 +61,7 @@ int run(const app::CliOptions& options) {
     app::print_rpe(std::cout, rpe);
     if (!options.json_path.empty()) write_text_file(options.json_path, to_json(rpe, context));
     if (!options.plot_path.empty()) write_plot(options.plot_path, rpe_plot(pair, rpe, plot_title(options, "RPE")));
+    if (!options.errors_path.empty()) write_text_file(options.errors_path, app::rpe_error_rows(rpe, pair));
   }
   return 0;
 }

@@ -35,6 +35,11 @@ void print_stats(std::ostream& out, const ErrorStats& t, const ErrorStats& r) {
   }
 }
 
+// The stamp of row `i` of `t`, or its frame id when the file had no time.
+double stamp_or_id(const Trajectory& t, std::size_t i) {
+  return t.has_stamps() ? t.stamps_s[i] : static_cast<double>(t.frame_ids[i]);
+}
+
 void print_alignment(std::ostream& out, AlignMode mode, const Sim3& S) {
   out << "alignment: " << align_mode_name(mode);
   if (mode == AlignMode::sim3) out << format(" (scale %.9g)", S.scale);
@@ -70,6 +75,32 @@ void print_kitti(std::ostream& out, const KittiResult& kitti) {
       << format("rotation drift [deg/100m]: %.15g\n", kitti.rotation_error_deg_per_100m)
       << format("ATE [m]:                   %.15g\n", kitti.ate_m)
       << format("RPE [m] / [deg]:           %.15g / %.15g\n", kitti.rpe_m, kitti.rpe_deg);
+}
+
+std::string ape_error_rows(const ApeResult& ape, const AlignedPair& pair) {
+  std::string out = "# est_row stamp_s translation_error_m dx_m dy_m dz_m rotation_error_deg\n";
+  char row[256];
+  for (std::size_t i = 0; i < ape.translation_errors_m.size(); ++i) {
+    const Eigen::Vector3d d = ape.est_aligned.position_m(i) - ape.gt.position_m(i);
+    std::snprintf(row, sizeof row, "%zu %.9f %.9g %.9g %.9g %.9g %.9g\n", pair.est_rows[i],
+                  stamp_or_id(pair.est, i), ape.translation_errors_m[i], d.x(), d.y(), d.z(),
+                  ape.rotation_errors_deg[i]);
+    out += row;
+  }
+  return out;
+}
+
+std::string rpe_error_rows(const RpeResult& rpe, const AlignedPair& pair) {
+  std::string out = "# est_row_i est_row_j stamp_i_s stamp_j_s translation_error_m rotation_error_deg\n";
+  char row[256];
+  for (std::size_t k = 0; k < rpe.pairs.size(); ++k) {
+    const auto [i, j] = rpe.pairs[k];
+    std::snprintf(row, sizeof row, "%zu %zu %.9f %.9f %.9g %.9g\n", pair.est_rows[i], pair.est_rows[j],
+                  stamp_or_id(pair.est, i), stamp_or_id(pair.est, j), rpe.translation_errors_m[k],
+                  rpe.rotation_errors_deg[k]);
+    out += row;
+  }
+  return out;
 }
 
 }  // namespace heslam::eval::app

@@ -1,7 +1,9 @@
-// The plain-text result tables heslam-eval prints on stdout.
+// The plain-text result tables heslam-eval prints on stdout, and the per-pair error tables of
+// --errors FILE (one row per pair, '#' header; for plotting or picking out a stretch of a run).
 #pragma once
 
 #include <iosfwd>
+#include <string>
 
 #include "tools/eval/ape.hpp"
 #include "tools/eval/kitti_metrics.hpp"
@@ -12,5 +14,12 @@ namespace heslam::eval::app {
 void print_ape(std::ostream& out, const ApeResult& ape);
 void print_rpe(std::ostream& out, const RpeResult& rpe);
 void print_kitti(std::ostream& out, const KittiResult& kitti);
+
+// APE: estimate row, stamp (s, or the frame id without stamps), translation error (m) and its x y z
+// in the ground truth's frame (aligned estimate - ground truth), rotation error (deg).
+std::string ape_error_rows(const ApeResult& ape, const AlignedPair& pair);
+// RPE: the two estimate rows of each pair, their stamps (or frame ids), translation (m) and rotation
+// (deg) errors.
+std::string rpe_error_rows(const RpeResult& rpe, const AlignedPair& pair);
 
 }  // namespace heslam::eval::app
