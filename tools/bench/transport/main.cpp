@@ -12,6 +12,13 @@
 //
 //   heslam-bench-transport [--frames N] [--domain D] [--bin DIR] [--euroc DIR] [--ddsperf-seconds S]
 //                          [--take reuse|fresh]   (reuse, the default: take_into one sample, as the frontend)
+//                          [--no-plain-c]         (skip the plain C API reference rows)
+//
+// Also for reference, the same type, QoS and Cyclone configuration through the plain C API
+// (dds_write / dds_take, no heslam runtime and no replay): a child process (this executable with the
+// hidden --plain-c-publisher mode) writes synthetic pairs at 20 Hz from as many distinct buffers as the
+// EuRoC recording has pairs, so its serialisation reads memory that is not in cache, as the replay's.
+// The difference to the heslam rows is what heslam's replay and runtime add.
 //
 // For reference it then runs Cyclone's `ddsperf` ping/pong (when on PATH) with the same sample sizes,
 // 20 Hz and the same (project) Cyclone configuration; ddsperf reports half the round trip per second,
@@ -34,6 +41,7 @@
 #include <regex>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
@@ -41,8 +49,10 @@
 
 #include "runtime/args.hpp"
 #include "runtime/participant.hpp"
+#include "runtime/qos.hpp"
 #include "runtime/reader.hpp"
 #include "runtime/shutdown.hpp"
+#include "runtime/topic.hpp"
 #include "runtime/topics.hpp"
 #include "runtime/waitset.hpp"
 #include "tools/replay/dataset/stereo_dataset.hpp"
@@ -202,6 +212,98 @@ pid_t spawn(std::vector<std::string> args, const fs::path& output, const std::st
   return error == 0 ? pid : 0;
 }
 
+// --plain-c-publisher mode: `frames` stereo pairs of width x height at 20 Hz with dds_write, each
+// from the next of `buffers` distinct buffers, after waiting for a reader.
+int plain_c_publish(int domain, int width, int height, std::size_t frames, std::size_t buffers) {
+  const runtime::Participant participant({.domain_id = domain, .dds_config = ""});
+  const runtime::Topic<msg::StereoFrame> topic(participant, runtime::Topics().stereo());
+  const runtime::Qos qos(runtime::QosRole::kImages);
+  const dds_entity_t writer = dds_create_writer(participant.handle(), topic.handle(), qos.get(), nullptr);
+  if (writer < 0) throw std::runtime_error(std::string("plain C publisher: ") + dds_strretcode(writer));
+  const std::size_t image_bytes = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  std::vector<std::uint8_t> pixels(buffers * 2 * image_bytes);
+  for (std::size_t i = 0; i < pixels.size(); ++i) pixels[i] = static_cast<std::uint8_t>(i * 131 + (i >> 12));
+  dds_publication_matched_status_t matched{};
+  for (int tries = 0; tries < 1000 && matched.current_count == 0; ++tries) {
+    dds_get_publication_matched_status(writer, &matched);
+    if (matched.current_count == 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  msg::StereoFrame frame{};
+  frame.width_px = static_cast<std::uint32_t>(width);
+  frame.height_px = static_cast<std::uint32_t>(height);
+  frame.encoding = heslam_msg_ENCODING_MONO8;
+  frame.left._length = frame.left._maximum = frame.right._length = frame.right._maximum =
+      static_cast<std::uint32_t>(image_bytes);
+  auto due = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < frames && !runtime::shutdown_requested(); ++i) {
+    due += std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(kFramePeriodS));
+    std::this_thread::sleep_until(due);
+    std::uint8_t* pair = pixels.data() + (i % buffers) * 2 * image_bytes;
+    frame.left._buffer = pair;
+    frame.right._buffer = pair + image_bytes;
+    frame.seq = i;
+    if (const dds_return_t rc = dds_write(writer, &frame); rc < 0 && rc != DDS_RETCODE_TIMEOUT) {
+      throw std::runtime_error(std::string("plain C publisher: write failed: ") + dds_strretcode(rc));
+    }
+  }
+  return 0;
+}
+
+// The plain C API reference: spawns the --plain-c-publisher child and takes its frames with dds_take
+// into one reused sample, through a waitset on a read condition (what runtime::Reader does, unwrapped).
+Result measure_plain_c(const std::string& name, int width, int height, int domain, std::size_t frames,
+                       std::size_t buffers) {
+  const runtime::Participant participant({.domain_id = domain, .dds_config = ""});
+  const runtime::Topic<msg::StereoFrame> topic(participant, runtime::Topics().stereo());
+  const runtime::Qos qos(runtime::QosRole::kImages);
+  const dds_entity_t reader = dds_create_reader(participant.handle(), topic.handle(), qos.get(), nullptr);
+  const dds_entity_t waitset = dds_create_waitset(participant.handle());
+  const dds_entity_t condition = dds_create_readcondition(reader, DDS_ANY_STATE);
+  if (reader < 0 || waitset < 0 || condition < 0 || dds_waitset_attach(waitset, condition, 0) < 0) {
+    throw std::runtime_error(name + ": cannot create the plain C reader");
+  }
+  std::vector<std::string> args{fs::canonical("/proc/self/exe").string(), "--plain-c-publisher", std::to_string(width),
+                                std::to_string(height), std::to_string(frames + kWarmupFrames), std::to_string(buffers),
+                                "--domain", std::to_string(domain)};
+  std::vector<char*> argv;
+  for (std::string& arg : args) argv.push_back(arg.data());
+  argv.push_back(nullptr);
+  pid_t publisher = 0;
+  if (posix_spawn(&publisher, argv[0], nullptr, nullptr, argv.data(), environ) != 0) {
+    throw std::runtime_error(name + ": cannot start the plain C publisher");
+  }
+  Result result;
+  result.name = name;
+  msg::StereoFrame sample{};
+  void* buffer = &sample;
+  dds_sample_info_t info{};
+  std::size_t received = 0;
+  auto last_frame = std::chrono::steady_clock::now();
+  while (result.latencies_us.size() < frames && !runtime::shutdown_requested()) {
+    if (std::chrono::steady_clock::now() - last_frame > kNoFrameTimeout) break;
+    if (dds_waitset_wait(waitset, nullptr, 0, DDS_MSECS(100)) <= 0) continue;
+    const std::int64_t wake_ns = realtime_ns();
+    bool first_of_wake = true;
+    while (dds_take(reader, &buffer, &info, 1, 1) == 1) {
+      const std::int64_t now_ns = realtime_ns();
+      if (!info.valid_data) continue;
+      last_frame = std::chrono::steady_clock::now();
+      if (++received <= kWarmupFrames) continue;
+      if (result.latencies_us.empty()) result.first_seq = sample.seq;
+      result.last_seq = sample.seq;
+      result.bytes = sample.left._length + sample.right._length;
+      result.latencies_us.push_back(static_cast<double>(now_ns - info.source_timestamp) * 1e-3);
+      if (first_of_wake) result.wake_latencies_us.push_back(static_cast<double>(wake_ns - info.source_timestamp) * 1e-3);
+      first_of_wake = false;
+    }
+  }
+  dds_sample_free(&sample, &heslam_msg_StereoFrame_desc, DDS_FREE_CONTENTS);
+  kill(publisher, SIGINT);
+  waitpid(publisher, nullptr, 0);
+  if (result.latencies_us.empty()) throw std::runtime_error(name + ": no frame from the plain C publisher");
+  return result;
+}
+
 // ddsperf ping/pong at 20 Hz with `bytes` per sample; prints median-of-seconds of its 50% and 99%.
 void run_ddsperf(const std::string& name, std::size_t bytes, int domain, int seconds) {
   const fs::path pong_out = fs::temp_directory_path() / ("heslam_bench_pong_" + std::to_string(getpid()));
@@ -247,11 +349,18 @@ int run(int argc, char** argv) {
   std::size_t frames = 200;
   int ddsperf_seconds = 10;
   bool reuse_buffers = true;
+  bool plain_c = true;
   fs::path bin_dir = fs::canonical("/proc/self/exe").parent_path();
   fs::path euroc_dir = fs::path(HESLAM_SHARED_DATA) / "euroc_v101_head";
   for (std::size_t i = 0; i < common.rest.size(); ++i) {
     const std::string& arg = common.rest[i];
-    if (arg == "--frames" && i + 1 < common.rest.size()) {
+    if (arg == "--plain-c-publisher" && i + 4 < common.rest.size()) {
+      return plain_c_publish(common.domain_id, std::stoi(common.rest[i + 1]), std::stoi(common.rest[i + 2]),
+                             std::stoul(common.rest[i + 3]), std::stoul(common.rest[i + 4]));
+    }
+    if (arg == "--no-plain-c") {
+      plain_c = false;
+    } else if (arg == "--frames" && i + 1 < common.rest.size()) {
       frames = std::stoul(common.rest[++i]);
     } else if (arg == "--bin" && i + 1 < common.rest.size()) {
       bin_dir = common.rest[++i];
@@ -263,7 +372,7 @@ int run(int argc, char** argv) {
                (common.rest[i + 1] == "reuse" || common.rest[i + 1] == "fresh")) {
       reuse_buffers = common.rest[++i] == "reuse";
     } else {
-      throw std::runtime_error(arg + ": unknown option (--frames N, --bin DIR, --euroc DIR, --ddsperf-seconds S, --take reuse|fresh, --domain D)");
+      throw std::runtime_error(arg + ": unknown option (--frames N, --bin DIR, --euroc DIR, --ddsperf-seconds S, --take reuse|fresh, --no-plain-c, --domain D)");
     }
   }
   const StereoDataset euroc = open_dataset(euroc_dir);
@@ -283,6 +392,12 @@ int run(int argc, char** argv) {
     throw;
   }
   fs::remove_all(kitti);
+  if (plain_c) {
+    std::fflush(stdout);
+    print(measure_plain_c("plain C 752x480", 752, 480, common.domain_id, frames, euroc.frames.size()));
+    std::fflush(stdout);
+    print(measure_plain_c("plain C 1241x376", kKittiWidth, kKittiHeight, common.domain_id, frames, euroc.frames.size()));
+  }
   if (ddsperf_seconds > 0) {
     std::fflush(stdout);
     run_ddsperf("ddsperf 722 KB", 752 * 480 * 2, common.domain_id, ddsperf_seconds);
