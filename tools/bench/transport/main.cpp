@@ -112,6 +112,17 @@ struct Result {
   std::vector<double> first_pass_latencies_us;
   std::uint64_t first_seq = 0;
   std::uint64_t last_seq = 0;
+
+  // One measured frame: taken at now_ns, written at source_ns; the first of a wake-up also gives the
+  // latency to that wake-up.
+  void record(const msg::StereoFrame& frame, std::int64_t source_ns, std::int64_t now_ns, std::int64_t wake_ns,
+              bool first_of_wake) {
+    if (latencies_us.empty()) first_seq = frame.seq;
+    last_seq = frame.seq;
+    bytes = frame.left._length + frame.right._length;
+    latencies_us.push_back(static_cast<double>(now_ns - source_ns) * 1e-3);
+    if (first_of_wake) wake_latencies_us.push_back(static_cast<double>(wake_ns - source_ns) * 1e-3);
+  }
 };
 
 double percentile(std::vector<double> values, double p) {
@@ -162,12 +173,8 @@ Result measure(const std::string& name, const fs::path& dataset, const fs::path&
       if (!frame.info.valid_data) continue;
       last_frame = std::chrono::steady_clock::now();
       if (++received <= kWarmupFrames) continue;
-      if (result.latencies_us.empty()) result.first_seq = frame.sample->seq;
-      result.last_seq = frame.sample->seq;
-      result.bytes = frame.sample->left._length + frame.sample->right._length;
-      result.latencies_us.push_back(static_cast<double>(now_ns - frame.info.source_stamp_ns) * 1e-3);
+      result.record(*frame.sample, frame.info.source_stamp_ns, now_ns, wake_ns, first_of_wake);
       if (frame.sample->seq < recording_frames) result.first_pass_latencies_us.push_back(result.latencies_us.back());
-      if (first_of_wake) result.wake_latencies_us.push_back(static_cast<double>(wake_ns - frame.info.source_stamp_ns) * 1e-3);
       first_of_wake = false;
       if (!reuse_buffers) fresh = runtime::Received<msg::StereoFrame>{};
     }
@@ -289,11 +296,7 @@ Result measure_plain_c(const std::string& name, int width, int height, int domai
       if (!info.valid_data) continue;
       last_frame = std::chrono::steady_clock::now();
       if (++received <= kWarmupFrames) continue;
-      if (result.latencies_us.empty()) result.first_seq = sample.seq;
-      result.last_seq = sample.seq;
-      result.bytes = sample.left._length + sample.right._length;
-      result.latencies_us.push_back(static_cast<double>(now_ns - info.source_timestamp) * 1e-3);
-      if (first_of_wake) result.wake_latencies_us.push_back(static_cast<double>(wake_ns - info.source_timestamp) * 1e-3);
+      result.record(sample, info.source_timestamp, now_ns, wake_ns, first_of_wake);
       first_of_wake = false;
     }
   }
