@@ -2,7 +2,9 @@
 #include "components/core/place/vocabulary.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 namespace heslam {
@@ -10,6 +12,16 @@ namespace {
 
 // Node depth is kept in a byte (ORBvoc.txt has 6 levels).
 constexpr int kMaxLevels = 255;
+constexpr std::size_t kDescriptorBytes = sizeof(Descriptor);
+// Descriptors descending together in transform(): enough independent cache misses in flight to
+// keep the memory system busy on a 1M-word tree, few enough that their state stays in registers/L1.
+constexpr std::size_t kDescentBatch = 16;
+constexpr std::size_t kCacheLineBytes = 64;
+
+void prefetch(const void* data, std::size_t bytes) {
+  const char* p = static_cast<const char*>(data);
+  for (std::size_t offset = 0; offset < bytes; offset += kCacheLineBytes) __builtin_prefetch(p + offset);
+}
 
 // DBoW2 normalises with the L1 norm for L1 scoring (ORBvoc.txt); every scoring gets it here.
 void l1_normalise(BowVector& bow) {
@@ -44,78 +56,117 @@ const char* to_string(BowScoring scoring) {
   return "unknown";
 }
 
-Vocabulary::Vocabulary(int branching, int levels, BowScoring scoring, BowWeighting weighting,
-                       std::span<const NodeRecord> nodes)
+Vocabulary::Vocabulary(int branching, int levels, BowScoring scoring, BowWeighting weighting)
     : branching_(branching), levels_(levels), scoring_(scoring), weighting_(weighting) {
   if (branching < 1) throw std::invalid_argument("vocabulary: branching factor k must be >= 1, got " + std::to_string(branching));
   if (levels < 1 || levels > kMaxLevels) {
     throw std::invalid_argument("vocabulary: levels L must be in 1.." + std::to_string(kMaxLevels) + ", got " + std::to_string(levels));
   }
+}
+
+Vocabulary::Vocabulary(int branching, int levels, BowScoring scoring, BowWeighting weighting,
+                       std::span<const NodeRecord> nodes)
+    : Vocabulary(branching, levels, scoring, weighting) {
   const std::size_t n = nodes.size() + 1;
   parent_.resize(n, 0);
-  descriptor_.resize(n, Descriptor{});
   weight_.resize(n, 0.f);
-  word_.resize(n, kNoWord);
-  depth_.resize(n, 0);
-  std::vector<std::uint32_t> child_count(n, 0);
+  std::vector<std::uint8_t> is_leaf(nodes.size());
   for (std::size_t i = 0; i < nodes.size(); ++i) {
-    const NodeId id = static_cast<NodeId>(i + 1);
-    const NodeRecord& record = nodes[i];
-    if (record.parent >= id) {
-      throw std::invalid_argument("vocabulary: node " + std::to_string(id) + " has parent " + std::to_string(record.parent) +
+    parent_[i + 1] = nodes[i].parent;
+    weight_[i + 1] = nodes[i].weight;
+    is_leaf[i] = nodes[i].is_leaf ? 1 : 0;
+  }
+  link(is_leaf, [&](std::size_t id) -> const Descriptor& { return nodes[id - 1].descriptor; });
+}
+
+Vocabulary Vocabulary::from_columns(int branching, int levels, BowScoring scoring, BowWeighting weighting,
+                                    const NodeColumns& columns) {
+  const std::size_t n = columns.is_leaf.size();
+  if (columns.parents.size() != 4 * n || columns.descriptors.size() != kDescriptorBytes * n || columns.weights.size() != 4 * n) {
+    throw std::invalid_argument("vocabulary: node columns of different lengths");
+  }
+  Vocabulary vocabulary(branching, levels, scoring, weighting);
+  vocabulary.parent_.resize(n + 1, 0);
+  vocabulary.weight_.resize(n + 1, 0.f);
+  std::memcpy(vocabulary.parent_.data() + 1, columns.parents.data(), columns.parents.size());
+  std::memcpy(vocabulary.weight_.data() + 1, columns.weights.data(), columns.weights.size());
+  vocabulary.link(columns.is_leaf, [&](std::size_t id) {
+    Descriptor descriptor;
+    std::memcpy(descriptor.data(), columns.descriptors.data() + kDescriptorBytes * (id - 1), kDescriptorBytes);
+    return descriptor;
+  });
+  return vocabulary;
+}
+
+template <typename DescriptorOf>
+void Vocabulary::link(std::span<const std::uint8_t> is_leaf, DescriptorOf&& descriptor_of) {
+  const std::size_t n = parent_.size();
+  word_.assign(n, kNoWord);
+  std::vector<std::uint8_t> depth(n, 0);
+  std::vector<std::uint32_t> child_count(n, 0);
+  for (std::size_t id = 1; id < n; ++id) {
+    const NodeId parent = parent_[id];
+    if (parent >= id) {
+      throw std::invalid_argument("vocabulary: node " + std::to_string(id) + " has parent " + std::to_string(parent) +
                                   ", which is not an earlier node");
     }
-    if (word_[record.parent] != kNoWord) {
-      throw std::invalid_argument("vocabulary: node " + std::to_string(id) + " has parent " + std::to_string(record.parent) +
+    if (word_[parent] != kNoWord) {
+      throw std::invalid_argument("vocabulary: node " + std::to_string(id) + " has parent " + std::to_string(parent) +
                                   ", which is a leaf");
     }
-    const int depth = depth_[record.parent] + 1;
-    if (depth > kMaxLevels) throw std::invalid_argument("vocabulary: node " + std::to_string(id) + " is deeper than " + std::to_string(kMaxLevels) + " levels");
-    if (!std::isfinite(record.weight)) {
-      throw std::invalid_argument("vocabulary: node " + std::to_string(id) + " has a non-finite weight");
-    }
-    parent_[id] = record.parent;
-    descriptor_[id] = record.descriptor;
-    weight_[id] = record.weight;
-    depth_[id] = static_cast<std::uint8_t>(depth);
-    ++child_count[record.parent];
-    if (record.is_leaf) {
+    if (depth[parent] + 1 > kMaxLevels) throw std::invalid_argument("vocabulary: node " + std::to_string(id) + " is deeper than " + std::to_string(kMaxLevels) + " levels");
+    if (!std::isfinite(weight_[id])) throw std::invalid_argument("vocabulary: node " + std::to_string(id) + " has a non-finite weight");
+    depth[id] = static_cast<std::uint8_t>(depth[parent] + 1);
+    ++child_count[parent];
+    if (is_leaf[id - 1]) {
       word_[id] = static_cast<WordId>(node_of_word_.size());
-      node_of_word_.push_back(id);
+      node_of_word_.push_back(static_cast<NodeId>(id));
     }
   }
-  // CSR children, in node-id order within each parent (DBoW2's order: first child wins ties).
-  child_begin_.assign(n + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) child_begin_[i + 1] = child_begin_[i] + child_count[i];
-  child_.resize(child_begin_[n]);
-  std::vector<std::uint32_t> fill(child_begin_.begin(), child_begin_.end() - 1);
-  for (std::size_t id = 1; id < n; ++id) child_[fill[parent_[id]]++] = static_cast<NodeId>(id);
-  // An inner node without children would swallow descriptors without a word.
-  for (std::size_t id = 0; id < n; ++id) {
-    if (word_[id] == kNoWord && child_count[id] == 0 && n > 1) {
+  // Children in node-id order within each parent (DBoW2's order: first child wins ties).
+  std::vector<std::uint32_t> first_slot(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) first_slot[i + 1] = first_slot[i] + child_count[i];
+  slot_.resize(n - 1);
+  slot_descriptor_.resize(n - 1);
+  slot_of_node_.assign(n, 0);
+  std::vector<std::uint32_t> fill(first_slot.begin(), first_slot.end() - 1);
+  for (std::size_t id = 1; id < n; ++id) {
+    const std::uint32_t slot = fill[parent_[id]]++;
+    slot_of_node_[id] = slot;
+    slot_descriptor_[slot] = descriptor_of(id);
+    Slot& s = slot_[slot];
+    s.node = static_cast<NodeId>(id);
+    if (word_[id] != kNoWord) {
+      s.first_child_or_word = word_[id];
+    } else if (child_count[id] == 0) {
+      // An inner node without children would swallow descriptors without a word.
       throw std::invalid_argument("vocabulary: node " + std::to_string(id) + " is neither a leaf nor has children");
+    } else {
+      s.first_child_or_word = first_slot[id];
+      s.child_count = child_count[id];
     }
   }
+  root_ = {0, first_slot[0], child_count[0]};
 }
 
 WordId Vocabulary::word_of(const Descriptor& descriptor) const {
   if (empty()) return kNoWord;
-  NodeId node = 0;
-  while (word_[node] == kNoWord) {
-    const std::uint32_t begin = child_begin_[node];
-    const std::uint32_t end = child_begin_[node + 1];
-    NodeId best = child_[begin];
-    int best_distance = hamming_distance(descriptor, descriptor_[best]);
+  const Slot* at = &root_;
+  while (true) {
+    const std::uint32_t begin = at->first_child_or_word;
+    const std::uint32_t end = begin + at->child_count;
+    std::uint32_t best = begin;
+    int best_distance = hamming_distance(descriptor, slot_descriptor_[begin]);
     for (std::uint32_t c = begin + 1; c < end; ++c) {
-      const int distance = hamming_distance(descriptor, descriptor_[child_[c]]);
+      const int distance = hamming_distance(descriptor, slot_descriptor_[c]);
       if (distance < best_distance) {
         best_distance = distance;
-        best = child_[c];
+        best = c;
       }
     }
-    node = best;
+    at = &slot_[best];
+    if (at->child_count == 0) return at->first_child_or_word;
   }
-  return word_[node];
 }
 
 float Vocabulary::word_weight(WordId word) const { return weight_[node_of_word_[word]]; }
@@ -132,26 +183,45 @@ void Vocabulary::transform(std::span<const Descriptor> descriptors, BowVector& b
   words.reserve(descriptors.size());
   std::vector<std::pair<NodeId, std::uint32_t>> filed;
   if (features) filed.reserve(descriptors.size());
-  for (std::uint32_t i = 0; i < descriptors.size(); ++i) {
-    NodeId node = 0;
-    NodeId feature_node = 0;
-    while (word_[node] == kNoWord) {
-      const std::uint32_t begin = child_begin_[node];
-      const std::uint32_t end = child_begin_[node + 1];
-      NodeId best = child_[begin];
-      int best_distance = hamming_distance(descriptors[i], descriptor_[best]);
-      for (std::uint32_t c = begin + 1; c < end; ++c) {
-        const int distance = hamming_distance(descriptors[i], descriptor_[child_[c]]);
-        if (distance < best_distance) {
-          best_distance = distance;
-          best = child_[c];
+  // Descriptors descend kDescentBatch at a time, one level per round: after each step the next
+  // step's blocks are prefetched and the other descriptors' steps overlap their cache misses.
+  std::array<const Slot*, kDescentBatch> at{};
+  std::array<NodeId, kDescentBatch> feature_node{};
+  for (std::size_t base = 0; base < descriptors.size(); base += kDescentBatch) {
+    const std::size_t batch = std::min(kDescentBatch, descriptors.size() - base);
+    at.fill(&root_);
+    feature_node.fill(0);
+    std::size_t remaining = batch;
+    for (int depth = 1; remaining > 0; ++depth) {
+      for (std::size_t g = 0; g < batch; ++g) {
+        if (at[g] == nullptr) continue;
+        const Descriptor& descriptor = descriptors[base + g];
+        const std::uint32_t begin = at[g]->first_child_or_word;
+        const std::uint32_t end = begin + at[g]->child_count;
+        std::uint32_t best = begin;
+        int best_distance = hamming_distance(descriptor, slot_descriptor_[begin]);
+        for (std::uint32_t c = begin + 1; c < end; ++c) {
+          const int distance = hamming_distance(descriptor, slot_descriptor_[c]);
+          if (distance < best_distance) {
+            best_distance = distance;
+            best = c;
+          }
         }
+        const Slot& chosen = slot_[best];
+        if (depth <= feature_depth) feature_node[g] = chosen.node;
+        if (chosen.child_count == 0) {
+          const auto index = static_cast<std::uint32_t>(base + g);
+          words.emplace_back(chosen.first_child_or_word, index);
+          if (features) filed.emplace_back(feature_node[g], index);
+          at[g] = nullptr;
+          --remaining;
+          continue;
+        }
+        at[g] = &chosen;
+        prefetch(slot_descriptor_.data() + chosen.first_child_or_word, chosen.child_count * sizeof(Descriptor));
+        prefetch(slot_.data() + chosen.first_child_or_word, chosen.child_count * sizeof(Slot));
       }
-      node = best;
-      if (depth_[node] <= feature_depth) feature_node = node;
     }
-    words.emplace_back(word_[node], i);
-    if (features) filed.emplace_back(feature_node, i);
   }
 
   std::sort(words.begin(), words.end());
@@ -227,7 +297,7 @@ std::vector<Vocabulary::NodeRecord> Vocabulary::node_records() const {
   std::vector<NodeRecord> records;
   records.reserve(parent_.empty() ? 0 : parent_.size() - 1);
   for (std::size_t id = 1; id < parent_.size(); ++id) {
-    records.push_back({parent_[id], word_[id] != kNoWord, descriptor_[id], weight_[id]});
+    records.push_back({parent_[id], word_[id] != kNoWord, slot_descriptor_[slot_of_node_[id]], weight_[id]});
   }
   return records;
 }

@@ -1,9 +1,11 @@
 // The ORB vocabulary tree (hierarchical k-medians over 256-bit descriptors, Galvez-Lopez & Tardos
 // 2012, as DBoW2 uses it): maps descriptors to words, weights them (TF-IDF), scores two images.
 //
-// Storage is flat arrays indexed by node id (root = 0), children in CSR form, so a 1M-word tree
-// loads in one block without per-node allocation and a descriptor descends with one Hamming
-// distance per child. Immutable after construction: share one const Vocabulary between threads.
+// Storage is flat arrays: per node id (root = 0) and per child slot (CSR: the children of a node are
+// consecutive slots holding their descriptors and where their own children start), so a 1M-word tree
+// loads without per-node allocation and one descent step reads two contiguous blocks. transform()
+// descends 16 descriptors at a time and prefetches each one's next blocks, which hides most cache
+// misses of a 1M-word tree. Immutable after construction: share one const Vocabulary between threads.
 // Files: vocabulary_io.hpp (DBoW2 text, own binary). Training: vocabulary_training.hpp.
 #pragma once
 
@@ -45,6 +47,18 @@ class Vocabulary {
   Vocabulary(int branching, int levels, BowScoring scoring, BowWeighting weighting,
              std::span<const NodeRecord> nodes);
 
+  // The same nodes as packed little-endian columns, as heslam's binary file stores them (n nodes:
+  // parents n x u32, is_leaf n x u8, descriptors n x 32 bytes, weights n x f32), so a file is turned
+  // into a tree without an intermediate copy. Same checks as the constructor.
+  struct NodeColumns {
+    std::span<const std::uint8_t> parents;
+    std::span<const std::uint8_t> is_leaf;
+    std::span<const std::uint8_t> descriptors;
+    std::span<const std::uint8_t> weights;
+  };
+  static Vocabulary from_columns(int branching, int levels, BowScoring scoring, BowWeighting weighting,
+                                 const NodeColumns& columns);
+
   int branching() const { return branching_; }
   int levels() const { return levels_; }
   BowScoring scoring() const { return scoring_; }
@@ -74,17 +88,30 @@ class Vocabulary {
   std::vector<NodeRecord> node_records() const;
 
  private:
+  // One child slot: which node it is, and where that node's children are (or its word, for a leaf).
+  struct Slot {
+    NodeId node = 0;
+    std::uint32_t first_child_or_word = 0;  // slot of its first child, or its word id when child_count == 0
+    std::uint32_t child_count = 0;
+  };
+
+  Vocabulary(int branching, int levels, BowScoring scoring, BowWeighting weighting);
+  // Fills the slots from parent_ and the leaf flags once parent_, weight_ and the per-node
+  // descriptors are set; validates the tree. `descriptor_of(id)` gives node id's descriptor.
+  template <typename DescriptorOf>
+  void link(std::span<const std::uint8_t> is_leaf, DescriptorOf&& descriptor_of);
+
   int branching_ = 0;
   int levels_ = 0;
   BowScoring scoring_ = BowScoring::kL1;
   BowWeighting weighting_ = BowWeighting::kTfIdf;
   std::vector<NodeId> parent_;                // per node; root's parent is 0
-  std::vector<Descriptor> descriptor_;        // per node (root's is zero)
   std::vector<float> weight_;                 // per node
   std::vector<WordId> word_;                  // per node: its word id, or kNoWord for inner nodes
-  std::vector<std::uint8_t> depth_;           // per node: root 0
-  std::vector<std::uint32_t> child_begin_;    // CSR: children of n are child_[child_begin_[n] .. child_begin_[n+1])
-  std::vector<NodeId> child_;
+  std::vector<std::uint32_t> slot_of_node_;   // per node: its child slot (root: unused)
+  Slot root_;                                 // where the root's children are
+  std::vector<Slot> slot_;                    // per child slot
+  std::vector<Descriptor> slot_descriptor_;   // per child slot
   std::vector<NodeId> node_of_word_;
 };
 

@@ -14,6 +14,11 @@
 #include <system_error>
 #include <vector>
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 namespace heslam {
 namespace {
 
@@ -55,6 +60,41 @@ std::vector<char> read_whole_file(const fs::path& path) {
   if (size > 0 && !in.read(data.data(), size)) fail(path, "cannot read file");
   return data;
 }
+
+// A whole file mapped read-only (prefaulted): the binary loader reads it in place, no copy.
+class MappedFile {
+ public:
+  explicit MappedFile(const fs::path& path) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) fail(path, "cannot open file");
+    struct stat st {};
+    if (::fstat(fd, &st) != 0) {
+      ::close(fd);
+      fail(path, "cannot read file");
+    }
+    size_ = static_cast<std::size_t>(st.st_size);
+    if (size_ > 0) {
+      void* data = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+      if (data == MAP_FAILED) {
+        ::close(fd);
+        fail(path, "cannot map file");
+      }
+      data_ = static_cast<const char*>(data);
+    }
+    ::close(fd);
+  }
+  ~MappedFile() {
+    if (data_) ::munmap(const_cast<char*>(data_), size_);
+  }
+  MappedFile(const MappedFile&) = delete;
+  MappedFile& operator=(const MappedFile&) = delete;
+
+  std::span<const char> bytes() const { return {data_, size_}; }
+
+ private:
+  const char* data_ = nullptr;
+  std::size_t size_ = 0;
+};
 
 // Writes through "<path>.tmp" and renames, so a reader never sees half a file.
 template <typename WriteBody>
@@ -321,7 +361,8 @@ void save_vocabulary_text(const fs::path& path, const Vocabulary& vocabulary) {
 }
 
 Vocabulary load_vocabulary_binary(const fs::path& path) {
-  const std::vector<char> data = read_whole_file(path);
+  const MappedFile file(path);
+  const std::span<const char> data = file.bytes();
   if (data.size() < kBinaryHeaderBytes + kChecksumBytes) {
     fail(path, "truncated: " + std::to_string(data.size()) + " bytes, a binary vocabulary has at least " +
                    std::to_string(kBinaryHeaderBytes + kChecksumBytes));
@@ -346,27 +387,21 @@ Vocabulary load_vocabulary_binary(const fs::path& path) {
   }
   const std::size_t body_size = data.size() - kChecksumBytes;
   const auto stored_checksum = get<std::uint64_t>(data.data() + body_size);
-  if (vocabulary_checksum(std::span<const char>(data.data(), body_size)) != stored_checksum) fail(path, "checksum mismatch (file corrupted)");
+  if (vocabulary_checksum(data.first(body_size)) != stored_checksum) fail(path, "checksum mismatch (file corrupted)");
   if (scoring > static_cast<std::uint32_t>(kMaxScoring) || weighting > static_cast<std::uint32_t>(kMaxWeighting)) {
     fail(path, "unknown scoring " + std::to_string(scoring) + " or weighting " + std::to_string(weighting));
   }
 
   const std::size_t n = node_count;
-  const char* parents = data.data() + kBinaryHeaderBytes;
-  const char* leaves = parents + 4 * n;
-  const char* descriptors = leaves + n;
-  const char* weights = descriptors + 32 * n;
-  std::vector<Vocabulary::NodeRecord> nodes(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    Vocabulary::NodeRecord& node = nodes[i];
-    node.parent = get<std::uint32_t>(parents + 4 * i);
-    node.is_leaf = leaves[i] != 0;
-    std::memcpy(node.descriptor.data(), descriptors + 32 * i, 32);
-    node.weight = get<float>(weights + 4 * i);
-  }
+  const auto* bytes = reinterpret_cast<const std::uint8_t*>(data.data());
+  Vocabulary::NodeColumns columns;
+  columns.parents = {bytes + kBinaryHeaderBytes, 4 * n};
+  columns.is_leaf = {columns.parents.data() + columns.parents.size(), n};
+  columns.descriptors = {columns.is_leaf.data() + n, 32 * n};
+  columns.weights = {columns.descriptors.data() + columns.descriptors.size(), 4 * n};
   try {
-    return Vocabulary(static_cast<int>(branching), static_cast<int>(levels), static_cast<BowScoring>(scoring),
-                      static_cast<BowWeighting>(weighting), nodes);
+    return Vocabulary::from_columns(static_cast<int>(branching), static_cast<int>(levels), static_cast<BowScoring>(scoring),
+                                    static_cast<BowWeighting>(weighting), columns);
   } catch (const std::invalid_argument& e) {
     fail(path, e.what());
   }
