@@ -149,22 +149,26 @@ void Vocabulary::link(std::span<const std::uint8_t> is_leaf, DescriptorOf&& desc
   root_ = {0, first_slot[0], child_count[0]};
 }
 
+std::uint32_t Vocabulary::closest_child(const Descriptor& descriptor, const Slot& node) const {
+  const std::uint32_t begin = node.first_child_or_word;
+  const std::uint32_t end = begin + node.child_count;
+  std::uint32_t best = begin;
+  int best_distance = hamming_distance(descriptor, slot_descriptor_[begin]);
+  for (std::uint32_t c = begin + 1; c < end; ++c) {
+    const int distance = hamming_distance(descriptor, slot_descriptor_[c]);
+    if (distance < best_distance) {
+      best_distance = distance;
+      best = c;
+    }
+  }
+  return best;
+}
+
 WordId Vocabulary::word_of(const Descriptor& descriptor) const {
   if (empty()) return kNoWord;
   const Slot* at = &root_;
   while (true) {
-    const std::uint32_t begin = at->first_child_or_word;
-    const std::uint32_t end = begin + at->child_count;
-    std::uint32_t best = begin;
-    int best_distance = hamming_distance(descriptor, slot_descriptor_[begin]);
-    for (std::uint32_t c = begin + 1; c < end; ++c) {
-      const int distance = hamming_distance(descriptor, slot_descriptor_[c]);
-      if (distance < best_distance) {
-        best_distance = distance;
-        best = c;
-      }
-    }
-    at = &slot_[best];
+    at = &slot_[closest_child(descriptor, *at)];
     if (at->child_count == 0) return at->first_child_or_word;
   }
 }
@@ -196,18 +200,7 @@ void Vocabulary::transform(std::span<const Descriptor> descriptors, BowVector& b
       for (std::size_t g = 0; g < batch; ++g) {
         if (at[g] == nullptr) continue;
         const Descriptor& descriptor = descriptors[base + g];
-        const std::uint32_t begin = at[g]->first_child_or_word;
-        const std::uint32_t end = begin + at[g]->child_count;
-        std::uint32_t best = begin;
-        int best_distance = hamming_distance(descriptor, slot_descriptor_[begin]);
-        for (std::uint32_t c = begin + 1; c < end; ++c) {
-          const int distance = hamming_distance(descriptor, slot_descriptor_[c]);
-          if (distance < best_distance) {
-            best_distance = distance;
-            best = c;
-          }
-        }
-        const Slot& chosen = slot_[best];
+        const Slot& chosen = slot_[closest_child(descriptor, *at[g])];
         if (depth <= feature_depth) feature_node[g] = chosen.node;
         if (chosen.child_count == 0) {
           const auto index = static_cast<std::uint32_t>(base + g);

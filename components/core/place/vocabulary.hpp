@@ -98,6 +98,8 @@ class Vocabulary {
   Vocabulary(int branching, int levels, BowScoring scoring, BowWeighting weighting);
   // Fills the slots from parent_ and the leaf flags once parent_, weight_ and the per-node
   // descriptors are set; validates the tree. `descriptor_of(id)` gives node id's descriptor.
+  // The slot of `node`'s child closest to `descriptor` (first on ties); `node` must have children.
+  std::uint32_t closest_child(const Descriptor& descriptor, const Slot& node) const;
   template <typename DescriptorOf>
   void link(std::span<const std::uint8_t> is_leaf, DescriptorOf&& descriptor_of);
 
