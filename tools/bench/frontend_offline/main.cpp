@@ -5,6 +5,7 @@
 // usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]
 //                                [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast]
 //                                [--first-frame K] [--frames N] [--stationary-chi2 X] [--rotation-chi2 X]
+//                                [--kidnap DIR]
 #include <algorithm>
 #include <charconv>
 #include <cstdio>
@@ -15,6 +16,7 @@
 #include <system_error>
 #include <vector>
 
+#include "tools/bench/frontend_offline/kidnapped_copy.hpp"
 #include "tools/bench/frontend_offline/offline_run.hpp"
 
 namespace {
@@ -25,7 +27,8 @@ constexpr const char* kUsage =
     "usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]\n"
     "       [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast]\n"
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
-    "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n";
+    "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n"
+    "       [--kidnap DIR]   (run on a kidnapped-camera copy written to DIR: frames 60-79 black, 80-159 = 0-79)\n";
 
 double percentile(std::vector<double> values, double fraction) {
   if (values.empty()) return 0.0;
@@ -38,6 +41,32 @@ void print_stage(const char* name, const std::vector<FrameRecord>& frames, doubl
   std::vector<double> values;
   for (const FrameRecord& f : frames) values.push_back(f.*field);
   std::printf("  %-10s median %7.2f ms   p90 %7.2f ms\n", name, percentile(values, 0.5), percentile(values, 0.9));
+}
+
+// Frames lost (not tracked after the map started) and what relocalizing took: the tracker's wall
+// time of every lost frame (each tried a relocalization and failed) and of each relocalized one.
+void print_relocalization_summary(const heslam::bench::OfflineRun& run) {
+  int lost = 0;
+  std::vector<double> lost_ms;
+  std::vector<double> relocalized_ms;
+  std::string relocalized_at;
+  for (std::size_t k = 0; k < run.frames.size(); ++k) {
+    const FrameRecord& f = run.frames[k];
+    if (f.state == heslam::TrackingState::kLost) {
+      ++lost;
+      lost_ms.push_back(f.tracking_ms);
+    }
+    if (f.method == heslam::TrackingMethod::kRelocalization) {
+      relocalized_ms.push_back(f.tracking_ms);
+      relocalized_at += (relocalized_at.empty() ? "" : ", ") + std::to_string(k);
+    }
+  }
+  if (lost == 0 && relocalized_ms.empty()) return;
+  std::printf("relocalization: %d frames lost (tracking median %.2f ms, max %.2f ms); relocalized at frame %s "
+              "(tracking median %.2f ms, max %.2f ms)\n",
+              lost, percentile(lost_ms, 0.5), lost_ms.empty() ? 0.0 : *std::max_element(lost_ms.begin(), lost_ms.end()),
+              relocalized_at.empty() ? "none" : relocalized_at.c_str(), percentile(relocalized_ms, 0.5),
+              relocalized_ms.empty() ? 0.0 : *std::max_element(relocalized_ms.begin(), relocalized_ms.end()));
 }
 
 // A whole-string number for `flag`, or a one-line error naming it.
@@ -62,6 +91,7 @@ int run(int argc, char** argv) {
   std::string settings;
   heslam::bench::OfflineRunOptions options;
   std::string he_mode;
+  std::string kidnap_dir;
   for (int i = 2; i < argc; ++i) {
     const std::string arg = argv[i];
     if (i + 1 >= argc) throw std::runtime_error(arg + ": missing value\n" + kUsage);
@@ -80,6 +110,8 @@ int run(int argc, char** argv) {
       options.max_frames = parse_number<int>(arg, value);
     } else if (arg == "--stationary-chi2") {
       options.tracker.stationary_test_chi2 = parse_number<double>(arg, value);
+    } else if (arg == "--kidnap") {
+      kidnap_dir = value;
     } else if (arg == "--rotation-chi2") {
       options.tracker.rotation_only_test_chi2 = parse_number<double>(arg, value);
     } else {
@@ -95,6 +127,11 @@ int run(int argc, char** argv) {
     }
   }
 
+  if (!kidnap_dir.empty()) {
+    heslam::bench::write_kidnapped_copy(dataset, kidnap_dir);
+    std::printf("kidnapped copy of %s written to %s\n", dataset.c_str(), kidnap_dir.c_str());
+    dataset = kidnap_dir;
+  }
   const auto sequence = heslam::bench::load_euroc_sequence(dataset);
   if (sequence.frames.empty()) throw std::runtime_error(dataset + ": no stereo frames found in mav0/cam0, mav0/cam1");
   const auto result = heslam::bench::run_offline(sequence, options);
@@ -116,6 +153,7 @@ int run(int argc, char** argv) {
   std::printf("features per frame: median %.0f (stereo %.0f)\n", percentile(features, 0.5), percentile(stereo, 0.5));
   std::printf("stationary test: %d frames still (last pose kept), %d rotating in place (last centre kept)\n", still,
               rotating);
+  print_relocalization_summary(result);
   std::printf("per-frame time (image decoding excluded):\n");
   print_stage("rectify", result.frames, &FrameRecord::rectify_ms);
   print_stage("he", result.frames, &FrameRecord::he_ms);
