@@ -7,11 +7,14 @@
 //
 // Binary (little-endian): "HESLAMVB", u32 format version, u32 k, u32 L, u32 scoring, u32 weighting,
 // u32 reserved, u64 node count (without the root), then per-field arrays (u32 parent[n], u8
-// is_leaf[n], u8 descriptor[n][32], f32 weight[n]), then u64 FNV-1a checksum of everything before it.
+// is_leaf[n], u8 descriptor[n][32], f32 weight[n]), then a u64 checksum of everything before it:
+// FNV-1a 64 taken over little-endian 64-bit words, the last < 8 bytes one by one (vocabulary_checksum;
+// word-wise because byte-wise FNV-1a costs ~0.1 s on a 45 MB file, an eighth of that word-wise).
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
+#include <span>
 
 #include "components/core/place/vocabulary.hpp"
 
@@ -30,6 +33,9 @@ VocabularyFileFormat detect_vocabulary_format(const std::filesystem::path& path)
 Vocabulary load_vocabulary(const std::filesystem::path& path);  // either format, by content
 Vocabulary load_vocabulary_text(const std::filesystem::path& path);
 Vocabulary load_vocabulary_binary(const std::filesystem::path& path);
+
+// The binary format's checksum of `bytes` (see the top of this file).
+std::uint64_t vocabulary_checksum(std::span<const char> bytes);
 
 // Written to "<path>.tmp" and renamed over <path>. Throw std::runtime_error naming the path.
 void save_vocabulary_text(const std::filesystem::path& path, const Vocabulary& vocabulary);
