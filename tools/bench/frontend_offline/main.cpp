@@ -5,7 +5,7 @@
 // usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]
 //                                [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast]
 //                                [--first-frame K] [--frames N] [--stationary-chi2 X] [--rotation-chi2 X]
-//                                [--kidnap DIR]
+//                                [--kidnap DIR] [--vocabulary FILE|none]
 #include <algorithm>
 #include <charconv>
 #include <cstdio>
@@ -16,6 +16,7 @@
 #include <system_error>
 #include <vector>
 
+#include "components/core/place/vocabulary_setting.hpp"
 #include "tools/bench/frontend_offline/kidnapped_copy.hpp"
 #include "tools/bench/frontend_offline/offline_run.hpp"
 
@@ -28,7 +29,8 @@ constexpr const char* kUsage =
     "       [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast]\n"
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
     "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n"
-    "       [--kidnap DIR]   (run on a kidnapped-camera copy written to DIR: frames 60-79 black, 80-159 = 0-79)\n";
+    "       [--kidnap DIR]   (run on a kidnapped-camera copy written to DIR: frames 60-79 black, 80-159 = 0-79)\n"
+    "       [--vocabulary FILE|none]   (keyframe database for relocalization; default: the build's vocabulary)\n";
 
 double percentile(std::vector<double> values, double fraction) {
   if (values.empty()) return 0.0;
@@ -92,6 +94,7 @@ int run(int argc, char** argv) {
   heslam::bench::OfflineRunOptions options;
   std::string he_mode;
   std::string kidnap_dir;
+  std::string vocabulary;
   for (int i = 2; i < argc; ++i) {
     const std::string arg = argv[i];
     if (i + 1 >= argc) throw std::runtime_error(arg + ": missing value\n" + kUsage);
@@ -110,6 +113,8 @@ int run(int argc, char** argv) {
       options.max_frames = parse_number<int>(arg, value);
     } else if (arg == "--stationary-chi2") {
       options.tracker.stationary_test_chi2 = parse_number<double>(arg, value);
+    } else if (arg == "--vocabulary") {
+      vocabulary = value;
     } else if (arg == "--kidnap") {
       kidnap_dir = value;
     } else if (arg == "--rotation-chi2") {
@@ -127,6 +132,13 @@ int run(int argc, char** argv) {
     }
   }
 
+  options.vocabulary = heslam::load_vocabulary_setting(vocabulary);
+  if (options.vocabulary) {
+    std::printf("vocabulary %s: %zu words\n", heslam::describe_vocabulary_setting(vocabulary).c_str(),
+                options.vocabulary->word_count());
+  } else {
+    std::printf("warning: --vocabulary none: a lost frame is relocalized against the newest keyframes only\n");
+  }
   if (!kidnap_dir.empty()) {
     heslam::bench::write_kidnapped_copy(dataset, kidnap_dir);
     std::printf("kidnapped copy of %s written to %s\n", dataset.c_str(), kidnap_dir.c_str());
