@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "components/core/place/vocabulary.hpp"
+#include "../tracking/synthetic_scene.hpp"
 
 namespace heslam::test {
 
@@ -47,14 +48,7 @@ class HandBuiltVocabulary {
     return out;
   }
 
-  static Descriptor random_descriptor(std::mt19937_64& rng) {
-    Descriptor d{};
-    for (std::size_t i = 0; i < d.size(); i += 8) {
-      const std::uint64_t word = rng();
-      for (std::size_t b = 0; b < 8; ++b) d[i + b] = static_cast<std::uint8_t>(word >> (8 * b));
-    }
-    return d;
-  }
+  static Descriptor random_descriptor(std::mt19937_64& rng) { return test::random_descriptor(rng); }
 
  private:
   Vocabulary vocabulary_;

@@ -22,16 +22,7 @@ constexpr int kNoiseBits = 5;
 // The tree has 2 levels: match at its first level (4 nodes), as kBowMatchLevelsUp does on 6 levels.
 constexpr int kLevelsUp = 1;
 
-PinholeStereo camera() {
-  PinholeStereo c;
-  c.fx_px = c.fy_px = 450.0;
-  c.cx_px = 320.0;
-  c.cy_px = 240.0;
-  c.baseline_m = 0.1;
-  c.width_px = 640;
-  c.height_px = 480;
-  return c;
-}
+PinholeStereo camera() { return test::synthetic_camera(); }
 
 Descriptor with_flipped_bits(Descriptor d, std::mt19937_64& rng, int bits) {
   for (int b = 0; b < bits; ++b) {
