@@ -5,7 +5,7 @@
 // usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]
 //                                [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast]
 //                                [--first-frame K] [--frames N] [--stationary-chi2 X] [--rotation-chi2 X]
-//                                [--kidnap DIR] [--vocabulary FILE|none]
+//                                [--kidnap DIR [--kidnap-plan B,R,S[,N]]] [--vocabulary FILE|none]
 #include <algorithm>
 #include <charconv>
 #include <cstdio>
@@ -30,6 +30,8 @@ constexpr const char* kUsage =
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
     "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n"
     "       [--kidnap DIR]   (run on a kidnapped-camera copy written to DIR: frames 60-79 black, 80-159 = 0-79)\n"
+    "       [--kidnap-plan B,R,S[,N]]   (the copy's plan: frames B..R-1 black, from R on the source's frames S.. (N of\n"
+    "                                    them; default to the source's end); B = R: a teleport without black frames)\n"
     "       [--vocabulary FILE|none]   (keyframe database for relocalization; default: the build's vocabulary)\n";
 
 double percentile(std::vector<double> values, double fraction) {
@@ -85,6 +87,21 @@ T parse_number(const std::string& flag, const std::string& value) {
   return number;
 }
 
+// "B,R,S" or "B,R,S,N" (KidnapPlan's black_first, replay_first, replay_source, replay_frames).
+heslam::bench::KidnapPlan parse_kidnap_plan(const std::string& flag, const std::string& value) {
+  std::vector<int> numbers;
+  std::size_t begin = 0;
+  while (begin <= value.size()) {
+    const std::size_t comma = std::min(value.find(',', begin), value.size());
+    numbers.push_back(parse_number<int>(flag, value.substr(begin, comma - begin)));
+    begin = comma + 1;
+  }
+  if (numbers.size() != 3 && numbers.size() != 4) {
+    throw std::runtime_error(flag + ": expected B,R,S or B,R,S,N, got '" + value + "'");
+  }
+  return heslam::bench::KidnapPlan{numbers[0], numbers[1], numbers[2], numbers.size() == 4 ? numbers[3] : -1};
+}
+
 int run(int argc, char** argv) {
   if (argc < 2) throw std::runtime_error(std::string("missing DATASET\n") + kUsage);
   std::string dataset = argv[1];
@@ -97,6 +114,8 @@ int run(int argc, char** argv) {
   heslam::bench::OfflineRunOptions options;
   std::string he_mode;
   std::string kidnap_dir;
+  heslam::bench::KidnapPlan kidnap_plan;
+  bool kidnap_plan_given = false;
   std::string vocabulary;
   for (int i = 2; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -120,6 +139,9 @@ int run(int argc, char** argv) {
       vocabulary = value;
     } else if (arg == "--kidnap") {
       kidnap_dir = value;
+    } else if (arg == "--kidnap-plan") {
+      kidnap_plan = parse_kidnap_plan(arg, value);
+      kidnap_plan_given = true;
     } else if (arg == "--rotation-chi2") {
       options.tracker.rotation_only_test_chi2 = parse_number<double>(arg, value);
     } else {
@@ -142,8 +164,9 @@ int run(int argc, char** argv) {
   } else {
     std::printf("warning: --vocabulary none: a lost frame is relocalized against the newest keyframes only\n");
   }
+  if (kidnap_dir.empty() && kidnap_plan_given) throw std::runtime_error("--kidnap-plan: needs --kidnap DIR");
   if (!kidnap_dir.empty()) {
-    heslam::bench::write_kidnapped_copy(dataset, kidnap_dir);
+    heslam::bench::write_kidnapped_copy(dataset, kidnap_dir, kidnap_plan);
     std::printf("kidnapped copy of %s written to %s\n", dataset.c_str(), kidnap_dir.c_str());
     dataset = kidnap_dir;
   }
