@@ -7,15 +7,10 @@
 #include <cstdio>
 #include <memory>
 
-#include "components/core/place/default_vocabulary.hpp"
-#include "components/core/place/image_descriptors.hpp"
-#include "components/core/place/vocabulary_io.hpp"
-#include "components/core/place/vocabulary_training.hpp"
+#include "relocalization_test_vocabulary.hpp"
 #include "test_support.hpp"
 #include "tools/bench/frontend_offline/kidnapped_copy.hpp"
 #include "tools/bench/frontend_offline/offline_run.hpp"
-
-#include <opencv2/imgcodecs.hpp>
 
 namespace heslam {
 namespace {
@@ -23,26 +18,6 @@ namespace {
 constexpr int kFirstValidImage = 80;        // the first frame after the black ones
 constexpr int kMaxFramesToRelocalize = 3;   // relocalized at frame 83 at the latest
 constexpr double kMaxPositionError_m = 0.02;
-
-// The build's default vocabulary; without it (a build that skipped training) a small one trained
-// here on the V101 clip's images (not MH01's: the test must not recognise places by having learnt
-// their words).
-std::shared_ptr<const Vocabulary> test_vocabulary() {
-  const auto path = default_vocabulary_path();
-  if (std::filesystem::exists(path)) return std::make_shared<const Vocabulary>(load_vocabulary(path));
-  std::printf("[ note     ] %s absent: training a small vocabulary on euroc_v101_head\n", path.c_str());
-  const auto sequence = bench::load_euroc_sequence(test::shared_dataset("euroc_v101_head"));
-  ImageDescriptorExtractor extractor;
-  std::vector<std::vector<Descriptor>> images;
-  for (std::size_t k = 0; k < sequence.frames.size(); k += 2) {
-    images.push_back(extractor.extract(cv::imread(sequence.frames[k].left_png.string(), cv::IMREAD_GRAYSCALE)));
-  }
-  VocabularyTrainingOptions options;
-  options.branching = 10;
-  options.levels = 5;
-  options.max_cluster_descriptors = 60000;
-  return std::make_shared<const Vocabulary>(train_vocabulary(images, options));
-}
 
 TEST(KidnappedCamera, Mh01RelocalizedWithinThreeFramesAtTheFirstPassPoses) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
@@ -52,7 +27,7 @@ TEST(KidnappedCamera, Mh01RelocalizedWithinThreeFramesAtTheFirstPassPoses) {
   ASSERT_EQ(bench::write_kidnapped_copy(source, scratch.path(), bench::KidnapPlan{60, 80, 0}), 160);
 
   bench::OfflineRunOptions options;
-  options.vocabulary = test_vocabulary();
+  options.vocabulary = test::relocalization_test_vocabulary();
   const bench::OfflineRun first_pass = bench::run_offline(bench::load_euroc_sequence(source), [&] {
     bench::OfflineRunOptions o = options;
     o.max_frames = 80;
