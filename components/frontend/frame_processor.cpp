@@ -17,7 +17,7 @@ double ms_since(std::chrono::steady_clock::time_point start) {
 FrameProcessor::FrameProcessor(const StereoCalibration& calibration, const FrontendOptions& options)
     : rectifier_(calibration),
       pipeline_(rectifier_.camera(), options.features),
-      tracker_(rectifier_.camera(), options.tracker) {}
+      tracker_(rectifier_.camera(), options.tracker, options.vocabulary) {}
 
 FrameOutput FrameProcessor::process(std::int64_t stamp_ns, std::uint64_t seq, const cv::Mat& left_raw,
                                     const cv::Mat& right_raw) {

@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "components/core/mapping/map_file.hpp"
+#include "components/core/place/vocabulary_setting.hpp"
 #include "runtime/sequence.hpp"
 
 namespace heslam::frontend {
@@ -89,6 +90,13 @@ void Frontend::configure(const runtime::Config& config) {
   log().info("HE ", to_string(options_.features.he.mode), ", ", options_.features.orb.features, " ORB features, ",
              options_.mapper_enabled ? "mirroring the local mapper's map" : "no local mapper (own map)",
              options_.wait_for_mapper ? ", lockstep waits for the mapper" : "");
+  if (options_.vocabulary) {
+    log().info("vocabulary ", describe_vocabulary_setting(options_.vocabulary_file), ": ",
+               options_.vocabulary->word_count(), " words; relocalization searches the whole map");
+  } else {
+    log().warn("vocabulary.file: none: no keyframe database, a lost frame is relocalized against the ",
+               options_.tracker.relocalization_keyframes, " newest keyframes only");
+  }
 }
 
 void Frontend::run() {

@@ -4,6 +4,8 @@
 #include <climits>
 #include <stdexcept>
 
+#include "components/core/place/vocabulary_setting.hpp"
+
 namespace heslam::frontend {
 namespace {
 
@@ -108,6 +110,8 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
   read(config, "lockstep.mapper_timeout_s", timeout_s, 0.1, kMaxTimeoutS);
   options.mapper_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));
   read(config, "frames.max_pending", options.max_pending_frames, 1, 1000);
+  options.vocabulary_file = config.get_string("vocabulary.file", "");
+  options.vocabulary = load_vocabulary_setting(options.vocabulary_file);
   options.mapper_map_file = config.get_string("mapper.map_file", "");
   for (std::size_t i = 0; i < rest.size(); ++i) {
     if (rest[i] == "--mapper-map-file" && i + 1 < rest.size()) {

@@ -5,11 +5,13 @@
 
 #include <chrono>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "components/core/feature/stereo_feature_pipeline.hpp"
 #include "components/core/map/map.hpp"
+#include "components/core/place/vocabulary.hpp"
 #include "components/core/tracking/tracker_options.hpp"
 #include "runtime/config.hpp"
 
@@ -18,6 +20,12 @@ namespace heslam::frontend {
 struct FrontendOptions {
   StereoFeaturePipelineOptions features;  // he.*, orb.*, stereo.*, pipeline.parallel
   TrackerOptions tracker;                 // tracker.*
+  // vocabulary.file: the ORB vocabulary of the tracker's keyframe database (a lost frame is
+  // relocalized anywhere in the map). Empty: the build's default vocabulary; "none": no vocabulary
+  // (warned; relocalization against the newest keyframes only). Loaded by from_config: a missing or
+  // malformed file ends the process with one line naming it.
+  std::string vocabulary_file;
+  std::shared_ptr<const Vocabulary> vocabulary;  // null for "none"
 
   // mapper.enabled: a local mapper owns the map. The frontend then mirrors map/keyframe_states and
   // map/points into its tracker and does not maintain the map itself (TrackerOptions::maintain_map).

@@ -1,6 +1,10 @@
 // Frontend options: no config = the core defaults (the offline chain); fields map to the core structs;
 // bad fields are one clear line.
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 
 #include "components/frontend/frontend_options.hpp"
 #include "runtime/config.hpp"
@@ -53,6 +57,36 @@ TEST(FrontendOptions, BadFieldIsOneLineNamingFileAndField) {
   const auto typo = runtime::Config::parse("orb:\n  levle: 4\n", "frontend.yaml");
   FrontendOptions::from_config(typo);
   EXPECT_THROW(typo.reject_unknown(), std::runtime_error);
+}
+
+// vocabulary.file: empty = the build's default vocabulary, none = no vocabulary, a missing or
+// malformed file one line naming it.
+TEST(FrontendOptions, VocabularyFileDefaultNoneAndBadFiles) {
+  const FrontendOptions defaults = FrontendOptions::from_config(runtime::Config::empty());
+  ASSERT_NE(defaults.vocabulary, nullptr) << "the build's default vocabulary (heslam-default-vocabulary)";
+  EXPECT_GT(defaults.vocabulary->word_count(), 0u);
+  const auto none = runtime::Config::parse("vocabulary:\n  file: none\n", "frontend.yaml");
+  EXPECT_EQ(FrontendOptions::from_config(none).vocabulary, nullptr);
+  none.reject_unknown();
+
+  const auto scratch = std::filesystem::temp_directory_path() / ("heslam_vocab_option_" + std::to_string(getpid()));
+  std::filesystem::create_directories(scratch);
+  {
+    std::ofstream malformed(scratch / "bad.txt");
+    malformed << "10 6 0 0\n0 0 1 2 3\n";
+  }
+  for (const std::string& file : {(scratch / "missing.hvoc").string(), (scratch / "bad.txt").string()}) {
+    const auto config = runtime::Config::parse("vocabulary:\n  file: " + file + "\n", "frontend.yaml");
+    try {
+      FrontendOptions::from_config(config);
+      ADD_FAILURE() << "expected an error for " << file;
+    } catch (const std::runtime_error& error) {
+      const std::string what = error.what();
+      EXPECT_NE(what.find(file), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << "one line: " << what;
+    }
+  }
+  std::filesystem::remove_all(scratch);
 }
 
 // The EuRoC and synth configs must not pin values that the core's defaults have since changed:

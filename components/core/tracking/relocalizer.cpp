@@ -1,9 +1,11 @@
-// Relocalization against recent keyframes.
+// Relocalization against the keyframe database's candidates (or, without one, the newest keyframes).
 #include "components/core/tracking/relocalizer.hpp"
 
+#include <functional>
 #include <vector>
 
 #include "components/core/solve/pnp_ransac.hpp"
+#include "components/core/tracking/bow_search.hpp"
 #include "components/core/tracking/local_map.hpp"
 #include "components/core/tracking/optimize_frame.hpp"
 #include "components/core/tracking/projection_search.hpp"
@@ -19,11 +21,15 @@ constexpr int kMinPnpInliers = 10;
 // Distinct RANSAC stream per (frame, keyframe): mixes the ids with a 64-bit odd constant.
 constexpr std::uint64_t kSeedMix = 0x9e3779b97f4a7c15ULL;
 
+// Writes the first matches between the keyframe's map points and the frame; returns how many.
+using KeyframeMatcher = std::function<int(Frame&, const Keyframe&)>;
+
 std::optional<Relocalization> try_keyframe(Frame& frame, Map& map, const Keyframe& keyframe,
-                                           const PinholeStereo& camera, const TrackerOptions& options) {
+                                           const PinholeStereo& camera, const TrackerOptions& options,
+                                           const KeyframeMatcher& match) {
   const Pose3 T_wc_before = frame.T_wc;
   frame.clear_matches();
-  const int matches = search_keyframe_brute_force(frame, keyframe, map, options.relocalization_ratio, options);
+  const int matches = match(frame, keyframe);
   if (matches < options.min_relocalization_matches) {
     frame.clear_matches();
     return std::nullopt;
@@ -80,13 +86,43 @@ std::optional<Relocalization> try_keyframe(Frame& frame, Map& map, const Keyfram
 }  // namespace
 
 std::optional<Relocalization> relocalize(Frame& frame, Map& map, const PinholeStereo& camera,
-                                         const TrackerOptions& options) {
+                                         const TrackerOptions& options, const KeyframeDatabase* database) {
   int tried = 0;
-  for (auto it = map.keyframes.rbegin(); it != map.keyframes.rend() && tried < options.relocalization_keyframes; ++it) {
-    if (it->second.culled) continue;
-    ++tried;
-    const auto result = try_keyframe(frame, map, it->second, camera, options);
-    if (result) return result;
+  if (database != nullptr && !database->vocabulary().empty()) {
+    BowVector bow;
+    FeatureVector features;
+    database->vocabulary().transform(frame.features.descriptors, bow, &features, kBowMatchLevelsUp);
+    BowSearchOptions bow_options;
+    bow_options.max_distance = options.descriptor_threshold_low;
+    bow_options.ratio = options.relocalization_ratio;
+    bow_options.check_orientation = options.check_orientation;
+    for (const PlaceCandidate& candidate : database->relocalization_candidates(bow, map)) {
+      const Keyframe* keyframe = map.keyframe(candidate.id);
+      const FeatureVector* keyframe_features = database->features(candidate.id);
+      if (keyframe == nullptr || keyframe->culled || keyframe_features == nullptr) continue;
+      ++tried;
+      const KeyframeMatcher by_bow = [&](Frame& f, const Keyframe& k) {
+        return search_keyframe_by_bow(f, features, k, *keyframe_features, map, bow_options);
+      };
+      auto result = try_keyframe(frame, map, *keyframe, camera, options, by_bow);
+      if (result) {
+        result->candidates_tried = tried;
+        return result;
+      }
+    }
+  } else {
+    const KeyframeMatcher brute_force = [&](Frame& f, const Keyframe& k) {
+      return search_keyframe_brute_force(f, k, map, options.relocalization_ratio, options);
+    };
+    for (auto it = map.keyframes.rbegin(); it != map.keyframes.rend() && tried < options.relocalization_keyframes; ++it) {
+      if (it->second.culled) continue;
+      ++tried;
+      auto result = try_keyframe(frame, map, it->second, camera, options, brute_force);
+      if (result) {
+        result->candidates_tried = tried;
+        return result;
+      }
+    }
   }
   frame.clear_matches();
   return std::nullopt;

@@ -73,7 +73,12 @@ const char* to_string(TrackingMethod method) {
   return "unknown";
 }
 
-Tracker::Tracker(const PinholeStereo& camera, const TrackerOptions& options) : camera_(camera), options_(options) {}
+Tracker::Tracker(const PinholeStereo& camera, const TrackerOptions& options, std::shared_ptr<const Vocabulary> vocabulary)
+    : camera_(camera), options_(options), vocabulary_(std::move(vocabulary)) {
+  if (vocabulary_ && !vocabulary_->empty()) database_.emplace(*vocabulary_);
+}
+
+DatabaseSync Tracker::sync_place_database() { return database_ ? database_->sync(map_) : DatabaseSync{}; }
 
 TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatures features) {
   const auto start = std::chrono::steady_clock::now();
@@ -100,7 +105,8 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
     }
   } else {
     frame.T_wc = last_frame_.T_wc;
-    const auto relocalization = relocalize(frame, map_, camera_, options_);
+    sync_place_database();  // keyframes the mapper culled or a loaded map brought since the last sync
+    const auto relocalization = relocalize(frame, map_, camera_, options_, place_database());
     if (relocalization) {
       ok = true;
       result.method = TrackingMethod::kRelocalization;
@@ -176,6 +182,7 @@ bool Tracker::resume_in_map() {
   point_counter_ = points + kResumeIdGap;
   reference_kf_ = map_.keyframes.rbegin()->first;
   state_ = TrackingState::kLost;  // the next frame goes to relocalization
+  sync_place_database();
   return true;
 }
 
@@ -195,6 +202,7 @@ bool Tracker::initialize(Frame& frame, TrackResult& result) {
   KeyframeCandidate candidate = make_keyframe(frame, camera_, map_, next_keyframe_id(), point_counter_, all_points);
   insert_keyframe(map_, candidate, camera_, options_);
   frame.point_ids = candidate.keyframe.point_ids;
+  sync_place_database();
 
   state_ = TrackingState::kOk;
   reference_kf_ = candidate.keyframe.id;
@@ -288,6 +296,7 @@ void Tracker::maybe_insert_keyframe(Frame& frame, int inliers, TrackResult& resu
   KeyframeCandidate candidate = make_keyframe(frame, camera_, map_, next_keyframe_id(), point_counter_, options_);
   insert_keyframe(map_, candidate, camera_, options_);
   frame.point_ids = candidate.keyframe.point_ids;  // the next frame tracks the new points too
+  sync_place_database();                           // the new keyframe, transformed once
   reference_kf_ = candidate.keyframe.id;
   frames_since_keyframe_ = 0;
   result.new_keyframe = std::move(candidate.keyframe);

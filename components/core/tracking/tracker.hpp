@@ -4,9 +4,14 @@
 // The tracker keeps a Map: alone it fills it itself (keyframes, points, observations, covisibility);
 // inside the frontend process the local mapper's state is applied to it (local_map()) and
 // TrackerOptions::maintain_map is false. Deterministic: same frames in, same poses out, bit for bit.
+//
+// With a vocabulary the tracker keeps a keyframe database of its map's keyframes and relocalizes a
+// lost frame against the database's candidates anywhere in the map (relocalizer.hpp); without one,
+// against the newest keyframes only.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -14,6 +19,8 @@
 #include "components/core/feature/features.hpp"
 #include "components/core/geometry/pose.hpp"
 #include "components/core/map/map.hpp"
+#include "components/core/place/keyframe_database.hpp"
+#include "components/core/place/vocabulary.hpp"
 #include "components/core/tracking/frame.hpp"
 #include "components/core/tracking/stationary_test.hpp"
 #include "components/core/tracking/tracker_options.hpp"
@@ -53,7 +60,9 @@ struct TrackResult {
 
 class Tracker {
  public:
-  Tracker(const PinholeStereo& camera, const TrackerOptions& options);
+  // `vocabulary` may be null: no keyframe database, relocalization against the newest keyframes.
+  Tracker(const PinholeStereo& camera, const TrackerOptions& options,
+          std::shared_ptr<const Vocabulary> vocabulary = nullptr);
 
   // Throws std::invalid_argument (one line naming the field) on inconsistent features; the tracker's
   // state is unchanged then, so the caller can skip the frame and count it.
@@ -68,6 +77,14 @@ class Tracker {
   // cannot collide with ids the previous process published that the map does not hold yet.
   // Returns false (and changes nothing) when the map holds no keyframe or tracking already started.
   bool resume_in_map();
+
+  // Brings the keyframe database up to the map's keyframes (new ones transformed once, culled ones
+  // dropped). The tracker does it itself after each keyframe it creates, before a relocalization and
+  // in resume_in_map(); a caller that changed local_map() may call it to spread the cost.
+  DatabaseSync sync_place_database();
+  // Null without a vocabulary.
+  const KeyframeDatabase* place_database() const { return database_ ? &*database_ : nullptr; }
+  const std::shared_ptr<const Vocabulary>& vocabulary() const { return vocabulary_; }
 
   Map& local_map() { return map_; }
   const Map& local_map() const { return map_; }
@@ -85,6 +102,8 @@ class Tracker {
 
   PinholeStereo camera_;
   TrackerOptions options_;
+  std::shared_ptr<const Vocabulary> vocabulary_;
+  std::optional<KeyframeDatabase> database_;  // with a vocabulary: the map's keyframes, by word
   Map map_;
   TrackingState state_ = TrackingState::kNotInitialized;
   Frame last_frame_;

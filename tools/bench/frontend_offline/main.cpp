@@ -5,6 +5,7 @@
 // usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]
 //                                [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast]
 //                                [--first-frame K] [--frames N] [--stationary-chi2 X] [--rotation-chi2 X]
+//                                [--kidnap DIR [--kidnap-plan B,R,S[,N]]] [--vocabulary FILE|none]
 #include <algorithm>
 #include <charconv>
 #include <cstdio>
@@ -15,6 +16,8 @@
 #include <system_error>
 #include <vector>
 
+#include "components/core/place/vocabulary_setting.hpp"
+#include "tools/bench/frontend_offline/kidnapped_copy.hpp"
 #include "tools/bench/frontend_offline/offline_run.hpp"
 
 namespace {
@@ -25,7 +28,11 @@ constexpr const char* kUsage =
     "usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]\n"
     "       [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast]\n"
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
-    "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n";
+    "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n"
+    "       [--kidnap DIR]   (run on a kidnapped-camera copy written to DIR: frames 60-79 black, 80-159 = 0-79)\n"
+    "       [--kidnap-plan B,R,S[,N]]   (the copy's plan: frames B..R-1 black, from R on the source's frames S.. (N of\n"
+    "                                    them; default to the source's end); B = R: a teleport without black frames)\n"
+    "       [--vocabulary FILE|none]   (keyframe database for relocalization; default: the build's vocabulary)\n";
 
 double percentile(std::vector<double> values, double fraction) {
   if (values.empty()) return 0.0;
@@ -40,6 +47,35 @@ void print_stage(const char* name, const std::vector<FrameRecord>& frames, doubl
   std::printf("  %-10s median %7.2f ms   p90 %7.2f ms\n", name, percentile(values, 0.5), percentile(values, 0.9));
 }
 
+// Frames lost (not tracked after the map started) and what relocalizing took: the tracker's wall
+// time of every lost frame (each tried a relocalization and failed) and of each relocalized one.
+void print_relocalization_summary(const heslam::bench::OfflineRun& run) {
+  int lost = 0;
+  std::vector<double> lost_ms;
+  std::vector<double> relocalized_ms;
+  std::vector<double> relocalized_cpu_ms;
+  std::string relocalized_at;
+  for (std::size_t k = 0; k < run.frames.size(); ++k) {
+    const FrameRecord& f = run.frames[k];
+    if (f.state == heslam::TrackingState::kLost) {
+      ++lost;
+      lost_ms.push_back(f.tracking_ms);
+    }
+    if (f.method == heslam::TrackingMethod::kRelocalization) {
+      relocalized_ms.push_back(f.tracking_ms);
+      relocalized_cpu_ms.push_back(f.tracking_cpu_ms);
+      relocalized_at += (relocalized_at.empty() ? "" : ", ") + std::to_string(k);
+    }
+  }
+  if (lost == 0 && relocalized_ms.empty()) return;
+  std::printf("relocalization: %d frames lost (tracking median %.2f ms, max %.2f ms); relocalized at frame %s "
+              "(tracking median %.2f ms, max %.2f ms; CPU median %.2f ms)\n",
+              lost, percentile(lost_ms, 0.5), lost_ms.empty() ? 0.0 : *std::max_element(lost_ms.begin(), lost_ms.end()),
+              relocalized_at.empty() ? "none" : relocalized_at.c_str(), percentile(relocalized_ms, 0.5),
+              relocalized_ms.empty() ? 0.0 : *std::max_element(relocalized_ms.begin(), relocalized_ms.end()),
+              percentile(relocalized_cpu_ms, 0.5));
+}
+
 // A whole-string number for `flag`, or a one-line error naming it.
 template <typename T>
 T parse_number(const std::string& flag, const std::string& value) {
@@ -49,6 +85,21 @@ T parse_number(const std::string& flag, const std::string& value) {
     throw std::runtime_error(flag + ": expected a number, got '" + value + "'");
   }
   return number;
+}
+
+// "B,R,S" or "B,R,S,N" (KidnapPlan's black_first, replay_first, replay_source, replay_frames).
+heslam::bench::KidnapPlan parse_kidnap_plan(const std::string& flag, const std::string& value) {
+  std::vector<int> numbers;
+  std::size_t begin = 0;
+  while (begin <= value.size()) {
+    const std::size_t comma = std::min(value.find(',', begin), value.size());
+    numbers.push_back(parse_number<int>(flag, value.substr(begin, comma - begin)));
+    begin = comma + 1;
+  }
+  if (numbers.size() != 3 && numbers.size() != 4) {
+    throw std::runtime_error(flag + ": expected B,R,S or B,R,S,N, got '" + value + "'");
+  }
+  return heslam::bench::KidnapPlan{numbers[0], numbers[1], numbers[2], numbers.size() == 4 ? numbers[3] : -1};
 }
 
 int run(int argc, char** argv) {
@@ -62,6 +113,10 @@ int run(int argc, char** argv) {
   std::string settings;
   heslam::bench::OfflineRunOptions options;
   std::string he_mode;
+  std::string kidnap_dir;
+  heslam::bench::KidnapPlan kidnap_plan;
+  bool kidnap_plan_given = false;
+  std::string vocabulary;
   for (int i = 2; i < argc; ++i) {
     const std::string arg = argv[i];
     if (i + 1 >= argc) throw std::runtime_error(arg + ": missing value\n" + kUsage);
@@ -80,6 +135,13 @@ int run(int argc, char** argv) {
       options.max_frames = parse_number<int>(arg, value);
     } else if (arg == "--stationary-chi2") {
       options.tracker.stationary_test_chi2 = parse_number<double>(arg, value);
+    } else if (arg == "--vocabulary") {
+      vocabulary = value;
+    } else if (arg == "--kidnap") {
+      kidnap_dir = value;
+    } else if (arg == "--kidnap-plan") {
+      kidnap_plan = parse_kidnap_plan(arg, value);
+      kidnap_plan_given = true;
     } else if (arg == "--rotation-chi2") {
       options.tracker.rotation_only_test_chi2 = parse_number<double>(arg, value);
     } else {
@@ -95,6 +157,19 @@ int run(int argc, char** argv) {
     }
   }
 
+  options.vocabulary = heslam::load_vocabulary_setting(vocabulary);
+  if (options.vocabulary) {
+    std::printf("vocabulary %s: %zu words\n", heslam::describe_vocabulary_setting(vocabulary).c_str(),
+                options.vocabulary->word_count());
+  } else {
+    std::printf("warning: --vocabulary none: a lost frame is relocalized against the newest keyframes only\n");
+  }
+  if (kidnap_dir.empty() && kidnap_plan_given) throw std::runtime_error("--kidnap-plan: needs --kidnap DIR");
+  if (!kidnap_dir.empty()) {
+    heslam::bench::write_kidnapped_copy(dataset, kidnap_dir, kidnap_plan);
+    std::printf("kidnapped copy of %s written to %s\n", dataset.c_str(), kidnap_dir.c_str());
+    dataset = kidnap_dir;
+  }
   const auto sequence = heslam::bench::load_euroc_sequence(dataset);
   if (sequence.frames.empty()) throw std::runtime_error(dataset + ": no stereo frames found in mav0/cam0, mav0/cam1");
   const auto result = heslam::bench::run_offline(sequence, options);
@@ -116,6 +191,7 @@ int run(int argc, char** argv) {
   std::printf("features per frame: median %.0f (stereo %.0f)\n", percentile(features, 0.5), percentile(stereo, 0.5));
   std::printf("stationary test: %d frames still (last pose kept), %d rotating in place (last centre kept)\n", still,
               rotating);
+  print_relocalization_summary(result);
   std::printf("per-frame time (image decoding excluded):\n");
   print_stage("rectify", result.frames, &FrameRecord::rectify_ms);
   print_stage("he", result.frames, &FrameRecord::he_ms);

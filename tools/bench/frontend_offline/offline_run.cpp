@@ -50,7 +50,7 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
   OfflineRun run;
   run.camera = rectifier.camera();
   StereoFeaturePipeline pipeline(run.camera, options.pipeline);
-  Tracker tracker(run.camera, options.tracker);
+  Tracker tracker(run.camera, options.tracker, options.vocabulary);
 
   const std::size_t first = std::min(sequence.frames.size(), static_cast<std::size_t>(std::max(options.first_frame, 0)));
   const std::size_t available = sequence.frames.size() - first;

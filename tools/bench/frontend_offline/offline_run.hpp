@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -18,6 +19,8 @@ namespace heslam::bench {
 struct OfflineRunOptions {
   StereoFeaturePipelineOptions pipeline;
   TrackerOptions tracker;
+  // Null: no keyframe database, a lost frame is relocalized against the newest keyframes only.
+  std::shared_ptr<const Vocabulary> vocabulary;
   PhotometricVariant variant = PhotometricVariant::kNone;
   int first_frame = 0;  // frames of the sequence skipped: the run starts (initializes) here
   int max_frames = 0;   // 0: the whole sequence
