@@ -1,9 +1,12 @@
 // The loop correction on a drifted synthetic loop: poses back near the truth, duplicates merged.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "components/core/loop/loop_correction_builder.hpp"
 #include "components/core/mapping/correction_application.hpp"
 #include "tests/loop/loop_world.hpp"
+#include "tests/mapping/mapping_test_util.hpp"
 
 namespace heslam {
 namespace {
@@ -93,6 +96,42 @@ TEST(LoopCorrectionBuilder, MatchedKeyframeStaysPutAndRunsRepeat) {
     }
   }
   EXPECT_EQ(first.correction.point_merges, second.correction.point_merges);
+}
+
+TEST(LoopCorrectionBuilder, FixedLoopGroupKeepsTheVerifiedTransformExactly) {
+  const test::LoopWorld w = test::make_loop_world();
+  const LoopCandidate loop = verified_loop(w);
+  LoopCorrectionBuilderOptions options;
+  options.fix_loop_group = true;
+  const LoopCorrectionOutput output = LoopCorrectionBuilder(options).compute(w.map, w.world.camera, loop, {});
+  ASSERT_TRUE(output.error.empty());
+  EXPECT_EQ(output.stats.pose_graph.fixed_vertices, output.stats.loop_group_keyframes + 1);
+  const Pose3 expected = w.map.keyframes.at(loop.matched_kf).T_wc * loop.T_matched_loop;
+  const auto loop_pose = std::find_if(output.correction.corrected_T_wc.begin(), output.correction.corrected_T_wc.end(),
+                                      [&](const auto& entry) { return entry.first == loop.loop_kf; });
+  ASSERT_NE(loop_pose, output.correction.corrected_T_wc.end());
+  EXPECT_LT(test::max_abs_difference(loop_pose->second, expected), 1e-12);
+}
+
+TEST(LoopCorrectionBuilder, GivenPointMatchesAreMergedFirst) {
+  const test::LoopWorld w = test::make_loop_world();
+  LoopCandidate loop = verified_loop(w);
+  // A loop-side point of the loop keyframe and the matched side's point of the same world point.
+  std::map<int, PointId> matched_side;
+  for (const PointId id : w.map.keyframes.at(loop.matched_kf).point_ids) {
+    if (id != kNoId) matched_side[w.truth_of_point.at(id)] = id;
+  }
+  for (const PointId id : w.map.keyframes.at(loop.loop_kf).point_ids) {
+    const auto it = id == kNoId ? matched_side.end() : matched_side.find(w.truth_of_point.at(id));
+    if (it != matched_side.end() && it->second != id) {
+      loop.matched_points.emplace_back(id, it->second);
+      break;
+    }
+  }
+  ASSERT_EQ(loop.matched_points.size(), 1u);
+  const LoopCorrectionOutput output = LoopCorrectionBuilder().compute(w.map, w.world.camera, loop, {});
+  ASSERT_FALSE(output.correction.point_merges.empty());
+  EXPECT_EQ(output.correction.point_merges.front(), loop.matched_points.front());
 }
 
 TEST(LoopCorrectionBuilder, RejectsUnknownKeyframes) {
