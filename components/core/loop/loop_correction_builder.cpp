@@ -110,6 +110,68 @@ int best_projection_match(const MapPoint& point, const Keyframe& kf, const Pose3
   return best_index;
 }
 
+// (c) Projects the matched side's points into every corrected loop-group keyframe; a keypoint holding
+// a loop-side point makes a merge. Returns the matches on free keypoints (not representable).
+int search_duplicates(const Map& map, const PinholeStereo& camera, const std::map<KeyframeId, Pose3>& corrected_T_wc,
+                      const std::vector<KeyframeId>& loop_group, const std::set<PointId>& loop_points,
+                      const std::vector<PointId>& matched_points, const LoopCorrectionBuilderOptions& options,
+                      MergeList& merges) {
+  int unlinked = 0;
+  for (const KeyframeId kf_id : loop_group) {
+    const Keyframe& kf = *map.keyframe(kf_id);
+    const FeatureGrid grid(kf.features.keypoints, camera.width_px, camera.height_px);
+    for (const PointId matched_id : matched_points) {
+      const int index =
+          best_projection_match(*map.point(matched_id), kf, corrected_T_wc.at(kf_id), grid, camera, options);
+      if (index < 0) continue;
+      const PointId existing = kf.point_ids[static_cast<std::size_t>(index)];
+      if (existing == kNoId || !live_point(map, existing)) {
+        ++unlinked;
+        continue;
+      }
+      if (loop_points.count(existing) != 0) merges.add(existing, matched_id);
+    }
+  }
+  return unlinked;
+}
+
+// (d) Covisibility of the loop group with keyframes outside it that only the merges created
+// (ORB-SLAM2: connections after the fusion minus the neighbours before it). The loop keyframe -
+// matched keyframe link comes first and is always kept.
+std::vector<LoopConnection> loop_connections(const Map& map, const LoopCandidate& loop,
+                                             const std::vector<KeyframeId>& loop_group, const MergeList& merges) {
+  const std::set<KeyframeId> in_group(loop_group.begin(), loop_group.end());
+  std::vector<LoopConnection> connections{{loop.loop_kf, loop.matched_kf, 0, true}};
+  for (const KeyframeId kf_id : loop_group) {
+    const Keyframe& kf = *map.keyframe(kf_id);
+    std::set<KeyframeId> previous{kf_id};
+    for (const auto& [neighbour, weight] : kf.covisible) previous.insert(neighbour);
+    std::map<KeyframeId, int> shared;
+    std::set<PointId> counted;
+    for (const PointId point_id : kf.point_ids) {
+      if (point_id == kNoId || !live_point(map, point_id) || !merges.merged(point_id)) continue;
+      const PointId into = merges.resolve(point_id);
+      if (!counted.insert(into).second) continue;
+      std::set<KeyframeId> observers;
+      for (const auto& [observer, index] : map.point(into)->observations) observers.insert(observer);
+      for (const PointId source : merges.sources(into)) {
+        for (const auto& [observer, index] : map.point(source)->observations) observers.insert(observer);
+      }
+      for (const KeyframeId observer : observers) {
+        if (in_group.count(observer) == 0 && previous.count(observer) == 0) ++shared[observer];
+      }
+    }
+    for (const auto& [neighbour, count] : shared) {
+      if (kf_id == loop.loop_kf && neighbour == loop.matched_kf) {
+        connections.front().shared_points = count;
+      } else {
+        connections.push_back({kf_id, neighbour, count, false});
+      }
+    }
+  }
+  return connections;
+}
+
 }  // namespace
 
 LoopCorrectionOutput LoopCorrectionBuilder::compute(
@@ -130,7 +192,6 @@ LoopCorrectionOutput LoopCorrectionBuilder::compute(
 
   // (a) The loop group moves rigidly with the loop keyframe's corrected pose.
   const std::vector<KeyframeId> loop_group = group_of(map, loop.loop_kf);
-  const std::set<KeyframeId> loop_group_set(loop_group.begin(), loop_group.end());
   const Pose3& T_w_loop = map.keyframe(loop.loop_kf)->T_wc;
   const Pose3 correction_w = map.keyframe(loop.matched_kf)->T_wc * loop.T_matched_loop * T_w_loop.inverse();
   std::map<KeyframeId, Pose3> corrected_T_wc;
@@ -155,54 +216,13 @@ LoopCorrectionOutput LoopCorrectionBuilder::compute(
   for (const PointId id : points_of(map, matched_group)) {
     if (loop_point_set.count(id) == 0) matched_points.push_back(id);
   }
-  for (const KeyframeId kf_id : loop_group) {
-    const Keyframe& kf = *map.keyframe(kf_id);
-    const FeatureGrid grid(kf.features.keypoints, camera.width_px, camera.height_px);
-    for (const PointId matched_id : matched_points) {
-      const int index = best_projection_match(*map.point(matched_id), kf, corrected_T_wc.at(kf_id), grid, camera,
-                                              options_);
-      if (index < 0) continue;
-      const PointId existing = kf.point_ids[static_cast<std::size_t>(index)];
-      if (existing == kNoId || !live_point(map, existing)) {
-        ++output.stats.unlinked_matches;
-        continue;
-      }
-      if (loop_point_set.count(existing) != 0) merges.add(existing, matched_id);
-    }
-  }
+  output.stats.unlinked_matches =
+      search_duplicates(map, camera, corrected_T_wc, loop_group, loop_point_set, matched_points, options_, merges);
   correction.point_merges = merges.merges();
   output.stats.fusion_ms = ms_since(fusion_start);
 
-  // (d) Loop connections: covisibility of the loop group with keyframes outside it that only the
-  // merges created (ORB-SLAM2: connections after fusion minus the neighbours before it).
-  std::vector<LoopConnection> connections{{loop.loop_kf, loop.matched_kf, 0, true}};
-  for (const KeyframeId kf_id : loop_group) {
-    const Keyframe& kf = *map.keyframe(kf_id);
-    std::set<KeyframeId> previous{kf_id};
-    for (const auto& [neighbour, weight] : kf.covisible) previous.insert(neighbour);
-    std::map<KeyframeId, int> shared;
-    std::set<PointId> counted;
-    for (const PointId point_id : kf.point_ids) {
-      if (point_id == kNoId || !live_point(map, point_id) || !merges.merged(point_id)) continue;
-      const PointId into = merges.resolve(point_id);
-      if (!counted.insert(into).second) continue;
-      std::set<KeyframeId> observers;
-      for (const auto& [observer, index] : map.point(into)->observations) observers.insert(observer);
-      for (const PointId source : merges.sources(into)) {
-        for (const auto& [observer, index] : map.point(source)->observations) observers.insert(observer);
-      }
-      for (const KeyframeId observer : observers) {
-        if (loop_group_set.count(observer) == 0 && previous.count(observer) == 0) ++shared[observer];
-      }
-    }
-    for (const auto& [neighbour, count] : shared) {
-      if (kf_id == loop.loop_kf && neighbour == loop.matched_kf) {
-        connections.front().shared_points = count;
-        continue;
-      }
-      connections.push_back({kf_id, neighbour, count, false});
-    }
-  }
+  // (d) Loop connections and the essential graph, the matched keyframe fixed.
+  const std::vector<LoopConnection> connections = loop_connections(map, loop, loop_group, merges);
   for (const LoopConnection& connection : connections) {
     if (connection.always || connection.shared_points >= options_.essential_graph.min_covisibility_weight) {
       ++output.stats.loop_connections;
