@@ -1,0 +1,124 @@
+// Global bundle adjustment with Ceres over the whole map, abortable between iterations.
+#include "components/core/loop/global_bundle_adjustment.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <memory>
+
+#include <ceres/ceres.h>
+
+#include "components/core/mapping/bundle_adjustment_terms.hpp"
+
+namespace heslam {
+namespace {
+
+class AbortCallback : public ceres::IterationCallback {
+ public:
+  explicit AbortCallback(const std::atomic<bool>* stop) : stop_(stop) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    if (stop_ != nullptr && stop_->load(std::memory_order_relaxed)) aborted_ = true;
+    return aborted_ ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
+  }
+  bool aborted() const { return aborted_; }
+
+ private:
+  const std::atomic<bool>* stop_;
+  bool aborted_ = false;
+};
+
+}  // namespace
+
+GlobalBundleAdjustmentResult GlobalBundleAdjustment::compute(const Map& map, const PinholeStereo& camera,
+                                                             const std::atomic<bool>* stop) const {
+  const auto start = std::chrono::steady_clock::now();
+  GlobalBundleAdjustmentResult result;
+
+  // Contiguous parameters in id order (Ceres orders blocks by address: reproducible solves).
+  std::vector<PoseBlock> poses;
+  std::map<KeyframeId, std::size_t> pose_index;
+  for (const auto& [id, kf] : map.keyframes) {
+    if (kf.culled) continue;
+    pose_index[id] = poses.size();
+    poses.push_back(to_pose_block(kf.T_wc));
+  }
+  std::vector<Eigen::Vector3d> points;
+  std::vector<PointId> point_ids;
+  for (const auto& [id, point] : map.points) {
+    if (point.culled) continue;
+    point_ids.push_back(id);
+    points.push_back(point.p_w);
+  }
+
+  ceres::Problem::Options problem_options;
+  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;  // one manifold shared by all poses
+  ceres::Problem problem(problem_options);
+  PoseManifold pose_manifold;
+  for (std::size_t p = 0; p < point_ids.size(); ++p) {
+    for (const auto& [kf_id, index] : map.point(point_ids[p])->observations) {
+      const auto pose = pose_index.find(kf_id);
+      if (pose == pose_index.end()) continue;
+      const Keyframe& kf = map.keyframes.at(kf_id);
+      const std::size_t i = static_cast<std::size_t>(index);
+      // Behind the camera at the start: the residual cannot be evaluated, leave it out.
+      if (transform_to_camera(poses[pose->second], points[p]).z() <= 0.0) continue;
+      const Keypoint& kp = kf.features.keypoints[i];
+      const bool stereo = kf.features.has_stereo(i);
+      const double inv_sigma = std::sqrt(kf.features.pyramid.inv_sigma2[static_cast<std::size_t>(kp.octave)]);
+      // Ceres owns cost and loss (the problem's default ownership).
+      auto* cost = new ReprojectionCost(camera, kp.u_px, kp.v_px, stereo ? kf.features.u_right_px[i] : 0.0, inv_sigma,
+                                        stereo, options_.disparity_sigma_ratio);
+      auto* loss = new ceres::HuberLoss(std::sqrt(stereo ? options_.stereo_chi2 : options_.mono_chi2));
+      problem.AddResidualBlock(cost, loss, poses[pose->second].data(), points[p].data());
+      ++result.stats.observations;
+    }
+  }
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  for (Eigen::Vector3d& point : points) {
+    if (!problem.HasParameterBlock(point.data())) continue;
+    ordering->AddElementToGroup(point.data(), 0);
+    ++result.stats.points;
+  }
+  bool gauge_fixed = false;
+  for (PoseBlock& pose : poses) {
+    if (!problem.HasParameterBlock(pose.data())) continue;
+    problem.SetManifold(pose.data(), &pose_manifold);
+    ordering->AddElementToGroup(pose.data(), 1);
+    if (!gauge_fixed) {  // the oldest keyframe in the problem anchors the gauge
+      problem.SetParameterBlockConstant(pose.data());
+      gauge_fixed = true;
+    }
+    ++result.stats.keyframes;
+  }
+
+  if (result.stats.observations > 0) {
+    AbortCallback abort_callback(stop);
+    ceres::Solver::Options solver_options;
+    solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
+    solver_options.linear_solver_ordering = ordering;
+    solver_options.max_num_iterations = options_.max_iterations;
+    solver_options.num_threads = options_.num_threads;
+    solver_options.logging_type = ceres::SILENT;
+    solver_options.callbacks.push_back(&abort_callback);
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options, &problem, &summary);
+    result.stats.aborted = abort_callback.aborted();
+    result.stats.initial_cost = summary.initial_cost;
+    result.stats.final_cost = summary.final_cost;
+    result.stats.iterations = static_cast<int>(summary.iterations.size()) - 1;  // entry 0 is the start
+  }
+
+  for (const auto& [id, index] : pose_index) {
+    const double* pose = poses[index].data();
+    const bool moved = problem.HasParameterBlock(pose) && !problem.IsParameterBlockConstant(pose);
+    result.corrected_T_wc.emplace_back(id, moved ? from_pose_block(poses[index]) : map.keyframes.at(id).T_wc);
+  }
+  for (std::size_t p = 0; p < point_ids.size(); ++p) {
+    if (problem.HasParameterBlock(points[p].data())) result.p_w.emplace_back(point_ids[p], points[p]);
+  }
+  result.stats.time_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace heslam
