@@ -34,6 +34,7 @@ using PointObservation = heslam_msg_PointObservation;
 using MapPointState = heslam_msg_MapPointState;
 using CorrectedKeyframePose = heslam_msg_CorrectedKeyframePose;
 using PointMerge = heslam_msg_PointMerge;
+using CorrectedPointPosition = heslam_msg_CorrectedPointPosition;
 using LoopCorrection = heslam_msg_LoopCorrection;
 using FrameDone = heslam_msg_FrameDone;
 using KeyframeDone = heslam_msg_KeyframeDone;

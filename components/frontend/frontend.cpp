@@ -1,6 +1,7 @@
 // heslam-frontend's DDS side: readers, writers, lockstep acknowledgement, map-state mirroring.
 #include "components/frontend/frontend.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -89,7 +90,8 @@ void Frontend::configure(const runtime::Config& config) {
   frame_done_writer_.emplace(participant(), topics().frame_done());
   log().info("HE ", to_string(options_.features.he.mode), ", ", options_.features.orb.features, " ORB features, ",
              options_.mapper_enabled ? "mirroring the local mapper's map" : "no local mapper (own map)",
-             options_.wait_for_mapper ? ", lockstep waits for the mapper" : "");
+             options_.wait_for_mapper ? ", lockstep waits for the mapper" : "",
+             options_.loop_closers.empty() ? "" : " and " + options_.loop_closers.front());
   if (options_.vocabulary) {
     log().info("vocabulary ", describe_vocabulary_setting(options_.vocabulary_file), ": ",
                options_.vocabulary->word_count(), " words; relocalization searches the whole map");
@@ -248,7 +250,8 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
 
   if (result.new_keyframe && options_.wait_for_mapper && !wait_for_keyframe_done(result.new_keyframe->id)) {
     stats().count("mapper_timeouts");
-    log().warn("keyframe ", result.new_keyframe->id, ": no KeyframeDone from the mapper within ",
+    log().warn("keyframe ", result.new_keyframe->id, ": no KeyframeDone from the mapper",
+               options_.loop_closers.empty() ? "" : " and the loop closer", " within ",
                options_.mapper_timeout.count(), " ms; going on without it");
   }
   acknowledge(frame, &output);
@@ -257,7 +260,15 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
 void Frontend::mirror_map_state() {
   if (!options_.mapper_enabled) return;
   for (auto& received : keyframe_done_reader_->take()) {
-    if (received.info.valid_data) keyframes_done_.insert(received.sample->keyframe_id);
+    if (!received.info.valid_data) continue;
+    if (received.sample->correction_id != 0) {
+      // The mapper applied a loop correction: once the mirror holds that map version, the tracker's
+      // last frame moves with its reference keyframe.
+      follow_correction_at_version_ = std::max(follow_correction_at_version_.value_or(0), received.sample->map_version);
+      continue;
+    }
+    keyframes_done_[received.sample->keyframe_id].insert(received.sample->component == nullptr ? "" : received.sample->component);
+    acknowledged_map_version_ = std::max(acknowledged_map_version_, received.sample->map_version);
   }
   // Without a processor there is no map to mirror into yet: the states stay in their readers
   // (keep-last per keyframe / point), so a restarted frontend still gets the whole map.
@@ -280,14 +291,21 @@ void Frontend::mirror_map_state() {
     }
     apply_point_state(*map, *received.sample);
   }
+  if (follow_correction_at_version_ && map->version >= *follow_correction_at_version_) {
+    processor_->tracker().follow_reference_keyframe();
+    follow_correction_at_version_.reset();
+    stats().count("corrections_followed");
+  }
 }
 
 bool Frontend::wait_for_keyframe_done(KeyframeId id) {
   const auto deadline = std::chrono::steady_clock::now() + options_.mapper_timeout;
   for (;;) {
     mirror_map_state();
-    if (keyframes_done_.erase(id) != 0) {
-      // The mapper publishes the keyframe's state before its KeyframeDone; take what is in flight.
+    // The mapper publishes the keyframe's state before its KeyframeDone, but a loop closer's
+    // acknowledgement may overtake the corrected states it waited for: wait for the map version too.
+    if (keyframe_acknowledged(id) && processor_->tracker().local_map().version >= acknowledged_map_version_) {
+      keyframes_done_.erase(id);
       mirror_map_state();
       return true;
     }
@@ -297,6 +315,23 @@ bool Frontend::wait_for_keyframe_done(KeyframeId id) {
       return false;
     }
   }
+}
+
+bool Frontend::keyframe_acknowledged(KeyframeId id) const {
+  const auto it = keyframes_done_.find(id);
+  if (it == keyframes_done_.end()) return false;
+  // The mapper: any component that is not an awaited loop closer (its name is the pipeline's).
+  bool mapper_done = false;
+  for (const std::string& component : it->second) {
+    if (std::find(options_.loop_closers.begin(), options_.loop_closers.end(), component) == options_.loop_closers.end()) {
+      mapper_done = true;
+    }
+  }
+  if (!mapper_done) return false;
+  for (const std::string& loop_closer : options_.loop_closers) {
+    if (it->second.count(loop_closer) == 0) return false;
+  }
+  return true;
 }
 
 void Frontend::acknowledge(const msg::StereoFrame& frame, const FrameOutput* output) {

@@ -5,9 +5,11 @@
 #pragma once
 
 #include <deque>
+#include <map>
 #include <memory>
 #include <optional>
 #include <set>
+#include <string>
 
 #include "components/frontend/frame_processor.hpp"
 #include "components/frontend/frontend_options.hpp"
@@ -32,9 +34,11 @@ class Frontend : public runtime::Component {
   // With a mapper: mirror its stored map into a new processor's tracker and, when it holds
   // keyframes (this frontend was restarted), relocalize in it instead of starting a new map.
   void resume_in_mapper_map();
-  // Lockstep with a mapper: waits for its KeyframeDone(id), mirroring state meanwhile. False on
-  // timeout or shutdown.
+  // Lockstep with a mapper (and a loop closer): waits for the KeyframeDone(id) of each, mirroring
+  // state meanwhile, until the mirror holds the map version they acknowledged. False on timeout or
+  // shutdown.
   bool wait_for_keyframe_done(KeyframeId id);
+  bool keyframe_acknowledged(KeyframeId id) const;
   void acknowledge(const msg::StereoFrame& frame, const FrameOutput* output);
 
   FrontendOptions options_;
@@ -54,7 +58,11 @@ class Frontend : public runtime::Component {
   // Seq of the last frame processed: a jump counts the frames in between as missed (a real-time
   // publisher outran us and the image reader kept only the newest), so a drop is never silent.
   std::optional<std::uint64_t> last_seq_;
-  std::set<KeyframeId> keyframes_done_;                      // KeyframeDone seen, not yet waited for
+  // KeyframeDone seen, not yet waited for: keyframe -> components that acknowledged it.
+  std::map<KeyframeId, std::set<std::string>> keyframes_done_;
+  std::uint64_t acknowledged_map_version_ = 0;  // the largest map version an awaited ack reported
+  // A correction the mapper applied: its map version, until the mirror has it.
+  std::optional<std::uint64_t> follow_correction_at_version_;
 };
 
 }  // namespace heslam::frontend

@@ -113,12 +113,20 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
   options.vocabulary_file = config.get_string("vocabulary.file", "");
   options.vocabulary = load_vocabulary_setting(options.vocabulary_file);
   options.mapper_map_file = config.get_string("mapper.map_file", "");
+  std::string loop_closer = config.get_string("lockstep.loop_closer", "none");
+  const std::string loop_closer_name = config.get_string("lockstep.loop_closer_name", "loop_closer");
   for (std::size_t i = 0; i < rest.size(); ++i) {
     if (rest[i] == "--mapper-map-file" && i + 1 < rest.size()) {
       options.mapper_map_file = rest[++i];
+    } else if (rest[i] == "--loop-closer" && i + 1 < rest.size()) {
+      loop_closer = rest[++i];
     } else {
-      throw std::runtime_error("unknown argument '" + rest[i] + "' (expected --mapper-map-file FILE)");
+      throw std::runtime_error("unknown argument '" + rest[i] +
+                               "' (expected --mapper-map-file FILE or --loop-closer EXECUTABLE|none)");
     }
+  }
+  if (!loop_closer.empty() && loop_closer != "none" && options.wait_for_mapper) {
+    options.loop_closers.push_back(loop_closer_name);
   }
 
   // With a mapper the frontend mirrors the map instead of maintaining it; its ids stay the frontend's.

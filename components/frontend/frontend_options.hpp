@@ -33,6 +33,11 @@ struct FrontendOptions {
   // lockstep.wait_for_mapper: before acknowledging a frame that created a keyframe, wait for the
   // mapper's KeyframeDone of that keyframe (deterministic runs with a mapper). Implies mapper_enabled.
   bool wait_for_mapper = false;
+  // lockstep.loop_closer / --loop-closer EXECUTABLE: the pipeline's loop closer ("none": none). With
+  // one and wait_for_mapper, the frontend also waits for the KeyframeDone of the component named
+  // lockstep.loop_closer_name (default "loop_closer"): it acknowledges a keyframe once it has checked
+  // it for a loop and the mapper applied any correction.
+  std::vector<std::string> loop_closers;
   // lockstep.mapper_timeout_s: how long to wait for that KeyframeDone before giving up (warned,
   // counted) and acknowledging anyway, so a dead mapper cannot hang the run.
   std::chrono::milliseconds mapper_timeout{30000};
@@ -45,7 +50,8 @@ struct FrontendOptions {
   int max_pending_frames = 8;
 
   // Throws std::runtime_error (one line: file, field, expectation) on a bad field.
-  // `rest`: the command line's own arguments (--mapper-map-file FILE), which win over the config.
+  // `rest`: the command line's own arguments (--mapper-map-file FILE, --loop-closer EXECUTABLE),
+  // which win over the config.
   static FrontendOptions from_config(const runtime::Config& config, const std::vector<std::string>& rest = {});
 };
 

@@ -155,7 +155,12 @@ void MapperNode::take_corrections() {
     if (!received.info.valid_data) continue;
     try {
       LoopCorrection correction = to_loop_correction(*received.sample);
-      if (applied_corrections_.count(correction.id) != 0) continue;  // replayed to us after a restart
+      if (applied_corrections_.count(correction.id) != 0) {
+        // Replayed to us after a restart: applied already, but its loop closer may still wait for the
+        // acknowledgement this process died before sending.
+        acknowledge(correction.loop_kf, correction.id);
+        continue;
+      }
       pending_corrections_.insert_or_assign(correction.id, std::move(correction));
     } catch (const std::exception& error) {
       stats().count("bad_corrections");
@@ -246,6 +251,7 @@ void MapperNode::apply_corrections() {
     save();
     remember_applied_correction(correction.id);
     publish(changes);
+    acknowledge(correction.loop_kf, correction.id);
     log().info("loop correction ", correction.id, " (keyframe ", correction.loop_kf, " -> ", correction.matched_kf,
                "): ", changes.changed_keyframes.size(), " keyframes and ", changes.changed_points.size(),
                " points moved, ", changes.removed_points.size(), " points merged");
@@ -312,7 +318,7 @@ void MapperNode::publish_all(const Map& map) {
   log().info("published the state of ", map.keyframes.size(), " keyframes and ", map.points.size(), " points");
 }
 
-void MapperNode::acknowledge(KeyframeId id) {
+void MapperNode::acknowledge(KeyframeId id, std::uint64_t correction_id) {
   // Discovery is asynchronous: wait once for the lockstep reader (the frontend) so the first
   // acknowledgement after a (re)start is not lost; later ones never wait.
   if (!reader_wait_done_) {
@@ -325,6 +331,7 @@ void MapperNode::acknowledge(KeyframeId id) {
   done.keyframe_id = id;
   done.component = runtime::borrow(name());
   done.map_version = mapper_ ? mapper_->map().version : 0;
+  done.correction_id = correction_id;
   keyframe_done_writer_->write(done);
 }
 

@@ -1,7 +1,7 @@
 // heslam-local-mapper's DDS side: takes Keyframe samples (transient-local, keyed) and LoopCorrection
 // samples, runs the core LocalMapper on them in keyframe-id order, persists the map, publishes
 // KeyframeState / MapPointState for exactly what changed (removed points disposed) and a KeyframeDone
-// per keyframe (lockstep).
+// per keyframe and per applied correction (lockstep: a loop closer waits for the latter).
 //
 // Restart: with a map_file that this run (same heslam-supervisor) wrote, the mapper resumes from it;
 // a file of an earlier run is replaced. The Keyframe samples DDS still
@@ -52,7 +52,8 @@ class MapperNode : public runtime::Component {
   void save();
   void publish(const MapChanges& changes);
   void publish_all(const Map& map);
-  void acknowledge(KeyframeId id);
+  // KeyframeDone for a mapped keyframe, or (correction_id != 0) for an applied correction.
+  void acknowledge(KeyframeId id, std::uint64_t correction_id = 0);
   void log_summary();
 
   // options_.map_file + suffix: ".run" (the run that wrote it), ".corrections" (applied ids).

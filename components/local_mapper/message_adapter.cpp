@@ -84,6 +84,19 @@ LoopCorrection to_loop_correction(const msg::LoopCorrection& message) {
     }
     correction.point_merges.emplace_back(merge.from_id, merge.into_id);
   }
+  if (message.kind != heslam_msg_CORRECTION_LOOP && message.kind != heslam_msg_CORRECTION_GLOBAL_BA) {
+    throw std::runtime_error(name + ": kind " + std::to_string(static_cast<int>(message.kind)) + " is unknown");
+  }
+  correction.kind = message.kind == heslam_msg_CORRECTION_GLOBAL_BA ? CorrectionKind::kGlobalBundleAdjustment
+                                                             : CorrectionKind::kLoop;
+  for (const msg::CorrectedPointPosition& entry : runtime::view(message.corrected_points)) {
+    const Eigen::Vector3d p_w(entry.position_w_m[0], entry.position_w_m[1], entry.position_w_m[2]);
+    if (entry.point_id == kNoId || !p_w.allFinite()) {
+      throw std::runtime_error(name + ": corrected position of point " + std::to_string(entry.point_id) +
+                               " has id 0 or is not finite");
+    }
+    correction.corrected_points.emplace_back(entry.point_id, p_w);
+  }
   return correction;
 }
 

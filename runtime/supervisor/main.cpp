@@ -103,6 +103,7 @@ int run(int argc, char** argv) {
   if (check) {
     std::cout << pipeline_file.string() << ": OK (" << loaded.pipeline.components.size() << " components:";
     for (const auto& component : loaded.pipeline.components) std::cout << " " << component.name;
+    for (const auto& name : loaded.pipeline.disabled_components) std::cout << " [" << name << " disabled]";
     std::cout << ")\n";
     return 0;
   }

@@ -174,9 +174,14 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       }
     });
     const std::string label = spec.name.empty() ? where : "component '" + spec.name + "'";
+    bool disabled = false;
     collect(problems, [&] {
       const std::string text = substitute(where + ".executable", section.get_string("executable", ""));
       if (text.empty()) throw std::runtime_error(source + ": " + label + ": field 'executable' is required");
+      if (text == kDisabledExecutable) {
+        disabled = true;
+        return;
+      }
       const auto resolved = resolve_executable(text, folder, bin_dir);
       if (!resolved) {
         throw std::runtime_error(source + ": " + label + ": executable '" + text + "' not found (looked in " +
@@ -189,7 +194,7 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
     });
     collect(problems, [&] {
       const std::string text = substitute(where + ".config", section.get_string("config", ""));
-      if (text.empty()) return;
+      if (text.empty() || disabled) return;  // a disabled component's config may name its executable
       std::filesystem::path path = text;
       if (path.is_relative()) path = folder / path;
       if (!std::filesystem::is_regular_file(path)) {
@@ -223,7 +228,11 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
     });
     collect(problems, [&] { spec.common_args = section.get_bool("common_args", true); });
     collect(problems, [&] { section.reject_unknown(); });
-    pipeline.components.push_back(std::move(spec));
+    if (disabled) {
+      pipeline.disabled_components.push_back(spec.name);
+    } else {
+      pipeline.components.push_back(std::move(spec));
+    }
   }
   return result;
 }

@@ -37,7 +37,12 @@ struct Pipeline {
   std::string dds_config;                 // "file://ABS" or "" (built-in loopback XML)
   double stop_timeout_s = 5.0;            // SIGTERM -> SIGKILL
   std::vector<ComponentSpec> components;  // start order
+  // Components whose executable is "none" (e.g. --arg loop_closer=none): validated, not started.
+  std::vector<std::string> disabled_components;
 };
+
+// The executable value that disables a component.
+inline constexpr const char* kDisabledExecutable = "none";
 
 struct PipelineOverrides {
   std::map<std::string, std::string> args;  // --arg key=value

@@ -64,6 +64,7 @@ Supervisor::Supervisor(Pipeline pipeline, SupervisorOptions options)
     name_width_ = std::max(name_width_, spec.name.size());
     components_.push_back(std::move(managed));
   }
+  for (const std::string& name : pipeline_.disabled_components) log_.info(name, ": disabled (executable none)");
 }
 
 Supervisor::~Supervisor() = default;

@@ -4,15 +4,12 @@
 #include <chrono>
 #include <set>
 
+#include "components/core/loop/keyframe_projection.hpp"
 #include "components/core/match/feature_grid.hpp"
 #include "components/core/mapping/point_statistics.hpp"
 
 namespace heslam {
 namespace {
-
-// ORB-SLAM2 accepts a projection a little outside the point's scale-invariance range.
-constexpr double kMinDistanceSlack = 0.8;
-constexpr double kMaxDistanceSlack = 1.2;
 
 using Clock = std::chrono::steady_clock;
 
@@ -79,37 +76,6 @@ class MergeList {
   std::vector<std::pair<PointId, PointId>> merges_;
 };
 
-// The keypoint of `kf` (seen from corrected pose T_wc) that best matches `point` by projection, or -1.
-int best_projection_match(const MapPoint& point, const Keyframe& kf, const Pose3& T_wc,
-                          const FeatureGrid& grid, const PinholeStereo& camera,
-                          const LoopCorrectionBuilderOptions& options) {
-  const Eigen::Vector3d p_c = T_wc.inverse() * point.p_w;
-  if (p_c.z() <= 0.0) return -1;
-  const Eigen::Vector2d uv = camera.project(p_c);
-  if (!camera.in_image(uv.x(), uv.y())) return -1;
-  const Eigen::Vector3d ray = point.p_w - T_wc.translation();
-  const double distance = ray.norm();
-  if (distance < kMinDistanceSlack * point.min_distance_m || distance > kMaxDistanceSlack * point.max_distance_m) {
-    return -1;
-  }
-  if (ray.dot(point.normal) < options.min_view_cos * distance) return -1;
-  const ScalePyramid& pyramid = kf.features.pyramid;
-  const int level = predict_level(point, distance, pyramid);
-  const float radius = options.fuse_radius_px * pyramid.scale[static_cast<std::size_t>(level)];
-  int best_distance = options.max_descriptor_distance + 1;
-  int best_index = -1;
-  const float u = static_cast<float>(uv.x());
-  const float v = static_cast<float>(uv.y());
-  for (const int index : grid.in_area(u, v, radius, level - 1, level)) {
-    const int d = hamming_distance(point.descriptor, kf.features.descriptors[static_cast<std::size_t>(index)]);
-    if (d < best_distance) {
-      best_distance = d;
-      best_index = index;
-    }
-  }
-  return best_index;
-}
-
 // (c) Projects the matched side's points into every corrected loop-group keyframe; a keypoint holding
 // a loop-side point makes a merge. Returns the matches on free keypoints (not representable).
 int search_duplicates(const Map& map, const PinholeStereo& camera, const std::map<KeyframeId, Pose3>& corrected_T_wc,
@@ -117,12 +83,16 @@ int search_duplicates(const Map& map, const PinholeStereo& camera, const std::ma
                       const std::vector<PointId>& matched_points, const LoopCorrectionBuilderOptions& options,
                       MergeList& merges) {
   int unlinked = 0;
+  ProjectionMatchOptions projection;
+  projection.radius_px = options.fuse_radius_px;
+  projection.max_descriptor_distance = options.max_descriptor_distance;
+  projection.min_view_cos = options.min_view_cos;
   for (const KeyframeId kf_id : loop_group) {
     const Keyframe& kf = *map.keyframe(kf_id);
     const FeatureGrid grid(kf.features.keypoints, camera.width_px, camera.height_px);
     for (const PointId matched_id : matched_points) {
       const int index =
-          best_projection_match(*map.point(matched_id), kf, corrected_T_wc.at(kf_id), grid, camera, options);
+          best_projection_match(*map.point(matched_id), kf, corrected_T_wc.at(kf_id), grid, camera, projection);
       if (index < 0) continue;
       const PointId existing = kf.point_ids[static_cast<std::size_t>(index)];
       if (existing == kNoId || !live_point(map, existing)) {

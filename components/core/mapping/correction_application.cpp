@@ -56,6 +56,16 @@ int apply_loop_correction(Map& map, const LoopCorrection& correction,
     point.p_w = ref_new * (ref_old->second.inverse() * point.p_w);
     changes.changed_points.insert(id);
   }
+  for (const auto& [id, p_w] : correction.corrected_points) {
+    MapPoint* point = map.point(id);
+    if (point == nullptr) {
+      ++skipped;
+      continue;
+    }
+    if (point->p_w == p_w) continue;
+    point->p_w = p_w;
+    changes.changed_points.insert(id);
+  }
 
   for (const auto& [from, into] : correction.point_merges) {
     if (map.point(from) == nullptr || map.point(into) == nullptr || from == into) {

@@ -8,10 +8,16 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "components/core/geometry/pose.hpp"
 #include "components/core/map/map.hpp"
 
 namespace heslam {
+
+// What produced the correction: a closed loop (essential-graph optimization) or the global bundle
+// adjustment that follows one (which also sets point positions).
+enum class CorrectionKind { kLoop, kGlobalBundleAdjustment };
 
 struct LoopCorrection {
   std::uint64_t id = 0;
@@ -21,6 +27,10 @@ struct LoopCorrection {
   Pose3 T_matched_loop = Pose3::Identity();  // loop keyframe in the matched keyframe's frame
   std::vector<std::pair<KeyframeId, Pose3>> corrected_T_wc;  // new camera->world poses
   std::vector<std::pair<PointId, PointId>> point_merges;     // (from, into): `from` is replaced
+  CorrectionKind kind = CorrectionKind::kLoop;
+  // Points that take these positions (after the poses moved); the others move with their reference
+  // keyframe.
+  std::vector<std::pair<PointId, Eigen::Vector3d>> corrected_points;
 };
 
 }  // namespace heslam

@@ -162,9 +162,16 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
   if (const Keyframe* reference = map_.keyframe(reference_kf_)) {
     result.T_ref_c = reference->T_wc.inverse() * frame.T_wc;
   }
+  last_T_ref_c_ = result.T_ref_c;
   last_frame_ = std::move(frame);
   result.timings.total_ms = elapsed_ms(start);
   return result;
+}
+
+void Tracker::follow_reference_keyframe() {
+  const Keyframe* reference = map_.keyframe(reference_kf_);
+  if (reference == nullptr || state_ == TrackingState::kNotInitialized) return;
+  last_frame_.T_wc = reference->T_wc * last_T_ref_c_;
 }
 
 bool Tracker::resume_in_map() {

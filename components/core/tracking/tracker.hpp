@@ -85,6 +85,10 @@ class Tracker {
   // Null without a vocabulary.
   const KeyframeDatabase* place_database() const { return database_ ? &*database_ : nullptr; }
   const std::shared_ptr<const Vocabulary>& vocabulary() const { return vocabulary_; }
+  // After a loop correction moved the map under the tracker (the frontend mirrors it): the last
+  // frame follows its reference keyframe, keeping its relative pose (ORB-SLAM2's UpdateLastFrame),
+  // so the motion model predicts the next frame in the corrected map. No-op without a reference.
+  void follow_reference_keyframe();
 
   Map& local_map() { return map_; }
   const Map& local_map() const { return map_; }
@@ -107,6 +111,7 @@ class Tracker {
   Map map_;
   TrackingState state_ = TrackingState::kNotInitialized;
   Frame last_frame_;
+  Pose3 last_T_ref_c_ = Pose3::Identity();  // the last frame in its reference keyframe's frame
   std::optional<Pose3> velocity_;  // T_last_current of the last tracked pair
   KeyframeId reference_kf_ = kNoId;
   std::uint64_t keyframe_counter_ = 0;

@@ -1,0 +1,79 @@
+// The loop closer's core (ORB-SLAM2 LoopClosing without threads or I/O): per new keyframe, detect
+// candidates (a swappable LoopDetector), verify each geometrically (BoW / projection matches, SE(3)
+// RANSAC, refinement, projection top-up) and turn an accepted loop into a LoopCorrection (propagated
+// group, fused points, essential-graph optimization); optionally a global bundle adjustment after it.
+// Works on a read-only Map (the loop closer's mirror of the local mapper's map); deterministic.
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/loop/loop_detector.hpp"
+#include "components/core/map/map.hpp"
+#include "components/core/mapping/loop_correction.hpp"
+#include "components/core/tracking/tracker_options.hpp"
+
+namespace heslam {
+
+struct LoopClosingOptions {
+  // Matches of a candidate before RANSAC (ORB-SLAM2 ComputeSim3: 20 BoW matches).
+  int min_candidate_matches = 20;
+  // RANSAC inliers after refinement (ORB-SLAM2: 20), then all matches after the projection top-up
+  // over the candidate's covisible group (ORB-SLAM2: 40): below either the candidate is rejected.
+  int min_ransac_inliers = 20;
+  int min_loop_matches = 40;
+  float projection_radius_px = 10.f;     // ORB-SLAM2 SearchByProjection in ComputeSim3
+  std::uint64_t ransac_seed = 0x100b;
+  TrackerOptions matching;               // descriptor thresholds, orientation check
+};
+
+struct LoopRejection {
+  KeyframeId candidate = kNoId;
+  std::string reason;  // e.g. "12 BoW matches (< 20)"
+};
+
+struct LoopClosingTimings {
+  double detection_ms = 0.0;
+  double verification_ms = 0.0;  // matching + RANSAC + refinement + top-up, all candidates
+  double correction_ms = 0.0;    // group propagation, fusion, essential graph
+};
+
+struct LoopClosingResult {
+  LoopCandidates candidates;
+  std::vector<LoopRejection> rejected;
+  std::optional<LoopCorrection> correction;  // id 0: the caller assigns it
+  int loop_matches = 0;
+  LoopClosingTimings timings;
+};
+
+class LoopClosing {
+ public:
+  LoopClosing(const PinholeStereo& camera, std::unique_ptr<LoopDetector> detector, const LoopClosingOptions& options);
+  ~LoopClosing();
+
+  // Processes keyframe `query` of `map`. On an accepted loop the result holds the correction
+  // (corrected poses of every keyframe, point merges) computed on map.version.
+  LoopClosingResult process_keyframe(const Map& map, KeyframeId query);
+
+  // A global bundle adjustment of the whole map, as a correction of kind kGlobalBundleAdjustment
+  // (poses and point positions). nullopt when `abort` was set before it finished.
+  std::optional<LoopCorrection> global_bundle_adjustment(const Map& map, const std::atomic<bool>* abort) const;
+
+  const LoopDetector& detector() const { return *detector_; }
+  // Accepted loops (loop keyframe, matched keyframe): the essential graph keeps them as edges. A
+  // restarted loop closer restores them.
+  const std::vector<std::pair<KeyframeId, KeyframeId>>& loop_edges() const { return loop_edges_; }
+  void add_loop_edge(KeyframeId loop_kf, KeyframeId matched_kf) { loop_edges_.emplace_back(loop_kf, matched_kf); }
+
+ private:
+  PinholeStereo camera_;
+  std::unique_ptr<LoopDetector> detector_;
+  LoopClosingOptions options_;
+  std::vector<std::pair<KeyframeId, KeyframeId>> loop_edges_;  // accepted loops: the essential graph keeps them
+};
+
+}  // namespace heslam

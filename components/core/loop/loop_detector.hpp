@@ -1,0 +1,37 @@
+// Loop candidate detection: which old keyframes might show the place a new keyframe sees. The part a
+// loop closer swaps (bag of words, proximity, ...); geometric verification and correction are shared
+// (se3_ransac.hpp, loop_correction_builder.hpp).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "components/core/map/map.hpp"
+
+namespace heslam {
+
+struct LoopCandidates {
+  std::vector<KeyframeId> keyframes;  // to verify geometrically, best first
+  std::string reason;                 // when empty: why not (for the debug log), e.g. "too few keyframes"
+};
+
+class LoopDetector {
+ public:
+  virtual ~LoopDetector() = default;
+  virtual const char* name() const = 0;
+  // Called once per new keyframe `query` (in keyframe order) after the local mapper processed it;
+  // `map` is the loop closer's mirror and holds it. Detectors may keep state across calls (the
+  // consistency groups of ORB-SLAM2), which is why a rejected loop is reported back.
+  virtual LoopCandidates detect(const Map& map, KeyframeId query) = 0;
+  // A loop was closed at `query`: detectors typically wait some keyframes before the next one.
+  virtual void loop_closed(KeyframeId query) = 0;
+  // Keypoint pairs (query keypoint, candidate keypoint), both observing live map points, that likely
+  // show the same point: the input of the shared geometric check. Each detector matches the way
+  // its candidates allow (words of a vocabulary, plain descriptors, ...).
+  virtual std::vector<std::pair<std::uint32_t, std::uint32_t>> match(const Map& map, KeyframeId query,
+                                                                     KeyframeId candidate) const = 0;
+};
+
+}  // namespace heslam

@@ -1,0 +1,275 @@
+// A loop closer process's DDS side (see loop_closer_node.hpp).
+#include "components/loop_closer/loop_closer_node.hpp"
+
+#include <chrono>
+#include <ctime>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include "components/loop_closer/message_adapter.hpp"
+#include "runtime/run_id.hpp"
+#include "runtime/sequence.hpp"
+
+namespace heslam::loop_closer {
+namespace {
+
+// Wait granularity of the main loop: shutdown is also signalled through the waitset, this only
+// bounds how long a missed wake-up could delay it.
+constexpr std::chrono::milliseconds kWaitPeriod{200};
+// Before the first KeyframeDone: how long to wait for the lockstep reader (the frontend) to match.
+constexpr std::chrono::milliseconds kReaderWait{2000};
+// Correction ids: the creator tag in the top byte (map.hpp) and, below, a start value from the clock
+// so a restarted loop closer without a state file never reuses an id the mapper already applied.
+constexpr int kClockShiftBits = 20;
+
+std::uint64_t clock_counter_start() {
+  timespec now{};
+  clock_gettime(CLOCK_REALTIME, &now);
+  const auto ns = static_cast<std::uint64_t>(now.tv_sec) * 1000000000ULL + static_cast<std::uint64_t>(now.tv_nsec);
+  return (ns >> kClockShiftBits) & ((std::uint64_t{1} << 48) - 1);
+}
+
+}  // namespace
+
+LoopCloserNode::LoopCloserNode(std::string default_name, const runtime::CommonArgs& args)
+    : Component(std::move(default_name), args) {}
+
+void LoopCloserNode::configure(const runtime::Config& config) {
+  options_ = LoopCloserProcessOptions::from_config(config, args().rest);
+  detector_ = make_detector(config, options_);
+  waitset_ = std::make_unique<runtime::WaitSet>(participant());
+  keyframe_reader_.emplace(participant(), topics().keyframes());
+  keyframe_state_reader_.emplace(participant(), topics().keyframe_states());
+  point_state_reader_.emplace(participant(), topics().map_points());
+  keyframe_done_reader_.emplace(participant(), topics().keyframe_done());
+  waitset_->attach(*keyframe_reader_);
+  waitset_->attach(*keyframe_state_reader_);
+  waitset_->attach(*point_state_reader_);
+  waitset_->attach(*keyframe_done_reader_);
+  correction_writer_.emplace(participant(), topics().loop_corrections());
+  keyframe_done_writer_.emplace(participant(), topics().keyframe_done());
+  correction_counter_ = clock_counter_start();
+  load_state();
+  log().info("detector ", detector_->name(), ", global BA ", options_.global_bundle_adjustment ? "on" : "off",
+             options_.state_file.empty() ? ", no state file" : ", state file " + options_.state_file.string());
+}
+
+void LoopCloserNode::run() {
+  while (!shutdown_requested()) {
+    if (waitset_->wait(kWaitPeriod) == runtime::Wake::kShutdown) break;
+    take_all();
+    process_ready_keyframes();
+  }
+  log_summary();
+}
+
+void LoopCloserNode::take_all() {
+  for (auto& received : keyframe_reader_->take()) {
+    if (!received.info.valid_data) continue;
+    try {
+      mirror_.add_keyframe(*received.sample);
+    } catch (const std::exception& error) {
+      stats().count("bad_keyframes");
+      log().warn("topic '", topics().keyframes().name, "': ", error.what(), "; skipped");
+    }
+  }
+  for (auto& received : keyframe_state_reader_->take()) {
+    if (!received.info.valid_data) continue;
+    try {
+      mirror_.apply_keyframe_state(*received.sample);
+    } catch (const std::exception& error) {
+      stats().count("bad_keyframe_states");
+      log().warn("topic '", topics().keyframe_states().name, "': ", error.what(), "; skipped");
+    }
+  }
+  for (auto& received : point_state_reader_->take()) {
+    if (!received.info.valid_data) {
+      if (received.info.disposed) mirror_.point_disposed(received.sample->id);
+      continue;
+    }
+    try {
+      mirror_.apply_point_state(*received.sample);
+    } catch (const std::exception& error) {
+      stats().count("bad_point_states");
+      log().warn("topic '", topics().map_points().name, "': ", error.what(), "; skipped");
+    }
+  }
+  for (auto& received : keyframe_done_reader_->take()) {
+    if (!received.info.valid_data) continue;
+    const msg::KeyframeDone& done = *received.sample;
+    if (runtime::to_string(done.component) == name()) continue;  // our own acknowledgements
+    if (done.correction_id != 0) {
+      corrections_applied_[done.correction_id] = done.map_version;
+    } else {
+      mapped_[done.keyframe_id] = done.map_version;
+    }
+  }
+}
+
+void LoopCloserNode::process_ready_keyframes() {
+  // In keyframe order, each once the mirror holds it and the map state the mapper acknowledged.
+  while (!mapped_.empty() && !shutdown_requested()) {
+    const auto [id, version] = *mapped_.begin();
+    if (id <= last_processed_) {
+      mapped_.erase(mapped_.begin());
+      // A restarted loop closer: the frontend may still wait for the last one.
+      if (id == last_processed_) acknowledge(id);
+      continue;
+    }
+    if (mirror_.map().keyframe(id) == nullptr || mirror_.map().version < version) return;  // in flight
+    mapped_.erase(mapped_.begin());
+    process_keyframe(id);
+    last_processed_ = id;
+    save_state();
+    acknowledge(id);
+  }
+}
+
+void LoopCloserNode::process_keyframe(KeyframeId id) {
+  stats().count("keyframes");
+  if (!closing_) {
+    if (!mirror_.camera()) return;  // unreachable: the mirror holds a keyframe, so it has its camera
+    closing_ = std::make_unique<LoopClosing>(*mirror_.camera(), std::move(detector_), options_.closing);
+    for (const auto& [loop_kf, matched_kf] : restored_loops_) closing_->add_loop_edge(loop_kf, matched_kf);
+  }
+  LoopClosingResult result = closing_->process_keyframe(mirror_.map(), id);
+  stats().record_ms("detection", result.timings.detection_ms);
+  if (!result.candidates.keyframes.empty()) {
+    stats().count("candidates", result.candidates.keyframes.size());
+    stats().record_ms("verification", result.timings.verification_ms);
+  } else {
+    log().debug("keyframe ", id, ": no loop candidate (", result.candidates.reason, ")");
+  }
+  for (const LoopRejection& rejection : result.rejected) {
+    stats().count("loops_rejected");
+    log().debug("keyframe ", id, ": candidate ", rejection.candidate, " rejected: ", rejection.reason);
+  }
+  if (!result.correction) return;
+  stats().count("loops_accepted");
+  stats().record_ms("correction", result.timings.correction_ms);
+  LoopCorrection correction = std::move(*result.correction);
+  log().info("loop closed: keyframe ", id, " -> ", correction.matched_kf, " with ", result.loop_matches,
+             " matches; correcting ", correction.corrected_T_wc.size(), " keyframes, merging ",
+             correction.point_merges.size(), " points");
+  if (!publish_and_wait(std::move(correction)) || !options_.global_bundle_adjustment) return;
+
+  const auto start = std::chrono::steady_clock::now();
+  std::optional<LoopCorrection> adjusted = closing_->global_bundle_adjustment(mirror_.map(), nullptr);
+  stats().record_ms("global_ba", std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  if (!adjusted) return;
+  adjusted->loop_kf = id;
+  stats().count("global_bundle_adjustments");
+  publish_and_wait(std::move(*adjusted));
+}
+
+bool LoopCloserNode::publish_and_wait(LoopCorrection correction) {
+  correction.id = make_id(kLoopCloserTag, ++correction_counter_);
+  const std::uint64_t id = correction.id;
+  {
+    const LoopCorrectionMessage message(correction);
+    if (correction_writer_->write(message.get()) == runtime::WriteResult::kTimeout) {
+      stats().count("correction_write_timeouts");
+      log().warn("loop correction ", id, ": write timed out (is the local mapper alive?)");
+    }
+  }
+  stats().count("corrections_published");
+  const auto deadline = std::chrono::steady_clock::now() + options_.mapper_timeout;
+  for (;;) {
+    take_all();
+    if (auto it = corrections_applied_.find(id); it != corrections_applied_.end() && mirror_.map().version >= it->second) {
+      corrections_applied_.erase(it);
+      return true;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= deadline || shutdown_requested()) break;
+    if (waitset_->wait(std::min<std::chrono::nanoseconds>(kWaitPeriod, deadline - now)) == runtime::Wake::kShutdown) break;
+  }
+  if (!shutdown_requested()) {
+    stats().count("correction_timeouts");
+    log().warn("loop correction ", id, ": the local mapper did not acknowledge it within ",
+               options_.mapper_timeout.count(), " ms; going on");
+  }
+  return false;
+}
+
+void LoopCloserNode::acknowledge(KeyframeId id) {
+  // Discovery is asynchronous: wait once for a lockstep reader so the first acknowledgement after a
+  // (re)start is not lost; later ones never wait.
+  if (!reader_wait_done_) {
+    reader_wait_done_ = true;
+    if (keyframe_done_writer_->matched_readers() == 0) keyframe_done_writer_->wait_for_readers(1, kReaderWait);
+  }
+  msg::KeyframeDone done{};
+  done.keyframe_id = id;
+  done.component = runtime::borrow(name());
+  done.map_version = mirror_.map().version;
+  keyframe_done_writer_->write(done);
+}
+
+// State file: "run <id>", "last <keyframe>", "counter <n>", then "loop <loop kf> <matched kf>" lines.
+void LoopCloserNode::load_state() {
+  if (options_.state_file.empty()) return;
+  std::ifstream in(options_.state_file);
+  std::string line;
+  std::string run;
+  KeyframeId last = kNoId;
+  std::uint64_t counter = 0;
+  std::vector<std::pair<KeyframeId, KeyframeId>> loops;
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string key;
+    fields >> key;
+    if (key == "run") {
+      fields >> run;
+    } else if (key == "last") {
+      fields >> last;
+    } else if (key == "counter") {
+      fields >> counter;
+    } else if (key == "loop") {
+      KeyframeId a = kNoId;
+      KeyframeId b = kNoId;
+      fields >> a >> b;
+      loops.emplace_back(a, b);
+    }
+  }
+  if (run.empty() || run != runtime::supervisor_run_id()) {
+    if (!run.empty()) log().info("state file ", options_.state_file.string(), " is from an earlier run; starting afresh");
+    save_state();
+    return;
+  }
+  last_processed_ = last;
+  correction_counter_ = std::max(correction_counter_, counter);
+  restored_loops_ = std::move(loops);
+  log().info("resuming: keyframes up to ", last_processed_, " processed, ", restored_loops_.size(), " loops closed");
+}
+
+void LoopCloserNode::save_state() const {
+  if (options_.state_file.empty()) return;
+  std::filesystem::path tmp = options_.state_file;
+  tmp += ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    out << "run " << runtime::supervisor_run_id() << "\nlast " << last_processed_ << "\ncounter " << correction_counter_ << "\n";
+    const auto& loops = closing_ ? closing_->loop_edges() : restored_loops_;
+    for (const auto& [a, b] : loops) out << "loop " << a << " " << b << "\n";
+    out.flush();
+    if (!out) throw std::runtime_error("state file " + tmp.string() + ": cannot write");
+  }
+  std::filesystem::rename(tmp, options_.state_file);
+}
+
+void LoopCloserNode::log_summary() {
+  const auto counters = stats().counters();
+  const auto count = [&](const char* key) { return counters.count(key) != 0 ? counters.at(key) : 0; };
+  log().info("processed ", count("keyframes"), " keyframes: ", count("candidates"), " loop candidates, ",
+             count("loops_accepted"), " loops accepted, ", count("loops_rejected"), " rejected, ",
+             count("global_bundle_adjustments"), " global BAs, ", count("correction_timeouts"), " corrections unacknowledged");
+  for (const runtime::StageSummary& stage : stats().stages()) {
+    log().info("stage ", stage.name, " median ", stage.p50_ms, " ms, p90 ", stage.p90_ms, " ms, max ", stage.max_ms,
+               " ms (", stage.count, ")");
+  }
+}
+
+}  // namespace heslam::loop_closer

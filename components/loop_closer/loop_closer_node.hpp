@@ -1,0 +1,70 @@
+// A loop closer process's DDS side, shared by every implementation (heslam-loop-closer with bag of
+// words, heslam-loop-closer-proximity): mirrors the map from the transient-local map topics, runs the
+// core LoopClosing on each keyframe once the local mapper acknowledged it, publishes LoopCorrections,
+// waits for the mapper to apply them and acknowledges the keyframe (lockstep). Implementations only
+// say how loop candidates are found (make_detector).
+//
+// Restart: with a state file this run wrote, keyframes already processed are skipped (the last one is
+// acknowledged again, a lockstep frontend may wait for it) and the loops closed are restored.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+
+#include "components/core/loop/loop_closing.hpp"
+#include "components/loop_closer/loop_closer_options.hpp"
+#include "components/loop_closer/map_mirror.hpp"
+#include "runtime/component.hpp"
+
+namespace heslam::loop_closer {
+
+class LoopCloserNode : public runtime::Component {
+ public:
+  LoopCloserNode(std::string default_name, const runtime::CommonArgs& args);
+
+ protected:
+  // The implementation's loop candidate detector, built once the options are read (configure()).
+  virtual std::unique_ptr<LoopDetector> make_detector(const runtime::Config& config,
+                                                      const LoopCloserProcessOptions& options) = 0;
+
+ private:
+  void configure(const runtime::Config& config) override;
+  void run() override;
+  bool accepts_positional_args() const override { return true; }  // --state-file, --vocabulary
+
+  // Takes every sample waiting in the readers into the mirror and the acknowledgement tables.
+  void take_all();
+  void process_ready_keyframes();
+  void process_keyframe(KeyframeId id);
+  // Publishes the correction and waits until the mapper applied it and the mirror holds the result.
+  bool publish_and_wait(LoopCorrection correction);
+  void acknowledge(KeyframeId id);
+  void load_state();
+  void save_state() const;
+  void log_summary();
+
+  LoopCloserProcessOptions options_;
+  std::unique_ptr<runtime::WaitSet> waitset_;
+  std::optional<runtime::Reader<msg::Keyframe>> keyframe_reader_;
+  std::optional<runtime::Reader<msg::KeyframeState>> keyframe_state_reader_;
+  std::optional<runtime::Reader<msg::MapPointState>> point_state_reader_;
+  std::optional<runtime::Reader<msg::KeyframeDone>> keyframe_done_reader_;
+  std::optional<runtime::Writer<msg::LoopCorrection>> correction_writer_;
+  std::optional<runtime::Writer<msg::KeyframeDone>> keyframe_done_writer_;
+
+  std::unique_ptr<LoopDetector> detector_;  // moved into closing_ once the camera is known
+  std::unique_ptr<LoopClosing> closing_;
+  MapMirror mirror_;
+  std::map<KeyframeId, std::uint64_t> mapped_;                 // mapper acknowledged: keyframe -> map version
+  std::map<std::uint64_t, std::uint64_t> corrections_applied_;  // correction id -> map version after it
+  KeyframeId last_processed_ = kNoId;
+  std::uint64_t correction_counter_ = 0;
+  std::vector<std::pair<KeyframeId, KeyframeId>> restored_loops_;
+  bool reader_wait_done_ = false;
+};
+
+}  // namespace heslam::loop_closer

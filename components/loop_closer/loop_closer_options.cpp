@@ -1,0 +1,45 @@
+// Config and command-line reading of the loop closer's options.
+#include "components/loop_closer/loop_closer_options.hpp"
+
+#include <climits>
+#include <stdexcept>
+
+namespace heslam::loop_closer {
+namespace {
+
+// Bounds of the numeric options: wide enough for any sensible tuning, tight enough to reject typos.
+constexpr int kMaxMatches = 100000;
+constexpr double kMaxPixels = 200.0;
+constexpr double kMaxTimeoutS = 3600.0;
+
+}  // namespace
+
+LoopCloserProcessOptions LoopCloserProcessOptions::from_config(const runtime::Config& config,
+                                                               const std::vector<std::string>& rest) {
+  LoopCloserProcessOptions o;
+  LoopClosingOptions& c = o.closing;
+  c.min_candidate_matches = config.get_int("verification.min_candidate_matches", c.min_candidate_matches, 3, kMaxMatches);
+  c.min_ransac_inliers = config.get_int("verification.min_ransac_inliers", c.min_ransac_inliers, 3, kMaxMatches);
+  c.min_loop_matches = config.get_int("verification.min_loop_matches", c.min_loop_matches, 3, kMaxMatches);
+  c.projection_radius_px =
+      static_cast<float>(config.get_double("verification.projection_radius_px", c.projection_radius_px, 0.5, kMaxPixels));
+  c.ransac_seed = static_cast<std::uint64_t>(
+      config.get_int("verification.ransac_seed", static_cast<int>(c.ransac_seed), 0, INT_MAX));
+  o.global_bundle_adjustment = config.get_bool("global_ba.enabled", o.global_bundle_adjustment);
+  const double timeout_s = config.get_double("lockstep.mapper_timeout_s", 30.0, 0.1, kMaxTimeoutS);
+  o.mapper_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));
+  if (!config.get_string("state_file", "").empty()) o.state_file = config.get_path("state_file", {});
+  if (!config.get_string("vocabulary.file", "").empty()) o.vocabulary = config.get_path("vocabulary.file", {});
+  for (std::size_t i = 0; i < rest.size(); ++i) {
+    if (rest[i] == "--state-file" && i + 1 < rest.size()) {
+      o.state_file = rest[++i];
+    } else if (rest[i] == "--vocabulary" && i + 1 < rest.size()) {
+      o.vocabulary = rest[++i];
+    } else {
+      throw std::runtime_error("unknown argument '" + rest[i] + "' (expected --state-file FILE or --vocabulary FILE)");
+    }
+  }
+  return o;
+}
+
+}  // namespace heslam::loop_closer

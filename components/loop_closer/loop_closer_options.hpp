@@ -1,0 +1,36 @@
+// Options of a loop closer process (every implementation): what the core LoopClosing uses, lockstep
+// waits, global bundle adjustment and the state file. Detector options are read by the
+// implementation (e.g. the BoW closer's vocabulary).
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "components/core/loop/loop_closing.hpp"
+#include "runtime/config.hpp"
+
+namespace heslam::loop_closer {
+
+struct LoopCloserProcessOptions {
+  LoopClosingOptions closing;  // verification.*
+  // global_ba.enabled: after a loop correction, bundle-adjust the whole map and publish the result as
+  // a second correction (ORB-SLAM2 does, in a thread). Lockstep waits for it, so runs stay
+  // deterministic.
+  bool global_bundle_adjustment = true;
+  // lockstep.mapper_timeout_s: how long to wait for the local mapper to apply a correction before
+  // going on without its acknowledgement (warned, counted), so a dead mapper cannot hang the run.
+  std::chrono::milliseconds mapper_timeout{30000};
+  // state_file / --state-file FILE: the keyframes already processed and the loops closed, so a
+  // restarted loop closer (kill -9) neither repeats nor loses work. Empty: nothing persisted.
+  std::filesystem::path state_file;
+  // vocabulary.file / --vocabulary FILE (bag-of-words closers): empty = the built default
+  // vocabulary (docs/place_recognition.md).
+  std::filesystem::path vocabulary;
+
+  // Throws std::runtime_error (one line: file, field, expectation) on a bad field or argument.
+  static LoopCloserProcessOptions from_config(const runtime::Config& config, const std::vector<std::string>& rest);
+};
+
+}  // namespace heslam::loop_closer

@@ -1,0 +1,70 @@
+// The loop closer's mirror of the map (see map_mirror.hpp).
+#include "components/loop_closer/map_mirror.hpp"
+
+#include <stdexcept>
+#include <string>
+
+#include "components/frontend/message_adapter.hpp"
+#include "runtime/sequence.hpp"
+
+namespace heslam::loop_closer {
+
+void MapMirror::add_keyframe(const msg::Keyframe& message) {
+  frontend::DecodedKeyframe decoded = frontend::to_keyframe(message);
+  Keyframe& incoming = decoded.keyframe;
+  const std::string name = "keyframe " + std::to_string(message.id);
+  if (message.id == kNoId) throw std::runtime_error("keyframe with id 0");
+  if (!incoming.T_wc.matrix().allFinite()) throw std::runtime_error(name + ": T_wc is not finite");
+  const PinholeStereo camera = frontend::to_camera(message.camera);
+  if (!(camera.fx_px > 0.0) || !(camera.baseline_m > 0.0)) {
+    throw std::runtime_error(name + ": camera fx " + std::to_string(camera.fx_px) + " px, baseline " +
+                             std::to_string(camera.baseline_m) + " m (expected both > 0)");
+  }
+  if (!camera_) camera_ = camera;
+  // The frontend's point ids at creation: the mapper's point states (observations) are authoritative,
+  // so only ids of points this mirror already holds with that observation survive.
+  const KeyframeId id = message.id;
+  for (std::size_t i = 0; i < incoming.point_ids.size(); ++i) incoming.point_ids[i] = kNoId;
+  Keyframe& keyframe = map_.keyframes[id] = std::move(incoming);
+  for (const auto& [point_id, point] : map_.points) {
+    for (const auto& [kf_id, index] : point.observations) {
+      if (kf_id == id && index >= 0 && static_cast<std::size_t>(index) < keyframe.point_ids.size()) {
+        keyframe.point_ids[static_cast<std::size_t>(index)] = point_id;
+      }
+    }
+  }
+  if (auto pending = pending_states_.find(id); pending != pending_states_.end()) {
+    keyframe.T_wc = pending->second.T_wc;
+    keyframe.parent = pending->second.parent;
+    keyframe.covisible = std::move(pending->second.covisible);
+    keyframe.culled = pending->second.culled;
+    pending_states_.erase(pending);
+  }
+}
+
+void MapMirror::apply_keyframe_state(const msg::KeyframeState& message) {
+  const Pose3 T_wc = frontend::to_pose(message.T_wc);
+  if (!T_wc.matrix().allFinite()) {
+    throw std::runtime_error("keyframe state " + std::to_string(message.id) + ": T_wc is not finite");
+  }
+  map_.version = std::max(map_.version, message.map_version);
+  if (frontend::apply_keyframe_state(map_, message)) return;
+  PendingState& pending = pending_states_[message.id];
+  pending.T_wc = T_wc;
+  pending.parent = message.parent_id;
+  pending.covisible.clear();
+  for (const msg::CovisibleKeyframe& neighbour : runtime::view(message.covisible)) {
+    pending.covisible.emplace_back(neighbour.id, static_cast<int>(neighbour.weight));
+  }
+  pending.culled = message.culled;
+}
+
+void MapMirror::apply_point_state(const msg::MapPointState& message) {
+  const Eigen::Vector3d p_w(message.position_w_m[0], message.position_w_m[1], message.position_w_m[2]);
+  if (!p_w.allFinite()) throw std::runtime_error("map point " + std::to_string(message.id) + ": position is not finite");
+  frontend::apply_point_state(map_, message);
+}
+
+void MapMirror::point_disposed(PointId id) { frontend::erase_point(map_, id); }
+
+}  // namespace heslam::loop_closer

@@ -1,0 +1,46 @@
+// The loop closer's read-only copy of the map: keyframes from the frontend's Keyframe samples, their
+// refined state and the map points from the local mapper's state topics (all transient-local, so a
+// late or restarted loop closer rebuilds the whole map from DDS).
+//
+// Samples of different topics arrive in any order: a keyframe state or a point observation that
+// refers to a keyframe not yet received is kept and applied when the keyframe arrives.
+#pragma once
+
+#include <map>
+#include <optional>
+
+#include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/map/map.hpp"
+#include "runtime/messages.hpp"
+
+namespace heslam::loop_closer {
+
+class MapMirror {
+ public:
+  // Throws std::runtime_error naming the keyframe when the sample is malformed (lengths, non-finite
+  // pose, bad camera); the mirror is unchanged then.
+  void add_keyframe(const msg::Keyframe& message);
+  // Throws std::runtime_error naming the keyframe / point on a non-finite pose or position.
+  void apply_keyframe_state(const msg::KeyframeState& message);
+  void apply_point_state(const msg::MapPointState& message);
+  // A disposed point instance: removed by the mapper (a culled or merged point).
+  void point_disposed(PointId id);
+
+  const Map& map() const { return map_; }
+  // The rectified camera of the first keyframe (every keyframe of a run shares it).
+  const std::optional<PinholeStereo>& camera() const { return camera_; }
+
+ private:
+  struct PendingState {
+    Pose3 T_wc;
+    KeyframeId parent = kNoId;
+    std::vector<std::pair<KeyframeId, int>> covisible;
+    bool culled = false;
+  };
+
+  Map map_;
+  std::optional<PinholeStereo> camera_;
+  std::map<KeyframeId, PendingState> pending_states_;  // states of keyframes not received yet
+};
+
+}  // namespace heslam::loop_closer
