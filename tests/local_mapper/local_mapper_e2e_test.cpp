@@ -26,6 +26,7 @@
 #include "components/core/mapping/map_file.hpp"
 #include "test_support.hpp"
 #include "child_process.hpp"
+#include "synth_render.hpp"
 #include "tools/bench/frontend_offline/kidnapped_copy.hpp"
 #include "tools/eval/ape.hpp"
 #include "tools/eval/trajectory_io.hpp"
@@ -407,11 +408,7 @@ TEST(LocalMapperEndToEnd, SavedMapLocalizesALaterRunStartingFarFromItsNewestKeyf
   const test::ScratchDir dir("localize_far");
   const fs::path mapped_dataset = dir.path() / "corridor_loop";
   const fs::path revisit_dataset = dir.path() / "revisit";
-  test::ChildProcess synth(test::bin_dir() / "heslam-synth",
-                           {"--preset", "corridor_loop", "--frames", std::to_string(kMappedFrames), "--threads", "2",
-                            "--no-events", "--out", mapped_dataset.string()},
-                           dir.path(), "synth");
-  ASSERT_EQ(synth.wait(kPipelineTimeout).value_or(-1), 0) << synth.err();
+  ASSERT_EQ(test::render_synth("corridor_loop", kMappedFrames, mapped_dataset, dir.path()), "");
   ASSERT_EQ(bench::write_kidnapped_copy(mapped_dataset, revisit_dataset,
                                         bench::KidnapPlan{0, 0, kRevisitFirst, kRevisitFrames}),
             kRevisitFrames);
