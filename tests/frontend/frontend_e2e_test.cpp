@@ -84,13 +84,6 @@ double max_abs_difference(const Pose3& a, const Pose3& b) {
   return worst;
 }
 
-int lost_entries(const fs::path& lost) {
-  std::ifstream in(lost);
-  int count = 0;
-  for (std::string line; std::getline(in, line);) count += (!line.empty() && line[0] != '#') ? 1 : 0;
-  return count;
-}
-
 TEST(FrontendEndToEnd, EurocMh01TracksEveryFrameAndMatchesTheOfflineChain) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
@@ -100,7 +93,7 @@ TEST(FrontendEndToEnd, EurocMh01TracksEveryFrameAndMatchesTheOfflineChain) {
 
   const eval::Trajectory estimate = eval::read_trajectory(run.trajectory);
   ASSERT_EQ(estimate.size(), 160u) << run.output;
-  EXPECT_EQ(lost_entries(run.lost), 0);
+  EXPECT_EQ(test::lost_entries(run.lost), 0);
   const eval::ApeResult ape = eval::compute_ape(camera_ground_truth(dataset), estimate);
   ASSERT_EQ(ape.translation_m.count, 160u);
   std::printf("[ figures  ] euroc_mh01_handheld over DDS: %zu frames, %zu keyframes, ATE rmse %.3f mm\n",
@@ -156,7 +149,7 @@ TEST(FrontendEndToEnd, WithLocalMapperDeterministicAndWithinFourMillimetres) {
 
   const eval::Trajectory estimate = eval::read_trajectory(first.trajectory);
   ASSERT_EQ(estimate.size(), 160u) << first.output;
-  EXPECT_EQ(lost_entries(first.lost), 0) << first.output;
+  EXPECT_EQ(test::lost_entries(first.lost), 0) << first.output;
   EXPECT_GT(eval::read_trajectory(first.keyframes).size(), 1u);
   const eval::ApeResult ape = eval::compute_ape(camera_ground_truth(dataset), estimate);
   std::printf("[ figures  ] euroc_mh01_handheld with the local mapper: %zu keyframes, ATE rmse %.3f mm\n",

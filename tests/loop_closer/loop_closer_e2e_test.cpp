@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "pipeline_runs.hpp"
+#include "synth_render.hpp"
 #include "test_support.hpp"
 
 namespace heslam {
@@ -52,12 +53,7 @@ class CorridorLoop : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = std::make_unique<test::ScratchDir>("corridor");
     dataset_ = dir_->path() / "corridor";
-    test::ChildProcess synth(test::bin_dir() / "heslam-synth",
-                             {"--preset", "corridor_loop", "--frames", std::to_string(kCorridorFrames), "--threads",
-                              "2", "--out", dataset_.string()},
-                             dir_->path(), "synth");
-    const int code = synth.wait(test::kPipelineTimeout).value_or(-1);
-    if (code != 0) render_error_ = synth.err();
+    render_error_ = test::render_synth("corridor_loop", kCorridorFrames, dataset_, dir_->path());
   }
   static void TearDownTestSuite() { dir_.reset(); }
   void SetUp() override { ASSERT_TRUE(render_error_.empty()) << render_error_; }
@@ -79,7 +75,7 @@ struct RunResult {
 
 RunResult run(const std::string& pipeline, const fs::path& dataset, const fs::path& dir, const std::string& label,
               const std::string& loop_closer) {
-  auto supervisor = test::start_pipeline(pipeline, dataset, dir, label, test_domain(), {"--arg", "loop_closer=" + loop_closer});
+  auto supervisor = test::start_pipeline(pipeline, dataset, dir, label, test_domain(), {"loop_closer=" + loop_closer});
   RunResult result;
   result.code = test::finish(*supervisor);
   result.output = supervisor->out() + supervisor->err();
@@ -125,7 +121,7 @@ TEST_F(CorridorLoop, ProximityLoopCloserClosesTheSameLoop) {
 TEST_F(CorridorLoop, KilledLoopCloserIsRestartedAndTheLoopIsStillClosed) {
   const fs::path dir = dir_->path();
   auto supervisor = test::start_pipeline("synth_mapper", dataset_, dir, "killed", test_domain(),
-                                         {"--arg", "loop_closer=heslam-loop-closer"});
+                                         {"loop_closer=heslam-loop-closer"});
   // Kill it once it has processed some keyframes (its state file exists), well before the loop.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
   bool killed = false;
@@ -157,10 +153,8 @@ TEST_F(CorridorLoop, KilledLoopCloserIsRestartedAndTheLoopIsStillClosed) {
 TEST(LoopCloserEndToEnd, RoomRevisitsWithoutFalseLoopsAndNoWorseAte) {
   const test::ScratchDir dir("room_loops");
   const fs::path dataset = dir.path() / "room";
-  test::ChildProcess synth(test::bin_dir() / "heslam-synth",
-                           {"--preset", "room", "--frames", "240", "--threads", "2", "--out", dataset.string()},
-                           dir.path(), "synth");
-  ASSERT_EQ(synth.wait(test::kPipelineTimeout).value_or(-1), 0) << synth.err();
+  const std::string render_error = test::render_synth("room", 240, dataset, dir.path());
+  ASSERT_TRUE(render_error.empty()) << render_error;
   const RunResult odometry = run("synth_mapper", dataset, dir.path(), "odometry", "none");
   ASSERT_EQ(odometry.code, 0) << odometry.output;
   const RunResult closed = run("synth_mapper", dataset, dir.path(), "bow", "heslam-loop-closer");

@@ -28,14 +28,15 @@ inline constexpr std::chrono::seconds kPipelineTimeout{300};
 inline constexpr std::chrono::seconds kStopTimeout{20};
 
 // heslam-supervisor config/pipelines/PIPELINE.yaml on `domain` with dataset=DATASET,
-// output=DIR/LABEL.txt, logs in DIR/logs_LABEL, plus `extra_args` (e.g. {"--arg", "loop_closer=..."}).
+// output=DIR/LABEL.txt, logs in DIR/logs_LABEL; `pipeline_args` are more NAME=VALUE pipeline
+// arguments (e.g. "loop_closer=heslam-loop-closer").
 inline std::unique_ptr<ChildProcess> start_pipeline(const std::string& pipeline, const std::filesystem::path& dataset,
                                                     const std::filesystem::path& dir, const std::string& label,
-                                                    int domain, const std::vector<std::string>& extra_args = {}) {
+                                                    int domain, const std::vector<std::string>& pipeline_args = {}) {
   std::vector<std::string> args{(source_dir() / "config/pipelines" / (pipeline + ".yaml")).string(), "--domain",
                                 std::to_string(domain), "--log-dir", (dir / ("logs_" + label)).string(), "--arg",
                                 "dataset=" + dataset.string(), "--arg", "output=" + (dir / (label + ".txt")).string()};
-  args.insert(args.end(), extra_args.begin(), extra_args.end());
+  for (const std::string& arg : pipeline_args) args.insert(args.end(), {"--arg", arg});
   return std::make_unique<ChildProcess>(bin_dir() / "heslam-supervisor", args, dir, "supervisor_" + label);
 }
 

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 #include <string>
 
@@ -63,6 +64,14 @@ inline int exclusive_domain_id() {
     throw std::runtime_error("no free DDS test domain in 1..230 (all locked under " + lock_dir.string() + ")");
   }();
   return domain_id;
+}
+
+// The frames listed in a recorder's FILE.lost.txt (rows that are not comments); 0 when it is absent.
+inline int lost_entries(const std::filesystem::path& lost) {
+  std::ifstream in(lost);
+  int count = 0;
+  for (std::string line; std::getline(in, line);) count += (!line.empty() && line[0] != '#') ? 1 : 0;
+  return count;
 }
 
 }  // namespace heslam::test

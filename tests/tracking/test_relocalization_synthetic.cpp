@@ -9,15 +9,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <future>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "child_process.hpp"
 #include "relocalization_test_vocabulary.hpp"
+#include "synth_render.hpp"
 #include "test_support.hpp"
 #include "tools/bench/frontend_offline/kidnapped_copy.hpp"
 #include "tools/bench/frontend_offline/offline_run.hpp"
@@ -31,10 +30,10 @@ constexpr int kReplayedFrames = 20;
 constexpr int kFrames = kJump + kReplayedFrames;
 constexpr int kMaxFramesToRelocalize = 3;
 constexpr double kMaxPositionError_m = 0.02;
-// Renders ~8 frame pairs/s on 2 loaded cores; this bounds a hung renderer, it is no performance test.
-constexpr std::chrono::seconds kRenderTimeout{300};
 
-const bench::FrameRecord& frame_at(const bench::OfflineRun& run, int k) { return run.frames[static_cast<std::size_t>(k)]; }
+const bench::FrameRecord& frame_at(const bench::OfflineRun& run, int k) {
+  return run.frames[static_cast<std::size_t>(k)];
+}
 
 TEST(KidnappedCamera, CorridorLoopTeleportedTwentySecondsBackIsRelocalizedOnlyWithTheDatabase) {
   const auto vocabulary = test::relocalization_test_vocabulary();
@@ -42,11 +41,7 @@ TEST(KidnappedCamera, CorridorLoopTeleportedTwentySecondsBackIsRelocalizedOnlyWi
   const test::ScratchDir scratch("teleport_corridor");
   const auto rendered = scratch.path() / "corridor_loop";
   const auto teleported = scratch.path() / "teleported";
-  test::ChildProcess synth(test::bin_dir() / "heslam-synth",
-                           {"--preset", "corridor_loop", "--frames", std::to_string(kJump), "--threads", "2",
-                            "--no-events", "--out", rendered.string()},
-                           scratch.path(), "synth");
-  ASSERT_EQ(synth.wait(kRenderTimeout).value_or(-1), 0) << synth.err();
+  ASSERT_EQ(test::render_synth("corridor_loop", kJump, rendered, scratch.path()), "");
   ASSERT_EQ(bench::write_kidnapped_copy(rendered, teleported,
                                         bench::KidnapPlan{kJump, kJump, kReplaySource, kReplayedFrames}),
             kFrames);
@@ -57,7 +52,8 @@ TEST(KidnappedCamera, CorridorLoopTeleportedTwentySecondsBackIsRelocalizedOnlyWi
   with_database.vocabulary = vocabulary;
   bench::OfflineRunOptions newest_keyframes_only;
   newest_keyframes_only.max_frames = kJump + 2 * kMaxFramesToRelocalize;
-  auto without_run = std::async(std::launch::async, [&] { return bench::run_offline(sequence, newest_keyframes_only); });
+  auto without_run =
+      std::async(std::launch::async, [&] { return bench::run_offline(sequence, newest_keyframes_only); });
   const bench::OfflineRun run = bench::run_offline(sequence, with_database);
   const bench::OfflineRun without = without_run.get();
   ASSERT_EQ(run.frames.size(), static_cast<std::size_t>(kFrames));

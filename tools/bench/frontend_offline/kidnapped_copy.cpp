@@ -17,6 +17,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The frame period past the end of a one-frame source, which has none: EuRoC's 20 Hz.
+constexpr std::int64_t kOneFrameSourcePeriod_ns = 50'000'000;
+
 void link_or_copy(const fs::path& target, const fs::path& link) {
   std::error_code error;
   fs::create_symlink(fs::absolute(target), link, error);
@@ -43,7 +46,8 @@ Schedule make_schedule(const EurocSequence& source, const fs::path& source_datas
   }
   const std::int64_t first_stamp = source.frames.front().stamp_ns;
   const std::int64_t last_stamp = source.frames.back().stamp_ns;
-  const std::int64_t period_ns = source_frames > 1 ? (last_stamp - first_stamp) / (source_frames - 1) : 50'000'000;
+  const std::int64_t period_ns =
+      source_frames > 1 ? (last_stamp - first_stamp) / (source_frames - 1) : kOneFrameSourcePeriod_ns;
   Schedule result;
   for (int k = 0; k < frames; ++k) {
     int shown = k;
@@ -69,8 +73,12 @@ std::map<std::int64_t, std::string> ground_truth_rows(const fs::path& csv, std::
       continue;
     }
     const std::size_t comma = line.find(',');
-    if (comma == std::string::npos) throw std::runtime_error(csv.string() + ": expected 'timestamp,...' rows");
-    rows[std::stoll(line.substr(0, comma))] = line.substr(comma);
+    try {
+      if (comma == std::string::npos) throw std::invalid_argument("no comma");
+      rows[std::stoll(line.substr(0, comma))] = line.substr(comma);
+    } catch (const std::logic_error&) {
+      throw std::runtime_error(csv.string() + ": expected 'timestamp,...' rows, got '" + line + "'");
+    }
   }
   return rows;
 }

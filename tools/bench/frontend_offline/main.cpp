@@ -30,8 +30,8 @@ constexpr const char* kUsage =
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
     "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n"
     "       [--kidnap DIR]   (run on a kidnapped-camera copy written to DIR: frames 60-79 black, 80-159 = 0-79)\n"
-    "       [--kidnap-plan B,R,S[,N]]   (the copy's plan: frames B..R-1 black, from R on the source's frames S.. (N of\n"
-    "                                    them; default to the source's end); B = R: a teleport without black frames)\n"
+    "       [--kidnap-plan B,R,S[,N]]   (the copy's plan: frames B..R-1 black, from R on the source's frames\n"
+    "                                    S.. (N of them; default: to the source's end); B = R: a teleport)\n"
     "       [--vocabulary FILE|none]   (keyframe database for relocalization; default: the build's vocabulary)\n";
 
 double percentile(std::vector<double> values, double fraction) {
