@@ -2,6 +2,7 @@
 // marker wall for geometry tests. World frame: z up, metres.
 #include "tools/synth/scene_builders.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -20,6 +21,9 @@ constexpr int kNumPhotos = sizeof(kPhotos) / sizeof(kPhotos[0]);
 constexpr double kMarkerStandoffM = 0.01;
 // Fixed layout seed: scenes are the same for every sequence seed (only the path varies).
 constexpr std::uint64_t kLayoutSeed = 20240601;
+// Street buildings: depth from the facade back, and the narrowest building placed at a row's end.
+constexpr double kBuildingDepthM = 10.0;
+constexpr double kMinBuildingWidthM = 4.0;
 
 struct Textures {
   int photo0 = 0;  // first photo index; photos are consecutive
@@ -213,10 +217,16 @@ BuiltScene build_street(const Preset& preset) {
     const double length = (side.b - side.a).norm();
     for (int row = 0; row < 2; ++row) {
       const double sign = row == 0 ? 1.0 : -1.0;  // inner block, outer ring
-      double along = -setback;
-      while (along < length + setback) {
-        const double width = uniform(10.0, 22.0);
-        const double depth = 10.0;
+      // Buildings stop where the crossing streets begin, and each row fills the corner square at its
+      // start (the previous side's row stops short of it: no two facades share a plane). Before, both
+      // rows ran from -setback to past length + setback, so buildings stood across the crossing roads
+      // and the drive started 8 m in front of a facade it then drove through (issue #21).
+      const double row_start = row == 0 ? setback : -setback - kBuildingDepthM;
+      const double row_end = row == 0 ? length - setback - kBuildingDepthM : length + setback;
+      double along = row_start;
+      while (along < row_end - kMinBuildingWidthM) {
+        const double width = std::min(uniform(10.0, 22.0), row_end - along);
+        const double depth = kBuildingDepthM;
         const double height = uniform(7.0, 20.0);
         const double mid = along + width / 2;
         const Eigen::Vector2d c = side.a + dir * mid + left * sign * (setback + depth / 2);
@@ -229,11 +239,14 @@ BuiltScene build_street(const Preset& preset) {
       }
       // Sidewalk strip in front of this row.
       Quad walk;
-      const Eigen::Vector2d start = side.a - dir * setback + left * sign * curb;
+      // Inner: from curb to curb of the crossing streets; outer: round the outer corner it starts at.
+      const double walk_start = row == 0 ? curb : -setback;
+      const double walk_end = row == 0 ? length - curb : length + curb;
+      const Eigen::Vector2d start = side.a + dir * walk_start + left * sign * curb;
       walk.origin_w = {start.x(), start.y(), 0.02};
       walk.axis_u_w = {dir.x(), dir.y(), 0.0};
       walk.axis_v_w = Eigen::Vector3d(left.x(), left.y(), 0.0) * sign;
-      walk.size_u_m = length + 2 * setback;
+      walk.size_u_m = walk_end - walk_start;
       walk.size_v_m = setback - curb;
       walk.texture = t.tiles;
       walk.texel_m = 0.006;
