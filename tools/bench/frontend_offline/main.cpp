@@ -138,6 +138,10 @@ int run(int argc, char** argv) {
   } else {
     std::printf("path length %.3f m (no ground truth)\n", heslam::bench::tracked_path_length_m(result));
   }
+  if (const auto drift = heslam::bench::compute_kitti_drift(result)) {
+    std::printf("KITTI drift (devkit, %zu sub-sequences of 100-800 m): translation %.2f %%, rotation %.4f deg/100 m\n",
+                drift->segments.size(), drift->translation_error_percent, drift->rotation_error_deg_per_100m);
+  }
   return 0;
 }
 

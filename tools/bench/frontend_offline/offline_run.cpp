@@ -121,6 +121,20 @@ std::optional<AteResult> compute_ate_se3(const OfflineRun& run) {
   return ate;
 }
 
+std::optional<eval::KittiResult> compute_kitti_drift(const OfflineRun& run) {
+  eval::Trajectory truth;
+  eval::Trajectory estimate;
+  for (std::size_t k = 0; k < run.frames.size(); ++k) {
+    const FrameRecord& f = run.frames[k];
+    if (f.state != TrackingState::kOk || !f.T_wc_truth) continue;
+    truth.push_back(*f.T_wc_truth, static_cast<std::int64_t>(k));
+    estimate.push_back(f.T_wc, static_cast<std::int64_t>(k));
+  }
+  const eval::KittiOptions options;
+  if (truth.size() < 2 || truth.path_length_m() < options.lengths_m.front()) return std::nullopt;
+  return eval::compute_kitti_metrics(truth, estimate, options);
+}
+
 double tracked_path_length_m(const OfflineRun& run) {
   double length = 0.0;
   const FrameRecord* previous = nullptr;

@@ -12,6 +12,7 @@
 #include "components/core/tracking/tracker.hpp"
 #include "tools/bench/frontend_offline/euroc_sequence.hpp"
 #include "tools/bench/frontend_offline/photometric_variant.hpp"
+#include "tools/eval/kitti_metrics.hpp"
 
 namespace heslam::bench {
 
@@ -62,6 +63,10 @@ struct AteResult {
 };
 // Absolute trajectory error of the tracked frames after SE(3) Umeyama alignment (no scale).
 std::optional<AteResult> compute_ate_se3(const OfflineRun& run);
+
+// The KITTI devkit's drift (heslam-eval kitti, alignment none) of the tracked frames against the ground
+// truth, paired by the frame's index in the run; nullopt without ground truth or below 100 m of path.
+std::optional<eval::KittiResult> compute_kitti_drift(const OfflineRun& run);
 
 // Summed distance between consecutive tracked positions.
 double tracked_path_length_m(const OfflineRun& run);
