@@ -23,6 +23,7 @@ using heslam::bench::FrameRecord;
 
 constexpr const char* kUsage =
     "usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]\n"
+    "       (ORB-SLAM2 settings: HE.*, ORBextractor.*, Stereo.*, and Camera.fps / ThDepth for the tracker)\n"
     "       [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast]\n"
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
     "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n";
@@ -86,7 +87,10 @@ int run(int argc, char** argv) {
       throw std::runtime_error("unknown option " + arg + "\n" + kUsage);
     }
   }
-  if (!settings.empty()) options.pipeline = heslam::StereoFeaturePipelineOptions::load(settings);
+  if (!settings.empty()) {
+    options.pipeline = heslam::StereoFeaturePipelineOptions::load(settings);
+    heslam::bench::apply_orbslam2_tracker_settings(settings, options.tracker);
+  }
   if (!he_mode.empty()) {
     try {
       options.pipeline.he.mode = heslam::parse_he_mode(he_mode);

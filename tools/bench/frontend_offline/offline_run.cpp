@@ -1,6 +1,7 @@
 // The offline frontend loop and its trajectory evaluation.
 #include "tools/bench/frontend_offline/offline_run.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <cmath>
@@ -8,6 +9,7 @@
 #include <iomanip>
 #include <stdexcept>
 
+#include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "components/core/camera/stereo_calibration.hpp"
@@ -42,6 +44,22 @@ int OfflineRun::tracked_frames() const {
   int n = 0;
   for (const FrameRecord& f : frames) n += f.state == TrackingState::kOk ? 1 : 0;
   return n;
+}
+
+void apply_orbslam2_tracker_settings(const std::filesystem::path& settings_yaml, TrackerOptions& tracker) {
+  cv::FileStorage fs(settings_yaml.string(), cv::FileStorage::READ);
+  if (!fs.isOpened()) throw std::runtime_error(settings_yaml.string() + ": cannot open file");
+  auto read_positive = [&](const char* key, double& value) {
+    const cv::FileNode node = fs[key];
+    if (node.empty()) return false;
+    if (!node.isReal() && !node.isInt()) throw std::runtime_error(settings_yaml.string() + ": " + key + ": expected a number");
+    value = static_cast<double>(node);
+    if (!(value > 0.0)) throw std::runtime_error(settings_yaml.string() + ": " + key + ": expected a positive number");
+    return true;
+  };
+  double fps = 0.0;
+  if (read_positive("Camera.fps", fps)) tracker.max_frames_between_keyframes = std::max(1, static_cast<int>(std::lround(fps)));
+  read_positive("ThDepth", tracker.close_depth_baselines);
 }
 
 OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& options) {
