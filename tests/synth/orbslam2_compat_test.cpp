@@ -196,6 +196,8 @@ TEST(SynthOrbSlam2, StereoKittiReadsTheKittiLayout) {
   ASSERT_TRUE(fs.isOpened());
   expect_tracking_settings(fs, 0.54);
   EXPECT_DOUBLE_EQ(static_cast<double>(fs["Camera.fx"]), 718.856);
+  // ORB-SLAM2's own KITTI settings (Examples/Stereo/KITTI00-02.yaml) ask 2000 features, EuRoC's 1200.
+  EXPECT_EQ(static_cast<int>(fs["ORBextractor.nFeatures"]), 2000);
   fs::remove_all(dir);
 }
 

@@ -44,8 +44,9 @@ SceneKind parse_scene(const std::string& s, const fs::path& file) {
   if (s == "room") return SceneKind::kRoom;
   if (s == "corridor_loop") return SceneKind::kCorridorLoop;
   if (s == "street") return SceneKind::kStreet;
+  if (s == "town") return SceneKind::kTown;
   if (s == "marker_wall") return SceneKind::kMarkerWall;
-  fail(file, "scene", "is '" + s + "', expected room, corridor_loop, street or marker_wall");
+  fail(file, "scene", "is '" + s + "', expected room, corridor_loop, street, town or marker_wall");
 }
 
 EventKind parse_event(const std::string& s, const std::string& field, const fs::path& file) {
@@ -63,6 +64,7 @@ std::string to_string(SceneKind kind) {
     case SceneKind::kRoom: return "room";
     case SceneKind::kCorridorLoop: return "corridor_loop";
     case SceneKind::kStreet: return "street";
+    case SceneKind::kTown: return "town";
     case SceneKind::kMarkerWall: return "marker_wall";
   }
   return "?";
@@ -94,7 +96,7 @@ Preset load_preset(const fs::path& yaml_path) {
   p.source = yaml_path;
   p.name = yaml_path.stem().string();
   if (!root["name"].empty()) p.name = static_cast<std::string>(root["name"]);
-  if (root["scene"].empty()) fail(f, "scene", "is missing (room, corridor_loop, street or marker_wall)");
+  if (root["scene"].empty()) fail(f, "scene", "is missing (room, corridor_loop, street, town or marker_wall)");
   if (!root["scene"].isString()) fail(f, "scene", "expected a string");
   p.scene = parse_scene(static_cast<std::string>(root["scene"]), f);
   read_int(root, "frames", "", f, p.frames);
@@ -144,6 +146,25 @@ Preset load_preset(const fs::path& yaml_path) {
     read_number(tr, "pitch_wiggle_deg", pre, f, p.trajectory.pitch_wiggle_deg);
     read_number(tr, "roll_wiggle_deg", pre, f, p.trajectory.roll_wiggle_deg);
     read_number(tr, "wiggle_hz", pre, f, p.trajectory.wiggle_hz);
+    int stop_at_end = p.trajectory.stop_at_end ? 1 : 0;
+    read_int(tr, "stop_at_end", pre, f, stop_at_end);
+    p.trajectory.stop_at_end = stop_at_end != 0;
+    const cv::FileNode stops = tr["stops"];
+    if (!stops.empty() && !stops.isNone()) {
+      if (!stops.isSeq()) fail(f, pre + "stops", "expected a list of {at_m, wait_s}");
+      int i = 0;
+      for (const auto& node : stops) {
+        const std::string stop_pre = pre + "stops[" + std::to_string(i++) + "].";
+        if (!node.isMap()) fail(f, stop_pre.substr(0, stop_pre.size() - 1), "expected a map");
+        StopSpec stop;
+        read_number(node, "at_m", stop_pre, f, stop.at_m);
+        read_number(node, "wait_s", stop_pre, f, stop.wait_s);
+        const double previous = p.trajectory.stops.empty() ? 0.0 : p.trajectory.stops.back().at_m;
+        if (!(stop.at_m > previous)) fail(f, stop_pre + "at_m", "must be positive and increase from stop to stop");
+        if (stop.wait_s < 0) fail(f, stop_pre + "wait_s", "must be >= 0");
+        p.trajectory.stops.push_back(stop);
+      }
+    }
   }
   require_positive(p.trajectory.speed_mps, "trajectory.speed_mps", f);
 

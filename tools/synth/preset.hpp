@@ -8,7 +8,7 @@
 
 namespace heslam::synth {
 
-enum class SceneKind { kRoom, kCorridorLoop, kStreet, kMarkerWall };
+enum class SceneKind { kRoom, kCorridorLoop, kStreet, kTown, kMarkerWall };
 
 struct CameraSpec {
   int width_px = 752;
@@ -22,6 +22,12 @@ struct CameraSpec {
   double rate_hz = 20.0;
 };
 
+// A stop along the path: brake to rest at `at_m` (arc length along the trajectory), wait, drive on.
+struct StopSpec {
+  double at_m = 0.0;
+  double wait_s = 0.0;
+};
+
 struct TrajectorySpec {
   double speed_mps = 0.8;         // cruising speed along the path
   double accel_time_s = 1.5;      // time to reach cruising speed from rest at the start
@@ -33,6 +39,11 @@ struct TrajectorySpec {
   double pitch_wiggle_deg = 4.0;
   double roll_wiggle_deg = 2.0;
   double wiggle_hz = 0.2;         // base frequency of the oscillations (two harmonics are added)
+  // Stops, braking and starting again at the accel_time_s rate (a constant speed profile without).
+  // With stops or stop_at_end the oscillations follow the distance travelled (wiggle_hz at cruising
+  // speed), so a vehicle at rest does not sway.
+  std::vector<StopSpec> stops;
+  bool stop_at_end = false;       // open paths: brake to rest at the end (without: stop dead there)
 };
 
 struct PhotometrySpec {

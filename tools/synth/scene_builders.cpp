@@ -2,6 +2,7 @@
 // marker wall for geometry tests. World frame: z up, metres.
 #include "tools/synth/scene_builders.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -20,6 +21,9 @@ constexpr int kNumPhotos = sizeof(kPhotos) / sizeof(kPhotos[0]);
 constexpr double kMarkerStandoffM = 0.01;
 // Fixed layout seed: scenes are the same for every sequence seed (only the path varies).
 constexpr std::uint64_t kLayoutSeed = 20240601;
+// Street buildings: depth from the facade back, and the narrowest building placed at a row's end.
+constexpr double kBuildingDepthM = 10.0;
+constexpr double kMinBuildingWidthM = 4.0;
 
 struct Textures {
   int photo0 = 0;  // first photo index; photos are consecutive
@@ -186,99 +190,193 @@ BuiltScene build_corridor_loop(const Preset& preset) {
   return out;
 }
 
-BuiltScene build_street(const Preset& preset) {
-  BuiltScene out;
-  Scene& s = out.scene;
-  const Textures t = add_textures(s, preset);
-  s.sky_radiance = 0.95f;
-  s.ambient = 0.6f;
-  s.diffuse = 0.4f;
-  s.light_dir_w = Eigen::Vector3d(0.5, -0.3, 0.8).normalized();
-  const double X = 160.0, Y = 100.0;   // road centre line rectangle
-  const double setback = 7.5;          // centre line to facades
-  const double curb = 4.5;             // centre line to curb (parked cars stand beyond it)
-  // Ground: asphalt over the whole area, sidewalks as tile strips in front of the facades.
-  add_horizontal(s, -40, -40, X + 40, Y + 40, 0.0, true, t.asphalt, 0.02, 1.0f);
-  std::mt19937_64 rng(kLayoutSeed);
-  auto uniform = [&](double lo, double hi) { return lo + (hi - lo) * static_cast<double>(rng() >> 11) * 0x1.0p-53; };
-  // Buildings: along each of the four sides, an outer row (facing the block) and an inner row.
-  struct Side {
-    Eigen::Vector2d a, b;  // centre line from a to b (counter-clockwise)
-  };
-  const Side sides[4] = {{{0, 0}, {X, 0}}, {{X, 0}, {X, Y}}, {{X, Y}, {0, Y}}, {{0, Y}, {0, 0}}};
-  int photo = 0;
-  for (const Side& side : sides) {
-    const Eigen::Vector2d dir = (side.b - side.a).normalized();
-    const Eigen::Vector2d left(-dir.y(), dir.x());  // towards the inside of the block
-    const double length = (side.b - side.a).norm();
-    for (int row = 0; row < 2; ++row) {
-      const double sign = row == 0 ? 1.0 : -1.0;  // inner block, outer ring
-      double along = -setback;
-      while (along < length + setback) {
-        const double width = uniform(10.0, 22.0);
-        const double depth = 10.0;
-        const double height = uniform(7.0, 20.0);
-        const double mid = along + width / 2;
-        const Eigen::Vector2d c = side.a + dir * mid + left * sign * (setback + depth / 2);
-        const double yaw = std::atan2(dir.y(), dir.x());
-        const int facade = (photo % 3 == 1) ? t.bricks : t.photo(photo);
-        s.add_box({c.x(), c.y(), 0.0}, {width, depth, height}, yaw, {facade, t.photo(photo + 5)}, t.concrete,
-                  0.035, 1.0f, static_cast<std::uint64_t>(photo) + 100);
-        ++photo;
-        along += width + uniform(0.0, 3.0);
-      }
-      // Sidewalk strip in front of this row.
-      Quad walk;
-      const Eigen::Vector2d start = side.a - dir * setback + left * sign * curb;
-      walk.origin_w = {start.x(), start.y(), 0.02};
-      walk.axis_u_w = {dir.x(), dir.y(), 0.0};
-      walk.axis_v_w = Eigen::Vector3d(left.x(), left.y(), 0.0) * sign;
-      walk.size_u_m = length + 2 * setback;
-      walk.size_v_m = setback - curb;
-      walk.texture = t.tiles;
-      walk.texel_m = 0.006;
-      s.add_quad(walk, 1.0f);
+// Streets lined with buildings, sidewalks, parked cars and lane dashes; shared by `street` (one block
+// and a ring of facades round it) and `town` (a grid of blocks). Roads are given by their centre lines.
+class CityBuilder {
+ public:
+  CityBuilder(Scene& scene, const Textures& textures, double setback_m, double curb_m, double no_parking_m)
+      : s_(scene), t_(textures), setback_(setback_m), curb_(curb_m), no_parking_(no_parking_m), rng_(kLayoutSeed) {}
+
+  // Buildings on one side of the road from a to b: the left side (sign +1, a block's edge walked
+  // counter-clockwise) or the right side (sign -1, the outer ring facing into the town). They stop
+  // where the crossing streets begin, and each row fills the corner square at its start (the
+  // previous row stops short of it: no two facades share a plane). Before issue #21 both rows ran
+  // from -setback to past length + setback, so buildings stood across the crossing roads and the
+  // street drive started 8 m in front of a facade it then drove through.
+  void building_row(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double sign) {
+    const Eigen::Vector2d dir = (b - a).normalized();
+    const Eigen::Vector2d left(-dir.y(), dir.x());
+    const double length = (b - a).norm();
+    const bool inner = sign > 0;
+    const double row_start = inner ? setback_ : -setback_ - kBuildingDepthM;
+    const double row_end = inner ? length - setback_ - kBuildingDepthM : length + setback_;
+    double along = row_start;
+    while (along < row_end - kMinBuildingWidthM) {
+      const double width = std::min(uniform(10.0, 22.0), row_end - along);
+      const double height = uniform(7.0, 20.0);
+      const Eigen::Vector2d c = a + dir * (along + width / 2) + left * sign * (setback_ + kBuildingDepthM / 2);
+      const int facade = (photo_ % 3 == 1) ? t_.bricks : t_.photo(photo_);
+      s_.add_box({c.x(), c.y(), 0.0}, {width, kBuildingDepthM, height}, std::atan2(dir.y(), dir.x()),
+                 {facade, t_.photo(photo_ + 5)}, t_.concrete, 0.035, 1.0f, static_cast<std::uint64_t>(photo_) + 100);
+      ++photo_;
+      along += width + uniform(0.0, 3.0);
     }
-    // Parked cars along the inner curb, none near the corners.
-    for (double along = 15.0; along < length - 15.0; along += uniform(5.0, 12.0)) {
+  }
+
+  // Sidewalk strip in front of that row. Inner: from curb to curb of the crossing streets; outer:
+  // round the outer corner it starts at.
+  void sidewalk(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double sign) {
+    const Eigen::Vector2d dir = (b - a).normalized();
+    const Eigen::Vector2d left(-dir.y(), dir.x());
+    const double length = (b - a).norm();
+    const double walk_start = sign > 0 ? curb_ : -setback_;
+    const double walk_end = sign > 0 ? length - curb_ : length + curb_;
+    const Eigen::Vector2d start = a + dir * walk_start + left * sign * curb_;
+    Quad walk;
+    walk.origin_w = {start.x(), start.y(), 0.02};
+    walk.axis_u_w = {dir.x(), dir.y(), 0.0};
+    walk.axis_v_w = Eigen::Vector3d(left.x(), left.y(), 0.0) * sign;
+    walk.size_u_m = walk_end - walk_start;
+    walk.size_v_m = setback_ - curb_;
+    walk.texture = t_.tiles;
+    walk.texel_m = 0.006;
+    s_.add_quad(walk, 1.0f);
+  }
+
+  // Parked cars along the left curb of a -> b, none within no_parking_m of the junctions.
+  void parked_cars(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    const Eigen::Vector2d dir = (b - a).normalized();
+    const Eigen::Vector2d left(-dir.y(), dir.x());
+    const double length = (b - a).norm();
+    for (double along = no_parking_; along < length - no_parking_; along += uniform(5.0, 12.0)) {
       if (uniform(0, 1) < 0.45) continue;
-      const Eigen::Vector2d c = side.a + dir * along + left * (curb - 1.1);
-      s.add_box({c.x(), c.y(), 0.0}, {4.2, 1.8, 1.45}, std::atan2(dir.y(), dir.x()), {t.photo(photo), t.photo(photo + 7)},
-                t.photo(photo + 3), 0.004, 0.8f, static_cast<std::uint64_t>(photo) + 500);
-      ++photo;
+      const Eigen::Vector2d c = a + dir * along + left * (curb_ - 1.1);
+      s_.add_box({c.x(), c.y(), 0.0}, {4.2, 1.8, 1.45}, std::atan2(dir.y(), dir.x()),
+                 {t_.photo(photo_), t_.photo(photo_ + 7)}, t_.photo(photo_ + 3), 0.004, 0.8f,
+                 static_cast<std::uint64_t>(photo_) + 500);
+      ++photo_;
       along += 4.2;
     }
-    // Dashed lane marking along the centre line.
+  }
+
+  // Dashed lane marking along the centre line from a to b.
+  void lane_dashes(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    const Eigen::Vector2d dir = (b - a).normalized();
+    const Eigen::Vector2d left(-dir.y(), dir.x());
+    const double length = (b - a).norm();
     for (double along = 0.0; along + 3.0 < length; along += 9.0) {
       Quad dash;
-      const Eigen::Vector2d p0 = side.a + dir * along + left * 0.075;
+      const Eigen::Vector2d p0 = a + dir * along + left * 0.075;
       dash.origin_w = {p0.x(), p0.y(), 0.01};
       dash.axis_u_w = {dir.x(), dir.y(), 0.0};
       dash.axis_v_w = {-left.x(), -left.y(), 0.0};
       dash.size_u_m = 3.0;
       dash.size_v_m = 0.15;
-      dash.texture = t.plaster;
+      dash.texture = t_.plaster;
       dash.texel_m = 0.01;
-      s.add_quad(dash, 1.1f);
+      s_.add_quad(dash, 1.1f);
     }
   }
-  // Path: once round the block counter-clockwise on the right-hand lane, then 120 m again.
-  auto& p = out.path.control_points_w;
-  const double lane = -1.8;  // right of the centre line when driving counter-clockwise
-  const double z = 1.65;     // KITTI camera height
-  for (int lap = 0; lap < 2; ++lap) {
-    for (const Side& side : sides) {
-      const Eigen::Vector2d dir = (side.b - side.a).normalized();
-      const Eigen::Vector2d left(-dir.y(), dir.x());
-      const double length = (side.b - side.a).norm();
-      for (double along = 10.0; along <= length - 10.0; along += 10.0) {
-        if (lap == 1 && &side != &sides[0]) break;
-        if (lap == 1 && along > 130.0) break;
-        const Eigen::Vector2d q = side.a + dir * along + left * lane;
-        p.push_back({q.x(), q.y(), z});
+
+ private:
+  double uniform(double lo, double hi) { return lo + (hi - lo) * static_cast<double>(rng_() >> 11) * 0x1.0p-53; }
+
+  Scene& s_;
+  const Textures& t_;
+  double setback_;  // centre line to facades
+  double curb_;     // centre line to curb (parked cars stand beyond it)
+  double no_parking_;  // junction centre to the first / last parking place
+  std::mt19937_64 rng_;
+  int photo_ = 0;
+};
+
+// KITTI-like lighting and sky over asphalt covering [x0, x1] x [y0, y1].
+void city_ground_and_light(Scene& s, const Textures& t, double x0, double y0, double x1, double y1) {
+  s.sky_radiance = 0.95f;
+  s.ambient = 0.6f;
+  s.diffuse = 0.4f;
+  s.light_dir_w = Eigen::Vector3d(0.5, -0.3, 0.8).normalized();
+  add_horizontal(s, x0, y0, x1, y1, 0.0, true, t.asphalt, 0.02, 1.0f);
+}
+
+// Control points of a drive through the road junctions `route` on the right-hand lane: every 10 m
+// of each leg from 10 m after its start junction to 10 m before its end junction (the spline rounds
+// the corners in between), at KITTI's camera height.
+void drive_through(const std::vector<Eigen::Vector2d>& route, std::vector<Eigen::Vector3d>& control_points_w) {
+  constexpr double kRightLaneM = 1.8;
+  constexpr double kCameraHeightM = 1.65;
+  for (std::size_t leg = 0; leg + 1 < route.size(); ++leg) {
+    const Eigen::Vector2d dir = (route[leg + 1] - route[leg]).normalized();
+    const Eigen::Vector2d right(dir.y(), -dir.x());
+    const double length = (route[leg + 1] - route[leg]).norm();
+    for (double along = 10.0; along <= length - 10.0; along += 10.0) {
+      const Eigen::Vector2d q = route[leg] + dir * along + right * kRightLaneM;
+      control_points_w.push_back({q.x(), q.y(), kCameraHeightM});
+    }
+  }
+}
+
+BuiltScene build_street(const Preset& preset) {
+  BuiltScene out;
+  Scene& s = out.scene;
+  const Textures t = add_textures(s, preset);
+  const double X = 160.0, Y = 100.0;  // road centre line rectangle
+  city_ground_and_light(s, t, -40, -40, X + 40, Y + 40);
+  CityBuilder city(s, t, /*setback_m=*/7.5, /*curb_m=*/4.5, /*no_parking_m=*/15.0);
+  // Along each of the four sides (counter-clockwise): the block's row, the outer ring's row, the
+  // block's parked cars, the centre line.
+  const Eigen::Vector2d corners[5] = {{0, 0}, {X, 0}, {X, Y}, {0, Y}, {0, 0}};
+  for (int side = 0; side < 4; ++side) {
+    const Eigen::Vector2d& a = corners[side];
+    const Eigen::Vector2d& b = corners[side + 1];
+    for (const double sign : {1.0, -1.0}) {
+      city.building_row(a, b, sign);
+      city.sidewalk(a, b, sign);
+    }
+    city.parked_cars(a, b);
+    city.lane_dashes(a, b);
+  }
+  // Path: once round the block counter-clockwise on the right-hand lane, then 130 m of the first side again.
+  drive_through({{0, 0}, {X, 0}, {X, Y}, {0, Y}, {0, 0}, {140, 0}}, out.path.control_points_w);
+  out.path.closed = false;
+  return out;
+}
+
+BuiltScene build_town(const Preset& preset) {
+  BuiltScene out;
+  Scene& s = out.scene;
+  const Textures t = add_textures(s, preset);
+  // Road centre lines: three streets each way; four blocks of 100 / 80 x 80 / 70 m between them.
+  const double xs[3] = {0.0, 100.0, 180.0};
+  const double ys[3] = {0.0, 80.0, 150.0};
+  city_ground_and_light(s, t, -40, -40, xs[2] + 40, ys[2] + 40);
+  // Wider streets than `street` (the drive passes parked cars on its own side too), and no parking
+  // where a right turn's path cuts towards the curb.
+  CityBuilder city(s, t, /*setback_m=*/9.0, /*curb_m=*/5.5, /*no_parking_m=*/22.0);
+  for (int i = 0; i < 2; ++i) {
+    for (int j = 0; j < 2; ++j) {
+      const Eigen::Vector2d c[5] = {{xs[i], ys[j]}, {xs[i + 1], ys[j]}, {xs[i + 1], ys[j + 1]}, {xs[i], ys[j + 1]}, {xs[i], ys[j]}};
+      for (int edge = 0; edge < 4; ++edge) {
+        city.building_row(c[edge], c[edge + 1], 1.0);
+        city.sidewalk(c[edge], c[edge + 1], 1.0);
+        city.parked_cars(c[edge], c[edge + 1]);
       }
     }
   }
+  // The outer ring of facades looks into the town from beyond the boundary streets (continuous past
+  // the T-junctions, where the crossing street ends at it).
+  const Eigen::Vector2d boundary[5] = {{xs[0], ys[0]}, {xs[2], ys[0]}, {xs[2], ys[2]}, {xs[0], ys[2]}, {xs[0], ys[0]}};
+  for (int side = 0; side < 4; ++side) {
+    city.building_row(boundary[side], boundary[side + 1], -1.0);
+    city.sidewalk(boundary[side], boundary[side + 1], -1.0);
+  }
+  for (const double y : ys) city.lane_dashes({xs[0], y}, {xs[2], y});
+  for (const double x : xs) city.lane_dashes({x, ys[0]}, {x, ys[2]});
+  // Path: east, left at the T-junction, north to the crossroads (the preset stops there), right,
+  // left, left, left, straight over the crossroads, right at the T-junction, and back west.
+  drive_through({{xs[0], ys[0]}, {xs[1], ys[0]}, {xs[1], ys[1]}, {xs[2], ys[1]}, {xs[2], ys[2]}, {xs[1], ys[2]},
+                 {xs[1], ys[0]}, {xs[0], ys[0]}},
+                out.path.control_points_w);
   out.path.closed = false;
   return out;
 }
@@ -307,6 +405,7 @@ BuiltScene build_scene(const Preset& preset) {
     case SceneKind::kRoom: return build_room(preset);
     case SceneKind::kCorridorLoop: return build_corridor_loop(preset);
     case SceneKind::kStreet: return build_street(preset);
+    case SceneKind::kTown: return build_town(preset);
     case SceneKind::kMarkerWall: return build_marker_wall(preset);
   }
   return build_room(preset);

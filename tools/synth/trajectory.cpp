@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <random>
 #include <stdexcept>
 
@@ -88,6 +89,43 @@ Trajectory::Trajectory(const PathSpec& path, const TrajectorySpec& spec, std::ui
     arc_length_[static_cast<std::size_t>(i)] = arc_length_[static_cast<std::size_t>(i) - 1] + (p - last).norm();
     last = p;
   }
+  plan_stops();
+}
+
+void Trajectory::plan_stops() {
+  std::vector<StopSpec> stops = spec_.stops;
+  if (spec_.stop_at_end && !closed_) stops.push_back({length_m(), 0.0});
+  if (stops.empty()) return;
+  const double v = spec_.speed_mps;
+  const double ta = std::max(spec_.accel_time_s, 1e-6);
+  const double a = v / ta;
+  const double ramp_m = v * ta / 2;  // distance to reach cruising speed from rest (and to brake)
+  double t = 0.0;
+  double s = 0.0;
+  for (const StopSpec& stop : stops) {
+    const double gap = std::min(stop.at_m, length_m()) - s;
+    if (gap <= 0.0) continue;
+    if (gap >= 2 * ramp_m) {
+      speed_phases_.push_back({t, s, 0.0, a});
+      speed_phases_.push_back({t + ta, s + ramp_m, v, 0.0});
+      t += ta + (gap - 2 * ramp_m) / v;
+      speed_phases_.push_back({t, s + gap - ramp_m, v, -a});
+      t += ta;
+    } else {  // too close to reach cruising speed: accelerate half way, brake the other half
+      const double peak = std::sqrt(a * gap);
+      speed_phases_.push_back({t, s, 0.0, a});
+      t += peak / a;
+      speed_phases_.push_back({t, s + gap / 2, peak, -a});
+      t += peak / a;
+    }
+    s += gap;
+    speed_phases_.push_back({t, s, 0.0, 0.0});
+    t += stop.wait_s;
+  }
+  if (s < length_m() || closed_) {
+    speed_phases_.push_back({t, s, 0.0, a});
+    speed_phases_.push_back({t + ta, s + ramp_m, v, 0.0});
+  }
 }
 
 Eigen::Vector3d Trajectory::spline_point(double u) const {
@@ -112,6 +150,13 @@ double Trajectory::distance_at(double t_s) const {
   const double v = spec_.speed_mps;
   const double ta = std::max(spec_.accel_time_s, 1e-6);
   double s = t_s < ta ? v * t_s * t_s / (2 * ta) : v * (t_s - ta / 2);
+  if (!speed_phases_.empty()) {
+    const auto after = std::upper_bound(speed_phases_.begin(), speed_phases_.end(), t_s,
+                                        [](double t, const SpeedPhase& phase) { return t < phase.t0_s; });
+    const SpeedPhase& phase = after == speed_phases_.begin() ? speed_phases_.front() : *std::prev(after);
+    const double dt = std::max(0.0, t_s - phase.t0_s);
+    s = phase.s0_m + phase.v0_mps * dt + 0.5 * phase.a_mps2 * dt * dt;
+  }
   const double length = length_m();
   if (closed_) {
     s = std::fmod(s, length);
@@ -144,7 +189,9 @@ Pose3 Trajectory::T_wb(double t_s) const {
   if (closed_) ahead = std::fmod(ahead, length_m());
   const Eigen::Vector3d dir = position_at_distance(ahead) - position_at_distance(behind);
   const double heading = std::atan2(dir.y(), dir.x());
-  const double w = 2 * kPi * spec_.wiggle_hz * t_s;
+  // With stops the sway follows the distance (none at rest); else time, as presets always had.
+  const double sway_t_s = speed_phases_.empty() ? t_s : s / spec_.speed_mps;
+  const double w = 2 * kPi * spec_.wiggle_hz * sway_t_s;
   auto wiggle = [&](int k) { return 0.7 * std::sin(w + phases_[2 * k]) + 0.3 * std::sin(kSecondHarmonic * w + phases_[2 * k + 1]); };
   const double yaw = heading + deg(spec_.yaw_offset_deg) + deg(spec_.yaw_wiggle_deg) * wiggle(0);
   const double pitch = deg(spec_.pitch_offset_deg) + deg(spec_.pitch_wiggle_deg) * wiggle(1);

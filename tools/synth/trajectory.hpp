@@ -38,6 +38,17 @@ class Trajectory {
   bool closed_ = true;
   int num_segments_ = 0;
   TrajectorySpec spec_;
+  // Speed profile with stops: from t0_s on, s = s0_m + v0 dt + a dt^2 / 2. Empty: the constant
+  // speed profile (accelerate over accel_time_s, then cruise).
+  struct SpeedPhase {
+    double t0_s = 0.0;
+    double s0_m = 0.0;
+    double v0_mps = 0.0;
+    double a_mps2 = 0.0;
+  };
+  void plan_stops();
+
+  std::vector<SpeedPhase> speed_phases_;
   std::vector<double> arc_length_;       // cumulative length at each table sample
   double table_step_u_ = 0.0;
   double phases_[6] = {0, 0, 0, 0, 0, 0};

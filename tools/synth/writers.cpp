@@ -20,6 +20,12 @@ namespace fs = std::filesystem;
 
 // Readable by cv::FileStorage and by standard YAML parsers (PyYAML rejects "%YAML:1.0").
 constexpr const char* kYamlHeader = "%YAML 1.0\n---\n";
+// ORB-SLAM2's shipped stereo settings ask 1200 ORB features of EuRoC's 752x480 images and 2000 of
+// KITTI's 1241x376 ones; wider images than this get the KITTI count (issue #21: the street preset's
+// settings asked 1200 of a KITTI-sized image).
+constexpr int kOrbslam2KittiWidthPx = 1000;
+constexpr int kOrbslam2FeaturesEuroc = 1200;
+constexpr int kOrbslam2FeaturesKitti = 2000;
 
 std::string fmt(const char* format, ...) __attribute__((format(printf, 1, 2)));
 std::string fmt(const char* format, ...) {
@@ -139,7 +145,8 @@ void write_orbslam_settings(const fs::path& file, const SequenceRenderer& r) {
   mat("RIGHT.R", R2);
   mat("RIGHT.P", P2);
   out << "\n";
-  out << "ORBextractor.nFeatures: 1200\nORBextractor.scaleFactor: 1.2\nORBextractor.nLevels: 8\n"
+  const int features = c.width_px >= kOrbslam2KittiWidthPx ? kOrbslam2FeaturesKitti : kOrbslam2FeaturesEuroc;
+  out << "ORBextractor.nFeatures: " << features << "\nORBextractor.scaleFactor: 1.2\nORBextractor.nLevels: 8\n"
       << "ORBextractor.iniThFAST: 20\nORBextractor.minThFAST: 7\n\n"
       << "Viewer.KeyFrameSize: 0.05\nViewer.KeyFrameLineWidth: 1\nViewer.GraphLineWidth: 0.9\nViewer.PointSize: 2\n"
       << "Viewer.CameraSize: 0.08\nViewer.CameraLineWidth: 3\nViewer.ViewpointX: 0\nViewer.ViewpointY: -0.7\n"

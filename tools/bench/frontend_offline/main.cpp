@@ -26,6 +26,7 @@ using heslam::bench::FrameRecord;
 
 constexpr const char* kUsage =
     "usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]\n"
+    "       (ORB-SLAM2 settings: HE.*, ORBextractor.*, Stereo.*, and Camera.fps / ThDepth for the tracker)\n"
     "       [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast]\n"
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
     "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n"
@@ -148,7 +149,10 @@ int run(int argc, char** argv) {
       throw std::runtime_error("unknown option " + arg + "\n" + kUsage);
     }
   }
-  if (!settings.empty()) options.pipeline = heslam::StereoFeaturePipelineOptions::load(settings);
+  if (!settings.empty()) {
+    options.pipeline = heslam::StereoFeaturePipelineOptions::load(settings);
+    heslam::bench::apply_orbslam2_tracker_settings(settings, options.tracker);
+  }
   if (!he_mode.empty()) {
     try {
       options.pipeline.he.mode = heslam::parse_he_mode(he_mode);
@@ -213,6 +217,10 @@ int run(int argc, char** argv) {
                 ate->max_m, heslam::bench::tracked_path_length_m(result));
   } else {
     std::printf("path length %.3f m (no ground truth)\n", heslam::bench::tracked_path_length_m(result));
+  }
+  if (const auto drift = heslam::bench::compute_kitti_drift(result)) {
+    std::printf("KITTI drift (devkit, %zu sub-sequences of 100-800 m): translation %.2f %%, rotation %.4f deg/100 m\n",
+                drift->segments.size(), drift->translation_error_percent, drift->rotation_error_deg_per_100m);
   }
   return 0;
 }

@@ -1,6 +1,7 @@
 // The offline frontend loop and its trajectory evaluation.
 #include "tools/bench/frontend_offline/offline_run.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <cmath>
@@ -8,6 +9,7 @@
 #include <iomanip>
 #include <stdexcept>
 
+#include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "components/core/camera/stereo_calibration.hpp"
@@ -42,6 +44,22 @@ int OfflineRun::tracked_frames() const {
   int n = 0;
   for (const FrameRecord& f : frames) n += f.state == TrackingState::kOk ? 1 : 0;
   return n;
+}
+
+void apply_orbslam2_tracker_settings(const std::filesystem::path& settings_yaml, TrackerOptions& tracker) {
+  cv::FileStorage fs(settings_yaml.string(), cv::FileStorage::READ);
+  if (!fs.isOpened()) throw std::runtime_error(settings_yaml.string() + ": cannot open file");
+  auto read_positive = [&](const char* key, double& value) {
+    const cv::FileNode node = fs[key];
+    if (node.empty()) return false;
+    if (!node.isReal() && !node.isInt()) throw std::runtime_error(settings_yaml.string() + ": " + key + ": expected a number");
+    value = static_cast<double>(node);
+    if (!(value > 0.0)) throw std::runtime_error(settings_yaml.string() + ": " + key + ": expected a positive number");
+    return true;
+  };
+  double fps = 0.0;
+  if (read_positive("Camera.fps", fps)) tracker.max_frames_between_keyframes = std::max(1, static_cast<int>(std::lround(fps)));
+  read_positive("ThDepth", tracker.close_depth_baselines);
 }
 
 OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& options) {
@@ -119,6 +137,20 @@ std::optional<AteResult> compute_ate_se3(const OfflineRun& run) {
   ate.pairs = static_cast<int>(estimate.size());
   ate.rmse_m = std::sqrt(sum2 / static_cast<double>(estimate.size()));
   return ate;
+}
+
+std::optional<eval::KittiResult> compute_kitti_drift(const OfflineRun& run) {
+  eval::Trajectory truth;
+  eval::Trajectory estimate;
+  for (std::size_t k = 0; k < run.frames.size(); ++k) {
+    const FrameRecord& f = run.frames[k];
+    if (f.state != TrackingState::kOk || !f.T_wc_truth) continue;
+    truth.push_back(*f.T_wc_truth, static_cast<std::int64_t>(k));
+    estimate.push_back(f.T_wc, static_cast<std::int64_t>(k));
+  }
+  const eval::KittiOptions options;
+  if (truth.size() < 2 || truth.path_length_m() < options.lengths_m.front()) return std::nullopt;
+  return eval::compute_kitti_metrics(truth, estimate, options);
 }
 
 double tracked_path_length_m(const OfflineRun& run) {

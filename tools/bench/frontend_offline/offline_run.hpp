@@ -13,6 +13,7 @@
 #include "components/core/tracking/tracker.hpp"
 #include "tools/bench/frontend_offline/euroc_sequence.hpp"
 #include "tools/bench/frontend_offline/photometric_variant.hpp"
+#include "tools/eval/kitti_metrics.hpp"
 
 namespace heslam::bench {
 
@@ -55,6 +56,11 @@ struct OfflineRun {
   int tracked_frames() const;
 };
 
+// The tracker values an ORB-SLAM2 settings file carries, as ORB-SLAM2's Tracking reads them:
+// Camera.fps -> at most that many frames between keyframes, ThDepth -> close_depth_baselines. Absent
+// keys keep `tracker`'s values; throws std::runtime_error naming the file and key on a bad value.
+void apply_orbslam2_tracker_settings(const std::filesystem::path& settings_yaml, TrackerOptions& tracker);
+
 // Throws std::runtime_error (one line naming the file) on unreadable calibration or images.
 OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& options);
 
@@ -65,6 +71,10 @@ struct AteResult {
 };
 // Absolute trajectory error of the tracked frames after SE(3) Umeyama alignment (no scale).
 std::optional<AteResult> compute_ate_se3(const OfflineRun& run);
+
+// The KITTI devkit's drift (heslam-eval kitti, alignment none) of the tracked frames against the ground
+// truth, paired by the frame's index in the run; nullopt without ground truth or below 100 m of path.
+std::optional<eval::KittiResult> compute_kitti_drift(const OfflineRun& run);
 
 // Summed distance between consecutive tracked positions.
 double tracked_path_length_m(const OfflineRun& run);
