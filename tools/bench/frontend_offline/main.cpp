@@ -16,11 +16,14 @@
 #include <system_error>
 #include <vector>
 
+#include "tools/bench/bench_util.hpp"
 #include "components/core/place/vocabulary_setting.hpp"
 #include "tools/bench/frontend_offline/kidnapped_copy.hpp"
 #include "tools/bench/frontend_offline/offline_run.hpp"
 
 namespace {
+
+using heslam::bench::percentile;
 
 using heslam::bench::FrameRecord;
 
@@ -34,13 +37,6 @@ constexpr const char* kUsage =
     "       [--kidnap-plan B,R,S[,N]]   (the copy's plan: frames B..R-1 black, from R on the source's frames\n"
     "                                    S.. (N of them; default: to the source's end); B = R: a teleport)\n"
     "       [--vocabulary FILE|none]   (keyframe database for relocalization; default: the build's vocabulary)\n";
-
-double percentile(std::vector<double> values, double fraction) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const auto index = static_cast<std::size_t>(fraction * static_cast<double>(values.size() - 1) + 0.5);
-  return values[std::min(index, values.size() - 1)];
-}
 
 void print_stage(const char* name, const std::vector<FrameRecord>& frames, double FrameRecord::*field) {
   std::vector<double> values;
@@ -227,11 +223,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "heslam-frontend-offline: " << e.what() << '\n';
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return heslam::bench::bench_main("heslam-frontend-offline", argc, argv, run); }

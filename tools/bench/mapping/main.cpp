@@ -15,10 +15,13 @@
 #include <string>
 #include <vector>
 
+#include "tools/bench/bench_util.hpp"
 #include "components/core/mapping/local_mapper.hpp"
 #include "tests/mapping/synthetic_world.hpp"
 
 namespace {
+
+using heslam::bench::percentile;
 
 constexpr const char* kUsage =
     "usage: heslam-bench-mapping [--keyframes N] [--points N] [--pose-jitter-m M] [--map-file PATH]\n"
@@ -76,13 +79,6 @@ double thread_cpu_ms() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
-}
-
-double percentile(std::vector<double> values, double fraction) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const auto index = static_cast<std::size_t>(fraction * static_cast<double>(values.size() - 1) + 0.5);
-  return values[std::min(index, values.size() - 1)];
 }
 
 int run(int argc, char** argv) {
@@ -181,11 +177,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "heslam-bench-mapping: " << e.what() << "\n";
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return heslam::bench::bench_main("heslam-bench-mapping", argc, argv, run); }

@@ -18,6 +18,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "tools/bench/bench_util.hpp"
 #include "components/core/place/image_descriptors.hpp"
 #include "components/core/place/keyframe_database.hpp"
 #include "components/core/place/vocabulary_setting.hpp"
@@ -25,16 +26,12 @@
 
 namespace {
 
+using heslam::bench::percentile;
+
 using namespace heslam;
 
 constexpr int kNeighboursEachSide = 5;  // covisible keyframes per keyframe on each side
 constexpr int kNeighbourWeight = 100;   // shared points with the nearest neighbour, minus 10 per step
-
-double percentile(std::vector<double> values, double fraction) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  return values[std::min(values.size() - 1, static_cast<std::size_t>(fraction * static_cast<double>(values.size() - 1) + 0.5))];
-}
 
 std::vector<Descriptor> with_noise(std::vector<Descriptor> descriptors, std::mt19937_64& rng, int bits) {
   for (Descriptor& d : descriptors) {
@@ -133,11 +130,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "heslam-bench-place-db: " << e.what() << '\n';
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return heslam::bench::bench_main("heslam-bench-place-db", argc, argv, run); }
