@@ -103,23 +103,18 @@ Args parse(int argc, char** argv) {
   return args;
 }
 
-double thread_cpu_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
-}
-
-// Wall and thread-CPU time of the timed sections (the machine is shared: CPU is what an idle core
-// would take).
+// Wall and CPU time of the timed sections (the machine is shared: CPU is what an idle core would
+// take). Everything timed here is single-threaded, so the process CPU clock is this work's.
 class Timings {
  public:
   void start() {
     wall_start_ = std::chrono::steady_clock::now();
-    cpu_start_ = thread_cpu_ms();
+    cpu_start_ = std::clock();
   }
   void stop() {
-    wall_ms_.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wall_start_).count());
-    cpu_ms_.push_back(thread_cpu_ms() - cpu_start_);
+    const auto wall = std::chrono::steady_clock::now() - wall_start_;
+    wall_ms_.push_back(std::chrono::duration<double, std::milli>(wall).count());
+    cpu_ms_.push_back(1e3 * static_cast<double>(std::clock() - cpu_start_) / CLOCKS_PER_SEC);
   }
   // One line: what, the map's size, median / p90 wall, median CPU, then the measurement's own sizes.
   void report(const char* what, const Map& map, const std::string& detail) const {
@@ -131,10 +126,22 @@ class Timings {
 
  private:
   std::chrono::steady_clock::time_point wall_start_;
-  double cpu_start_ = 0.0;
+  std::clock_t cpu_start_ = 0;
   std::vector<double> wall_ms_;
   std::vector<double> cpu_ms_;
 };
+
+// `run()` timed `repeats` times (the input it works on is the same each time).
+template <typename Run>
+Timings repeated(int repeats, Run run) {
+  Timings timings;
+  for (int r = 0; r < repeats; ++r) {
+    timings.start();
+    run();
+    timings.stop();
+  }
+  return timings;
+}
 
 std::string format(const char* pattern, auto... values) {
   char line[512];
@@ -254,12 +261,7 @@ void bench_size(const Args& args, int keyframes, const std::vector<Descriptor>& 
   int outliers = 0;
   const std::vector<Se3Correspondence> matches = ransac_problem(w, matched_kf, loop_kf, outliers);
   std::optional<Se3RansacResult> verified;
-  Timings ransac;
-  for (int r = 0; r < args.repeats; ++r) {
-    ransac.start();
-    verified = Se3Ransac().compute(camera, matches);
-    ransac.stop();
-  }
+  const Timings ransac = repeated(args.repeats, [&] { verified = Se3Ransac().compute(camera, matches); });
   if (!verified) throw std::runtime_error("Se3Ransac found no transform for the loop pair");
   const Pose3 true_T_ab = w.true_T_wc.at(matched_kf).inverse() * w.true_T_wc.at(loop_kf);
   const Pose3 error = verified->T_ab.inverse() * true_T_ab;
@@ -278,12 +280,9 @@ void bench_size(const Args& args, int keyframes, const std::vector<Descriptor>& 
     corrected_group[neighbour] = correction_w * map.keyframes.at(neighbour).T_wc;
   }
   EssentialGraph graph;
-  Timings essential;
-  for (int r = 0; r < args.repeats; ++r) {
-    essential.start();
+  const Timings essential = repeated(args.repeats, [&] {
     graph = EssentialGraphBuilder().compute(map, corrected_group, {{loop_kf, matched_kf, 0, true}}, {});
-    essential.stop();
-  }
+  });
   essential.report("EssentialGraphBuilder", map,
                    format("%zu edges: %d spanning tree, %d covisibility >= 100, %d loop", graph.edges.size(),
                           graph.spanning_tree_edges, graph.covisibility_edges, graph.new_loop_edges));
@@ -293,12 +292,8 @@ void bench_size(const Args& args, int keyframes, const std::vector<Descriptor>& 
     initial_T_wc[id] = corrected != corrected_group.end() ? corrected->second : kf.T_wc;
   }
   PoseGraphResult optimized;
-  Timings pose_graph;
-  for (int r = 0; r < args.repeats; ++r) {
-    pose_graph.start();
-    optimized = PoseGraph().compute(initial_T_wc, graph.edges, {matched_kf});
-    pose_graph.stop();
-  }
+  const Timings pose_graph =
+      repeated(args.repeats, [&] { optimized = PoseGraph().compute(initial_T_wc, graph.edges, {matched_kf}); });
   pose_graph.report("PoseGraph", map,
                     format("%d vertices, %d edges, %d iterations, cost %.3g -> %.3g", optimized.stats.vertices,
                            optimized.stats.edges, optimized.stats.iterations, optimized.stats.initial_cost,
@@ -306,25 +301,21 @@ void bench_size(const Args& args, int keyframes, const std::vector<Descriptor>& 
 
   // The whole correction.
   LoopCorrectionOutput output;
-  Timings builder;
-  for (int r = 0; r < args.repeats; ++r) {
-    builder.start();
-    output = LoopCorrectionBuilder().compute(map, camera, loop, {});
-    builder.stop();
-  }
+  const Timings builder =
+      repeated(args.repeats, [&] { output = LoopCorrectionBuilder().compute(map, camera, loop, {}); });
   if (!output.error.empty()) throw std::runtime_error("LoopCorrectionBuilder: " + output.error);
   const LoopCorrectionStats& stats = output.stats;
+  const EssentialGraph& edges = stats.graph_edges;
   double corrected_error_m = 0.0;
   for (const auto& [id, T_wc] : output.correction.corrected_T_wc) {
     corrected_error_m = std::max(corrected_error_m, (T_wc.translation() - w.true_T_wc.at(id).translation()).norm());
   }
   builder.report("LoopCorrectionBuilder::compute", map,
-                 format("groups %d / %d kf, %d merges, %zu graph edges, fusion %.1f ms, pose graph %.1f ms "
+                 format("groups %d / %d kf, %d merges, %d graph edges, fusion %.1f ms, pose graph %.1f ms "
                         "(%d it); worst kf error after %.2f m",
                         stats.loop_group_keyframes, stats.matched_group_keyframes, stats.point_merges,
-                        static_cast<std::size_t>(stats.graph_edges.new_loop_edges + stats.graph_edges.spanning_tree_edges +
-                                                 stats.graph_edges.previous_loop_edges +
-                                                 stats.graph_edges.covisibility_edges),
+                        edges.new_loop_edges + edges.spanning_tree_edges + edges.previous_loop_edges +
+                            edges.covisibility_edges,
                         stats.fusion_ms, stats.pose_graph.time_ms, stats.pose_graph.iterations, corrected_error_m));
   LoopCorrection correction = output.correction;
   correction.id = 1;
@@ -363,12 +354,8 @@ void bench_size(const Args& args, int keyframes, const std::vector<Descriptor>& 
     for (auto& [id, point] : corrected_map.points) point.culled = point.culled || index++ % stride != 0;
   }
   GlobalBundleAdjustmentResult ba;
-  Timings global_ba;
-  for (int r = 0; r < args.repeats; ++r) {
-    global_ba.start();
-    ba = GlobalBundleAdjustment().compute(corrected_map, camera);
-    global_ba.stop();
-  }
+  const Timings global_ba =
+      repeated(args.repeats, [&] { ba = GlobalBundleAdjustment().compute(corrected_map, camera); });
   global_ba.report("GlobalBundleAdjustment", corrected_map,
                    format("%d kf, %d points%s, %d observations, %d iterations, cost %.3g -> %.3g", ba.stats.keyframes,
                           ba.stats.points, stride > 1 ? format(" (1 in %zu)", stride).c_str() : "",
@@ -386,7 +373,7 @@ int run(int argc, char** argv) {
   }
   const std::vector<Descriptor> pool = real_descriptors(args.dataset);
   if (pool.empty()) std::printf("descriptors: random bytes (--dataset none)\n");
-  std::printf("repeats %d (BoW detection: %d query keyframes); times are wall clock, cpu = this thread's\n",
+  std::printf("repeats %d (BoW detection: %d query keyframes); times are wall clock, cpu = process CPU\n",
               args.repeats, args.queries);
   for (const int keyframes : args.keyframes) bench_size(args, keyframes, pool, vocabulary);
   return 0;
