@@ -1,5 +1,6 @@
-// A synthetic loop for the loop-closing tests: stereo keyframes on a circle (radius 2 m) looking out
-// at a ring of textured points (radius 6 m), going round once and revisiting the start. The map is
+// A synthetic loop for the loop-closing tests and benchmark: stereo keyframes on a circle (radius 2 m)
+// looking out at a ring of textured points (radius 6 m), going round once and revisiting the start.
+// Larger radii give longer loops with the same local structure (heslam-bench-loop). The map is
 // built the way tracking would build it with odometry drift: poses chained from biased relative
 // motions, a keyframe re-observes the points seen within the last few keyframes and creates new
 // points (at its drifted pose) for the rest, so the revisit duplicates the first keyframes' points.
@@ -32,6 +33,11 @@ struct LoopWorldOptions {
   double pixel_noise_px = 0.5;  // keypoint noise at level 0 (the disparity's is half of it)
   int track_window = 6;          // a point not seen for this many keyframes is lost (re-created)
   unsigned seed = 11;
+  double camera_radius_m = 2.0;  // the keyframes' circle (the revisit runs 5 cm further out)
+  double ring_radius_m = 6.0;    // the points' ring
+  // When not empty, world point i takes descriptor_pool[i % size] (e.g. ORB descriptors of real
+  // images, so that a vocabulary sees realistic words) instead of random bytes.
+  std::vector<Descriptor> descriptor_pool;
 };
 
 struct LoopWorld {
@@ -44,9 +50,9 @@ struct LoopWorld {
 
 inline KeyframeId loop_kf_id(int k) { return static_cast<KeyframeId>(k + 1); }
 
-inline Pose3 ring_pose(int k, int per_turn) {
+inline Pose3 ring_pose(int k, int per_turn, double camera_radius_m = 2.0) {
   const double theta = 2.0 * M_PI * k / per_turn;
-  const double radius_m = k >= per_turn ? 2.05 : 2.0;  // the revisit is close, not identical
+  const double radius_m = k >= per_turn ? camera_radius_m + 0.05 : camera_radius_m;  // close, not identical
   Pose3 T_wc = Pose3::Identity();
   T_wc.linear() = Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitY()).toRotationMatrix();
   T_wc.translation() = radius_m * Eigen::Vector3d(std::sin(theta), 0.0, std::cos(theta));
@@ -63,9 +69,11 @@ inline LoopWorld make_loop_world(const LoopWorldOptions& options = {}) {
   std::uniform_int_distribution<int> octave(0, 2);
   for (int i = 0; i < options.points; ++i) {
     const double a = angle(rng);
-    world.points_w.emplace_back(6.0 * std::sin(a), height(rng), 6.0 * std::cos(a));
+    world.points_w.emplace_back(options.ring_radius_m * std::sin(a), height(rng), options.ring_radius_m * std::cos(a));
     Descriptor d;
     for (auto& b : d) b = static_cast<std::uint8_t>(byte(rng));
+    const std::vector<Descriptor>& pool = options.descriptor_pool;
+    if (!pool.empty()) d = pool[static_cast<std::size_t>(i) % pool.size()];
     world.descriptors.push_back(d);
     world.angles_deg.push_back(static_cast<float>(angle(rng) * 180.0 / M_PI));
     world.octaves.push_back(octave(rng));
@@ -80,11 +88,12 @@ inline LoopWorld make_loop_world(const LoopWorldOptions& options = {}) {
   std::map<int, PointId> point_of_truth;
   std::map<PointId, int> last_seen;
   std::uint64_t counter = 0;
-  Pose3 T_est = ring_pose(0, options.keyframes_per_turn);
+  const auto true_pose = [&](int k) { return ring_pose(k, options.keyframes_per_turn, options.camera_radius_m); };
+  Pose3 T_est = true_pose(0);
   for (int k = 0; k < options.keyframes; ++k) {
     const KeyframeId id = loop_kf_id(k);
-    const Pose3 T_true = ring_pose(k, options.keyframes_per_turn);
-    if (k > 0) T_est = T_est * ring_pose(k - 1, options.keyframes_per_turn).inverse() * T_true * bias;
+    const Pose3 T_true = true_pose(k);
+    if (k > 0) T_est = T_est * true_pose(k - 1).inverse() * T_true * bias;
     SyntheticView view = make_view(world, id, T_true, 500 + static_cast<unsigned>(k), view_options);
     view.kf.T_wc = T_est;
     view.kf.parent = k > 0 ? loop_kf_id(k - 1) : kNoId;
