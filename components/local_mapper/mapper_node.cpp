@@ -21,7 +21,7 @@ constexpr std::chrono::milliseconds kWaitPeriod{200};
 
 // The per-keyframe stages in pipeline order (status percentiles and the final summary).
 constexpr const char* kStageOrder[] = {"insertion", "point_culling",  "triangulation", "fusion", "local_ba",
-                                       "keyframe_culling", "mapping_total", "map_save",      "publish"};
+                                       "keyframe_culling", "mapping_total", "map_save",      "publish", "correction"};
 
 std::uint64_t counter(const std::map<std::string, std::uint64_t>& counters, const char* name) {
   const auto it = counters.find(name);
