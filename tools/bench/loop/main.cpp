@@ -68,32 +68,26 @@ struct Args {
 
 Args parse(int argc, char** argv) {
   Args args;
-  for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (i + 1 >= argc) throw std::runtime_error("missing value after " + flag + "\n" + kUsage);
-    const std::string value = argv[++i];
-    try {
-      if (flag == "--keyframes") {
-        args.keyframes.clear();
-        std::stringstream list(value);
-        for (std::string item; std::getline(list, item, ',');) args.keyframes.push_back(std::stoi(item));
-      } else if (flag == "--repeats") {
-        args.repeats = std::stoi(value);
-      } else if (flag == "--queries") {
-        args.queries = std::stoi(value);
-      } else if (flag == "--ba-max-points") {
-        args.ba_max_points = std::stoi(value);
-      } else if (flag == "--vocabulary") {
-        args.vocabulary = value;
-      } else if (flag == "--dataset") {
-        args.dataset = value;
-      } else {
-        throw std::runtime_error("unknown option " + flag + "\n" + kUsage);
-      }
-    } catch (const std::logic_error&) {
-      throw std::runtime_error("bad value '" + value + "' for " + flag);
+  heslam::bench::for_each_flag(argc, argv, kUsage, [&](const std::string& flag, const std::string& value) {
+    if (flag == "--keyframes") {
+      args.keyframes.clear();
+      std::stringstream list(value);
+      for (std::string item; std::getline(list, item, ',');) args.keyframes.push_back(std::stoi(item));
+    } else if (flag == "--repeats") {
+      args.repeats = std::stoi(value);
+    } else if (flag == "--queries") {
+      args.queries = std::stoi(value);
+    } else if (flag == "--ba-max-points") {
+      args.ba_max_points = std::stoi(value);
+    } else if (flag == "--vocabulary") {
+      args.vocabulary = value;
+    } else if (flag == "--dataset") {
+      args.dataset = value;
+    } else {
+      return false;
     }
-  }
+    return true;
+  });
   for (const int n : args.keyframes) {
     if (n < 2 * kRevisitKeyframes + 10) throw std::runtime_error("--keyframes: each size must be >= 18");
   }

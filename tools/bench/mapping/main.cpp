@@ -39,38 +39,32 @@ struct Args {
 
 Args parse(int argc, char** argv) {
   Args args;
-  for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (i + 1 >= argc) throw std::runtime_error("missing value after " + flag + "\n" + kUsage);
-    const std::string value = argv[++i];
-    try {
-      if (flag == "--keyframes") {
-        args.keyframes = std::stoi(value);
-      } else if (flag == "--points") {
-        args.points = std::stoi(value);
-      } else if (flag == "--pose-jitter-m") {
-        args.pose_jitter_m = std::stod(value);
-      } else if (flag == "--map-file") {
-        args.map_file = value;
-      } else if (flag == "--disable") {
-        if (value == "triangulation") {
-          args.options.enable_triangulation = false;
-        } else if (value == "fusion") {
-          args.options.enable_fusion = false;
-        } else if (value == "ba") {
-          args.options.enable_bundle_adjustment = false;
-        } else if (value == "kf-culling") {
-          args.options.enable_keyframe_culling = false;
-        } else {
-          throw std::runtime_error("unknown stage '" + value + "' after --disable\n" + kUsage);
-        }
+  heslam::bench::for_each_flag(argc, argv, kUsage, [&](const std::string& flag, const std::string& value) {
+    if (flag == "--keyframes") {
+      args.keyframes = std::stoi(value);
+    } else if (flag == "--points") {
+      args.points = std::stoi(value);
+    } else if (flag == "--pose-jitter-m") {
+      args.pose_jitter_m = std::stod(value);
+    } else if (flag == "--map-file") {
+      args.map_file = value;
+    } else if (flag == "--disable") {
+      if (value == "triangulation") {
+        args.options.enable_triangulation = false;
+      } else if (value == "fusion") {
+        args.options.enable_fusion = false;
+      } else if (value == "ba") {
+        args.options.enable_bundle_adjustment = false;
+      } else if (value == "kf-culling") {
+        args.options.enable_keyframe_culling = false;
       } else {
-        throw std::runtime_error("unknown option " + flag + "\n" + kUsage);
+        throw std::runtime_error("unknown stage '" + value + "' after --disable\n" + kUsage);
       }
-    } catch (const std::logic_error&) {
-      throw std::runtime_error("bad value '" + value + "' for " + flag);
+    } else {
+      return false;
     }
-  }
+    return true;
+  });
   if (args.keyframes < 2 || args.points < 100) throw std::runtime_error("need --keyframes >= 2 and --points >= 100");
   return args;
 }
