@@ -20,6 +20,10 @@ namespace {
 constexpr std::chrono::milliseconds kWaitPeriod{200};
 // Before the first KeyframeDone: how long to wait for the lockstep reader (the frontend) to match.
 constexpr std::chrono::milliseconds kReaderWait{2000};
+// settle(): the readers count as drained once they stayed empty this long (loopback delivers what was
+// written before an acknowledgement within milliseconds), waiting at most kSettleLimit in all.
+constexpr std::chrono::milliseconds kSettleQuiet{20};
+constexpr std::chrono::milliseconds kSettleLimit{500};
 // Correction ids: the creator tag in the top byte (map.hpp) and, below, a start value from the clock
 // so a restarted loop closer without a state file never reuses an id the mapper already applied.
 constexpr int kClockShiftBits = 20;
@@ -65,8 +69,10 @@ void LoopCloserNode::run() {
   log_summary();
 }
 
-void LoopCloserNode::take_all() {
+std::size_t LoopCloserNode::take_all() {
+  std::size_t taken = 0;
   for (auto& received : keyframe_reader_->take()) {
+    ++taken;
     if (!received.info.valid_data) continue;
     try {
       mirror_.add_keyframe(*received.sample);
@@ -76,6 +82,7 @@ void LoopCloserNode::take_all() {
     }
   }
   for (auto& received : keyframe_state_reader_->take()) {
+    ++taken;
     if (!received.info.valid_data) continue;
     try {
       mirror_.apply_keyframe_state(*received.sample);
@@ -85,6 +92,7 @@ void LoopCloserNode::take_all() {
     }
   }
   for (auto& received : point_state_reader_->take()) {
+    ++taken;
     if (!received.info.valid_data) {
       if (received.info.disposed) mirror_.point_disposed(received.sample->id);
       continue;
@@ -97,6 +105,7 @@ void LoopCloserNode::take_all() {
     }
   }
   for (auto& received : keyframe_done_reader_->take()) {
+    ++taken;
     if (!received.info.valid_data) continue;
     const msg::KeyframeDone& done = *received.sample;
     if (runtime::to_string(done.component) == name()) continue;  // our own acknowledgements
@@ -105,6 +114,15 @@ void LoopCloserNode::take_all() {
     } else {
       mapped_[done.keyframe_id] = done.map_version;
     }
+  }
+  return taken;
+}
+
+void LoopCloserNode::settle() {
+  const auto deadline = std::chrono::steady_clock::now() + kSettleLimit;
+  while (!shutdown_requested() && std::chrono::steady_clock::now() < deadline) {
+    if (waitset_->wait(kSettleQuiet) == runtime::Wake::kShutdown) return;
+    if (take_all() == 0) return;
   }
 }
 
@@ -119,6 +137,7 @@ void LoopCloserNode::process_ready_keyframes() {
       continue;
     }
     if (mirror_.map().keyframe(id) == nullptr || mirror_.map().version < version) return;  // in flight
+    settle();
     mapped_.erase(mapped_.begin());
     process_keyframe(id);
     last_processed_ = id;
@@ -180,6 +199,7 @@ bool LoopCloserNode::publish_and_wait(LoopCorrection correction) {
     take_all();
     if (auto it = corrections_applied_.find(id); it != corrections_applied_.end() && mirror_.map().version >= it->second) {
       corrections_applied_.erase(it);
+      settle();
       return true;
     }
     const auto now = std::chrono::steady_clock::now();

@@ -36,8 +36,13 @@ class LoopCloserNode : public runtime::Component {
   void run() override;
   bool accepts_positional_args() const override { return true; }  // --state-file, --vocabulary
 
-  // Takes every sample waiting in the readers into the mirror and the acknowledgement tables.
-  void take_all();
+  // Takes every sample waiting in the readers into the mirror and the acknowledgement tables;
+  // returns how many it took.
+  std::size_t take_all();
+  // Keeps taking until the readers stayed empty for a short while: the mapper wrote a keyframe's
+  // (or a correction's) states before acknowledging it, but over other writers, so some may still be
+  // in flight when the acknowledgement arrives.
+  void settle();
   void process_ready_keyframes();
   void process_keyframe(KeyframeId id);
   // Publishes the correction and waits until the mapper applied it and the mirror holds the result.
