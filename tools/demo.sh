@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The one-command demo: installs missing Debian packages, builds heslam, generates the synthetic `room`
 # sequence (cached in build/data), runs the stereo pipeline on it in lockstep under heslam-supervisor
-# (replay -> frontend -> local mapper -> recorder, config/pipelines/synth_mapper.yaml) and prints the ATE against the ground truth.
+# (replay -> frontend -> local mapper -> loop closer -> recorder, config/pipelines/synth.yaml) and prints the ATE against the ground truth.
 #   HESLAM_BUILD_DIR  build folder (default build/)       HESLAM_DEMO_FRAMES  frames to render (default 300)
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -25,8 +25,8 @@ fi
 output_dir=$build_dir/demo
 mkdir -p "$output_dir"
 trajectory=$output_dir/room_trajectory.txt
-echo "heslam demo: running config/pipelines/synth_mapper.yaml (lockstep)"
-"$bin/heslam-supervisor" "$root/config/pipelines/synth_mapper.yaml" --log-dir "$output_dir/logs" \
+echo "heslam demo: running config/pipelines/synth.yaml (the full system, lockstep)"
+"$bin/heslam-supervisor" "$root/config/pipelines/synth.yaml" --log-dir "$output_dir/logs" \
   --arg dataset="$dataset" --arg output="$trajectory"
 
 echo

