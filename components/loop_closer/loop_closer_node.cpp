@@ -18,6 +18,8 @@ namespace {
 // Wait granularity of the main loop: shutdown is also signalled through the waitset, this only
 // bounds how long a missed wake-up could delay it.
 constexpr std::chrono::milliseconds kWaitPeriod{200};
+// While a real-time global BA runs: how often to look whether it finished (nothing wakes the waitset).
+constexpr std::chrono::milliseconds kGlobalBaPoll{20};
 // Before the first KeyframeDone: how long to wait for the lockstep reader (the frontend) to match.
 constexpr std::chrono::milliseconds kReaderWait{2000};
 // settle(): the readers count as drained once they stayed empty this long (loopback delivers what was
@@ -56,16 +58,19 @@ void LoopCloserNode::configure(const runtime::Config& config) {
   keyframe_done_writer_.emplace(participant(), topics().keyframe_done());
   correction_counter_ = clock_counter_start();
   load_state();
-  log().info("detector ", detector_->name(), ", global BA ", options_.global_bundle_adjustment ? "on" : "off",
+  log().info("detector ", detector_->name(), ", global BA ",
+             options_.global_bundle_adjustment ? (options_.real_time ? "on (own thread, real time)" : "on (lockstep)") : "off",
              options_.state_file.empty() ? ", no state file" : ", state file " + options_.state_file.string());
 }
 
 void LoopCloserNode::run() {
   while (!shutdown_requested()) {
-    if (waitset_->wait(kWaitPeriod) == runtime::Wake::kShutdown) break;
+    if (waitset_->wait(global_ba_.running() ? kGlobalBaPoll : kWaitPeriod) == runtime::Wake::kShutdown) break;
     take_all();
     process_ready_keyframes();
+    if (global_ba_.finished()) finish_global_ba();
   }
+  if (global_ba_.abort()) stats().count("global_ba_aborted");
   log_summary();
 }
 
@@ -168,19 +173,30 @@ void LoopCloserNode::process_keyframe(KeyframeId id) {
   if (!result.correction) return;
   stats().count("loops_accepted");
   stats().record_ms("correction", result.timings.correction_ms);
+  // ORB-SLAM2: a new loop makes the running global BA stale; it restarts after this correction.
+  if (global_ba_.abort()) {
+    stats().count("global_ba_aborted");
+    log().info("global BA aborted: a newer loop at keyframe ", id);
+  }
   LoopCorrection correction = std::move(*result.correction);
   log().info("loop closed: keyframe ", id, " -> ", correction.matched_kf, " with ", result.loop_matches,
              " matches; correcting ", correction.corrected_T_wc.size(), " keyframes, merging ",
              correction.point_merges.size(), " points");
   if (!publish_and_wait(std::move(correction)) || !options_.global_bundle_adjustment) return;
 
-  const auto start = std::chrono::steady_clock::now();
-  std::optional<LoopCorrection> adjusted = closing_->global_bundle_adjustment(mirror_.map(), nullptr);
-  stats().record_ms("global_ba", std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-  if (!adjusted) return;
-  adjusted->loop_kf = id;
+  global_ba_.start(*closing_, mirror_.map(), id);
+  if (!options_.real_time) finish_global_ba();
+}
+
+void LoopCloserNode::finish_global_ba() {
+  BackgroundGlobalBa::Outcome outcome = global_ba_.collect();
+  if (!outcome.correction) return;
+  stats().record_ms("global_ba", outcome.elapsed_ms);
   stats().count("global_bundle_adjustments");
-  publish_and_wait(std::move(*adjusted));
+  log().info("global BA for the loop at keyframe ", outcome.correction->loop_kf, ": ",
+             outcome.correction->corrected_T_wc.size(), " keyframes, ", outcome.correction->corrected_points.size(),
+             " points in ", outcome.elapsed_ms, " ms");
+  publish_and_wait(std::move(*outcome.correction));
 }
 
 bool LoopCloserNode::publish_and_wait(LoopCorrection correction) {
@@ -285,7 +301,7 @@ void LoopCloserNode::log_summary() {
   const auto count = [&](const char* key) { return counters.count(key) != 0 ? counters.at(key) : 0; };
   log().info("processed ", count("keyframes"), " keyframes: ", count("candidates"), " loop candidates, ",
              count("loops_accepted"), " loops accepted, ", count("loops_rejected"), " rejected, ",
-             count("global_bundle_adjustments"), " global BAs, ", count("correction_timeouts"), " corrections unacknowledged");
+             count("global_bundle_adjustments"), " global BAs (", count("global_ba_aborted"), " aborted), ", count("correction_timeouts"), " corrections unacknowledged");
   for (const runtime::StageSummary& stage : stats().stages()) {
     log().info("stage ", stage.name, " median ", stage.p50_ms, " ms, p90 ", stage.p90_ms, " ms, max ", stage.max_ms,
                " ms (", stage.count, ")");

@@ -16,6 +16,7 @@
 #include <string>
 
 #include "components/core/loop/loop_closing.hpp"
+#include "components/loop_closer/background_global_ba.hpp"
 #include "components/loop_closer/loop_closer_options.hpp"
 #include "components/loop_closer/map_mirror.hpp"
 #include "runtime/component.hpp"
@@ -45,6 +46,8 @@ class LoopCloserNode : public runtime::Component {
   void settle();
   void process_ready_keyframes();
   void process_keyframe(KeyframeId id);
+  // Waits for the global BA started last and publishes its correction (if it was not aborted).
+  void finish_global_ba();
   // Publishes the correction and waits until the mapper applied it and the mirror holds the result.
   bool publish_and_wait(LoopCorrection correction);
   void acknowledge(KeyframeId id);
@@ -63,6 +66,7 @@ class LoopCloserNode : public runtime::Component {
 
   std::unique_ptr<LoopDetector> detector_;  // moved into closing_ once the camera is known
   std::unique_ptr<LoopClosing> closing_;
+  BackgroundGlobalBa global_ba_;  // after closing_: stopped before closing_ goes
   MapMirror mirror_;
   std::map<KeyframeId, std::uint64_t> mapped_;                 // mapper acknowledged: keyframe -> map version
   std::map<std::uint64_t, std::uint64_t> corrections_applied_;  // correction id -> map version after it

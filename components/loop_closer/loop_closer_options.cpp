@@ -26,6 +26,7 @@ LoopCloserProcessOptions LoopCloserProcessOptions::from_config(const runtime::Co
   c.ransac_seed = static_cast<std::uint64_t>(
       config.get_int("verification.ransac_seed", static_cast<int>(c.ransac_seed), 0, INT_MAX));
   o.global_bundle_adjustment = config.get_bool("global_ba.enabled", o.global_bundle_adjustment);
+  o.real_time = config.get_bool("real_time", o.real_time);
   const double timeout_s = config.get_double("lockstep.mapper_timeout_s", 30.0, 0.1, kMaxTimeoutS);
   o.mapper_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));
   if (!config.get_string("state_file", "").empty()) o.state_file = config.get_path("state_file", {});
@@ -35,8 +36,10 @@ LoopCloserProcessOptions LoopCloserProcessOptions::from_config(const runtime::Co
       o.state_file = rest[++i];
     } else if (rest[i] == "--vocabulary" && i + 1 < rest.size()) {
       o.vocabulary = rest[++i];
+    } else if (rest[i] == "--real-time") {
+      o.real_time = true;
     } else {
-      throw std::runtime_error("unknown argument '" + rest[i] + "' (expected --state-file FILE or --vocabulary FILE)");
+      throw std::runtime_error("unknown argument '" + rest[i] + "' (expected --state-file FILE, --vocabulary FILE or --real-time)");
     }
   }
   return o;

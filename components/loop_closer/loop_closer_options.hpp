@@ -19,6 +19,10 @@ struct LoopCloserProcessOptions {
   // a second correction (ORB-SLAM2 does, in a thread). Lockstep waits for it, so runs stay
   // deterministic.
   bool global_bundle_adjustment = true;
+  // real_time / --real-time: the global BA runs on its own thread while keyframes go on being
+  // processed (and a newer loop aborts it), instead of finishing before the keyframe is acknowledged.
+  // The real-time pipelines set it; lockstep runs must not.
+  bool real_time = false;
   // lockstep.mapper_timeout_s: how long to wait for the local mapper to apply a correction before
   // going on without its acknowledgement (warned, counted), so a dead mapper cannot hang the run.
   std::chrono::milliseconds mapper_timeout{30000};
