@@ -23,6 +23,12 @@ LoopCloserProcessOptions LoopCloserProcessOptions::from_config(const runtime::Co
   c.min_loop_matches = config.get_int("verification.min_loop_matches", c.min_loop_matches, 3, kMaxMatches);
   c.projection_radius_px =
       static_cast<float>(config.get_double("verification.projection_radius_px", c.projection_radius_px, 0.5, kMaxPixels));
+  c.max_drift_fraction = config.get_double("verification.max_drift_fraction", c.max_drift_fraction, 0.0, 10.0);
+  c.min_drift_allowance_m = config.get_double("verification.min_drift_allowance_m", c.min_drift_allowance_m, 0.0, 1e6);
+  c.max_rotation_drift_deg_per_m =
+      config.get_double("verification.max_rotation_drift_deg_per_m", c.max_rotation_drift_deg_per_m, 0.0, 360.0);
+  c.min_rotation_allowance_deg =
+      config.get_double("verification.min_rotation_allowance_deg", c.min_rotation_allowance_deg, 0.0, 180.0);
   c.ransac_seed = static_cast<std::uint64_t>(
       config.get_int("verification.ransac_seed", static_cast<int>(c.ransac_seed), 0, INT_MAX));
   o.global_bundle_adjustment = config.get_bool("global_ba.enabled", o.global_bundle_adjustment);

@@ -31,6 +31,10 @@ constexpr int kCorridorFrames = 960;
 // The bar for a closed loop: ATE after closing at most 0.2 % of the path length.
 constexpr double kMaxAteOfPath = 0.002;
 constexpr const char* kLoopCloserComm = "heslam-loop-clo";
+// ATE of the same lockstep run without a loop closer (--arg loop_closer=none), measured 2026-11-25
+// (docs/benchmarks.md, "Loop closing end to end"): closing the loop must at least halve it. Not
+// re-run here, to keep the suite short; the benchmark command re-measures it.
+constexpr double kCorridorOdometryAteM = 0.0299;
 
 int test_domain() { return test::exclusive_domain_id(); }
 
@@ -47,24 +51,16 @@ int loops_accepted(const std::string& output) {
   return total;
 }
 
-// One rendered corridor loop for the whole test binary (rendering takes ~30 s).
+// One rendered corridor loop for every test process of the build (rendering takes ~30 s).
 class CorridorLoop : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = std::make_unique<test::ScratchDir>("corridor");
-    dataset_ = dir_->path() / "corridor";
-    render_error_ = test::render_synth("corridor_loop", kCorridorFrames, dataset_, dir_->path());
+  void SetUp() override {
+    const std::string render_error = test::cached_synth("corridor_loop", kCorridorFrames, dataset_);
+    ASSERT_TRUE(render_error.empty()) << render_error;
   }
-  static void TearDownTestSuite() { dir_.reset(); }
-  void SetUp() override { ASSERT_TRUE(render_error_.empty()) << render_error_; }
-
-  static std::unique_ptr<test::ScratchDir> dir_;
-  static fs::path dataset_;
-  static std::string render_error_;
+  fs::path dataset_;
+  const test::ScratchDir dir_{"corridor"};
 };
-std::unique_ptr<test::ScratchDir> CorridorLoop::dir_;
-fs::path CorridorLoop::dataset_;
-std::string CorridorLoop::render_error_;
 
 struct RunResult {
   int code = -1;
@@ -86,26 +82,8 @@ RunResult run(const std::string& pipeline, const fs::path& dataset, const fs::pa
   return result;
 }
 
-TEST_F(CorridorLoop, BowLoopCloserClosesTheLoopAndRemovesTheDrift) {
-  const fs::path dir = dir_->path();
-  const RunResult odometry = run("synth", dataset_, dir, "odometry", "none");
-  ASSERT_EQ(odometry.code, 0) << odometry.output;
-  const RunResult closed = run("synth", dataset_, dir, "bow", "heslam-loop-closer");
-  ASSERT_EQ(closed.code, 0) << closed.output;
-  const eval::Trajectory truth = test::camera_ground_truth(dataset_);
-  const double path_m = truth.path_length_m();
-  std::printf("[ figures  ] corridor_loop %d frames, path %.1f m: ATE rmse without loop closer %.1f mm (%.3f %%), "
-              "with heslam-loop-closer %.1f mm (%.3f %%), %d loop(s) accepted\n",
-              kCorridorFrames, path_m, odometry.ate_m * 1e3, 100.0 * odometry.ate_m / path_m, closed.ate_m * 1e3,
-              100.0 * closed.ate_m / path_m, loops_accepted(closed.output));
-  EXPECT_EQ(closed.poses, truth.size());
-  EXPECT_GE(loops_accepted(closed.output), 1) << closed.output;
-  EXPECT_LT(closed.ate_m, odometry.ate_m);
-  EXPECT_LT(closed.ate_m, kMaxAteOfPath * path_m);
-}
-
 TEST_F(CorridorLoop, ProximityLoopCloserClosesTheSameLoop) {
-  const fs::path dir = dir_->path();
+  const fs::path dir = dir_.path();
   const RunResult closed = run("synth", dataset_, dir, "proximity", "heslam-loop-closer-proximity");
   ASSERT_EQ(closed.code, 0) << closed.output;
   const eval::Trajectory truth = test::camera_ground_truth(dataset_);
@@ -118,11 +96,13 @@ TEST_F(CorridorLoop, ProximityLoopCloserClosesTheSameLoop) {
   EXPECT_LT(closed.ate_m, kMaxAteOfPath * path_m);
 }
 
-TEST_F(CorridorLoop, KilledLoopCloserIsRestartedAndTheLoopIsStillClosed) {
-  const fs::path dir = dir_->path();
+// heslam-loop-closer, killed with SIGKILL once it has processed some keyframes (well before the loop):
+// the supervisor restarts it, it rebuilds its map copy and keyframe database from DDS, and the loop is
+// still closed where the camera comes back; every frame is in the trajectory.
+TEST_F(CorridorLoop, BowLoopCloserKilledMidRunStillClosesTheLoopAndRemovesTheDrift) {
+  const fs::path dir = dir_.path();
   auto supervisor = test::start_pipeline("synth", dataset_, dir, "killed", test_domain(),
                                          {"loop_closer=heslam-loop-closer"});
-  // Kill it once it has processed some keyframes (its state file exists), well before the loop.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
   bool killed = false;
   while (!killed && std::chrono::steady_clock::now() < deadline) {
@@ -141,13 +121,17 @@ TEST_F(CorridorLoop, KilledLoopCloserIsRestartedAndTheLoopIsStillClosed) {
   ASSERT_EQ(test::finish(*supervisor), 0) << supervisor->out() << supervisor->err();
   const std::string output = supervisor->out() + supervisor->err();
   const eval::Trajectory truth = test::camera_ground_truth(dataset_);
+  const double path_m = truth.path_length_m();
   const double ate_m = test::ate_rmse_m(dataset_, dir / "killed.txt");
-  std::printf("[ figures  ] corridor_loop, loop closer killed and restarted: ATE rmse %.1f mm, %d loop(s) accepted\n",
-              ate_m * 1e3, loops_accepted(output));
+  std::printf("[ figures  ] corridor_loop %d frames, path %.1f m, heslam-loop-closer killed and restarted: ATE rmse "
+              "%.1f mm (%.3f %%; %.1f mm without a loop closer), %d loop(s) accepted\n",
+              kCorridorFrames, path_m, ate_m * 1e3, 100.0 * ate_m / path_m, kCorridorOdometryAteM * 1e3,
+              loops_accepted(output));
   EXPECT_EQ(eval::read_trajectory(dir / "killed.txt").size(), truth.size());
   EXPECT_NE(output.find("restart"), std::string::npos) << output;
   EXPECT_GE(loops_accepted(output), 1) << output;
-  EXPECT_LT(ate_m, kMaxAteOfPath * truth.path_length_m());
+  EXPECT_LT(ate_m, 0.5 * kCorridorOdometryAteM);
+  EXPECT_LT(ate_m, kMaxAteOfPath * path_m);
 }
 
 TEST(LoopCloserEndToEnd, RoomRevisitsWithoutFalseLoopsAndNoWorseAte) {

@@ -1,9 +1,15 @@
 // Rendering a heslam-synth sequence from a test: the real renderer process (build/bin), bounded.
 #pragma once
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <string>
+#include <system_error>
 
 #include "child_process.hpp"
 #include "test_support.hpp"
@@ -23,6 +29,37 @@ inline std::string render_synth(const std::string& preset, int frames, const std
                      log_dir, "synth_" + preset);
   const int code = synth.wait(timeout).value_or(-1);
   return code == 0 ? std::string{} : "heslam-synth exited " + std::to_string(code) + ": " + synth.err();
+}
+
+// The same rendering, done once per build for every test process that asks for it: the sequence is
+// kept under build/test-data/PRESET_FRAMES and reused while the heslam-synth binary is unchanged
+// (its size and modification time are the key). Concurrent callers wait on a lock file. Sets
+// `dataset` to the folder; returns as render_synth.
+inline std::string cached_synth(const std::string& preset, int frames, std::filesystem::path& dataset) {
+  namespace fs = std::filesystem;
+  const fs::path root = bin_dir().parent_path() / "test-data";
+  fs::create_directories(root);
+  const std::string name = preset + "_" + std::to_string(frames);
+  dataset = root / name;
+  const fs::path renderer = bin_dir() / "heslam-synth";
+  std::error_code error;
+  const std::string key = std::to_string(fs::file_size(renderer, error)) + " " +
+                          std::to_string(fs::last_write_time(renderer, error).time_since_epoch().count());
+  const fs::path marker = root / (name + ".complete");
+  const int fd = ::open((root / (name + ".lock")).c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0666);
+  if (fd < 0 || ::flock(fd, LOCK_EX) != 0) return "cannot lock " + (root / (name + ".lock")).string();
+  std::string result;
+  std::string done;
+  std::ifstream marker_in(marker);
+  std::getline(marker_in, done);
+  if (done != key) {
+    fs::remove(marker, error);
+    fs::remove_all(dataset, error);
+    result = render_synth(preset, frames, dataset, root);
+    if (result.empty()) std::ofstream(marker) << key << "\n";
+  }
+  ::close(fd);  // releases the lock
+  return result;
 }
 
 }  // namespace heslam::test

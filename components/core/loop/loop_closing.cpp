@@ -1,7 +1,10 @@
 // The loop closer's core: detection, geometric verification, correction, global BA.
 #include "components/core/loop/loop_closing.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <set>
 #include <string>
 
@@ -31,6 +34,36 @@ struct VerifiedLoop {
   std::vector<std::pair<PointId, PointId>> matched_points;  // (loop-side, matched-side) RANSAC inliers
   int matches = 0;                                          // after the projection top-up
 };
+
+// Distance travelled from keyframe `from` to keyframe `to` along the live keyframes between them (ids
+// grow in creation order), on the map's current poses.
+double path_between(const Map& map, KeyframeId from, KeyframeId to) {
+  double path_m = 0.0;
+  const Keyframe* previous = nullptr;
+  for (auto it = map.keyframes.lower_bound(std::min(from, to)); it != map.keyframes.end() && it->first <= std::max(from, to); ++it) {
+    if (it->second.culled) continue;
+    if (previous != nullptr) path_m += (it->second.T_wc.translation() - previous->T_wc.translation()).norm();
+    previous = &it->second;
+  }
+  return path_m;
+}
+
+// Empty when the loop's implied drift is plausible, else why not (LoopClosingOptions, drift gate).
+std::string implausible_drift(const Map& map, const Keyframe& loop_kf, const Keyframe& matched,
+                              const Pose3& T_matched_loop, const LoopClosingOptions& options) {
+  const Pose3 T_wc_loop_corrected = matched.T_wc * T_matched_loop;
+  const Pose3 delta = loop_kf.T_wc.inverse() * T_wc_loop_corrected;
+  const double drift_m = (T_wc_loop_corrected.translation() - loop_kf.T_wc.translation()).norm();
+  const double drift_deg = Eigen::AngleAxisd(delta.linear()).angle() * 180.0 / M_PI;
+  const double path_m = path_between(map, matched.id, loop_kf.id);
+  const double allowed_m = options.max_drift_fraction * path_m + options.min_drift_allowance_m;
+  const double allowed_deg = options.max_rotation_drift_deg_per_m * path_m + options.min_rotation_allowance_deg;
+  if (drift_m <= allowed_m && drift_deg <= allowed_deg) return {};
+  char reason[160];
+  std::snprintf(reason, sizeof reason, "implies %.2f m / %.1f deg of drift over %.1f m travelled (allowed %.2f m / %.1f deg)",
+                drift_m, drift_deg, path_m, allowed_m, allowed_deg);
+  return reason;
+}
 
 }  // namespace
 
@@ -92,6 +125,10 @@ LoopClosingResult LoopClosing::process_keyframe(const Map& map, KeyframeId query
     if (!ransac) {
       result.rejected.push_back({candidate_id, "SE(3) RANSAC: fewer than " + std::to_string(options_.min_ransac_inliers) +
                                                    " of " + std::to_string(correspondences.size()) + " matches agree"});
+      continue;
+    }
+    if (std::string why = implausible_drift(map, loop_kf, *candidate, ransac->T_ab, options_); !why.empty()) {
+      result.rejected.push_back({candidate_id, "drift gate: " + why});
       continue;
     }
     VerifiedLoop verified;

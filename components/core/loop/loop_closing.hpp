@@ -27,6 +27,19 @@ struct LoopClosingOptions {
   int min_ransac_inliers = 20;
   int min_loop_matches = 40;
   float projection_radius_px = 10.f;     // ORB-SLAM2 SearchByProjection in ComputeSim3
+  // Drift gate. A verified loop says how far the odometry drifted since the matched keyframe: the loop
+  // keyframe would move from its estimate to matched.T_wc * T_matched_loop. Stereo odometry drifts
+  // about 1 % of the path and 0.3-1 deg per 100 m (KITTI), so a loop that needs far more is a look-alike
+  // place (perceptual aliasing: the same facades on another street) and is rejected. Allowed:
+  // max_drift_fraction * path + min_drift_allowance_m of translation and max_rotation_drift_deg_per_m *
+  // path + min_rotation_allowance_deg of rotation, path = the distance travelled between the two
+  // keyframes. The rotation bound is loose (handheld odometry turns fast); it only catches gross
+  // aliasing such as a place seen the other way round. ORB-SLAM2 has no such gate (its monocular scale
+  // drift makes one hard); stereo can.
+  double max_drift_fraction = 0.1;
+  double min_drift_allowance_m = 1.0;
+  double max_rotation_drift_deg_per_m = 1.0;
+  double min_rotation_allowance_deg = 10.0;
   std::uint64_t ransac_seed = 0x100b;
   TrackerOptions matching;               // descriptor thresholds, orientation check
 };
