@@ -299,6 +299,8 @@ void LoopCloserNode::save_state() const {
 void LoopCloserNode::log_summary() {
   const auto counters = stats().counters();
   const auto count = [&](const char* key) { return counters.count(key) != 0 ? counters.at(key) : 0; };
+  log().info("map copy: ", mirror_.map().keyframes.size(), " keyframes, ", mirror_.map().points.size(),
+             " points (map version ", mirror_.map().version, ")");
   log().info("processed ", count("keyframes"), " keyframes: ", count("candidates"), " loop candidates, ",
              count("loops_accepted"), " loops accepted, ", count("loops_rejected"), " rejected, ",
              count("global_bundle_adjustments"), " global BAs (", count("global_ba_aborted"), " aborted), ", count("correction_timeouts"), " corrections unacknowledged");

@@ -164,5 +164,50 @@ TEST(LoopCloserEndToEnd, EurocMh01FullSystemNoWorseThanWithoutLoopCloser) {
   EXPECT_LE(with.ate_m, without.ate_m * 1.05);
 }
 
+// A loop closer started by hand against a running pipeline (same domain and namespace), as a user
+// swapping in their own would: it gets the map written before it joined from the transient-local
+// topics and processes the keyframes the mapper acknowledges (the recent acknowledgements are replayed
+// to a late reader, so it catches up on those too).
+TEST(LoopCloserEndToEnd, StartedByHandMidRunPicksUpTheMapFromDds) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
+  const test::ScratchDir dir("by_hand");
+  const int domain = test_domain();
+  auto supervisor = test::start_pipeline("euroc", dataset, dir.path(), "byhand", domain, {"loop_closer=none"});
+  // Join once a third of the clip is tracked (the recorder's journal has a line per frame).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  int frames = 0;
+  while (frames < 50 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    std::ifstream journal(dir.path() / "byhand.journal");
+    std::string line;
+    for (frames = 0; std::getline(journal, line);) ++frames;
+  }
+  ASSERT_GE(frames, 50) << "the pipeline never tracked 50 frames";
+  test::ChildProcess loop_closer(test::bin_dir() / "heslam-loop-closer", {"--domain", std::to_string(domain)},
+                                 dir.path(), "loop_closer_by_hand");
+  ASSERT_EQ(test::finish(*supervisor), 0) << supervisor->out() << supervisor->err();
+  std::this_thread::sleep_for(std::chrono::seconds(1));  // the last acknowledgements reach it
+  loop_closer.signal(SIGTERM);
+  ASSERT_EQ(loop_closer.wait(test::kStopTimeout).value_or(-1), 0) << loop_closer.err();
+  const std::string log = loop_closer.out() + loop_closer.err();
+  static const std::regex map_copy(R"(map copy: (\d+) keyframes, (\d+) points)");
+  static const std::regex processed(R"(processed (\d+) keyframes)");
+  std::smatch copy_match;
+  std::smatch processed_match;
+  ASSERT_TRUE(std::regex_search(log, copy_match, map_copy)) << log;
+  ASSERT_TRUE(std::regex_search(log, processed_match, processed)) << log;
+  const int keyframes = std::stoi(copy_match[1]);
+  const int processed_keyframes = std::stoi(processed_match[1]);
+  std::printf("[ figures  ] loop closer started by hand after %d frames: map copy %d keyframes, %s points; "
+              "processed %d keyframes\n", frames, keyframes, copy_match[2].str().c_str(), processed_keyframes);
+  // Every keyframe of the run is in its copy, including those written before it joined.
+  EXPECT_EQ(keyframes, static_cast<int>(eval::read_trajectory(dir.path() / "byhand.keyframes.txt").size()));
+  // It processes the keyframes acknowledged from then on and the recent ones the lockstep topic
+  // replays to a late reader (here: all of them).
+  EXPECT_GE(processed_keyframes, 1);
+  EXPECT_LE(processed_keyframes, keyframes);
+}
+
 }  // namespace
 }  // namespace heslam
