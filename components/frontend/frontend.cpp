@@ -274,24 +274,42 @@ void Frontend::mirror_map_state() {
   // (keep-last per keyframe / point), so a restarted frontend still gets the whole map.
   if (!processor_) return;
   Map* map = &processor_->tracker().local_map();
-  for (auto& received : keyframe_state_reader_->take()) {
-    // Invalid-data samples (disposes, no-writer notices) carry no state: the mapper culls keyframes
-    // by flag and its writers keep their instances when it exits or restarts.
-    if (!received.info.valid_data) continue;
-    if (!apply_keyframe_state(*map, *received.sample)) stats().count("unknown_keyframe_states");
-  }
-  for (auto& received : point_state_reader_->take()) {
-    if (!received.info.valid_data) {
-      // Removed by the mapper, or its writer went away (then its restart republishes the point):
-      // flag it culled, which the tracker skips and a later state revives.
-      if (received.info.disposed) {
-        if (MapPoint* point = map->point(received.sample->id)) point->culled = true;
+  // Both readers are drained until empty before the version markers taken meanwhile count
+  // (MirrorVersion).
+  MirrorVersion markers;
+  for (bool drained = false; !drained;) {
+    drained = true;
+    for (auto& received : keyframe_state_reader_->take()) {
+      drained = false;
+      // Invalid-data samples (disposes, no-writer notices) carry no state: the mapper culls keyframes
+      // by flag and its writers keep their instances when it exits or restarts.
+      if (!received.info.valid_data) continue;
+      if (is_version_marker(*received.sample)) {
+        markers.keyframe_states = std::max(markers.keyframe_states, received.sample->map_version);
+      } else if (!apply_keyframe_state(*map, *received.sample)) {
+        stats().count("unknown_keyframe_states");
       }
-      continue;
     }
-    apply_point_state(*map, *received.sample);
+    for (auto& received : point_state_reader_->take()) {
+      drained = false;
+      if (!received.info.valid_data) {
+        // Removed by the mapper, or its writer went away (then its restart republishes the point):
+        // flag it culled, which the tracker skips and a later state revives.
+        if (received.info.disposed && received.sample->id != kVersionMarkerId) {
+          if (MapPoint* point = map->point(received.sample->id)) point->culled = true;
+        }
+        continue;
+      }
+      if (is_version_marker(*received.sample)) {
+        markers.point_states = std::max(markers.point_states, received.sample->map_version);
+      } else {
+        apply_point_state(*map, *received.sample);
+      }
+    }
   }
-  if (follow_correction_at_version_ && map->version >= *follow_correction_at_version_) {
+  mirror_version_.keyframe_states = std::max(mirror_version_.keyframe_states, markers.keyframe_states);
+  mirror_version_.point_states = std::max(mirror_version_.point_states, markers.point_states);
+  if (follow_correction_at_version_ && mirror_version_.complete() >= *follow_correction_at_version_) {
     processor_->tracker().follow_reference_keyframe();
     follow_correction_at_version_.reset();
     stats().count("corrections_followed");
@@ -304,7 +322,7 @@ bool Frontend::wait_for_keyframe_done(KeyframeId id) {
     mirror_map_state();
     // The mapper publishes the keyframe's state before its KeyframeDone, but a loop closer's
     // acknowledgement may overtake the corrected states it waited for: wait for the map version too.
-    if (keyframe_acknowledged(id) && processor_->tracker().local_map().version >= acknowledged_map_version_) {
+    if (keyframe_acknowledged(id) && mirror_version_.complete() >= acknowledged_map_version_) {
       keyframes_done_.erase(id);
       mirror_map_state();
       return true;

@@ -61,6 +61,9 @@ class Frontend : public runtime::Component {
   // KeyframeDone seen, not yet waited for: keyframe -> components that acknowledged it.
   std::map<KeyframeId, std::set<std::string>> keyframes_done_;
   std::uint64_t acknowledged_map_version_ = 0;  // the largest map version an awaited ack reported
+  // The mapper's map version this mirror holds completely (its version markers); the tracker's own
+  // map.version also counts the keyframes it inserted, so it cannot say that.
+  MirrorVersion mirror_version_;
   // A correction the mapper applied: its map version, until the mirror has it.
   std::optional<std::uint64_t> follow_correction_at_version_;
 };

@@ -283,6 +283,9 @@ DecodedKeyframe to_keyframe(const msg::Keyframe& message) {
   return decoded;
 }
 
+bool is_version_marker(const msg::KeyframeState& state) { return state.id == kVersionMarkerId; }
+bool is_version_marker(const msg::MapPointState& state) { return state.id == kVersionMarkerId; }
+
 bool apply_keyframe_state(Map& map, const msg::KeyframeState& state) {
   Keyframe* keyframe = map.keyframe(state.id);
   if (keyframe == nullptr) return false;
@@ -293,13 +296,11 @@ bool apply_keyframe_state(Map& map, const msg::KeyframeState& state) {
     keyframe->covisible.emplace_back(neighbour.id, static_cast<int>(neighbour.weight));
   }
   keyframe->culled = state.culled;
-  map.version = std::max(map.version, state.map_version);
   return true;  // a culled keyframe stays (flagged) so frames referencing it keep their anchor
 
 }
 
 void apply_point_state(Map& map, const msg::MapPointState& state) {
-  map.version = std::max(map.version, state.map_version);
   if (state.merged_into != kNoId) {
     erase_point(map, state.id, state.merged_into);
     return;

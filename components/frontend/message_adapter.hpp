@@ -6,6 +6,7 @@
 // message object must outlive the write() that sends it. Incoming conversions copy what they keep.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -88,8 +89,27 @@ struct DecodedKeyframe {
 DecodedKeyframe to_keyframe(const msg::Keyframe& message);
 
 // --- the mapper's state mirrored into the tracker's map ---
+// Which map version a mirror holds completely. The local mapper ends every batch of state samples
+// (per keyframe, per correction, the whole map after a restart) with a version marker on both state
+// topics: a sample of id kVersionMarkerId carrying the batch's map version, written by the same
+// writer after the batch. One writer's samples arrive in order, so once both markers of version v
+// arrived, every state of v arrived too (or was superseded by a newer one). A map version read off
+// ordinary samples would only say that *some* state of it arrived (docs/topics.md).
+inline constexpr std::uint64_t kVersionMarkerId = 0;
+// A reader's take returns instances in key order, not in arrival order, so a marker may come out
+// before states that arrived ahead of it: drain both readers until empty, then count the markers
+// taken meanwhile.
+struct MirrorVersion {
+  std::uint64_t keyframe_states = 0;  // the newest marker of each topic
+  std::uint64_t point_states = 0;
+  std::uint64_t complete() const { return std::min(keyframe_states, point_states); }
+};
+bool is_version_marker(const msg::KeyframeState& state);
+bool is_version_marker(const msg::MapPointState& state);
+
 // Refined pose, spanning-tree parent, covisibility and culled flag of a keyframe the map holds (a
 // culled keyframe stays, flagged). Returns false when the keyframe is unknown here (state ignored).
+// map.version is left alone: only the markers advance it.
 bool apply_keyframe_state(Map& map, const msg::KeyframeState& state);
 // Creates or updates the point (a culled one stays, flagged); a merged point is removed and the
 // observing keyframes' point ids are pointed at the point it merged into.

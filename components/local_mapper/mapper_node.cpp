@@ -305,6 +305,12 @@ void MapperNode::publish(const MapChanges& changes) {
     point_state_writer_->dispose(last);
     stats().count("disposed_points");
   }
+  write_version_markers(map.version);
+}
+
+void MapperNode::write_version_markers(std::uint64_t map_version) {
+  keyframe_state_writer_->write(keyframe_version_marker(map_version));
+  point_state_writer_->write(point_version_marker(map_version));
 }
 
 void MapperNode::publish_all(const Map& map) {
@@ -315,6 +321,7 @@ void MapperNode::publish_all(const Map& map) {
   for (const auto& [id, point] : map.points) {
     point_state_writer_->write(to_state_message(point, map.version, observation_buffer_));
   }
+  write_version_markers(map.version);
   log().info("published the state of ", map.keyframes.size(), " keyframes and ", map.points.size(), " points");
 }
 

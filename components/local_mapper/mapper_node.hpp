@@ -52,6 +52,8 @@ class MapperNode : public runtime::Component {
   void save();
   void publish(const MapChanges& changes);
   void publish_all(const Map& map);
+  // Ends a batch of states: the version markers of both state topics (frontend::MirrorVersion).
+  void write_version_markers(std::uint64_t map_version);
   // KeyframeDone for a mapped keyframe, or (correction_id != 0) for an applied correction.
   void acknowledge(KeyframeId id, std::uint64_t correction_id = 0);
   void log_summary();

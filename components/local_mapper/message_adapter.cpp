@@ -60,6 +60,21 @@ msg::MapPointState merged_state_message(PointId id, PointId into, std::uint64_t 
   return message;
 }
 
+msg::KeyframeState keyframe_version_marker(std::uint64_t map_version) {
+  msg::KeyframeState message{};
+  message.id = frontend::kVersionMarkerId;
+  message.map_version = map_version;
+  message.T_wc.orientation_xyzw[3] = 1.0;  // a valid identity, for tools that print it
+  return message;
+}
+
+msg::MapPointState point_version_marker(std::uint64_t map_version) {
+  msg::MapPointState message{};
+  message.id = frontend::kVersionMarkerId;
+  message.map_version = map_version;
+  return message;
+}
+
 LoopCorrection to_loop_correction(const msg::LoopCorrection& message) {
   const std::string name = "loop correction " + std::to_string(message.id);
   LoopCorrection correction;

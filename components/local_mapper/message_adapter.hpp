@@ -28,6 +28,10 @@ msg::MapPointState to_state_message(const MapPoint& point, std::uint64_t map_ver
 // just before the instance is disposed.
 msg::MapPointState merged_state_message(PointId id, PointId into, std::uint64_t map_version);
 
+// The end-of-batch markers written after every batch of states (frontend::MirrorVersion says why).
+msg::KeyframeState keyframe_version_marker(std::uint64_t map_version);
+msg::MapPointState point_version_marker(std::uint64_t map_version);
+
 // Throws std::runtime_error naming the correction when a pose is not finite or an id is 0.
 LoopCorrection to_loop_correction(const msg::LoopCorrection& message);
 

@@ -22,10 +22,6 @@ constexpr std::chrono::milliseconds kWaitPeriod{200};
 constexpr std::chrono::milliseconds kGlobalBaPoll{20};
 // Before the first KeyframeDone: how long to wait for the lockstep reader (the frontend) to match.
 constexpr std::chrono::milliseconds kReaderWait{2000};
-// settle(): the readers count as drained once they stayed empty this long (loopback delivers what was
-// written before an acknowledgement within milliseconds), waiting at most kSettleLimit in all.
-constexpr std::chrono::milliseconds kSettleQuiet{20};
-constexpr std::chrono::milliseconds kSettleLimit{500};
 // Correction ids: the creator tag in the top byte (map.hpp) and, below, a start value from the clock
 // so a restarted loop closer without a state file never reuses an id the mapper already applied.
 constexpr int kClockShiftBits = 20;
@@ -86,29 +82,47 @@ std::size_t LoopCloserNode::take_all() {
       log().warn("topic '", topics().keyframes().name, "': ", error.what(), "; skipped");
     }
   }
-  for (auto& received : keyframe_state_reader_->take()) {
-    ++taken;
-    if (!received.info.valid_data) continue;
-    try {
-      mirror_.apply_keyframe_state(*received.sample);
-    } catch (const std::exception& error) {
-      stats().count("bad_keyframe_states");
-      log().warn("topic '", topics().keyframe_states().name, "': ", error.what(), "; skipped");
+  // The state readers are drained until empty before the version markers taken meanwhile count
+  // (frontend::MirrorVersion).
+  frontend::MirrorVersion markers;
+  for (std::size_t batch = 1; batch != 0;) {
+    batch = 0;
+    for (auto& received : keyframe_state_reader_->take()) {
+      ++batch;
+      if (!received.info.valid_data) continue;
+      if (frontend::is_version_marker(*received.sample)) {
+        markers.keyframe_states = std::max(markers.keyframe_states, received.sample->map_version);
+        continue;
+      }
+      try {
+        mirror_.apply_keyframe_state(*received.sample);
+      } catch (const std::exception& error) {
+        stats().count("bad_keyframe_states");
+        log().warn("topic '", topics().keyframe_states().name, "': ", error.what(), "; skipped");
+      }
     }
+    for (auto& received : point_state_reader_->take()) {
+      ++batch;
+      if (!received.info.valid_data) {
+        if (received.info.disposed && received.sample->id != frontend::kVersionMarkerId) {
+          mirror_.point_disposed(received.sample->id);
+        }
+        continue;
+      }
+      if (frontend::is_version_marker(*received.sample)) {
+        markers.point_states = std::max(markers.point_states, received.sample->map_version);
+        continue;
+      }
+      try {
+        mirror_.apply_point_state(*received.sample);
+      } catch (const std::exception& error) {
+        stats().count("bad_point_states");
+        log().warn("topic '", topics().map_points().name, "': ", error.what(), "; skipped");
+      }
+    }
+    taken += batch;
   }
-  for (auto& received : point_state_reader_->take()) {
-    ++taken;
-    if (!received.info.valid_data) {
-      if (received.info.disposed) mirror_.point_disposed(received.sample->id);
-      continue;
-    }
-    try {
-      mirror_.apply_point_state(*received.sample);
-    } catch (const std::exception& error) {
-      stats().count("bad_point_states");
-      log().warn("topic '", topics().map_points().name, "': ", error.what(), "; skipped");
-    }
-  }
+  mirror_.count_markers(markers);
   for (auto& received : keyframe_done_reader_->take()) {
     ++taken;
     if (!received.info.valid_data) continue;
@@ -123,14 +137,6 @@ std::size_t LoopCloserNode::take_all() {
   return taken;
 }
 
-void LoopCloserNode::settle() {
-  const auto deadline = std::chrono::steady_clock::now() + kSettleLimit;
-  while (!shutdown_requested() && std::chrono::steady_clock::now() < deadline) {
-    if (waitset_->wait(kSettleQuiet) == runtime::Wake::kShutdown) return;
-    if (take_all() == 0) return;
-  }
-}
-
 void LoopCloserNode::process_ready_keyframes() {
   // In keyframe order, each once the mirror holds it and the map state the mapper acknowledged.
   while (!mapped_.empty() && !shutdown_requested()) {
@@ -142,7 +148,6 @@ void LoopCloserNode::process_ready_keyframes() {
       continue;
     }
     if (mirror_.map().keyframe(id) == nullptr || mirror_.map().version < version) return;  // in flight
-    settle();
     mapped_.erase(mapped_.begin());
     process_keyframe(id);
     last_processed_ = id;
@@ -215,7 +220,6 @@ bool LoopCloserNode::publish_and_wait(LoopCorrection correction) {
     take_all();
     if (auto it = corrections_applied_.find(id); it != corrections_applied_.end() && mirror_.map().version >= it->second) {
       corrections_applied_.erase(it);
-      settle();
       return true;
     }
     const auto now = std::chrono::steady_clock::now();

@@ -38,12 +38,9 @@ class LoopCloserNode : public runtime::Component {
   bool accepts_positional_args() const override { return true; }  // --state-file, --vocabulary
 
   // Takes every sample waiting in the readers into the mirror and the acknowledgement tables;
-  // returns how many it took.
+  // returns how many it took. The mirror's map version then is the mapper's version it holds
+  // completely (version markers), so a keyframe acknowledged at version v is processed only on it.
   std::size_t take_all();
-  // Keeps taking until the readers stayed empty for a short while: the mapper wrote a keyframe's
-  // (or a correction's) states before acknowledging it, but over other writers, so some may still be
-  // in flight when the acknowledgement arrives.
-  void settle();
   void process_ready_keyframes();
   void process_keyframe(KeyframeId id);
   // Waits for the global BA started last and publishes its correction (if it was not aborted).

@@ -47,7 +47,6 @@ void MapMirror::apply_keyframe_state(const msg::KeyframeState& message) {
   if (!T_wc.matrix().allFinite()) {
     throw std::runtime_error("keyframe state " + std::to_string(message.id) + ": T_wc is not finite");
   }
-  map_.version = std::max(map_.version, message.map_version);
   if (frontend::apply_keyframe_state(map_, message)) return;
   PendingState& pending = pending_states_[message.id];
   pending.T_wc = T_wc;
@@ -66,5 +65,11 @@ void MapMirror::apply_point_state(const msg::MapPointState& message) {
 }
 
 void MapMirror::point_disposed(PointId id) { frontend::erase_point(map_, id); }
+
+void MapMirror::count_markers(const frontend::MirrorVersion& markers) {
+  version_.keyframe_states = std::max(version_.keyframe_states, markers.keyframe_states);
+  version_.point_states = std::max(version_.point_states, markers.point_states);
+  map_.version = std::max(map_.version, version_.complete());
+}
 
 }  // namespace heslam::loop_closer

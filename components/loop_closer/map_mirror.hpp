@@ -11,6 +11,7 @@
 
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/map/map.hpp"
+#include "components/frontend/message_adapter.hpp"
 #include "runtime/messages.hpp"
 
 namespace heslam::loop_closer {
@@ -25,6 +26,9 @@ class MapMirror {
   void apply_point_state(const msg::MapPointState& message);
   // A disposed point instance: removed by the mapper (a culled or merged point).
   void point_disposed(PointId id);
+  // The version markers taken since the readers were last drained (frontend::MirrorVersion): map().version
+  // becomes the mapper's map version this copy holds completely.
+  void count_markers(const frontend::MirrorVersion& markers);
 
   const Map& map() const { return map_; }
   // The rectified camera of the first keyframe (every keyframe of a run shares it).
@@ -39,6 +43,7 @@ class MapMirror {
   };
 
   Map map_;
+  frontend::MirrorVersion version_;
   std::optional<PinholeStereo> camera_;
   std::map<KeyframeId, PendingState> pending_states_;  // states of keyframes not received yet
 };

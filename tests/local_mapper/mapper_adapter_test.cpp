@@ -59,7 +59,22 @@ TEST(MapperAdapter, KeyframeStateRoundTripsThroughTheFrontendMirror) {
   EXPECT_EQ(mirrored.parent, 3u);
   EXPECT_EQ(mirrored.covisible, keyframe.covisible);
   EXPECT_TRUE(mirrored.culled);
-  EXPECT_EQ(mirror.version, 42u);
+  EXPECT_EQ(mirror.version, 0u);  // only the version markers advance it
+}
+
+// The markers that end every batch of states: id 0 on both topics, carrying the batch's map version;
+// a mirror holds version v completely once both topics' markers reached v.
+TEST(MapperAdapter, VersionMarkersEndABatchOnBothTopics) {
+  const msg::KeyframeState keyframe_marker = keyframe_version_marker(12);
+  const msg::MapPointState point_marker = point_version_marker(11);
+  EXPECT_TRUE(frontend::is_version_marker(keyframe_marker));
+  EXPECT_TRUE(frontend::is_version_marker(point_marker));
+  EXPECT_EQ(keyframe_marker.map_version, 12u);
+  frontend::MirrorVersion version;
+  version.keyframe_states = keyframe_marker.map_version;
+  EXPECT_EQ(version.complete(), 0u);  // no point marker yet
+  version.point_states = point_marker.map_version;
+  EXPECT_EQ(version.complete(), 11u);
 }
 
 TEST(MapperAdapter, PointStateRoundTripsAndMergeRedirectsObservations) {

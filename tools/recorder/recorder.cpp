@@ -120,7 +120,7 @@ std::size_t Recorder::drain() {
     const msg::KeyframeState& state = *received.sample;
     // Invalid-data samples (disposes, no-writer notices) carry no state: the mapper culls keyframes
     // by flag and its writers keep their instances when it exits or restarts.
-    if (!received.info.valid_data) continue;
+    if (!received.info.valid_data || frontend::is_version_marker(state)) continue;
     recorder_.update_keyframe(state.id, frontend::to_pose(state.T_wc), state.parent_id, state.culled);
   }
   for (auto& received : odometry_reader_->take()) {

@@ -38,7 +38,7 @@ struct LoopClosingOptions {
   // drift makes one hard); stereo can.
   double max_drift_fraction = 0.1;
   double min_drift_allowance_m = 1.0;
-  double max_rotation_drift_deg_per_m = 1.0;
+  double max_rotation_drift_deg_per_m = 0.2;
   double min_rotation_allowance_deg = 10.0;
   std::uint64_t ransac_seed = 0x100b;
   TrackerOptions matching;               // descriptor thresholds, orientation check
