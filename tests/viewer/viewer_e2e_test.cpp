@@ -1,7 +1,8 @@
 // heslam-viewer as a real process beside a lockstep MH01 run (euroc_mapper pipeline): started by hand
 // while the run goes (it gets the map from the transient-local topics), on an Xvfb display when Xvfb
-// is installed (viz 3D window + highgui), else headless. Asserts on its pictures and counts, and that
-// the pipeline's output is bit-identical with and without the viewer.
+// is installed (viz 3D window + highgui), else headless, plus a second headless viewer with the
+// ground truth. Asserts on the pictures and counts, and that the pipeline's output is bit-identical
+// with and without viewers.
 #include <gtest/gtest.h>
 
 #include <signal.h>
@@ -122,13 +123,23 @@ TEST(ViewerEndToEnd, JoinsAMh01RunDrawsEveryKeyframeAndLeavesTheOutputBitIdentic
                                        "--snapshot-every", "2", "--record", (dir.path() / "frames.mp4").string()};
   if (!xvfb) viewer_args.push_back("--headless");
   ChildProcess viewer(test::bin_dir() / "heslam-viewer", viewer_args, dir.path(), "viewer");
+  // A second, headless viewer at the same time, with the ground truth overlaid.
+  const std::vector<std::string> headless_args{
+      "--domain", std::to_string(domain), "--headless", "--out", (dir.path() / "headless").string(), "--gt",
+      (dataset / "mav0/state_groundtruth_estimate0/data.csv").string(), "--gt-extrinsic",
+      (dataset / "mav0/cam0/sensor.yaml").string()};
+  ChildProcess headless(test::bin_dir() / "heslam-viewer", headless_args, dir.path(), "headless_viewer");
   const int pipeline_code = test::finish(*viewed);
   viewer.signal(SIGTERM);  // the map stays with the viewer after the pipeline's writers left
+  headless.signal(SIGTERM);
   const std::optional<int> viewer_code = viewer.wait(kViewerStop);
+  const std::optional<int> headless_code = headless.wait(kViewerStop);
   unsetenv("DISPLAY");
   const std::string viewer_output = viewer.out() + viewer.err();
+  const std::string headless_output = headless.out() + headless.err();
   ASSERT_EQ(pipeline_code, 0) << viewed->out() << viewed->err();
   ASSERT_EQ(viewer_code.value_or(-1), 0) << viewer_output;
+  ASSERT_EQ(headless_code.value_or(-1), 0) << headless_output;
 
   // The pipeline's output does not change with a viewer attached (lockstep is not disturbed).
   EXPECT_EQ(read_file(dir.path() / "viewed.txt"), read_file(dir.path() / "plain.txt"));
@@ -144,6 +155,12 @@ TEST(ViewerEndToEnd, JoinsAMh01RunDrawsEveryKeyframeAndLeavesTheOutputBitIdentic
   EXPECT_EQ(stats.at("frustums_drawn"), std::to_string(keyframes)) << viewer_output;
   EXPECT_GT(std::stoi(stats.at("map_points")), 500) << viewer_output;
   EXPECT_EQ(stats.at("display"), xvfb ? "viz" : "headless") << viewer_output;
+  const auto headless_stats = read_stats(dir.path() / "headless/viewer_stats.txt");
+  ASSERT_FALSE(headless_stats.empty()) << headless_output;
+  EXPECT_EQ(headless_stats.at("display"), "headless");
+  EXPECT_EQ(headless_stats.at("frustums_drawn"), std::to_string(keyframes)) << headless_output;
+  EXPECT_GT(std::stoi(headless_stats.at("ground_truth_points")), 100) << headless_output;
+  EXPECT_TRUE(fs::exists(dir.path() / "headless/map_final.png"));
 
   // The top view: frustums (the only pure-blue pixels) and points on a white background.
   const cv::Mat map = cv::imread((dir.path() / "pictures/map_final.png").string());

@@ -49,12 +49,16 @@ void ViewerModel::apply_keyframe_state(const msg::KeyframeState& message) {
 
 void ViewerModel::apply_point_state(const msg::MapPointState& message) {
   mirror_.apply_point_state(message);
+  if (message.merged_into != kNoId) merged_away_.insert(message.id);
   culled_points_.erase(message.id);
   changed_ = true;
 }
 
 void ViewerModel::point_disposed(PointId id) {
-  if (const MapPoint* point = mirror_.map().point(id); point != nullptr) culled_points_[id] = point->p_w;
+  // Samples of different topics arrive in any order: a point merged by a correction is not culled
+  // even when its dispose comes before or after the correction.
+  const MapPoint* point = mirror_.map().point(id);
+  if (point != nullptr && merged_away_.count(id) == 0) culled_points_[id] = point->p_w;
   mirror_.point_disposed(id);
   changed_ = true;
 }
@@ -62,6 +66,7 @@ void ViewerModel::point_disposed(PointId id) {
 void ViewerModel::apply_correction(const msg::LoopCorrection& message, Clock::time_point now) {
   for (const msg::PointMerge& merge : runtime::view(message.point_merges)) {
     loop_merged_points_.insert(merge.into_id);
+    merged_away_.insert(merge.from_id);
     culled_points_.erase(merge.from_id);  // merged, not culled
   }
   ++loop_corrections_;

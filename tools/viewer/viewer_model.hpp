@@ -91,6 +91,7 @@ class ViewerModel {
   loop_closer::MapMirror mirror_;
   std::map<PointId, Eigen::Vector3d> culled_points_;  // last known position of disposed points
   std::set<PointId> loop_merged_points_;              // targets of a loop correction's merges
+  std::set<PointId> merged_away_;                     // merged into another point: gone, not culled
   std::map<std::uint64_t, KeyframeId> keyframe_of_frame_;  // frame seq -> keyframe made from it
   std::shared_ptr<const StereoRectifier> rectifier_;  // immutable once made: shared with drawings
   std::deque<FrameEntry> frames_recent_;              // newest last

@@ -26,6 +26,9 @@ constexpr std::chrono::milliseconds kWaitPeriod{200};
 // Odometry is small: a deeper best-effort queue keeps the trajectory whole through short stalls of
 // the viewer without ever slowing the frontend.
 constexpr int kOdometryDepth = 100;
+// Without any frontend (odometry writer) for this long, frames are read anyway (a replay watched
+// without a frontend, a camera driver alone).
+constexpr std::chrono::milliseconds kNoFrontendWait{2000};
 // Corrections are rare; the reader keeps the newest (the loop closer writes KEEP_ALL).
 constexpr int kCorrectionDepth = 100;
 // The 3D map widgets are rebuilt at most this often (VTK actors cost milliseconds each rebuild).
@@ -61,8 +64,7 @@ void ViewerNode::configure(const runtime::Config& /*config*/) {
   model.covisibility_min_weight = options_.covisibility_min_weight;
   model_ = std::make_unique<ViewerModel>(model);
 
-  // Frames: best effort, keep the newest only (a slow viewer drops frames, never the camera's).
-  frame_reader_.emplace(participant(), topics().stereo(), runtime::Qos(runtime::QosRole::kSpy));
+  // Frames are read from the first odometry on (maybe_subscribe_frames).
   odometry_reader_.emplace(participant(), topics().odometry(), runtime::Qos(runtime::QosRole::kSpy).keep_last(kOdometryDepth));
   // Calibration and map: their own transient-local QoS, so a late viewer gets them from DDS.
   calibration_reader_.emplace(participant(), topics().calibration());
@@ -72,7 +74,6 @@ void ViewerNode::configure(const runtime::Config& /*config*/) {
   correction_reader_.emplace(participant(), topics().loop_corrections(),
                              runtime::Qos(runtime::QosRole::kCorrections).keep_last(kCorrectionDepth));
   waitset_ = std::make_unique<runtime::WaitSet>(participant());
-  waitset_->attach(*frame_reader_);
   waitset_->attach(*odometry_reader_);
   waitset_->attach(*calibration_reader_);
   waitset_->attach(*keyframe_reader_);
@@ -85,10 +86,12 @@ void ViewerNode::configure(const runtime::Config& /*config*/) {
 }
 
 void ViewerNode::run() {
+  started_ = Clock::now();
   draw_thread_ = std::thread([this] { draw_loop(); });
   while (!shutdown_requested()) {
     if (waitset_->wait(kWaitPeriod) == runtime::Wake::kShutdown) break;
     take_all();
+    maybe_subscribe_frames();
   }
   take_all();  // what arrived last, for the final pictures
   stop_drawing();
@@ -102,6 +105,22 @@ void ViewerNode::stop_drawing() {
   }
   stop_signal_.notify_all();
   if (draw_thread_.joinable()) draw_thread_.join();
+}
+
+// A lockstep replay starts publishing once ANY reader of camera/stereo matched, and then waits for the
+// frontend's acknowledgement of frame 0. A viewer whose reader matched before the frontend's would let
+// frame 0 go out before the frontend hears it (a stalled start until the replay's ack timeout). So the
+// viewer reads frames only after the frontend published its first odometry (frame 0 is then done), or
+// when no frontend appeared within kNoFrontendWait. Joining mid-run is safe: the replay sends the
+// current frame again to a new reader and the frontend acknowledges it without tracking it twice.
+void ViewerNode::maybe_subscribe_frames() {
+  if (frame_reader_) return;
+  const bool no_frontend = odometry_reader_->matched_writers() == 0 && Clock::now() - started_ >= kNoFrontendWait;
+  if (!odometry_seen_ && !no_frontend) return;
+  // Best effort, keep the newest only: a slow viewer drops frames, never the camera's.
+  frame_reader_.emplace(participant(), topics().stereo(), runtime::Qos(runtime::QosRole::kSpy));
+  waitset_->attach(*frame_reader_);
+  log().debug("reading ", topics().stereo().name, odometry_seen_ ? " (the frontend is running)" : " (no frontend)");
 }
 
 std::size_t ViewerNode::take_all() {
@@ -146,12 +165,15 @@ std::size_t ViewerNode::take_all() {
     if (r.info.valid_data) model_->apply_correction(*r.sample, now);
     return r.info.valid_data;
   });
-  apply(*frame_reader_, "frames", [&](auto& r) {
-    if (r.info.valid_data) model_->add_frame(*r.sample);
-    return r.info.valid_data;
-  });
+  if (frame_reader_) {
+    apply(*frame_reader_, "frames", [&](auto& r) {
+      if (r.info.valid_data) model_->add_frame(*r.sample);
+      return r.info.valid_data;
+    });
+  }
   apply(*odometry_reader_, "odometry", [&](auto& r) {
     if (r.info.valid_data) model_->add_odometry(*r.sample, now);
+    odometry_seen_ = odometry_seen_ || r.info.valid_data;
     return r.info.valid_data;
   });
   return taken;

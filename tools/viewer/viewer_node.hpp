@@ -31,6 +31,8 @@ class ViewerNode final : public runtime::Component {
 
   // Takes every waiting sample and applies it to the model; returns the number taken.
   std::size_t take_all();
+  // Creates the camera/stereo reader once it cannot disturb a lockstep start (see the .cpp).
+  void maybe_subscribe_frames();
   void draw_loop();
   void stop_drawing();
 
@@ -52,6 +54,8 @@ class ViewerNode final : public runtime::Component {
   bool stop_ = false;
   std::thread draw_thread_;
   std::exception_ptr draw_error_;
+  bool odometry_seen_ = false;
+  std::chrono::steady_clock::time_point started_{};
 };
 
 }  // namespace heslam::viewer
