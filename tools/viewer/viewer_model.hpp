@@ -64,6 +64,10 @@ class ViewerModel {
   const Map& map() const { return mirror_.map(); }
   std::uint64_t loop_corrections() const { return loop_corrections_; }
   std::size_t live_keyframes() const;
+  // Any frame, odometry or map sample arrived.
+  bool received_anything() const {
+    return frames_.received > 0 || !odometry_.empty() || !mirror_.map().keyframes.empty() || !mirror_.map().points.empty();
+  }
 
  private:
   struct FrameEntry {

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <map>
+#include <sstream>
 #include <string>
 #include <tuple>
 
@@ -80,7 +81,13 @@ void ViewerNode::configure(const runtime::Config& /*config*/) {
   waitset_->attach(*keyframe_state_reader_);
   waitset_->attach(*point_state_reader_);
   waitset_->attach(*correction_reader_);
-  log().info(headless_ ? "headless" : "display", ", drawing at ", options_.draw_rate_hz, " Hz",
+  std::ostringstream drawing;
+  if (!headless_ || !options_.record_file.empty()) {
+    drawing << ", drawing at " << options_.draw_rate_hz << " Hz";
+  } else {
+    drawing << ", drawing only for snapshots";
+  }
+  log().info(headless_ ? "headless" : "display", drawing.str(),
              options_.out_dir.empty() ? std::string() : ", snapshots to " + options_.out_dir.string(),
              options_.record_file.empty() ? std::string() : ", recording to " + options_.record_file.string());
 }
@@ -96,6 +103,13 @@ void ViewerNode::run() {
   take_all();  // what arrived last, for the final pictures
   stop_drawing();
   if (draw_error_) std::rethrow_exception(draw_error_);
+  std::lock_guard<std::mutex> lock(model_mutex_);
+  if (!model_->received_anything()) {
+    // Empty pictures are no result: say why, exit non-zero.
+    throw std::runtime_error("received no frame, odometry or map sample under '" + topics().ns() + "/' on domain " +
+                             std::to_string(args().domain_id) +
+                             " (is a pipeline running with the same --domain / --namespace?)");
+  }
 }
 
 void ViewerNode::stop_drawing() {
