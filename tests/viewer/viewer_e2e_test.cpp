@@ -82,12 +82,16 @@ int pixels_of(const cv::Mat& image, const cv::Scalar& bgr) {
 }
 
 // An Xvfb server on a display number derived from the test's exclusive DDS domain, or nothing when
-// Xvfb is not installed or does not come up.
+// Xvfb is not installed or does not come up. The number is ours alone (the domain lock), so a socket
+// or lock file left by a killed earlier server is stale: removed first, or the socket would look ready.
 std::unique_ptr<ChildProcess> start_xvfb(const fs::path& dir, std::string& display) {
   const fs::path xvfb = "/usr/bin/Xvfb";
   if (!fs::exists(xvfb)) return nullptr;
   const int number = 300 + test::exclusive_domain_id();
   display = std::string(1, ':').append(std::to_string(number));  // (not ":" + ...: GCC 12 -Wrestrict false positive)
+  std::error_code ignored;
+  fs::remove(fs::path("/tmp/.X11-unix") / std::string(1, 'X').append(std::to_string(number)), ignored);
+  fs::remove(fs::path("/tmp") / std::string(".X").append(std::to_string(number)).append("-lock"), ignored);
   auto server = std::make_unique<ChildProcess>(xvfb, std::vector<std::string>{display, "-screen", "0", "1920x1200x24", "-nolisten", "tcp"},
                                                dir, "xvfb");
   const auto deadline = std::chrono::steady_clock::now() + kXvfbStart;
@@ -135,10 +139,15 @@ TEST(ViewerEndToEnd, JoinsAMh01RunDrawsEveryKeyframeAndLeavesTheOutputBitIdentic
   const std::optional<int> viewer_code = viewer.wait(kViewerStop);
   const std::optional<int> headless_code = headless.wait(kViewerStop);
   unsetenv("DISPLAY");
+  if (xvfb) {
+    xvfb->signal(SIGTERM);  // a graceful end removes its socket and lock file
+    xvfb->wait(kViewerStop);
+  }
   const std::string viewer_output = viewer.out() + viewer.err();
   const std::string headless_output = headless.out() + headless.err();
   ASSERT_EQ(pipeline_code, 0) << viewed->out() << viewed->err();
   ASSERT_EQ(viewer_code.value_or(-1), 0) << viewer_output;
+  EXPECT_TRUE(fs::exists(dir.path() / "frames.mp4") || fs::exists(dir.path() / "frames_000000.png")) << viewer_output;
   ASSERT_EQ(headless_code.value_or(-1), 0) << headless_output;
 
   // The pipeline's output does not change with a viewer attached (lockstep is not disturbed).
