@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The one-command demo: installs missing Debian packages, builds heslam, generates the synthetic `room`
 # sequence (cached in build/data), runs the stereo pipeline on it in lockstep under heslam-supervisor
-# (replay -> frontend -> local mapper -> loop closer -> recorder, config/pipelines/synth.yaml) and prints the ATE against the ground truth.
+# (replay -> frontend -> local mapper -> loop closer -> recorder, config/pipelines/synth.yaml) with
+# heslam-viewer attached (windows when there is a display, else headless) and prints the ATE against the
+# ground truth; the viewer's final map picture lands beside the error plot.
 #   HESLAM_BUILD_DIR  build folder (default build/)       HESLAM_DEMO_FRAMES  frames to render (default 300)
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -27,7 +29,7 @@ mkdir -p "$output_dir"
 trajectory=$output_dir/room_trajectory.txt
 echo "heslam demo: running config/pipelines/synth.yaml (the full system, lockstep)"
 "$bin/heslam-supervisor" "$root/config/pipelines/synth.yaml" --log-dir "$output_dir/logs" \
-  --arg dataset="$dataset" --arg output="$trajectory"
+  --arg dataset="$dataset" --arg output="$trajectory" --arg viewer=heslam-viewer
 
 echo
 echo "heslam demo: trajectory $trajectory ($(grep -vc '^#' "$trajectory") poses; untracked frames listed in" \
@@ -35,3 +37,11 @@ echo "heslam demo: trajectory $trajectory ($(grep -vc '^#' "$trajectory") poses;
 "$bin/heslam-eval" ape --gt "$dataset/mav0/state_groundtruth_estimate0/data.csv" \
   --extrinsic "$dataset/mav0/cam0/sensor.yaml" --est "$trajectory" --plot "$output_dir/room_ate.svg"
 echo "heslam demo: top view and error plot in $output_dir/room_ate.svg"
+if [[ -f $trajectory.viewer/map_final.png ]]; then
+  cp "$trajectory.viewer/map_final.png" "$output_dir/room_map.png"
+  cp "$trajectory.viewer/frame_final.png" "$output_dir/room_last_frame.png"
+  echo "heslam demo: the viewer's final map $output_dir/room_map.png and last frame $output_dir/room_last_frame.png" \
+       "(all its pictures in $trajectory.viewer/)"
+else
+  echo "heslam demo: the viewer left no picture (see $output_dir/logs/viewer.log)"
+fi

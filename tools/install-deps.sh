@@ -6,7 +6,8 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config ccache
   cyclonedds-dev cyclonedds-tools
-  libopencv-dev opencv-doc
+  libopencv-dev opencv-doc libopencv-viz-dev
+  xvfb
   libeigen3-dev libceres-dev
   googletest libgtest-dev libbenchmark-dev
 )

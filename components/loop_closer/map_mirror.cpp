@@ -43,6 +43,7 @@ void MapMirror::add_keyframe(const msg::Keyframe& message) {
 }
 
 void MapMirror::apply_keyframe_state(const msg::KeyframeState& message) {
+  if (frontend::is_version_marker(message)) return;  // count_markers() takes those
   const Pose3 T_wc = frontend::to_pose(message.T_wc);
   if (!T_wc.matrix().allFinite()) {
     throw std::runtime_error("keyframe state " + std::to_string(message.id) + ": T_wc is not finite");
@@ -59,12 +60,15 @@ void MapMirror::apply_keyframe_state(const msg::KeyframeState& message) {
 }
 
 void MapMirror::apply_point_state(const msg::MapPointState& message) {
+  if (frontend::is_version_marker(message)) return;
   const Eigen::Vector3d p_w(message.position_w_m[0], message.position_w_m[1], message.position_w_m[2]);
   if (!p_w.allFinite()) throw std::runtime_error("map point " + std::to_string(message.id) + ": position is not finite");
   frontend::apply_point_state(map_, message);
 }
 
-void MapMirror::point_disposed(PointId id) { frontend::erase_point(map_, id); }
+void MapMirror::point_disposed(PointId id) {
+  if (id != frontend::kVersionMarkerId) frontend::erase_point(map_, id);
+}
 
 void MapMirror::count_markers(const frontend::MirrorVersion& markers) {
   version_.keyframe_states = std::max(version_.keyframe_states, markers.keyframe_states);

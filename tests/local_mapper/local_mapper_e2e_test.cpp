@@ -406,7 +406,7 @@ TEST(LocalMapperEndToEnd, SavedMapLocalizesALaterRunStartingFarFromItsNewestKeyf
 
   const fs::path no_vocabulary = dir.path() / "frontend_no_vocabulary.yaml";
   {
-    std::ifstream shipped(test::source_dir() / "config/frontend/euroc.yaml with --arg loop_closer=none");
+    std::ifstream shipped(test::source_dir() / "config/frontend/euroc_mapper.yaml");
     std::ofstream config(no_vocabulary);
     config << shipped.rdbuf() << "vocabulary:\n  file: none\n";
   }
