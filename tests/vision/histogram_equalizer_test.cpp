@@ -176,8 +176,8 @@ TEST(HistogramEqualizer, OptionsFromYaml) {
 
 TEST(HistogramEqualizer, MatchedUndoesTheRightCameraGain) {
   // The same image seen by a left camera at x1 and a right camera at x2 (a third of it clipped).
-  // Matched: wherever the right is not clipped both outputs agree to a grey level or two, in every
-  // HE mode; shared (one mapping of the joint histogram) keeps them far apart.
+  // Matched: wherever the right is not clipped both outputs agree (measured: exactly), in every HE
+  // mode; shared (one mapping of the joint histogram) keeps them 71-89 grey levels apart.
   HESLAM_REQUIRE_TEXTURE();
   const cv::Mat left = test::load_texture()(cv::Rect(0, 0, 400, 300)).clone();
   cv::Mat right;
@@ -284,8 +284,8 @@ TEST(HistogramEqualizer, DarkAndFlatEurocFramesKeepTheirFeatures) {
 }
 
 // Real EuRoC pairs whose cameras are exposed apart (left x0.35, right x2 and clipped; left x1, right
-// x4): with the shared mapping stereo matching loses most pairs, with the matched one it keeps what
-// the clipping leaves.
+// x4, 40-58 % of it saturated): with the shared mapping stereo matching loses half its matches, with
+// the matched one it keeps them.
 TEST(HistogramEqualizer, EurocPairsExposedApartKeepTheirStereoMatches) {
   HESLAM_REQUIRE_SHARED_DATA(test::kEurocDataset);
   PinholeStereo camera;
@@ -308,10 +308,14 @@ TEST(HistogramEqualizer, EurocPairsExposedApartKeepTheirStereoMatches) {
       const Counts c = count(camera, HeMode::kClipped, with_gains(left_gain, right_gain), stereo);
       std::printf("%-9s %-9s %9zu %9zu  (%3.0f %% of the equal exposure's stereo)\n", to_string(stereo), name, c.features,
                   c.stereo, 100.0 * c.stereo / base.stereo);
+      // Measured: shared 49 % / 44 %, matched 102 % / 94 % (the left clipped where the right is white,
+      // so its features lie where both cameras see texture), separate 61 % / 50 %.
       if (stereo == StereoPhotometry::kMatched) {
         EXPECT_GE(c.features, 0.9 * base.features) << name;
-        // What is left after clipping: 40-58 % of the right x4 image is saturated.
-        EXPECT_GE(c.stereo, (right_gain > 2.0 ? 0.5 : 0.75) * base.stereo) << name;
+        EXPECT_GE(c.stereo, 0.85 * base.stereo) << name;
+      }
+      if (stereo == StereoPhotometry::kShared) {
+        EXPECT_LT(c.stereo, 0.7 * base.stereo) << name << ": the failure of issue 17";
       }
     }
   }

@@ -23,7 +23,11 @@ TEST(HistogramMatching, EqualHistogramsGiveTheIdentity) {
   HESLAM_REQUIRE_TEXTURE();
   const GreyHistogram h = histogram_of(test::load_texture());
   const GreyLut lut = match_histogram(h, h);
-  for (int v = 0; v < 256; ++v) EXPECT_EQ(lut[v], v) << "level " << v;
+  for (int v = 0; v < 256; ++v) {
+    if (h[v] > 0) {  // levels the image does not hold may go anywhere
+      EXPECT_EQ(lut[v], v) << "level " << v;
+    }
+  }
   const GreyLut empty = match_histogram(GreyHistogram{}, h);
   for (int v = 0; v < 256; ++v) EXPECT_EQ(empty[v], v) << "level " << v;
 }

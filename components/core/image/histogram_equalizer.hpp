@@ -47,7 +47,7 @@ struct HistogramEqualizerOptions {
   // flat versions 8-10.
   double adaptive_on_below = 25.0;
   double adaptive_off_above = 35.0;
-  StereoPhotometry stereo = StereoPhotometry::kShared;
+  StereoPhotometry stereo = StereoPhotometry::kMatched;  // measured best with cameras exposed apart (docs/vision.md)
   // Matched: a right camera that saturates more than this fraction of its pixels beyond the left's
   // own saturated fraction has the left clipped to its range (histogram_matching.hpp). Equally
   // exposed EuRoC MH01 pairs differ by up to 7.5 % (3-6 % saturated in each camera; a lamp one
