@@ -21,6 +21,7 @@
 #include "components/core/feature/orb_extractor.hpp"
 #include "components/core/feature/stereo_feature_pipeline.hpp"
 #include "components/core/image/histogram_equalizer.hpp"
+#include "components/core/image/histogram_matching.hpp"
 #include "components/core/match/stereo_matcher.hpp"
 
 namespace heslam {
@@ -131,6 +132,23 @@ void BM_HistogramEqualizationStereo(benchmark::State& state) {
   state.SetLabel(std::string(to_string(o.stereo)) + (state.range(2) == 1 ? " gains 0.35/2" : " as recorded"));
 }
 BENCHMARK(BM_HistogramEqualizationStereo)->ArgsProduct({{0}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond);
+
+// What matched adds to shared: the tone curves from the two histograms (no pass over the pixels).
+void BM_AlignStereoTones(benchmark::State& state) {
+  GreyHistogram left{};
+  GreyHistogram right{};
+  cv::Mat l = left_image(state);
+  cv::Mat r;
+  right_image(state).convertTo(r, CV_8U, 2.0);
+  for (int y = 0; y < l.rows; ++y) {
+    for (int x = 0; x < l.cols; ++x) {
+      ++left[l.at<std::uint8_t>(y, x)];
+      ++right[r.at<std::uint8_t>(y, x)];
+    }
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(align_stereo_tones(left, right, 0.1));
+}
+BENCHMARK(BM_AlignStereoTones)->Arg(0)->Unit(benchmark::kMicrosecond);
 
 void BM_OrbPyramid(benchmark::State& state) {
   OrbExtractor extractor(orb_options(state));
