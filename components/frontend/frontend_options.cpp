@@ -36,6 +36,11 @@ void read_features(const runtime::Config& c, StereoFeaturePipelineOptions& o) {
   read(c, "he.clahe_tiles_y", he.clahe_tiles_y, 1, 64);
   read(c, "he.adaptive_on_below", he.adaptive_on_below, 0.0, 255.0);
   read(c, "he.adaptive_off_above", he.adaptive_off_above, 0.0, 255.0);
+  he.stereo = parse_stereo_photometry(c.get_choice("he.stereo", to_string(he.stereo), {"shared", "matched", "separate"}));
+  read(c, "he.saturation_excess", he.saturation_excess, 0.001, 1.0);
+  read(c, "he.match_shift_from", he.match_shift_from, 0.0, 255.0);
+  // Above match_shift_from: the fade-in needs a positive width.
+  read(c, "he.match_shift_full", he.match_shift_full, he.match_shift_from + 0.01, 255.0);
 
   OrbOptions& orb = o.orb;
   read(c, "orb.features", orb.features, 1, kMaxFeatures);

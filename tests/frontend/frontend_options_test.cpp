@@ -30,12 +30,16 @@ TEST(FrontendOptions, EmptyConfigKeepsTheCoreDefaults) {
 
 TEST(FrontendOptions, FieldsReachTheCoreOptions) {
   const auto config = runtime::Config::parse(
-      "he:\n  mode: clahe\norb:\n  features: 2000\ntracker:\n  max_frames_between_keyframes: 10\n"
+      "he:\n  mode: clahe\n  stereo: separate\n  match_shift_from: 10\n  match_shift_full: 30\n"
+      "orb:\n  features: 2000\ntracker:\n  max_frames_between_keyframes: 10\n"
       "lockstep:\n  wait_for_mapper: true\n  mapper_timeout_s: 2.5\n",
       "test.yaml");
   const FrontendOptions options = FrontendOptions::from_config(config);
   config.reject_unknown();
   EXPECT_EQ(options.features.he.mode, HeMode::kClahe);
+  EXPECT_EQ(options.features.he.stereo, StereoPhotometry::kSeparate);
+  EXPECT_EQ(options.features.he.match_shift_from, 10.0);
+  EXPECT_EQ(options.features.he.match_shift_full, 30.0);
   EXPECT_EQ(options.features.orb.features, 2000);
   EXPECT_EQ(options.tracker.max_frames_between_keyframes, 10);
   EXPECT_TRUE(options.mapper_enabled);  // waiting for a mapper implies one

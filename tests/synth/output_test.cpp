@@ -34,6 +34,13 @@ TEST(SynthOutput, EurocLayoutAndMetadata) {
   fs::remove_all(dir);
   Preset preset = test::repo_preset("room_exposure");
   preset.frames = 3;
+  ExposureEvent stereo_gain;
+  stereo_gain.kind = EventKind::kStereoGain;
+  stereo_gain.start_s = 2.0;
+  stereo_gain.end_s = 4.0;
+  stereo_gain.left = 0.35;
+  stereo_gain.right = 2.0;
+  preset.events.push_back(stereo_gain);
   SequenceRenderer renderer(preset, {.seed = 4});
   write_sequence(renderer, OutputFormat::kEuroc, dir);
 
@@ -86,6 +93,9 @@ TEST(SynthOutput, EurocLayoutAndMetadata) {
     EXPECT_DOUBLE_EQ(static_cast<double>(e["start_s"]), preset.events[i].start_s);
     EXPECT_DOUBLE_EQ(static_cast<double>(e["end_s"]), preset.events[i].end_s);
   }
+  EXPECT_EQ(static_cast<std::string>(events[4]["type"]), "stereo_gain");
+  EXPECT_DOUBLE_EQ(static_cast<double>(events[4]["left"]), 0.35);
+  EXPECT_DOUBLE_EQ(static_cast<double>(events[4]["right"]), 2.0);
   cv::FileStorage settings((dir / "orbslam2_settings.yaml").string(), cv::FileStorage::READ);
   ASSERT_TRUE(settings.isOpened());
   cv::Mat P_right;

@@ -1,5 +1,5 @@
 // Each photometric event of room_exposure changes the images as configured inside its time range and
-// leaves them untouched (same bytes) outside it.
+// leaves them untouched (same bytes) outside it; a stereo_gain event exposes the two cameras apart.
 #include <cmath>
 #include <memory>
 
@@ -96,6 +96,42 @@ TEST_F(SynthEvents, OutsideEveryRangeImagesAreUntouched) {
       const auto [on, off] = with_and_without(t);
       EXPECT_EQ(cv::countNonZero(on != off), 0) << to_string(e.kind) << " at t=" << t;
     }
+  }
+}
+
+// stereo_gain: the left camera x0.5, the right x2 (clipped), ramped in over 0.1 s; both cameras
+// untouched outside the event. Noise-free, so the ratios are the configured gains up to clipping.
+TEST(SynthStereoGain, ExposesTheTwoCamerasWithTheirOwnGain) {
+  Preset preset = test::repo_preset("room");
+  preset.photometry.noise = false;
+  ExposureEvent event;
+  event.kind = EventKind::kStereoGain;
+  event.start_s = 0.5;
+  event.end_s = 1.5;
+  event.ramp_s = 0.1;
+  event.left = 0.5;
+  event.right = 2.0;
+  preset.events = {event};
+  SequenceRenderer on(preset, RenderOptions{.seed = 2, .frames = 40});
+  SequenceRenderer off(preset, RenderOptions{.seed = 2, .frames = 40, .events = false});
+
+  const SynthFrame inside = on.render_frame(20);  // t = 1.0 s
+  const SynthFrame reference = off.render_frame(20);
+  EXPECT_DOUBLE_EQ(inside.photometry.left_gain, 0.5);
+  EXPECT_DOUBLE_EQ(inside.photometry.right_gain, 2.0);
+  EXPECT_DOUBLE_EQ(inside.photometry.gain, 1.0) << "a stereo gain is not a gain of both cameras";
+  EXPECT_NEAR(stats(inside.left).mean / stats(reference.left).mean, 0.5, 0.01);
+  const double right_ratio = stats(inside.right).mean / stats(reference.right).mean;
+  EXPECT_GT(right_ratio, 1.5);
+  EXPECT_LE(right_ratio, 2.0 * 1.01);  // clipping can only take brightness away
+  EXPECT_GT(cv::countNonZero(inside.right == 255), cv::countNonZero(reference.right == 255) + 1000)
+      << "the brighter camera clips";
+
+  for (const int index : {5, 35}) {  // t = 0.25 s and 1.75 s: outside the event
+    const SynthFrame a = on.render_frame(index);
+    const SynthFrame b = off.render_frame(index);
+    EXPECT_EQ(cv::countNonZero(a.left != b.left), 0) << "frame " << index;
+    EXPECT_EQ(cv::countNonZero(a.right != b.right), 0) << "frame " << index;
   }
 }
 

@@ -175,6 +175,10 @@ TEST(SynthPresets, BadFilesNameFileAndField) {
   expect_error("scene: room\ncamera:\n  distortion: [1, 2]\n", "'camera.distortion'");
   expect_error("scene: room\nevents:\n  - type: fog\n    start_s: 1\n    end_s: 2\n", "'events[0].type'");
   expect_error("scene: room\nevents:\n  - type: haze\n    start_s: 3\n    end_s: 2\n", "'events[0].end_s'");
+  expect_error("scene: room\nevents:\n  - type: stereo_gain\n    start_s: 1\n    end_s: 2\n", "'events[0].left'");
+  expect_error("scene: room\nevents:\n  - type: stereo_gain\n    start_s: 1\n    end_s: 2\n    left: 1\n    right: 0\n",
+               "'events[0].right'");
+  expect_error("scene: room\nevents:\n  - type: darkness\n    start_s: 1\n    end_s: 2\n    left: 2\n", "'events[0].left'");
   expect_error("scene: town\ntrajectory:\n  stops:\n    - {at_m: 50, wait_s: 1}\n    - {at_m: 20, wait_s: 1}\n",
                "'trajectory.stops[1].at_m'");
   EXPECT_THROW(find_preset("no_such_preset"), std::runtime_error);

@@ -91,8 +91,20 @@ PhotometricState photometric_state(const std::vector<ExposureEvent>& events, dou
       case EventKind::kHaze:
         s.haze = std::max(s.haze, e.strength * w);
         break;
+      case EventKind::kStereoGain:
+        s.left_gain *= std::pow(e.left, w);
+        s.right_gain *= std::pow(e.right, w);
+        break;
     }
   }
+  return s;
+}
+
+PhotometricState PhotometricState::for_camera(int camera) const {
+  PhotometricState s = *this;
+  s.gain *= camera == 0 ? left_gain : right_gain;
+  s.left_gain = 1.0;
+  s.right_gain = 1.0;
   return s;
 }
 

@@ -15,6 +15,12 @@ namespace heslam::synth {
 struct PhotometricState {
   double gain = 1.0;  // exposure x gain multiplier relative to the preset's exposure
   double haze = 0.0;  // fraction of radiance replaced by the airlight
+  // Per-camera multipliers on top of `gain` (stereo_gain events); camera 0 is the left.
+  double left_gain = 1.0;
+  double right_gain = 1.0;
+
+  // The state one camera is exposed with: `gain` times that camera's own multiplier.
+  PhotometricState for_camera(int camera) const;
 };
 
 // 0 outside [start_s, end_s], 1 inside after a smooth ramp of ramp_s at each end (drift: a sine swell).

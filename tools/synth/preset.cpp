@@ -54,7 +54,8 @@ EventKind parse_event(const std::string& s, const std::string& field, const fs::
   if (s == "darkness") return EventKind::kDarkness;
   if (s == "haze") return EventKind::kHaze;
   if (s == "drift") return EventKind::kDrift;
-  fail(file, field, "is '" + s + "', expected overexposure, darkness, haze or drift");
+  if (s == "stereo_gain") return EventKind::kStereoGain;
+  fail(file, field, "is '" + s + "', expected overexposure, darkness, haze, drift or stereo_gain");
 }
 
 }  // namespace
@@ -76,6 +77,7 @@ std::string to_string(EventKind kind) {
     case EventKind::kDarkness: return "darkness";
     case EventKind::kHaze: return "haze";
     case EventKind::kDrift: return "drift";
+    case EventKind::kStereoGain: return "stereo_gain";
   }
   return "?";
 }
@@ -195,13 +197,22 @@ Preset load_preset(const fs::path& yaml_path) {
     for (const auto& e : ev) {
       const std::string pre = "events[" + std::to_string(i++) + "].";
       if (!e.isMap()) fail(f, pre.substr(0, pre.size() - 1), "expected a map");
-      if (e["type"].empty() || !e["type"].isString()) fail(f, pre + "type", "expected overexposure, darkness, haze or drift");
+      if (e["type"].empty() || !e["type"].isString()) fail(f, pre + "type", "expected overexposure, darkness, haze, drift or stereo_gain");
       ExposureEvent event;
       event.kind = parse_event(static_cast<std::string>(e["type"]), pre + "type", f);
       read_number(e, "start_s", pre, f, event.start_s);
       read_number(e, "end_s", pre, f, event.end_s);
       read_number(e, "strength", pre, f, event.strength);
       read_number(e, "ramp_s", pre, f, event.ramp_s);
+      read_number(e, "left", pre, f, event.left);
+      read_number(e, "right", pre, f, event.right);
+      if (event.kind == EventKind::kStereoGain) {
+        if (e["left"].empty() && e["right"].empty()) fail(f, pre + "left", "stereo_gain needs left and/or right");
+        if (!(event.left > 0)) fail(f, pre + "left", "must be positive");
+        if (!(event.right > 0)) fail(f, pre + "right", "must be positive");
+      } else if (!e["left"].empty() || !e["right"].empty()) {
+        fail(f, pre + "left", "only stereo_gain events have left / right gains");
+      }
       if (!(event.end_s > event.start_s)) fail(f, pre + "end_s", "must be after start_s");
       if (event.ramp_s < 0 || 2 * event.ramp_s > event.end_s - event.start_s)
         fail(f, pre + "ramp_s", "must be >= 0 and at most half the event");

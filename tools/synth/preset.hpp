@@ -58,18 +58,22 @@ struct PhotometrySpec {
   bool noise = true;
 };
 
-enum class EventKind { kOverexposure, kDarkness, kHaze, kDrift };
+enum class EventKind { kOverexposure, kDarkness, kHaze, kDrift, kStereoGain };
 
 // One photometric event, active over [start_s, end_s] (seconds from the first frame).
 //   overexposure / darkness: exposure gain multiplied by `strength` (e.g. 4.0 / 0.12), ramped over ramp_s
 //   haze: radiance blended towards the airlight by fraction `strength` (0..1), ramped over ramp_s
 //   drift: exposure gain follows strength^sin(pi * phase) — a slow swell that is back to 1 at end_s
+//   stereo_gain: the left camera's exposure x `left`, the right camera's x `right` (cameras with their
+//     own auto-exposure, a flared or shaded lens), ramped over ramp_s; `strength` is not used
 struct ExposureEvent {
   EventKind kind = EventKind::kOverexposure;
   double start_s = 0.0;
   double end_s = 0.0;
   double strength = 1.0;
   double ramp_s = 0.1;
+  double left = 1.0;   // stereo_gain only
+  double right = 1.0;  // stereo_gain only
 };
 
 struct Preset {

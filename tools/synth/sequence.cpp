@@ -81,7 +81,7 @@ void SequenceRenderer::render_camera(int camera, const SynthFrame& frame, cv::Ma
   }
   const std::uint64_t noise_seed =
       mix_seed(mix_seed(options_.seed ^ kNoiseStream, static_cast<std::uint64_t>(frame.index)), static_cast<std::uint64_t>(camera));
-  sensor_.expose(radiance, rays_, frame.photometry, noise_seed, out);
+  sensor_.expose(radiance, rays_, frame.photometry.for_camera(camera), noise_seed, out);
 }
 
 SynthFrame SequenceRenderer::render_frame(int index) {

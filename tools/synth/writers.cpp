@@ -189,6 +189,10 @@ void write_metadata(const fs::path& file, const SequenceRenderer& r, OutputForma
         << "    in_sequence: " << (first < r.num_frames() ? 1 : 0) << "\n"
         << "    strength: " << fmt("%.6g", e.strength) << "\n"
         << "    ramp_s: " << fmt("%.6g", e.ramp_s) << "\n";
+    if (e.kind == EventKind::kStereoGain) {
+      out << "    left: " << fmt("%.6g", e.left) << "\n"
+          << "    right: " << fmt("%.6g", e.right) << "\n";
+    }
   }
 }
 

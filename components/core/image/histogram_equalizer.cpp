@@ -1,11 +1,14 @@
-// Joint-histogram equalization of a stereo pair: global (paper), CLAHE with shared tile LUTs, adaptive.
+// Equalization of a stereo pair: global (paper), clipped, CLAHE, adaptive; shared, matched or separate
+// mappings for the two images.
 #include "components/core/image/histogram_equalizer.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <stdexcept>
 #include <vector>
 
+#include "components/core/image/histogram_matching.hpp"
 #include "components/core/image/yaml_option.hpp"
 
 namespace heslam {
@@ -13,8 +16,8 @@ namespace {
 
 constexpr int kLevels = 256;  // 8-bit grey
 
-using Histogram = std::array<std::uint32_t, kLevels>;
-using Lut = std::array<std::uint8_t, kLevels>;
+using Histogram = GreyHistogram;
+using Lut = GreyLut;
 
 // Adds the histogram of `image` (region `roi`) to `histogram`. Four partial histograms break the
 // store-to-load dependency of runs of equal pixels, about 2x faster than one.
@@ -70,6 +73,20 @@ void clip_histogram(Histogram& histogram, double clip_limit, std::uint64_t count
   }
 }
 
+// The histogram of `image` after mapping it through `lut`, from its histogram (no pass over pixels).
+Histogram mapped_histogram(const Histogram& histogram, const Lut& lut) {
+  Histogram out{};
+  for (int v = 0; v < kLevels; ++v) out[lut[v]] += histogram[v];
+  return out;
+}
+
+// first[second[v]]: two LUTs as one, so the right image is mapped in one pass.
+Lut compose(const Lut& first, const Lut& second) {
+  Lut out{};
+  for (int v = 0; v < kLevels; ++v) out[v] = first[second[v]];
+  return out;
+}
+
 void apply_lut(const cv::Mat& in, cv::Mat& out, const Lut& lut) {
   cv::LUT(in, cv::Mat(1, kLevels, CV_8U, const_cast<std::uint8_t*>(lut.data())), out);
 }
@@ -105,6 +122,22 @@ HeMode parse_he_mode(const std::string& name) {
   throw std::invalid_argument("HE mode '" + name + "': expected none | global | clipped | clahe | adaptive");
 }
 
+StereoPhotometry parse_stereo_photometry(const std::string& name) {
+  if (name == "shared") return StereoPhotometry::kShared;
+  if (name == "matched") return StereoPhotometry::kMatched;
+  if (name == "separate") return StereoPhotometry::kSeparate;
+  throw std::invalid_argument("HE stereo '" + name + "': expected shared | matched | separate");
+}
+
+const char* to_string(StereoPhotometry stereo) {
+  switch (stereo) {
+    case StereoPhotometry::kShared: return "shared";
+    case StereoPhotometry::kMatched: return "matched";
+    case StereoPhotometry::kSeparate: return "separate";
+  }
+  return "unknown";
+}
+
 const char* to_string(HeMode mode) {
   switch (mode) {
     case HeMode::kNone: return "none";
@@ -125,6 +158,19 @@ HistogramEqualizerOptions HistogramEqualizerOptions::from_yaml(const cv::FileNod
   } catch (const std::invalid_argument&) {
     yaml_option::fail(source, "HE.mode", "none | global | clipped | clahe | adaptive, got '" + mode + "'");
   }
+  std::string stereo = to_string(o.stereo);
+  yaml_option::read(root, "HE.stereo", source, stereo);
+  try {
+    o.stereo = parse_stereo_photometry(stereo);
+  } catch (const std::invalid_argument&) {
+    yaml_option::fail(source, "HE.stereo", "shared | matched | separate, got '" + stereo + "'");
+  }
+  yaml_option::read(root, "HE.saturationExcess", source, o.saturation_excess);
+  yaml_option::read(root, "HE.matchShiftFrom", source, o.match_shift_from);
+  yaml_option::read(root, "HE.matchShiftFull", source, o.match_shift_full);
+  if (!(o.match_shift_from >= 0.0)) yaml_option::fail(source, "HE.matchShiftFrom", "a number >= 0");
+  if (!(o.match_shift_full > o.match_shift_from)) yaml_option::fail(source, "HE.matchShiftFull", "a number > HE.matchShiftFrom");
+  if (!(o.saturation_excess > 0.0) || o.saturation_excess > 1.0) yaml_option::fail(source, "HE.saturationExcess", "a number in (0, 1]");
   yaml_option::read(root, "HE.clipLimit", source, o.clahe_clip_limit);
   yaml_option::read(root, "HE.globalClipLimit", source, o.global_clip_limit);
   yaml_option::read(root, "HE.tilesX", source, o.clahe_tiles_x);
@@ -146,46 +192,84 @@ HistogramEqualizer::HistogramEqualizer(const HistogramEqualizerOptions& options)
 
 void HistogramEqualizer::equalize(const cv::Mat& left, const cv::Mat& right, cv::Mat& left_out, cv::Mat& right_out) {
   check_pair(left, right);
-  switch (options_.mode) {
-    case HeMode::kNone:
-      left_out = left;
-      right_out = right;
-      return;
-    case HeMode::kClahe:
-      last_contrast_ = equalize_clahe(left, right, left_out, right_out);
-      return;
-    case HeMode::kGlobal:
-    case HeMode::kClipped:
-    case HeMode::kAdaptive: {
-      Histogram histogram{};
-      accumulate_histogram(left, cv::Rect(0, 0, left.cols, left.rows), histogram);
-      accumulate_histogram(right, cv::Rect(0, 0, right.cols, right.rows), histogram);
-      last_contrast_ = rms_contrast(histogram);
-      if (options_.mode == HeMode::kAdaptive) {
-        if (active_ && last_contrast_ > options_.adaptive_off_above) active_ = false;
-        if (!active_ && last_contrast_ < options_.adaptive_on_below) active_ = true;
-        if (!active_) {
-          left_out = left;
-          right_out = right;
-          return;
-        }
+  if (options_.mode == HeMode::kNone) {
+    left_out = left;
+    right_out = right;
+    return;
+  }
+  if (options_.mode == HeMode::kClahe && options_.stereo != StereoPhotometry::kMatched) {
+    last_contrast_ = equalize_clahe(left, right, left_out, right_out);
+    return;
+  }
+  Histogram left_histogram{};
+  Histogram right_histogram{};
+  accumulate_histogram(left, cv::Rect(0, 0, left.cols, left.rows), left_histogram);
+  accumulate_histogram(right, cv::Rect(0, 0, right.cols, right.rows), right_histogram);
+  // Matched: the tone curves first (composed with the HE mapping below, so each image is still
+  // mapped in one pass); the mapped histograms follow from the LUTs.
+  Lut left_tone{};
+  Lut right_tone{};
+  for (int v = 0; v < kLevels; ++v) left_tone[v] = right_tone[v] = static_cast<std::uint8_t>(v);
+  last_tone_shift_ = 0.0;
+  if (options_.stereo == StereoPhotometry::kMatched) {
+    const StereoToneCurves curves = align_stereo_tones(left_histogram, right_histogram, options_.saturation_excess);
+    last_tone_shift_ = curves.mean_right_shift;
+    left_tone = curves.left;
+    right_tone = curves.right;
+    if (!curves.left_clipped) {
+      // The pair's own difference (EuRoC MH01's cameras: up to 18 grey levels) keeps the shared
+      // mapping; the curve fades in linearly up to match_shift_full, so no frame-to-frame switch.
+      const double weight = std::clamp((curves.mean_right_shift - options_.match_shift_from) /
+                                           (options_.match_shift_full - options_.match_shift_from), 0.0, 1.0);
+      for (int v = 0; v < kLevels; ++v) {
+        right_tone[v] = static_cast<std::uint8_t>(std::lround(v + weight * (curves.right[v] - v)));
       }
-      equalize_global(left, right, left_out, right_out, histogram);
+    }
+    left_histogram = mapped_histogram(left_histogram, left_tone);
+    right_histogram = mapped_histogram(right_histogram, right_tone);
+  }
+  Histogram joint = left_histogram;
+  for (int v = 0; v < kLevels; ++v) joint[v] += right_histogram[v];
+
+  if (options_.mode == HeMode::kClahe) {  // matched: tile LUTs of the left and the matched right
+    cv::Mat left_matched, right_matched;
+    apply_lut(left, left_matched, left_tone);
+    apply_lut(right, right_matched, right_tone);
+    last_contrast_ = equalize_clahe(left_matched, right_matched, left_out, right_out);
+    return;
+  }
+
+  last_contrast_ = rms_contrast(joint);
+  if (options_.mode == HeMode::kAdaptive) {
+    if (active_ && last_contrast_ > options_.adaptive_off_above) active_ = false;
+    if (!active_ && last_contrast_ < options_.adaptive_on_below) active_ = true;
+    if (!active_) {
+      if (options_.stereo == StereoPhotometry::kMatched) {
+        apply_lut(left, left_out, left_tone);
+        apply_lut(right, right_out, right_tone);
+      } else {
+        left_out = left;
+        right_out = right;
+      }
       return;
     }
   }
-}
 
-void HistogramEqualizer::equalize_global(const cv::Mat& left, const cv::Mat& right, cv::Mat& left_out,
-                                         cv::Mat& right_out, const Histogram& histogram) const {
-  Histogram equalized = histogram;
-  if (options_.mode == HeMode::kClipped) {
-    clip_histogram(equalized, options_.global_clip_limit,
-                   static_cast<std::uint64_t>(left.total()) + static_cast<std::uint64_t>(right.total()));
+  // Global / clipped / adaptive (on): y = 255 cdf(x) of the (clipped) histogram.
+  auto he_lut = [&](Histogram histogram, std::uint64_t pixels) {
+    if (options_.mode == HeMode::kClipped) clip_histogram(histogram, options_.global_clip_limit, pixels);
+    return cdf_lut(histogram);
+  };
+  const auto left_pixels = static_cast<std::uint64_t>(left.total());
+  const auto right_pixels = static_cast<std::uint64_t>(right.total());
+  if (options_.stereo == StereoPhotometry::kSeparate) {
+    apply_lut(left, left_out, he_lut(left_histogram, left_pixels));
+    apply_lut(right, right_out, he_lut(right_histogram, right_pixels));
+    return;
   }
-  const Lut lut = cdf_lut(equalized);
-  apply_lut(left, left_out, lut);
-  apply_lut(right, right_out, lut);
+  const Lut lut = he_lut(joint, left_pixels + right_pixels);
+  apply_lut(left, left_out, compose(lut, left_tone));
+  apply_lut(right, right_out, compose(lut, right_tone));
 }
 
 double HistogramEqualizer::equalize_clahe(const cv::Mat& left, const cv::Mat& right, cv::Mat& left_out,
@@ -195,22 +279,24 @@ double HistogramEqualizer::equalize_clahe(const cv::Mat& left, const cv::Mat& ri
   const int tile_w = (left.cols + tiles_x - 1) / tiles_x;
   const int tile_h = (left.rows + tiles_y - 1) / tiles_y;
 
-  // One clipped-histogram LUT per tile, from the same tile of both images.
-  std::vector<Lut> luts(static_cast<std::size_t>(tiles_x * tiles_y));
+  // One clipped-histogram LUT per tile, from the same tile of the given images.
   Histogram all{};
-  for (int ty = 0; ty < tiles_y; ++ty) {
-    for (int tx = 0; tx < tiles_x; ++tx) {
-      const cv::Rect roi = cv::Rect(tx * tile_w, ty * tile_h, tile_w, tile_h) & cv::Rect(0, 0, left.cols, left.rows);
-      Histogram h{};
-      if (roi.area() > 0) {
-        accumulate_histogram(left, roi, h);
-        accumulate_histogram(right, roi, h);
+  auto tile_luts = [&](std::initializer_list<const cv::Mat*> images) {
+    std::vector<Lut> luts(static_cast<std::size_t>(tiles_x * tiles_y));
+    for (int ty = 0; ty < tiles_y; ++ty) {
+      for (int tx = 0; tx < tiles_x; ++tx) {
+        const cv::Rect roi = cv::Rect(tx * tile_w, ty * tile_h, tile_w, tile_h) & cv::Rect(0, 0, left.cols, left.rows);
+        Histogram h{};
+        if (roi.area() > 0) {
+          for (const cv::Mat* image : images) accumulate_histogram(*image, roi, h);
+        }
+        for (int v = 0; v < kLevels; ++v) all[v] += h[v];
+        clip_histogram(h, options_.clahe_clip_limit, images.size() * static_cast<std::uint64_t>(std::max(roi.area(), 0)));
+        luts[static_cast<std::size_t>(ty * tiles_x + tx)] = cdf_lut(h);
       }
-      for (int v = 0; v < kLevels; ++v) all[v] += h[v];
-      clip_histogram(h, options_.clahe_clip_limit, 2u * static_cast<std::uint64_t>(std::max(roi.area(), 0)));
-      luts[static_cast<std::size_t>(ty * tiles_x + tx)] = cdf_lut(h);
     }
-  }
+    return luts;
+  };
 
   // Bilinear interpolation between the LUTs of the four nearest tile centres.
   const int width = left.cols;
@@ -223,7 +309,7 @@ double HistogramEqualizer::equalize_clahe(const cv::Mat& left, const cv::Mat& ri
     x0[x] = std::clamp(i, 0, tiles_x - 1);
     x1[x] = std::clamp(i + 1, 0, tiles_x - 1);
   }
-  auto map_image = [&](const cv::Mat& in, cv::Mat& out) {
+  auto map_image = [&](const cv::Mat& in, const std::vector<Lut>& luts, cv::Mat& out) {
     cv::Mat result(in.size(), CV_8UC1);
     for (int y = 0; y < in.rows; ++y) {
       const float t = (static_cast<float>(y) + 0.5f) / static_cast<float>(tile_h) - 0.5f;
@@ -242,8 +328,14 @@ double HistogramEqualizer::equalize_clahe(const cv::Mat& left, const cv::Mat& ri
     }
     out = result;
   };
-  map_image(left, left_out);
-  map_image(right, right_out);
+  if (options_.stereo == StereoPhotometry::kSeparate) {
+    map_image(left, tile_luts({&left}), left_out);
+    map_image(right, tile_luts({&right}), right_out);
+  } else {
+    const std::vector<Lut> luts = tile_luts({&left, &right});
+    map_image(left, luts, left_out);
+    map_image(right, luts, right_out);
+  }
   return rms_contrast(all);  // the pair's contrast, reported like the other modes
 }
 

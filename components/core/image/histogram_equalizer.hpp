@@ -1,6 +1,9 @@
 // Histogram equalization before ORB extraction (HE-SLAM's contribution), applied to a stereo pair
-// with ONE mapping for both images (from their joint histogram) so stereo SAD matching stays
-// photometrically consistent.
+// so that stereo matching compares like with like. How the two images are related (HE.stereo):
+// shared (one mapping from the joint histogram; right only if both cameras expose alike), matched
+// (the right image's histogram is first matched to the left's -- a monotonic tone curve, which undoes
+// a different gain, offset or gamma of the right camera -- then one mapping for both), separate (each
+// image its own mapping).
 //
 // Modes: none; global (the paper: y = 255 * cdf(x)); clipped (global with the histogram clipped at
 // a multiple of its mean bin, so a few dominant grey levels -- sky, a white wall, a dark floor -- do
@@ -19,9 +22,15 @@ namespace heslam {
 
 enum class HeMode { kNone, kGlobal, kClahe, kAdaptive, kClipped };
 
+// How the mappings of the two images of a pair relate; see the header comment. Not used by mode none.
+enum class StereoPhotometry { kShared, kMatched, kSeparate };
+
 // "none" | "global" | "clipped" | "clahe" | "adaptive"; throws std::invalid_argument on anything else.
 HeMode parse_he_mode(const std::string& name);
 const char* to_string(HeMode mode);
+// "shared" | "matched" | "separate"; throws std::invalid_argument on anything else.
+StereoPhotometry parse_stereo_photometry(const std::string& name);
+const char* to_string(StereoPhotometry stereo);
 
 struct HistogramEqualizerOptions {
   HeMode mode = HeMode::kClipped;  // the paper's global HE, clipped (measured best on EuRoC, docs/vision.md)
@@ -38,8 +47,20 @@ struct HistogramEqualizerOptions {
   // flat versions 8-10.
   double adaptive_on_below = 25.0;
   double adaptive_off_above = 35.0;
+  StereoPhotometry stereo = StereoPhotometry::kMatched;  // measured best with cameras exposed apart (docs/vision.md)
+  // Matched: a right camera that saturates more than this fraction of its pixels beyond the left's
+  // own saturated fraction has the left clipped to its range (histogram_matching.hpp). Equally
+  // exposed EuRoC MH01 pairs differ by up to 7.5 % (3-6 % saturated in each camera; a lamp one
+  // camera sees and the other does not); right x1.5 saturates 17-35 % of the right image.
+  double saturation_excess = 0.10;
+  // Matched: how much of the right's tone curve is applied, by the mean grey-level shift it makes:
+  // none below match_shift_from (a camera pair's own difference: EuRoC MH01's equally exposed pairs
+  // measure 1-18.5 levels, and matching them moved the MH01 ATE by noise only, 3.8 -> 4.05 mm), all
+  // from match_shift_full (right x1.5 against left x0.5 measures ~70), linear between.
+  double match_shift_from = 20.0;
+  double match_shift_full = 40.0;
 
-  // Reads HE.mode, HE.globalClipLimit, HE.clipLimit, HE.tilesX, HE.tilesY, HE.adaptiveOnBelow, HE.adaptiveOffAbove.
+  // Reads HE.mode, HE.stereo, HE.saturationExcess, HE.matchShiftFrom, HE.matchShiftFull, HE.globalClipLimit, HE.clipLimit, HE.tilesX, HE.tilesY, HE.adaptiveOnBelow, HE.adaptiveOffAbove.
   static HistogramEqualizerOptions from_yaml(const cv::FileNode& root, const std::string& source);
 };
 
@@ -55,18 +76,19 @@ class HistogramEqualizer {
   bool active() const { return active_; }
   // RMS contrast of the last pair (computed in every mode but none).
   double last_contrast() const { return last_contrast_; }
+  // Matched: mean grey-level shift of the right image by its tone curve in the last pair (0 otherwise).
+  double last_tone_shift() const { return last_tone_shift_; }
 
   const HistogramEqualizerOptions& options() const { return options_; }
 
  private:
-  void equalize_global(const cv::Mat& left, const cv::Mat& right, cv::Mat& left_out, cv::Mat& right_out,
-                       const std::array<std::uint32_t, 256>& histogram) const;
   // Returns the pair's RMS contrast.
   double equalize_clahe(const cv::Mat& left, const cv::Mat& right, cv::Mat& left_out, cv::Mat& right_out) const;
 
   HistogramEqualizerOptions options_;
   bool active_ = false;
   double last_contrast_ = 0.0;
+  double last_tone_shift_ = 0.0;
 };
 
 }  // namespace heslam

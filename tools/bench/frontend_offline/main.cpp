@@ -3,8 +3,9 @@
 // per-stage time breakdown (median / p90) and, when the folder has ground truth, the SE(3) ATE.
 //
 // usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]
-//                                [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast]
-//                                [--first-frame K] [--frames N] [--stationary-chi2 X] [--rotation-chi2 X]
+//                                [--he none|global|clipped|clahe|adaptive] [--he-stereo shared|matched|separate]
+//                                [--variant none|dark|low_contrast]
+//                                [--stereo-gain L,R[/L,R...]] [--first-frame K] [--frames N] [--stationary-chi2 X] [--rotation-chi2 X]
 //                                [--kidnap DIR [--kidnap-plan B,R,S[,N]]] [--vocabulary FILE|none]
 #include <algorithm>
 #include <charconv>
@@ -30,7 +31,10 @@ using heslam::bench::FrameRecord;
 constexpr const char* kUsage =
     "usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]\n"
     "       (ORB-SLAM2 settings: HE.*, ORBextractor.*, Stereo.*, and Camera.fps / ThDepth for the tracker)\n"
-    "       [--he none|global|clipped|clahe|adaptive] [--variant none|dark|low_contrast]\n"
+    "       [--he none|global|clipped|clahe|adaptive] [--he-stereo shared|matched|separate]\n"
+    "       [--variant none|dark|low_contrast]\n"
+    "       [--stereo-gain L,R[/L,R...]]   (left image x L, right x R, saturated to 8 bit: cameras exposed\n"
+    "                                       differently; several: the run split into equal blocks)\n"
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
     "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n"
     "       [--kidnap DIR]   (run on a kidnapped-camera copy written to DIR: frames 60-79 black, 80-159 = 0-79)\n"
@@ -110,6 +114,7 @@ int run(int argc, char** argv) {
   std::string settings;
   heslam::bench::OfflineRunOptions options;
   std::string he_mode;
+  std::string he_stereo;
   std::string kidnap_dir;
   heslam::bench::KidnapPlan kidnap_plan;
   bool kidnap_plan_given = false;
@@ -124,8 +129,12 @@ int run(int argc, char** argv) {
       settings = value;
     } else if (arg == "--he") {
       he_mode = value;
+    } else if (arg == "--he-stereo") {
+      he_stereo = value;
     } else if (arg == "--variant") {
       options.variant = heslam::bench::parse_photometric_variant(value);
+    } else if (arg == "--stereo-gain") {
+      options.stereo_gain = heslam::bench::parse_stereo_gain_schedule(value);
     } else if (arg == "--first-frame") {
       options.first_frame = parse_number<int>(arg, value);
     } else if (arg == "--frames") {
@@ -156,6 +165,13 @@ int run(int argc, char** argv) {
       throw std::runtime_error("--he: expected none, global, clipped, clahe or adaptive, got '" + he_mode + "'");
     }
   }
+  if (!he_stereo.empty()) {
+    try {
+      options.pipeline.he.stereo = heslam::parse_stereo_photometry(he_stereo);
+    } catch (const std::invalid_argument&) {
+      throw std::runtime_error("--he-stereo: expected shared, matched or separate, got '" + he_stereo + "'");
+    }
+  }
 
   options.vocabulary = heslam::load_vocabulary_setting(vocabulary);
   if (options.vocabulary) {
@@ -175,9 +191,10 @@ int run(int argc, char** argv) {
   const auto result = heslam::bench::run_offline(sequence, options);
   if (!output.empty()) heslam::bench::write_tum_trajectory(output, result);
 
-  std::printf("dataset %s: %zu frames, %d tracked, %d keyframes, %d map points (HE %s, variant %s)\n",
+  std::printf("dataset %s: %zu frames, %d tracked, %d keyframes, %d map points (HE %s %s, variant %s, stereo gain %s)\n",
               dataset.c_str(), result.frames.size(), result.tracked_frames(), result.keyframes, result.map_points,
-              heslam::to_string(options.pipeline.he.mode), heslam::bench::to_string(options.variant));
+              heslam::to_string(options.pipeline.he.mode), heslam::to_string(options.pipeline.he.stereo),
+              heslam::bench::to_string(options.variant), heslam::bench::describe(options.stereo_gain).c_str());
   std::vector<double> features;
   std::vector<double> stereo;
   int still = 0;

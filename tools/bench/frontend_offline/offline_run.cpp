@@ -83,6 +83,9 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
     cv::Mat right = read_grey(input.right_png);
     apply_photometric_variant(left, options.variant, static_cast<std::uint64_t>(k));
     apply_photometric_variant(right, options.variant, static_cast<std::uint64_t>(k) + kRightImageSeedOffset);
+    const StereoGain gain = stereo_gain_at(options.stereo_gain, k - first, count);
+    apply_gain(left, gain.left);
+    apply_gain(right, gain.right);
 
     FrameRecord record;
     record.stamp_ns = input.stamp_ns;

@@ -23,6 +23,9 @@ struct OfflineRunOptions {
   // Null: no keyframe database, a lost frame is relocalized against the newest keyframes only.
   std::shared_ptr<const Vocabulary> vocabulary;
   PhotometricVariant variant = PhotometricVariant::kNone;
+  // Per-camera exposure, applied after the variant: empty = equal exposure; several entries split
+  // the run into equal consecutive blocks of frames.
+  std::vector<StereoGain> stereo_gain;
   int first_frame = 0;  // frames of the sequence skipped: the run starts (initializes) here
   int max_frames = 0;   // 0: the whole sequence
 };

@@ -1,6 +1,10 @@
-// Dark and low-contrast image variants.
+// Dark and low-contrast image variants, and per-camera gains.
 #include "tools/bench/frontend_offline/photometric_variant.hpp"
 
+#include <algorithm>
+#include <cstdio>
+#include <algorithm>
+#include <cstdlib>
 #include <stdexcept>
 
 namespace heslam::bench {
@@ -47,6 +51,56 @@ void apply_photometric_variant(cv::Mat& image, PhotometricVariant variant, std::
       image.convertTo(image, CV_8U, kLowContrastGain, kMidGrey * (1.0 - kLowContrastGain));
       return;
   }
+}
+
+std::string StereoGain::describe() const {
+  if (equal_exposure()) return "1";
+  char text[64];
+  std::snprintf(text, sizeof text, "%g/%g", left, right);
+  return text;
+}
+
+StereoGain parse_stereo_gain(const std::string& value) {
+  const std::size_t comma = value.find(',');
+  const auto fail = [&] { return std::runtime_error("--stereo-gain: expected L,R (two positive numbers), got '" + value + "'"); };
+  if (comma == std::string::npos) throw fail();
+  StereoGain gain;
+  const std::string left = value.substr(0, comma);
+  const std::string right = value.substr(comma + 1);
+  char* end = nullptr;
+  gain.left = std::strtod(left.c_str(), &end);
+  if (left.empty() || *end != '\0' || !(gain.left > 0.0)) throw fail();
+  gain.right = std::strtod(right.c_str(), &end);
+  if (right.empty() || *end != '\0' || !(gain.right > 0.0)) throw fail();
+  return gain;
+}
+
+std::vector<StereoGain> parse_stereo_gain_schedule(const std::string& value) {
+  std::vector<StereoGain> schedule;
+  std::size_t begin = 0;
+  while (begin <= value.size()) {
+    const std::size_t slash = std::min(value.find('/', begin), value.size());
+    schedule.push_back(parse_stereo_gain(value.substr(begin, slash - begin)));
+    begin = slash + 1;
+  }
+  return schedule;
+}
+
+std::string describe(const std::vector<StereoGain>& schedule) {
+  if (schedule.empty()) return "1";
+  std::string text;
+  for (const StereoGain& gain : schedule) text += (text.empty() ? "" : ", ") + gain.describe();
+  return text;
+}
+
+StereoGain stereo_gain_at(const std::vector<StereoGain>& schedule, std::size_t index, std::size_t count) {
+  if (schedule.empty() || count == 0) return {};
+  return schedule[std::min(schedule.size() - 1, index * schedule.size() / count)];
+}
+
+void apply_gain(cv::Mat& image, double gain) {
+  if (gain == 1.0) return;
+  image.convertTo(image, CV_8U, gain);  // rounds and saturates to [0, 255]
 }
 
 }  // namespace heslam::bench

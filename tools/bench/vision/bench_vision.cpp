@@ -21,6 +21,7 @@
 #include "components/core/feature/orb_extractor.hpp"
 #include "components/core/feature/stereo_feature_pipeline.hpp"
 #include "components/core/image/histogram_equalizer.hpp"
+#include "components/core/image/histogram_matching.hpp"
 #include "components/core/match/stereo_matcher.hpp"
 
 namespace heslam {
@@ -111,6 +112,43 @@ void BM_HistogramEqualizationPair(benchmark::State& state) {
 BENCHMARK(BM_HistogramEqualizationPair)
     ->ArgsProduct({{0, 1}, {0, 1, 2, 3}})
     ->Unit(benchmark::kMillisecond);
+
+// Clipped HE (the default) with the two images' mappings shared or matched (HE.stereo), on the EuRoC
+// pair (arg 0 = 0: EuRoC) as recorded (arg 2 = 0) and exposed apart: left x0.35, right x2 clipped
+// (arg 2 = 1); arg 1: 0 shared, 1 matched.
+void BM_HistogramEqualizationStereo(benchmark::State& state) {
+  HistogramEqualizerOptions o;
+  o.mode = HeMode::kClipped;
+  o.stereo = state.range(1) == 0 ? StereoPhotometry::kShared : StereoPhotometry::kMatched;
+  HistogramEqualizer equalizer(o);
+  cv::Mat left = left_image(state).clone();
+  cv::Mat right = right_image(state).clone();
+  if (state.range(2) == 1) {
+    left.convertTo(left, CV_8U, 0.35);
+    right.convertTo(right, CV_8U, 2.0);
+  }
+  cv::Mat l, r;
+  for (auto _ : state) equalizer.equalize(left, right, l, r);
+  state.SetLabel(std::string(to_string(o.stereo)) + (state.range(2) == 1 ? " gains 0.35/2" : " as recorded"));
+}
+BENCHMARK(BM_HistogramEqualizationStereo)->ArgsProduct({{0}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond);
+
+// What matched adds to shared: the tone curves from the two histograms (no pass over the pixels).
+void BM_AlignStereoTones(benchmark::State& state) {
+  GreyHistogram left{};
+  GreyHistogram right{};
+  cv::Mat l = left_image(state);
+  cv::Mat r;
+  right_image(state).convertTo(r, CV_8U, 2.0);
+  for (int y = 0; y < l.rows; ++y) {
+    for (int x = 0; x < l.cols; ++x) {
+      ++left[l.at<std::uint8_t>(y, x)];
+      ++right[r.at<std::uint8_t>(y, x)];
+    }
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(align_stereo_tones(left, right, 0.1));
+}
+BENCHMARK(BM_AlignStereoTones)->Arg(0)->Unit(benchmark::kMicrosecond);
 
 void BM_OrbPyramid(benchmark::State& state) {
   OrbExtractor extractor(orb_options(state));

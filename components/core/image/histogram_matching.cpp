@@ -1,0 +1,92 @@
+// Histogram matching: source quantiles looked up in the reference's inverse cdf.
+#include "components/core/image/histogram_matching.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace heslam {
+
+GreyLut match_histogram(const GreyHistogram& source, const GreyHistogram& reference) {
+  constexpr int kLevels = 256;
+  GreyLut lut{};
+  for (int v = 0; v < kLevels; ++v) lut[v] = static_cast<std::uint8_t>(v);
+  std::uint64_t source_total = 0;
+  std::uint64_t reference_total = 0;
+  for (int v = 0; v < kLevels; ++v) {
+    source_total += source[v];
+    reference_total += reference[v];
+  }
+  if (source_total == 0 || reference_total == 0) return lut;
+
+  // Walk both cdfs once: source levels in increasing order have increasing quantiles.
+  const double scale = static_cast<double>(reference_total) / static_cast<double>(source_total);
+  std::uint64_t source_below = 0;  // source pixels below level x
+  std::uint64_t reference_below = 0;  // reference pixels below level y
+  int y = 0;
+  for (int x = 0; x < kLevels; ++x) {
+    // The middle of x's cdf step, in reference pixel counts (an empty bin: the step's position).
+    const double target = (static_cast<double>(source_below) + 0.5 * source[x]) * scale;
+    source_below += source[x];
+    while (y < kLevels - 1 && static_cast<double>(reference_below + reference[y]) < target) {
+      reference_below += reference[y];
+      ++y;
+    }
+    const double inside =
+        reference[y] > 0 ? (target - static_cast<double>(reference_below)) / reference[y] : 0.5;
+    const double level = static_cast<double>(y) - 0.5 + std::clamp(inside, 0.0, 1.0);
+    lut[x] = static_cast<std::uint8_t>(std::clamp(std::lround(level), 0l, 255l));
+  }
+  return lut;
+}
+
+namespace {
+
+// The lowest level of `histogram` at which the cdf reaches `count` pixels.
+int level_at_count(const GreyHistogram& histogram, double count) {
+  double cumulative = 0.0;
+  for (int v = 0; v < 256; ++v) {
+    cumulative += histogram[v];
+    if (cumulative >= count) return v;
+  }
+  return 255;
+}
+
+}  // namespace
+
+StereoToneCurves align_stereo_tones(const GreyHistogram& left, const GreyHistogram& right, double saturation_excess) {
+  StereoToneCurves curves;
+  for (int v = 0; v < 256; ++v) curves.left[v] = static_cast<std::uint8_t>(v);
+  curves.right = match_histogram(right, left);
+  double left_total = 0.0;
+  double right_total = 0.0;
+  for (int v = 0; v < 256; ++v) {
+    left_total += left[v];
+    right_total += right[v];
+  }
+  if (left_total == 0.0 || right_total == 0.0) return curves;
+
+  // Right clipped at the top beyond the left: the left's top (same fraction) becomes one level.
+  const double top_excess = right[255] / right_total - left[255] / left_total;
+  if (top_excess > saturation_excess) {
+    const int ceiling = level_at_count(left, (1.0 - right[255] / right_total) * left_total);
+    for (int v = ceiling; v < 256; ++v) curves.left[v] = static_cast<std::uint8_t>(ceiling);
+    curves.right[255] = static_cast<std::uint8_t>(ceiling);
+    for (int v = 0; v < 255; ++v) curves.right[v] = std::min(curves.right[v], static_cast<std::uint8_t>(ceiling));
+    curves.left_clipped = true;
+  }
+  // The same at the bottom (a right camera crushing its shadows to 0).
+  const double bottom_excess = right[0] / right_total - left[0] / left_total;
+  if (bottom_excess > saturation_excess) {
+    const int floor = level_at_count(left, right[0] / right_total * left_total);
+    for (int v = 0; v <= floor; ++v) curves.left[v] = static_cast<std::uint8_t>(floor);
+    curves.right[0] = static_cast<std::uint8_t>(floor);
+    for (int v = 1; v < 256; ++v) curves.right[v] = std::max(curves.right[v], static_cast<std::uint8_t>(floor));
+    curves.left_clipped = true;
+  }
+  double shift = 0.0;
+  for (int v = 0; v < 256; ++v) shift += right[v] * std::abs(static_cast<int>(curves.right[v]) - v);
+  curves.mean_right_shift = shift / right_total;
+  return curves;
+}
+
+}  // namespace heslam
