@@ -18,8 +18,8 @@ constexpr std::chrono::milliseconds kWaitPeriod{200};
 // stay empty this long.
 constexpr std::chrono::milliseconds kDrainQuietPeriod{300};
 // The files are rewritten whole (poses follow their keyframes' latest state), so the rewrites are
-// spaced by this many times the duration of the last one: at most ~5% of a core. A 160-frame run
-// (well under 1 ms a rewrite) is rewritten for every frame; a 4000-frame one every ~0.1-0.2 s.
+// spaced by this many times the duration of the last one: at most 1/21 (~5%) of a core however long
+// the run, while a short run's files follow about every frame.
 constexpr int kRewriteSpacingFactor = 20;
 // The replay's count of published frames, on its status.
 constexpr const char* kFramesPublishedCounter = "frames_published";
