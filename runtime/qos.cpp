@@ -12,9 +12,12 @@ using std::chrono::milliseconds;
 constexpr milliseconds kImageMaxBlocking{100};
 // Frames kept per reader: enough to absorb a hiccup, few enough that a slow frontend sees fresh data.
 constexpr int32_t kImageDepth = 4;
-// Odometry kept per reader, and replayed to a late (restarted) reader: ~5 s at 20 Hz, so a recorder
-// loses no pose to a short stall or to its own restart.
-constexpr int32_t kOdometryDepth = 100;
+// Odometry kept per reader, and replayed to a late (restarted, or stalled past the 2 s lease and
+// rematched) reader: 60 s at 20 Hz, so a recorder loses no pose to a stall or a restart that short.
+// With 100, a recorder stopped 5 s while 400 frames were published wrote 220 of 420
+// (RecorderProcess test). ~800 B a sample: ~1 MB of writer history, well under the 8 MB WhcHigh of
+// config/cyclonedds.xml, so the frontend's writes are never throttled.
+constexpr int32_t kOdometryDepth = 1200;
 // Corrections are rare and precious; KEEP_ALL with a short block, replay the last 100 to late joiners
 // (replay depth comes from durability_service, not history: findings pitfall 7).
 constexpr milliseconds kCorrectionMaxBlocking{100};
@@ -72,7 +75,9 @@ void apply(dds_qos_t* qos, QosRole role) {
                                   DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
       break;
     case QosRole::kStatus:
-      dds_qset_reliability(qos, DDS_RELIABILITY_BEST_EFFORT, 0);
+      // Reliable: a component's last sample before it exits carries its result (the recorder's
+      // "tracked N/M frames ...") that the supervisor's last line reports; KEEP_LAST(1) never blocks.
+      dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(kDefaultMaxBlocking.count()));
       dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
       dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
       dds_qset_liveliness(qos, DDS_LIVELINESS_AUTOMATIC, DDS_MSECS(kStatusLiveliness.count()));

@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "runtime/shutdown_registry.hpp"
+#include "runtime/startup_notify.hpp"
 
 namespace heslam::runtime {
 namespace {
@@ -38,7 +39,13 @@ void trigger_all() {
 }
 
 extern "C" void on_signal(int signal_number) {
-  if (g_requested.exchange(true)) _exit(128 + signal_number);  // second signal: the user insists
+  // A second Ctrl-C: the user insists. A second SIGTERM is not a user: the kernel's parent-death
+  // signal (PR_SET_PDEATHSIG) follows the supervisor's own SIGTERM when the supervisor is killed or
+  // interrupted twice, and must not cut short the shutdown work (the recorder's final files).
+  if (g_requested.exchange(true)) {
+    if (signal_number == SIGINT) _exit(128 + signal_number);
+    return;
+  }
   g_signal.store(signal_number);
   const char byte = 1;
   [[maybe_unused]] const ssize_t ignored = ::write(g_pipe[1], &byte, 1);
@@ -59,6 +66,10 @@ void bind_to_supervisor() {
   // Only our direct parent is the supervisor: programs we start must not inherit the binding.
   unsetenv("HESLAM_SUPERVISOR_PID");
   prctl(PR_SET_PDEATHSIG, SIGTERM);
+  // Our output is a pipe to the supervisor: when it dies (kill -9, a double Ctrl-C) the next log line
+  // would raise SIGPIPE and kill us in the middle of the shutdown work (the recorder's final files).
+  // Only under the supervisor: a tool piped into `head` on a terminal should still end with the pipe.
+  signal(SIGPIPE, SIG_IGN);
   // The supervisor may have died between our spawn and the prctl: then nobody will send the signal.
   if (std::to_string(getppid()) != supervisor_pid) request_shutdown();
 }
@@ -76,6 +87,7 @@ void install_shutdown_handlers() {
     sigaction(SIGINT, &action, nullptr);
     sigaction(SIGTERM, &action, nullptr);
     bind_to_supervisor();
+    notify_supervisor_starting();
   });
 }
 

@@ -3,9 +3,11 @@
 
 namespace heslam::runtime {
 
-// Installs SIGINT/SIGTERM handlers that request shutdown (a second signal exits immediately with
-// 128+signal) and, when started by heslam-supervisor ($HESLAM_SUPERVISOR_PID), asks the kernel to send
-// SIGTERM to this process when the supervisor dies (PR_SET_PDEATHSIG: no orphans even after kill -9).
+// Installs SIGINT/SIGTERM handlers that request shutdown (a second SIGINT exits immediately with
+// 130; a second SIGTERM is ignored) and, when started by heslam-supervisor ($HESLAM_SUPERVISOR_PID),
+// asks the kernel to send SIGTERM to this process when the supervisor dies (PR_SET_PDEATHSIG: no
+// orphans even after kill -9) and ignores SIGPIPE, so output to a dead supervisor cannot kill the
+// shutdown work.
 // Idempotent; call early in main() (Component does it for you).
 void install_shutdown_handlers();
 

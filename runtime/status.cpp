@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "runtime/sequence.hpp"
+#include "runtime/startup_notify.hpp"
 
 namespace heslam::runtime {
 namespace {
@@ -78,7 +79,13 @@ void StatusPublisher::set_state(ComponentState state, const std::string& message
     state_ = state;
     message_ = message;
   }
+  if (state == ComponentState::kRunning) notify_supervisor_running();
   publish_now();
+}
+
+void StatusPublisher::set_message(const std::string& message) {
+  std::lock_guard lock(mutex_);
+  message_ = message;
 }
 
 void StatusPublisher::publish_now() {

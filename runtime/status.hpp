@@ -26,12 +26,16 @@ class StatusPublisher {
  public:
   StatusPublisher(const Participant& participant, const Topics& topics, std::string name, const Stats& stats,
                   std::chrono::milliseconds period = std::chrono::seconds(1));
-  ~StatusPublisher();  // publishes a final sample, then unregisters (readers see the instance go)
+  ~StatusPublisher();  // unregisters (readers see the instance go)
   StatusPublisher(const StatusPublisher&) = delete;
   StatusPublisher& operator=(const StatusPublisher&) = delete;
 
-  // Changes the state and publishes immediately; message is shown for kFailed.
+  // Changes the state and publishes immediately. message: the error for kFailed, otherwise the
+  // component's one-line result so far (the recorder's "tracked N/M frames, ..."), or empty.
+  // kRunning also tells heslam-supervisor's start-up handshake that configuring succeeded.
   void set_state(ComponentState state, const std::string& message = "");
+  // Replaces the message without publishing (the next periodic sample carries it).
+  void set_message(const std::string& message);
   void publish_now();
 
  private:

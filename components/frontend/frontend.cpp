@@ -112,6 +112,7 @@ void Frontend::run() {
     // their data-available status stays set meanwhile, so do not spin on it.
     if (!processor_ && wake == runtime::Wake::kData) std::this_thread::sleep_for(kNoCalibrationPoll);
   }
+  count_frames_left();
   const auto counters = stats().counters();
   const auto count = [&](const char* name) { return counters.count(name) != 0 ? counters.at(name) : 0; };
   log().info("processed ", count("frames"), " frames (", count("lost"), " lost, ", count("bad_frames"), " bad), ",
@@ -206,6 +207,19 @@ void Frontend::take_frames() {
     }
     process_frame(*frame_.sample);
     if (shutdown_requested()) return;
+  }
+}
+
+void Frontend::count_frames_left() {
+  const auto count = [&](std::uint64_t seq) {
+    if (last_seq_ && seq <= *last_seq_) return;  // published again: processed already
+    stats().count("frames_missed", last_seq_ ? seq - *last_seq_ : seq + 1);
+    last_seq_ = seq;
+  };
+  for (const auto& frame : pending_) count(frame.sample->seq);
+  pending_.clear();
+  while (frame_reader_->take_into(frame_)) {
+    if (frame_.info.valid_data) count(frame_.sample->seq);
   }
 }
 

@@ -27,6 +27,9 @@ class Frontend : public runtime::Component {
   bool accepts_positional_args() const override { return true; }  // --mapper-map-file FILE
 
   void take_calibration();
+  // At the end of the run: frames still queued (real time, the replay ended while we were busy)
+  // are not tracked but counted as missed, so every published frame is processed or missed.
+  void count_frames_left();
   void take_frames();
   void process_frame(const msg::StereoFrame& frame);
   // Applies whatever map state the mapper published so far.

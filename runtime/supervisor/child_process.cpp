@@ -13,6 +13,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "runtime/startup_notify.hpp"
+
 extern char** environ;
 
 namespace heslam::supervisor {
@@ -20,6 +22,13 @@ namespace {
 
 // Read size per call: a component's log burst fits in one or two reads.
 constexpr std::size_t kReadChunk = 64 * 1024;
+// The child's descriptor of the handshake pipe: the first one after stdin, stdout, stderr.
+constexpr int kChildNotifyFd = 3;
+
+void close_fd(int& fd) {
+  if (fd >= 0) close(fd);
+  fd = -1;
+}
 
 }  // namespace
 
@@ -29,12 +38,19 @@ ChildProcess ChildProcess::spawn(const std::filesystem::path& trampoline, const 
   if (pipe2(pipe_fds, O_CLOEXEC) != 0) {
     throw std::runtime_error("cannot start " + program.string() + ": pipe: " + std::strerror(errno));
   }
+  int notify_fds[2];
+  if (pipe2(notify_fds, O_CLOEXEC) != 0) {
+    close(pipe_fds[0]);
+    close(pipe_fds[1]);
+    throw std::runtime_error("cannot start " + program.string() + ": pipe: " + std::strerror(errno));
+  }
 
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
   posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDOUT_FILENO);
   posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDERR_FILENO);
+  posix_spawn_file_actions_adddup2(&actions, notify_fds[1], kChildNotifyFd);  // dup2 clears close-on-exec
 
   posix_spawnattr_t attributes;
   posix_spawnattr_init(&attributes);
@@ -61,6 +77,7 @@ ChildProcess ChildProcess::spawn(const std::filesystem::path& trampoline, const 
   }
   for (const auto& [key, value] : env) environment[key] = value;
   environment["HESLAM_SUPERVISOR_PID"] = std::to_string(getpid());
+  environment[runtime::kNotifyFdVariable] = std::to_string(kChildNotifyFd);
   std::vector<std::string> env_text;
   for (const auto& [key, value] : environment) env_text.push_back(key + "=" + value);
   std::vector<char*> envp;
@@ -72,37 +89,63 @@ ChildProcess ChildProcess::spawn(const std::filesystem::path& trampoline, const 
   posix_spawn_file_actions_destroy(&actions);
   posix_spawnattr_destroy(&attributes);
   close(pipe_fds[1]);
+  close(notify_fds[1]);
   if (error != 0) {
     close(pipe_fds[0]);
+    close(notify_fds[0]);
     throw std::runtime_error("cannot start " + program.string() + ": " + std::strerror(error));
   }
   fcntl(pipe_fds[0], F_SETFL, fcntl(pipe_fds[0], F_GETFL) | O_NONBLOCK);
+  fcntl(notify_fds[0], F_SETFL, fcntl(notify_fds[0], F_GETFL) | O_NONBLOCK);
   ChildProcess child;
   child.pid_ = pid;
   child.output_fd_ = pipe_fds[0];
+  child.notify_fd_ = notify_fds[0];
   return child;
 }
 
-ChildProcess::ChildProcess(ChildProcess&& other) noexcept
-    : pid_(std::exchange(other.pid_, 0)),
-      output_fd_(std::exchange(other.output_fd_, -1)),
-      partial_(std::move(other.partial_)) {}
+ChildProcess::ChildProcess(ChildProcess&& other) noexcept { *this = std::move(other); }
 
 ChildProcess& ChildProcess::operator=(ChildProcess&& other) noexcept {
   if (this != &other) {
     close_output();
+    close_fd(notify_fd_);
     pid_ = std::exchange(other.pid_, 0);
     output_fd_ = std::exchange(other.output_fd_, -1);
+    notify_fd_ = std::exchange(other.notify_fd_, -1);
+    said_starting_ = std::exchange(other.said_starting_, false);
+    said_running_ = std::exchange(other.said_running_, false);
     partial_ = std::move(other.partial_);
+    notify_partial_ = std::move(other.notify_partial_);
   }
   return *this;
 }
 
-ChildProcess::~ChildProcess() { close_output(); }
+ChildProcess::~ChildProcess() {
+  close_output();
+  close_fd(notify_fd_);
+}
 
-void ChildProcess::close_output() {
-  if (output_fd_ >= 0) close(output_fd_);
-  output_fd_ = -1;
+void ChildProcess::close_output() { close_fd(output_fd_); }
+
+void ChildProcess::read_notifications() {
+  char buffer[256];
+  while (notify_fd_ >= 0) {
+    const ssize_t n = read(notify_fd_, buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return;
+    if (n <= 0) {
+      close_fd(notify_fd_);  // the program closed it (after "running") or ended
+      return;
+    }
+    notify_partial_.append(buffer, static_cast<std::size_t>(n));
+    for (std::size_t newline; (newline = notify_partial_.find('\n')) != std::string::npos;) {
+      const std::string line = notify_partial_.substr(0, newline);
+      notify_partial_.erase(0, newline + 1);
+      if (line == runtime::kNotifyStarting) said_starting_ = true;
+      if (line == runtime::kNotifyRunning) said_starting_ = said_running_ = true;
+    }
+  }
 }
 
 bool ChildProcess::read_lines(std::vector<std::string>& lines) {

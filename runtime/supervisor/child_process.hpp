@@ -2,7 +2,7 @@
 //
 // Spawned through the supervisor's own binary in "--exec-child" mode, which sets PR_SET_PDEATHSIG
 // before exec'ing the program, so even a program that knows nothing of heslam dies with the
-// supervisor (kill -9 included).
+// supervisor (kill -9 included). A second pipe, as file descriptor 3, carries the start-up handshake.
 #pragma once
 
 #include <sys/types.h>
@@ -29,6 +29,13 @@ class ChildProcess {
 
   pid_t pid() const { return pid_; }
   int output_fd() const { return output_fd_; }
+  int notify_fd() const { return notify_fd_; }
+
+  // The start-up handshake (runtime/startup_notify.hpp): reads what the program wrote so far
+  // (non-blocking); closes the pipe at its end.
+  void read_notifications();
+  bool said_starting() const { return said_starting_; }  // a heslam program: it speaks the handshake
+  bool said_running() const { return said_running_; }    // configured itself successfully
 
   // Reads what is available (non-blocking) and returns complete lines; at end of stream also the
   // unterminated rest. Returns false once the stream is closed.
@@ -41,7 +48,11 @@ class ChildProcess {
  private:
   pid_t pid_ = 0;
   int output_fd_ = -1;
+  int notify_fd_ = -1;
+  bool said_starting_ = false;
+  bool said_running_ = false;
   std::string partial_;
+  std::string notify_partial_;
 };
 
 // The --exec-child mode of heslam-supervisor: never returns (exec or _exit(127)).

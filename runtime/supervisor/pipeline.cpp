@@ -204,6 +204,21 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       spec.config = std::filesystem::absolute(path);
     });
     collect(problems, [&] {
+      for (const std::string& input : section.get_strings("inputs", {})) {
+        const std::string text = substitute(where + ".inputs", input);
+        if (text.empty()) {
+          throw std::runtime_error(source + ": " + label + ": input '" + input +
+                                   "' is empty (give it with --arg, e.g. --arg dataset=DIR)");
+        }
+        std::filesystem::path path = text;
+        if (path.is_relative()) path = std::filesystem::current_path() / path;
+        if (!disabled && !std::filesystem::exists(path)) {
+          throw std::runtime_error(source + ": " + label + ": input " + text + " does not exist");
+        }
+        spec.inputs.push_back(path);
+      }
+    });
+    collect(problems, [&] {
       for (auto& [key, value] : section.get_string_map("env")) spec.env[key] = substitute(where + ".env", value);
     });
     collect(problems, [&] {

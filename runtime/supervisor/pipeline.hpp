@@ -17,6 +17,9 @@ struct ComponentSpec {
   std::filesystem::path executable;       // resolved absolute path
   std::vector<std::string> args;          // after $(arg) substitution
   std::filesystem::path config;           // empty: none
+  // Files or folders it reads (e.g. the dataset): each must exist, checked by --check and before
+  // anything starts, so a wrong path is one line and exit 1 instead of a failing, restarting process.
+  std::vector<std::filesystem::path> inputs;
   std::map<std::string, std::string> env; // added to the supervisor's environment
   RestartPolicy restart = RestartPolicy::kNever;
   int max_restarts = 3;                   // restarts allowed before giving up

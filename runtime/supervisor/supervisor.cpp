@@ -9,7 +9,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <iostream>
+#include <sstream>
 #include <thread>
 
 #include "runtime/participant.hpp"
@@ -31,6 +33,12 @@ constexpr auto kPumpPeriod = 20ms;
 constexpr auto kStableRun = 10s;
 // After SIGKILL the kernel reaps within milliseconds; this only bounds a pathological wait.
 constexpr auto kKillReapTimeout = 2s;
+
+std::string format_seconds(double seconds) {
+  std::ostringstream text;
+  text << seconds;
+  return text.str();
+}
 
 struct StatusSeen {
   int32_t pid = 0;
@@ -90,6 +98,8 @@ void Supervisor::start(Managed& component) {
   component.started_at = Clock::now();
   component.ready = component.spec.ready == Readiness::kStarted;
   component.stopping = false;
+  component.killed_at_stop = false;
+  component.last_line.clear();
   log_.info("started ", component.spec.name, " (pid ", component.process.pid(), ")");
 }
 
@@ -101,10 +111,12 @@ bool Supervisor::wait_ready(Managed& component) {
     // Ended while starting: fine for a short-lived program, fatal if it failed and is required.
     if (component.phase == Phase::kEnded) return !failed_;
     if (Clock::now() >= deadline) {
-      log_.error(component.spec.name, ": no status within ", component.spec.ready_timeout_s,
-                 " s (a program that publishes no heslam status needs 'ready: started'; a heslam program built"
-                 " from other .idl files cannot talk to this one: rebuild both from the same tree)");
-      if (component.spec.required) failed_ = true;
+      std::ostringstream reason;
+      reason << component.spec.name << ": no status within " << component.spec.ready_timeout_s
+             << " s (a program that publishes no heslam status needs 'ready: started'; a heslam program built"
+                " from other .idl files cannot talk to this one: rebuild both from the same tree)";
+      log_.error(reason.str());
+      if (component.spec.required) fail(reason.str());
       return !component.spec.required;
     }
     pump(kPumpPeriod);
@@ -121,6 +133,7 @@ void Supervisor::forward_output(Managed& component) {
     prefix.resize(name_width_, ' ');
     std::cout << prefix << " | " << line << '\n';
     component.log_file << line << '\n';
+    if (line.find_first_not_of(" \t\r") != std::string::npos) component.last_line = line;
   }
   if (!lines.empty()) {
     std::cout.flush();
@@ -139,9 +152,12 @@ void Supervisor::read_status() {
   }
   for (auto& component : components_) {
     const auto it = dds_->seen.find(component->spec.name);
-    if (it == dds_->seen.end() || component->phase != Phase::kRunning) continue;
+    if (it == dds_->seen.end()) continue;
     const StatusSeen& seen = it->second;
     if (seen.pid != component->process.pid()) continue;  // an older instance's last words
+    // Kept after the process ended: its last sample may arrive after its exit.
+    if (seen.state != heslam_msg_STATE_FAILED && !seen.message.empty()) component->result = seen.message;
+    if (component->phase != Phase::kRunning) continue;
     if (!component->ready && seen.state == heslam_msg_STATE_RUNNING) component->ready = true;
     if (seen.state == heslam_msg_STATE_FAILED && seen.message != component->last_reported_failure) {
       component->last_reported_failure = seen.message;
@@ -163,25 +179,64 @@ void Supervisor::reap() {
 
 void Supervisor::on_exit(Managed& component, int wait_status) {
   forward_output(component);
+  component.process.read_notifications();
+  read_status();  // its last sample may carry its result
   // Anything the program left behind in its group goes with it.
   component.process.signal_group(SIGKILL);
   const bool success = WIFEXITED(wait_status) && WEXITSTATUS(wait_status) == 0;
   const std::string how = describe_exit(wait_status);
   const std::string& name = component.spec.name;
+  // A failing heslam program's last line is its one-line reason ("heslam-recorder: ...").
+  const std::string why = !success && WIFEXITED(wait_status) && !component.last_line.empty()
+                              ? ": " + component.last_line
+                              : std::string();
   component.phase = Phase::kEnded;
   component.ready = false;
   if (component.stopping) {
-    log_.info(name, " stopped (", how, ")");
+    // Our SIGTERM ends a program without handlers; anything else means its shutdown work (the
+    // recorder's final files, the mapper's map) did not finish as it should.
+    const bool clean = success || (WIFSIGNALED(wait_status) && WTERMSIG(wait_status) == SIGTERM);
+    if (clean) {
+      log_.info(name, " stopped (", how, ")");
+      return;
+    }
+    const std::string reason = component.killed_at_stop
+                                   ? name + " did not stop within " + format_seconds(pipeline_.stop_timeout_s) +
+                                         " s and was killed; its shutdown did not finish"
+                                   : name + " failed while stopping (" + how + ")" + why;
+    if (component.spec.required) {
+      log_.error(reason);
+      fail(reason);
+    } else {
+      log_.warn(reason);
+    }
+    return;
+  }
+  // It exited with an error after saying "starting" but before "running" (runtime/startup_notify.hpp):
+  // a bad config, a missing input, an unwritable output. Restarting cannot fix that.
+  const bool startup_error = WIFEXITED(wait_status) && !success && component.process.said_starting() &&
+                             !component.process.said_running();
+  if (startup_error) {
+    const std::string reason = name + " failed at start-up (" + how + ")" + why;
+    log_.error(reason, component.spec.restart == RestartPolicy::kNever
+                           ? ""
+                           : "; not restarted: a restart cannot fix a start-up error");
+    if (component.spec.required) {
+      fail(reason);
+      end_requested_ = true;
+    }
     return;
   }
   const bool wants_restart = component.spec.restart == RestartPolicy::kAlways ||
                              (component.spec.restart == RestartPolicy::kOnFailure && !success);
   if (wants_restart && !end_requested_ && !runtime::shutdown_requested()) {
     if (component.restarts >= component.spec.max_restarts) {
+      const std::string reason =
+          name + " " + how + why + "; gave up after " + std::to_string(component.restarts) + " restarts";
       log_.error(name, " (pid ", component.process.pid(), ") ", how, "; giving up after ", component.restarts,
                  " restarts");
       if (component.spec.required) {
-        failed_ = true;
+        fail(reason);
         end_requested_ = true;
       }
       return;
@@ -202,8 +257,8 @@ void Supervisor::on_exit(Managed& component, int wait_status) {
   if (success) {
     log_.info(name, " finished (", how, ")");
   } else {
-    log_.error(name, " (pid ", component.process.pid(), ") ", how);
-    if (component.spec.required) failed_ = true;
+    log_.error(name, " (pid ", component.process.pid(), ") ", how, why);
+    if (component.spec.required) fail(name + " " + how + why);
   }
   if (component.spec.shutdown_on_exit || (!success && component.spec.required)) end_requested_ = true;
 }
@@ -225,6 +280,7 @@ void Supervisor::pump(std::chrono::milliseconds timeout) {
   for (std::size_t i = 0; i < fds.size(); ++i) {
     if (fds[i].revents != 0) forward_output(*owners[i]);
   }
+  for (auto& component : components_) component->process.read_notifications();
   reap();
   read_status();
   for (auto& component : components_) {
@@ -238,7 +294,7 @@ void Supervisor::pump(std::chrono::milliseconds timeout) {
         log_.error(error.what());
         component->phase = Phase::kEnded;
         if (component->spec.required) {
-          failed_ = true;
+          fail(error.what());
           end_requested_ = true;
         }
       }
@@ -262,6 +318,7 @@ void Supervisor::stop(Managed& component) {
   while (component.phase == Phase::kRunning && Clock::now() < deadline) pump(kPumpPeriod);
   if (component.phase == Phase::kRunning) {
     log_.warn(component.spec.name, " did not stop within ", pipeline_.stop_timeout_s, " s; sending SIGKILL");
+    component.killed_at_stop = true;
     component.process.signal_group(SIGKILL);
     const auto kill_deadline = Clock::now() + kKillReapTimeout;
     while (component.phase == Phase::kRunning && Clock::now() < kill_deadline) pump(kPumpPeriod);
@@ -286,8 +343,8 @@ int Supervisor::run() {
       start(*component);
     } catch (const std::exception& error) {
       log_.error(error.what());
-      failed_ = failed_ || component->spec.required;
       if (component->spec.required) {
+        fail(error.what());
         started_all = false;
         break;
       }
@@ -306,8 +363,31 @@ int Supervisor::run() {
   }
   dds_->status.set_state(runtime::ComponentState::kShuttingDown);
   stop_all();
-  log_.info(failed_ ? "pipeline failed" : "pipeline finished");
+  read_status();  // the last results
+  if (failed_) {
+    log_.error(outcome());
+  } else {
+    log_.info(outcome());
+  }
   return failed_ ? 1 : 0;
+}
+
+void Supervisor::fail(const std::string& reason) {
+  if (!failed_) failure_ = reason;
+  failed_ = true;
+}
+
+std::string Supervisor::outcome() const {
+  if (failed_) return "pipeline failed: " + failure_;
+  std::string results;
+  for (const auto& component : components_) {
+    if (!component->result.empty()) results += (results.empty() ? "" : "; ") + component->result;
+  }
+  const char* signal_name = sigabbrev_np(runtime::shutdown_signal());
+  const std::string text = !runtime::shutdown_requested() ? "pipeline finished"
+                           : signal_name != nullptr       ? std::string("pipeline stopped by SIG") + signal_name
+                                                          : "pipeline stopped";
+  return results.empty() ? text : text + ": " + results;
 }
 
 }  // namespace heslam::supervisor

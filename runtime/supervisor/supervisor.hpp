@@ -29,7 +29,8 @@ class Supervisor {
   Supervisor(const Supervisor&) = delete;
   Supervisor& operator=(const Supervisor&) = delete;
 
-  // Runs until the pipeline ends or shutdown is requested; 0 = success, 1 = a required component failed.
+  // Runs until the pipeline ends or shutdown is requested; 0 = success, 1 = a required component failed
+  // (at start-up, while running, or while stopping).
   int run();
 
  private:
@@ -47,7 +48,10 @@ class Supervisor {
     int consecutive_restarts = 0;
     bool ready = false;
     bool stopping = false;  // we sent SIGTERM: the exit is expected
+    bool killed_at_stop = false;  // did not stop within stop_timeout_s: we sent SIGKILL
     std::string last_reported_failure;
+    std::string last_line;  // of its output: a failing heslam program's one-line reason
+    std::string result;     // the one-line result in its latest status (the recorder's "tracked N/M ...")
   };
 
   struct Dds;  // participant, status reader and writer (pimpl: keeps DDS out of this header)
@@ -63,6 +67,10 @@ class Supervisor {
   void stop(Managed& component);
   std::vector<std::string> child_args(const Managed& component) const;
   bool anything_alive() const;
+  // Marks the run failed (exit code 1) for this reason, unless an earlier failure is already the reason.
+  void fail(const std::string& reason);
+  // The last line: what the run produced, or why it failed.
+  std::string outcome() const;
 
   Pipeline pipeline_;
   SupervisorOptions options_;
@@ -71,6 +79,7 @@ class Supervisor {
   std::vector<std::unique_ptr<Managed>> components_;
   std::size_t name_width_ = 0;
   bool failed_ = false;
+  std::string failure_;  // the first reason the run failed
   bool end_requested_ = false;
 };
 

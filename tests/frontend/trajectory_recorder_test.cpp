@@ -112,6 +112,57 @@ TEST(RecorderFiles, WritesTrajectoryKeyframesAndLostListInTheChosenFormat) {
   EXPECT_THROW(RecorderOptions::from(runtime::Config::empty(), {"--output"}), std::runtime_error);
 }
 
+// Issue 16: the summary accounts for every published frame: with a pose, untracked, or never
+// received (missed by the frontend, or lost on the way) — listed exactly, by seq.
+TEST(RecorderSummary, AccountsForEveryPublishedFrame) {
+  TrajectoryRecorder recorder;
+  recorder.add_keyframe(1, 0, 0, Pose3::Identity());
+  for (std::uint64_t seq : {0, 1, 5}) recorder.add_frame(tracked(seq, 1, Pose3::Identity(), Pose3::Identity()));
+  RecordedFrame lost;
+  lost.seq = 2;
+  lost.state = "LOST";
+  recorder.add_frame(lost);
+  const FrameAccount account = recorder.account(8);
+  EXPECT_EQ(account.published, 8u);
+  EXPECT_EQ(account.with_pose, 3u);
+  EXPECT_EQ(account.untracked, 1u);
+  EXPECT_EQ(account.never_received_count(), 4u);
+  EXPECT_EQ(account.never_received_text(), "3-4, 6-7");
+  EXPECT_EQ(account.without_pose(), 5u);
+  EXPECT_EQ(summary_line(account, "out/run.txt"), "tracked 3/8 frames, 5 lost, trajectory out/run.txt");
+  // Without the publisher's count, the highest seq stands in.
+  EXPECT_EQ(recorder.account(0).published, 6u);
+  EXPECT_EQ(TrajectoryRecorder().account(0).published, 0u);
+}
+
+// Issue 16: an output that is a folder is an error naming the file (the recorder reports it at
+// start-up), and a write never leaves a half-written or temporary file behind.
+TEST(RecorderFiles, FolderAsOutputIsAnErrorAndWritesAreAtomic) {
+  const auto dir = std::filesystem::temp_directory_path() / ("heslam_recorder_atomic_" + std::to_string(getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "taken.txt");
+  TrajectoryRecorder recorder;
+  recorder.add_keyframe(1, 1'000'000'000, 0, Pose3::Identity());
+  recorder.add_frame(tracked(0, 1, Pose3::Identity(), Pose3::Identity()));
+  RecorderOptions options = RecorderOptions::from(runtime::Config::empty(), {"--output", (dir / "taken.txt").string()});
+  try {
+    write_recording(recorder.build(), options);
+    ADD_FAILURE() << "a folder accepted as the trajectory file";
+  } catch (const std::runtime_error& error) {
+    EXPECT_EQ(std::string(error.what()), (dir / "taken.txt").string() +
+                                             ": is a folder; expected the file name of the trajectory");
+  }
+  options = RecorderOptions::from(runtime::Config::empty(), {"--output", (dir / "run.txt").string()});
+  write_recording(recorder.build(), options);
+  recorder.add_frame(tracked(1, 1, Pose3::Identity(), translation(0.1, 0, 0)));
+  write_recording(recorder.build(), options);  // replaced whole
+  EXPECT_EQ(eval::read_trajectory(options.output).size(), 2u);
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+  }
+  std::filesystem::remove_all(dir);
+}
+
 // Largest element difference of two poses (a plain loop: GCC 12 warns falsely on Eigen's AVX-512
 // reductions here).
 double max_abs_difference(const Pose3& a, const Pose3& b) {

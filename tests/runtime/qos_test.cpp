@@ -71,10 +71,11 @@ TEST(Qos, LockstepAcksAreTransientLocalWithMatchingReplayDepth) {
   EXPECT_EQ(replay_depth(qos), 64);
 }
 
-TEST(Qos, StatusAndSpyAreBestEffortKeepLastOne) {
+TEST(Qos, StatusIsReliableAndSpyBestEffortBothKeepLastOne) {
+  EXPECT_EQ(read(Qos(QosRole::kStatus)).reliability, DDS_RELIABILITY_RELIABLE);  // the last sample carries the result
+  EXPECT_EQ(read(Qos(QosRole::kSpy)).reliability, DDS_RELIABILITY_BEST_EFFORT);
   for (QosRole role : {QosRole::kStatus, QosRole::kSpy}) {
     const Read r = read(Qos(role));
-    EXPECT_EQ(r.reliability, DDS_RELIABILITY_BEST_EFFORT) << to_string(role);
     EXPECT_EQ(r.durability, DDS_DURABILITY_VOLATILE) << to_string(role);
     EXPECT_EQ(r.depth, 1) << to_string(role);
   }
@@ -90,7 +91,7 @@ TEST(Qos, OverridesAndCopiesAreIndependent) {
   Qos copy = base;
   copy.keep_all().best_effort();
   EXPECT_EQ(read(base).history, DDS_HISTORY_KEEP_LAST);
-  EXPECT_EQ(read(base).depth, 100);
+  EXPECT_EQ(read(base).depth, 1200);
   EXPECT_EQ(read(copy).history, DDS_HISTORY_KEEP_ALL);
   EXPECT_EQ(read(copy).reliability, DDS_RELIABILITY_BEST_EFFORT);
   Qos moved = std::move(copy);

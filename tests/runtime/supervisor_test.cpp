@@ -13,6 +13,7 @@
 #include <set>
 #include <sstream>
 #include <thread>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
@@ -227,13 +228,17 @@ TEST_F(SupervisorTest, KilledSupervisorLeavesNoOrphans) {
   EXPECT_TRUE(all_children_gone(kExitBound)) << output();
 }
 
-TEST_F(SupervisorTest, ComponentIgnoringSigtermIsKilled) {
+// Killed at stop, a component did not finish its shutdown work (the recorder's final files, the
+// mapper's map): the run is not a success (issue 16).
+TEST_F(SupervisorTest, ComponentIgnoringSigtermIsKilledAndFailsTheRun) {
   write("stubborn.yaml", "ignore_sigterm: true\n");
   start(pipeline(std::string(kTalker) + "    config: stubborn.yaml\n"));
   ASSERT_TRUE(wait_for_output("talker is ready", kStartupBound)) << output();
   kill(supervisor_pid_, SIGTERM);
-  EXPECT_EQ(wait_exit(kExitBound), 0) << output();
+  EXPECT_EQ(wait_exit(kExitBound), 1) << output();
   EXPECT_NE(output().find("talker did not stop within 3 s; sending SIGKILL"), std::string::npos) << output();
+  EXPECT_NE(output().find("pipeline failed: talker did not stop within 3 s and was killed"), std::string::npos)
+      << output();
   EXPECT_TRUE(all_children_gone(kExitBound));
 }
 
@@ -253,6 +258,35 @@ TEST_F(SupervisorTest, GivesUpAfterMaxRestarts) {
   EXPECT_EQ(wait_exit(kExitBound), 1) << output();
   EXPECT_NE(output().find("giving up after 2 restarts"), std::string::npos) << output();
   EXPECT_EQ(started_pids("talker").size(), 3u);
+}
+
+// Issue 16: an error a restart cannot fix (a bad config, a missing input, an unwritable output) is
+// not retried: the component said "starting" on the handshake pipe but never "running". One try,
+// its one-line reason in the supervisor's last line, exit 1. (Before: 1 + max_restarts tries.)
+TEST_F(SupervisorTest, StartupErrorIsNotRestarted) {
+  write("bad.yaml", "exit_code: 300\n");
+  start(pipeline(std::string(kTalker) + "    config: bad.yaml\n    restart: on-failure\n    restart_backoff_s: 0.05\n"));
+  EXPECT_EQ(wait_exit(kExitBound), 1) << output();
+  EXPECT_EQ(started_pids("talker").size(), 1u) << output();
+  const std::string text = output();
+  EXPECT_NE(text.find("not restarted: a restart cannot fix a start-up error"), std::string::npos) << text;
+  // The last line says which component failed and why.
+  std::string last;
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) last = line;
+  EXPECT_EQ(last, "[supervisor] error: pipeline failed: talker failed at start-up (exit code 1): heslam-talker: " +
+                      (dir_ / "bad.yaml").string() + ": field 'exit_code': expected an integer in [0, 255], got 300")
+      << text;
+}
+
+// A crash after start-up is still restarted (the handshake said "running").
+TEST_F(SupervisorTest, FailureAfterStartupIsStillRestarted) {
+  write("fail.yaml", "exit_after_s: 0.1\nexit_code: 1\n");
+  start(pipeline(std::string(kTalker) + "    config: fail.yaml\n    restart: on-failure\n    max_restarts: 1\n"
+                 "    restart_backoff_s: 0.05\n"));
+  EXPECT_EQ(wait_exit(kExitBound), 1) << output();
+  EXPECT_EQ(started_pids("talker").size(), 2u) << output();
+  EXPECT_EQ(output().find("failed at start-up"), std::string::npos) << output();
 }
 
 TEST_F(SupervisorTest, OnExitShutdownEndsTheRunCleanly) {
@@ -326,6 +360,27 @@ class SupervisorCheck : public SupervisorTest {
   }
   std::string file() const { return (dir_ / "pipeline.yaml").string(); }
 };
+
+// Issue 16: a missing input (the dataset) is caught by --check and before anything starts.
+TEST_F(SupervisorCheck, RejectsAMissingOrEmptyInput) {
+  const std::string component = std::string(kTalker) + "    inputs: [\"$(arg dataset)\"]\n";
+  const std::string text = pipeline(component, "args:\n  dataset: \"\"\n");
+  const std::string missing = (dir_ / "no_such_dataset").string();
+  auto [code, out] = check(text, {"--arg", "dataset=" + missing});
+  EXPECT_EQ(code, 1);
+  EXPECT_EQ(out, "heslam-supervisor: " + file() + ": component 'talker': input " + missing + " does not exist\n");
+  std::tie(code, out) = check(text);
+  EXPECT_EQ(code, 1);
+  EXPECT_EQ(out, "heslam-supervisor: " + file() +
+                     ": component 'talker': input '$(arg dataset)' is empty (give it with --arg, e.g. --arg dataset=DIR)\n");
+  std::tie(code, out) = check(text, {"--arg", "dataset=" + dir_.string()});
+  EXPECT_EQ(code, 0) << out;
+  // A run fails the same way, starting nothing.
+  write("pipeline.yaml", text);
+  supervisor_pid_ = spawn_supervisor({file(), "--arg", "dataset=" + missing});
+  EXPECT_EQ(wait_exit(kExitBound), 1);
+  EXPECT_TRUE(started_pids().empty()) << output();
+}
 
 TEST_F(SupervisorCheck, AcceptsAGoodFile) {
   write("talker.yaml", "exit_after_s: 1\n");

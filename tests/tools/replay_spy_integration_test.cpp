@@ -1,6 +1,6 @@
 // heslam-replay and heslam-spy as real processes on loopback DDS, each test on its own domain:
 // lockstep replay delivers every EuRoC pair bit-identical to the PNGs; spy hz measures a --rate 1
-// replay at 20 +/- 1 Hz; spy list / echo / info show the topics; replay's errors are one clear line.
+// replay (at most 20 Hz; the rate itself is a printed figure); spy list / echo / info show the topics; replay's errors are one clear line.
 #include <unistd.h>
 
 #include <chrono>
@@ -122,7 +122,7 @@ TEST_F(ReplaySpy, LockstepDeliversEveryPairBitIdenticalToThePngs) {
   EXPECT_NEAR(calib.rectified.baseline_m, 0.110, 0.002);  // EuRoC rig: 11 cm
 }
 
-TEST_F(ReplaySpy, SpyHzMeasuresRealTimeReplayAt20Hz) {
+TEST_F(ReplaySpy, SpyHzMeasuresRealTimeReplayAtMost20Hz) {
   HESLAM_REQUIRE_SHARED_DATA(kClip);
   // The spy taps a running replay, as a user would. A 1 s excerpt looped: after the first pass the
   // replay publishes from decoded memory, so a loaded 2-core machine still keeps 20 Hz; passes join
@@ -140,7 +140,10 @@ TEST_F(ReplaySpy, SpyHzMeasuresRealTimeReplayAt20Hz) {
   }
   ASSERT_FALSE(last_rate.empty()) << out;
   std::cout << "heslam-spy hz camera/stereo: " << last_rate << " Hz\n";
-  EXPECT_NEAR(std::stod(last_rate), 20.0, 1.0) << out;
+  // Speed is not behaviour (issue 16, section 5): a loaded machine may publish slower than 20 Hz,
+  // but never faster than the recording; the measured 20 Hz is a printed figure, not an assertion.
+  EXPECT_GT(std::stod(last_rate), 0.0) << out;
+  EXPECT_LE(std::stod(last_rate), 21.0) << out;
   EXPECT_NE(out.find("window: 80"), std::string::npos) << out;
   replay->signal(SIGINT);
   EXPECT_EQ(run(*replay), 0) << replay->err();

@@ -1,12 +1,14 @@
-// heslam-recorder's DDS side and its output files.
+// heslam-recorder's DDS side and its output files, rewritten as frames arrive and finalized at shutdown.
 #include "tools/recorder/recorder.hpp"
 
+#include <algorithm>
 #include <fstream>
 #include <stdexcept>
 #include <thread>
 
 #include "components/frontend/message_adapter.hpp"
 #include "runtime/run_id.hpp"
+#include "runtime/sequence.hpp"
 
 namespace heslam::recorder {
 namespace {
@@ -15,6 +17,12 @@ constexpr std::chrono::milliseconds kWaitPeriod{200};
 // At shutdown, samples still in flight from a frontend that just stopped: drain until the readers
 // stay empty this long.
 constexpr std::chrono::milliseconds kDrainQuietPeriod{300};
+// The files are rewritten whole (poses follow their keyframes' latest state), so the rewrites are
+// spaced by this many times the duration of the last one: at most 1/21 (~5%) of a core however long
+// the run, while a short run's files follow about every frame.
+constexpr int kRewriteSpacingFactor = 20;
+// The replay's count of published frames, on its status.
+constexpr const char* kFramesPublishedCounter = "frames_published";
 
 const char* state_name(heslam_msg_TrackingState state) {
   switch (state) {
@@ -62,16 +70,56 @@ RecorderOptions RecorderOptions::from(const runtime::Config& config, const std::
   return options;
 }
 
-void write_recording(const RecordedTrajectories& recording, const RecorderOptions& options) {
-  for (const auto& path : {options.output, options.keyframe_output, options.lost_output}) {
-    if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
+namespace {
+
+// Writes `path` through write(temporary) and a rename: the file is always either the previous
+// complete version or the new one.
+template <typename Write>
+void replace_file(const std::filesystem::path& path, const std::string& what, Write&& write) {
+  if (std::filesystem::is_directory(path)) {
+    throw std::runtime_error(path.string() + ": is a folder; expected the file name of the " + what);
   }
-  eval::write_trajectory(options.output, recording.frames, options.format);
-  eval::write_trajectory(options.keyframe_output, recording.keyframes, options.format);
-  std::ofstream lost(options.lost_output);
-  lost << "# frames without a pose (not tracked; never interpolated): seq stamp_ns state\n";
-  for (const LostFrame& frame : recording.lost) lost << frame.seq << " " << frame.stamp_ns << " " << frame.state << "\n";
-  if (!lost) throw std::runtime_error(options.lost_output.string() + ": cannot write");
+  std::error_code error;
+  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), error);
+  if (error) {
+    throw std::runtime_error(path.parent_path().string() + ": cannot create the folder of the " + what + " (" +
+                             error.message() + ")");
+  }
+  const std::filesystem::path partial = path.parent_path() / ("." + path.filename().string() + ".partial");
+  try {
+    write(partial);
+  } catch (const std::exception& failure) {
+    std::filesystem::remove(partial, error);
+    throw std::runtime_error(path.string() + ": cannot write the " + what + " (" + failure.what() + ")");
+  }
+  std::filesystem::rename(partial, path, error);
+  if (error) {
+    std::filesystem::remove(partial, error);
+    throw std::runtime_error(path.string() + ": cannot write the " + what + " (" + error.message() + ")");
+  }
+}
+
+}  // namespace
+
+void write_recording(const RecordedTrajectories& recording, const RecorderOptions& options) {
+  replace_file(options.output, "trajectory", [&](const std::filesystem::path& path) {
+    eval::write_trajectory(path, recording.frames, options.format);
+  });
+  replace_file(options.keyframe_output, "keyframe trajectory", [&](const std::filesystem::path& path) {
+    eval::write_trajectory(path, recording.keyframes, options.format);
+  });
+  replace_file(options.lost_output, "list of untracked frames", [&](const std::filesystem::path& path) {
+    std::ofstream lost(path);
+    lost << "# frames without a pose (not tracked; never interpolated): seq stamp_ns state\n";
+    for (const LostFrame& frame : recording.lost) lost << frame.seq << " " << frame.stamp_ns << " " << frame.state << "\n";
+    lost.flush();
+    if (!lost) throw std::runtime_error("write error");
+  });
+}
+
+std::string summary_line(const FrameAccount& account, const std::filesystem::path& output) {
+  return "tracked " + std::to_string(account.with_pose) + "/" + std::to_string(account.published) + " frames, " +
+         std::to_string(account.without_pose()) + " lost, trajectory " + output.string();
 }
 
 Recorder::Recorder(const runtime::CommonArgs& args) : Component("recorder", args) {}
@@ -81,10 +129,12 @@ void Recorder::configure(const runtime::Config& config) {
   odometry_reader_.emplace(participant(), topics().odometry());
   keyframe_reader_.emplace(participant(), topics().keyframes());
   keyframe_state_reader_.emplace(participant(), topics().keyframe_states());
+  status_reader_.emplace(participant(), topics().status());
   waitset_ = std::make_unique<runtime::WaitSet>(participant());
   waitset_->attach(*odometry_reader_);
   waitset_->attach(*keyframe_reader_);
   waitset_->attach(*keyframe_state_reader_);
+  waitset_->attach(*status_reader_);
   log().info("recording to ", options_.output.string(), " (", eval::format_name(options_.format), ")");
   // A restart of this run (kill -9, crash) resumes with every frame recorded before; keyframes come
   // back on their own (transient-local), and odometry published while we were down is replayed to
@@ -97,17 +147,50 @@ void Recorder::configure(const runtime::Config& config) {
     log().info("resuming: ", resumed.frames.size(), " frames from ", journal_->path().string(),
                resumed.torn_lines > 0 ? " (" + std::to_string(resumed.torn_lines) + " torn lines skipped)" : "");
   }
+  // Written now: an output that cannot be written is a start-up error (one line, exit 1, not
+  // restarted), not a surprise at the end of the run; and a resumed run's files are current again.
+  write_files();
+}
+
+std::chrono::milliseconds Recorder::wait_period() const {
+  if (!files_stale_) return kWaitPeriod;
+  const auto until_due = std::chrono::ceil<std::chrono::milliseconds>(next_write_ - std::chrono::steady_clock::now());
+  return std::clamp(until_due, std::chrono::milliseconds(0), kWaitPeriod);
 }
 
 void Recorder::run() {
   while (!shutdown_requested()) {
-    if (waitset_->wait(kWaitPeriod) == runtime::Wake::kShutdown) break;
-    drain();
+    if (waitset_->wait(wait_period()) == runtime::Wake::kShutdown) break;
+    if (drain() > 0) files_stale_ = true;
+    if (files_stale_ && std::chrono::steady_clock::now() >= next_write_) write_files();
   }
+}
+
+FrameAccount Recorder::write_files() {
+  const auto start = std::chrono::steady_clock::now();
+  const RecordedTrajectories recording = recorder_.build();
+  write_recording(recording, options_);
+  const FrameAccount account = recorder_.account(frames_published_);
+  status().set_message(summary_line(account, options_.output));
+  files_stale_ = false;
+  const auto now = std::chrono::steady_clock::now();
+  next_write_ = now + (now - start) * kRewriteSpacingFactor;
+  stats().count("rewrites");
+  return account;
 }
 
 std::size_t Recorder::drain() {
   std::size_t taken = 0;
+  for (auto& received : status_reader_->take()) {
+    if (!received.info.valid_data) continue;
+    const msg::ComponentStatus& status = *received.sample;
+    for (std::uint32_t i = 0; i < status.counters._length; ++i) {
+      const msg::Counter& counter = status.counters._buffer[i];
+      if (runtime::to_string(counter.name) == kFramesPublishedCounter) {
+        frames_published_ = std::max<std::uint64_t>(frames_published_, counter.value);
+      }
+    }
+  }
   for (auto& received : keyframe_reader_->take()) {
     ++taken;
     if (!received.info.valid_data) continue;
@@ -149,7 +232,7 @@ void Recorder::on_shutdown() {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   const RecordedTrajectories recording = recorder_.build();
-  write_recording(recording, options_);
+  const FrameAccount account = write_files();
   journal_->remove();  // the outputs hold everything now
   if (recording.frames_without_reference > 0) {
     log().warn(recording.frames_without_reference, " frames referenced a keyframe that never arrived (odometry pose used)");
@@ -157,6 +240,15 @@ void Recorder::on_shutdown() {
   log().info("wrote ", recording.frames.size(), " poses to ", options_.output.string(), ", ", recording.keyframes.size(),
              " keyframes to ", options_.keyframe_output.string(), ", ", recording.lost.size(), " untracked frames to ",
              options_.lost_output.string());
+  if (account.never_received_count() > 0) {
+    log().warn(account.never_received_count(), " frames never reached the recorder (seq ",
+               account.never_received_text(), "): missed by the frontend (its 'frames missed') or lost on the way");
+  }
+  const std::string summary = summary_line(account, options_.output);
+  // A run without a single pose is a failure, never a success with an empty file.
+  if (account.with_pose == 0) throw std::runtime_error("no frame has a pose: " + summary);
+  status().set_state(runtime::ComponentState::kShuttingDown, summary);
+  log().info(summary);
 }
 
 }  // namespace heslam::recorder

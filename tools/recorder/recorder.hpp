@@ -1,11 +1,15 @@
-// heslam-recorder: records odometry, keyframes and keyframe states, and at shutdown (after draining
-// its readers) writes the full trajectory, the keyframe trajectory and the list of untracked frames.
+// heslam-recorder: records odometry, keyframes and keyframe states, and keeps the full trajectory,
+// the keyframe trajectory and the list of untracked frames on disk as it goes (each file replaced
+// atomically, so it is always complete up to the last frame received), finalized at shutdown after
+// draining its readers. Its status message and last line: "tracked N/M frames, K lost, trajectory FILE".
 //
 //   heslam-recorder [--output FILE] [--format tum|kitti|euroc] [--keyframes FILE] [--lost FILE]
 //
 // Config fields (same names): output, format, keyframe_output, lost_output; flags win over them.
 #pragma once
 
+#include <chrono>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -30,8 +34,13 @@ struct RecorderOptions {
 // "<dir>/<stem><suffix>" next to output, e.g. traj.txt -> traj.keyframes.txt.
 std::filesystem::path sibling_path(const std::filesystem::path& output, const std::string& suffix);
 
-// Writes the three files; creates the output folders. Throws std::runtime_error on I/O errors.
+// Writes the three files, each to a temporary file beside it then renamed over it (a reader or a
+// kill never sees a half-written file); creates the output folders. Throws std::runtime_error naming
+// the file when it cannot be written (a folder, no permission, disk full).
 void write_recording(const RecordedTrajectories& recording, const RecorderOptions& options);
+
+// "tracked N/M frames, K lost, trajectory FILE".
+std::string summary_line(const FrameAccount& account, const std::filesystem::path& output);
 
 class Recorder : public runtime::Component {
  public:
@@ -44,6 +53,10 @@ class Recorder : public runtime::Component {
   bool accepts_positional_args() const override { return true; }
   // Takes everything the readers hold; returns the number of samples taken.
   std::size_t drain();
+  // Rewrites the files from what is recorded and updates the status message with the summary.
+  FrameAccount write_files();
+  // How long the run loop may wait before the files are due again.
+  std::chrono::milliseconds wait_period() const;
 
   RecorderOptions options_;
   TrajectoryRecorder recorder_;
@@ -51,7 +64,11 @@ class Recorder : public runtime::Component {
   std::optional<runtime::Reader<msg::Odometry>> odometry_reader_;
   std::optional<runtime::Reader<msg::Keyframe>> keyframe_reader_;
   std::optional<runtime::Reader<msg::KeyframeState>> keyframe_state_reader_;
+  std::optional<runtime::Reader<msg::ComponentStatus>> status_reader_;  // the replay's frames_published
   std::unique_ptr<runtime::WaitSet> waitset_;
+  std::uint64_t frames_published_ = 0;  // the largest count any publisher reported
+  bool files_stale_ = false;            // recorded data newer than the files
+  std::chrono::steady_clock::time_point next_write_{};
 };
 
 }  // namespace heslam::recorder

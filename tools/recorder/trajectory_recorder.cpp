@@ -2,6 +2,8 @@
 #include "tools/recorder/trajectory_recorder.hpp"
 
 #include <algorithm>
+#include <sstream>
+#include <string>
 
 namespace heslam::recorder {
 namespace {
@@ -86,6 +88,40 @@ RecordedTrajectories TrajectoryRecorder::build() const {
                             static_cast<double>(stamp_ns) / kNsPerSecond);
   }
   return out;
+}
+
+std::uint64_t FrameAccount::never_received_count() const {
+  std::uint64_t count = 0;
+  for (const auto& [first, last] : never_received) count += last - first + 1;
+  return count;
+}
+
+std::string FrameAccount::never_received_text(std::size_t max_ranges) const {
+  std::ostringstream text;
+  for (std::size_t i = 0; i < never_received.size(); ++i) {
+    if (i == max_ranges) {
+      text << ", ...";
+      break;
+    }
+    const auto& [first, last] = never_received[i];
+    text << (i == 0 ? "" : ", ") << first;
+    if (last > first) text << "-" << last;
+  }
+  return text.str();
+}
+
+FrameAccount TrajectoryRecorder::account(std::uint64_t frames_published) const {
+  FrameAccount account;
+  const std::uint64_t highest_plus_one = frames_.empty() ? 0 : frames_.rbegin()->first + 1;
+  account.published = std::max(frames_published, highest_plus_one);
+  std::uint64_t next = 0;  // the first seq not yet accounted for
+  for (const auto& [seq, frame] : frames_) {
+    if (seq > next) account.never_received.emplace_back(next, seq - 1);
+    next = seq + 1;
+    ++(frame.tracked ? account.with_pose : account.untracked);
+  }
+  if (account.published > next) account.never_received.emplace_back(next, account.published - 1);
+  return account;
 }
 
 }  // namespace heslam::recorder

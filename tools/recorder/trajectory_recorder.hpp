@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "components/core/geometry/pose.hpp"
@@ -39,6 +40,21 @@ struct RecordedTrajectories {
   int frames_without_reference = 0;  // tracked frames whose keyframe never arrived (odometry pose used)
 };
 
+// What became of the published frames: the run's summary "tracked N/M frames, K lost".
+struct FrameAccount {
+  std::uint64_t published = 0;  // M: frames published (the replay's count, at least the highest seq + 1)
+  std::uint64_t with_pose = 0;  // N: tracked frames, each a pose of the trajectory
+  std::uint64_t untracked = 0;  // LOST / NOT_INITIALIZED: in the lost list
+  // Seqs below `published` with no odometry at all, as [first, last] ranges: frames the frontend
+  // missed (real time) or that never reached the recorder.
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> never_received;
+
+  std::uint64_t without_pose() const { return published - with_pose; }  // K
+  std::uint64_t never_received_count() const;
+  // "3-7, 9, 12-40" (at most max_ranges ranges, then "...").
+  std::string never_received_text(std::size_t max_ranges = 8) const;
+};
+
 class TrajectoryRecorder {
  public:
   // A frame's odometry. A later sample with the same seq replaces the earlier one.
@@ -50,6 +66,9 @@ class TrajectoryRecorder {
   void update_keyframe(KeyframeId id, const Pose3& T_wc, KeyframeId parent, bool culled);
 
   RecordedTrajectories build() const;
+  // Frames are numbered from 0 by their publisher (StereoFrame.seq); frames_published is its count
+  // (0 when unknown: the highest recorded seq + 1 stands in).
+  FrameAccount account(std::uint64_t frames_published) const;
 
   std::size_t frame_count() const { return frames_.size(); }
   std::size_t keyframe_count() const { return keyframes_.size(); }
