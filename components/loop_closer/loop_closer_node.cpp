@@ -63,9 +63,11 @@ void LoopCloserNode::configure(const runtime::Config& config) {
 void LoopCloserNode::run() {
   while (!shutdown_requested()) {
     if (waitset_->wait(kWaitPeriod) == runtime::Wake::kShutdown) break;
+    log().flush_throttled(/*due_only=*/true);
     take_all();
     process_ready_keyframes();
   }
+  log().flush_throttled();
   log_summary();
 }
 
@@ -78,7 +80,7 @@ std::size_t LoopCloserNode::take_all() {
       mirror_.add_keyframe(*received.sample);
     } catch (const std::exception& error) {
       stats().count("bad_keyframes");
-      log().warn("topic '", topics().keyframes().name, "': ", error.what(), "; skipped");
+      log().warn_throttled("bad_keyframes", "topic '", topics().keyframes().name, "': ", error.what(), "; skipped");
     }
   }
   for (auto& received : keyframe_state_reader_->take()) {
@@ -88,7 +90,7 @@ std::size_t LoopCloserNode::take_all() {
       mirror_.apply_keyframe_state(*received.sample);
     } catch (const std::exception& error) {
       stats().count("bad_keyframe_states");
-      log().warn("topic '", topics().keyframe_states().name, "': ", error.what(), "; skipped");
+      log().warn_throttled("bad_keyframe_states", "topic '", topics().keyframe_states().name, "': ", error.what(), "; skipped");
     }
   }
   for (auto& received : point_state_reader_->take()) {
@@ -101,7 +103,7 @@ std::size_t LoopCloserNode::take_all() {
       mirror_.apply_point_state(*received.sample);
     } catch (const std::exception& error) {
       stats().count("bad_point_states");
-      log().warn("topic '", topics().map_points().name, "': ", error.what(), "; skipped");
+      log().warn_throttled("bad_point_states", "topic '", topics().map_points().name, "': ", error.what(), "; skipped");
     }
   }
   for (auto& received : keyframe_done_reader_->take()) {
