@@ -7,6 +7,7 @@ packages=(
   build-essential cmake pkg-config ccache
   cyclonedds-dev cyclonedds-tools
   libopencv-dev opencv-doc
+  zlib1g-dev
   libeigen3-dev libceres-dev
   googletest libgtest-dev libbenchmark-dev
 )

@@ -1,10 +1,12 @@
-// PNG chunk walk with CRC-32 (ISO 3309, the polynomial PNG uses), no decompression.
+// PNG chunk walk with CRC-32 (zlib's, the one PNG specifies), no decompression.
 #include "tools/replay/dataset/png_check.hpp"
 
 #include <algorithm>
 #include <array>
 #include <stdexcept>
 #include <string>
+
+#include <zlib.h>
 
 #include "components/core/camera/image_limits.hpp"
 
@@ -16,21 +18,8 @@ constexpr std::array<std::uint8_t, 8> kSignature{0x89, 'P', 'N', 'G', '\r', '\n'
 constexpr std::size_t kChunkOverhead = 12;  // length, type, CRC
 constexpr std::size_t kIhdrLength = 13;
 
-std::array<std::uint32_t, 256> make_crc_table() {
-  std::array<std::uint32_t, 256> table{};
-  for (std::uint32_t n = 0; n < 256; ++n) {
-    std::uint32_t c = n;
-    for (int k = 0; k < 8; ++k) c = (c & 1) != 0 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-    table[n] = c;
-  }
-  return table;
-}
-
-std::uint32_t crc32(std::span<const std::uint8_t> bytes) {
-  static const std::array<std::uint32_t, 256> table = make_crc_table();
-  std::uint32_t c = 0xFFFFFFFFu;
-  for (const std::uint8_t b : bytes) c = table[(c ^ b) & 0xFF] ^ (c >> 8);
-  return c ^ 0xFFFFFFFFu;
+std::uint32_t crc32_of(std::span<const std::uint8_t> bytes) {
+  return static_cast<std::uint32_t>(::crc32(::crc32(0L, Z_NULL, 0), bytes.data(), static_cast<uInt>(bytes.size())));
 }
 
 std::uint32_t big_endian(std::span<const std::uint8_t> bytes, std::size_t at) {
@@ -68,7 +57,7 @@ void check_png(std::span<const std::uint8_t> bytes) {
                                std::to_string(length + kChunkOverhead) + " bytes, the file ends after " + file_size);
     }
     const std::uint32_t stored_crc = big_endian(bytes, at + 8 + length);
-    if (crc32(bytes.subspan(at + 4, 4 + length)) != stored_crc) {
+    if (crc32_of(bytes.subspan(at + 4, 4 + length)) != stored_crc) {
       throw std::runtime_error("corrupt PNG: chunk " + name + " at byte " + std::to_string(at) + " fails its CRC check");
     }
     if (first) {

@@ -21,10 +21,15 @@ std::string size_text(const cv::Mat& image) {
 std::vector<std::uint8_t> read_bytes(const std::filesystem::path& path) {
   std::error_code error;
   if (!std::filesystem::exists(path, error)) throw std::runtime_error(path.string() + ": image file missing");
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path.string() + ": cannot open the image file");
-  std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw std::runtime_error(path.string() + ": read error");
+  if (!in || error) throw std::runtime_error(path.string() + ": cannot open the image file");
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
+  in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  if (in.gcount() != static_cast<std::streamsize>(bytes.size())) {
+    throw std::runtime_error(path.string() + ": read error (got " + std::to_string(in.gcount()) + " of " +
+                             std::to_string(size) + " bytes)");
+  }
   return bytes;
 }
 
