@@ -10,6 +10,8 @@
 #include <optional>
 #include <thread>
 
+#include <dds/ddsi/ddsi_serdata.h>
+
 #include <gtest/gtest.h>
 
 #include "child_process.hpp"
@@ -139,6 +141,29 @@ class Ros2Subscriber {
   runtime::Entity reader_;
 };
 
+// The first 4 bytes of the next serialized sample on a topic (the CDR encapsulation header), read
+// without deserializing; empty on timeout.
+std::vector<unsigned char> encapsulation_header(const runtime::Participant& participant,
+                                                const dds_topic_descriptor_t* descriptor, const std::string& topic,
+                                                seconds timeout) {
+  runtime::Entity topic_entity(dds_create_topic(participant.handle(), descriptor, topic.c_str(), nullptr, nullptr));
+  const runtime::Qos qos = runtime::Qos(runtime::QosRole::kCalibration).keep_last(1).transient_local(1);
+  runtime::Entity reader(dds_create_reader(participant.handle(), topic_entity.get(), qos.get(), nullptr));
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    ddsi_serdata* serdata = nullptr;
+    dds_sample_info_t info{};
+    if (dds_takecdr(reader.get(), &serdata, 1, &info, DDS_ANY_STATE) > 0) {
+      std::vector<unsigned char> header(4);
+      ddsi_serdata_to_ser(serdata, 0, header.size(), header.data());
+      ddsi_serdata_unref(serdata);
+      if (info.valid_data) return header;
+    }
+    std::this_thread::sleep_for(milliseconds(20));
+  }
+  return {};
+}
+
 TEST(Ros2BridgeProcess, RepublishesOdometryPathAndPointsOnRos2Topics) {
   const test::ScratchDir dir("ros2_bridge");
   const int domain = test::exclusive_domain_id();
@@ -215,6 +240,12 @@ TEST(Ros2BridgeProcess, RepublishesOdometryPathAndPointsOnRos2Topics) {
       },
       seconds(10)))
       << bridge.err();
+  // rmw_cyclonedds_cpp sends and expects plain CDR (XCDR1), little-endian: encapsulation 00 01.
+  const std::vector<unsigned char> header =
+      encapsulation_header(participant, &nav_msgs_msg_dds__Path__desc, "rt/heslam/keyframe_trajectory", seconds(10));
+  ASSERT_EQ(header.size(), 4u);
+  EXPECT_EQ(header[0], 0x00);
+  EXPECT_EQ(header[1], 0x01) << "CDR_LE (XCDR1) expected, got XCDR2 or big-endian";
   bridge.signal(SIGINT);
   EXPECT_EQ(bridge.wait(seconds(20)).value_or(-1), 0) << bridge.err();
 }
