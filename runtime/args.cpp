@@ -1,6 +1,7 @@
 // Parsing of the flags every heslam process shares.
 #include "runtime/args.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <optional>
 #include <cstdlib>
@@ -24,9 +25,20 @@ int parse_domain(const std::string& flag, const std::string& text) {
 
 }  // namespace
 
+std::string program_name(const char* argv0, std::string_view default_name) {
+  if (argv0 != nullptr) {
+    const std::string file = std::filesystem::path(argv0).filename().string();
+    if (file.rfind("heslam-", 0) == 0) return file;
+  }
+  std::string program = "heslam-" + std::string(default_name);
+  std::replace(program.begin(), program.end(), '_', '-');
+  return program;
+}
+
 CommonArgs parse_common_args(int argc, const char* const* argv, std::string_view default_name) {
   CommonArgs args;
   args.name = std::string(default_name);
+  args.program = program_name(argc > 0 ? argv[0] : nullptr, default_name);
   if (const char* env = std::getenv("HESLAM_DOMAIN"); env != nullptr && *env != '\0') {
     args.domain_id = parse_domain("$HESLAM_DOMAIN", env);
   }

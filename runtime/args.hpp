@@ -16,6 +16,7 @@ struct CommonArgs {
   int domain_id = 0;                  // default: $HESLAM_DOMAIN when set, else 0
   std::string ns = "heslam";          // topic namespace
   std::string name;                   // instance name (status key, log prefix); default: the program's
+  std::string program;                // the executable's name for error lines, see program_name()
   std::filesystem::path config_file;  // empty: every option at its documented default
   LogLevel log_level = LogLevel::kInfo;
   std::string dds_config;             // empty: see ParticipantOptions::dds_config
@@ -26,6 +27,10 @@ struct CommonArgs {
 // Accepts "--flag value" and "--flag=value". Throws std::runtime_error with one line for a bad value,
 // e.g. "--domain: expected an integer in [0, 232], got 'x'".
 CommonArgs parse_common_args(int argc, const char* const* argv, std::string_view default_name);
+
+// The name a user typed, for "<program>: <what>" lines: the file name of argv[0] when it is a
+// heslam executable (heslam-local-mapper), else "heslam-" + default_name with '_' as '-'.
+std::string program_name(const char* argv0, std::string_view default_name);
 
 // The help text of the common flags (append to a tool's own usage).
 std::string common_args_usage();

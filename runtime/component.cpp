@@ -6,7 +6,7 @@
 namespace heslam::runtime {
 
 Component::Component(std::string default_name, const CommonArgs& args)
-    : program_("heslam-" + default_name),
+    : program_(args.program.empty() ? program_name(nullptr, default_name) : args.program),
       name_(args.name.empty() ? default_name : args.name),
       args_(args),
       log_(name_, args.log_level),
@@ -32,8 +32,10 @@ int Component::execute() {
     run();
     status_->set_state(ComponentState::kShuttingDown);
     on_shutdown();
+    log_.flush_throttled();
     return 0;
   } catch (const std::exception& error) {
+    log_.flush_throttled();
     std::cerr << program_ << ": " << error.what() << std::endl;
     try {
       status_->set_state(ComponentState::kFailed, error.what());
@@ -50,6 +52,7 @@ void Component::spin() {
 }
 
 bool Component::spin_once(std::chrono::milliseconds timeout) {
+  log_.flush_throttled(/*due_only=*/true);
   const Wake wake = waitset_.wait(timeout);
   if (wake == Wake::kShutdown) return false;
   if (wake == Wake::kData) {

@@ -11,7 +11,7 @@
 //
 // Lifecycle: construct (participant, status "configuring") -> configure(config) (unknown fields are
 // errors) -> status "running" -> run() -> on_shutdown() -> status gone. Exceptions end the process
-// with one line "heslam-<default name>: <what>" on stderr, status FAILED and exit code 1;
+// with one line "<program>: <what>" on stderr (the executable's name, e.g. heslam-local-mapper), status FAILED and exit code 1;
 // SIGINT/SIGTERM end run() cleanly (exit 0).
 #pragma once
 
@@ -97,7 +97,7 @@ class Component {
   // spin() re-checks for shutdown at least this often even if a wake-up were missed.
   static constexpr int kSpinTimeoutMs = 200;
 
-  std::string program_;  // "heslam-<default name>", the prefix of fatal errors
+  std::string program_;  // the executable's name, the prefix of fatal errors
   std::string name_;
   CommonArgs args_;
   Logger log_;
@@ -110,20 +110,20 @@ class Component {
 };
 
 // Parses the common flags (prints usage for --help), constructs C(args), executes it. Any exception
-// becomes "heslam-<default_name>: <what>" on stderr and exit code 1.
+// becomes "<program>: <what>" on stderr and exit code 1.
 template <typename C>
 int component_main(int argc, char** argv, std::string_view default_name) {
   try {
     install_shutdown_handlers();
     const CommonArgs args = parse_common_args(argc, argv, default_name);
     if (args.help) {
-      std::cout << "usage: heslam-" << default_name << " [options]\n" << common_args_usage();
+      std::cout << "usage: " << args.program << " [options]\n" << common_args_usage();
       return 0;
     }
     C component(args);
     return component.execute();
   } catch (const std::exception& error) {
-    std::cerr << "heslam-" << default_name << ": " << error.what() << "\n";
+    std::cerr << program_name(argc > 0 ? argv[0] : nullptr, default_name) << ": " << error.what() << "\n";
     return 1;
   }
 }

@@ -1,11 +1,16 @@
 // Leveled logging to stderr, one line per message, prefixed by the component name:
 //   "[frontend] warn: frame 17: only 34 keypoints"
+// warn_throttled(key, ...) is for warnings that can repeat every frame: per key, a few lines, then at
+// most one per second with a count (runtime/log_throttle.hpp); flush_throttled() reports the rest.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
 #include <string_view>
+
+#include "runtime/log_throttle.hpp"
 
 namespace heslam::runtime {
 
@@ -17,7 +22,9 @@ std::string_view to_string(LogLevel level);
 
 class Logger {
  public:
-  explicit Logger(std::string name, LogLevel level = LogLevel::kInfo) : name_(std::move(name)), level_(level) {}
+  explicit Logger(std::string name, LogLevel level = LogLevel::kInfo,
+                  std::shared_ptr<LogThrottle> throttle = std::make_shared<LogThrottle>())
+      : name_(std::move(name)), level_(level), throttle_(std::move(throttle)) {}
 
   // Streams every argument: log.info("frame ", seq, " took ", ms, " ms").
   template <typename... Args>
@@ -28,6 +35,22 @@ class Logger {
   void warn(const Args&... args) const { log(LogLevel::kWarn, args...); }
   template <typename... Args>
   void error(const Args&... args) const { log(LogLevel::kError, args...); }
+
+  // A warning of class `key` (e.g. the stats counter it goes with, "bad_frames") that may repeat per
+  // frame: the first few are printed, then one line per second saying how many it stands for.
+  template <typename... Args>
+  void warn_throttled(std::string_view key, const Args&... args) const {
+    if (!enabled(LogLevel::kWarn)) return;
+    std::ostringstream line;
+    (line << ... << args);
+    if (auto admitted = throttle_->admit(key, line.str())) write(LogLevel::kWarn, *admitted);
+  }
+  // Prints the counts of throttled warnings held back: all (at exit) or those due (periodically).
+  void flush_throttled(bool due_only = false) const {
+    for (const std::string& line : throttle_->flush(due_only)) {
+      if (enabled(LogLevel::kWarn)) write(LogLevel::kWarn, line);
+    }
+  }
 
   template <typename... Args>
   void log(LogLevel level, const Args&... args) const {
@@ -47,6 +70,7 @@ class Logger {
 
   std::string name_;
   LogLevel level_;
+  std::shared_ptr<LogThrottle> throttle_;  // shared by copies of this logger
 };
 
 }  // namespace heslam::runtime

@@ -69,6 +69,7 @@ class Reader {
       received.info.no_writers = info.instance_state == DDS_IST_NOT_ALIVE_NO_WRITERS;
       received.info.source_stamp_ns = info.source_timestamp;
       received.info.publication_handle = info.publication_handle;
+      received.info.instance_handle = info.instance_handle;
       if (info.valid_data && received.sample->schema_version != msg::kSchemaVersion) {
         if (schema_mismatches_++ == 0) std::cerr << schema_mismatch_message(name(), received.sample->schema_version) << "\n";
         continue;

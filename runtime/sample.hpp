@@ -41,6 +41,7 @@ struct SampleInfo {
   bool no_writers = false;        // the instance's writers are gone (writer died or unregistered)
   std::int64_t source_stamp_ns = 0;  // the writer's write time (CLOCK_REALTIME)
   dds_instance_handle_t publication_handle = 0;  // which writer sent it
+  dds_instance_handle_t instance_handle = 0;     // which instance (key value) of a keyed topic
 };
 
 template <Message T>

@@ -8,6 +8,7 @@ packages=(
   cyclonedds-dev cyclonedds-tools
   libopencv-dev opencv-doc libopencv-viz-dev
   xvfb
+  zlib1g-dev
   libeigen3-dev libceres-dev
   googletest libgtest-dev libbenchmark-dev
 )

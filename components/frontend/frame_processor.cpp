@@ -23,10 +23,12 @@ FrameOutput FrameProcessor::process(std::int64_t stamp_ns, std::uint64_t seq, co
                                     const cv::Mat& right_raw) {
   const auto start = std::chrono::steady_clock::now();
   const cv::Size raw = rectifier_.raw_size();
-  if (left_raw.size() != raw || right_raw.size() != raw) {
-    throw std::runtime_error("stereo frame " + std::to_string(seq) + ": images are " + std::to_string(left_raw.cols) +
-                             "x" + std::to_string(left_raw.rows) + ", the calibration expects " +
-                             std::to_string(raw.width) + "x" + std::to_string(raw.height));
+  for (const auto& [image, side] : {std::pair{&left_raw, "left"}, std::pair{&right_raw, "right"}}) {
+    if (image->size() != raw) {
+      throw std::runtime_error("stereo frame " + std::to_string(seq) + ": " + side + " image is " +
+                               std::to_string(image->cols) + "x" + std::to_string(image->rows) +
+                               ", the calibration expects " + std::to_string(raw.width) + "x" + std::to_string(raw.height));
+    }
   }
   rectifier_.rectify(left_raw, right_raw, left_rect_, right_rect_);
   const double rectify_ms = ms_since(start);

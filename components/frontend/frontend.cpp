@@ -105,6 +105,7 @@ void Frontend::run() {
   while (!shutdown_requested()) {
     const runtime::Wake wake = waitset_->wait(kWaitPeriod);
     if (wake == runtime::Wake::kShutdown) break;
+    log().flush_throttled(/*due_only=*/true);
     take_calibration();
     mirror_map_state();
     take_frames();
@@ -113,6 +114,7 @@ void Frontend::run() {
     if (!processor_ && wake == runtime::Wake::kData) std::this_thread::sleep_for(kNoCalibrationPoll);
   }
   count_frames_left();
+  log().flush_throttled();
   const auto counters = stats().counters();
   const auto count = [&](const char* name) { return counters.count(name) != 0 ? counters.at(name) : 0; };
   log().info("processed ", count("frames"), " frames (", count("lost"), " lost, ", count("bad_frames"), " bad), ",
@@ -240,7 +242,7 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
   } catch (const std::exception& error) {
     // A bad frame is skipped and counted; it is still acknowledged so a lockstep run goes on.
     stats().count("bad_frames");
-    log().warn(error.what());
+    log().warn_throttled("bad_frames", error.what());
     acknowledge(frame, nullptr);
     return;
   }
@@ -264,7 +266,7 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
 
   if (result.new_keyframe && options_.wait_for_mapper && !wait_for_keyframe_done(result.new_keyframe->id)) {
     stats().count("mapper_timeouts");
-    log().warn("keyframe ", result.new_keyframe->id, ": no KeyframeDone from the mapper",
+    log().warn_throttled("mapper_timeouts", "keyframe ", result.new_keyframe->id, ": no KeyframeDone from the mapper",
                options_.loop_closers.empty() ? "" : " and the loop closer", " within ",
                options_.mapper_timeout.count(), " ms; going on without it");
   }

@@ -7,6 +7,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "components/core/camera/image_limits.hpp"
 #include "runtime/sequence.hpp"
 
 namespace heslam::frontend {
@@ -26,6 +27,11 @@ void from_row_major(const double (&values)[N], Matrix& matrix) {
 }
 
 CameraModel to_camera_model(const msg::CameraModel& message, const std::string& source, const char* which) {
+  if (!image_size_plausible(message.width_px, message.height_px)) {
+    throw std::runtime_error("calibration '" + source + "': " + which + ": image size " +
+                             std::to_string(message.width_px) + "x" + std::to_string(message.height_px) + ": " +
+                             image_size_expectation());
+  }
   CameraModel camera;
   camera.width_px = static_cast<int>(message.width_px);
   camera.height_px = static_cast<int>(message.height_px);
@@ -142,6 +148,12 @@ msg::RectifiedStereoCamera to_message(const PinholeStereo& camera) {
 }
 
 GreyPair to_grey_images(const msg::StereoFrame& frame) {
+  // Checked as the unsigned wire values: 0xFFFFFFFF must read as 4294967295, not as -1.
+  if (!image_size_plausible(frame.width_px, frame.height_px)) {
+    throw std::runtime_error("stereo frame " + std::to_string(frame.seq) + ": width_px x height_px " +
+                             std::to_string(frame.width_px) + "x" + std::to_string(frame.height_px) + ": " +
+                             image_size_expectation());
+  }
   const int width = static_cast<int>(frame.width_px);
   const int height = static_cast<int>(frame.height_px);
   int channels = 0;
@@ -155,11 +167,14 @@ GreyPair to_grey_images(const msg::StereoFrame& frame) {
   const std::size_t expected = static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * channels;
   const auto left = runtime::view(frame.left);
   const auto right = runtime::view(frame.right);
-  if (width <= 0 || height <= 0 || left.size() != expected || right.size() != expected) {
+  if (left.size() != expected || right.size() != expected) {
+    // Name the side that is wrong (both when both are).
+    std::string got;
+    if (left.size() != expected) got += "left has " + std::to_string(left.size());
+    if (right.size() != expected) got += std::string(got.empty() ? "" : ", ") + "right has " + std::to_string(right.size());
     throw std::runtime_error("stereo frame " + std::to_string(frame.seq) + ": expected " + std::to_string(expected) +
                              " bytes per image for " + std::to_string(width) + "x" + std::to_string(height) +
-                             "x" + std::to_string(channels) + ", got " + std::to_string(left.size()) + " and " +
-                             std::to_string(right.size()));
+                             "x" + std::to_string(channels) + ", " + got);
   }
   const int type = channels == 1 ? CV_8UC1 : CV_8UC3;
   // cv::Mat wraps non-const data; the pixels are only read.

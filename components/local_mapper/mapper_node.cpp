@@ -121,12 +121,14 @@ void MapperNode::load_initial_map() {
 void MapperNode::run() {
   while (!shutdown_requested()) {
     if (waitset_->wait(kWaitPeriod) == runtime::Wake::kShutdown) break;
+    log().flush_throttled(/*due_only=*/true);
     take_keyframes();
     take_corrections();
     process_pending();
     apply_corrections();
   }
   if (mapper_ && unsaved_keyframes_ > 0) save();
+  log().flush_throttled();
   log_summary();
 }
 
@@ -144,7 +146,7 @@ void MapperNode::take_keyframes() {
       pending_.insert_or_assign(message.id, std::move(keyframe));
     } catch (const std::exception& error) {
       stats().count("bad_keyframes");
-      log().warn(error.what());
+      log().warn_throttled("bad_keyframes", error.what());
       acknowledge(message.id);  // a lockstep frontend must not wait for a keyframe we cannot use
     }
   }
@@ -164,7 +166,7 @@ void MapperNode::take_corrections() {
       pending_corrections_.insert_or_assign(correction.id, std::move(correction));
     } catch (const std::exception& error) {
       stats().count("bad_corrections");
-      log().warn(error.what());
+      log().warn_throttled("bad_corrections", error.what());
     }
   }
 }
@@ -212,7 +214,7 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
   if (const Keyframe* known = mapper_->map().keyframe(id); known != nullptr) {
     if (known->stamp_ns != keyframe.decoded.keyframe.stamp_ns) {
       stats().count("duplicate_keyframe_ids");
-      log().warn("keyframe ", id, ": id already in the map with stamp ", known->stamp_ns, " ns, received with ",
+      log().warn_throttled("duplicate_keyframe_ids", "keyframe ", id, ": id already in the map with stamp ", known->stamp_ns, " ns, received with ",
                  keyframe.decoded.keyframe.stamp_ns, " ns; ignored");
       acknowledge(id);
     } else {
@@ -227,7 +229,7 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
     changes = mapper_->process_keyframe(std::move(keyframe.decoded.keyframe), std::move(keyframe.decoded.new_points));
   } catch (const std::invalid_argument& error) {
     stats().count("bad_keyframes");
-    log().warn(error.what());
+    log().warn_throttled("bad_keyframes", error.what());
     acknowledge(id);
     return;
   }

@@ -62,11 +62,13 @@ void LoopCloserNode::configure(const runtime::Config& config) {
 void LoopCloserNode::run() {
   while (!shutdown_requested()) {
     if (waitset_->wait(global_ba_.running() ? kGlobalBaPoll : kWaitPeriod) == runtime::Wake::kShutdown) break;
+    log().flush_throttled(/*due_only=*/true);
     take_all();
     process_ready_keyframes();
     if (global_ba_.finished()) finish_global_ba();
   }
   if (global_ba_.abort()) stats().count("global_ba_aborted");
+  log().flush_throttled();
   log_summary();
 }
 
@@ -79,7 +81,7 @@ std::size_t LoopCloserNode::take_all() {
       mirror_.add_keyframe(*received.sample);
     } catch (const std::exception& error) {
       stats().count("bad_keyframes");
-      log().warn("topic '", topics().keyframes().name, "': ", error.what(), "; skipped");
+      log().warn_throttled("bad_keyframes", "topic '", topics().keyframes().name, "': ", error.what(), "; skipped");
     }
   }
   // The state readers are drained until empty before the version markers taken meanwhile count
@@ -98,7 +100,7 @@ std::size_t LoopCloserNode::take_all() {
         mirror_.apply_keyframe_state(*received.sample);
       } catch (const std::exception& error) {
         stats().count("bad_keyframe_states");
-        log().warn("topic '", topics().keyframe_states().name, "': ", error.what(), "; skipped");
+        log().warn_throttled("bad_keyframe_states", "topic '", topics().keyframe_states().name, "': ", error.what(), "; skipped");
       }
     }
     for (auto& received : point_state_reader_->take()) {
@@ -117,7 +119,7 @@ std::size_t LoopCloserNode::take_all() {
         mirror_.apply_point_state(*received.sample);
       } catch (const std::exception& error) {
         stats().count("bad_point_states");
-        log().warn("topic '", topics().map_points().name, "': ", error.what(), "; skipped");
+        log().warn_throttled("bad_point_states", "topic '", topics().map_points().name, "': ", error.what(), "; skipped");
       }
     }
     taken += batch;

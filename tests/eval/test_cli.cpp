@@ -55,9 +55,8 @@ TEST(EvalCli, ApeOnSyntheticFilesWritesTableJsonAndPlots) {
                            dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.out.find("APE: 400 pairs"), std::string::npos) << run.out;
-  const std::size_t rmse_row = run.out.find("  rmse ");
-  ASSERT_NE(rmse_row, std::string::npos) << run.out;
-  EXPECT_NEAR(std::stod(run.out.substr(rmse_row + 7)), 0.1, 1e-12) << run.out;
+  // Below 1 m the table is in millimetres with 3 decimals.
+  EXPECT_NE(run.out.find("  rmse        100.000 mm         0.000 deg\n"), std::string::npos) << run.out;
   const std::string json = slurp(dir / "ape.json");
   EXPECT_NE(json.find("\"metric\": \"ape\""), std::string::npos) << json;
   EXPECT_NE(json.find("\"association\": \"time\""), std::string::npos) << json;
@@ -103,10 +102,15 @@ TEST(EvalCli, ApeOnSyntheticFilesWritesTableJsonAndPlots) {
   EXPECT_NE(svg.find("x [m]"), std::string::npos);
 }
 
-double printed_rmse(const ToolRun& run) {
-  const std::size_t row = run.out.find("  rmse ");
-  return row == std::string::npos ? -1.0 : std::stod(run.out.substr(row + 7));
+// The machine-readable path: `--json` alone prints only the JSON document on stdout.
+double json_translation_rmse_m(const std::string& json) {
+  const std::size_t section = json.find("\"translation_m\"");
+  if (section == std::string::npos) return -1.0;
+  const std::size_t rmse = json.find("\"rmse\": ", section);
+  return rmse == std::string::npos ? -1.0 : std::stod(json.substr(rmse + 8));
 }
+
+double printed_rmse(const ToolRun& run) { return json_translation_rmse_m(run.out); }
 
 // The camera-rate EuRoC ground truth against itself: zero at the same instants; shifted by 9 ms
 // (interpolated), the error a perfect estimator would show if the image stamps were 9 ms off the
@@ -117,13 +121,20 @@ TEST(EvalCli, EurocGroundTruthAgainstItselfShiftedWithInterpolation) {
   const auto data = ::heslam::test::shared_dataset("euroc_mh01_handheld") / "mav0";
   const std::string gt = (data / "state_groundtruth_estimate0/data.csv").string();
   const std::string extrinsic = (data / "cam0/sensor.yaml").string();
-  const std::string both = "ape --gt " + gt + " --extrinsic " + extrinsic + " --est " + gt +
-                           " --est-format euroc --est-extrinsic " + extrinsic + " --interpolate-gt";
+  const std::string table = "ape --gt " + gt + " --extrinsic " + extrinsic + " --est " + gt +
+                            " --est-format euroc --est-extrinsic " + extrinsic + " --interpolate-gt";
+  const std::string both = table + " --json";
   const ToolRun same = run_eval(both, dir);
   ASSERT_EQ(same.exit_code, 0) << same.err;
-  EXPECT_NE(same.out.find("160 pairs"), std::string::npos) << same.out;
+  EXPECT_EQ(same.out.rfind("{\n", 0), 0u) << "stdout is the JSON document alone: " << same.out;
+  EXPECT_NE(same.out.find("\"pairs\": 160"), std::string::npos) << same.out;
   EXPECT_LT(printed_rmse(same), 1e-9) << same.out;
   const ToolRun shifted = run_eval(both + " --offset 0.009", dir);
+  const ToolRun readable = run_eval(table + " --offset 0.009", dir);
+  ASSERT_EQ(readable.exit_code, 0) << readable.err;
+  char rmse_row[64];
+  std::snprintf(rmse_row, sizeof rmse_row, "  rmse    %11.3f mm", printed_rmse(shifted) * 1e3);
+  EXPECT_NE(readable.out.find(rmse_row), std::string::npos) << rmse_row << " in\n" << readable.out;
   ASSERT_EQ(shifted.exit_code, 0) << shifted.err;
   std::printf("[ figures  ] MH01 ground truth against itself 9 ms later: ATE rmse %.2f mm\n", printed_rmse(shifted) * 1e3);
   EXPECT_GT(printed_rmse(shifted), 0.002);
@@ -135,11 +146,52 @@ TEST(EvalCli, PublishedFiguresPrintInFull) {
   const auto dir = test::scratch_dir();
   const auto data = ::heslam::test::shared_dataset("trajectories");
   const ToolRun kitti = run_eval("kitti --gt " + (data / "kitti_gt_poses/09.txt").string() + " --est " +
-                                 (data / "kitti_example_results/09.txt").string() + " --align sim3",
+                                 (data / "kitti_example_results/09.txt").string() + " --align sim3 --full-precision",
                              dir);
   ASSERT_EQ(kitti.exit_code, 0) << kitti.err;
   EXPECT_NE(kitti.out.find("translation drift [%]:     2.88411251140"), std::string::npos) << kitti.out;
   EXPECT_NE(kitti.out.find("ATE [m]:                   8.386619228786"), std::string::npos) << kitti.out;
+  const ToolRun readable = run_eval("kitti --gt " + (data / "kitti_gt_poses/09.txt").string() + " --est " +
+                                    (data / "kitti_example_results/09.txt").string() + " --align sim3", dir);
+  ASSERT_EQ(readable.exit_code, 0) << readable.err;
+  EXPECT_NE(readable.out.find("translation drift:  2.884 %"), std::string::npos) << readable.out;
+  EXPECT_NE(readable.out.find("ATE:                8.387 m"), std::string::npos) << readable.out;
+}
+
+// from_chars reads "nan" and "inf" as numbers; the reader must still refuse them and say where.
+TEST(EvalCli, NonFiniteValueNamesFileLineAndColumn) {
+  const auto dir = test::scratch_dir();
+  test::write_file(dir / "gt.txt", "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n");
+  test::write_file(dir / "nan.txt", "# stamp x y z qx qy qz qw\n1.0 0 0 0 0 0 0 1\n2.0 0 NaN 0 0 0 0 1\n");
+  const ToolRun nan = run_eval("ape --gt " + (dir / "gt.txt").string() + " --est " + (dir / "nan.txt").string(), dir);
+  EXPECT_EQ(nan.exit_code, 1);
+  EXPECT_EQ(nan.err, "heslam-eval: " + (dir / "nan.txt").string() + ":3: column 3 is not a finite number ('NaN')\n");
+  test::write_file(dir / "inf.csv", "#t,x,y,z,qw,qx,qy,qz\n1000000000,0,0,0,1,0,0,0\n2000000000,inf,0,0,1,0,0,0\n");
+  const ToolRun inf = run_eval("ape --gt " + (dir / "inf.csv").string() + " --est " + (dir / "gt.txt").string(), dir);
+  EXPECT_EQ(inf.exit_code, 1);
+  EXPECT_EQ(inf.err, "heslam-eval: " + (dir / "inf.csv").string() + ":3: column 2 is not a finite number ('inf')\n");
+}
+
+// --json FILE keeps the tables on stdout; --json - (or --json alone) prints the JSON document instead.
+TEST(EvalCli, JsonToStdoutIsTheDocumentAlone) {
+  const auto dir = test::scratch_dir();
+  const Trajectory gt = test::figure_eight();
+  Trajectory est = gt;
+  for (std::size_t i = 0; i < est.size(); ++i) est.poses_wc[i].translation().x() += 0.003;
+  write_trajectory(dir / "gt.txt", gt, Format::heslam_default);
+  write_trajectory(dir / "est.txt", est, Format::heslam_default);
+  const std::string files = "--gt " + (dir / "gt.txt").string() + " --est " + (dir / "est.txt").string();
+  for (const std::string json_flag : {"--json -", "--json"}) {
+    const ToolRun run = run_eval("rpe " + files + " " + json_flag + " --delta 5 --unit frames --align none", dir);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_EQ(run.out.rfind("{\n  \"metric\": \"rpe\"", 0), 0u) << run.out;
+    EXPECT_EQ(run.out.substr(run.out.size() - 2), "}\n") << run.out;
+    EXPECT_NEAR(json_translation_rmse_m(run.out), 0.0, 1e-9) << run.out;
+  }
+  const ToolRun table = run_eval("ape " + files + " --align none --full-precision", dir);
+  ASSERT_EQ(table.exit_code, 0) << table.err;
+  EXPECT_NE(table.out.find("   translation [m]    rotation [deg]\n  rmse                 0.003                 0\n"), std::string::npos)
+      << table.out;
 }
 
 TEST(EvalCli, BadInputIsOneLineAndExitOne) {

@@ -56,5 +56,26 @@ TEST(FrameProcessor, CalibrationThroughTheMessageRectifiesTheSame) {
   EXPECT_EQ(direct.camera().baseline_m, through.camera().baseline_m);
 }
 
+// A wrong-sized image is blamed on its side: here the right one (the left is fine).
+TEST(FrameProcessor, WrongSizedImageNamesItsSide) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_v101_head");
+  const StereoCalibration calibration = load_euroc_calibration(test::shared_dataset("euroc_v101_head") / "mav0");
+  FrameProcessor processor(calibration, FrontendOptions::from_config(runtime::Config::empty()));
+  const cv::Mat good(480, 752, CV_8UC1, cv::Scalar(100));
+  const cv::Mat small(480, 640, CV_8UC1, cv::Scalar(100));
+  try {
+    processor.process(0, 4, good, small);
+    ADD_FAILURE() << "expected an error";
+  } catch (const std::runtime_error& error) {
+    EXPECT_STREQ(error.what(), "stereo frame 4: right image is 640x480, the calibration expects 752x480");
+  }
+  try {
+    processor.process(0, 5, small, good);
+    ADD_FAILURE() << "expected an error";
+  } catch (const std::runtime_error& error) {
+    EXPECT_STREQ(error.what(), "stereo frame 5: left image is 640x480, the calibration expects 752x480");
+  }
+}
+
 }  // namespace
 }  // namespace heslam::frontend

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <string>
 
 #include "components/frontend/message_adapter.hpp"
 #include "runtime/sequence.hpp"
@@ -104,6 +105,53 @@ TEST(MessageAdapter, FrameImagesAreWrappedAndSizesChecked) {
   const GreyPair grey = to_grey_images(frame);
   EXPECT_EQ(grey.left.channels(), 1);
   EXPECT_EQ(grey.left.at<std::uint8_t>(0, 0), 29);  // 0.114 * 255, OpenCV's BGR -> grey weights
+}
+
+std::string error_of(const msg::StereoFrame& frame) {
+  try {
+    to_grey_images(frame);
+  } catch (const std::runtime_error& error) {
+    return error.what();
+  }
+  return "(no error)";
+}
+
+// Known bad frames: the line names the side at fault and prints the wire values as they are.
+TEST(MessageAdapter, BadFrameSizesNameTheFieldAndTheSide) {
+  std::vector<std::uint8_t> full(4 * 3, 7), short_one(4 * 2, 9);
+  msg::StereoFrame frame{};
+  frame.seq = 12;
+  frame.width_px = 4;
+  frame.height_px = 3;
+  frame.encoding = heslam_msg_ENCODING_MONO8;
+  runtime::borrow(frame.left, full);
+  runtime::borrow(frame.right, short_one);
+  EXPECT_EQ(error_of(frame), "stereo frame 12: expected 12 bytes per image for 4x3x1, right has 8");
+  runtime::borrow(frame.left, short_one);
+  runtime::borrow(frame.right, full);
+  EXPECT_EQ(error_of(frame), "stereo frame 12: expected 12 bytes per image for 4x3x1, left has 8");
+
+  frame.width_px = 0xFFFFFFFFu;
+  frame.height_px = 0xFFFFFFFFu;
+  EXPECT_EQ(error_of(frame),
+            "stereo frame 12: width_px x height_px 4294967295x4294967295: expected 1..8192 px per side");
+  frame.width_px = 100000;  // would be 40 GB of pixels and maps if it reached OpenCV
+  frame.height_px = 400000;
+  EXPECT_EQ(error_of(frame), "stereo frame 12: width_px x height_px 100000x400000: expected 1..8192 px per side");
+}
+
+TEST(MessageAdapter, CalibrationWithAnImpossibleSizeNamesTheSourceNotOpenCv) {
+  msg::StereoCalibration message{};
+  message.left = {100000, 100000, 458.654, 457.296, 367.215, 248.375, heslam_msg_DISTORTION_NONE, {}, {}};
+  message.right = message.left;
+  std::string source = "huge.yaml";
+  message.source = runtime::borrow(source);
+  try {
+    to_calibration(message);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& error) {
+    EXPECT_STREQ(error.what(), "calibration 'huge.yaml': left: image size 100000x100000: expected 1..8192 px per side");
+  }
 }
 
 TEST(MessageAdapter, OdometryOfALostFrameCarriesNoPose) {

@@ -249,7 +249,7 @@ TEST(LocalMapperProcess, BadConfigFieldExitsWithOneLine) {
                             "mapper");
   EXPECT_EQ(mapper.wait(std::chrono::seconds(30)).value_or(-1), 1);
   const std::string err = mapper.err();
-  EXPECT_NE(err.find("heslam-local_mapper: "), std::string::npos) << err;
+  EXPECT_NE(err.find("heslam-local-mapper: "), std::string::npos) << err;
   EXPECT_NE(err.find("field 'bundle_adjustment.threads'"), std::string::npos) << err;
   EXPECT_NE(err.find("mapper.yaml"), std::string::npos) << err;
 }

@@ -32,6 +32,15 @@ TEST(CommonArgs, DefaultsAndPassThrough) {
   EXPECT_EQ(args.rest, (std::vector<std::string>{"DATASET", "--rate", "1"}));
 }
 
+// Error lines name the executable the user ran, not the component's internal name.
+TEST(CommonArgs, ProgramNameIsTheExecutable) {
+  EXPECT_EQ(program_name("/work/build/bin/heslam-local-mapper", "local_mapper"), "heslam-local-mapper");
+  EXPECT_EQ(program_name("heslam-loop-closer-proximity", "loop_closer"), "heslam-loop-closer-proximity");
+  EXPECT_EQ(program_name(nullptr, "local_mapper"), "heslam-local-mapper");
+  EXPECT_EQ(program_name("/tmp/a.out", "loop_closer"), "heslam-loop-closer");
+  EXPECT_EQ(parse({}).program, "heslam-x");
+}
+
 TEST(CommonArgs, ParsesBothSpellings) {
   const CommonArgs args =
       parse({"--domain", "7", "--namespace=robot1", "--name", "fe", "--config", "c.yaml", "--log-level=debug", "x"});

@@ -324,7 +324,7 @@ TEST_F(ComponentErrors, BadFieldValue) {
   write("bad.yaml", "exit_code: 300\n");
   const auto [code, text] = run_talker({"--config", (dir_ / "bad.yaml").string()});
   EXPECT_EQ(code, 1);
-  EXPECT_EQ(text, "heslam-talker: " + (dir_ / "bad.yaml").string() +
+  EXPECT_EQ(text, "heslam-test-talker: " + (dir_ / "bad.yaml").string() +
                       ": field 'exit_code': expected an integer in [0, 255], got 300\n");
 }
 
@@ -332,19 +332,19 @@ TEST_F(ComponentErrors, UnknownField) {
   write("typo.yaml", "exit_afer_s: 1\n");
   const auto [code, text] = run_talker({"--config", (dir_ / "typo.yaml").string()});
   EXPECT_EQ(code, 1);
-  EXPECT_EQ(text, "heslam-talker: " + (dir_ / "typo.yaml").string() + ": unknown field 'exit_afer_s' (no such option)\n");
+  EXPECT_EQ(text, "heslam-test-talker: " + (dir_ / "typo.yaml").string() + ": unknown field 'exit_afer_s' (no such option)\n");
 }
 
 TEST_F(ComponentErrors, MissingConfigAndBadFlags) {
   auto [code, text] = run_talker({"--config", (dir_ / "none.yaml").string()});
   EXPECT_EQ(code, 1);
-  EXPECT_EQ(text, "heslam-talker: " + (dir_ / "none.yaml").string() + ": cannot open\n");
+  EXPECT_EQ(text, "heslam-test-talker: " + (dir_ / "none.yaml").string() + ": cannot open\n");
   std::tie(code, text) = run_talker({"stray"});
   EXPECT_EQ(code, 1);
-  EXPECT_EQ(text, "heslam-talker: unexpected argument 'stray' (see --help)\n");
+  EXPECT_EQ(text, "heslam-test-talker: unexpected argument 'stray' (see --help)\n");
   std::tie(code, text) = run_talker({"--log-level", "loud"});
   EXPECT_EQ(code, 1);
-  EXPECT_EQ(text, "heslam-talker: --log-level: expected debug, info, warn, error or off, got 'loud'\n");
+  EXPECT_EQ(text, "heslam-test-talker: --log-level: expected debug, info, warn, error or off, got 'loud'\n");
 }
 
 // --check: a broken pipeline file gives its one-line message and exit code 1; nothing starts.

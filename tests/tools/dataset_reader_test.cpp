@@ -1,6 +1,8 @@
 // heslam_dataset on tiny EuRoC and KITTI folders written by the test (known answers for every field
 // and every error line), plus the real EuRoC clip from the shared data when present.
+#include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 
@@ -233,8 +235,103 @@ TEST_F(DatasetReader, MissingCorruptAndMismatchedImagesNameTheFile) {
   EXPECT_EQ(error_of(dataset.frames[1]),
             dataset.frames[1].left.string() + ": cannot be decoded as an image (corrupt file?)");
   cv::imwrite(dataset.frames[2].right.string(), cv::Mat(10, 10, CV_8UC1, cv::Scalar(7)));
-  EXPECT_EQ(error_of(dataset.frames[2]),
-            dataset.frames[2].right.string() + ": 10x10x1 differs from the left image 40x30x1");
+  EXPECT_EQ(error_of(dataset.frames[2]), "stereo pair differs in size or channels: " +
+                                             dataset.frames[2].left.string() + " is 40x30x1, " +
+                                             dataset.frames[2].right.string() + " is 10x10x1");
+}
+
+// With the calibration's size known, the file at fault is named: here the LEFT image is wrong
+// (it used to be reported as a problem of the right file).
+TEST_F(DatasetReader, WrongSizedLeftImageIsBlamedNotTheRight) {
+  make_euroc(kThreeRows, kThreeRows);
+  const StereoDataset dataset = open_dataset(root_);
+  const cv::Size calibrated(dataset.calibration.left.width_px, dataset.calibration.left.height_px);
+  ASSERT_EQ(calibrated, cv::Size(kWidth, kHeight));
+  cv::imwrite(dataset.frames[0].left.string(), cv::Mat(24, 32, CV_8UC1, cv::Scalar(7)));
+  try {
+    load_stereo_images(dataset.frames[0], calibrated);
+    ADD_FAILURE() << "expected an error";
+  } catch (const std::runtime_error& error) {
+    EXPECT_EQ(std::string(error.what()),
+              dataset.frames[0].left.string() + ": 32x24 image; the calibration says 40x30");
+  }
+  EXPECT_NO_THROW(load_stereo_images(dataset.frames[1], calibrated));
+}
+
+// CRC-32 as PNG computes it, to write a well-formed chunk with a corrupt size in the test.
+std::uint32_t png_crc(const std::uint8_t* data, std::size_t size) {
+  std::uint32_t c = 0xFFFFFFFFu;
+  for (std::size_t i = 0; i < size; ++i) {
+    c ^= data[i];
+    for (int k = 0; k < 8; ++k) c = (c & 1) != 0 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+  }
+  return c ^ 0xFFFFFFFFu;
+}
+
+void put_big_endian(std::vector<std::uint8_t>& bytes, std::size_t at, std::uint32_t value) {
+  for (int i = 0; i < 4; ++i) bytes[at + static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(value >> (24 - 8 * i));
+}
+
+// Runs `load` with stderr captured; returns what was printed there.
+template <typename F>
+std::string captured_stderr(F&& load) {
+  std::fflush(stderr);
+  const fs::path capture = fs::temp_directory_path() / ("heslam_stderr_" + std::to_string(::getpid()));
+  const int saved = ::dup(STDERR_FILENO);
+  FILE* file = std::fopen(capture.c_str(), "w");
+  ::dup2(::fileno(file), STDERR_FILENO);
+  load();
+  std::fflush(stderr);
+  ::dup2(saved, STDERR_FILENO);
+  ::close(saved);
+  std::fclose(file);
+  std::ifstream in(capture);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  fs::remove(capture);
+  return text;
+}
+
+// A truncated PNG, one with a flipped byte, and one whose header claims 100000x400000 pixels: one
+// line naming the file and what is wrong, nothing from libpng on stderr, no OpenCV allocation error.
+TEST_F(DatasetReader, DamagedPngFilesAreNamedWithoutLibpngNoise) {
+  make_euroc(kThreeRows, kThreeRows);
+  const StereoDataset dataset = open_dataset(root_);
+  std::vector<std::uint8_t> png;
+  cv::imencode(".png", test_image(0, 0), png);
+  auto write_bytes = [](const fs::path& path, const std::vector<std::uint8_t>& bytes) {
+    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
+                                                static_cast<std::streamsize>(bytes.size()));
+  };
+  auto error_of = [](const StereoFrameFiles& frame) -> std::string {
+    try {
+      load_stereo_images(frame);
+    } catch (const std::runtime_error& error) {
+      return error.what();
+    }
+    return "(no error)";
+  };
+
+  std::vector<std::uint8_t> truncated(png.begin(), png.begin() + static_cast<std::ptrdiff_t>(png.size() / 2));
+  write_bytes(dataset.frames[0].left, truncated);
+  std::string error;
+  EXPECT_EQ(captured_stderr([&] { error = error_of(dataset.frames[0]); }), "");
+  EXPECT_EQ(error.rfind(dataset.frames[0].left.string() + ": truncated PNG: chunk IDAT at byte ", 0), 0u) << error;
+
+  std::vector<std::uint8_t> flipped = png;
+  flipped[png.size() - 20] ^= 0x40;  // inside the image data
+  write_bytes(dataset.frames[1].right, flipped);
+  EXPECT_EQ(captured_stderr([&] { error = error_of(dataset.frames[1]); }), "");
+  EXPECT_EQ(error.rfind(dataset.frames[1].right.string() + ": corrupt PNG: chunk ", 0), 0u) << error;
+  EXPECT_NE(error.find("fails its CRC check"), std::string::npos) << error;
+
+  std::vector<std::uint8_t> huge = png;
+  put_big_endian(huge, 16, 100000);  // IHDR width, then height, after signature, length and type
+  put_big_endian(huge, 20, 400000);
+  put_big_endian(huge, 29, png_crc(huge.data() + 12, 17));  // IHDR type + 13 data bytes
+  write_bytes(dataset.frames[2].left, huge);
+  EXPECT_EQ(error_of(dataset.frames[2]), dataset.frames[2].left.string() +
+                                             ": PNG header says 100000x400000 pixels: expected 1..8192 px per side "
+                                             "(corrupt file?)");
 }
 
 TEST_F(DatasetReader, TimeWindowSelectsFramesBySecondsFromStart) {

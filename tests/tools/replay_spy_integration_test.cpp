@@ -210,6 +210,60 @@ TEST_F(ReplaySpy, BadDatasetAndBadOptionsAreOneClearLine) {
       << bad_topic->err();
 }
 
+// echo --once on a keyed topic: one sample per instance (every component's status), not just the
+// first that arrives.
+TEST_F(ReplaySpy, EchoOnceOnStatusShowsEveryComponent) {
+  runtime::Participant participant({.domain_id = domain_, .dds_config = ""});
+  const runtime::Topics topics;
+  runtime::Writer<msg::ComponentStatus> status(participant, topics.status());
+  auto echo = start("spy", {"echo", "system/status", "--once", "--timeout", "20"}, "echo");
+  std::string names[] = {"frontend", "local_mapper", "replay"};
+  std::string empty;
+  const auto deadline = std::chrono::steady_clock::now() + seconds(30);
+  // Like components: each publishes its status every second (here every 0.3 s, staggered).
+  while (!echo->wait(milliseconds(100)).has_value() && std::chrono::steady_clock::now() < deadline) {
+    for (std::string& name : names) {
+      msg::ComponentStatus sample{};
+      sample.name = runtime::borrow(name);
+      sample.executable = runtime::borrow(empty);
+      sample.message = runtime::borrow(empty);
+      sample.state = heslam_msg_STATE_RUNNING;
+      status.write(sample);
+      std::this_thread::sleep_for(milliseconds(100));
+    }
+  }
+  ASSERT_EQ(run(*echo), 0) << echo->err();
+  const std::string out = echo->out();
+  for (const std::string& name : names) EXPECT_NE(out.find("name: " + name + "\n"), std::string::npos) << out;
+  EXPECT_NE(out.find("# 3 instances, one sample each\n"), std::string::npos) << out;
+  EXPECT_EQ(out.find("name: replay\n"), out.rfind("name: replay\n")) << "one sample per instance:\n" << out;
+}
+
+// A paused replay is a matched but silent writer: the spy's timeout says so instead of asking
+// whether a writer runs; the replay itself does not claim to publish while paused.
+TEST_F(ReplaySpy, PausedReplayIsReportedAsMatchedButSilent) {
+  HESLAM_REQUIRE_SHARED_DATA(kClip);
+  auto replay = start("replay", {test::shared_dataset(kClip).string(), "--start-paused", "--wait", "0.2",
+                                 "--no-progress", "--no-keyboard"},
+                      "replay");
+  // The spy starts once the replay has given up waiting for a subscriber (and said so).
+  const auto deadline = std::chrono::steady_clock::now() + seconds(30);
+  while (replay->err().find("no subscriber") == std::string::npos && std::chrono::steady_clock::now() < deadline &&
+         !replay->wait(milliseconds(50)).has_value()) {
+  }
+  EXPECT_NE(replay->err().find("yet; paused (--start-paused): the first frame goes out on resume"), std::string::npos)
+      << replay->err();
+  auto hz = start("spy", {"hz", "camera/stereo", "--timeout", "3"}, "hz");
+  EXPECT_EQ(run(*hz), 1);
+  EXPECT_NE(hz->err().find("heslam-spy: no sample on 'heslam/camera/stereo' within 3 s, although 1 writer is "
+                           "matched: the writer is silent"),
+            std::string::npos)
+      << hz->err();
+  replay->signal(SIGINT);
+  EXPECT_EQ(run(*replay), 0) << replay->err();
+  EXPECT_EQ(replay->err().find("publishing anyway"), std::string::npos) << replay->err();
+}
+
 TEST_F(ReplaySpy, StartPausedWaitsForSigusr2) {
   HESLAM_REQUIRE_SHARED_DATA(kClip);
   runtime::Participant participant({.domain_id = domain_, .dds_config = ""});

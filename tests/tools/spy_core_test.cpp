@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "components/core/map/ids.hpp"
+
 #include "runtime/sequence.hpp"
 #include "tools/spy/arrival_window.hpp"
 #include "tools/spy/endpoint_qos.hpp"
@@ -121,18 +123,33 @@ TEST(MessageFormat, KeyframeShowsIdPoseAndKeypointCount) {
   keypoints[0].u_px = 12.5f;
   std::vector<std::uint64_t> point_ids = {0, 42, 0, 43, 44};
   msg::Keyframe keyframe{};
-  keyframe.id = 3;
+  keyframe.id = 72057594037927939ULL;  // the frontend's (tag 1) third keyframe
   keyframe.T_wc.position_m[0] = 1.5;
   keyframe.T_wc.orientation_xyzw[3] = 1.0;
   runtime::borrow(keyframe.keypoints, keypoints);
   runtime::borrow(keyframe.point_ids, point_ids);
   const std::string text = format_message(keyframe, {});
-  EXPECT_NE(text.find("id: 3\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("id: fe:3\n"), std::string::npos) << text;
   EXPECT_NE(text.find("T_wc: {position_m: [1.5, 0, 0], orientation_xyzw: [0, 0, 0, 1]}"), std::string::npos);
   EXPECT_NE(text.find("keypoints_count: 5\n"), std::string::npos);
   EXPECT_NE(text.find("... (2 more, --full)"), std::string::npos);
   EXPECT_NE(text.find("observed_points: 3\n"), std::string::npos);
   EXPECT_EQ(format_message(keyframe, {.full = true}).find("more, --full"), std::string::npos);
+}
+
+// Ids show their creator and counter; an unknown creator stays visible in hex; 0 is "no id".
+TEST(MessageFormat, IdsShowCreatorAndCounter) {
+  EXPECT_EQ(format_id(72057594037927937ULL), "fe:1");
+  EXPECT_EQ(format_id(make_id(kMapperTag, 12345)), "lm:12345");
+  EXPECT_EQ(format_id(make_id(kLoopCloserTag, 2)), "lc:2");
+  EXPECT_EQ(format_id(make_id(7, 5)), "0x0700000000000005");
+  EXPECT_EQ(format_id(0), "0");
+  msg::KeyframeState state{};
+  state.id = make_id(kFrontendTag, 9);
+  state.parent_id = make_id(kFrontendTag, 8);
+  const std::string text = format_message(state, {});
+  EXPECT_NE(text.find("id: fe:9\nmap_version: 0\nT_wc: "), std::string::npos) << text;
+  EXPECT_NE(text.find("parent_id: fe:8\n"), std::string::npos) << text;
 }
 
 std::string spy_error(const std::vector<std::string>& args) {

@@ -260,6 +260,22 @@ TEST(Calibration, MalformedEurocFilesGiveOneClearLine) {
   expect_one_line_naming(missing, "cam0/sensor.yaml", "cannot open");
 }
 
+// A resolution no camera has would make OpenCV allocate 40 GB of rectification maps ("Failed to
+// allocate 40000000000 bytes"): refused at the file, with the field named.
+TEST(Calibration, ImpossibleResolutionIsRefusedBeforeOpenCv) {
+  const fs::path mav0 =
+      write_euroc("huge", replace(kEurocCam0, "resolution: [752, 480]", "resolution: [100000, 100000]"), kEurocCam1);
+  const std::string error = error_of([&] { load_euroc_calibration(mav0); });
+  expect_one_line_naming(error, "cam0/sensor.yaml", "resolution: image size 100000 px: expected 1..8192 px per side");
+  // The same camera built in code (as from a message) is refused by the rectifier, naming its source.
+  StereoCalibration calibration = load_euroc_calibration(write_euroc("ok", kEurocCam0, kEurocCam1));
+  calibration.left.width_px = 100000;
+  calibration.left.height_px = 100000;
+  calibration.source = "huge rig";
+  EXPECT_EQ(error_of([&] { StereoRectifier rectifier(calibration); }),
+            "huge rig: left camera: image size 100000x100000: expected 1..8192 px per side");
+}
+
 TEST(Calibration, MalformedKittiAndOrbSlamFilesGiveOneClearLine) {
   const fs::path dir = scratch_dir("bad_formats");
   write(dir / "short.txt", "P0: 718.856 0 607.1928 0 0 718.856 185.2157 0 0 0 1\nP1: 1 2 3\n");

@@ -2,6 +2,7 @@
 #include "tools/eval/line_reader.hpp"
 
 #include <charconv>
+#include <cmath>
 #include <stdexcept>
 #include <system_error>
 
@@ -40,6 +41,10 @@ bool LineReader::next() {
       const auto [end, error] = std::from_chars(first, last, values_[k]);
       if (error != std::errc{} || end != last) {
         fail("expected a number in column " + std::to_string(k + 1) + ", got '" + token + "'");
+      }
+      // from_chars accepts "nan" and "inf"; one such pose would turn every statistic into nan.
+      if (!std::isfinite(values_[k])) {
+        fail("column " + std::to_string(k + 1) + " is not a finite number ('" + token + "')");
       }
     }
     return true;

@@ -201,7 +201,14 @@ class Replay {
   bool wait_for_consumer() {
     if (!options_.lockstep) {
       if (!frame_writer_.wait_for_readers(1, to_ms(options_.wait_subscriber_s)) && options_.wait_subscriber_s > 0) {
-        log_.info("no subscriber of '", frame_writer_.name(), "' yet; publishing anyway");
+        // Paused from the start nothing is published yet: "publishing anyway" would be wrong.
+        if (options_.start_paused) {
+          log_.info("no subscriber of '", frame_writer_.name(), "' yet; paused (--start-paused): the first frame goes "
+                    "out on resume (space, or kill -USR2 ", getpid(), ") to whoever has subscribed by then");
+        } else {
+          log_.info("no subscriber of '", frame_writer_.name(), "' yet; publishing anyway (frames before one "
+                    "subscribes are lost)");
+        }
       }
       return !runtime::shutdown_requested();
     }
@@ -275,11 +282,12 @@ class Replay {
   // preempt it between the datagrams of a frame (measured: decoding on this thread made each 722 KB
   // write take about 3 ms instead of 0.3-0.5 ms).
   std::future<DecodedPair> decode_on_helper(std::size_t index) const {
-    return std::async(std::launch::async, [files = dataset_.frames[index]] {
+    const cv::Size calibrated_size(dataset_.calibration.left.width_px, dataset_.calibration.left.height_px);
+    return std::async(std::launch::async, [files = dataset_.frames[index], calibrated_size] {
       DecodedPair pair;
       const auto start = Clock::now();
       try {
-        pair.images = load_stereo_images(files);
+        pair.images = load_stereo_images(files, calibrated_size);
       } catch (const std::exception& error) {
         pair.error = error.what();
       }
@@ -298,7 +306,7 @@ class Replay {
       ++counts_.skipped_images;
       stats_.count("images_skipped");
       progress_.clear();
-      log_.warn("skipped frame: ", pair.error);
+      log_.warn_throttled("images_skipped", "skipped frame: ", pair.error);
       return std::nullopt;
     }
     stats_.record_ms("load", pair.decode_ms);
@@ -318,7 +326,7 @@ class Replay {
     {
       auto timer = stats_.time("publish");
       if (frame_writer_.write(message) == runtime::WriteResult::kTimeout) {
-        log_.warn("frame ", seq_, ": write timed out (reader too slow)");
+        log_.warn_throttled("write_timeouts", "frame ", seq_, ": write timed out (reader too slow)");
       }
     }
     ++seq_;
@@ -335,7 +343,7 @@ class Replay {
     const msg::StereoFrame message =
         make_frame_message(images, frame.stamp_ns + pass_offset_ns, frame.right_stamp_ns + pass_offset_ns, seq);
     if (frame_writer_.write(message) == runtime::WriteResult::kTimeout) {
-      log_.warn("frame ", seq, ": write timed out (reader too slow)");
+      log_.warn_throttled("write_timeouts", "frame ", seq, ": write timed out (reader too slow)");
     }
     stats_.count("frames_republished");
   }
@@ -385,6 +393,7 @@ class Replay {
   int finish() {
     update_counts();
     progress_.finish();
+    log_.flush_throttled();
     dds_wait_for_acks(frame_writer_.handle(), std::chrono::nanoseconds(kFinalAckTimeout).count());
     status_.set_state(runtime::ComponentState::kShuttingDown);
     log_.info(format_summary(counts_), runtime::shutdown_requested() || quit_ ? " (stopped early)" : "");

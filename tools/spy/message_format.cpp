@@ -6,6 +6,7 @@
 #include <span>
 #include <sstream>
 
+#include "components/core/map/ids.hpp"
 #include "runtime/sequence.hpp"
 
 namespace heslam {
@@ -155,7 +156,7 @@ std::string format_message(const msg::Odometry& odometry, const FormatOptions& o
   text.line(0, "stamp_ns", std::to_string(odometry.stamp_ns));
   text.line(0, "state", state);
   text.line(0, "T_wc", pose(odometry.T_wc));
-  text.line(0, "reference_keyframe_id", std::to_string(odometry.reference_keyframe_id));
+  text.line(0, "reference_keyframe_id", format_id(odometry.reference_keyframe_id));
   text.line(0, "T_ref_c", pose(odometry.T_ref_c));
   text.line(0, "keypoints", std::to_string(odometry.keypoints));
   text.line(0, "tracked_points", std::to_string(odometry.tracked_points));
@@ -169,7 +170,7 @@ std::string format_message(const msg::Odometry& odometry, const FormatOptions& o
 
 std::string format_message(const msg::Keyframe& keyframe, const FormatOptions& options) {
   Text text;
-  text.line(0, "id", std::to_string(keyframe.id));
+  text.line(0, "id", format_id(keyframe.id));
   text.line(0, "stamp_ns", std::to_string(keyframe.stamp_ns));
   text.line(0, "frame_seq", std::to_string(keyframe.frame_seq));
   text.line(0, "T_wc", pose(keyframe.T_wc));
@@ -188,11 +189,11 @@ std::string format_message(const msg::Keyframe& keyframe, const FormatOptions& o
   text.line(0, "observed_points", std::to_string(observed));
   if (options.full) {
     sequence<std::uint64_t>(text, 0, "point_ids", runtime::view(keyframe.point_ids), options,
-                            [](const std::uint64_t& id) { return std::to_string(id); });
+                            [](const std::uint64_t& id) { return format_id(id); });
   }
   sequence<msg::NewStereoPoint>(text, 0, "new_points", runtime::view(keyframe.new_points), options,
                                 [](const msg::NewStereoPoint& p) {
-                                  return "{id: " + std::to_string(p.id) + ", keypoint_index: " +
+                                  return "{id: " + format_id(p.id) + ", keypoint_index: " +
                                          std::to_string(p.keypoint_index) + ", position_w_m: " + array(p.position_w_m) + "}";
                                 });
   return text.str();
@@ -200,32 +201,32 @@ std::string format_message(const msg::Keyframe& keyframe, const FormatOptions& o
 
 std::string format_message(const msg::KeyframeState& state, const FormatOptions& options) {
   Text text;
-  text.line(0, "id", std::to_string(state.id));
+  text.line(0, "id", format_id(state.id));
   text.line(0, "map_version", std::to_string(state.map_version));
   text.line(0, "T_wc", pose(state.T_wc));
-  text.line(0, "parent_id", std::to_string(state.parent_id));
+  text.line(0, "parent_id", format_id(state.parent_id));
   text.line(0, "culled", state.culled ? "true" : "false");
   sequence<msg::CovisibleKeyframe>(text, 0, "covisible", runtime::view(state.covisible), options,
                                    [](const msg::CovisibleKeyframe& c) {
-                                     return "{id: " + std::to_string(c.id) + ", weight: " + std::to_string(c.weight) + "}";
+                                     return "{id: " + format_id(c.id) + ", weight: " + std::to_string(c.weight) + "}";
                                    });
   return text.str();
 }
 
 std::string format_message(const msg::MapPointState& point, const FormatOptions& options) {
   Text text;
-  text.line(0, "id", std::to_string(point.id));
+  text.line(0, "id", format_id(point.id));
   text.line(0, "map_version", std::to_string(point.map_version));
   text.line(0, "position_w_m", array(point.position_w_m));
   text.line(0, "normal_w", array(point.normal_w));
   text.line(0, "distance_range_m", "[" + number(point.min_distance_m) + ", " + number(point.max_distance_m) + "]");
-  text.line(0, "reference_keyframe_id", std::to_string(point.reference_keyframe_id));
+  text.line(0, "reference_keyframe_id", format_id(point.reference_keyframe_id));
   text.line(0, "culled", point.culled ? "true" : "false");
-  text.line(0, "merged_into", std::to_string(point.merged_into));
+  text.line(0, "merged_into", format_id(point.merged_into));
   if (options.full) bytes(text, 0, "descriptor", std::span<const std::uint8_t>(point.descriptor, sizeof(point.descriptor)));
   sequence<msg::PointObservation>(text, 0, "observations", runtime::view(point.observations), options,
                                   [](const msg::PointObservation& o) {
-                                    return "{keyframe_id: " + std::to_string(o.keyframe_id) +
+                                    return "{keyframe_id: " + format_id(o.keyframe_id) +
                                            ", keypoint_index: " + std::to_string(o.keypoint_index) + "}";
                                   });
   return text.str();
@@ -233,18 +234,18 @@ std::string format_message(const msg::MapPointState& point, const FormatOptions&
 
 std::string format_message(const msg::LoopCorrection& correction, const FormatOptions& options) {
   Text text;
-  text.line(0, "id", std::to_string(correction.id));
+  text.line(0, "id", format_id(correction.id));
   text.line(0, "map_version", std::to_string(correction.map_version));
-  text.line(0, "loop_keyframe_id", std::to_string(correction.loop_keyframe_id));
-  text.line(0, "matched_keyframe_id", std::to_string(correction.matched_keyframe_id));
+  text.line(0, "loop_keyframe_id", format_id(correction.loop_keyframe_id));
+  text.line(0, "matched_keyframe_id", format_id(correction.matched_keyframe_id));
   text.line(0, "T_matched_loop", pose(correction.T_matched_loop));
   sequence<msg::CorrectedKeyframePose>(text, 0, "corrected_poses", runtime::view(correction.corrected_poses), options,
                                        [](const msg::CorrectedKeyframePose& c) {
-                                         return "{keyframe_id: " + std::to_string(c.keyframe_id) + ", T_wc: " + pose(c.T_wc) + "}";
+                                         return "{keyframe_id: " + format_id(c.keyframe_id) + ", T_wc: " + pose(c.T_wc) + "}";
                                        });
   sequence<msg::PointMerge>(text, 0, "point_merges", runtime::view(correction.point_merges), options,
                             [](const msg::PointMerge& m) {
-                              return "{from_id: " + std::to_string(m.from_id) + ", into_id: " + std::to_string(m.into_id) + "}";
+                              return "{from_id: " + format_id(m.from_id) + ", into_id: " + format_id(m.into_id) + "}";
                             });
   return text.str();
 }
@@ -255,13 +256,13 @@ std::string format_message(const msg::FrameDone& done, const FormatOptions& /*op
   text.line(0, "stamp_ns", std::to_string(done.stamp_ns));
   text.line(0, "component", runtime::to_string(done.component));
   text.line(0, "keyframe_created", done.keyframe_created ? "true" : "false");
-  text.line(0, "keyframe_id", std::to_string(done.keyframe_id));
+  text.line(0, "keyframe_id", format_id(done.keyframe_id));
   return text.str();
 }
 
 std::string format_message(const msg::KeyframeDone& done, const FormatOptions& /*options*/) {
   Text text;
-  text.line(0, "keyframe_id", std::to_string(done.keyframe_id));
+  text.line(0, "keyframe_id", format_id(done.keyframe_id));
   text.line(0, "component", runtime::to_string(done.component));
   text.line(0, "map_version", std::to_string(done.map_version));
   return text.str();

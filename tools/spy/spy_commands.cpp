@@ -28,6 +28,9 @@ using Clock = std::chrono::steady_clock;
 constexpr std::chrono::seconds kReportPeriod{1};
 // Waits are sliced so SIGINT and --timeout are noticed promptly.
 constexpr std::chrono::milliseconds kWaitSlice{100};
+// echo --once on a keyed topic prints one sample per instance and stops once no new instance has
+// appeared for this long: status is published every second, so every living component is heard.
+constexpr std::chrono::milliseconds kInstanceSettle{1500};
 
 std::chrono::milliseconds to_ms(double seconds) { return std::chrono::milliseconds(static_cast<std::int64_t>(seconds * 1e3)); }
 
@@ -51,10 +54,20 @@ class TimeoutGuard {
  public:
   TimeoutGuard(double timeout_s, std::string topic) : timeout_s_(timeout_s), topic_(std::move(topic)) { reset(); }
   void reset() { last_ = Clock::now(); }
-  void check(int domain) const {
+  // `matched_writers`: writers the spy's reader is matched with now. A matched writer that sends
+  // nothing (a paused replay) is a different problem from no writer at all.
+  void check(int domain, int matched_writers) const {
     if (timeout_s_ > 0.0 && Clock::now() - last_ >= to_ms(timeout_s_)) {
-      throw std::runtime_error("no sample on '" + topic_ + "' within " + std::to_string(timeout_s_) +
-                               " s (is a writer running on domain " + std::to_string(domain) + "?)");
+      char seconds[32];
+      std::snprintf(seconds, sizeof seconds, "%g", timeout_s_);
+      if (matched_writers > 0) {
+        throw std::runtime_error("no sample on '" + topic_ + "' within " + seconds + " s, although " +
+                                 std::to_string(matched_writers) + (matched_writers == 1 ? " writer is" : " writers are") +
+                                 " matched: the writer is silent (paused, waiting for its input, or publishing "
+                                 "only on change)");
+      }
+      throw std::runtime_error("no sample on '" + topic_ + "' within " + seconds + " s and no writer matched (is a "
+                               "writer running on domain " + std::to_string(domain) + " with the same --namespace?)");
     }
   }
 
@@ -81,12 +94,20 @@ int run_list(const runtime::Participant& participant, const SpyOptions& options)
     return 0;
   }
   std::size_t width = 5;
-  for (const auto& [topic, row] : rows) width = std::max(width, topic.size());
-  std::printf("%-*s  %-32s %7s %7s\n", static_cast<int>(width), "TOPIC", "TYPE", "WRITERS", "READERS");
+  std::size_t type_width = 32;  // heslam's own type names fit; ROS 2 ones (via the bridge) are longer
+  std::map<std::string, std::string> types_of;
   for (const auto& [topic, row] : rows) {
+    width = std::max(width, topic.size());
     std::string types;
     for (const std::string& type : row.types) types += (types.empty() ? "" : " | ") + type;
-    std::printf("%-*s  %-32s %7d %7d\n", static_cast<int>(width), topic.c_str(), types.c_str(), row.writers, row.readers);
+    type_width = std::max(type_width, types.size());
+    types_of[topic] = types;
+  }
+  std::printf("%-*s  %-*s %7s %7s\n", static_cast<int>(width), "TOPIC", static_cast<int>(type_width), "TYPE", "WRITERS",
+              "READERS");
+  for (const auto& [topic, row] : rows) {
+    std::printf("%-*s  %-*s %7d %7d\n", static_cast<int>(width), topic.c_str(), static_cast<int>(type_width),
+                types_of[topic].c_str(), row.writers, row.readers);
   }
   return 0;
 }
@@ -131,6 +152,29 @@ int run_info(const runtime::Participant& participant, const ResolvedTopic& topic
 }
 
 template <runtime::Message T>
+int echo_each_instance(const runtime::Participant& participant, runtime::Reader<T>& reader, runtime::WaitSet& waitset,
+                       TimeoutGuard& timeout, const FormatOptions& format) {
+  std::set<dds_instance_handle_t> seen;
+  auto last_new_instance = Clock::now();
+  while (seen.empty() || Clock::now() - last_new_instance < kInstanceSettle) {
+    const runtime::Wake wake = waitset.wait(kWaitSlice);
+    if (wake == runtime::Wake::kShutdown) break;
+    if (wake != runtime::Wake::kData) {
+      if (seen.empty()) timeout.check(participant.domain_id(), reader.matched_writers());
+      continue;
+    }
+    for (auto& received : reader.take()) {
+      if (!received.info.valid_data || !seen.insert(received.info.instance_handle).second) continue;
+      timeout.reset();
+      last_new_instance = Clock::now();
+      std::cout << format_message(*received.sample, format) << "---\n" << std::flush;
+    }
+  }
+  if (!seen.empty()) std::cout << "# " << seen.size() << (seen.size() == 1 ? " instance" : " instances") << ", one sample each\n";
+  return 0;
+}
+
+template <runtime::Message T>
 int run_echo(const runtime::Participant& participant, const ResolvedTopic& topic, const SpyOptions& options) {
   runtime::Reader<T> reader(participant, runtime::TopicSpec<T>{topic.full_name, topic.role}, spy_qos(topic.role, true));
   runtime::WaitSet waitset(participant);
@@ -138,12 +182,16 @@ int run_echo(const runtime::Participant& participant, const ResolvedTopic& topic
   TimeoutGuard timeout(options.timeout_s, topic.full_name);
   FormatOptions format;
   format.full = options.full;
+  // --once on a keyed topic (status of every component, every keyframe): one sample per instance.
+  if (options.once && runtime::MessageTraits<T>::descriptor()->m_nkeys > 0) {
+    return echo_each_instance(participant, reader, waitset, timeout, format);
+  }
   std::size_t printed = 0;
   while (options.count == 0 || printed < options.count) {
     const runtime::Wake wake = waitset.wait(kWaitSlice);
     if (wake == runtime::Wake::kShutdown) break;
     if (wake != runtime::Wake::kData) {
-      timeout.check(participant.domain_id());
+      timeout.check(participant.domain_id(), reader.matched_writers());
       continue;
     }
     for (auto& received : reader.take()) {
@@ -222,7 +270,7 @@ int run_rate(const runtime::Participant& participant, const ResolvedTopic& topic
         serdata = nullptr;
       }
     } else {
-      timeout.check(participant.domain_id());
+      timeout.check(participant.domain_id(), reader.matched_writers());
     }
     if (options.count != 0 && received >= options.count) break;
     if (Clock::now() >= next_report) {

@@ -6,7 +6,10 @@
 #include <stdexcept>
 #include <string>
 
+#include <unistd.h>
+
 #include "tools/synth/preset.hpp"
+#include "tools/synth/progress_report.hpp"
 #include "tools/synth/sequence.hpp"
 #include "tools/synth/writers.hpp"
 
@@ -14,7 +17,8 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: heslam-synth --preset NAME|FILE.yaml --out DIR [--seed N] [--frames N] [--format euroc|kitti]\n"
-    "                    [--threads 1|2] [--no-events]\n"
+    "                    [--threads 1|2] [--no-events] [--quiet]\n"
+    "  progress on stderr: a live line on a terminal, a line per 10 % otherwise, none with --quiet\n"
     "       heslam-synth --list\n";
 
 std::uint64_t parse_u64(const std::string& flag, const std::string& value) {
@@ -32,6 +36,7 @@ int main(int argc, char** argv) {
   using namespace heslam::synth;
   try {
     std::string preset_name, out_dir, format = "euroc";
+    bool quiet = false;
     RenderOptions options;
     for (int i = 1; i < argc; ++i) {
       const std::string arg = argv[i];
@@ -46,6 +51,7 @@ int main(int argc, char** argv) {
       else if (arg == "--format") format = value();
       else if (arg == "--threads") options.threads = static_cast<int>(parse_u64(arg, value()));
       else if (arg == "--no-events") options.events = false;
+      else if (arg == "--quiet" || arg == "-q") quiet = true;
       else if (arg == "--list") {
         for (const auto& n : known_presets()) std::cout << n << "\n";
         return 0;
@@ -65,14 +71,14 @@ int main(int argc, char** argv) {
     const Preset preset = load_preset(find_preset(preset_name));
     SequenceRenderer renderer(preset, options);
     const auto start = std::chrono::steady_clock::now();
+    ProgressReport progress(std::cerr, ProgressReport::mode_for(quiet, isatty(STDERR_FILENO) == 1), preset.name);
     write_sequence(renderer, fmt, out_dir, [&](int done, int total) {
-      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      std::fprintf(stderr, "\rheslam-synth: %s %d/%d frames (%.1f pairs/s)", preset.name.c_str(), done, total,
-                   s > 0 ? done / s : 0.0);
-      if (done == total) std::fputc('\n', stderr);
+      progress.update(done, total, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     });
-    std::fprintf(stderr, "heslam-synth: wrote %s (%s, seed %llu, %.1f m path)\n", out_dir.c_str(), format.c_str(),
-                 static_cast<unsigned long long>(options.seed), renderer.trajectory().length_m());
+    if (!quiet) {
+      std::fprintf(stderr, "heslam-synth: wrote %s (%s, seed %llu, %.1f m path)\n", out_dir.c_str(), format.c_str(),
+                   static_cast<unsigned long long>(options.seed), renderer.trajectory().length_m());
+    }
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "heslam-synth: " << e.what() << "\n";

@@ -1,11 +1,14 @@
 // Loaders for EuRoC sensor.yaml pairs, KITTI calib.txt and ORB-SLAM2 stereo settings.
 #include "components/core/camera/stereo_calibration.hpp"
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 
 #include <opencv2/core.hpp>
+
+#include "components/core/camera/image_limits.hpp"
 
 namespace heslam {
 namespace {
@@ -41,6 +44,17 @@ double read_number(const cv::FileNode& node, const std::filesystem::path& file, 
   if (node.empty() || node.isNone()) fail(file, field, "missing (expected a number)");
   if (!node.isReal() && !node.isInt()) fail(file, field, "expected a number");
   return static_cast<double>(node);
+}
+
+// An image width or height: a whole number of pixels in 1..kMaxImageSidePx (checked before the
+// conversion to int, which would be undefined for a huge value).
+int read_image_side(double value, const std::filesystem::path& file, const std::string& field) {
+  if (!(value >= 1.0 && value <= static_cast<double>(kMaxImageSidePx)) || value != static_cast<double>(static_cast<int>(value))) {
+    std::ostringstream text;
+    text << "image size " << value << " px: " << image_size_expectation();
+    fail(file, field, text.str());
+  }
+  return static_cast<int>(value);
 }
 
 double read_positive(const cv::FileNode& node, const std::filesystem::path& file, const std::string& field) {
@@ -108,9 +122,8 @@ CameraModel read_euroc_camera(const std::filesystem::path& file, double* rate_hz
   if (!(camera.fx_px > 0.0 && camera.fy_px > 0.0)) fail(file, "intrinsics", "expected positive fu, fv");
 
   const std::vector<double> resolution = read_sequence(fs["resolution"], file, "resolution", {2});
-  camera.width_px = static_cast<int>(resolution[0]);
-  camera.height_px = static_cast<int>(resolution[1]);
-  if (camera.width_px <= 0 || camera.height_px <= 0) fail(file, "resolution", "expected positive width, height");
+  camera.width_px = read_image_side(resolution[0], file, "resolution");
+  camera.height_px = read_image_side(resolution[1], file, "resolution");
 
   const std::string distortion = static_cast<std::string>(fs["distortion_model"]);
   if (distortion == "radial-tangential" || distortion == "radtan") {
@@ -154,7 +167,10 @@ StereoCalibration load_euroc_calibration(const std::filesystem::path& mav0_dir) 
 }
 
 StereoCalibration load_kitti_calibration(const std::filesystem::path& calib_txt, int width_px, int height_px) {
-  if (width_px <= 0 || height_px <= 0) fail(calib_txt, "image size", "expected a positive width and height");
+  if (!image_size_plausible(static_cast<std::uint64_t>(std::max(width_px, 0)), static_cast<std::uint64_t>(std::max(height_px, 0)))) {
+    fail(calib_txt, "image size", std::to_string(width_px) + "x" + std::to_string(height_px) + ": " +
+                                      image_size_expectation());
+  }
   std::ifstream in(calib_txt);
   if (!in) throw std::runtime_error(calib_txt.string() + ": cannot open file");
   std::optional<std::vector<double>> p0;
@@ -211,8 +227,8 @@ StereoCalibration load_orbslam_settings(const std::filesystem::path& settings_ya
   const double cx = read_number(fs["Camera.cx"], file, "Camera.cx");
   const double cy = read_number(fs["Camera.cy"], file, "Camera.cy");
   const double bf = read_positive(fs["Camera.bf"], file, "Camera.bf");
-  const int width_px = static_cast<int>(read_positive(fs["Camera.width"], file, "Camera.width"));
-  const int height_px = static_cast<int>(read_positive(fs["Camera.height"], file, "Camera.height"));
+  const int width_px = read_image_side(read_number(fs["Camera.width"], file, "Camera.width"), file, "Camera.width");
+  const int height_px = read_image_side(read_number(fs["Camera.height"], file, "Camera.height"), file, "Camera.height");
 
   if (fs["LEFT.K"].empty()) {
     // Already rectified input (KITTI style): Camera.* is the rectified model, no distortion allowed.

@@ -1,11 +1,14 @@
 // Stereo rectification: the rectified model and remap tables from a StereoCalibration.
 #include "components/core/camera/stereo_rectifier.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "components/core/camera/image_limits.hpp"
 
 namespace heslam {
 namespace {
@@ -54,6 +57,14 @@ StereoRectifier::StereoRectifier(const StereoCalibration& calibration) {
   if (left.width_px <= 0 || left.height_px <= 0 || !(left.fx_px > 0.0) || !(left.fy_px > 0.0)) {
     throw std::runtime_error(calibration.source + ": left camera: expected positive size and focal lengths");
   }
+  for (const auto& [camera, which] : {std::pair{&left, "left"}, std::pair{&right, "right"}}) {
+    if (!image_size_plausible(static_cast<std::uint64_t>(std::max(camera->width_px, 0)),
+                              static_cast<std::uint64_t>(std::max(camera->height_px, 0)))) {
+      throw std::runtime_error(calibration.source + ": " + which + " camera: image size " +
+                               std::to_string(camera->width_px) + "x" + std::to_string(camera->height_px) + ": " +
+                               image_size_expectation());
+    }
+  }
   raw_size_ = cv::Size(left.width_px, left.height_px);
   camera_.width_px = left.width_px;
   camera_.height_px = left.height_px;
@@ -68,6 +79,23 @@ StereoRectifier::StereoRectifier(const StereoCalibration& calibration) {
     T_B_rect_ = left.T_BS;
     passthrough_ = true;
   } else {
+    try {
+      compute_rectification(calibration);
+    } catch (const cv::Exception& error) {
+      // OpenCV's own text names its source file and function, not the calibration at fault.
+      throw std::runtime_error(calibration.source + ": cannot rectify with this calibration (OpenCV: " + error.err + ")");
+    }
+  }
+  if (!(camera_.baseline_m > 0.0)) {
+    throw std::runtime_error(calibration.source +
+                             ": right camera: expected it to the right of the left camera (positive baseline)");
+  }
+}
+
+void StereoRectifier::compute_rectification(const StereoCalibration& calibration) {
+  const CameraModel& left = calibration.left;
+  const CameraModel& right = calibration.right;
+  {
     cv::Mat R1, R2, P1, P2;
     if (calibration.explicit_rectification) {
       const ExplicitRectification& e = *calibration.explicit_rectification;
@@ -96,10 +124,6 @@ StereoRectifier::StereoRectifier(const StereoCalibration& calibration) {
                                 CV_16SC2, left_map_xy_, left_map_frac_);
     cv::initUndistortRectifyMap(camera_matrix(right), distortion_vector(right), R2, P2.colRange(0, 3),
                                 cv::Size(right.width_px, right.height_px), CV_16SC2, right_map_xy_, right_map_frac_);
-  }
-  if (!(camera_.baseline_m > 0.0)) {
-    throw std::runtime_error(calibration.source +
-                             ": right camera: expected it to the right of the left camera (positive baseline)");
   }
 }
 

@@ -34,6 +34,9 @@ class StereoRectifier {
   void rectify(const cv::Mat& left_raw, const cv::Mat& right_raw, cv::Mat& left_rect, cv::Mat& right_rect) const;
 
  private:
+  // The rectified model and remap tables for raw (not yet rectified) input; OpenCV may throw.
+  void compute_rectification(const StereoCalibration& calibration);
+
   PinholeStereo camera_;
   Pose3 T_B_rect_ = Pose3::Identity();
   cv::Size raw_size_;

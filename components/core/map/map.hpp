@@ -14,6 +14,7 @@
 
 #include "components/core/feature/features.hpp"
 #include "components/core/geometry/pose.hpp"
+#include "components/core/map/ids.hpp"
 
 namespace heslam {
 
@@ -21,17 +22,7 @@ using KeyframeId = std::uint64_t;
 using PointId = std::uint64_t;
 inline constexpr std::uint64_t kNoId = 0;
 
-// Ids are allocated without coordination: the creating process's tag in the top 8 bits,
-// a per-creator counter (starting at 1) below.
-inline constexpr std::uint64_t make_id(std::uint8_t creator_tag, std::uint64_t counter) {
-  return (static_cast<std::uint64_t>(creator_tag) << 56) | (counter & ((1ULL << 56) - 1));
-}
-inline constexpr std::uint8_t creator_of(std::uint64_t id) { return static_cast<std::uint8_t>(id >> 56); }
-
-// Creator tags of the shipped processes.
-inline constexpr std::uint8_t kFrontendTag = 1;
-inline constexpr std::uint8_t kMapperTag = 2;
-inline constexpr std::uint8_t kLoopCloserTag = 3;
+// Ids: make_id(creator_tag, counter), creator tags and format_id() are in ids.hpp.
 
 struct Keyframe {
   KeyframeId id = kNoId;

@@ -45,7 +45,10 @@ const char* usage() {
          "  --interpolate-gt              pair each estimate pose with the ground truth interpolated at its\n"
          "                                stamp (+ offset): linear position, slerp rotation\n"
          "  --delta N  --unit frames|m  --all-pairs   RPE pairs (delta 1, frames)\n"
-         "  --json FILE                   write the results as JSON\n"
+         "  --json [FILE]                 the results as JSON: into FILE, or alone (or '-') instead of the\n"
+         "                                tables on stdout, for scripts\n"
+         "  --full-precision              tables in m and deg with 12-17 significant digits (to compare\n"
+         "                                with evo / kitti-odom-eval); default: mm below 1 m, 3 decimals\n"
          "  --plot FILE.png|FILE.svg      top view of the aligned trajectories and the error over time\n"
          "  --errors FILE                 ape / rpe: one row per pair (stamps, errors; ape also the error\n"
          "                                vector), to plot or to look at a stretch of the run\n";
@@ -79,6 +82,16 @@ CliOptions parse_cli(int argc, char** argv) {
     }
     if (flag == "--interpolate-gt") {
       options.interpolate_gt = true;
+      continue;
+    }
+    if (flag == "--full-precision") {
+      options.full_precision = true;
+      continue;
+    }
+    // --json alone (last, or before another option) or "--json -": the JSON document on stdout.
+    if (flag == "--json" && (i + 1 >= args.size() || args[i + 1] == "-" || args[i + 1].starts_with("--"))) {
+      options.json_path = kStdout;
+      if (i + 1 < args.size() && args[i + 1] == "-") ++i;
       continue;
     }
     if (i + 1 >= args.size()) throw std::runtime_error(std::string(flag) + ": missing value");

@@ -13,6 +13,8 @@ namespace heslam::eval::app {
 
 enum class Command { ape, rpe, kitti };
 
+inline const std::filesystem::path kStdout = "-";
+
 struct CliOptions {
   Command command = Command::ape;
   std::filesystem::path gt_path;
@@ -25,7 +27,9 @@ struct CliOptions {
   double est_offset_s = 0.0;
   bool interpolate_gt = false;
   RpeOptions rpe;
+  // kStdout ("-"): JSON on stdout instead of the tables.
   std::filesystem::path json_path;
+  bool full_precision = false;
   std::filesystem::path plot_path;
   std::filesystem::path errors_path;
   bool help = false;

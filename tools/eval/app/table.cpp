@@ -1,10 +1,12 @@
-// Result tables: statistics as rows, translation and rotation as columns; full precision so that a
-// figure can be compared digit for digit with evo or kitti-odom-eval.
+// Result tables: statistics as rows, translation and rotation as columns. By default in a unit that
+// fits the size of the error (mm below 1 m) with a fixed number of decimals; with full precision (17
+// significant digits) a figure can be compared digit for digit with evo or kitti-odom-eval.
 #include "tools/eval/app/table.hpp"
 
 #include <cstdio>
 #include <ostream>
 #include <string>
+#include <string_view>
 
 namespace heslam::eval::app {
 
@@ -22,16 +24,37 @@ std::string format(const char* pattern, double a) {
   return buffer;
 }
 
-void print_stats(std::ostream& out, const ErrorStats& t, const ErrorStats& r) {
-  out << "          " << "   translation [m]" << "    rotation [deg]\n";
+// Errors below this are printed in millimetres: EuRoC / TUM runs are off by millimetres, KITTI by metres.
+constexpr double kMillimetreTableBelow_m = 1.0;
+constexpr double kMillimetresPerMetre = 1e3;
+
+void print_stats(std::ostream& out, const ErrorStats& t, const ErrorStats& r, Precision precision) {
   const std::pair<const char*, std::pair<double, double>> rows[] = {
       {"rmse", {t.rmse, r.rmse}}, {"mean", {t.mean, r.mean}}, {"median", {t.median, r.median}},
       {"std", {t.std, r.std}},    {"min", {t.min, r.min}},    {"max", {t.max, r.max}},
       {"sse", {t.sse, r.sse}}};
+  if (precision == Precision::full) {
+    out << "          " << "   translation [m]" << "    rotation [deg]\n";
+    for (const auto& [name, values] : rows) {
+      char label[16];
+      std::snprintf(label, sizeof label, "  %-8s", name);
+      out << label << format("%18.12g%18.12g\n", values.first, values.second);
+    }
+    return;
+  }
+  const bool millimetres = t.max < kMillimetreTableBelow_m;
+  const double scale = millimetres ? kMillimetresPerMetre : 1.0;
+  const char* unit = millimetres ? "mm" : "m";
+  out << "          " << "   translation" << "        rotation\n";
   for (const auto& [name, values] : rows) {
+    // sse is a sum of squares: its unit is the square of the table's.
+    const bool squared = std::string_view(name) == "sse";
     char label[16];
     std::snprintf(label, sizeof label, "  %-8s", name);
-    out << label << format("%18.12g%18.12g\n", values.first, values.second);
+    const double translation = values.first * (squared ? scale * scale : scale);
+    const std::string translation_unit = squared ? std::string(unit) + "^2" : std::string(unit) + "  ";
+    out << label << format("%11.3f ", translation) << translation_unit
+        << format("%12.3f ", values.second) << (squared ? "deg^2" : "deg") << "\n";
   }
 }
 
@@ -48,33 +71,41 @@ void print_alignment(std::ostream& out, AlignMode mode, const Sim3& S) {
 
 }  // namespace
 
-void print_ape(std::ostream& out, const ApeResult& ape) {
+void print_ape(std::ostream& out, const ApeResult& ape, Precision precision) {
   out << "APE: " << ape.translation_m.count << " pairs, ";
   print_alignment(out, ape.align, ape.alignment);
-  print_stats(out, ape.translation_m, ape.rotation_deg);
+  print_stats(out, ape.translation_m, ape.rotation_deg, precision);
 }
 
-void print_rpe(std::ostream& out, const RpeResult& rpe) {
+void print_rpe(std::ostream& out, const RpeResult& rpe, Precision precision) {
   out << "RPE: delta " << format("%g", rpe.options.delta) << " " << delta_unit_name(rpe.options.unit)
       << (rpe.options.all_pairs ? " (all pairs)" : "") << ", " << rpe.pairs.size() << " pairs, ";
   print_alignment(out, rpe.options.align, Sim3{});
-  print_stats(out, rpe.translation_m, rpe.rotation_deg);
+  print_stats(out, rpe.translation_m, rpe.rotation_deg, precision);
 }
 
-void print_kitti(std::ostream& out, const KittiResult& kitti) {
+void print_kitti(std::ostream& out, const KittiResult& kitti, Precision precision) {
   out << "KITTI: " << kitti.pairs << " frames, " << kitti.segments.size() << " sub-sequences, ";
   print_alignment(out, kitti.align, kitti.alignment);
+  const bool full = precision == Precision::full;
   out << "  length [m]  segments  translation [%]  rotation [deg/100m]\n";
   for (const KittiLengthError& l : kitti.per_length) {
     char row[160];
-    std::snprintf(row, sizeof row, "  %10.0f  %8zu  %15.9g  %19.9g\n", l.length_m, l.segments,
-                  l.translation_error_percent, l.rotation_error_deg_per_100m);
+    std::snprintf(row, sizeof row, full ? "  %10.0f  %8zu  %15.9g  %19.9g\n" : "  %10.0f  %8zu  %15.3f  %19.4f\n",
+                  l.length_m, l.segments, l.translation_error_percent, l.rotation_error_deg_per_100m);
     out << row;
   }
-  out << format("translation drift [%%]:     %.15g\n", kitti.translation_error_percent)
-      << format("rotation drift [deg/100m]: %.15g\n", kitti.rotation_error_deg_per_100m)
-      << format("ATE [m]:                   %.15g\n", kitti.ate_m)
-      << format("RPE [m] / [deg]:           %.15g / %.15g\n", kitti.rpe_m, kitti.rpe_deg);
+  if (full) {
+    out << format("translation drift [%%]:     %.15g\n", kitti.translation_error_percent)
+        << format("rotation drift [deg/100m]: %.15g\n", kitti.rotation_error_deg_per_100m)
+        << format("ATE [m]:                   %.15g\n", kitti.ate_m)
+        << format("RPE [m] / [deg]:           %.15g / %.15g\n", kitti.rpe_m, kitti.rpe_deg);
+    return;
+  }
+  out << format("translation drift:  %.3f %%\n", kitti.translation_error_percent)
+      << format("rotation drift:     %.4f deg/100m\n", kitti.rotation_error_deg_per_100m)
+      << format("ATE:                %.3f m\n", kitti.ate_m)
+      << format("RPE:                %.3f m / %.4f deg\n", kitti.rpe_m, kitti.rpe_deg);
 }
 
 std::string ape_error_rows(const ApeResult& ape, const AlignedPair& pair) {

@@ -11,9 +11,13 @@
 
 namespace heslam::eval::app {
 
-void print_ape(std::ostream& out, const ApeResult& ape);
-void print_rpe(std::ostream& out, const RpeResult& rpe);
-void print_kitti(std::ostream& out, const KittiResult& kitti);
+// readable: a unit that fits the errors (mm when every translation error is below 1 m, else m), 3
+// decimals; full: 12-17 significant digits in m and deg, to compare with evo / kitti-odom-eval.
+enum class Precision { readable, full };
+
+void print_ape(std::ostream& out, const ApeResult& ape, Precision precision = Precision::readable);
+void print_rpe(std::ostream& out, const RpeResult& rpe, Precision precision = Precision::readable);
+void print_kitti(std::ostream& out, const KittiResult& kitti, Precision precision = Precision::readable);
 
 // APE: estimate row, stamp (s, or the frame id without stamps), translation error (m) and its x y z
 // in the ground truth's frame (aligned estimate - ground truth), rotation error (deg).

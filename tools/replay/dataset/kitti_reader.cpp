@@ -7,9 +7,10 @@
 #include <sstream>
 #include <stdexcept>
 
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/core.hpp>
 
 #include "tools/replay/dataset/dataset_readers.hpp"
+#include "tools/replay/dataset/stereo_images.hpp"
 
 namespace heslam::dataset_detail {
 
@@ -64,8 +65,12 @@ StereoDataset read_kitti(const fs::path& sequence_dir, const DatasetOptions& /*o
   // The first decodable left image gives the size calib.txt leaves out.
   cv::Mat first;
   for (const StereoFrameFiles& frame : dataset.frames) {
-    first = cv::imread(frame.left.string(), cv::IMREAD_UNCHANGED);
-    if (!first.empty()) break;
+    try {
+      first = load_image_file(frame.left);
+      break;
+    } catch (const std::runtime_error&) {
+      // missing or damaged: the replay reports it when the frame is due; try the next one
+    }
   }
   if (first.empty()) {
     throw std::runtime_error((sequence_dir / "image_0").string() + ": no readable image (empty recording)");

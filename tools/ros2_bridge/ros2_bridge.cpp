@@ -1,0 +1,127 @@
+// heslam-ros2-bridge: heslam topics in, ROS 2 topics out (see ros2_bridge.hpp).
+#include "tools/ros2_bridge/ros2_bridge.hpp"
+
+#include <stdexcept>
+
+namespace heslam::ros2 {
+
+namespace {
+
+// ROS 2's default QoS profile for a stream: reliable, volatile, keep last 10 (rclcpp's default).
+constexpr int kRosDefaultDepth = 10;
+constexpr double kMinPublishPeriod_s = 0.05;
+constexpr double kMaxPublishPeriod_s = 60.0;
+
+runtime::Qos stream_qos() {
+  return runtime::Qos(runtime::QosRole::kOdometry).keep_last(kRosDefaultDepth).volatile_durability();
+}
+
+// Like a latched ROS 2 topic (rviz2 "Transient Local"): a late subscriber gets the current path /
+// cloud; volatile ROS 2 subscribers still match.
+runtime::Qos latched_qos() { return runtime::Qos(runtime::QosRole::kCalibration).keep_last(1).transient_local(1); }
+
+}  // namespace
+
+BridgeOptions BridgeOptions::from(const runtime::Config& config) {
+  BridgeOptions options;
+  options.ros_namespace = config.get_string("ros_namespace", options.ros_namespace);
+  options.frames.world = config.get_string("world_frame", options.frames.world);
+  options.frames.camera = config.get_string("camera_frame", options.frames.camera);
+  options.publish_period_s =
+      config.get_double("publish_period_s", options.publish_period_s, kMinPublishPeriod_s, kMaxPublishPeriod_s);
+  if (options.ros_namespace.empty() || options.ros_namespace.front() == '/' || options.ros_namespace.back() == '/') {
+    throw std::runtime_error("ros_namespace: '" + options.ros_namespace +
+                             "': expected a ROS name without leading or trailing '/' (e.g. heslam, robot1/slam)");
+  }
+  return options;
+}
+
+Ros2Bridge::Ros2Bridge(const runtime::CommonArgs& args) : Component("ros2_bridge", args) {}
+
+void Ros2Bridge::configure(const runtime::Config& config) {
+  options_ = BridgeOptions::from(config);
+  const std::string prefix = options_.ros_namespace + "/";
+  odometry_writer_.emplace(participant(), &nav_msgs_msg_dds__Odometry__desc, ros2_topic(prefix + "odometry"), stream_qos());
+  pose_writer_.emplace(participant(), &geometry_msgs_msg_dds__PoseStamped__desc, ros2_topic(prefix + "pose"), stream_qos());
+  path_writer_.emplace(participant(), &nav_msgs_msg_dds__Path__desc, ros2_topic(prefix + "keyframe_trajectory"),
+                       latched_qos());
+  cloud_writer_.emplace(participant(), &sensor_msgs_msg_dds__PointCloud2__desc, ros2_topic(prefix + "map_points"),
+                        latched_qos());
+
+  subscribe(topics().odometry(), [this](runtime::Received<msg::Odometry>& received) {
+    if (received.info.valid_data) on_odometry(*received.sample);
+  });
+  subscribe(topics().keyframes(), [this](runtime::Received<msg::Keyframe>& received) {
+    if (!received.info.valid_data) return;
+    KeyframeEntry& entry = keyframes_[received.sample->id];
+    if (!entry.stamp_ns) {
+      entry.stamp_ns = received.sample->stamp_ns;
+      entry.T_wc = received.sample->T_wc;
+    }
+    path_changed_ = true;
+  });
+  subscribe(topics().keyframe_states(), [this](runtime::Received<msg::KeyframeState>& received) {
+    if (!received.info.valid_data) return;
+    KeyframeEntry& entry = keyframes_[received.sample->id];
+    entry.T_wc = received.sample->T_wc;
+    entry.culled = received.sample->culled;
+    path_changed_ = true;
+  });
+  subscribe(topics().map_points(), [this](runtime::Received<msg::MapPointState>& received) {
+    const msg::MapPointState& point = *received.sample;
+    if (!received.info.valid_data || point.culled || point.merged_into != 0) {
+      cloud_changed_ = points_w_m_.erase(point.id) > 0 || cloud_changed_;
+      return;
+    }
+    points_w_m_[point.id] = {point.position_w_m[0], point.position_w_m[1], point.position_w_m[2]};
+    cloud_changed_ = true;
+  });
+  log().info("ROS 2 topics: rt/", prefix, "odometry, rt/", prefix, "pose, rt/", prefix, "keyframe_trajectory, rt/",
+             prefix, "map_points (frame '", options_.frames.world, "')");
+}
+
+void Ros2Bridge::on_odometry(const msg::Odometry& odometry) {
+  newest_stamp_ns_ = std::max(newest_stamp_ns_, odometry.stamp_ns);
+  // A frame that is not tracked carries no pose (the identity): ROS 2 gets nothing for it.
+  if (odometry.state != heslam_msg_TRACKING_OK) {
+    stats().count("untracked_frames_skipped");
+    return;
+  }
+  odometry_writer_->write(OdometryMessage(odometry, options_.frames).get());
+  pose_writer_->write(PoseStampedMessage(odometry.stamp_ns, odometry.T_wc, options_.frames).get());
+  stats().count("odometry_published");
+}
+
+void Ros2Bridge::publish_map_if_changed() {
+  if (path_changed_) {
+    std::vector<KeyframePose> keyframes;
+    for (const auto& [id, entry] : keyframes_) {
+      if (entry.stamp_ns && !entry.culled) keyframes.push_back({*entry.stamp_ns, entry.T_wc});
+    }
+    path_writer_->write(PathMessage(std::move(keyframes), options_.frames).get());
+    stats().count("paths_published");
+    path_changed_ = false;
+  }
+  if (cloud_changed_) {
+    std::vector<std::array<double, 3>> points;
+    points.reserve(points_w_m_.size());
+    for (const auto& [id, position] : points_w_m_) points.push_back(position);
+    cloud_writer_->write(PointCloudMessage(newest_stamp_ns_, points, options_.frames).get());
+    stats().count("point_clouds_published");
+    cloud_changed_ = false;
+  }
+}
+
+void Ros2Bridge::run() {
+  const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(options_.publish_period_s));
+  auto next_publish = std::chrono::steady_clock::now() + period;
+  while (spin_once(std::chrono::milliseconds(50))) {
+    if (std::chrono::steady_clock::now() < next_publish) continue;
+    next_publish += period;
+    publish_map_if_changed();
+  }
+  publish_map_if_changed();
+}
+
+}  // namespace heslam::ros2

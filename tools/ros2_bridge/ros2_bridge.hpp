@@ -1,0 +1,64 @@
+// heslam-ros2-bridge: republishes heslam's odometry, keyframe trajectory and map points on ROS 2 topic
+// names with ROS 2's wire types, so ROS 2 tools (rviz2, ros2 topic echo, rosbag2) on the same DDS
+// domain see them without any ROS code in heslam (docs/ros2.md).
+//
+//   heslam-odometry          -> rt/<ros_namespace>/odometry             nav_msgs/Odometry (tracked frames)
+//                            -> rt/<ros_namespace>/pose                 geometry_msgs/PoseStamped
+//   map/keyframes + states   -> rt/<ros_namespace>/keyframe_trajectory  nav_msgs/Path (transient local)
+//   map/points               -> rt/<ros_namespace>/map_points           sensor_msgs/PointCloud2 (transient local)
+//
+// Config fields (all optional): ros_namespace ("heslam"), world_frame ("heslam_world"),
+// camera_frame ("heslam_camera"), publish_period_s (1.0: how often a changed path / cloud is sent).
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "runtime/component.hpp"
+#include "tools/ros2_bridge/ros2_conversions.hpp"
+#include "tools/ros2_bridge/ros2_writer.hpp"
+
+namespace heslam::ros2 {
+
+struct BridgeOptions {
+  std::string ros_namespace = "heslam";
+  Frames frames;
+  double publish_period_s = 1.0;
+
+  // Throws std::runtime_error naming the field on a bad value.
+  static BridgeOptions from(const runtime::Config& config);
+};
+
+class Ros2Bridge : public runtime::Component {
+ public:
+  explicit Ros2Bridge(const runtime::CommonArgs& args);
+
+ private:
+  void configure(const runtime::Config& config) override;
+  void run() override;
+
+  void on_odometry(const msg::Odometry& odometry);
+  void publish_map_if_changed();
+
+  struct KeyframeEntry {
+    std::optional<std::int64_t> stamp_ns;  // from map/keyframes
+    msg::Pose T_wc{};                      // newest: the keyframe's, then its states'
+    bool culled = false;
+  };
+
+  BridgeOptions options_;
+  std::optional<Ros2Writer<Odometry>> odometry_writer_;
+  std::optional<Ros2Writer<PoseStamped>> pose_writer_;
+  std::optional<Ros2Writer<Path>> path_writer_;
+  std::optional<Ros2Writer<PointCloud2>> cloud_writer_;
+  std::map<std::uint64_t, KeyframeEntry> keyframes_;
+  std::map<std::uint64_t, std::array<double, 3>> points_w_m_;
+  std::int64_t newest_stamp_ns_ = 0;
+  bool path_changed_ = false;
+  bool cloud_changed_ = false;
+};
+
+}  // namespace heslam::ros2

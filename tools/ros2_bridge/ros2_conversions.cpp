@@ -1,0 +1,94 @@
+// heslam -> ROS 2 message conversion (see ros2_conversions.hpp for frames and units).
+#include "tools/ros2_bridge/ros2_conversions.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cstring>
+
+#include "runtime/sequence.hpp"
+
+namespace heslam::ros2 {
+
+namespace {
+
+constexpr std::int64_t kNanosecondsPerSecond = 1'000'000'000;
+
+// PointCloud2 carries its byte order; heslam writes the host's, which must be little-endian to say so.
+static_assert(std::endian::native == std::endian::little, "PointCloudMessage writes is_bigendian = false");
+
+Header header(std::int64_t stamp_ns, const Frames& frames) {
+  Header h{};
+  h.stamp = to_time(stamp_ns);
+  h.frame_id = runtime::borrow(frames.world);
+  return h;
+}
+
+}  // namespace
+
+Time to_time(std::int64_t stamp_ns) {
+  std::int64_t sec = stamp_ns / kNanosecondsPerSecond;
+  std::int64_t nanosec = stamp_ns % kNanosecondsPerSecond;
+  if (nanosec < 0) {
+    nanosec += kNanosecondsPerSecond;
+    sec -= 1;
+  }
+  return Time{static_cast<std::int32_t>(sec), static_cast<std::uint32_t>(nanosec)};
+}
+
+Pose to_pose(const msg::Pose& pose) {
+  Pose out{};
+  out.position = {pose.position_m[0], pose.position_m[1], pose.position_m[2]};
+  out.orientation = {pose.orientation_xyzw[0], pose.orientation_xyzw[1], pose.orientation_xyzw[2],
+                     pose.orientation_xyzw[3]};
+  return out;
+}
+
+OdometryMessage::OdometryMessage(const msg::Odometry& odometry, const Frames& frames) {
+  message_.header = header(odometry.stamp_ns, frames);
+  message_.child_frame_id = runtime::borrow(frames.camera);
+  message_.pose.pose = to_pose(odometry.T_wc);
+}
+
+PoseStampedMessage::PoseStampedMessage(std::int64_t stamp_ns, const msg::Pose& T_wc, const Frames& frames) {
+  message_.header = header(stamp_ns, frames);
+  message_.pose = to_pose(T_wc);
+}
+
+PathMessage::PathMessage(std::vector<KeyframePose> keyframes, const Frames& frames) {
+  std::stable_sort(keyframes.begin(), keyframes.end(),
+                   [](const KeyframePose& a, const KeyframePose& b) { return a.stamp_ns < b.stamp_ns; });
+  poses_.reserve(keyframes.size());
+  for (const KeyframePose& keyframe : keyframes) {
+    PoseStamped pose{};
+    pose.header = header(keyframe.stamp_ns, frames);
+    pose.pose = to_pose(keyframe.T_wc);
+    poses_.push_back(pose);
+  }
+  message_.header = header(keyframes.empty() ? 0 : keyframes.back().stamp_ns, frames);
+  runtime::borrow(message_.poses, poses_);
+}
+
+PointCloudMessage::PointCloudMessage(std::int64_t stamp_ns, const std::vector<std::array<double, 3>>& points_w_m,
+                                     const Frames& frames) {
+  static const std::string kNames[3] = {"x", "y", "z"};
+  for (std::uint32_t k = 0; k < 3; ++k) {
+    fields_.push_back(PointField{runtime::borrow(kNames[k]), 4 * k, kPointFieldFloat32, 1});
+  }
+  data_.resize(points_w_m.size() * kPointStep);
+  for (std::size_t i = 0; i < points_w_m.size(); ++i) {
+    const float xyz[3] = {static_cast<float>(points_w_m[i][0]), static_cast<float>(points_w_m[i][1]),
+                          static_cast<float>(points_w_m[i][2])};
+    std::memcpy(data_.data() + i * kPointStep, xyz, sizeof xyz);
+  }
+  message_.header = header(stamp_ns, frames);
+  message_.height = 1;
+  message_.width = static_cast<std::uint32_t>(points_w_m.size());
+  runtime::borrow(message_.fields, fields_);
+  message_.is_bigendian = false;
+  message_.point_step = kPointStep;
+  message_.row_step = kPointStep * message_.width;
+  runtime::borrow(message_.data, data_);
+  message_.is_dense = true;  // map points are never NaN
+}
+
+}  // namespace heslam::ros2

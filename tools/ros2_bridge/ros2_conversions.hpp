@@ -1,0 +1,89 @@
+// heslam messages -> ROS 2 messages (nav_msgs/Odometry, geometry_msgs/PoseStamped, nav_msgs/Path,
+// sensor_msgs/PointCloud2), DDS-free so they are unit-tested on known values.
+//
+// Frames: poses stay heslam's T_wc (camera -> world) in heslam's world frame, which is the first
+// camera's optical frame (x right, y down, z forward), named `frames.world`; the camera frame is
+// `frames.camera`. Covariances and the twist are not estimated: all zeros.
+//
+// Each *Message class holds the C struct and the storage its sequences point into; strings point
+// into `frames`, which must outlive the message. Build one, write get(), drop it.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "runtime/messages.hpp"
+#include "tools/ros2_bridge/ros2_messages.hpp"
+
+namespace heslam::ros2 {
+
+struct Frames {
+  std::string world = "heslam_world";    // header.frame_id of every message
+  std::string camera = "heslam_camera";  // Odometry.child_frame_id
+};
+
+// builtin_interfaces/Time of a stamp in ns (nanosec always in [0, 1e9), also for negative stamps).
+Time to_time(std::int64_t stamp_ns);
+Pose to_pose(const msg::Pose& pose);
+
+class OdometryMessage {
+ public:
+  OdometryMessage(const msg::Odometry& odometry, const Frames& frames);
+  OdometryMessage(const OdometryMessage&) = delete;
+  OdometryMessage& operator=(const OdometryMessage&) = delete;
+  const Odometry& get() const { return message_; }
+
+ private:
+  Odometry message_{};
+};
+
+class PoseStampedMessage {
+ public:
+  PoseStampedMessage(std::int64_t stamp_ns, const msg::Pose& T_wc, const Frames& frames);
+  PoseStampedMessage(const PoseStampedMessage&) = delete;
+  PoseStampedMessage& operator=(const PoseStampedMessage&) = delete;
+  const PoseStamped& get() const { return message_; }
+
+ private:
+  PoseStamped message_{};
+};
+
+// One keyframe of the trajectory: its stamp and newest pose.
+struct KeyframePose {
+  std::int64_t stamp_ns = 0;
+  msg::Pose T_wc{};
+};
+
+// nav_msgs/Path of the keyframes in stamp order; header stamp = the newest keyframe's.
+class PathMessage {
+ public:
+  PathMessage(std::vector<KeyframePose> keyframes, const Frames& frames);
+  PathMessage(const PathMessage&) = delete;
+  PathMessage& operator=(const PathMessage&) = delete;
+  const Path& get() const { return message_; }
+
+ private:
+  std::vector<PoseStamped> poses_;
+  Path message_{};
+};
+
+// sensor_msgs/PointCloud2: one row of float32 x, y, z (12 bytes per point, little-endian, dense).
+class PointCloudMessage {
+ public:
+  PointCloudMessage(std::int64_t stamp_ns, const std::vector<std::array<double, 3>>& points_w_m, const Frames& frames);
+  PointCloudMessage(const PointCloudMessage&) = delete;
+  PointCloudMessage& operator=(const PointCloudMessage&) = delete;
+  const PointCloud2& get() const { return message_; }
+
+  static constexpr std::uint32_t kPointStep = 12;
+
+ private:
+  std::vector<PointField> fields_;
+  std::vector<std::uint8_t> data_;
+  PointCloud2 message_{};
+};
+
+}  // namespace heslam::ros2
