@@ -274,7 +274,7 @@ TEST_F(SupervisorTest, StartupErrorIsNotRestarted) {
   std::string last;
   std::istringstream lines(text);
   for (std::string line; std::getline(lines, line);) last = line;
-  EXPECT_EQ(last, "[supervisor] error: pipeline failed: talker failed at start-up (exit code 1): heslam-talker: " +
+  EXPECT_EQ(last, "[supervisor] error: pipeline failed: talker failed at start-up (exit code 1): heslam-test-talker: " +
                       (dir_ / "bad.yaml").string() + ": field 'exit_code': expected an integer in [0, 255], got 300")
       << text;
 }
