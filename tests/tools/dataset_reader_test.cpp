@@ -107,6 +107,16 @@ class DatasetReader : public ::testing::Test {
 
 const std::string kThreeRows = "100,100.png\n200,200.png\n300,300.png\n";
 
+// The error loading a frame's images gives, or "(no error)".
+std::string error_of(const StereoFrameFiles& frame) {
+  try {
+    load_stereo_images(frame);
+  } catch (const std::runtime_error& error) {
+    return error.what();
+  }
+  return "(no error)";
+}
+
 TEST_F(DatasetReader, EurocPairsRowsAndReadsCalibration) {
   make_euroc(kThreeRows, kThreeRows);
   const StereoDataset dataset = open_dataset(root_);
@@ -221,14 +231,6 @@ TEST_F(DatasetReader, LoadsImagesBitIdentical) {
 TEST_F(DatasetReader, MissingCorruptAndMismatchedImagesNameTheFile) {
   make_euroc(kThreeRows, kThreeRows);
   StereoDataset dataset = open_dataset(root_);
-  auto error_of = [](const StereoFrameFiles& frame) -> std::string {
-    try {
-      load_stereo_images(frame);
-    } catch (const std::runtime_error& error) {
-      return error.what();
-    }
-    return "(no error)";
-  };
   fs::remove(dataset.frames[0].right);
   EXPECT_EQ(error_of(dataset.frames[0]), dataset.frames[0].right.string() + ": image file missing");
   write_text(dataset.frames[1].left, "not a png");
@@ -301,14 +303,6 @@ TEST_F(DatasetReader, DamagedPngFilesAreNamedWithoutLibpngNoise) {
   auto write_bytes = [](const fs::path& path, const std::vector<std::uint8_t>& bytes) {
     std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
                                                 static_cast<std::streamsize>(bytes.size()));
-  };
-  auto error_of = [](const StereoFrameFiles& frame) -> std::string {
-    try {
-      load_stereo_images(frame);
-    } catch (const std::runtime_error& error) {
-      return error.what();
-    }
-    return "(no error)";
   };
 
   std::vector<std::uint8_t> truncated(png.begin(), png.begin() + static_cast<std::ptrdiff_t>(png.size() / 2));
