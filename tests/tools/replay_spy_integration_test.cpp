@@ -4,6 +4,9 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <string>
 #include <iostream>
 #include <regex>
 #include <set>
@@ -208,6 +211,34 @@ TEST_F(ReplaySpy, BadDatasetAndBadOptionsAreOneClearLine) {
   EXPECT_EQ(run(*bad_topic), 1);
   EXPECT_NE(bad_topic->err().find("heslam-spy: topic 'camera/mono': not a heslam topic"), std::string::npos)
       << bad_topic->err();
+}
+
+// A sequence whose every image pair is unreadable publishes nothing: one line, exit 1 (an empty run is
+// never a success), not a summary and exit 0.
+TEST_F(ReplaySpy, SequenceWithOnlyUnreadableImagesFailsWithOneLine) {
+  HESLAM_REQUIRE_SHARED_DATA(kClip);
+  const fs::path source = test::shared_dataset(kClip) / "mav0";
+  const fs::path copy = log_dir_ / "broken" / "mav0";
+  constexpr int kRows = 3;
+  for (const char* cam : {"cam0", "cam1"}) {
+    fs::create_directories(copy / cam / "data");
+    fs::copy_file(source / cam / "sensor.yaml", copy / cam / "sensor.yaml");
+    std::ifstream rows(source / cam / "data.csv");
+    std::ofstream out(copy / cam / "data.csv");
+    std::string line;
+    for (int i = 0; i <= kRows && std::getline(rows, line); ++i) {
+      out << line << "\n";
+      if (i == 0) continue;  // header
+      const std::string name = line.substr(line.find(',') + 1);
+      const std::string png = name.substr(0, name.find_last_not_of("\r ") + 1);
+      fs::copy_file(source / cam / "data" / png, copy / cam / "data" / png);
+      // the left images cut in half: unreadable
+      if (std::string(cam) == "cam0") fs::resize_file(copy / cam / "data" / png, fs::file_size(copy / cam / "data" / png) / 2);
+    }
+  }
+  auto replay = start("replay", {copy.parent_path().string(), "--rate", "0", "--no-progress", "--no-keyboard"}, "replay");
+  EXPECT_EQ(run(*replay), 1) << replay->err();
+  EXPECT_NE(replay->err().find("published no frame: all 3 image pairs were skipped"), std::string::npos) << replay->err();
 }
 
 // echo --once on a keyed topic: one sample per instance (every component's status), not just the

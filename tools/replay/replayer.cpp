@@ -396,7 +396,13 @@ class Replay {
     log_.flush_throttled();
     dds_wait_for_acks(frame_writer_.handle(), std::chrono::nanoseconds(kFinalAckTimeout).count());
     status_.set_state(runtime::ComponentState::kShuttingDown);
-    log_.info(format_summary(counts_), runtime::shutdown_requested() || quit_ ? " (stopped early)" : "");
+    const bool stopped_early = runtime::shutdown_requested() || quit_;
+    log_.info(format_summary(counts_), stopped_early ? " (stopped early)" : "");
+    // An empty result is never a success: every pair of the sequence was unreadable.
+    if (counts_.published == 0 && counts_.skipped_images > 0 && !stopped_early) {
+      log_.error("published no frame: all ", counts_.skipped_images, " image pairs were skipped (see the warnings above)");
+      return 1;
+    }
     return 0;
   }
 
