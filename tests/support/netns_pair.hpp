@@ -21,6 +21,7 @@ class NetnsPair {
   // Names carry this prefix and the test process's pid: unique per test process, and a namespace
   // left by a killed test (a ctest timeout skips destructors) is recognised and removed by the next.
   static constexpr const char* kPrefix = "hslt";
+  static constexpr const char* kInterface = "hsnet0";
 
   // Why two namespaces cannot be made here (not root, no `ip`, netns refused), or nullopt.
   static std::optional<std::string> unavailable() {
@@ -39,6 +40,7 @@ class NetnsPair {
     ns_[1] = std::string(kPrefix) + id + "b";
     veth_[0] = "hv" + id + "a";  // interface names: at most 15 characters
     veth_[1] = "hv" + id + "b";
+    root_veth_ = veth_[0];
     // Each namespace has its own stack, so fixed addresses cannot collide with another test's.
     address_[0] = "10.213.7.1";
     address_[1] = "10.213.7.2";
@@ -46,6 +48,12 @@ class NetnsPair {
     ok_ = run(ip + " netns add " + ns_[0]) && run(ip + " netns add " + ns_[1]) &&
           run(ip + " link add " + veth_[0] + " type veth peer name " + veth_[1]) &&
           run(ip + " link set " + veth_[0] + " netns " + ns_[0]) && run(ip + " link set " + veth_[1] + " netns " + ns_[1]);
+    // Both ends get the same name inside their namespace, as two real hosts both have "eth0": one
+    // dds_interface works for both halves of a pipeline.
+    for (int i = 0; i < 2 && ok_; ++i) {
+      ok_ = exec(i, "ip link set " + veth_[i] + " name " + std::string(kInterface));
+      if (ok_) veth_[i] = kInterface;
+    }
     for (int i = 0; i < 2 && ok_; ++i) {
       ok_ = exec(i, "ip addr add " + address_[i] + "/24 dev " + veth_[i]) && exec(i, "ip link set " + veth_[i] + " up") &&
             exec(i, "ip link set lo up");
@@ -54,7 +62,7 @@ class NetnsPair {
   ~NetnsPair() {
     run(ip_path() + " netns del " + ns_[0]);
     run(ip_path() + " netns del " + ns_[1]);
-    run(ip_path() + " link del " + veth_[0]);  // only if it never made it into a namespace
+    run(ip_path() + " link del " + root_veth_);  // only if it never made it into a namespace
   }
   NetnsPair(const NetnsPair&) = delete;
   NetnsPair& operator=(const NetnsPair&) = delete;
@@ -107,7 +115,7 @@ class NetnsPair {
     }
   }
 
-  std::string ns_[2], veth_[2], address_[2];
+  std::string ns_[2], veth_[2], address_[2], root_veth_;
   bool ok_ = false;
 };
 
