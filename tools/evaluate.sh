@@ -113,7 +113,7 @@ for dir in "${euroc_dirs[@]}"; do
     [[ -f $mav/cam0/data.csv && -f $mav/cam1/data.csv ]] || continue
     seq=$(dirname "$mav"); name=$(basename "$seq")
     gt=$mav/state_groundtruth_estimate0/data.csv; [[ -f $gt ]] || gt=""
-    key=""; [[ -n ${paper_he[$name]:-} ]] && key=$name
+    key=""; [[ -v "paper_he[$name]" ]] && key=$name
     sequences+=("euroc|$name|$seq|$gt|$key"); found=1
   done
   [[ $found -eq 1 ]] || die "--euroc $dir: no sequence (expected DIR/mav0 or DIR/*/mav0 with cam0/data.csv, cam1/data.csv)"
@@ -219,8 +219,11 @@ for entry in "${sequences[@]}"; do
          --json "$seq_out/lockstep_1/kitti.json" > "$seq_out/lockstep_1/kitti.txt" 2>&1; then
       t_rel=$(json_number "$seq_out/lockstep_1/kitti.json" translation_error_percent)
       r_rel=$(json_number "$seq_out/lockstep_1/kitti.json" rotation_error_deg_per_100m)
+    elif grep -q "no sub-sequence" "$seq_out/lockstep_1/kitti.txt"; then
+      t_rel="<100 m" r_rel="<100 m"  # the devkit's shortest sub-sequence is 100 m
     else
-      t_rel="($(tail -n 1 "$seq_out/lockstep_1/kitti.txt"))"
+      t_rel="error" r_rel="error"
+      echo "evaluate.sh: $name: heslam-eval kitti: $(tail -n 1 "$seq_out/lockstep_1/kitti.txt")" >&2
     fi
   fi
   tracked_r="-" dropped="-" ate_r="-" time_r="- -"
@@ -235,7 +238,8 @@ for entry in "${sequences[@]}"; do
   fi
   frames=${tracked_l#*/}
   read -r med p90 <<< "$time_l"; read -r med_r p90_r <<< "$time_r"
-  he_paper=${paper_he[$key]:-}; orb_paper=${paper_orb[$key]:-}
+  he_paper="" orb_paper=""
+  if [[ -n $key ]]; then he_paper=${paper_he[$key]}; orb_paper=${paper_orb[$key]}; fi
   echo "$name,$kind,${frames:-},$runs,$identical,${tracked_l:-},$ate_mean,$ate_min,$ate_max,$t_rel,$r_rel,$med,$p90,${tracked_r:-},$dropped,$ate_r,$med_r,$p90_r,$he_paper,$orb_paper,$name/trajectory.svg" >> "$csv"
 done
 
