@@ -2,8 +2,10 @@
 // (config/cyclonedds.xml, measured in shared/notes/cyclonedds-0.10-findings.md).
 #include "runtime/dds_network_profile.hpp"
 
+#include <arpa/inet.h>
 #include <ifaddrs.h>
 #include <net/if.h>
+#include <netinet/in.h>
 
 #include <set>
 #include <sstream>
@@ -83,6 +85,20 @@ std::string network_dds_config(const DdsNetworkProfile& profile) {
       << "  </Internal>\n"
       << "</Domain></CycloneDDS>\n";
   return xml.str();
+}
+
+std::optional<std::string> interface_ipv4_address(const std::string& name) {
+  ifaddrs* list = nullptr;
+  if (getifaddrs(&list) != 0) return std::nullopt;
+  std::optional<std::string> address;
+  for (const ifaddrs* entry = list; entry != nullptr && !address; entry = entry->ifa_next) {
+    if (entry->ifa_addr == nullptr || entry->ifa_addr->sa_family != AF_INET || name != entry->ifa_name) continue;
+    char text[INET_ADDRSTRLEN] = {};
+    const auto* ipv4 = reinterpret_cast<const sockaddr_in*>(entry->ifa_addr);
+    if (inet_ntop(AF_INET, &ipv4->sin_addr, text, sizeof text) != nullptr) address = text;
+  }
+  freeifaddrs(list);
+  return address;
 }
 
 std::optional<std::string> check_network_interface(const std::string& name) {

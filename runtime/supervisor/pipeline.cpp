@@ -107,6 +107,14 @@ void load_network_profile(const Config& config, Pipeline& pipeline, std::vector<
     if (const auto problem = runtime::check_network_interface(network.interface)) {
       throw std::runtime_error(source + ": field 'dds_interface': " + *problem);
     }
+    // This host's own address among the peers, or its processes do not find each other (a user
+    // listing only "the other host" is the common mistake).
+    if (!network.peers.empty()) {
+      const auto own = runtime::interface_ipv4_address(network.interface);
+      if (own && std::find(network.peers.begin(), network.peers.end(), *own) == network.peers.end()) {
+        network.peers.push_back(*own);
+      }
+    }
     runtime::network_dds_config(network);  // its own checks (peer names)
     pipeline.network = network;
   });

@@ -76,6 +76,21 @@ TEST_F(PipelineHosts, HostRunsItsGroupAndMarksTheOthersRemote) {
   EXPECT_EQ(result.pipeline.components[1].name, "mapper");
 }
 
+TEST_F(PipelineHosts, InputsOfAnotherHostAreNotCheckedHere) {
+  const std::string text =
+      "args: {dataset: \"\"}\n"
+      "components:\n"
+      "  - {name: mapper, executable: true}\n"
+      "  - {name: replay, executable: true, inputs: [\"$(arg dataset)\"]}\n"
+      "hosts:\n  camera: replay\n  server: mapper\n";
+  PipelineOverrides server;
+  server.host = "server";
+  EXPECT_TRUE(load(text, server).problems.empty()) << problems(load(text, server));
+  PipelineOverrides camera;
+  camera.host = "camera";
+  EXPECT_NE(problems(load(text, camera)).find("input '$(arg dataset)' is empty"), std::string::npos);
+}
+
 TEST_F(PipelineHosts, OnlyRunsTheNamedComponents) {
   PipelineOverrides only;
   only.only = {"mapper"};
@@ -120,8 +135,16 @@ TEST_F(PipelineHosts, NetworkProfileNeedsAnExistingInterface) {
   ASSERT_TRUE(ok.problems.empty()) << problems(ok);
   ASSERT_TRUE(ok.pipeline.network.has_value());
   EXPECT_EQ(ok.pipeline.network->interface, "lo");
-  EXPECT_EQ(ok.pipeline.network->peers, (std::vector<std::string>{"10.0.0.1", "10.0.0.2"}));
+  EXPECT_EQ(ok.pipeline.network->peers, (std::vector<std::string>{"10.0.0.1", "10.0.0.2", "127.0.0.1"}))
+      << "this host's own address is added";
   EXPECT_DOUBLE_EQ(ok.pipeline.network->lease_s, 4.0);
+  // Only the other host given: this host's own address is added, or its processes would not find
+  // each other (measured over veth).
+  const auto own = load(base + "dds_interface: lo\ndds_peers: \"10.0.0.2\"\n");
+  ASSERT_TRUE(own.problems.empty()) << problems(own);
+  EXPECT_EQ(own.pipeline.network->peers, (std::vector<std::string>{"10.0.0.2", "127.0.0.1"}));
+  EXPECT_EQ(runtime::interface_ipv4_address("lo"), "127.0.0.1");
+  EXPECT_FALSE(runtime::interface_ipv4_address("nosuchif0").has_value());
   // Loopback (the default) needs none of it.
   EXPECT_FALSE(load("components:\n  - {name: a, executable: true}\n").pipeline.network.has_value());
 }
