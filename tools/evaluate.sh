@@ -153,7 +153,7 @@ frame_time() {  # $1 run dir -> "median p90" in ms, or "- -"
 # Frames published but never processed by the frontend (real time: dropped while it was busy).
 dropped_frames() {
   local n
-  n=$(grep -o '[0-9]* frames missed' "$1/logs/frontend.log" 2>/dev/null | tail -n 1 | awk '{print $1}')
+  n=$(grep -o '[0-9]* frames missed' "$1/logs/frontend.log" 2>/dev/null | tail -n 1 | awk '{print $1}' || true)
   echo "${n:-0}"
 }
 # "tracked N/M" from the supervisor's last line (the recorder's result).
