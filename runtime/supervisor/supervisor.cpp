@@ -202,7 +202,13 @@ void Supervisor::follow_remote_hosts() {
     if (seen.state == heslam_msg_STATE_SHUTTING_DOWN) {
       // One run over several hosts ends together: the host whose replay finished (or that was
       // stopped) ends it for the others.
-      log_.info("the supervisor on host ", name.substr(prefix.size()), " is ending the run; stopping here too");
+      // Its failure is its own to report (exit code 1 there); here it is only the reason to stop.
+      if (seen.message.empty()) {
+        log_.info("the supervisor on host ", name.substr(prefix.size()), " is ending the run; stopping here too");
+      } else {
+        log_.warn("the supervisor on host ", name.substr(prefix.size()), " is ending the run (", seen.message,
+                  "); stopping here too");
+      }
       remote_ended_ = true;
       end_requested_ = true;
       return;
@@ -431,7 +437,8 @@ int Supervisor::run() {
   if (runtime::shutdown_requested()) {
     log_.info("shutdown requested (signal ", runtime::shutdown_signal(), "); stopping in reverse order");
   }
-  dds_->status.set_state(runtime::ComponentState::kShuttingDown);
+  // Why, for the supervisors of other hosts that follow this one's end (empty: a normal end).
+  dds_->status.set_state(runtime::ComponentState::kShuttingDown, failed_ ? "pipeline failed: " + failure_ : "");
   stop_all();
   read_status();  // the last results
   if (failed_) {
