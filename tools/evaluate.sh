@@ -183,6 +183,8 @@ ate() {  # $1 kind, $2 dataset, $3 gt, $4 trajectory, [$5 plot] -> ATE RMSE in m
   if "$bin/heslam-eval" ape $(ape_args "$1" "$2" "$3") --est "$4" --json "$json" "${plot[@]}" > "${4%.txt}.ape.txt" 2>&1; then
     json_number "$json" translation_m.rmse
   else
+    # e.g. "the estimate does not move" (a still clip tracked as still cannot be SE(3)-aligned)
+    echo "evaluate.sh: $4: no ATE: $(tail -n 1 "${4%.txt}.ape.txt")" >&2
     echo "-"
   fi
 }
