@@ -10,7 +10,7 @@ set -euo pipefail
 usage() {
   cat <<'EOF'
 usage: tools/evaluate.sh [--kitti DIR] [--euroc DIR] [--runs N] [--he MODE] [--out DIR]
-                         [--loop-closer EXE] [--no-realtime] [--rate R] [--domain N] [--bin DIR]
+                         [--loop-closer EXE] [--no-realtime] [--rate R] [--domain N] [--bin DIR] [--list]
   --kitti DIR        KITTI odometry: DIR/sequences/NN/{image_0,image_1,times.txt,calib.txt}, ground
                      truth DIR/poses/NN.txt (or NN/poses.txt, as heslam-synth writes); DIR may also be
                      one sequence folder
@@ -26,6 +26,8 @@ usage: tools/evaluate.sh [--kitti DIR] [--euroc DIR] [--runs N] [--he MODE] [--o
   --rate R           real-time run speed (default 1 = the recording's rate)
   --domain N         DDS domain of the runs (default $HESLAM_DOMAIN or 0)
   --bin DIR          heslam binaries (default: build/bin of this tree)
+  --list             only list the sequences found (kind, name, folder, ground truth, the paper's
+                     HE-SLAM / ORB-SLAM2 ATE when it is one of the paper's sequences); run nothing
 At least one of --kitti / --euroc. Exit code 1 when a run fails or no sequence is found.
 EOF
 }
@@ -33,7 +35,7 @@ EOF
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 kitti_dirs=() euroc_dirs=()
 runs=1 he="" out="" loop_closer=heslam-loop-closer realtime=1 rate=1
-domain=${HESLAM_DOMAIN:-0} bin="$root/build/bin"
+domain=${HESLAM_DOMAIN:-0} bin="$root/build/bin" list=0
 die() { echo "evaluate.sh: $*" >&2; exit 1; }
 while [[ $# -gt 0 ]]; do
   case $1 in
@@ -48,17 +50,12 @@ while [[ $# -gt 0 ]]; do
     --rate) [[ ${2:-} =~ ^[0-9]+([.][0-9]+)?$ ]] || die "--rate: expected a number, got '${2:-}'"; rate=$2; shift 2 ;;
     --domain) [[ ${2:-} =~ ^[0-9]+$ && ${2:-} -le 232 ]] || die "--domain: expected 0..232, got '${2:-}'"; domain=$2; shift 2 ;;
     --bin) [[ -n ${2:-} ]] || die "--bin: missing DIR"; bin=$2; shift 2 ;;
+    --list) list=1; shift ;;
     -h|--help) usage; exit 0 ;;
     *) usage >&2; die "unknown argument '$1'" ;;
   esac
 done
 [[ ${#kitti_dirs[@]} -gt 0 || ${#euroc_dirs[@]} -gt 0 ]] || { usage >&2; die "give --kitti DIR and/or --euroc DIR"; }
-for tool in heslam-supervisor heslam-eval; do
-  [[ -x $bin/$tool ]] || die "$bin/$tool not found (build first: tools/build.sh, or give --bin DIR)"
-done
-out=${out:-evaluation-$(date +%Y%m%d-%H%M%S)}
-mkdir -p "$out" || die "$out: cannot create the results folder"
-out=$(cd "$out" && pwd)
 
 # ---- the paper's published numbers (../shared/paper/he-slam.md, Tables I and II: ATE RMSE in m) ----
 # Only ATE RMSE is published (the run time is "basically flat so it is not shown"; no drift
@@ -118,6 +115,21 @@ for dir in "${euroc_dirs[@]}"; do
   done
   [[ $found -eq 1 ]] || die "--euroc $dir: no sequence (expected DIR/mav0 or DIR/*/mav0 with cam0/data.csv, cam1/data.csv)"
 done
+if [[ $list -eq 1 ]]; then
+  for entry in "${sequences[@]}"; do
+    IFS='|' read -r kind name dataset gt key <<< "$entry"
+    he_paper="" orb_paper=""
+    if [[ -n $key ]]; then he_paper=${paper_he[$key]}; orb_paper=${paper_orb[$key]}; fi
+    echo "$kind $name $dataset gt=${gt:-none} paper_he_slam=${he_paper:--} paper_orb_slam2=${orb_paper:--}"
+  done
+  exit 0
+fi
+for tool in heslam-supervisor heslam-eval; do
+  [[ -x $bin/$tool ]] || die "$bin/$tool not found (build first: tools/build.sh, or give --bin DIR)"
+done
+out=${out:-evaluation-$(date +%Y%m%d-%H%M%S)}
+mkdir -p "$out" || die "$out: cannot create the results folder"
+out=$(cd "$out" && pwd)
 echo "evaluate.sh: ${#sequences[@]} sequence(s); lockstep x $runs$([[ $realtime -eq 1 ]] && echo ", real time x 1 at rate $rate"); results in $out"
 
 # ---- frontend configs with the HE mode ----

@@ -123,6 +123,51 @@ TEST(EvaluateScript, RunsSyntheticKittiAndEurocLayoutsEndToEnd) {
   EXPECT_NE(markdown.find("paper HE-SLAM (m)"), std::string::npos);
 }
 
+// The paper's numbers go only beside the paper's sequences: KITTI by number and ground-truth frame
+// count (the real 04 has 271 frames), EuRoC by the official folder name.
+TEST(EvaluateScript, PaperNumbersOnlyForThePapersSequences) {
+  const fs::path kitti_04 = test::shared_data() / "trajectories/kitti_gt_poses/04.txt";
+  if (!fs::exists(kitti_04)) GTEST_SKIP() << "../shared/data/trajectories/kitti_gt_poses is absent";
+  test::ScratchDir dir("evaluate_list");
+  const fs::path kitti = dir.path() / "kitti";
+  for (const std::string seq : {"04", "05"}) {
+    fs::create_directories(kitti / "sequences" / seq / "image_0");
+    fs::create_directories(kitti / "sequences" / seq / "image_1");
+    std::ofstream(kitti / "sequences" / seq / "times.txt") << "0\n";
+    std::ofstream(kitti / "sequences" / seq / "calib.txt") << "P0: 1\n";
+  }
+  fs::create_directories(kitti / "poses");
+  fs::copy_file(kitti_04, kitti / "poses/04.txt");
+  std::ofstream(kitti / "poses/05.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n";  // not the real 05 (2761 frames)
+  const fs::path euroc = dir.path() / "euroc";
+  for (const std::string name : {"MH_01_easy", "my_flight"}) {
+    for (const std::string cam : {"cam0", "cam1"}) {
+      fs::create_directories(euroc / name / "mav0" / cam);
+      std::ofstream(euroc / name / "mav0" / cam / "data.csv") << "#timestamp [ns],filename\n";
+    }
+  }
+  std::string output;
+  ASSERT_EQ(run("/bin/bash",
+                {(test::source_dir() / "tools/evaluate.sh").string(), "--kitti", kitti.string(), "--euroc",
+                 euroc.string(), "--list"},
+                dir.path(), "evaluate_list", 30s, &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("kitti_04 " + (kitti / "sequences/04").string() + " gt=" + (kitti / "poses/04.txt").string() +
+                        " paper_he_slam=0.233628 paper_orb_slam2=0.163535"),
+            std::string::npos)
+      << output;
+  EXPECT_NE(output.find("paper_he_slam=0.0410544 paper_orb_slam2=0.0380801"), std::string::npos) << output;
+  // Neither a 1-frame "05" nor an unknown EuRoC name gets one.
+  EXPECT_NE(output.find("kitti_05 " + (kitti / "sequences/05").string() + " gt=" + (kitti / "poses/05.txt").string() +
+                        " paper_he_slam=- paper_orb_slam2=-"),
+            std::string::npos)
+      << output;
+  EXPECT_NE(output.find("my_flight " + (euroc / "my_flight").string() + " gt=none paper_he_slam=- paper_orb_slam2=-"),
+            std::string::npos)
+      << output;
+}
+
 TEST(EvaluateScript, NoSequenceIsOneLineAndExitOne) {
   test::ScratchDir dir("evaluate_empty");
   fs::create_directories(dir.path() / "empty");
