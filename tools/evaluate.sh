@@ -136,7 +136,7 @@ echo "evaluate.sh: ${#sequences[@]} sequence(s); lockstep x $runs$([[ $realtime 
 frontend_config() {  # $1 kitti|euroc, $2 lockstep|realtime -> path
   local base=$root/config/frontend/${1}_mapper$([[ $2 == realtime ]] && echo _realtime).yaml
   if [[ -z $he ]]; then echo "$base"; return; fi
-  grep -q '^he:' "$base" && die "$base already sets he: cannot add --he $he to it"
+  if grep -q '^he:' "$base"; then echo "evaluate.sh: $base already sets he: cannot add --he $he to it" >&2; return 1; fi
   local copy=$out/configs/$(basename "${base%.yaml}")_he-$he.yaml
   mkdir -p "$out/configs"
   { cat "$base"; printf '# added by tools/evaluate.sh --he %s\nhe:\n  mode: %s\n' "$he" "$he"; } > "$copy"
@@ -145,9 +145,10 @@ frontend_config() {  # $1 kitti|euroc, $2 lockstep|realtime -> path
 
 # ---- one run: prints nothing, leaves DIR/trajectory.txt and DIR/logs ----
 run_pipeline() {  # $1 kind, $2 mode (lockstep|realtime), $3 dataset, $4 run dir
-  local pipeline=$root/config/pipelines/$1$([[ $2 == realtime ]] && echo _realtime).yaml
+  local pipeline=$root/config/pipelines/$1$([[ $2 == realtime ]] && echo _realtime).yaml config
+  config=$(frontend_config "$1" "$2") || return 1
   local args=(--arg "dataset=$3" --arg "output=$4/trajectory.txt" --arg "loop_closer=$loop_closer"
-              --arg "frontend_config=$(frontend_config "$1" "$2")")
+              --arg "frontend_config=$config")
   [[ $2 == realtime ]] && args+=(--arg "rate=$rate")
   mkdir -p "$4"
   if ! "$bin/heslam-supervisor" "$pipeline" --domain "$domain" --log-dir "$4/logs" "${args[@]}" \
