@@ -98,8 +98,9 @@ TEST_F(MultiHost, LockstepOverTwoHostsIsBitIdenticalToOneHost) {
 // retransmits). Images never cross the link (replay and frontend share the camera host).
 TEST_F(MultiHost, RealTimeRunSurvivesATwoSecondLinkCut) {
   const int domain = test::exclusive_domain_id();
-  auto server = start_half(kServer, "euroc_realtime", "cut", domain);
-  auto camera = start_half(kCamera, "euroc_realtime", "cut", domain);
+  // Half the recording's rate (a 10 Hz camera, 16 s): room for the cut inside the run on a loaded machine.
+  auto server = start_half(kServer, "euroc_realtime", "cut", domain, {"--arg", "rate=0.5"});
+  auto camera = start_half(kCamera, "euroc_realtime", "cut", domain, {"--arg", "rate=0.5"});
   // Wait for frames to flow (the recorder's file grows), then pull the cable for 2 s.
   const auto trajectory = dir_.path() / "cut.txt";
   const auto deadline = std::chrono::steady_clock::now() + 120s;
@@ -109,7 +110,7 @@ TEST_F(MultiHost, RealTimeRunSurvivesATwoSecondLinkCut) {
   ASSERT_TRUE(hosts_->set_link(false));
   std::this_thread::sleep_for(2s);
   ASSERT_TRUE(hosts_->set_link(true));
-  // The replay runs at the recording's rate (8 s), so the cut fell in the middle of the run.
+  // The replay runs at half the recording's rate (16 s), so the cut fell in the middle of the run.
   ASSERT_FALSE(camera->wait(0ms)) << "the run ended before the link came back: " << camera->err();
 
   const int camera_code = test::finish(*camera);
