@@ -1,9 +1,10 @@
 // heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]
-//                   [--log-dir DIR] [--log-level LEVEL]
+//                   [--log-dir DIR] [--log-level LEVEL] [--host NAME | --only a,b]
 #include <signal.h>
 #include <unistd.h>
 
 #include <ctime>
+#include <fstream>
 #include <iostream>
 
 #include "runtime/log.hpp"
@@ -19,10 +20,12 @@ using namespace heslam;
 
 constexpr const char* kUsage =
     "usage: heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]\n"
-    "                         [--log-dir DIR] [--log-level debug|info|warn|error]\n"
+    "                         [--log-dir DIR] [--log-level debug|info|warn|error] [--host NAME | --only a,b]\n"
     "  --check      validate the pipeline file and every file it references; start nothing\n"
     "  --arg k=v    value for $(arg k) in the pipeline file (overrides its 'args' default)\n"
-    "  --log-dir    per-component logs (default: $HESLAM_LOG_DIR or ~/.heslam/log, + /<pipeline>-<time>)\n";
+    "  --log-dir    per-component logs (default: $HESLAM_LOG_DIR or ~/.heslam/log, + /<pipeline>-<time>)\n"
+    "  --host NAME  run only the components of the file's hosts.NAME group; the others run on other hosts\n"
+    "  --only a,b   run only these components; the others run on other hosts (docs/deployment.md)\n";
 
 std::filesystem::path default_log_dir(const std::string& pipeline_name) {
   std::filesystem::path base;
@@ -77,6 +80,13 @@ int run(int argc, char** argv) {
       }
     } else if (arg == "--namespace") {
       overrides.ns = value_of(argc, argv, i, arg);
+    } else if (arg == "--host") {
+      overrides.host = value_of(argc, argv, i, arg);
+      if (overrides.host.empty()) throw std::runtime_error("--host: expected a host group name");
+    } else if (arg == "--only") {
+      const std::string text = value_of(argc, argv, i, arg);
+      overrides.only = runtime::split_list(text);
+      if (overrides.only.empty()) throw std::runtime_error("--only: expected component names, e.g. --only frontend,replay");
     } else if (arg == "--log-dir") {
       log_dir = value_of(argc, argv, i, arg);
     } else if (arg == "--log-level") {
@@ -102,7 +112,9 @@ int run(int argc, char** argv) {
   }
   if (check) {
     std::cout << pipeline_file.string() << ": OK (" << loaded.pipeline.components.size() << " components:";
-    for (const auto& component : loaded.pipeline.components) std::cout << " " << component.name;
+    for (const auto& component : loaded.pipeline.components) {
+      std::cout << " " << component.name << (component.remote ? " [other host]" : "");
+    }
     for (const auto& name : loaded.pipeline.disabled_components) std::cout << " [" << name << " disabled]";
     std::cout << ")\n";
     return 0;
@@ -113,7 +125,18 @@ int run(int argc, char** argv) {
   options.self_executable = self;
   options.log_dir = log_dir.empty() ? default_log_dir(loaded.pipeline.name) : log_dir;
   options.log_level = log_level;
-  supervisor::Supervisor supervisor(loaded.pipeline, options);
+  supervisor::Pipeline pipeline = loaded.pipeline;
+  if (pipeline.network) {
+    // The profile's XML beside the logs: every process reads the same file, and it is kept with
+    // the run for inspection.
+    std::filesystem::create_directories(options.log_dir);
+    const std::filesystem::path xml_file = options.log_dir / "cyclonedds-network.xml";
+    std::ofstream xml(xml_file);
+    xml << runtime::network_dds_config(*pipeline.network);
+    if (!xml.flush()) throw std::runtime_error(xml_file.string() + ": cannot write the network profile's Cyclone XML");
+    pipeline.dds_config = "file://" + std::filesystem::absolute(xml_file).string();
+  }
+  supervisor::Supervisor supervisor(pipeline, options);
   return supervisor.run();
 }
 

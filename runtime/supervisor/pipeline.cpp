@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <functional>
 #include <regex>
@@ -64,6 +65,114 @@ void collect(std::vector<std::string>& problems, const std::function<void()>& fn
   } catch (const std::runtime_error& error) {
     problems.emplace_back(error.what());
   }
+}
+
+using Substitute = std::function<std::string(const std::string& field, const std::string& text)>;
+
+// dds_profile: loopback (default) | network, with dds_interface, dds_peers, dds_lease_s.
+void load_network_profile(const Config& config, Pipeline& pipeline, std::vector<std::string>& problems,
+                          const Substitute& substitute) {
+  const std::string source = config.source();
+  std::string profile = "loopback";
+  collect(problems, [&] {
+    profile = substitute("dds_profile", config.get_string("dds_profile", "loopback"));
+    if (profile.empty()) profile = "loopback";
+    if (profile != "loopback" && profile != "network") {
+      throw std::runtime_error(source + ": field 'dds_profile': expected loopback or network, got '" + profile + "'");
+    }
+  });
+  runtime::DdsNetworkProfile network;
+  collect(problems, [&] { network.interface = substitute("dds_interface", config.get_string("dds_interface", "")); });
+  collect(problems, [&] { network.peers = runtime::split_list(substitute("dds_peers", config.get_string("dds_peers", ""))); });
+  collect(problems, [&] {
+    const std::string text = substitute("dds_lease_s", config.get_scalar("dds_lease_s", "10"));
+    std::istringstream parse(text);
+    if (!(parse >> network.lease_s) || !parse.eof() || network.lease_s < runtime::kMinLeaseS ||
+        network.lease_s > runtime::kMaxLeaseS) {
+      std::ostringstream expected;
+      expected << "expected seconds in [" << runtime::kMinLeaseS << ", " << runtime::kMaxLeaseS << "]";
+      throw std::runtime_error(source + ": field 'dds_lease_s': " + expected.str() + ", got '" + text + "'");
+    }
+  });
+  if (profile != "network") return;
+  collect(problems, [&] {
+    if (!pipeline.dds_config.empty()) {
+      throw std::runtime_error(source + ": fields 'dds_config' and 'dds_profile: network' exclude each other "
+                               "(the profile writes its own Cyclone XML)");
+    }
+    if (network.interface.empty()) {
+      throw std::runtime_error(source + ": dds_profile network: field 'dds_interface' is empty (give the "
+                               "interface by name, e.g. --arg dds_interface=eth0)");
+    }
+    if (const auto problem = runtime::check_network_interface(network.interface)) {
+      throw std::runtime_error(source + ": field 'dds_interface': " + *problem);
+    }
+    // This host's own address among the peers, or its processes do not find each other (a user
+    // listing only "the other host" is the common mistake).
+    if (!network.peers.empty()) {
+      const auto own = runtime::interface_ipv4_address(network.interface);
+      if (own && std::find(network.peers.begin(), network.peers.end(), *own) == network.peers.end()) {
+        network.peers.push_back(*own);
+      }
+    }
+    runtime::network_dds_config(network);  // its own checks (peer names)
+    pipeline.network = network;
+  });
+}
+
+// --host / --only: marks the components of other hosts remote. Unknown names are problems.
+void select_local_components(Pipeline& pipeline, const PipelineOverrides& overrides,
+                             std::vector<std::string>& problems) {
+  const std::string source = pipeline.file.filename().string();
+  std::set<std::string> known;
+  for (const auto& component : pipeline.components) known.insert(component.name);
+  for (const auto& name : pipeline.disabled_components) known.insert(name);
+  const auto check_known = [&](const std::string& name, const std::string& where) {
+    if (known.count(name) != 0) return true;
+    std::string names;
+    for (const auto& each : known) names += (names.empty() ? "" : ", ") + each;
+    problems.push_back(source + ": " + where + ": no component '" + name + "' (components: " + names + ")");
+    return false;
+  };
+  // Every enabled component in exactly one group, so the hosts together run the whole pipeline.
+  std::map<std::string, std::string> group_of;
+  for (const auto& [group, names] : pipeline.hosts) {
+    for (const auto& name : names) {
+      if (!check_known(name, "field 'hosts." + group + "'")) continue;
+      const auto [it, inserted] = group_of.emplace(name, group);
+      if (!inserted) {
+        problems.push_back(source + ": field 'hosts." + group + "': component '" + name +
+                           "' is already in hosts." + it->second);
+      }
+    }
+  }
+  if (!pipeline.hosts.empty()) {
+    for (const auto& component : pipeline.components) {
+      if (group_of.count(component.name) == 0) {
+        problems.push_back(source + ": field 'hosts': component '" + component.name + "' is in no host group");
+      }
+    }
+  }
+  pipeline.host = overrides.host;
+  std::set<std::string> local;
+  if (!overrides.only.empty()) {
+    for (const auto& name : overrides.only) {
+      if (check_known(name, "--only")) local.insert(name);
+    }
+  } else if (!overrides.host.empty()) {
+    const auto group = pipeline.hosts.find(overrides.host);
+    if (group == pipeline.hosts.end()) {
+      std::string groups;
+      for (const auto& [name, members] : pipeline.hosts) groups += (groups.empty() ? "" : ", ") + name;
+      problems.push_back(source + ": --host " + overrides.host + ": the pipeline has no such host group (hosts: " +
+                         (groups.empty() ? "none; use --only a,b" : groups) + ")");
+      return;
+    }
+    local.insert(group->second.begin(), group->second.end());
+  } else {
+    return;  // the whole pipeline on this host
+  }
+  for (auto& component : pipeline.components) component.remote = local.count(component.name) == 0;
 }
 
 }  // namespace
@@ -150,12 +259,29 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
     pipeline.dds_config = "file://" + std::filesystem::absolute(path).string();
   });
   collect(problems, [&] { pipeline.stop_timeout_s = config->get_double("stop_timeout_s", 5.0, 0.1, 600.0); });
+  load_network_profile(*config, pipeline, problems, substitute);
+  collect(problems, [&] {
+    pipeline.remote_ready_timeout_s = config->get_double("remote_ready_timeout_s", 120.0, 0.1, 86400.0);
+  });
+  collect(problems, [&] {
+    for (const auto& [group, names] : config->get_string_map("hosts")) {
+      pipeline.hosts[group] = runtime::split_list(substitute("hosts." + group, names));
+    }
+  });
 
   std::vector<Config> sections;
   collect(problems, [&] { sections = config->get_sections("components"); });
   if (sections.empty() && problems.empty()) problems.push_back(source + ": field 'components': expected a non-empty list");
   collect(problems, [&] { config->reject_unknown(); });
 
+  // A component of another host reads its inputs there: not checked here (the dataset is on the
+  // camera host only). hosts.NAME may be misspelled: select_local_components reports that below.
+  const auto runs_here = [&](const std::string& name) {
+    if (!overrides.only.empty()) return std::find(overrides.only.begin(), overrides.only.end(), name) != overrides.only.end();
+    const auto group = pipeline.hosts.find(overrides.host);
+    if (overrides.host.empty() || group == pipeline.hosts.end()) return true;
+    return std::find(group->second.begin(), group->second.end(), name) != group->second.end();
+  };
   std::map<std::string, int> first_index;
   for (std::size_t i = 0; i < sections.size(); ++i) {
     const Config& section = sections[i];
@@ -206,6 +332,7 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
     collect(problems, [&] {
       for (const std::string& input : section.get_strings("inputs", {})) {
         const std::string text = substitute(where + ".inputs", input);
+        if (!runs_here(spec.name)) continue;
         if (text.empty()) {
           throw std::runtime_error(source + ": " + label + ": input '" + input +
                                    "' is empty (give it with --arg, e.g. --arg dataset=DIR)");
@@ -249,6 +376,7 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       pipeline.components.push_back(std::move(spec));
     }
   }
+  if (problems.empty()) select_local_components(pipeline, overrides, problems);
   return result;
 }
 

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "runtime/dds_network_profile.hpp"
+
 namespace heslam::supervisor {
 
 enum class RestartPolicy { kNever, kOnFailure, kAlways };
@@ -30,6 +32,9 @@ struct ComponentSpec {
   bool required = true;                   // its failure fails the run (exit code 1)
   bool shutdown_on_exit = false;          // on_exit: shutdown — its end ends the run
   bool common_args = true;                // pass --domain --namespace --name [--config] --log-level --dds-config
+  // Runs on another host (hosts: groups, --host / --only): never started, stopped or restarted here;
+  // its readiness is read from the status topic (docs/deployment.md).
+  bool remote = false;
 };
 
 struct Pipeline {
@@ -42,6 +47,21 @@ struct Pipeline {
   std::vector<ComponentSpec> components;  // start order
   // Components whose executable is "none" (e.g. --arg loop_closer=none): validated, not started.
   std::vector<std::string> disabled_components;
+  // dds_profile: network — the processes talk over this interface (the XML is written into the log
+  // folder at start and passed like dds_config). nullopt: loopback (or dds_config).
+  std::optional<runtime::DdsNetworkProfile> network;
+  // Multi-host runs (docs/deployment.md): this supervisor's host (--host, else empty), the host
+  // groups of the file (hosts:, group name -> component names), and how long to wait for a component
+  // of another host to say RUNNING before starting the next one anyway.
+  std::string host;
+  std::map<std::string, std::vector<std::string>> hosts;
+  double remote_ready_timeout_s = 120.0;
+  bool split() const {
+    for (const auto& component : components) {
+      if (component.remote) return true;
+    }
+    return false;
+  }
 };
 
 // The executable value that disables a component.
@@ -51,6 +71,8 @@ struct PipelineOverrides {
   std::map<std::string, std::string> args;  // --arg key=value
   std::optional<int> domain_id;
   std::optional<std::string> ns;
+  std::string host;               // --host NAME: run the components of the file's hosts.NAME group
+  std::vector<std::string> only;  // --only a,b: run only these components (the others run elsewhere)
 };
 
 // Loads and validates. Problems are collected, one line each ("FILE: ..."); the pipeline is only

@@ -40,6 +40,23 @@ std::string format_seconds(double seconds) {
   return text.str();
 }
 
+// The supervisors of one multi-host run tell each other apart by their status name.
+constexpr const char* kSupervisorName = "supervisor";
+constexpr const char* kHostSeparator = "@";
+
+// "supervisor" on a single host; "supervisor@HOST" when components run elsewhere (HOST: --host,
+// else this machine's name and pid, as --only gives no group name).
+std::string supervisor_status_name(const Pipeline& pipeline) {
+  if (!pipeline.split()) return kSupervisorName;
+  std::string host = pipeline.host;
+  if (host.empty()) {
+    char name[256] = {};
+    gethostname(name, sizeof name - 1);
+    host = std::string(name) + ":" + std::to_string(getpid());
+  }
+  return std::string(kSupervisorName) + kHostSeparator + host;
+}
+
 struct StatusSeen {
   int32_t pid = 0;
   heslam_msg_ComponentState state = heslam_msg_STATE_CONFIGURING;
@@ -53,13 +70,15 @@ struct Supervisor::Dds {
       : participant(runtime::ParticipantOptions{pipeline.domain_id, pipeline.dds_config}),
         topics(pipeline.ns),
         status_reader(participant, topics.status()),
-        status(participant, topics, "supervisor", stats) {}
+        status(participant, topics, supervisor_status_name(pipeline), stats),
+        status_name(supervisor_status_name(pipeline)) {}
   runtime::Participant participant;
   runtime::Topics topics;
   runtime::Reader<msg::ComponentStatus> status_reader;
   runtime::Stats stats;
   runtime::StatusPublisher status;
   std::map<std::string, StatusSeen> seen;
+  std::string status_name;  // ours: remote supervisors are the other "supervisor@..." names
 };
 
 Supervisor::Supervisor(Pipeline pipeline, SupervisorOptions options)
@@ -73,6 +92,9 @@ Supervisor::Supervisor(Pipeline pipeline, SupervisorOptions options)
     components_.push_back(std::move(managed));
   }
   for (const std::string& name : pipeline_.disabled_components) log_.info(name, ": disabled (executable none)");
+  for (const ComponentSpec& spec : pipeline_.components) {
+    if (spec.remote) log_.info(spec.name, ": runs on another host (not started here)");
+  }
 }
 
 Supervisor::~Supervisor() = default;
@@ -150,10 +172,16 @@ void Supervisor::read_status() {
     seen.state = status.state;
     seen.message = runtime::to_string(status.message);
   }
+  follow_remote_hosts();
   for (auto& component : components_) {
     const auto it = dds_->seen.find(component->spec.name);
     if (it == dds_->seen.end()) continue;
     const StatusSeen& seen = it->second;
+    if (component->spec.remote) {
+      // Another host's process: any pid will do (we never started it); only its readiness matters.
+      if (seen.state == heslam_msg_STATE_RUNNING) component->ready = true;
+      continue;
+    }
     if (seen.pid != component->process.pid()) continue;  // an older instance's last words
     // Kept after the process ended: its last sample may arrive after its exit.
     if (seen.state != heslam_msg_STATE_FAILED && !seen.message.empty()) component->result = seen.message;
@@ -164,6 +192,47 @@ void Supervisor::read_status() {
       log_.error(component->spec.name, " reports failure: ", seen.message);
     }
   }
+}
+
+void Supervisor::follow_remote_hosts() {
+  if (!pipeline_.split() || end_requested_) return;
+  const std::string prefix = std::string(kSupervisorName) + kHostSeparator;
+  for (const auto& [name, seen] : dds_->seen) {
+    if (name == dds_->status_name || name.rfind(prefix, 0) != 0) continue;
+    if (seen.state == heslam_msg_STATE_SHUTTING_DOWN) {
+      // One run over several hosts ends together: the host whose replay finished (or that was
+      // stopped) ends it for the others.
+      // Its failure is its own to report (exit code 1 there); here it is only the reason to stop.
+      if (seen.message.empty()) {
+        log_.info("the supervisor on host ", name.substr(prefix.size()), " is ending the run; stopping here too");
+      } else {
+        log_.warn("the supervisor on host ", name.substr(prefix.size()), " is ending the run (", seen.message,
+                  "); stopping here too");
+      }
+      remote_ended_ = true;
+      end_requested_ = true;
+      return;
+    }
+  }
+}
+
+bool Supervisor::wait_remote_ready(Managed& component) {
+  if (component.spec.ready == Readiness::kStarted) return true;
+  log_.info("waiting for ", component.spec.name, " on another host (its status on the status topic)");
+  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(pipeline_.remote_ready_timeout_s));
+  while (!component.ready) {
+    if (runtime::shutdown_requested() || end_requested_) return false;
+    if (Clock::now() >= deadline) {
+      // Not ours to fail: the other host's supervisor reports its own components.
+      log_.warn(component.spec.name, ": no RUNNING status from another host within ",
+                pipeline_.remote_ready_timeout_s, " s; starting the next components anyway");
+      return true;
+    }
+    pump(kPumpPeriod);
+  }
+  log_.info(component.spec.name, " (another host) is ready");
+  return true;
 }
 
 void Supervisor::reap() {
@@ -339,6 +408,13 @@ int Supervisor::run() {
   dds_->status.set_state(runtime::ComponentState::kRunning);
   bool started_all = true;
   for (auto& component : components_) {
+    if (component->spec.remote) {
+      if (!wait_remote_ready(*component)) {
+        started_all = false;
+        break;
+      }
+      continue;
+    }
     try {
       start(*component);
     } catch (const std::exception& error) {
@@ -361,7 +437,8 @@ int Supervisor::run() {
   if (runtime::shutdown_requested()) {
     log_.info("shutdown requested (signal ", runtime::shutdown_signal(), "); stopping in reverse order");
   }
-  dds_->status.set_state(runtime::ComponentState::kShuttingDown);
+  // Why, for the supervisors of other hosts that follow this one's end (empty: a normal end).
+  dds_->status.set_state(runtime::ComponentState::kShuttingDown, failed_ ? "pipeline failed: " + failure_ : "");
   stop_all();
   read_status();  // the last results
   if (failed_) {
@@ -384,7 +461,8 @@ std::string Supervisor::outcome() const {
     if (!component->result.empty()) results += (results.empty() ? "" : "; ") + component->result;
   }
   const char* signal_name = sigabbrev_np(runtime::shutdown_signal());
-  const std::string text = !runtime::shutdown_requested() ? "pipeline finished"
+  const std::string text = remote_ended_                   ? "pipeline finished (ended by another host)"
+                           : !runtime::shutdown_requested() ? "pipeline finished"
                            : signal_name != nullptr       ? std::string("pipeline stopped by SIG") + signal_name
                                                           : "pipeline stopped";
   return results.empty() ? text : text + ": " + results;

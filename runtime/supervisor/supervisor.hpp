@@ -58,6 +58,10 @@ class Supervisor {
 
   void start(Managed& component);
   bool wait_ready(Managed& component);
+  // Multi-host (docs/deployment.md): waits for another host's component to say RUNNING (bounded,
+  // never a failure here), and ends this side when another host's supervisor ends the run.
+  bool wait_remote_ready(Managed& component);
+  void follow_remote_hosts();
   void pump(std::chrono::milliseconds timeout);  // output, exits, status, due restarts
   void forward_output(Managed& component);
   void reap();
@@ -81,6 +85,7 @@ class Supervisor {
   bool failed_ = false;
   std::string failure_;  // the first reason the run failed
   bool end_requested_ = false;
+  bool remote_ended_ = false;  // another host's supervisor ended the run
 };
 
 }  // namespace heslam::supervisor

@@ -13,6 +13,8 @@
 //   heslam-bench-transport [--frames N] [--domain D] [--bin DIR] [--euroc DIR] [--ddsperf-seconds S]
 //                          [--take reuse|fresh]   (reuse, the default: take_into one sample, as the frontend)
 //                          [--no-plain-c]         (skip the plain C API reference rows)
+//                          [--replay-via "ip netns exec NS"]  (start the replay through this command, e.g.
+//                           in another network namespace: the latency over a real link; docs/deployment.md)
 //
 // Also for reference, the same type, QoS and Cyclone configuration through the plain C API
 // (dds_write / dds_take, no heslam runtime and no replay): a child process (this executable with the
@@ -133,7 +135,8 @@ double percentile(std::vector<double> values, double p) {
 }
 
 Result measure(const std::string& name, const fs::path& dataset, const fs::path& bin_dir, int domain,
-               std::size_t frames, std::size_t recording_frames, bool reuse_buffers) {
+               std::size_t frames, std::size_t recording_frames, bool reuse_buffers,
+               const std::vector<std::string>& replay_via) {
   runtime::Participant participant({.domain_id = domain, .dds_config = ""});
   const runtime::Topics topics;
   runtime::Reader<msg::StereoFrame> reader(participant, topics.stereo());
@@ -143,11 +146,12 @@ Result measure(const std::string& name, const fs::path& dataset, const fs::path&
   std::vector<std::string> args{(bin_dir / "heslam-replay").string(), dataset.string(), "--rate", "1", "--loop",
                                 "--domain", std::to_string(domain), "--no-progress", "--no-keyboard",
                                 "--log-level", "error"};
+  args.insert(args.begin(), replay_via.begin(), replay_via.end());
   std::vector<char*> argv;
   for (std::string& arg : args) argv.push_back(arg.data());
   argv.push_back(nullptr);
   pid_t replay = 0;
-  if (posix_spawn(&replay, argv[0], nullptr, nullptr, argv.data(), environ) != 0) {
+  if (posix_spawnp(&replay, argv[0], nullptr, nullptr, argv.data(), environ) != 0) {
     throw std::runtime_error(args[0] + ": cannot start (build heslam-replay, or pass --bin DIR)");
   }
 
@@ -353,6 +357,7 @@ int run(int argc, char** argv) {
   int ddsperf_seconds = 10;
   bool reuse_buffers = true;
   bool plain_c = true;
+  std::vector<std::string> replay_via;
   fs::path bin_dir = fs::canonical("/proc/self/exe").parent_path();
   fs::path euroc_dir = fs::path(HESLAM_SHARED_DATA) / "euroc_v101_head";
   for (std::size_t i = 0; i < common.rest.size(); ++i) {
@@ -361,7 +366,10 @@ int run(int argc, char** argv) {
       return plain_c_publish(common.domain_id, std::stoi(common.rest[i + 1]), std::stoi(common.rest[i + 2]),
                              std::stoul(common.rest[i + 3]), std::stoul(common.rest[i + 4]));
     }
-    if (arg == "--no-plain-c") {
+    if (arg == "--replay-via" && i + 1 < common.rest.size()) {
+      std::istringstream words(common.rest[++i]);
+      for (std::string word; words >> word;) replay_via.push_back(word);
+    } else if (arg == "--no-plain-c") {
       plain_c = false;
     } else if (arg == "--frames" && i + 1 < common.rest.size()) {
       frames = std::stoul(common.rest[++i]);
@@ -375,7 +383,7 @@ int run(int argc, char** argv) {
                (common.rest[i + 1] == "reuse" || common.rest[i + 1] == "fresh")) {
       reuse_buffers = common.rest[++i] == "reuse";
     } else {
-      throw std::runtime_error(arg + ": unknown option (--frames N, --bin DIR, --euroc DIR, --ddsperf-seconds S, --take reuse|fresh, --no-plain-c, --domain D)");
+      throw std::runtime_error(arg + ": unknown option (--frames N, --bin DIR, --euroc DIR, --ddsperf-seconds S, --take reuse|fresh, --no-plain-c, --replay-via CMD, --domain D)");
     }
   }
   const StereoDataset euroc = open_dataset(euroc_dir);
@@ -387,9 +395,9 @@ int run(int argc, char** argv) {
               "p99_us", "max_us", "wake_p50");
   std::fflush(stdout);
   try {
-    print(measure("EuRoC 752x480", euroc_dir, bin_dir, common.domain_id, frames, euroc.frames.size(), reuse_buffers));
+    print(measure("EuRoC 752x480", euroc_dir, bin_dir, common.domain_id, frames, euroc.frames.size(), reuse_buffers, replay_via));
     std::fflush(stdout);
-    print(measure("KITTI 1241x376", kitti, bin_dir, common.domain_id, frames, euroc.frames.size(), reuse_buffers));
+    print(measure("KITTI 1241x376", kitti, bin_dir, common.domain_id, frames, euroc.frames.size(), reuse_buffers, replay_via));
   } catch (...) {
     fs::remove_all(kitti);
     throw;
