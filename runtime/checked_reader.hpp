@@ -18,6 +18,7 @@
 // Invalid-data notices without a dispose (a writer unregistered / left) carry no data and pass.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <deque>
 #include <functional>
@@ -116,16 +117,19 @@ class CheckedReader {
   }
 
   // True when `received` is the owner's (or carries no data); otherwise it is moved into held_.
+  // Only data takes over a stream: a dispose notice is held like data but never makes its writer the
+  // owner (a writer deleted at exit disposes its instances, and would otherwise own the topic).
   bool admit(Received<T>& received) {
     if (!options_.single_writer) return true;
     if (!received.info.valid_data && !received.info.disposed) return true;
     const dds_instance_handle_t writer = received.info.publication_handle;
     if (!owner_) {
-      owner_ = writer;
+      if (received.info.valid_data) owner_ = writer;
       return true;
     }
     if (writer == *owner_) return true;
-    if (!writer_matched(handle(), *owner_)) {
+    const bool owner_alive = writer_matched(handle(), *owner_);
+    if (!owner_alive && received.info.valid_data) {
       take_over(writer);
       if (!released_.empty()) {  // older held samples of this writer go first
         released_.push_back(std::move(received));
@@ -133,7 +137,7 @@ class CheckedReader {
       }
       return true;
     }
-    if (announced_.insert(writer).second) {
+    if (owner_alive && received.info.valid_data && announced_.insert(writer).second) {
       stats_.count("second_writers");
       log_.warn("topic '", name(), "': a second writer (", describe_writer(handle(), writer),
                 ") while the run's first writer (", describe_writer(handle(), *owner_),
@@ -157,7 +161,8 @@ class CheckedReader {
       if (it == alive.end()) it = alive.emplace(writer, writer_matched(handle(), writer)).first;
       return !it->second;
     });
-    if (!held_.empty()) take_over(held_.front().info.publication_handle);
+    const auto with_data = std::find_if(held_.begin(), held_.end(), [](const Received<T>& held) { return held.info.valid_data; });
+    if (with_data != held_.end()) take_over(with_data->info.publication_handle);
   }
 
   // `writer` owns the stream from now on; its held samples are released in arrival order.

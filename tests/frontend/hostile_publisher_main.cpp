@@ -6,7 +6,7 @@
 //   stray_frame       a valid StereoFrame of the dataset's size with seq 1,000,000
 //   malformed_frame   a StereoFrame whose images hold 16 bytes, seq 2,000,000
 //   calibration       the dataset's calibration with the left fx 10 % larger (a valid, different one)
-//   nan_keyframe      a Keyframe with a NaN pose;  nan_keyframe_state: KeyframeState of fe:1, NaN pose
+//   nan_keyframe      a Keyframe with a NaN pose;  nan_keyframe_state: KeyframeState of fe:1, NaN pose (wrong_keyframe_state: fe:2)
 //   nan_point         MapPointState lm:1 with a NaN position;  nan_odometry: Odometry seq 5, NaN pose
 //   nan_correction    a LoopCorrection moving fe:1 to a NaN pose
 //   wrong_keyframe_state, wrong_odometry: valid samples with a pose 100 m away (only the
@@ -141,6 +141,7 @@ int run(int argc, char** argv) {
   state.map_version = 1'000'000;
   state.T_wc = nan_pose();
   add(all, domain, topics.keyframe_states(), state);
+  state.id = kFrontendTag | 2;  // another instance: readers keep the newest sample per instance
   state.T_wc = pose_at(100.0);
   add(all, domain, topics.keyframe_states(), state);
 
