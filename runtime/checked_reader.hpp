@@ -167,8 +167,6 @@ class CheckedReader {
 
   // `writer` owns the stream from now on; its held samples are released in arrival order.
   void take_over(dds_instance_handle_t writer) {
-    log_.info("topic '", name(), "': the first writer left; ", describe_writer(handle(), writer),
-              " takes over (a restarted publisher)");
     owner_ = writer;
     std::deque<Received<T>> others;
     for (Received<T>& held : held_) {
@@ -176,6 +174,9 @@ class CheckedReader {
     }
     held_ = std::move(others);
     announced_.erase(writer);
+    // Counted above as second_writer_samples; these are used after all.
+    log_.info("topic '", name(), "': the first writer left; ", describe_writer(handle(), writer),
+              " takes over (a restarted publisher), its ", released_.size(), " held samples are used");
   }
 
   Reader<T> reader_;
