@@ -16,9 +16,17 @@
 #include <thread>
 #include <vector>
 
+#include <signal.h>
+
+#include "components/core/camera/stereo_rectifier.hpp"
 #include "components/core/mapping/map_file.hpp"
 #include "pipeline_runs.hpp"
+#include "runtime/participant.hpp"
+#include "runtime/topics.hpp"
+#include "runtime/writer.hpp"
 #include "test_support.hpp"
+#include "tools/replay/dataset/stereo_dataset.hpp"
+#include "tools/replay/replay_messages.hpp"
 
 namespace heslam {
 namespace {
@@ -125,6 +133,55 @@ TEST(HostileParticipants, LockstepRunIsUnchangedAndEveryRefusalIsCounted) {
   expect_contains(recorder_log, "topic 'heslam/odometry': a second writer");
   expect_contains(mapper_log, "topic 'heslam/map/keyframes': a second writer");
   expect_contains(mapper_log, "1 bad corrections");
+}
+
+// Polls a child's stderr for `part` (bounded: discovery and start-up take a moment).
+bool err_contains_within(const test::ChildProcess& child, const std::string& part, std::chrono::seconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (child.err().find(part) != std::string::npos) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return false;
+}
+
+// The calibration's writer went away and another writer took the topic over (as a restarted replay
+// would): the same calibration from it is fine, a different one is refused with an error line.
+TEST(HostileParticipants, ADifferentCalibrationFromAnotherWriterIsRefusedEvenAfterATakeOver) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const fs::path dataset_path = test::shared_dataset("euroc_mh01_handheld");
+  const test::ScratchDir dir("calibration_writer");
+  const int domain = test::exclusive_domain_id();
+  const StereoDataset dataset = open_dataset(dataset_path);
+  StereoCalibration different = dataset.calibration;
+  different.left.fx_px *= 1.1;
+  different.source = "another writer";
+  const CalibrationMessage first_message(dataset.calibration, StereoRectifier(dataset.calibration).camera());
+  const CalibrationMessage different_message(different, StereoRectifier(different).camera());
+  const runtime::Topics topics;
+
+  test::ChildProcess frontend(test::bin_dir() / "heslam-frontend",
+                              {"--domain", std::to_string(domain), "--config",
+                               (test::source_dir() / "config/frontend/euroc.yaml").string()},
+                              dir.path(), "frontend");
+  runtime::Participant second(runtime::ParticipantOptions{domain, ""});
+  runtime::Writer<msg::StereoCalibration> second_writer(second, topics.calibration());
+  {
+    runtime::Participant first(runtime::ParticipantOptions{domain, ""});
+    runtime::Writer<msg::StereoCalibration> first_writer(first, topics.calibration());
+    ASSERT_TRUE(first_writer.wait_for_readers(1, std::chrono::seconds(30))) << frontend.err();
+    first_writer.write(first_message.get());
+    ASSERT_TRUE(err_contains_within(frontend, "': rectified ", std::chrono::seconds(30))) << frontend.err();
+  }  // the run's calibration writer leaves
+  ASSERT_TRUE(second_writer.wait_for_readers(1, std::chrono::seconds(10)));
+  second_writer.write(different_message.get());
+  EXPECT_TRUE(err_contains_within(frontend, "refused a different calibration ('another writer'", std::chrono::seconds(10)))
+      << frontend.err();
+  frontend.signal(SIGTERM);
+  EXPECT_EQ(frontend.wait(test::kStopTimeout).value_or(-1), 0) << frontend.err();
+  const std::string err = frontend.err();
+  EXPECT_NE(err.find("refused_calibrations 1"), std::string::npos) << err;
+  EXPECT_EQ(err.find("calibration changed"), std::string::npos) << err;
 }
 
 }  // namespace
