@@ -13,7 +13,9 @@
 
 #include "components/core/mapping/map_file.hpp"
 #include "components/core/place/vocabulary_setting.hpp"
+#include "components/frontend/message_checks.hpp"
 #include "runtime/sequence.hpp"
+#include "runtime/writer_identity.hpp"
 
 namespace heslam::frontend {
 namespace {
@@ -30,6 +32,13 @@ constexpr std::chrono::milliseconds kMapHistorySettle{100};
 // The publisher's rectified model and ours agree to this (both come from the same calibration; a
 // larger difference means mismatched builds or a different rectification).
 constexpr double kCameraTolerance = 1e-6;
+// Frames / calibrations of a second writer kept in case it takes over (a restarted replay sends one
+// frame, then waits for its acknowledgement); the image topic keeps 4 as well.
+constexpr std::size_t kHeldFrames = 4;
+constexpr std::size_t kHeldCalibrations = 4;
+// Counters of samples refused from the topics' writers or from other participants (log_rejections).
+constexpr const char* kRejectionCounters[] = {"rejected_calibrations", "refused_calibrations", "rejected_keyframe_states",
+                                             "rejected_points", runtime::kSecondWriterSamples, "second_writers"};
 
 bool same_camera(const PinholeStereo& a, const PinholeStereo& b) {
   return std::abs(a.fx_px - b.fx_px) < kCameraTolerance && std::abs(a.fy_px - b.fy_px) < kCameraTolerance &&
@@ -73,13 +82,20 @@ Frontend::Frontend(const runtime::CommonArgs& args) : Component("frontend", args
 void Frontend::configure(const runtime::Config& config) {
   options_ = FrontendOptions::from_config(config, args().rest);
   waitset_ = std::make_unique<runtime::WaitSet>(participant());
-  calibration_reader_.emplace(participant(), topics().calibration());
-  frame_reader_.emplace(participant(), topics().stereo());
+  calibration_reader_.emplace(participant(), topics().calibration(), log(), stats(),
+                              sample_check<msg::StereoCalibration>(), checked_options<msg::StereoCalibration>(kHeldCalibrations));
+  // Frames are checked by process_frame (a bad frame of the replay is still acknowledged).
+  runtime::CheckedReaderOptions frame_options;
+  frame_options.rejected_counter = "bad_frames";
+  frame_options.max_held = kHeldFrames;
+  frame_reader_.emplace(participant(), topics().stereo(), log(), stats(), nullptr, frame_options);
   waitset_->attach(*calibration_reader_);
   waitset_->attach(*frame_reader_);
   if (options_.mapper_enabled) {
-    keyframe_state_reader_.emplace(participant(), topics().keyframe_states());
-    point_state_reader_.emplace(participant(), topics().map_points());
+    keyframe_state_reader_.emplace(participant(), topics().keyframe_states(), log(), stats(),
+                                   sample_check<msg::KeyframeState>(), checked_options<msg::KeyframeState>(kMapStateHeld));
+    point_state_reader_.emplace(participant(), topics().map_points(), log(), stats(), sample_check<msg::MapPointState>(),
+                                checked_options<msg::MapPointState>(kMapStateHeld));
     keyframe_done_reader_.emplace(participant(), topics().keyframe_done());
     waitset_->attach(*keyframe_state_reader_);
     waitset_->attach(*point_state_reader_);
@@ -115,6 +131,7 @@ void Frontend::run() {
   }
   count_frames_left();
   log().flush_throttled();
+  log_rejections();
   const auto counters = stats().counters();
   const auto count = [&](const char* name) { return counters.count(name) != 0 ? counters.at(name) : 0; };
   log().info("processed ", count("frames"), " frames (", count("lost"), " lost, ", count("bad_frames"), " bad), ",
@@ -134,6 +151,14 @@ void Frontend::take_calibration() {
     const msg::StereoCalibration& message = *received.sample;
     const PinholeStereo announced = to_camera(message.rectified);
     if (processor_ && calibration_camera_ && same_camera(*calibration_camera_, announced)) continue;
+    if (processor_ && received.info.publication_handle != calibration_writer_) {
+      stats().count("refused_calibrations");
+      log().error("topic '", calibration_reader_->name(), "': refused a different calibration ('",
+                  runtime::to_string(message.source), "', fx ", announced.fx_px, " px, baseline ", announced.baseline_m,
+                  " m) from ", runtime::describe_writer(calibration_reader_->handle(), received.info.publication_handle),
+                  ": only the writer the run started with may change the calibration (counted as refused_calibrations)");
+      continue;
+    }
     try {
       const StereoCalibration calibration = to_calibration(message);
       auto processor = std::make_unique<FrameProcessor>(calibration, options_);
@@ -145,6 +170,7 @@ void Frontend::take_calibration() {
       if (processor_) log().warn("calibration changed: tracking restarts with an empty map");
       processor_ = std::move(processor);
       calibration_camera_ = announced;
+      calibration_writer_ = received.info.publication_handle;
       if (options_.mapper_enabled) resume_in_mapper_map();
       const PinholeStereo& camera = processor_->camera();
       log().info("calibration '", calibration.source, "': rectified ", camera.width_px, "x", camera.height_px,
@@ -233,11 +259,21 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
     acknowledge(frame, nullptr);
     return;
   }
+  // Checked before its seq counts: a malformed frame with a high seq must not make every later
+  // frame look processed already.
+  GreyPair images;
+  try {
+    images = to_grey_images(frame);
+  } catch (const std::exception& error) {
+    stats().count("bad_frames");
+    log().warn_throttled("bad_frames", error.what());
+    acknowledge(frame, nullptr);
+    return;
+  }
   if (last_seq_ && frame.seq > *last_seq_ + 1) stats().count("frames_missed", frame.seq - *last_seq_ - 1);
   last_seq_ = frame.seq;
   FrameOutput output;
   try {
-    const GreyPair images = to_grey_images(frame);
     output = processor_->process(frame.stamp_ns, frame.seq, images.left, images.right);
   } catch (const std::exception& error) {
     // A bad frame is skipped and counted; it is still acknowledged so a lockstep run goes on.
@@ -271,6 +307,16 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
                options_.mapper_timeout.count(), " ms; going on without it");
   }
   acknowledge(frame, &output);
+}
+
+void Frontend::log_rejections() {
+  const auto counters = stats().counters();
+  std::ostringstream line;
+  for (const char* name : kRejectionCounters) {
+    const auto it = counters.find(name);
+    if (it != counters.end() && it->second > 0) line << (line.tellp() > 0 ? ", " : "") << name << " " << it->second;
+  }
+  if (line.tellp() > 0) log().warn("samples refused from other writers or invalid: ", line.str());
 }
 
 void Frontend::mirror_map_state() {

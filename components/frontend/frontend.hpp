@@ -13,6 +13,7 @@
 
 #include "components/frontend/frame_processor.hpp"
 #include "components/frontend/frontend_options.hpp"
+#include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
 
 namespace heslam::frontend {
@@ -32,6 +33,8 @@ class Frontend : public runtime::Component {
   void count_frames_left();
   void take_frames();
   void process_frame(const msg::StereoFrame& frame);
+  // One line with the samples refused from other participants (invalid, second writers), if any.
+  void log_rejections();
   // Applies whatever map state the mapper published so far.
   void mirror_map_state();
   // With a mapper: mirror its stored map into a new processor's tracker and, when it holds
@@ -45,10 +48,12 @@ class Frontend : public runtime::Component {
   void acknowledge(const msg::StereoFrame& frame, const FrameOutput* output);
 
   FrontendOptions options_;
-  std::optional<runtime::Reader<msg::StereoCalibration>> calibration_reader_;
-  std::optional<runtime::Reader<msg::StereoFrame>> frame_reader_;
-  std::optional<runtime::Reader<msg::KeyframeState>> keyframe_state_reader_;
-  std::optional<runtime::Reader<msg::MapPointState>> point_state_reader_;
+  // Checked, one writer each (runtime/checked_reader.hpp): a second replay or a stray participant on
+  // the domain is ignored instead of mixed into the run.
+  std::optional<runtime::CheckedReader<msg::StereoCalibration>> calibration_reader_;
+  std::optional<runtime::CheckedReader<msg::StereoFrame>> frame_reader_;
+  std::optional<runtime::CheckedReader<msg::KeyframeState>> keyframe_state_reader_;
+  std::optional<runtime::CheckedReader<msg::MapPointState>> point_state_reader_;
   std::optional<runtime::Reader<msg::KeyframeDone>> keyframe_done_reader_;
   std::optional<runtime::Writer<msg::Odometry>> odometry_writer_;
   std::optional<runtime::Writer<msg::Keyframe>> keyframe_writer_;
@@ -56,6 +61,9 @@ class Frontend : public runtime::Component {
   std::unique_ptr<runtime::WaitSet> waitset_;
   std::unique_ptr<FrameProcessor> processor_;  // from the first calibration
   std::optional<PinholeStereo> calibration_camera_;
+  // The writer of the calibration in use: only it may change the calibration (a different one from
+  // any other writer, even one that took over the topic, is refused).
+  dds_instance_handle_t calibration_writer_ = 0;
   std::deque<runtime::Received<msg::StereoFrame>> pending_;  // frames before the calibration
   runtime::Received<msg::StereoFrame> frame_;                // taken into, buffers reused frame to frame
   // Seq of the last frame processed: a jump counts the frames in between as missed (a real-time

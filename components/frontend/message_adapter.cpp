@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "components/core/camera/image_limits.hpp"
+#include "components/frontend/message_checks.hpp"
 #include "runtime/sequence.hpp"
 
 namespace heslam::frontend {
@@ -148,34 +149,12 @@ msg::RectifiedStereoCamera to_message(const PinholeStereo& camera) {
 }
 
 GreyPair to_grey_images(const msg::StereoFrame& frame) {
-  // Checked as the unsigned wire values: 0xFFFFFFFF must read as 4294967295, not as -1.
-  if (!image_size_plausible(frame.width_px, frame.height_px)) {
-    throw std::runtime_error("stereo frame " + std::to_string(frame.seq) + ": width_px x height_px " +
-                             std::to_string(frame.width_px) + "x" + std::to_string(frame.height_px) + ": " +
-                             image_size_expectation());
-  }
+  if (auto problem = check(frame)) throw std::runtime_error("stereo frame " + std::to_string(frame.seq) + ": " + *problem);
   const int width = static_cast<int>(frame.width_px);
   const int height = static_cast<int>(frame.height_px);
-  int channels = 0;
-  switch (frame.encoding) {
-    case heslam_msg_ENCODING_MONO8: channels = 1; break;
-    case heslam_msg_ENCODING_BGR8: channels = 3; break;
-    default:
-      throw std::runtime_error("stereo frame " + std::to_string(frame.seq) + ": unknown encoding " +
-                               std::to_string(static_cast<int>(frame.encoding)));
-  }
-  const std::size_t expected = static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * channels;
+  const int channels = frame.encoding == heslam_msg_ENCODING_BGR8 ? 3 : 1;
   const auto left = runtime::view(frame.left);
   const auto right = runtime::view(frame.right);
-  if (left.size() != expected || right.size() != expected) {
-    // Name the side that is wrong (both when both are).
-    std::string got;
-    if (left.size() != expected) got += "left has " + std::to_string(left.size());
-    if (right.size() != expected) got += std::string(got.empty() ? "" : ", ") + "right has " + std::to_string(right.size());
-    throw std::runtime_error("stereo frame " + std::to_string(frame.seq) + ": expected " + std::to_string(expected) +
-                             " bytes per image for " + std::to_string(width) + "x" + std::to_string(height) +
-                             "x" + std::to_string(channels) + ", " + got);
-  }
   const int type = channels == 1 ? CV_8UC1 : CV_8UC3;
   // cv::Mat wraps non-const data; the pixels are only read.
   cv::Mat left_raw(height, width, type, const_cast<std::uint8_t*>(left.data()));

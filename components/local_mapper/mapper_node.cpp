@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "components/frontend/message_checks.hpp"
 #include "components/local_mapper/message_adapter.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
@@ -18,6 +19,11 @@ namespace {
 // Wait granularity of the main loop: shutdown is also signalled through the waitset, this only
 // bounds how long a missed wake-up could delay it.
 constexpr std::chrono::milliseconds kWaitPeriod{200};
+// Samples of a second writer kept in case it takes over (a restarted frontend / loop closer within
+// the 2 s lease of the dead one): a frontend waits for each keyframe, a loop closer replays at most
+// its correction history (KEEP_LAST(100), docs/topics.md). A keyframe is ~60 KB.
+constexpr std::size_t kHeldKeyframes = 64;
+constexpr std::size_t kHeldCorrections = 100;
 
 // The per-keyframe stages in pipeline order (status percentiles and the final summary).
 constexpr const char* kStageOrder[] = {"insertion", "point_culling",  "triangulation", "fusion", "local_ba",
@@ -35,8 +41,10 @@ MapperNode::MapperNode(const runtime::CommonArgs& args) : Component("local_mappe
 void MapperNode::configure(const runtime::Config& config) {
   options_ = MapperProcessOptions::from_config(config, args().rest);
   waitset_ = std::make_unique<runtime::WaitSet>(participant());
-  keyframe_reader_.emplace(participant(), topics().keyframes());
-  correction_reader_.emplace(participant(), topics().loop_corrections());
+  keyframe_reader_.emplace(participant(), topics().keyframes(), log(), stats(), nullptr,
+                           frontend::checked_options<msg::Keyframe>(kHeldKeyframes));
+  correction_reader_.emplace(participant(), topics().loop_corrections(), log(), stats(), nullptr,
+                             frontend::checked_options<msg::LoopCorrection>(kHeldCorrections));
   waitset_->attach(*keyframe_reader_);
   waitset_->attach(*correction_reader_);
   // The map outlives this process: a mapper that exits (or is restarted) must not make the readers
@@ -137,6 +145,7 @@ void MapperNode::take_keyframes() {
     if (!received.info.valid_data) continue;  // a frontend that left: its keyframes stay in the map
     const msg::Keyframe& message = *received.sample;
     try {
+      if (auto problem = frontend::check(message)) throw std::runtime_error("topic '" + keyframe_reader_->name() + "': " + *problem);
       PendingKeyframe keyframe{frontend::to_keyframe(message), frontend::to_camera(message.camera)};
       if (!(keyframe.camera.fx_px > 0.0) || !(keyframe.camera.baseline_m > 0.0)) {
         throw std::runtime_error("keyframe " + std::to_string(message.id) + ": camera fx " +
@@ -156,6 +165,9 @@ void MapperNode::take_corrections() {
   for (auto& received : correction_reader_->take()) {
     if (!received.info.valid_data) continue;
     try {
+      if (auto problem = frontend::check(*received.sample)) {
+        throw std::runtime_error("topic '" + correction_reader_->name() + "': " + *problem);
+      }
       LoopCorrection correction = to_loop_correction(*received.sample);
       if (applied_corrections_.count(correction.id) != 0) {
         // Replayed to us after a restart: applied already, but its loop closer may still wait for the
@@ -368,6 +380,10 @@ void MapperNode::log_summary() {
          << counter(counters, "corrections") << " corrections";
   if (options_.real_time) totals << "; " << counter(counters, "ba_stopped_early") << " local BAs stopped early";
   log().info(totals.str());
+  if (counter(counters, runtime::kSecondWriterSamples) > 0 || counter(counters, "bad_corrections") > 0) {
+    log().warn("samples refused: ", counter(counters, runtime::kSecondWriterSamples), " from second writers (",
+               counter(counters, "second_writers"), " writers), ", counter(counters, "bad_corrections"), " bad corrections");
+  }
   if (mapper_) {
     log().info("map: ", mapper_->map().keyframes.size(), " keyframes, ", mapper_->map().points.size(),
                " points, version ", mapper_->map().version);

@@ -22,6 +22,7 @@
 #include "components/core/mapping/local_mapper.hpp"
 #include "components/frontend/message_adapter.hpp"
 #include "components/local_mapper/mapper_process_options.hpp"
+#include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
 
 namespace heslam::local_mapper {
@@ -65,8 +66,10 @@ class MapperNode : public runtime::Component {
 
   MapperProcessOptions options_;
   std::unique_ptr<runtime::WaitSet> waitset_;
-  std::optional<runtime::Reader<msg::Keyframe>> keyframe_reader_;
-  std::optional<runtime::Reader<msg::LoopCorrection>> correction_reader_;
+  // One writer each (runtime/checked_reader.hpp); samples are checked where they are converted, so a
+  // bad keyframe of the frontend is still acknowledged.
+  std::optional<runtime::CheckedReader<msg::Keyframe>> keyframe_reader_;
+  std::optional<runtime::CheckedReader<msg::LoopCorrection>> correction_reader_;
   std::optional<runtime::Writer<msg::KeyframeState>> keyframe_state_writer_;
   std::optional<runtime::Writer<msg::MapPointState>> point_state_writer_;
   std::optional<runtime::Writer<msg::KeyframeDone>> keyframe_done_writer_;

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "components/frontend/message_checks.hpp"
 #include "components/loop_closer/message_adapter.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
@@ -25,6 +26,8 @@ constexpr std::chrono::milliseconds kReaderWait{2000};
 // Correction ids: the creator tag in the top byte (map.hpp) and, below, a start value from the clock
 // so a restarted loop closer without a state file never reuses an id the mapper already applied.
 constexpr int kClockShiftBits = 20;
+// Keyframes of a second writer kept in case it takes over (a restarted frontend; ~60 KB each).
+constexpr std::size_t kHeldKeyframes = 64;
 
 std::uint64_t clock_counter_start() {
   timespec now{};
@@ -42,9 +45,12 @@ void LoopCloserNode::configure(const runtime::Config& config) {
   options_ = LoopCloserProcessOptions::from_config(config, args().rest);
   detector_ = make_detector(config, options_);
   waitset_ = std::make_unique<runtime::WaitSet>(participant());
-  keyframe_reader_.emplace(participant(), topics().keyframes());
-  keyframe_state_reader_.emplace(participant(), topics().keyframe_states());
-  point_state_reader_.emplace(participant(), topics().map_points());
+  keyframe_reader_.emplace(participant(), topics().keyframes(), log(), stats(), nullptr,
+                           frontend::checked_options<msg::Keyframe>(kHeldKeyframes));
+  keyframe_state_reader_.emplace(participant(), topics().keyframe_states(), log(), stats(), nullptr,
+                                 frontend::checked_options<msg::KeyframeState>(frontend::kMapStateHeld));
+  point_state_reader_.emplace(participant(), topics().map_points(), log(), stats(), nullptr,
+                              frontend::checked_options<msg::MapPointState>(frontend::kMapStateHeld));
   keyframe_done_reader_.emplace(participant(), topics().keyframe_done());
   waitset_->attach(*keyframe_reader_);
   waitset_->attach(*keyframe_state_reader_);
@@ -310,6 +316,11 @@ void LoopCloserNode::log_summary() {
   log().info("processed ", count("keyframes"), " keyframes: ", count("candidates"), " loop candidates, ",
              count("loops_accepted"), " loops accepted, ", count("loops_rejected"), " rejected, ",
              count("global_bundle_adjustments"), " global BAs (", count("global_ba_aborted"), " aborted), ", count("correction_timeouts"), " corrections unacknowledged");
+  if (count(runtime::kSecondWriterSamples) + count("bad_keyframes") + count("bad_keyframe_states") + count("bad_point_states") > 0) {
+    log().warn("samples refused: ", count(runtime::kSecondWriterSamples), " from second writers, ", count("bad_keyframes"),
+               " bad keyframes, ", count("bad_keyframe_states"), " bad keyframe states, ", count("bad_point_states"),
+               " bad point states");
+  }
   for (const runtime::StageSummary& stage : stats().stages()) {
     log().info("stage ", stage.name, " median ", stage.p50_ms, " ms, p90 ", stage.p90_ms, " ms, max ", stage.max_ms,
                " ms (", stage.count, ")");

@@ -19,6 +19,7 @@
 #include "components/loop_closer/background_global_ba.hpp"
 #include "components/loop_closer/loop_closer_options.hpp"
 #include "components/loop_closer/map_mirror.hpp"
+#include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
 
 namespace heslam::loop_closer {
@@ -54,9 +55,10 @@ class LoopCloserNode : public runtime::Component {
 
   LoopCloserProcessOptions options_;
   std::unique_ptr<runtime::WaitSet> waitset_;
-  std::optional<runtime::Reader<msg::Keyframe>> keyframe_reader_;
-  std::optional<runtime::Reader<msg::KeyframeState>> keyframe_state_reader_;
-  std::optional<runtime::Reader<msg::MapPointState>> point_state_reader_;
+  // One writer each (runtime/checked_reader.hpp); the mirror checks the samples (frontend::check).
+  std::optional<runtime::CheckedReader<msg::Keyframe>> keyframe_reader_;
+  std::optional<runtime::CheckedReader<msg::KeyframeState>> keyframe_state_reader_;
+  std::optional<runtime::CheckedReader<msg::MapPointState>> point_state_reader_;
   std::optional<runtime::Reader<msg::KeyframeDone>> keyframe_done_reader_;
   std::optional<runtime::Writer<msg::LoopCorrection>> correction_writer_;
   std::optional<runtime::Writer<msg::KeyframeDone>> keyframe_done_writer_;

@@ -5,16 +5,16 @@
 #include <string>
 
 #include "components/frontend/message_adapter.hpp"
+#include "components/frontend/message_checks.hpp"
 #include "runtime/sequence.hpp"
 
 namespace heslam::loop_closer {
 
 void MapMirror::add_keyframe(const msg::Keyframe& message) {
+  if (auto problem = frontend::check(message)) throw std::runtime_error(*problem);
   frontend::DecodedKeyframe decoded = frontend::to_keyframe(message);
   Keyframe& incoming = decoded.keyframe;
   const std::string name = "keyframe " + std::to_string(message.id);
-  if (message.id == kNoId) throw std::runtime_error("keyframe with id 0");
-  if (!incoming.T_wc.matrix().allFinite()) throw std::runtime_error(name + ": T_wc is not finite");
   const PinholeStereo camera = frontend::to_camera(message.camera);
   if (!(camera.fx_px > 0.0) || !(camera.baseline_m > 0.0)) {
     throw std::runtime_error(name + ": camera fx " + std::to_string(camera.fx_px) + " px, baseline " +
@@ -44,10 +44,8 @@ void MapMirror::add_keyframe(const msg::Keyframe& message) {
 
 void MapMirror::apply_keyframe_state(const msg::KeyframeState& message) {
   if (frontend::is_version_marker(message)) return;  // count_markers() takes those
+  if (auto problem = frontend::check(message)) throw std::runtime_error(*problem);
   const Pose3 T_wc = frontend::to_pose(message.T_wc);
-  if (!T_wc.matrix().allFinite()) {
-    throw std::runtime_error("keyframe state " + std::to_string(message.id) + ": T_wc is not finite");
-  }
   if (frontend::apply_keyframe_state(map_, message)) return;
   PendingState& pending = pending_states_[message.id];
   pending.T_wc = T_wc;
@@ -61,8 +59,7 @@ void MapMirror::apply_keyframe_state(const msg::KeyframeState& message) {
 
 void MapMirror::apply_point_state(const msg::MapPointState& message) {
   if (frontend::is_version_marker(message)) return;
-  const Eigen::Vector3d p_w(message.position_w_m[0], message.position_w_m[1], message.position_w_m[2]);
-  if (!p_w.allFinite()) throw std::runtime_error("map point " + std::to_string(message.id) + ": position is not finite");
+  if (auto problem = frontend::check(message)) throw std::runtime_error(*problem);
   frontend::apply_point_state(map_, message);
 }
 

@@ -18,10 +18,11 @@ namespace heslam::loop_closer {
 
 class MapMirror {
  public:
-  // Throws std::runtime_error naming the keyframe when the sample is malformed (lengths, non-finite
-  // pose, bad camera); the mirror is unchanged then.
+  // Throws std::runtime_error naming the keyframe when the sample is malformed (frontend::check:
+  // lengths, non-finite numbers, bad camera); the mirror is unchanged then.
   void add_keyframe(const msg::Keyframe& message);
-  // Throws std::runtime_error naming the keyframe / point on a non-finite pose or position.
+  // Throws std::runtime_error naming the keyframe / point when frontend::check refuses the sample
+  // (non-finite pose or position, zero ids, ...).
   void apply_keyframe_state(const msg::KeyframeState& message);
   void apply_point_state(const msg::MapPointState& message);
   // A disposed point instance: removed by the mapper (a culled or merged point).

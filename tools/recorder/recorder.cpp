@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "components/frontend/message_adapter.hpp"
+#include "components/frontend/message_checks.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
 
@@ -23,6 +24,13 @@ constexpr std::chrono::milliseconds kDrainQuietPeriod{300};
 constexpr int kRewriteSpacingFactor = 20;
 // The replay's count of published frames, on its status.
 constexpr const char* kFramesPublishedCounter = "frames_published";
+// Samples of a second writer kept in case it takes over (a restarted frontend within the 2 s lease
+// of the dead one): the odometry history depth (docs/topics.md), and keyframes (~60 KB each).
+constexpr std::size_t kHeldOdometry = 1200;
+constexpr std::size_t kHeldKeyframes = 64;
+// Counters of samples refused (invalid, or from a second writer), reported at exit.
+constexpr const char* kRejectionCounters[] = {"rejected_odometry", "rejected_keyframes", "rejected_keyframe_states",
+                                             runtime::kSecondWriterSamples};
 
 const char* state_name(heslam_msg_TrackingState state) {
   switch (state) {
@@ -126,9 +134,13 @@ Recorder::Recorder(const runtime::CommonArgs& args) : Component("recorder", args
 
 void Recorder::configure(const runtime::Config& config) {
   options_ = RecorderOptions::from(config, args().rest);
-  odometry_reader_.emplace(participant(), topics().odometry());
-  keyframe_reader_.emplace(participant(), topics().keyframes());
-  keyframe_state_reader_.emplace(participant(), topics().keyframe_states());
+  odometry_reader_.emplace(participant(), topics().odometry(), log(), stats(), frontend::sample_check<msg::Odometry>(),
+                           frontend::checked_options<msg::Odometry>(kHeldOdometry));
+  keyframe_reader_.emplace(participant(), topics().keyframes(), log(), stats(), frontend::sample_check<msg::Keyframe>(),
+                           frontend::checked_options<msg::Keyframe>(kHeldKeyframes));
+  keyframe_state_reader_.emplace(participant(), topics().keyframe_states(), log(), stats(),
+                                 frontend::sample_check<msg::KeyframeState>(),
+                                 frontend::checked_options<msg::KeyframeState>(frontend::kMapStateHeld));
   status_reader_.emplace(participant(), topics().status());
   waitset_ = std::make_unique<runtime::WaitSet>(participant());
   waitset_->attach(*odometry_reader_);
@@ -244,6 +256,13 @@ void Recorder::on_shutdown() {
     log().warn(account.never_received_count(), " frames never reached the recorder (seq ",
                account.never_received_text(), "): missed by the frontend (its 'frames missed') or lost on the way");
   }
+  const auto counters = stats().counters();
+  std::string refused;
+  for (const char* name : kRejectionCounters) {
+    const auto it = counters.find(name);
+    if (it != counters.end() && it->second > 0) refused += (refused.empty() ? "" : ", ") + std::string(name) + " " + std::to_string(it->second);
+  }
+  if (!refused.empty()) log().warn("samples refused (invalid, or from a second writer; not recorded): ", refused);
   const std::string summary = summary_line(account, options_.output);
   // A run without a single pose is a failure, never a success with an empty file.
   if (account.with_pose == 0) throw std::runtime_error("no frame has a pose: " + summary);

@@ -14,6 +14,7 @@
 #include <optional>
 #include <string>
 
+#include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
 #include "tools/eval/trajectory_io.hpp"
 #include "tools/recorder/frame_journal.hpp"
@@ -61,9 +62,11 @@ class Recorder : public runtime::Component {
   RecorderOptions options_;
   TrajectoryRecorder recorder_;
   std::optional<FrameJournal> journal_;  // OUTPUT stem + .journal: survives a kill -9 of this process
-  std::optional<runtime::Reader<msg::Odometry>> odometry_reader_;
-  std::optional<runtime::Reader<msg::Keyframe>> keyframe_reader_;
-  std::optional<runtime::Reader<msg::KeyframeState>> keyframe_state_reader_;
+  // Checked, one writer each (runtime/checked_reader.hpp): a NaN pose or a second frontend / mapper
+  // on the domain never reaches the trajectory.
+  std::optional<runtime::CheckedReader<msg::Odometry>> odometry_reader_;
+  std::optional<runtime::CheckedReader<msg::Keyframe>> keyframe_reader_;
+  std::optional<runtime::CheckedReader<msg::KeyframeState>> keyframe_state_reader_;
   std::optional<runtime::Reader<msg::ComponentStatus>> status_reader_;  // the replay's frames_published
   std::unique_ptr<runtime::WaitSet> waitset_;
   std::uint64_t frames_published_ = 0;  // the largest count any publisher reported

@@ -4,12 +4,14 @@
 #include <chrono>
 #include <cstdlib>
 #include <map>
+#include <stdexcept>
 #include <sstream>
 #include <string>
 #include <tuple>
 
 #include <opencv2/highgui.hpp>
 
+#include "components/frontend/message_checks.hpp"
 #include "tools/viewer/frame_view_renderer.hpp"
 #include "tools/viewer/ground_truth_overlay.hpp"
 #include "tools/viewer/map_window.hpp"
@@ -148,10 +150,15 @@ std::size_t ViewerNode::take_all() {
     std::lock_guard<std::mutex> lock(model_mutex_);
     for (auto& received : samples) {
       try {
+        // The shared checks (finite numbers, sizes, ids): a NaN pose is never drawn.
+        if (received.info.valid_data) {
+          if (auto problem = frontend::check(*received.sample)) throw std::runtime_error(*problem);
+        }
         if (handle(received)) stats().count(counter);
       } catch (const std::exception& error) {
-        stats().count(std::string("bad_") + counter);
-        log().warn("topic '", reader.name(), "': ", error.what(), "; skipped");
+        const std::string bad = std::string("bad_") + counter;
+        stats().count(bad);
+        log().warn_throttled(bad, "topic '", reader.name(), "': ", error.what(), "; skipped (counted as ", bad, ")");
       }
     }
   };

@@ -1,0 +1,39 @@
+// Matched-writer queries for single-writer readers.
+#include "runtime/writer_identity.hpp"
+
+#include <cstdio>
+#include <memory>
+
+namespace heslam::runtime {
+namespace {
+
+struct FreeEndpoint {
+  void operator()(dds_builtintopic_endpoint_t* endpoint) const { dds_builtintopic_free_endpoint(endpoint); }
+};
+using Endpoint = std::unique_ptr<dds_builtintopic_endpoint_t, FreeEndpoint>;
+
+Endpoint matched_endpoint(dds_entity_t reader, dds_instance_handle_t publication) {
+  return Endpoint(dds_get_matched_publication_data(reader, publication));
+}
+
+}  // namespace
+
+bool writer_matched(dds_entity_t reader, dds_instance_handle_t publication) {
+  return matched_endpoint(reader, publication) != nullptr;
+}
+
+std::string describe_writer(dds_entity_t reader, dds_instance_handle_t publication) {
+  const Endpoint endpoint = matched_endpoint(reader, publication);
+  if (!endpoint) return "publication handle " + std::to_string(publication);
+  // 16 bytes: 12 of participant prefix (host, process, instance), 4 of entity id.
+  std::string text = "GUID ";
+  char hex[3];
+  for (int i = 0; i < 16; ++i) {
+    std::snprintf(hex, sizeof hex, "%02x", endpoint->key.v[i]);
+    text += hex;
+    if (i % 4 == 3 && i != 15) text += ':';
+  }
+  return text;
+}
+
+}  // namespace heslam::runtime
