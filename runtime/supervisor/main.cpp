@@ -1,5 +1,5 @@
 // heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]
-//                   [--log-dir DIR] [--log-level LEVEL]
+//                   [--log-dir DIR] [--log-level LEVEL] [--no-progress]
 #include <signal.h>
 #include <unistd.h>
 
@@ -19,10 +19,11 @@ using namespace heslam;
 
 constexpr const char* kUsage =
     "usage: heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]\n"
-    "                         [--log-dir DIR] [--log-level debug|info|warn|error]\n"
+    "                         [--log-dir DIR] [--log-level debug|info|warn|error] [--no-progress]\n"
     "  --check      validate the pipeline file and every file it references; start nothing\n"
     "  --arg k=v    value for $(arg k) in the pipeline file (overrides its 'args' default)\n"
-    "  --log-dir    per-component logs (default: $HESLAM_LOG_DIR or ~/.heslam/log, + /<pipeline>-<time>)\n";
+    "  --log-dir    per-component logs (default: $HESLAM_LOG_DIR or ~/.heslam/log, + /<pipeline>-<time>)\n"
+    "  --no-progress  no run progress (default: a line redrawn on a terminal, else a line per 10 %)\n";
 
 std::filesystem::path default_log_dir(const std::string& pipeline_name) {
   std::filesystem::path base;
@@ -50,6 +51,7 @@ int run(int argc, char** argv) {
   std::filesystem::path pipeline_file;
   supervisor::PipelineOverrides overrides;
   bool check = false;
+  bool progress = true;
   std::filesystem::path log_dir;
   runtime::LogLevel log_level = runtime::LogLevel::kInfo;
   for (int i = 1; i < argc; ++i) {
@@ -59,6 +61,8 @@ int run(int argc, char** argv) {
       return 0;
     } else if (arg == "--check") {
       check = true;
+    } else if (arg == "--no-progress") {
+      progress = false;
     } else if (arg == "--arg") {
       const std::string pair = value_of(argc, argv, i, arg);
       const auto eq = pair.find('=');
@@ -113,6 +117,9 @@ int run(int argc, char** argv) {
   options.self_executable = self;
   options.log_dir = log_dir.empty() ? default_log_dir(loaded.pipeline.name) : log_dir;
   options.log_level = log_level;
+  options.progress = !progress                 ? supervisor::RunProgress::Mode::kOff
+                     : isatty(STDERR_FILENO) ? supervisor::RunProgress::Mode::kLive
+                                             : supervisor::RunProgress::Mode::kPlain;
   supervisor::Supervisor supervisor(loaded.pipeline, options);
   return supervisor.run();
 }
