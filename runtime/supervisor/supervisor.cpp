@@ -194,9 +194,14 @@ void Supervisor::report_progress() {
   }
   const Clock::time_point now = Clock::now();
   if (counts.published > 0 && !first_published_) first_published_.emplace(now, counts.published);
-  if (first_published_ && now - first_published_->first >= kMinFpsSpan) {
-    counts.fps = static_cast<double>(counts.published - std::min(counts.published, first_published_->second)) /
-                 std::chrono::duration<double>(now - first_published_->first).count();
+  // Measured between the arrivals of new counts (once a status period), not up to now: between two
+  // statuses the count stands still and the rate would seem to sink.
+  if (counts.published > 0 && (!latest_published_ || latest_published_->second != counts.published)) {
+    latest_published_.emplace(now, counts.published);
+  }
+  if (first_published_ && latest_published_ && latest_published_->first - first_published_->first >= kMinFpsSpan) {
+    counts.fps = static_cast<double>(latest_published_->second - std::min(latest_published_->second, first_published_->second)) /
+                 std::chrono::duration<double>(latest_published_->first - first_published_->first).count();
   }
   const std::optional<std::string> line = progress_.update(counts, now);
   if (!line) return;

@@ -92,6 +92,7 @@ class Supervisor {
   bool progress_drawn_ = false;  // a live line is on the terminal
   // The first status with frames published: fps is measured from there.
   std::optional<std::pair<Clock::time_point, std::uint64_t>> first_published_;
+  std::optional<std::pair<Clock::time_point, std::uint64_t>> latest_published_;  // the latest new count
 };
 
 }  // namespace heslam::supervisor
