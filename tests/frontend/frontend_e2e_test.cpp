@@ -198,8 +198,9 @@ TEST(FrontendEndToEnd, EurocV101StillCameraStaysStill) {
   std::printf("[ figures  ] euroc_v101_head over DDS: path length %.1f mm, max distance from start %.1f mm, "
               "ATE rmse %.2f mm\n",
               estimate.path_length_m() * 1e3, max_distance_m * 1e3, ape.translation_m.rmse * 1e3);
-  // Target: path length < 5 mm (measured 2.9 mm; 63 mm of per-frame jitter before the tracker's
-  // stationary test, tests/tracking/test_stationary.cpp). The vehicle rocks by 0.15 degrees in this
+  // Target: path length < 5 mm (measured 2.9 mm for the rectified camera, 4.1 mm for the body frame
+  // written since issue 19: the body sits ~7 cm from the camera, so the rocking moves it more; 63 mm
+  // of per-frame jitter before the tracker's stationary test, tests/tracking/test_stationary.cpp). The vehicle rocks by 0.15 degrees in this
   // clip: the test keeps the camera centre on those frames, so the rotation is not read as translation.
   EXPECT_LT(estimate.path_length_m(), 0.005);
   EXPECT_LT(max_distance_m, 0.005);
