@@ -34,14 +34,16 @@ echo "heslam demo: running config/pipelines/synth.yaml (the full system, lockste
 echo
 echo "heslam demo: trajectory $trajectory ($(grep -vc '^#' "$trajectory") poses; untracked frames listed in" \
      "${trajectory%.txt}.lost.txt)"
+# The recorder writes body-frame poses (the ground truth's frame; '# heslam frame: body' in the file).
 "$bin/heslam-eval" ape --gt "$dataset/mav0/state_groundtruth_estimate0/data.csv" \
-  --extrinsic "$dataset/mav0/cam0/sensor.yaml" --est "$trajectory" --plot "$output_dir/room_ate.svg"
+  --est "$trajectory" --plot "$output_dir/room_ate.svg"
 echo "heslam demo: top view and error plot in $output_dir/room_ate.svg"
-if [[ -f $trajectory.viewer/map_final.png ]]; then
-  cp "$trajectory.viewer/map_final.png" "$output_dir/room_map.png"
-  cp "$trajectory.viewer/frame_final.png" "$output_dir/room_last_frame.png"
+viewer_dir=${trajectory%.txt}.viewer  # a run's outputs: OUTPUT stem + .map, .loop, .viewer (docs/recorder.md)
+if [[ -f $viewer_dir/map_final.png ]]; then
+  cp "$viewer_dir/map_final.png" "$output_dir/room_map.png"
+  cp "$viewer_dir/frame_final.png" "$output_dir/room_last_frame.png"
   echo "heslam demo: the viewer's final map $output_dir/room_map.png and last frame $output_dir/room_last_frame.png" \
-       "(all its pictures in $trajectory.viewer/)"
+       "(all its pictures in $viewer_dir/)"
 else
   echo "heslam demo: the viewer left no picture (see $output_dir/logs/viewer.log)"
 fi

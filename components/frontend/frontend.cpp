@@ -108,6 +108,13 @@ void Frontend::configure(const runtime::Config& config) {
              options_.mapper_enabled ? "mirroring the local mapper's map" : "no local mapper (own map)",
              options_.wait_for_mapper ? ", lockstep waits for the mapper" : "",
              options_.loop_closers.empty() ? "" : " and " + options_.loop_closers.front());
+  std::error_code no_file;
+  if (options_.localize && !std::filesystem::exists(options_.mapper_map_file, no_file)) {
+    // The mapper (started before us) writes the saved map there at its start: without it there is
+    // nothing to localize in, and tracking would silently start a new map.
+    throw std::runtime_error("--localize: no saved map: the local mapper's map file " + options_.mapper_map_file.string() +
+                             " does not exist (start the mapper with --load-map FILE)");
+  }
   if (options_.vocabulary) {
     log().info("vocabulary ", describe_vocabulary_setting(options_.vocabulary_file), ": ",
                options_.vocabulary->word_count(), " words; relocalization searches the whole map");
@@ -143,6 +150,11 @@ void Frontend::run() {
     log().warn(count("frames_missed"), " frames missed: published while this frontend was busy, only the newest kept");
   }
   log_stage_summary(log(), stats());
+  if (options_.localize && !relocalized_at_seq_) {
+    // A localization run that never found itself in the map has no pose at all: a failure.
+    throw std::runtime_error("never relocalized in the saved map (" + options_.mapper_map_file.string() + "): " +
+                             std::to_string(count("frames")) + " frames, none tracked");
+  }
 }
 
 void Frontend::take_calibration() {
@@ -284,6 +296,10 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
   }
   const TrackResult& result = output.result;
   stats().count("frames");
+  if (options_.localize && !relocalized_at_seq_ && result.state == TrackingState::kOk) {
+    relocalized_at_seq_ = frame.seq;
+    log().info("relocalized in the saved map at frame ", frame.seq);
+  }
   if (result.state == TrackingState::kLost) stats().count("lost");
   if (result.motion == FrameMotion::kStill) stats().count("still_frames");
   if (result.motion == FrameMotion::kRotatingInPlace) stats().count("rotating_in_place_frames");

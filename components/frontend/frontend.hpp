@@ -77,6 +77,8 @@ class Frontend : public runtime::Component {
   MirrorVersion mirror_version_;
   // A correction the mapper applied: its map version, until the mirror has it.
   std::optional<std::uint64_t> follow_correction_at_version_;
+  // --localize: the seq of the first frame tracked in the saved map, unset until then.
+  std::optional<std::uint64_t> relocalized_at_seq_;
 };
 
 }  // namespace heslam::frontend

@@ -125,10 +125,15 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
       options.mapper_map_file = rest[++i];
     } else if (rest[i] == "--loop-closer" && i + 1 < rest.size()) {
       loop_closer = rest[++i];
+    } else if (rest[i] == "--localize") {
+      options.localize = true;
     } else {
       throw std::runtime_error("unknown argument '" + rest[i] +
-                               "' (expected --mapper-map-file FILE or --loop-closer EXECUTABLE|none)");
+                               "' (expected --mapper-map-file FILE, --loop-closer EXECUTABLE|none or --localize)");
     }
+  }
+  if (options.localize && (options.mapper_map_file.empty() || !options.mapper_enabled)) {
+    throw std::runtime_error("--localize: needs the local mapper (mapper.enabled) and its map file (--mapper-map-file FILE)");
   }
   if (!loop_closer.empty() && loop_closer != "none" && options.wait_for_mapper) {
     options.loop_closers.push_back(loop_closer_name);

@@ -46,11 +46,15 @@ struct FrontendOptions {
   // carry) from it, then relocalizes in that map (ARCHITECTURE.md, Recovery). Empty: a restarted
   // frontend starts a new map.
   std::filesystem::path mapper_map_file;
+  // --localize: tracking in a saved map (config/pipelines/euroc_localize.yaml). The mapper's map file
+  // must exist at start (the mapper loaded the saved map into it), the first tracked frame is reported
+  // ("relocalized in the saved map at frame N"), and a run that never relocalizes fails (exit 1).
+  bool localize = false;
   // frames.max_pending: frames that arrive before the calibration are kept (oldest dropped beyond).
   int max_pending_frames = 8;
 
   // Throws std::runtime_error (one line: file, field, expectation) on a bad field.
-  // `rest`: the command line's own arguments (--mapper-map-file FILE, --loop-closer EXECUTABLE),
+  // `rest`: the command line's own arguments (--mapper-map-file FILE, --loop-closer EXECUTABLE, --localize),
   // which win over the config.
   static FrontendOptions from_config(const runtime::Config& config, const std::vector<std::string>& rest = {});
 };

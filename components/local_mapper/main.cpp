@@ -1,5 +1,5 @@
 // heslam-local-mapper: the map owner process (local mapping of ORB-SLAM2 over DDS).
-//   heslam-local-mapper [common options] [--map-file FILE] [--load-map FILE]
+//   heslam-local-mapper [common options] [--map-file FILE] [--load-map FILE] [--save-map FILE]
 #include "components/local_mapper/mapper_node.hpp"
 
 int main(int argc, char** argv) {

@@ -74,6 +74,36 @@ std::filesystem::path MapperNode::sidecar(const char* suffix) const {
   return path;
 }
 
+std::filesystem::path MapperNode::saved_map_path(const std::filesystem::path& requested) const {
+  // Until 2026-11 a run's map was OUTPUT.txt.map (OUTPUT.csv.map for EuRoC csv output); it is now
+  // OUTPUT.map beside OUTPUT.txt (docs/recorder.md, Output files). The old names are read for one
+  // release, with a line saying so.
+  constexpr const char* kOldSuffixes[] = {".txt.map", ".csv.map"};
+  const std::string name = requested.filename().string();
+  for (const char* suffix : kOldSuffixes) {
+    if (name.ends_with(suffix)) {
+      log().warn("deprecated: ", requested.string(), " is named as before 2026-11 (OUTPUT.txt.map); runs now write "
+                 "the map beside OUTPUT as its stem + .map (mh01.txt -> mh01.map). The old name is read for one more "
+                 "release");
+      return requested;
+    }
+  }
+  std::error_code error;
+  if (std::filesystem::exists(requested, error) || requested.extension() != ".map") return requested;
+  for (const char* suffix : kOldSuffixes) {
+    std::filesystem::path old = requested;
+    old.replace_extension();
+    old += suffix;
+    if (std::filesystem::exists(old, error)) {
+      log().warn("deprecated: ", requested.string(), " does not exist; loading ", old.string(),
+                 ", its name before 2026-11 (runs now write mh01.map beside mh01.txt, not mh01.txt.map). The old "
+                 "name is read for one more release");
+      return old;
+    }
+  }
+  return requested;
+}
+
 void MapperNode::load_initial_map() {
   bool resume = false;
   if (!options_.map_file.empty()) {
@@ -112,6 +142,7 @@ void MapperNode::load_initial_map() {
     log().info("resuming from ", options_.map_file.string(), ": ", loaded_->map.keyframes.size(), " keyframes, ",
                loaded_->map.points.size(), " points, map version ", loaded_->map.version);
   } else if (!options_.load_map.empty()) {
+    options_.load_map = saved_map_path(options_.load_map);
     loaded_ = load_map_file(options_.load_map);
     log().info("loaded ", options_.load_map.string(), ": ", loaded_->map.keyframes.size(), " keyframes, ",
                loaded_->map.points.size(), " points, map version ", loaded_->map.version);
@@ -138,6 +169,23 @@ void MapperNode::run() {
   if (mapper_ && unsaved_keyframes_ > 0) save();
   log().flush_throttled();
   log_summary();
+  if (!options_.save_map.empty()) save_map_to(options_.save_map);
+}
+
+void MapperNode::save_map_to(const std::filesystem::path& path) {
+  std::error_code error;
+  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), error);
+  if (mapper_) {
+    mapper_->save(path, options_.sync_writes);
+    log().info("saved the map to ", path.string(), ": ", mapper_->map().keyframes.size(), " keyframes, ",
+               mapper_->map().points.size(), " points");
+  } else if (loaded_) {
+    // Loaded, and no keyframe arrived to start mapping: the map is the loaded one.
+    save_map_file(path, loaded_->map, loaded_->state, options_.sync_writes);
+    log().info("saved the map to ", path.string(), ": ", loaded_->map.keyframes.size(), " keyframes (as loaded)");
+  } else {
+    throw std::runtime_error("--save-map " + path.string() + ": no map to save (not one keyframe arrived)");
+  }
 }
 
 void MapperNode::take_keyframes() {

@@ -28,6 +28,7 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
   // An empty string means "none" (get_path would resolve it to the config folder).
   if (!config.get_string("map_file", "").empty()) o.map_file = config.get_path("map_file", {});
   if (!config.get_string("load_map", "").empty()) o.load_map = config.get_path("load_map", {});
+  if (!config.get_string("save_map", "").empty()) o.save_map = config.get_path("save_map", {});
   o.real_time = config.get_bool("real_time", o.real_time);
   o.save_every_keyframes = config.get_int("save_every_keyframes", o.save_every_keyframes, 1, kMaxSaveEvery);
   o.sync_writes = config.get_bool("sync_writes", o.sync_writes);
@@ -58,9 +59,17 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
       o.map_file = command_line_path(rest, i);
     } else if (rest[i] == "--load-map") {
       o.load_map = command_line_path(rest, i);
+      o.load_map_given_empty = o.load_map.empty();
+    } else if (rest[i] == "--save-map") {
+      o.save_map = command_line_path(rest, i);  // "" (a pipeline's unset save_map): none
     } else {
-      throw std::runtime_error("unknown argument '" + rest[i] + "' (expected --map-file FILE, --load-map FILE)");
+      throw std::runtime_error("unknown argument '" + rest[i] +
+                               "' (expected --map-file FILE, --load-map FILE, --save-map FILE)");
     }
+  }
+  if (o.load_map_given_empty) {
+    throw std::runtime_error("--load-map: no saved map given (an empty file name; a localize pipeline needs "
+                             "--arg map=FILE, the map an earlier run saved)");
   }
   return o;
 }

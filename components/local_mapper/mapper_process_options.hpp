@@ -20,6 +20,12 @@ struct MapperProcessOptions {
   // load_map / --load-map FILE: start from this saved map (read once; map_file, when it exists,
   // takes precedence because it is newer: a restart of the same run).
   std::filesystem::path load_map;
+  // --load-map "" (an empty value given on purpose, as euroc_localize passes an unset `map`) is an
+  // error, never a silent fresh map.
+  bool load_map_given_empty = false;
+  // save_map / --save-map FILE: when the run ends, the final map is written there as well (the
+  // explicit "save" verb; map_file is the run's own working copy). Empty = none.
+  std::filesystem::path save_map;
   // save_every_keyframes: snapshot cadence. 1 = after every keyframe (a kill -9 then loses nothing;
   // larger values re-process the missing keyframes from DDS on restart, which also loses nothing as
   // long as the frontend still holds them).
@@ -35,7 +41,7 @@ struct MapperProcessOptions {
   // (the default, and what lockstep runs need): every BA runs to completion, so runs are repeatable.
   bool real_time = false;
 
-  // Reads the config, then `--map-file FILE` / `--load-map FILE` from `rest` (the command line wins).
+  // Reads the config, then `--map-file FILE` / `--load-map FILE` / `--save-map FILE` from `rest` (the command line wins).
   // Throws std::runtime_error naming the config file and field, or the bad argument.
   static MapperProcessOptions from_config(const runtime::Config& config, const std::vector<std::string>& rest);
 };

@@ -1,5 +1,5 @@
 // heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]
-//                   [--log-dir DIR] [--log-level LEVEL] [--host NAME | --only a,b]
+//                   [--log-dir DIR] [--log-level LEVEL] [--host NAME | --only a,b] [--no-progress]
 #include <signal.h>
 #include <unistd.h>
 
@@ -21,11 +21,13 @@ using namespace heslam;
 constexpr const char* kUsage =
     "usage: heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]\n"
     "                         [--log-dir DIR] [--log-level debug|info|warn|error] [--host NAME | --only a,b]\n"
+    "                         [--no-progress]\n"
     "  --check      validate the pipeline file and every file it references; start nothing\n"
     "  --arg k=v    value for $(arg k) in the pipeline file (overrides its 'args' default)\n"
     "  --log-dir    per-component logs (default: $HESLAM_LOG_DIR or ~/.heslam/log, + /<pipeline>-<time>)\n"
     "  --host NAME  run only the components of the file's hosts.NAME group; the others run on other hosts\n"
-    "  --only a,b   run only these components; the others run on other hosts (docs/deployment.md)\n";
+    "  --only a,b   run only these components; the others run on other hosts (docs/deployment.md)\n"
+    "  --no-progress  no run progress (default: a line redrawn on a terminal, else a line per 10 %)\n";
 
 std::filesystem::path default_log_dir(const std::string& pipeline_name) {
   std::filesystem::path base;
@@ -53,6 +55,7 @@ int run(int argc, char** argv) {
   std::filesystem::path pipeline_file;
   supervisor::PipelineOverrides overrides;
   bool check = false;
+  bool progress = true;
   std::filesystem::path log_dir;
   runtime::LogLevel log_level = runtime::LogLevel::kInfo;
   for (int i = 1; i < argc; ++i) {
@@ -62,6 +65,8 @@ int run(int argc, char** argv) {
       return 0;
     } else if (arg == "--check") {
       check = true;
+    } else if (arg == "--no-progress") {
+      progress = false;
     } else if (arg == "--arg") {
       const std::string pair = value_of(argc, argv, i, arg);
       const auto eq = pair.find('=');
@@ -125,6 +130,10 @@ int run(int argc, char** argv) {
   options.self_executable = self;
   options.log_dir = log_dir.empty() ? default_log_dir(loaded.pipeline.name) : log_dir;
   options.log_level = log_level;
+  options.progress = !progress                 ? supervisor::RunProgress::Mode::kOff
+                     : isatty(STDERR_FILENO) ? supervisor::RunProgress::Mode::kLive
+                                             : supervisor::RunProgress::Mode::kPlain;
+  
   supervisor::Pipeline pipeline = loaded.pipeline;
   if (pipeline.network) {
     // The profile's XML beside the logs: every process reads the same file, and it is kept with

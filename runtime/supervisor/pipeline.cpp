@@ -179,16 +179,19 @@ void select_local_components(Pipeline& pipeline, const PipelineOverrides& overri
 
 std::string substitute_args(const std::string& text, const std::map<std::string, std::string>& args,
                             std::vector<std::string>& unknown) {
-  static const std::regex pattern(R"(\$\(arg\s+([A-Za-z0-9_\-]+)\s*\))");
+  static const std::regex pattern(R"(\$\((arg|stem)\s+([A-Za-z0-9_\-]+)\s*\))");
   std::string out;
   auto begin = std::sregex_iterator(text.begin(), text.end(), pattern);
   std::size_t last = 0;
   for (auto it = begin; it != std::sregex_iterator(); ++it) {
     const std::smatch& match = *it;
     out += text.substr(last, static_cast<std::size_t>(match.position(0)) - last);
-    const auto found = args.find(match[1].str());
+    const auto found = args.find(match[2].str());
     if (found == args.end()) {
-      unknown.push_back(match[1].str());
+      unknown.push_back(match[2].str());
+    } else if (match[1].str() == "stem") {
+      // The value without its extension: a run's outputs are OUTPUT stem + .map, .loop, ...
+      out += std::filesystem::path(found->second).replace_extension().string();
     } else {
       out += found->second;
     }

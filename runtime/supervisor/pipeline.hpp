@@ -84,7 +84,9 @@ struct LoadResult {
 LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverrides& overrides,
                          const std::filesystem::path& bin_dir);
 
-// Replaces every $(arg NAME); unknown names are reported in unknown.
+// Replaces every $(arg NAME), and $(stem NAME) by the value without its extension (a/run.txt ->
+// a/run: the outputs of a run are named OUTPUT stem + .map, .loop, ...); unknown names are reported
+// in unknown.
 std::string substitute_args(const std::string& text, const std::map<std::string, std::string>& args,
                             std::vector<std::string>& unknown);
 

@@ -57,10 +57,16 @@ std::string supervisor_status_name(const Pipeline& pipeline) {
   return std::string(kSupervisorName) + kHostSeparator + host;
 }
 
+// fps is shown once frames have been published for this long (a shorter span is mostly the status
+// period's jitter).
+constexpr auto kMinFpsSpan = 500ms;
+
 struct StatusSeen {
   int32_t pid = 0;
   heslam_msg_ComponentState state = heslam_msg_STATE_CONFIGURING;
   std::string message;
+  std::uint64_t frames_published = 0;  // the replay's counters, for the progress line
+  std::uint64_t frames_total = 0;
 };
 
 }  // namespace
@@ -82,7 +88,10 @@ struct Supervisor::Dds {
 };
 
 Supervisor::Supervisor(Pipeline pipeline, SupervisorOptions options)
-    : pipeline_(std::move(pipeline)), options_(std::move(options)), log_("supervisor", options_.log_level) {
+    : pipeline_(std::move(pipeline)),
+      options_(std::move(options)),
+      log_("supervisor", options_.log_level),
+      progress_(options_.progress) {
   dds_ = std::make_unique<Dds>(pipeline_);
   std::filesystem::create_directories(options_.log_dir);
   for (const ComponentSpec& spec : pipeline_.components) {
@@ -150,6 +159,7 @@ bool Supervisor::wait_ready(Managed& component) {
 void Supervisor::forward_output(Managed& component) {
   std::vector<std::string> lines;
   component.process.read_lines(lines);
+  if (!lines.empty()) clear_progress();
   for (const std::string& line : lines) {
     std::string prefix = component.spec.name;
     prefix.resize(name_width_, ' ');
@@ -171,6 +181,12 @@ void Supervisor::read_status() {
     seen.pid = status.pid;
     seen.state = status.state;
     seen.message = runtime::to_string(status.message);
+    for (std::uint32_t i = 0; i < status.counters._length; ++i) {
+      const msg::Counter& counter = status.counters._buffer[i];
+      const std::string name = runtime::to_string(counter.name);
+      if (name == "frames_published") seen.frames_published = counter.value;
+      if (name == "frames_total") seen.frames_total = counter.value;
+    }
   }
   follow_remote_hosts();
   for (auto& component : components_) {
@@ -235,6 +251,43 @@ bool Supervisor::wait_remote_ready(Managed& component) {
   return true;
 }
 
+void Supervisor::report_progress() {
+  if (progress_.mode() == RunProgress::Mode::kOff) return;
+  RunCounts counts;
+  for (const auto& [name, seen] : dds_->seen) {
+    counts.published = std::max(counts.published, seen.frames_published);
+    counts.total = std::max(counts.total, seen.frames_total);
+    if (const std::optional<std::uint64_t> tracked = tracked_from_message(seen.message)) {
+      counts.tracked = std::max(counts.tracked.value_or(0), *tracked);
+    }
+  }
+  const Clock::time_point now = Clock::now();
+  if (counts.published > 0 && !first_published_) first_published_.emplace(now, counts.published);
+  // Measured between the arrivals of new counts (once a status period), not up to now: between two
+  // statuses the count stands still and the rate would seem to sink.
+  if (counts.published > 0 && (!latest_published_ || latest_published_->second != counts.published)) {
+    latest_published_.emplace(now, counts.published);
+  }
+  if (first_published_ && latest_published_ && latest_published_->first - first_published_->first >= kMinFpsSpan) {
+    counts.fps = static_cast<double>(latest_published_->second - std::min(latest_published_->second, first_published_->second)) /
+                 std::chrono::duration<double>(latest_published_->first - first_published_->first).count();
+  }
+  const std::optional<std::string> line = progress_.update(counts, now);
+  if (!line) return;
+  if (progress_.mode() == RunProgress::Mode::kPlain) {
+    log_.info(*line);
+    return;
+  }
+  std::cerr << "\r\033[K" << *line << std::flush;
+  progress_drawn_ = true;
+}
+
+void Supervisor::clear_progress() {
+  if (!progress_drawn_) return;
+  std::cerr << "\r\033[K" << std::flush;
+  progress_drawn_ = false;
+}
+
 void Supervisor::reap() {
   for (;;) {
     int wait_status = 0;
@@ -247,6 +300,7 @@ void Supervisor::reap() {
 }
 
 void Supervisor::on_exit(Managed& component, int wait_status) {
+  clear_progress();
   forward_output(component);
   component.process.read_notifications();
   read_status();  // its last sample may carry its result
@@ -352,11 +406,13 @@ void Supervisor::pump(std::chrono::milliseconds timeout) {
   for (auto& component : components_) component->process.read_notifications();
   reap();
   read_status();
+  report_progress();
   for (auto& component : components_) {
     if (component->phase == Phase::kRestartPending && Clock::now() >= component->restart_at && !end_requested_ &&
         !runtime::shutdown_requested()) {
       try {
         start(*component);
+        clear_progress();
         log_.warn("restarted ", component->spec.name, " (pid ", component->process.pid(), ")");
         dds_->status.publish_now();
       } catch (const std::exception& error) {
@@ -395,6 +451,7 @@ void Supervisor::stop(Managed& component) {
 }
 
 void Supervisor::stop_all() {
+  clear_progress();
   for (auto it = components_.rbegin(); it != components_.rend(); ++it) stop(**it);
   for (auto& component : components_) {
     forward_output(*component);
@@ -441,6 +498,7 @@ int Supervisor::run() {
   dds_->status.set_state(runtime::ComponentState::kShuttingDown, failed_ ? "pipeline failed: " + failure_ : "");
   stop_all();
   read_status();  // the last results
+  clear_progress();
   if (failed_) {
     log_.error(outcome());
   } else {

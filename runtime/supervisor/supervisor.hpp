@@ -13,6 +13,7 @@
 #include "runtime/log.hpp"
 #include "runtime/supervisor/child_process.hpp"
 #include "runtime/supervisor/pipeline.hpp"
+#include "runtime/supervisor/run_progress.hpp"
 
 namespace heslam::supervisor {
 
@@ -20,6 +21,8 @@ struct SupervisorOptions {
   std::filesystem::path self_executable;  // the exec trampoline (this binary)
   std::filesystem::path log_dir;          // per-component logs go here
   runtime::LogLevel log_level = runtime::LogLevel::kInfo;
+  // The run's progress line (run_progress.hpp): kLive on a terminal, kPlain (a line per 10 %) otherwise.
+  RunProgress::Mode progress = RunProgress::Mode::kOff;
 };
 
 class Supervisor {
@@ -67,6 +70,10 @@ class Supervisor {
   void reap();
   void on_exit(Managed& component, int wait_status);
   void read_status();
+  // Shows the run's progress from the latest statuses (live redraw or a plain line per 10 %).
+  void report_progress();
+  // Before any other output: wipes a live progress line so the output starts on a clean line.
+  void clear_progress();
   void stop_all();
   void stop(Managed& component);
   std::vector<std::string> child_args(const Managed& component) const;
@@ -86,6 +93,11 @@ class Supervisor {
   std::string failure_;  // the first reason the run failed
   bool end_requested_ = false;
   bool remote_ended_ = false;  // another host's supervisor ended the run
+  RunProgress progress_;
+  bool progress_drawn_ = false;  // a live line is on the terminal
+  // The first status with frames published: fps is measured from there.
+  std::optional<std::pair<Clock::time_point, std::uint64_t>> first_published_;
+  std::optional<std::pair<Clock::time_point, std::uint64_t>> latest_published_;  // the latest new count
 };
 
 }  // namespace heslam::supervisor

@@ -194,6 +194,46 @@ TEST(EvalCli, JsonToStdoutIsTheDocumentAlone) {
       << table.out;
 }
 
+// Issue 19: the estimate's '# heslam frame:' header against the ground truth's frame (EuRoC csv:
+// body, cam0 with --extrinsic). Mixed frames are one line and exit 1 naming the fix; a rectified
+// estimate against camera poses is only warned about (positions compare, rotations carry the
+// rectifying rotation); a body estimate against body poses is what the recorder writes by default.
+TEST(EvalCli, FrameHeaderMustMatchTheGroundTruthsFrame) {
+  const auto dir = test::scratch_dir();
+  const Trajectory gt = test::figure_eight(50);
+  write_trajectory(dir / "gt.csv", gt, Format::euroc);
+  test::write_file(dir / "sensor.yaml", "T_BS:\n  cols: 4\n  rows: 4\n  data: [0, -1, 0, 0.1, 1, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\n");
+  Trajectory est = gt;
+  est.frame = PoseFrame::body;
+  write_trajectory(dir / "body.txt", est);
+  est.frame = PoseFrame::rectified;
+  write_trajectory(dir / "rectified.txt", est);
+  const std::string gt_body = "ape --gt " + (dir / "gt.csv").string();
+  const std::string gt_cam0 = gt_body + " --extrinsic " + (dir / "sensor.yaml").string();
+
+  const ToolRun same = run_eval(gt_body + " --est " + (dir / "body.txt").string(), dir);
+  EXPECT_EQ(same.exit_code, 0) << same.err;
+  EXPECT_EQ(same.err, "");
+  EXPECT_NE(same.out.find("  rmse          0.000 mm         0.000 deg\n"), std::string::npos) << same.out;
+
+  const ToolRun body_vs_cam0 = run_eval(gt_cam0 + " --est " + (dir / "body.txt").string(), dir);
+  EXPECT_EQ(body_vs_cam0.exit_code, 1);
+  EXPECT_EQ(body_vs_cam0.err, "heslam-eval: " + (dir / "body.txt").string() +
+                                  " holds poses of the body frame (its '# heslam frame:' header), the ground truth of "
+                                  "the cam0 frame (--extrinsic): drop --extrinsic\n");
+  EXPECT_EQ(body_vs_cam0.out, "");
+
+  const ToolRun rectified_vs_body = run_eval(gt_body + " --est " + (dir / "rectified.txt").string(), dir);
+  EXPECT_EQ(rectified_vs_body.exit_code, 1);
+  EXPECT_NE(rectified_vs_body.err.find("add --extrinsic mav0/cam0/sensor.yaml"), std::string::npos)
+      << rectified_vs_body.err;
+
+  const ToolRun rectified_vs_cam0 = run_eval(gt_cam0 + " --est " + (dir / "rectified.txt").string(), dir);
+  EXPECT_EQ(rectified_vs_cam0.exit_code, 0) << rectified_vs_cam0.err;
+  EXPECT_NE(rectified_vs_cam0.err.find("heslam-eval: warning: "), std::string::npos);
+  EXPECT_NE(rectified_vs_cam0.err.find("rotation errors include the rectifying rotation"), std::string::npos);
+}
+
 TEST(EvalCli, BadInputIsOneLineAndExitOne) {
   const auto dir = test::scratch_dir();
   test::write_file(dir / "gt.txt", "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n");

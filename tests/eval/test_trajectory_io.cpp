@@ -183,3 +183,44 @@ TEST(EvalTrajectoryIo, BadExtrinsicIsOneClearLine) {
 
 }  // namespace
 }  // namespace heslam::eval
+
+namespace heslam::eval {
+namespace {
+
+// heslam's TUM and EuRoC files name the frame of their poses in a '#' header line (which evo and
+// the KITTI-free readers skip as a comment); a file without it (another tool's) has no frame.
+TEST(EvalTrajectoryIo, FrameHeaderRoundTripsInTumAndEuroc) {
+  const std::filesystem::path dir = scratch_dir();
+  Trajectory body = figure_eight(20);
+  body.frame = PoseFrame::body;
+  for (const Format format : {Format::tum, Format::euroc}) {
+    const std::filesystem::path path = dir / (std::string("frame_") + format_name(format) + ".txt");
+    write_trajectory(path, body, format);
+    const Trajectory back = read_trajectory(path, ReadOptions{.format = format});
+    ASSERT_TRUE(back.frame.has_value()) << format_name(format);
+    EXPECT_EQ(*back.frame, PoseFrame::body);
+    ASSERT_EQ(back.size(), body.size());
+    EXPECT_LT(max_abs_difference(back.poses_wc[7], body.poses_wc[7]), 1e-15);
+  }
+  write_file(dir / "other_tool.txt", "# t x y z qx qy qz qw\n0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n");
+  EXPECT_FALSE(read_trajectory(dir / "other_tool.txt").frame.has_value());
+  // A header line after the first pose is not a header.
+  write_file(dir / "late.txt", "0 0 0 0 0 0 0 1\n# heslam frame: body\n1 1 0 0 0 0 0 1\n");
+  EXPECT_FALSE(read_trajectory(dir / "late.txt").frame.has_value());
+  EXPECT_EQ(pose_frame_from_header(std::string_view("# heslam frame: rectified (T_wc: ...)")), PoseFrame::rectified);
+  EXPECT_FALSE(pose_frame_from_header(std::string_view("# heslam frame: imu")).has_value());
+}
+
+// --est-extrinsic on a body-frame file makes it camera poses, and says so.
+TEST(EvalTrajectoryIo, ExtrinsicOnABodyFileMakesItCam0) {
+  const std::filesystem::path dir = scratch_dir();
+  Trajectory body = figure_eight(10);
+  body.frame = PoseFrame::body;
+  write_trajectory(dir / "body.txt", body);
+  write_file(dir / "sensor.yaml", "T_BS:\n  cols: 4\n  rows: 4\n  data: [1, 0, 0, 0.1, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\n");
+  const Trajectory camera = read_trajectory(dir / "body.txt", ReadOptions{.extrinsic_path = dir / "sensor.yaml"});
+  EXPECT_EQ(camera.frame, PoseFrame::cam0);
+}
+
+}  // namespace
+}  // namespace heslam::eval

@@ -16,6 +16,7 @@
 
 #include "test_support.hpp"
 #include "child_process.hpp"
+#include "components/core/camera/stereo_rectifier.hpp"
 #include "tools/bench/frontend_offline/offline_run.hpp"
 #include "tools/eval/ape.hpp"
 #include "tools/eval/trajectory_io.hpp"
@@ -77,6 +78,15 @@ eval::Trajectory camera_ground_truth(const fs::path& dataset) {
   return eval::read_trajectory(dataset / "mav0/state_groundtruth_estimate0/data.csv", options);
 }
 
+// The ground truth in the estimate's frame: body poses as they are for the recorder's default
+// ('# heslam frame: body'), else cam0 poses.
+eval::Trajectory ground_truth_for(const fs::path& dataset, const eval::Trajectory& estimate) {
+  if (estimate.frame == eval::PoseFrame::body) {
+    return eval::read_trajectory(dataset / "mav0/state_groundtruth_estimate0/data.csv");
+  }
+  return camera_ground_truth(dataset);
+}
+
 double max_abs_difference(const Pose3& a, const Pose3& b) {
   double worst = 0.0;
   for (int r = 0; r < 4; ++r)
@@ -94,23 +104,40 @@ TEST(FrontendEndToEnd, EurocMh01TracksEveryFrameAndMatchesTheOfflineChain) {
   const eval::Trajectory estimate = eval::read_trajectory(run.trajectory);
   ASSERT_EQ(estimate.size(), 160u) << run.output;
   EXPECT_EQ(test::lost_entries(run.lost), 0);
-  const eval::ApeResult ape = eval::compute_ape(camera_ground_truth(dataset), estimate);
+  // Issue 19: by default the poses are of the body frame (EuRoC's T_BS), as the ground truth, so
+  // rotation errors are real: compared as they are, no --extrinsic.
+  ASSERT_EQ(estimate.frame, eval::PoseFrame::body) << "no '# heslam frame: body' header";
+  const eval::Trajectory truth = ground_truth_for(dataset, estimate);
+  const eval::ApeResult ape = eval::compute_ape(truth, estimate);
   ASSERT_EQ(ape.translation_m.count, 160u);
-  std::printf("[ figures  ] euroc_mh01_handheld over DDS: %zu frames, %zu keyframes, ATE rmse %.3f mm\n",
-              estimate.size(), eval::read_trajectory(run.keyframes).size(), ape.translation_m.rmse * 1e3);
+  const eval::ApeResult from_start = eval::compute_ape(truth, estimate, eval::ApeOptions{.align = eval::AlignMode::origin});
+  std::printf("[ figures  ] euroc_mh01_handheld over DDS: %zu frames, %zu keyframes, ATE rmse %.3f mm; rotation APE "
+              "(body frame) rmse %.3f deg aligned se3, %.3f deg aligned at the first pose\n",
+              estimate.size(), eval::read_trajectory(run.keyframes).size(), ape.translation_m.rmse * 1e3,
+              ape.rotation_deg.rmse, from_start.rotation_deg.rmse);
   // Target 4 mm (ORB-SLAM2/3 with local mapping: 3.6 mm). This frontend alone, without a local mapper,
   // measures 4.1 mm — the offline chain's figure, bound 4.5 mm in tests/tracking as well.
   EXPECT_LT(ape.translation_m.rmse, 0.0045);
+  // Rotation errors are real now. The rectified-camera poses measured 1.45 deg (se3) against the cam0
+  // ground truth: the rectifying rotation R1, not the tracker. In the body frame, aligned at the first
+  // pose, what remains is the tracker's rotation drift over the clip (0.17 deg with the local mapper,
+  // docs/benchmarks.md); 0.5 deg bounds it with room and stays well below R1. Aligned se3 (position-only
+  // Umeyama, as evo_ape -a) the 30 cm clip leaves the alignment's rotation loosely fixed and the
+  // positional drift tilts it (0.76 deg with the local mapper); bound it below the 1.45 deg of before.
+  EXPECT_LT(from_start.rotation_deg.rmse, 0.5);
+  EXPECT_LT(ape.rotation_deg.rmse, 1.2);
 
-  // The same chain without DDS (tools/bench/frontend_offline) gives the same trajectory. The poses
-  // cross the wire as quaternions, so equality is to the last bits of a double, not bit for bit.
+  // The same chain without DDS (tools/bench/frontend_offline) gives the same trajectory, once put in
+  // the same frame. The poses cross the wire as quaternions, so equality is to the last bits of a
+  // double, not bit for bit.
   const bench::OfflineRun offline = bench::run_offline(bench::load_euroc_sequence(dataset), {});
   ASSERT_EQ(offline.frames.size(), estimate.size());
+  const Pose3 T_B_rect = StereoRectifier(load_euroc_calibration(dataset / "mav0")).T_B_rect();
   double worst = 0.0;
   for (std::size_t k = 0; k < estimate.size(); ++k) {
     ASSERT_EQ(offline.frames[k].state, TrackingState::kOk) << "frame " << k;
     EXPECT_NEAR(estimate.stamps_s[k], static_cast<double>(offline.frames[k].stamp_ns) * 1e-9, 1e-6) << "frame " << k;
-    worst = std::max(worst, max_abs_difference(estimate.poses_wc[k], offline.frames[k].T_wc));
+    worst = std::max(worst, max_abs_difference(estimate.poses_wc[k], eval::to_pose_frame(offline.frames[k].T_wc, T_B_rect)));
   }
   std::printf("[ figures  ] largest pose element difference DDS vs offline chain: %.3g\n", worst);
   EXPECT_LT(worst, 1e-12);
@@ -151,7 +178,7 @@ TEST(FrontendEndToEnd, FullSystemDeterministicAndWithinFourMillimetres) {
   ASSERT_EQ(estimate.size(), 160u) << first.output;
   EXPECT_EQ(test::lost_entries(first.lost), 0) << first.output;
   EXPECT_GT(eval::read_trajectory(first.keyframes).size(), 1u);
-  const eval::ApeResult ape = eval::compute_ape(camera_ground_truth(dataset), estimate);
+  const eval::ApeResult ape = eval::compute_ape(ground_truth_for(dataset, estimate), estimate);
   std::printf("[ figures  ] euroc_mh01_handheld, full system: %zu keyframes, ATE rmse %.3f mm\n",
               eval::read_trajectory(first.keyframes).size(), ape.translation_m.rmse * 1e3);
   EXPECT_LE(ape.translation_m.rmse, 0.004);
@@ -167,12 +194,13 @@ TEST(FrontendEndToEnd, EurocV101StillCameraStaysStill) {
   ASSERT_EQ(estimate.size(), 95u) << run.output;
   double max_distance_m = 0.0;
   for (const Pose3& T_wc : estimate.poses_wc) max_distance_m = std::max(max_distance_m, T_wc.translation().norm());
-  const eval::ApeResult ape = eval::compute_ape(camera_ground_truth(dataset), estimate);
+  const eval::ApeResult ape = eval::compute_ape(ground_truth_for(dataset, estimate), estimate);
   std::printf("[ figures  ] euroc_v101_head over DDS: path length %.1f mm, max distance from start %.1f mm, "
               "ATE rmse %.2f mm\n",
               estimate.path_length_m() * 1e3, max_distance_m * 1e3, ape.translation_m.rmse * 1e3);
-  // Target: path length < 5 mm (measured 2.9 mm; 63 mm of per-frame jitter before the tracker's
-  // stationary test, tests/tracking/test_stationary.cpp). The vehicle rocks by 0.15 degrees in this
+  // Target: path length < 5 mm (measured 2.9 mm for the rectified camera, 4.1 mm for the body frame
+  // written since issue 19: the body sits ~7 cm from the camera, so the rocking moves it more; 63 mm
+  // of per-frame jitter before the tracker's stationary test, tests/tracking/test_stationary.cpp). The vehicle rocks by 0.15 degrees in this
   // clip: the test keeps the camera centre on those frames, so the rotation is not read as translation.
   EXPECT_LT(estimate.path_length_m(), 0.005);
   EXPECT_LT(max_distance_m, 0.005);
@@ -190,7 +218,7 @@ TEST(FrontendEndToEnd, SyntheticRoomAteWithinOnePercentOfPathLength) {
   const PipelineRun run = run_pipeline("synth_odometry", dataset, dir.path(), "room");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const eval::Trajectory estimate = eval::read_trajectory(run.trajectory);
-  const eval::Trajectory truth = camera_ground_truth(dataset);
+  const eval::Trajectory truth = ground_truth_for(dataset, estimate);
   ASSERT_EQ(estimate.size(), truth.size()) << run.output;
   const eval::ApeResult ape = eval::compute_ape(truth, estimate);
   const double path_m = truth.path_length_m();

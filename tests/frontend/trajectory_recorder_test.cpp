@@ -112,6 +112,58 @@ TEST(RecorderFiles, WritesTrajectoryKeyframesAndLostListInTheChosenFormat) {
   EXPECT_THROW(RecorderOptions::from(runtime::Config::empty(), {"--output"}), std::runtime_error);
 }
 
+Pose3 rotation_about(const Eigen::Vector3d& axis, double angle_rad, const Eigen::Vector3d& t) {
+  Pose3 T = Pose3::Identity();
+  T.linear() = Eigen::AngleAxisd(angle_rad, axis.normalized()).toRotationMatrix();
+  T.translation() = t;
+  return T;
+}
+
+// Issue 19: poses in the frame the ground truth is of. Known answer: a body moving along T_Wb(t)
+// in some world W carries a rectified camera at T_b_r; the tracker sees T_wr(t) = T_Wr(0)^-1 T_Wr(t)
+// (world: the camera at the first keyframe). In the body frame the recorder must write the body's
+// motion from its first pose, T_Wb(0)^-1 T_Wb(t); rectified leaves the poses untouched, bit for bit.
+TEST(RecorderFrames, BodyFrameGivesTheBodysMotionAndRectifiedIsUntouched) {
+  const Pose3 T_b_r = rotation_about({0.2, 1, 0.1}, 1.5, {-0.02, 0.065, 0.01});
+  std::vector<Pose3> T_Wb;
+  for (int t = 0; t < 5; ++t) T_Wb.push_back(rotation_about({t * 0.3, 1, 0.5}, 0.1 * t + 0.4, {1.0 + 0.2 * t, 2.0, 0.1 * t * t}));
+  RecordedTrajectories recording;
+  for (int t = 0; t < 5; ++t) {
+    const Pose3 T_wr = (T_Wb[0] * T_b_r).inverse() * (T_Wb[t] * T_b_r);
+    recording.frames.push_back(T_wr, t, 1.0 + t);
+    if (t % 2 == 0) recording.keyframes.push_back(T_wr, t, 1.0 + t);
+  }
+  RecordedTrajectories body = recording;
+  express_in_frame(body, eval::PoseFrame::body, T_b_r);
+  EXPECT_EQ(body.frames.frame, eval::PoseFrame::body);
+  EXPECT_EQ(body.keyframes.frame, eval::PoseFrame::body);
+  for (int t = 0; t < 5; ++t) {
+    const Pose3 expected = T_Wb[0].inverse() * T_Wb[t];
+    EXPECT_TRUE(body.frames.poses_wc[t].matrix().isApprox(expected.matrix(), 1e-12)) << "frame " << t;
+  }
+  EXPECT_TRUE(body.keyframes.poses_wc[1].matrix().isApprox((T_Wb[0].inverse() * T_Wb[2]).matrix(), 1e-12));
+
+  RecordedTrajectories rectified = recording;
+  express_in_frame(rectified, eval::PoseFrame::rectified, T_b_r);
+  EXPECT_EQ(rectified.frames.frame, eval::PoseFrame::rectified);
+  for (int t = 0; t < 5; ++t) EXPECT_EQ(rectified.frames.poses_wc[t].matrix(), recording.frames.poses_wc[t].matrix());
+}
+
+TEST(RecorderFrames, FrameOptionDefaultsToBodyAndRejectsOthers) {
+  const RecorderOptions defaults = RecorderOptions::from(runtime::Config::empty(), {});
+  EXPECT_EQ(defaults.frame, eval::PoseFrame::body);
+  EXPECT_FALSE(defaults.frame_given);
+  const RecorderOptions cam0 = RecorderOptions::from(runtime::Config::empty(), {"--frame", "cam0"});
+  EXPECT_EQ(cam0.frame, eval::PoseFrame::cam0);
+  EXPECT_TRUE(cam0.frame_given);
+  try {
+    RecorderOptions::from(runtime::Config::empty(), {"--frame", "imu"});
+    FAIL() << "--frame imu accepted";
+  } catch (const std::runtime_error& error) {
+    EXPECT_STREQ(error.what(), "--frame: expected body, cam0 or rectified, got 'imu'");
+  }
+}
+
 // Issue 16: the summary accounts for every published frame: with a pose, untracked, or never
 // received (missed by the frontend, or lost on the way) — listed exactly, by seq.
 TEST(RecorderSummary, AccountsForEveryPublishedFrame) {

@@ -107,7 +107,7 @@ TEST_F(CorridorLoop, BowLoopCloserKilledMidRunStillClosesTheLoopAndRemovesTheDri
   bool killed = false;
   while (!killed && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    std::ifstream state(dir / "killed.txt.loop");
+    std::ifstream state(dir / "killed.loop");
     std::string line;
     int lines = 0;
     while (std::getline(state, line)) ++lines;

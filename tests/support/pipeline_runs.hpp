@@ -57,8 +57,18 @@ inline eval::Trajectory camera_ground_truth(const std::filesystem::path& dataset
   return eval::read_trajectory(dataset / "mav0/state_groundtruth_estimate0/data.csv", options);
 }
 
+// The ground truth in the frame of `estimate`: the body poses as they are for a body-frame estimate
+// (its '# heslam frame: body' header, the recorder's default), else the cam0 poses.
+inline eval::Trajectory ground_truth_for(const std::filesystem::path& dataset, const eval::Trajectory& estimate) {
+  if (estimate.frame == eval::PoseFrame::body) {
+    return eval::read_trajectory(dataset / "mav0/state_groundtruth_estimate0/data.csv");
+  }
+  return camera_ground_truth(dataset);
+}
+
 inline double ate_rmse_m(const std::filesystem::path& dataset, const std::filesystem::path& trajectory) {
-  return eval::compute_ape(camera_ground_truth(dataset), eval::read_trajectory(trajectory)).translation_m.rmse;
+  const eval::Trajectory estimate = eval::read_trajectory(trajectory);
+  return eval::compute_ape(ground_truth_for(dataset, estimate), estimate).translation_m.rmse;
 }
 
 // The pid of the supervisor's child whose /proc comm is `comm` (the first 15 characters of the

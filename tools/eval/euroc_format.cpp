@@ -33,6 +33,7 @@ Trajectory read_euroc(const std::filesystem::path& path) {
     trajectory.push_back(make_pose({v[1], v[2], v[3]}, q), frame_id++,
                          static_cast<double>(stamp_ns) * kSecondsPerNanosecond);
   }
+  trajectory.frame = pose_frame_from_header(reader.header_comments());
   return trajectory;
 }
 
@@ -44,6 +45,7 @@ void write_euroc(const std::filesystem::path& path, const Trajectory& trajectory
   if (!out) throw std::runtime_error("cannot write " + path.string());
   out << "#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],q_RS_y [],"
          "q_RS_z []\n";
+  if (trajectory.frame) out << pose_frame_header(*trajectory.frame) << "\n";
   char line[512];
   for (std::size_t i = 0; i < trajectory.size(); ++i) {
     const Pose3& T = trajectory.poses_wc[i];

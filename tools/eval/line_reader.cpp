@@ -31,7 +31,12 @@ bool LineReader::next() {
       tokens_.push_back(line_.substr(i, end - i));
       i = end;
     }
-    if (tokens_.empty()) continue;
+    if (tokens_.empty()) {
+      const std::size_t first = line_.find_first_not_of(" \t");
+      if (!data_seen_ && first != std::string::npos && line_[first] == '#') header_comments_.push_back(line_.substr(first));
+      continue;
+    }
+    data_seen_ = true;
     values_.assign(tokens_.size(), 0.0);
     for (std::size_t k = 0; k < tokens_.size(); ++k) {
       const std::string& token = tokens_[k];

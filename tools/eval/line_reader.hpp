@@ -29,6 +29,8 @@ class LineReader {
   long long integer_token(std::size_t index) const;
   std::size_t line_number() const { return line_number_; }
   const std::filesystem::path& path() const { return path_; }
+  // The comment lines ('#' first) read so far before the first data row, as written.
+  const std::vector<std::string>& header_comments() const { return header_comments_; }
 
   // Throws "<path>:<line>: <what>".
   [[noreturn]] void fail(const std::string& what) const;
@@ -42,6 +44,8 @@ class LineReader {
   std::vector<std::string> tokens_;
   std::vector<double> values_;
   std::size_t line_number_ = 0;
+  std::vector<std::string> header_comments_;
+  bool data_seen_ = false;
 };
 
 }  // namespace heslam::eval

@@ -24,6 +24,7 @@ void Trajectory::push_back(const Pose3& T_wc, std::int64_t frame_id, double stam
 Trajectory Trajectory::subset(std::span<const std::size_t> indices) const {
   Trajectory out;
   out.name = name;
+  out.frame = frame;
   out.poses_wc.reserve(indices.size());
   out.frame_ids.reserve(indices.size());
   for (const std::size_t i : indices) {

@@ -11,6 +11,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -18,6 +19,7 @@
 #include <Eigen/Core>
 
 #include "components/core/geometry/pose.hpp"
+#include "tools/eval/pose_frame.hpp"
 
 namespace heslam::eval {
 
@@ -38,6 +40,9 @@ struct Trajectory {
   std::vector<std::int64_t> frame_ids;
   // Where the trajectory came from, for messages ("gt", a path, ...).
   std::string name;
+  // The frame the poses are of, from / into the `# heslam frame:` header of TUM and EuRoC files;
+  // unset: not known (files of other tools, KITTI files).
+  std::optional<PoseFrame> frame;
 
   std::size_t size() const { return poses_wc.size(); }
   bool empty() const { return poses_wc.empty(); }

@@ -104,6 +104,7 @@ Trajectory read_trajectory(const std::filesystem::path& path, const ReadOptions&
   if (!options.extrinsic_path.empty()) {
     const Pose3 T_bs = read_euroc_extrinsic(options.extrinsic_path);
     for (Pose3& T_wb : trajectory.poses_wc) T_wb = T_wb * T_bs;
+    if (trajectory.frame == PoseFrame::body) trajectory.frame = PoseFrame::cam0;
   }
   return trajectory;
 }

@@ -26,6 +26,7 @@ Trajectory read_tum(const std::filesystem::path& path) {
     if (q.norm() < 1e-9) reader.fail("quaternion has zero norm");
     trajectory.push_back(make_pose({v[1], v[2], v[3]}, q), frame_id++, v[0]);
   }
+  trajectory.frame = pose_frame_from_header(reader.header_comments());
   return trajectory;
 }
 
@@ -33,6 +34,7 @@ void write_tum(const std::filesystem::path& path, const Trajectory& trajectory) 
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write " + path.string());
   out << "# timestamp tx ty tz qx qy qz qw (T_wc, heslam)\n";
+  if (trajectory.frame) out << pose_frame_header(*trajectory.frame) << "\n";
   char line[512];
   for (std::size_t i = 0; i < trajectory.size(); ++i) {
     const Pose3& T = trajectory.poses_wc[i];

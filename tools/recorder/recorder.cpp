@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "components/core/camera/stereo_rectifier.hpp"
 #include "components/frontend/message_adapter.hpp"
 #include "components/frontend/message_checks.hpp"
 #include "runtime/run_id.hpp"
@@ -47,6 +48,12 @@ eval::Format parse_format_or_throw(const std::string& text, const std::string& w
   return *format;
 }
 
+eval::PoseFrame parse_frame_or_throw(const std::string& text, const std::string& where) {
+  const std::optional<eval::PoseFrame> frame = eval::parse_pose_frame(text);
+  if (!frame) throw std::runtime_error(where + ": expected body, cam0 or rectified, got '" + text + "'");
+  return *frame;
+}
+
 }  // namespace
 
 std::filesystem::path sibling_path(const std::filesystem::path& output, const std::string& suffix) {
@@ -59,6 +66,10 @@ RecorderOptions RecorderOptions::from(const runtime::Config& config, const std::
   options.format = parse_format_or_throw(config.get_choice("format", "tum", {"tum", "kitti", "euroc"}), "format");
   options.keyframe_output = config.get_path("keyframe_output", {});
   options.lost_output = config.get_path("lost_output", {});
+  if (config.has("frame")) {
+    options.frame = parse_frame_or_throw(config.get_choice("frame", "body", {"body", "cam0", "rectified"}), "frame");
+    options.frame_given = true;
+  }
   for (std::size_t i = 0; i < flags.size(); ++i) {
     const std::string& flag = flags[i];
     const auto value = [&]() -> std::string {
@@ -67,7 +78,10 @@ RecorderOptions RecorderOptions::from(const runtime::Config& config, const std::
     };
     if (flag == "--output") options.output = value();
     else if (flag == "--format") options.format = parse_format_or_throw(value(), "--format");
-    else if (flag == "--keyframes") options.keyframe_output = value();
+    else if (flag == "--frame") {
+      options.frame = parse_frame_or_throw(value(), "--frame");
+      options.frame_given = true;
+    } else if (flag == "--keyframes") options.keyframe_output = value();
     else if (flag == "--lost") options.lost_output = value();
     else throw std::runtime_error("unexpected argument '" + flag + "' (see --help)");
   }
@@ -125,6 +139,14 @@ void write_recording(const RecordedTrajectories& recording, const RecorderOption
   });
 }
 
+void express_in_frame(RecordedTrajectories& recording, eval::PoseFrame frame, const Pose3& T_x_r) {
+  for (eval::Trajectory* trajectory : {&recording.frames, &recording.keyframes}) {
+    trajectory->frame = frame;
+    if (frame == eval::PoseFrame::rectified) continue;
+    for (Pose3& pose : trajectory->poses_wc) pose = eval::to_pose_frame(pose, T_x_r);
+  }
+}
+
 std::string summary_line(const FrameAccount& account, const std::filesystem::path& output) {
   return "tracked " + std::to_string(account.with_pose) + "/" + std::to_string(account.published) + " frames, " +
          std::to_string(account.without_pose()) + " lost, trajectory " + output.string();
@@ -142,12 +164,16 @@ void Recorder::configure(const runtime::Config& config) {
                                  frontend::sample_check<msg::KeyframeState>(),
                                  frontend::checked_options<msg::KeyframeState>(frontend::kMapStateHeld));
   status_reader_.emplace(participant(), topics().status());
+  calibration_reader_.emplace(participant(), topics().calibration());
   waitset_ = std::make_unique<runtime::WaitSet>(participant());
   waitset_->attach(*odometry_reader_);
   waitset_->attach(*keyframe_reader_);
   waitset_->attach(*keyframe_state_reader_);
   waitset_->attach(*status_reader_);
-  log().info("recording to ", options_.output.string(), " (", eval::format_name(options_.format), ")");
+  waitset_->attach(*calibration_reader_);
+  if (options_.frame == eval::PoseFrame::rectified) T_frame_rect_ = Pose3::Identity();
+  log().info("recording to ", options_.output.string(), " (", eval::format_name(options_.format), ", poses of the ",
+             eval::pose_frame_name(options_.frame), " frame)");
   // A restart of this run (kill -9, crash) resumes with every frame recorded before; keyframes come
   // back on their own (transient-local), and odometry published while we were down is replayed to
   // us by the frontend's writer (transient-local, the last 100 frames).
@@ -180,7 +206,9 @@ void Recorder::run() {
 
 FrameAccount Recorder::write_files() {
   const auto start = std::chrono::steady_clock::now();
-  const RecordedTrajectories recording = recorder_.build();
+  RecordedTrajectories recording = recorder_.build();
+  express_in_frame(recording, T_frame_rect_ ? options_.frame : eval::PoseFrame::rectified,
+                   T_frame_rect_.value_or(Pose3::Identity()));
   write_recording(recording, options_);
   const FrameAccount account = recorder_.account(frames_published_);
   status().set_message(summary_line(account, options_.output));
@@ -191,8 +219,30 @@ FrameAccount Recorder::write_files() {
   return account;
 }
 
+void Recorder::take_calibration() {
+  for (auto& received : calibration_reader_->take()) {
+    if (!received.info.valid_data || T_frame_rect_) continue;
+    try {
+      const StereoCalibration calibration = frontend::to_calibration(*received.sample);
+      // The frontend's own rectification (the same calibration, the same computation), hence its
+      // rectified camera exactly.
+      const Pose3 T_B_rect = StereoRectifier(calibration).T_B_rect();
+      T_frame_rect_ = options_.frame == eval::PoseFrame::body ? T_B_rect : Pose3(calibration.left.T_BS.inverse() * T_B_rect);
+      log().info("poses of the ", eval::pose_frame_name(options_.frame), " frame (calibration '", calibration.source, "')");
+    } catch (const std::exception& error) {
+      stats().count("bad_calibrations");
+      log().error("topic ", topics().calibration().name, ": ", error.what());
+    }
+  }
+}
+
 std::size_t Recorder::drain() {
   std::size_t taken = 0;
+  if (calibration_reader_->has_unread()) {
+    const bool had_frame = T_frame_rect_.has_value();
+    take_calibration();
+    if (!had_frame && T_frame_rect_) ++taken;  // every pose changes frame: the files are due
+  }
   for (auto& received : status_reader_->take()) {
     if (!received.info.valid_data) continue;
     const msg::ComponentStatus& status = *received.sample;
@@ -245,6 +295,10 @@ void Recorder::on_shutdown() {
   }
   const RecordedTrajectories recording = recorder_.build();
   const FrameAccount account = write_files();
+  if (!T_frame_rect_) {
+    log().warn("no camera calibration on ", topics().calibration().name, ": poses written in the rectified left camera "
+               "frame (the files' header says so), not the ", eval::pose_frame_name(options_.frame), " frame");
+  }
   journal_->remove();  // the outputs hold everything now
   if (recording.frames_without_reference > 0) {
     log().warn(recording.frames_without_reference, " frames referenced a keyframe that never arrived (odometry pose used)");
@@ -266,6 +320,10 @@ void Recorder::on_shutdown() {
   const std::string summary = summary_line(account, options_.output);
   // A run without a single pose is a failure, never a success with an empty file.
   if (account.with_pose == 0) throw std::runtime_error("no frame has a pose: " + summary);
+  if (!T_frame_rect_ && options_.frame_given) {
+    throw std::runtime_error(std::string("--frame ") + eval::pose_frame_name(options_.frame) +
+                             ": no camera calibration arrived, the poses are of the rectified frame: " + summary);
+  }
   status().set_state(runtime::ComponentState::kShuttingDown, summary);
   log().info(summary);
 }

@@ -3,9 +3,10 @@
 // atomically, so it is always complete up to the last frame received), finalized at shutdown after
 // draining its readers. Its status message and last line: "tracked N/M frames, K lost, trajectory FILE".
 //
-//   heslam-recorder [--output FILE] [--format tum|kitti|euroc] [--keyframes FILE] [--lost FILE]
+//   heslam-recorder [--output FILE] [--format tum|kitti|euroc] [--frame body|cam0|rectified]
+//                   [--keyframes FILE] [--lost FILE]
 //
-// Config fields (same names): output, format, keyframe_output, lost_output; flags win over them.
+// Config fields (same names): output, format, frame, keyframe_output, lost_output; flags win over them.
 #pragma once
 
 #include <chrono>
@@ -27,6 +28,11 @@ struct RecorderOptions {
   eval::Format format = eval::Format::tum;
   std::filesystem::path keyframe_output;  // empty: <output stem>.keyframes<ext>
   std::filesystem::path lost_output;      // empty: <output stem>.lost.txt
+  // The frame the poses are written in (tools/eval/pose_frame.hpp), named in the files' header.
+  // body: the calibration's T_BS body frame, what EuRoC's ground truth is of (= cam0 when T_BS is
+  // the identity, as for KITTI).
+  eval::PoseFrame frame = eval::PoseFrame::body;
+  bool frame_given = false;  // set by --frame / `frame`: a run without a calibration then fails
 
   // Throws std::runtime_error naming the field or flag on a bad value.
   static RecorderOptions from(const runtime::Config& config, const std::vector<std::string>& flags);
@@ -39,6 +45,11 @@ std::filesystem::path sibling_path(const std::filesystem::path& output, const st
 // kill never sees a half-written file); creates the output folders. Throws std::runtime_error naming
 // the file when it cannot be written (a folder, no permission, disk full).
 void write_recording(const RecordedTrajectories& recording, const RecorderOptions& options);
+
+// Rewrites the poses of `recording` (rectified left camera, world: it at the first keyframe) as poses
+// of `frame`, given T_x_r (rectified camera -> that frame), and names the frame in both
+// trajectories. Rectified: the poses are left untouched, bit for bit.
+void express_in_frame(RecordedTrajectories& recording, eval::PoseFrame frame, const Pose3& T_x_r);
 
 // "tracked N/M frames, K lost, trajectory FILE".
 std::string summary_line(const FrameAccount& account, const std::filesystem::path& output);
@@ -54,6 +65,7 @@ class Recorder : public runtime::Component {
   bool accepts_positional_args() const override { return true; }
   // Takes everything the readers hold; returns the number of samples taken.
   std::size_t drain();
+  void take_calibration();
   // Rewrites the files from what is recorded and updates the status message with the summary.
   FrameAccount write_files();
   // How long the run loop may wait before the files are due again.
@@ -68,6 +80,10 @@ class Recorder : public runtime::Component {
   std::optional<runtime::CheckedReader<msg::Keyframe>> keyframe_reader_;
   std::optional<runtime::CheckedReader<msg::KeyframeState>> keyframe_state_reader_;
   std::optional<runtime::Reader<msg::ComponentStatus>> status_reader_;  // the replay's frames_published
+  std::optional<runtime::Reader<msg::StereoCalibration>> calibration_reader_;
+  // Rectified left camera -> options_.frame, from the calibration; unset until one arrives (the
+  // files are then written in the rectified frame, and say so).
+  std::optional<Pose3> T_frame_rect_;
   std::unique_ptr<runtime::WaitSet> waitset_;
   std::uint64_t frames_published_ = 0;  // the largest count any publisher reported
   bool files_stale_ = false;            // recorded data newer than the files

@@ -124,6 +124,8 @@ class Replay {
       ack_waitset_->attach(*acks_);
     }
     counts_.total = dataset_.frames.size();
+    // Frames per pass, for whoever shows the progress of the whole run (heslam-supervisor).
+    stats_.count("frames_total", counts_.total);
     counts_.unpaired_rows = static_cast<std::size_t>(dataset_.skipped_rows);
   }
 

@@ -2,8 +2,10 @@
 #include <exception>
 #include <iostream>
 #include <sstream>
+#include <stdexcept>
 
 #include "tools/eval/app/cli_options.hpp"
+#include "tools/eval/app/frame_check.hpp"
 #include "tools/eval/app/table.hpp"
 #include "tools/eval/association.hpp"
 #include "tools/eval/json_output.hpp"
@@ -33,6 +35,9 @@ void emit_json(const app::CliOptions& options, const std::string& json) {
 int run(const app::CliOptions& options) {
   const Trajectory gt = read_trajectory(options.gt_path, options.gt_read);
   const Trajectory est = read_trajectory(options.est_path, options.est_read);
+  const app::FrameCheck frames = app::check_frames(options, gt, est);
+  if (frames.error) throw std::runtime_error(*frames.error);
+  if (frames.warning) std::cerr << "heslam-eval: warning: " << *frames.warning << "\n";
   // With JSON on stdout, the human-readable lines would make it unparsable: they are dropped.
   std::ostringstream discarded;
   std::ostream& text = options.json_path == app::kStdout ? discarded : std::cout;
