@@ -207,6 +207,10 @@ void Frontend::take_frames() {
       pending_.push_back(std::exchange(frame_, runtime::Received<msg::StereoFrame>{}));
       continue;
     }
+    // Before every frame, not only when run() wakes: a frontend slower than the camera finds the
+    // next frame waiting every time and would otherwise never mirror the map while frames come (a
+    // loop correction reached it only at the end of a loaded real-time run).
+    mirror_map_state();
     process_frame(*frame_.sample);
     if (shutdown_requested()) return;
   }
