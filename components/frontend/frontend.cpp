@@ -245,6 +245,10 @@ void Frontend::take_frames() {
       pending_.push_back(std::exchange(frame_, runtime::Received<msg::StereoFrame>{}));
       continue;
     }
+    // Before every frame, not only when run() wakes: a frontend slower than the camera finds the
+    // next frame waiting every time and would otherwise never mirror the map while frames come (a
+    // loop correction reached it only at the end of a loaded real-time run).
+    mirror_map_state();
     process_frame(*frame_.sample);
     if (shutdown_requested()) return;
   }
@@ -307,8 +311,12 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
 
   if (result.new_keyframe) {
     stats().count("keyframes");
-    const KeyframeMessage keyframe(*result.new_keyframe, frame.seq, result.new_points, processor_->camera());
+    const KeyframeMessage keyframe(*result.new_keyframe, frame.seq, result.new_points, processor_->camera(),
+                                   result.new_keyframe_reference, mirror_.version().complete());
     keyframe_writer_->write(keyframe.get());
+    if (options_.mapper_enabled) {
+      mirror_.own_keyframe(result.new_keyframe->id, result.new_keyframe_reference, mirror_.version().complete());
+    }
   }
   const OdometryMessage odometry(frame.stamp_ns, frame.seq, result, output.keypoints, output.timings);
   if (odometry_writer_->write(odometry.get()) == runtime::WriteResult::kTimeout) stats().count("odometry_timeouts");
@@ -339,10 +347,15 @@ void Frontend::mirror_map_state() {
   if (!options_.mapper_enabled) return;
   for (auto& received : keyframe_done_reader_->take()) {
     if (!received.info.valid_data) continue;
+    // The mapper's acknowledgement of a loop correction: the mirror acts on it when it applies the
+    // correction's batch (whose version marker says the same, unless a newer marker replaced it).
     if (received.sample->correction_id != 0) {
-      // The mapper applied a loop correction: once the mirror holds that map version, the tracker's
-      // last frame moves with its reference keyframe.
-      follow_correction_at_version_ = std::max(follow_correction_at_version_.value_or(0), received.sample->map_version);
+      if (processor_ && !mirror_.correction_acknowledged(received.sample->map_version)) {
+        // Applied already as an ordinary batch: our keyframes in flight were not moved (the mapper
+        // still moves them, and their states bring them here), the last frame can still follow.
+        processor_->tracker().follow_reference_keyframe();
+        stats().count("corrections_seen_late");
+      }
       continue;
     }
     keyframes_done_[received.sample->keyframe_id].insert(received.sample->component == nullptr ? "" : received.sample->component);
@@ -353,44 +366,40 @@ void Frontend::mirror_map_state() {
   if (!processor_) return;
   Map* map = &processor_->tracker().local_map();
   // Both readers are drained until empty before the version markers taken meanwhile count
-  // (MirrorVersion).
-  MirrorVersion markers;
+  // (MirrorVersion); the states wait in the mirror until their version is complete.
   for (bool drained = false; !drained;) {
     drained = true;
     for (auto& received : keyframe_state_reader_->take()) {
       drained = false;
       // Invalid-data samples (disposes, no-writer notices) carry no state: the mapper culls keyframes
       // by flag and its writers keep their instances when it exits or restarts.
-      if (!received.info.valid_data) continue;
-      if (is_version_marker(*received.sample)) {
-        markers.keyframe_states = std::max(markers.keyframe_states, received.sample->map_version);
-      } else if (!apply_keyframe_state(*map, *received.sample)) {
-        stats().count("unknown_keyframe_states");
-      }
+      if (received.info.valid_data) mirror_.add(*received.sample);
     }
     for (auto& received : point_state_reader_->take()) {
       drained = false;
       if (!received.info.valid_data) {
         // Removed by the mapper, or its writer went away (then its restart republishes the point):
         // flag it culled, which the tracker skips and a later state revives.
-        if (received.info.disposed && received.sample->id != kVersionMarkerId) {
-          if (MapPoint* point = map->point(received.sample->id)) point->culled = true;
-        }
+        if (received.info.disposed) mirror_.dispose_point(received.sample->id);
         continue;
       }
-      if (is_version_marker(*received.sample)) {
-        markers.point_states = std::max(markers.point_states, received.sample->map_version);
-      } else {
-        apply_point_state(*map, *received.sample);
-      }
+      mirror_.add(*received.sample);
     }
   }
-  mirror_version_.keyframe_states = std::max(mirror_version_.keyframe_states, markers.keyframe_states);
-  mirror_version_.point_states = std::max(mirror_version_.point_states, markers.point_states);
-  if (follow_correction_at_version_ && mirror_version_.complete() >= *follow_correction_at_version_) {
+  const BatchedMirror::Applied applied = mirror_.apply(*map);
+  if (applied.unknown_keyframe_states > 0) {
+    stats().count("unknown_keyframe_states", static_cast<std::uint64_t>(applied.unknown_keyframe_states));
+  }
+  if (applied.correction) {
+    // A loop correction's batch: keyframes we made meanwhile moved with their reference keyframe
+    // (the mapper moves them alike), and the last frame follows its own (ORB-SLAM2's UpdateLastFrame),
+    // so the motion model predicts the next frame in the corrected map.
     processor_->tracker().follow_reference_keyframe();
-    follow_correction_at_version_.reset();
     stats().count("corrections_followed");
+    stats().count("keyframes_moved_by_corrections", static_cast<std::uint64_t>(applied.keyframes_moved));
+    log().info("loop correction in the mirror at map version ", mirror_.version().complete(), ": ",
+               applied.keyframe_states, " keyframe and ", applied.point_states, " point states, ",
+               applied.keyframes_moved, " of our keyframes in flight moved with their reference keyframe");
   }
 }
 
@@ -400,7 +409,7 @@ bool Frontend::wait_for_keyframe_done(KeyframeId id) {
     mirror_map_state();
     // The mapper publishes the keyframe's state before its KeyframeDone, but a loop closer's
     // acknowledgement may overtake the corrected states it waited for: wait for the map version too.
-    if (keyframe_acknowledged(id) && mirror_version_.complete() >= acknowledged_map_version_) {
+    if (keyframe_acknowledged(id) && mirror_.version().complete() >= acknowledged_map_version_) {
       keyframes_done_.erase(id);
       mirror_map_state();
       return true;

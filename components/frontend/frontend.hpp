@@ -11,6 +11,7 @@
 #include <set>
 #include <string>
 
+#include "components/frontend/batched_mirror.hpp"
 #include "components/frontend/frame_processor.hpp"
 #include "components/frontend/frontend_options.hpp"
 #include "runtime/checked_reader.hpp"
@@ -72,11 +73,10 @@ class Frontend : public runtime::Component {
   // KeyframeDone seen, not yet waited for: keyframe -> components that acknowledged it.
   std::map<KeyframeId, std::set<std::string>> keyframes_done_;
   std::uint64_t acknowledged_map_version_ = 0;  // the largest map version an awaited ack reported
-  // The mapper's map version this mirror holds completely (its version markers); the tracker's own
-  // map.version also counts the keyframes it inserted, so it cannot say that.
-  MirrorVersion mirror_version_;
-  // A correction the mapper applied: its map version, until the mirror has it.
-  std::optional<std::uint64_t> follow_correction_at_version_;
+  // The mapper's states, applied one complete map version at a time; its version() is the mapper's
+  // map version this mirror holds (the tracker's own map.version also counts the keyframes it
+  // inserted, so it cannot say that).
+  BatchedMirror mirror_;
   // --localize: the seq of the first frame tracked in the saved map, unset until then.
   std::optional<std::uint64_t> relocalized_at_seq_;
 };

@@ -203,12 +203,15 @@ OdometryMessage::OdometryMessage(std::int64_t stamp_ns, std::uint64_t seq, const
 }
 
 KeyframeMessage::KeyframeMessage(const Keyframe& keyframe, std::uint64_t frame_seq,
-                                 const std::vector<MapPoint>& new_points, const PinholeStereo& camera) {
+                                 const std::vector<MapPoint>& new_points, const PinholeStereo& camera,
+                                 KeyframeId reference_kf, std::uint64_t tracked_map_version) {
   const StereoFeatures& features = keyframe.features;
   message_.id = keyframe.id;
   message_.stamp_ns = keyframe.stamp_ns;
   message_.frame_seq = frame_seq;
   message_.T_wc = to_message(keyframe.T_wc);
+  message_.reference_keyframe_id = reference_kf;
+  message_.tracked_map_version = tracked_map_version;
   message_.camera = to_message(camera);
   message_.pyramid_levels = static_cast<std::uint32_t>(features.pyramid.levels);
   message_.scale_factor = features.pyramid.scale_factor;
@@ -248,6 +251,8 @@ DecodedKeyframe to_keyframe(const msg::Keyframe& message) {
                              std::to_string(point_ids.size()) + " point ids");
   }
   DecodedKeyframe decoded;
+  decoded.reference_kf = message.reference_keyframe_id;
+  decoded.tracked_map_version = message.tracked_map_version;
   Keyframe& keyframe = decoded.keyframe;
   keyframe.id = message.id;
   keyframe.stamp_ns = message.stamp_ns;

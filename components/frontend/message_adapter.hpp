@@ -66,8 +66,10 @@ heslam_msg_TrackingState to_message(TrackingState state);
 // --- keyframes (frontend -> mapper, recorder) ---
 class KeyframeMessage {
  public:
+  // `reference_kf` and `tracked_map_version`: what the keyframe was tracked against
+  // (TrackResult::new_keyframe_reference, the mapper's map version the mirror held completely).
   KeyframeMessage(const Keyframe& keyframe, std::uint64_t frame_seq, const std::vector<MapPoint>& new_points,
-                  const PinholeStereo& camera);
+                  const PinholeStereo& camera, KeyframeId reference_kf, std::uint64_t tracked_map_version);
   KeyframeMessage(const KeyframeMessage&) = delete;
   KeyframeMessage& operator=(const KeyframeMessage&) = delete;
   const msg::Keyframe& get() const { return message_; }
@@ -85,6 +87,8 @@ class KeyframeMessage {
 struct DecodedKeyframe {
   Keyframe keyframe;
   std::vector<MapPoint> new_points;  // position and creating observation only
+  KeyframeId reference_kf = kNoId;   // the keyframe it was tracked against (kNoId: none)
+  std::uint64_t tracked_map_version = 0;  // the mapper's map version the frontend tracked it in
 };
 DecodedKeyframe to_keyframe(const msg::Keyframe& message);
 

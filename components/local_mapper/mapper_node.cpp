@@ -286,7 +286,9 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
   }
   MapChanges changes;
   try {
-    changes = mapper_->process_keyframe(std::move(keyframe.decoded.keyframe), std::move(keyframe.decoded.new_points));
+    const TrackedAgainst tracked{keyframe.decoded.reference_kf, keyframe.decoded.tracked_map_version};
+    changes = mapper_->process_keyframe(std::move(keyframe.decoded.keyframe), std::move(keyframe.decoded.new_points),
+                                        tracked);
   } catch (const std::invalid_argument& error) {
     stats().count("bad_keyframes");
     log().warn_throttled("bad_keyframes", error.what());
@@ -297,6 +299,10 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
   if (++unsaved_keyframes_ >= options_.save_every_keyframes) save();
   publish(changes);
   acknowledge(id);
+  if (changes.counts.late_keyframes_moved > 0) {
+    log().info("keyframe ", id, " was tracked at map version ", keyframe.decoded.tracked_map_version,
+               ", before a correction applied since: moved with its reference keyframe ", keyframe.decoded.reference_kf);
+  }
   log().debug("keyframe ", id, ": ", changes.timings.total_ms, " ms, ", changes.counts.triangulated_points,
               " new points, ", changes.counts.culled_points, " culled points, ", changes.counts.culled_keyframes,
               " culled keyframes, ", changes.changed_points.size(), " points changed");
@@ -312,7 +318,7 @@ void MapperNode::apply_corrections() {
     stats().record_ms("correction", changes.timings.total_ms);
     save();
     remember_applied_correction(correction.id);
-    publish(changes);
+    publish(changes, correction.id);
     acknowledge(correction.loop_kf, correction.id);
     log().info("loop correction ", correction.id, " (keyframe ", correction.loop_kf, " -> ", correction.matched_kf,
                "): ", changes.changed_keyframes.size(), " keyframes and ", changes.changed_points.size(),
@@ -337,6 +343,7 @@ void MapperNode::record(const MapChanges& changes) {
   stats().count("culled_keyframes", static_cast<std::uint64_t>(c.culled_keyframes));
   stats().count("ba_outliers", static_cast<std::uint64_t>(c.bundle_adjustment_outliers));
   if (c.bundle_adjustment_aborted) stats().count("ba_stopped_early");
+  stats().count("late_keyframes_moved", static_cast<std::uint64_t>(c.late_keyframes_moved));
   stats().count("rejected_observations", static_cast<std::uint64_t>(c.rejected_observations));
 }
 
@@ -348,7 +355,7 @@ void MapperNode::save() {
   stats().count("map_saves");
 }
 
-void MapperNode::publish(const MapChanges& changes) {
+void MapperNode::publish(const MapChanges& changes, std::uint64_t correction_id) {
   const auto timer = stats().time("publish");
   const Map& map = mapper_->map();
   for (const KeyframeId id : changes.changed_keyframes) {
@@ -367,11 +374,11 @@ void MapperNode::publish(const MapChanges& changes) {
     point_state_writer_->dispose(last);
     stats().count("disposed_points");
   }
-  write_version_markers(map.version);
+  write_version_markers(map.version, correction_id);
 }
 
-void MapperNode::write_version_markers(std::uint64_t map_version) {
-  keyframe_state_writer_->write(keyframe_version_marker(map_version));
+void MapperNode::write_version_markers(std::uint64_t map_version, std::uint64_t correction_id) {
+  keyframe_state_writer_->write(keyframe_version_marker(map_version, correction_id));
   point_state_writer_->write(point_version_marker(map_version));
 }
 
@@ -425,7 +432,8 @@ void MapperNode::log_summary() {
          << " already in the map file, " << counter(counters, "bad_keyframes") << " bad), "
          << counter(counters, "triangulated_points") << " points triangulated, " << counter(counters, "culled_points")
          << " culled, " << counter(counters, "culled_keyframes") << " keyframes culled, "
-         << counter(counters, "corrections") << " corrections";
+         << counter(counters, "corrections") << " corrections (" << counter(counters, "late_keyframes_moved")
+         << " keyframes tracked before one moved into it)";
   if (options_.real_time) totals << "; " << counter(counters, "ba_stopped_early") << " local BAs stopped early";
   log().info(totals.str());
   if (counter(counters, runtime::kSecondWriterSamples) > 0 || counter(counters, "bad_corrections") > 0) {

@@ -56,10 +56,11 @@ class MapperNode : public runtime::Component {
 
   void record(const MapChanges& changes);
   void save();
-  void publish(const MapChanges& changes);
+  // `correction_id`: the changes are that loop correction's (marked on the version marker).
+  void publish(const MapChanges& changes, std::uint64_t correction_id = 0);
   void publish_all(const Map& map);
   // Ends a batch of states: the version markers of both state topics (frontend::MirrorVersion).
-  void write_version_markers(std::uint64_t map_version);
+  void write_version_markers(std::uint64_t map_version, std::uint64_t correction_id = 0);
   // KeyframeDone for a mapped keyframe, or (correction_id != 0) for an applied correction.
   void acknowledge(KeyframeId id, std::uint64_t correction_id = 0);
   void log_summary();

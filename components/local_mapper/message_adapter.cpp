@@ -60,10 +60,11 @@ msg::MapPointState merged_state_message(PointId id, PointId into, std::uint64_t 
   return message;
 }
 
-msg::KeyframeState keyframe_version_marker(std::uint64_t map_version) {
+msg::KeyframeState keyframe_version_marker(std::uint64_t map_version, std::uint64_t correction_id) {
   msg::KeyframeState message{};
   message.id = frontend::kVersionMarkerId;
   message.map_version = map_version;
+  message.correction_id = correction_id;
   message.T_wc.orientation_xyzw[3] = 1.0;  // a valid identity, for tools that print it
   return message;
 }

@@ -29,7 +29,8 @@ msg::MapPointState to_state_message(const MapPoint& point, std::uint64_t map_ver
 msg::MapPointState merged_state_message(PointId id, PointId into, std::uint64_t map_version);
 
 // The end-of-batch markers written after every batch of states (frontend::MirrorVersion says why).
-msg::KeyframeState keyframe_version_marker(std::uint64_t map_version);
+// `correction_id`: the batch applied that loop correction (0: a keyframe's batch, or a republish).
+msg::KeyframeState keyframe_version_marker(std::uint64_t map_version, std::uint64_t correction_id = 0);
 msg::MapPointState point_version_marker(std::uint64_t map_version);
 
 // Throws std::runtime_error naming the correction when a pose is not finite or an id is 0.

@@ -195,12 +195,15 @@ TEST(MessageAdapter, KeyframeRoundTripKeepsFeaturesPointsAndNewPoints) {
   point.p_w = Eigen::Vector3d(1, 2, 3);
   point.observations.emplace_back(keyframe.id, 4);
   PinholeStereo camera{435.2, 435.2, 367.4, 252.2, 0.11, 752, 480};
-  const KeyframeMessage message(keyframe, 17, {point}, camera);
+  const KeyframeId reference = make_id(kFrontendTag, 2);
+  const KeyframeMessage message(keyframe, 17, {point}, camera, reference, 41);
   EXPECT_EQ(message.get().frame_seq, 17u);
   EXPECT_EQ(message.get().camera.baseline_m, 0.11);
 
   const DecodedKeyframe decoded = to_keyframe(message.get());
   EXPECT_EQ(decoded.keyframe.id, keyframe.id);
+  EXPECT_EQ(decoded.reference_kf, reference);
+  EXPECT_EQ(decoded.tracked_map_version, 41u);
   EXPECT_EQ(decoded.keyframe.point_ids, keyframe.point_ids);
   ASSERT_EQ(decoded.keyframe.features.size(), 6u);
   EXPECT_EQ(decoded.keyframe.features.descriptors[5], keyframe.features.descriptors[5]);

@@ -126,11 +126,14 @@ TEST(MessageFormat, KeyframeShowsIdPoseAndKeypointCount) {
   keyframe.id = 72057594037927939ULL;  // the frontend's (tag 1) third keyframe
   keyframe.T_wc.position_m[0] = 1.5;
   keyframe.T_wc.orientation_xyzw[3] = 1.0;
+  keyframe.reference_keyframe_id = 72057594037927938ULL;
+  keyframe.tracked_map_version = 7;
   runtime::borrow(keyframe.keypoints, keypoints);
   runtime::borrow(keyframe.point_ids, point_ids);
   const std::string text = format_message(keyframe, {});
   EXPECT_NE(text.find("id: fe:3\n"), std::string::npos) << text;
   EXPECT_NE(text.find("T_wc: {position_m: [1.5, 0, 0], orientation_xyzw: [0, 0, 0, 1]}"), std::string::npos);
+  EXPECT_NE(text.find("reference_keyframe_id: fe:2\ntracked_map_version: 7\n"), std::string::npos) << text;
   EXPECT_NE(text.find("keypoints_count: 5\n"), std::string::npos);
   EXPECT_NE(text.find("... (2 more, --full)"), std::string::npos);
   EXPECT_NE(text.find("observed_points: 3\n"), std::string::npos);

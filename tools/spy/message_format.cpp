@@ -174,6 +174,8 @@ std::string format_message(const msg::Keyframe& keyframe, const FormatOptions& o
   text.line(0, "stamp_ns", std::to_string(keyframe.stamp_ns));
   text.line(0, "frame_seq", std::to_string(keyframe.frame_seq));
   text.line(0, "T_wc", pose(keyframe.T_wc));
+  text.line(0, "reference_keyframe_id", format_id(keyframe.reference_keyframe_id));
+  text.line(0, "tracked_map_version", std::to_string(keyframe.tracked_map_version));
   text.line(0, "camera", camera(keyframe.camera));
   text.line(0, "pyramid", std::to_string(keyframe.pyramid_levels) + " levels x " + number(keyframe.scale_factor));
   sequence<msg::KeyframeKeypoint>(text, 0, "keypoints", runtime::view(keyframe.keypoints), options,

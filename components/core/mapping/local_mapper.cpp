@@ -18,6 +18,11 @@
 namespace heslam {
 namespace {
 
+// Corrections remembered for keyframes in flight: a keyframe is in flight for a fraction of a
+// second, corrections come seconds apart; the bound only guards keyframes that never say what they
+// were tracked against (then nothing is ever forgotten by version).
+constexpr std::size_t kMaxRememberedCorrections = 16;
+
 using Clock = std::chrono::steady_clock;
 
 double ms_since(Clock::time_point& start) {
@@ -62,9 +67,18 @@ PointId LocalMapper::resolve_merges(PointId id) const {
   return kNoId;
 }
 
-void LocalMapper::insert_keyframe(Keyframe kf, std::vector<MapPoint> new_points, MapChanges& changes) {
+void LocalMapper::insert_keyframe(Keyframe kf, std::vector<MapPoint> new_points, const TrackedAgainst& tracked,
+                                  MapChanges& changes) {
   check_keyframe(map_, kf);
   const KeyframeId kf_id = kf.id;
+  // Tracked before a correction applied since: into the corrected frame, with its reference.
+  const Pose3 motion = motion_of_late_keyframe(state_.correction_motions, kf_id, tracked);
+  if (!motion.matrix().isIdentity(0.0)) {
+    kf.T_wc = motion * kf.T_wc;
+    for (MapPoint& point : new_points) point.p_w = motion * point.p_w;
+    changes.counts.late_keyframes_moved = 1;
+  }
+  if (tracked.reference_kf != kNoId) forget_corrections_up_to(state_.correction_motions, tracked.map_version);
   std::vector<PointId> references = std::move(kf.point_ids);
   kf.point_ids.assign(references.size(), kNoId);
   kf.parent = kNoId;
@@ -172,14 +186,14 @@ void LocalMapper::refresh_culled_keyframes(MapChanges& changes) {
   }
 }
 
-MapChanges LocalMapper::process_keyframe(Keyframe kf, std::vector<MapPoint> new_points) {
+MapChanges LocalMapper::process_keyframe(Keyframe kf, std::vector<MapPoint> new_points, const TrackedAgainst& tracked) {
   MapChanges changes;
   const auto start = Clock::now();
   auto stage = start;
   ++state_.keyframes_processed;
   const KeyframeId kf_id = kf.id;
   try {
-    insert_keyframe(std::move(kf), std::move(new_points), changes);
+    insert_keyframe(std::move(kf), std::move(new_points), tracked, changes);
   } catch (...) {
     --state_.keyframes_processed;
     throw;
@@ -239,6 +253,8 @@ MapChanges LocalMapper::process_keyframe(Keyframe kf, std::vector<MapPoint> new_
 MapChanges LocalMapper::apply_correction(const LoopCorrection& correction) {
   MapChanges changes;
   const auto start = Clock::now();
+  std::map<KeyframeId, Pose3> old_T_wc;
+  for (const auto& [id, kf] : map_.keyframes) old_T_wc.emplace(id, kf.T_wc);
   apply_loop_correction(map_, correction, state_.created_version, changes);
   refresh_culled_keyframes(changes);
   record_removed(changes);
@@ -257,6 +273,11 @@ MapChanges LocalMapper::apply_correction(const LoopCorrection& correction) {
   }
   ++map_.version;
   changes.map_version = map_.version;
+  // Keyframes the frontend tracked before this version and sends later follow this correction.
+  state_.correction_motions.push_back(record_correction_motion(old_T_wc, map_));
+  if (state_.correction_motions.size() > kMaxRememberedCorrections) {
+    state_.correction_motions.erase(state_.correction_motions.begin());
+  }
   changes.timings.total_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   return changes;
 }

@@ -30,7 +30,10 @@ class LocalMapper {
   // each referenced by exactly the keypoint that created it). References to unknown points are
   // dropped and counted; references to merged points follow the merge. Throws std::invalid_argument
   // when the keyframe is malformed (duplicate id, mismatched vector sizes).
-  MapChanges process_keyframe(Keyframe kf, std::vector<MapPoint> new_points);
+  // `tracked`: what the frontend tracked the keyframe against. A keyframe tracked at a map version
+  // older than a correction applied since is first moved, with its new points, as its reference
+  // keyframe was moved (correction_history.hpp); without a reference it is inserted as it comes.
+  MapChanges process_keyframe(Keyframe kf, std::vector<MapPoint> new_points, const TrackedAgainst& tracked = {});
 
   MapChanges apply_correction(const LoopCorrection& correction);
 
@@ -42,7 +45,8 @@ class LocalMapper {
   MapFileWriteStats save(const std::filesystem::path& path, bool sync = false) const;
 
  private:
-  void insert_keyframe(Keyframe kf, std::vector<MapPoint> new_points, MapChanges& changes);
+  void insert_keyframe(Keyframe kf, std::vector<MapPoint> new_points, const TrackedAgainst& tracked,
+                       MapChanges& changes);
   void cull_recent_points(MapChanges& changes);
   void record_removed(const MapChanges& changes);
   void refresh_culled_keyframes(MapChanges& changes);

@@ -28,6 +28,7 @@ void MapChanges::merge(const MapChanges& other) {
   counts.fused_points += other.counts.fused_points;
   counts.bundle_adjustment_outliers += other.counts.bundle_adjustment_outliers;
   counts.culled_keyframes += other.counts.culled_keyframes;
+  counts.late_keyframes_moved += other.counts.late_keyframes_moved;
   counts.bundle_adjustment_aborted = counts.bundle_adjustment_aborted || other.counts.bundle_adjustment_aborted;
 }
 

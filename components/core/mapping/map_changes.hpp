@@ -29,6 +29,7 @@ struct LocalMapperCounts {
   int bundle_adjustment_outliers = 0;
   int culled_keyframes = 0;
   bool bundle_adjustment_aborted = false;
+  int late_keyframes_moved = 0;   // tracked before a correction applied since: moved into its frame
 };
 
 struct MapChanges {

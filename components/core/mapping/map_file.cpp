@@ -190,9 +190,19 @@ void write_payload(Writer& w, const Map& map, const MapperState& state) {
       w.put(static_cast<std::int32_t>(index));
     }
   }
+
+  w.put(static_cast<std::uint64_t>(state.correction_motions.size()));
+  for (const CorrectionMotion& record : state.correction_motions) {
+    w.put(record.map_version);
+    w.put(static_cast<std::uint64_t>(record.T_new_old.size()));
+    for (const auto& [id, T] : record.T_new_old) {
+      w.put(id);
+      w.put_pose(T);
+    }
+  }
 }
 
-void read_payload(Reader& r, MapSnapshot& out) {
+void read_payload(Reader& r, std::uint32_t format, MapSnapshot& out) {
   Map& map = out.map;
   MapperState& state = out.state;
   r.context("mapper state");
@@ -285,6 +295,18 @@ void read_payload(Reader& r, MapSnapshot& out) {
     }
     if (!map.points.emplace(p.id, std::move(p)).second) r.fail("duplicate point id");
   }
+  if (format >= 2) {
+    r.context("correction motions");
+    for (std::uint64_t n = r.get_count(16); n > 0; --n) {
+      CorrectionMotion record;
+      record.map_version = r.get<std::uint64_t>();
+      for (std::uint64_t k = r.get_count(8 + 96); k > 0; --k) {
+        const auto id = r.get<std::uint64_t>();
+        record.T_new_old[id] = r.get_pose();
+      }
+      state.correction_motions.push_back(std::move(record));
+    }
+  }
   r.context("end of payload");
   if (r.remaining() != 0) r.fail(std::to_string(r.remaining()) + " unexpected trailing bytes");
 }
@@ -349,9 +371,10 @@ MapSnapshot load_map_file(const std::filesystem::path& path) {
   }
   for (std::size_t i = 0; i < sizeof(kMagic); ++i) header.get<char>();
   const auto format = header.get<std::uint32_t>();
-  if (format != kMapFileFormatVersion) {
+  if (format < kOldestReadableMapFileFormatVersion || format > kMapFileFormatVersion) {
     throw std::runtime_error("map file " + path.string() + ": format version " + std::to_string(format) +
-                             ", this build reads version " + std::to_string(kMapFileFormatVersion));
+                             ", this build reads versions " + std::to_string(kOldestReadableMapFileFormatVersion) +
+                             " to " + std::to_string(kMapFileFormatVersion));
   }
   header.get<std::uint32_t>();
   const auto payload_bytes = header.get<std::uint64_t>();
@@ -368,7 +391,7 @@ MapSnapshot load_map_file(const std::filesystem::path& path) {
   }
   MapSnapshot snapshot;
   Reader reader(path, payload, payload_bytes);
-  read_payload(reader, snapshot);
+  read_payload(reader, format, snapshot);
   return snapshot;
 }
 

@@ -14,7 +14,10 @@
 
 namespace heslam {
 
-inline constexpr std::uint32_t kMapFileFormatVersion = 1;
+// 2: the mapper's correction motions (correction_history.hpp) after the points. Version 1 files
+// are still read (no correction remembered).
+inline constexpr std::uint32_t kMapFileFormatVersion = 2;
+inline constexpr std::uint32_t kOldestReadableMapFileFormatVersion = 1;
 
 struct MapSnapshot {
   Map map;

@@ -5,8 +5,11 @@
 #include <cstdint>
 #include <map>
 
+#include <vector>
+
 #include "components/core/geometry/pose.hpp"
 #include "components/core/map/map.hpp"
+#include "components/core/mapping/correction_history.hpp"
 
 namespace heslam {
 
@@ -18,6 +21,8 @@ struct MapperState {
   std::map<PointId, std::uint64_t> recent_points;       // young point -> keyframes_processed at creation
   std::map<KeyframeId, Pose3> culled_T_pc;              // culled keyframe relative to its parent
   std::map<PointId, PointId> merged_into;               // merged-away point -> the point it became
+  // Applied corrections a keyframe still in flight may predate, oldest first (correction_history.hpp).
+  std::vector<CorrectionMotion> correction_motions;
 };
 
 }  // namespace heslam

@@ -304,6 +304,7 @@ void Tracker::maybe_insert_keyframe(Frame& frame, int inliers, TrackResult& resu
   insert_keyframe(map_, candidate, camera_, options_);
   frame.point_ids = candidate.keyframe.point_ids;  // the next frame tracks the new points too
   sync_place_database();                           // the new keyframe, transformed once
+  result.new_keyframe_reference = reference_kf_;
   reference_kf_ = candidate.keyframe.id;
   frames_since_keyframe_ = 0;
   result.new_keyframe = std::move(candidate.keyframe);

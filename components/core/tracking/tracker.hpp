@@ -53,6 +53,10 @@ struct TrackResult {
   FrameMotion motion = FrameMotion::kMoving;  // still / rotating in place: the stationary test held (part of) the last pose
   std::optional<Keyframe> new_keyframe;
   std::vector<MapPoint> new_points;   // created with new_keyframe
+  // The reference keyframe new_keyframe was tracked against (reference_kf is the new keyframe
+  // itself then); kNoId for the first keyframe. The mapper moves a keyframe that predates a loop
+  // correction with this keyframe.
+  KeyframeId new_keyframe_reference = kNoId;
   TrackTimings timings;
 
   bool pose_valid() const { return state == TrackingState::kOk; }
