@@ -71,7 +71,8 @@ OdometryJournal::Opened OdometryJournal::open_for_run(const std::string& run_id)
       }
     }
   }
-  if (path_.has_parent_path()) std::filesystem::create_directories(path_.parent_path());
+  std::error_code ignored;  // an uncreatable folder fails the fopen below, with our message
+  if (path_.has_parent_path()) std::filesystem::create_directories(path_.parent_path(), ignored);
   file_.reset(std::fopen(path_.c_str(), same_run ? "a" : "w"));
   if (!file_) throw std::runtime_error(path_.string() + ": cannot open the frontend journal for writing");
   if (!same_run) {
