@@ -107,10 +107,10 @@ void Frontend::resume_from_journal() {
   if (options_.journal_file.empty()) return;
   journal_.emplace(options_.journal_file);
   const OdometryJournal::Opened resumed = journal_->open_for_run(runtime::supervisor_run_id());
-  if (!resumed.last_seq) return;
+  if (resumed.frames.empty()) return;
   last_seq_ = resumed.last_seq;
   for (const msg::Odometry& odometry : resumed.frames) {
-    if (odometry.seq != *last_seq_) continue;
+    if (!last_seq_ || odometry.seq != *last_seq_) continue;  // the last finished frame
     if (odometry.state == heslam_msg_TRACKING_OK) {
       journal_last_pose_ = LastFramePose{odometry.reference_keyframe_id, to_pose(odometry.T_ref_c), to_pose(odometry.T_wc)};
     } else {
@@ -121,7 +121,8 @@ void Frontend::resume_from_journal() {
   // with it) still gets every frame. A live recorder takes them again by seq, unchanged.
   for (const msg::Odometry& odometry : resumed.frames) odometry_writer_->write(odometry);
   stats().count("journal_frames", resumed.frames.size());
-  log().info("resuming after frame ", *last_seq_, ": ", resumed.frames.size(), " frames from ",
+  log().info("resuming after frame ", last_seq_ ? std::to_string(*last_seq_) : std::string("none"), ": ",
+             resumed.frames.size(), " frames from ",
              journal_->path().string(),
              resumed.torn_lines > 0 ? " (" + std::to_string(resumed.torn_lines) + " torn lines skipped)" : "",
              "; their odometry published again");
@@ -301,6 +302,7 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
   }
   const OdometryMessage odometry(frame.stamp_ns, frame.seq, result, output.keypoints, output.timings);
   if (odometry_writer_->write(odometry.get()) == runtime::WriteResult::kTimeout) stats().count("odometry_timeouts");
+  if (journal_ && result.new_keyframe) journal_->append(odometry.get(), /*finished=*/false);
   log().debug("frame ", frame.seq, ": ", to_string(result.state), " (", to_string(result.method), "), ",
               result.tracked_points, " points, ", output.keypoints, " keypoints (", output.stereo_keypoints, " stereo), ",
               output.timings.back().ms, " ms");
@@ -313,7 +315,7 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
   }
   // Journaled before the acknowledgement: killed in between, the restarted process acknowledges
   // the frame the replay sends again instead of tracking it twice.
-  if (journal_) journal_->append(odometry.get());
+  if (journal_) journal_->append(odometry.get(), /*finished=*/true);
   acknowledge(frame, &output);
 }
 

@@ -8,7 +8,7 @@
 namespace heslam::frontend {
 namespace {
 
-constexpr const char* kHeader = "heslam-frontend-journal 1";
+constexpr const char* kHeader = "heslam-frontend-journal 1";  // + the run id
 
 void write_pose(std::FILE* file, const msg::Pose& pose) {
   for (const double value : pose.position_m) std::fprintf(file, " %.17g", value);
@@ -25,15 +25,15 @@ bool read_pose(std::istringstream& in, msg::Pose& pose) {
   return true;
 }
 
-bool read_line(const std::string& line, msg::Odometry& odometry) {
+bool read_line(const std::string& line, msg::Odometry& odometry, bool& finished) {
   std::istringstream fields(line);
   unsigned long long seq = 0, reference = 0;
   long long stamp_ns = 0;
-  int state = 0, keyframe_created = 0;
+  int state = 0, keyframe_created = 0, finished_flag = 0;
   unsigned keypoints = 0, tracked_points = 0;
   std::string end;
   if (!(fields >> seq >> stamp_ns >> state >> reference) || !read_pose(fields, odometry.T_wc) ||
-      !read_pose(fields, odometry.T_ref_c) || !(fields >> keypoints >> tracked_points >> keyframe_created >> end) ||
+      !read_pose(fields, odometry.T_ref_c) || !(fields >> keypoints >> tracked_points >> keyframe_created >> finished_flag >> end) ||
       end != ";") {
     return false;
   }
@@ -44,6 +44,7 @@ bool read_line(const std::string& line, msg::Odometry& odometry) {
   odometry.keypoints = keypoints;
   odometry.tracked_points = tracked_points;
   odometry.keyframe_created = keyframe_created != 0;
+  finished = finished_flag != 0;
   return true;
 }
 
@@ -61,15 +62,18 @@ OdometryJournal::Opened OdometryJournal::open_for_run(const std::string& run_id)
     in.seekg(0);
     std::string line;
     same_run = std::getline(in, line) && line == header;
+    std::map<std::uint64_t, msg::Odometry> by_seq;
     while (same_run && std::getline(in, line)) {
       msg::Odometry odometry{};
-      if (read_line(line, odometry)) {
-        opened.last_seq = std::max(opened.last_seq.value_or(0), odometry.seq);
-        opened.frames.push_back(odometry);
+      bool finished = false;
+      if (read_line(line, odometry, finished)) {
+        if (finished) opened.last_seq = std::max(opened.last_seq.value_or(0), odometry.seq);
+        by_seq[odometry.seq] = odometry;
       } else {
         ++opened.torn_lines;
       }
     }
+    for (const auto& [seq, odometry] : by_seq) opened.frames.push_back(odometry);
   }
   std::error_code ignored;  // an uncreatable folder fails the fopen below, with our message
   if (path_.has_parent_path()) std::filesystem::create_directories(path_.parent_path(), ignored);
@@ -84,7 +88,7 @@ OdometryJournal::Opened OdometryJournal::open_for_run(const std::string& run_id)
   return opened;
 }
 
-void OdometryJournal::append(const msg::Odometry& odometry) {
+void OdometryJournal::append(const msg::Odometry& odometry, bool finished) {
   if (!file_) return;
   std::FILE* file = file_.get();
   std::fprintf(file, "%llu %lld %d %llu", static_cast<unsigned long long>(odometry.seq),
@@ -94,7 +98,8 @@ void OdometryJournal::append(const msg::Odometry& odometry) {
   write_pose(file, odometry.T_ref_c);
   // The terminator marks a complete line: a kill mid-write leaves a line without it, which the next
   // open skips and counts.
-  std::fprintf(file, " %u %u %d ;\n", odometry.keypoints, odometry.tracked_points, odometry.keyframe_created ? 1 : 0);
+  std::fprintf(file, " %u %u %d %d ;\n", odometry.keypoints, odometry.tracked_points, odometry.keyframe_created ? 1 : 0,
+               finished ? 1 : 0);
   std::fflush(file);
 }
 

@@ -7,6 +7,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -19,10 +20,10 @@ namespace heslam::frontend {
 class OdometryJournal {
  public:
   struct Opened {
-    // Of this run, from before a restart, in file order (stage times are not kept); empty on a
-    // fresh run.
+    // Of this run, from before a restart, in seq order, the last line of a seq winning (stage times
+    // are not kept); empty on a fresh run. Includes a frame published but not finished.
     std::vector<msg::Odometry> frames;
-    std::optional<std::uint64_t> last_seq;  // the largest seq in `frames`
+    std::optional<std::uint64_t> last_seq;  // the largest finished seq
     int torn_lines = 0;                     // unreadable lines (a kill mid-write), skipped
   };
 
@@ -34,7 +35,11 @@ class OdometryJournal {
   Opened open_for_run(const std::string& run_id);
 
   // Appends one frame and flushes it to the kernel: a kill -9 of this process loses nothing written.
-  void append(const msg::Odometry& odometry);
+  // `finished`: about to be acknowledged (a restart does not track it again). A keyframe's frame is
+  // also appended unfinished when published, before the wait for the mapper: killed during that
+  // wait, the frame is tracked again, but its odometry still names the keyframe it made, which the
+  // mapper may have stored (a recorder restarted meanwhile learns its stamp from it).
+  void append(const msg::Odometry& odometry, bool finished);
 
   // Closes and deletes the journal (a frontend that stopped cleanly: the run is over).
   void remove();

@@ -31,14 +31,15 @@ TEST(OdometryJournal, ResumesTheFramesOfItsRunExactlyAndSurvivesATornLine) {
   {
     OdometryJournal journal(path);
     EXPECT_FALSE(journal.open_for_run("run-a").last_seq);
-    journal.append(odometry(0, heslam_msg_TRACKING_OK, 1.0 / 3.0));
-    journal.append(odometry(1, heslam_msg_TRACKING_LOST, 0.0));
+    journal.append(odometry(0, heslam_msg_TRACKING_OK, 1.0 / 3.0), false);  // a keyframe's frame, published
+    journal.append(odometry(0, heslam_msg_TRACKING_OK, 1.0 / 3.0), true);   // ... and finished
+    journal.append(odometry(1, heslam_msg_TRACKING_LOST, 0.0), true);
   }
   std::ofstream(path, std::ios::app) << "2 1100000000 0 7 0.1";  // killed mid-write
   {
     OdometryJournal journal(path);
     const OdometryJournal::Opened opened = journal.open_for_run("run-a");
-    ASSERT_EQ(opened.frames.size(), 2u);
+    ASSERT_EQ(opened.frames.size(), 2u);  // one per seq
     EXPECT_EQ(opened.torn_lines, 1);
     EXPECT_EQ(opened.last_seq, 1u);
     const msg::Odometry expected = odometry(0, heslam_msg_TRACKING_OK, 1.0 / 3.0);
@@ -54,14 +55,16 @@ TEST(OdometryJournal, ResumesTheFramesOfItsRunExactlyAndSurvivesATornLine) {
     EXPECT_EQ(first.tracked_points, 300u);
     EXPECT_TRUE(first.keyframe_created);
     EXPECT_EQ(opened.frames[1].state, heslam_msg_TRACKING_LOST);
-    journal.append(odometry(2, heslam_msg_TRACKING_OK, 2.0));  // after the torn line, not glued to it
+    journal.append(odometry(2, heslam_msg_TRACKING_OK, 2.0), true);  // after the torn line, not glued to it
+    journal.append(odometry(3, heslam_msg_TRACKING_OK, 3.0), false);  // killed while waiting for the mapper
   }
   {
     OdometryJournal journal(path);
     const OdometryJournal::Opened opened = journal.open_for_run("run-a");
-    EXPECT_EQ(opened.frames.size(), 3u);
+    ASSERT_EQ(opened.frames.size(), 4u);  // the unfinished frame's odometry too (its keyframe) ...
+    EXPECT_EQ(opened.frames[3].seq, 3u);
     EXPECT_EQ(opened.torn_lines, 1);
-    EXPECT_EQ(opened.last_seq, 2u);
+    EXPECT_EQ(opened.last_seq, 2u);  // ... but it is tracked again
   }
   {
     OdometryJournal journal(path);

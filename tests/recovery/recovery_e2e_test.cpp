@@ -48,6 +48,7 @@ struct RunResult {
   double ate_m = -1.0;            // against the ground truth (SE(3) aligned, as heslam-eval ape)
   std::vector<std::string> kills; // what was killed, for the failure message and the figures
   std::size_t processes_killed = 0;
+  int keyframes_without_stamp = -1;  // in the keyframe trajectory (a keyframe whose creation was never seen)
 };
 
 // Frames the run has recorded so far: one more than the largest seq in the recorder's journal
@@ -106,6 +107,12 @@ RunResult run_with_faults(const fs::path& dataset, const fs::path& dir, const st
     result.poses = eval::read_trajectory(trajectory).size();
     if (result.poses > 0) result.ate_m = test::ate_rmse_m(dataset, trajectory);
   }
+  const fs::path keyframes = dir / (label + ".keyframes.txt");
+  if (fs::exists(keyframes)) {
+    const eval::Trajectory keyframe_trajectory = eval::read_trajectory(keyframes);
+    result.keyframes_without_stamp =
+        static_cast<int>(std::count(keyframe_trajectory.stamps_s.begin(), keyframe_trajectory.stamps_s.end(), 0.0));
+  }
   return result;
 }
 
@@ -127,6 +134,7 @@ void expect_recovered(const RunResult& run, double undisturbed_m, const std::str
   EXPECT_EQ(run.exit_code, 0) << what << joined(run.kills) << "\n" << run.output;
   EXPECT_EQ(run.poses, kClipFrames) << what << joined(run.kills) << "\n" << run.output;
   EXPECT_GT(run.ate_m, 0.0) << what;
+  EXPECT_EQ(run.keyframes_without_stamp, 0) << what << joined(run.kills);
   EXPECT_LT(run.ate_m, undisturbed_m * kAteFactor) << what << joined(run.kills) << "\n" << run.output;
 }
 
@@ -191,7 +199,7 @@ TEST(Recovery, SoakRandomKillsLoseNoFrameAndKeepTheAccuracy) {
     const RunResult run = run_with_faults(dataset, dir.path(), label, plan);
     processes_killed += run.processes_killed;
     const bool ok = run.exit_code == 0 && run.poses == kClipFrames && run.ate_m > 0.0 &&
-                    run.ate_m < undisturbed_m * kAteFactor;
+                    run.ate_m < undisturbed_m * kAteFactor && run.keyframes_without_stamp == 0;
     failed += ok ? 0 : 1;
     worst_m = std::max(worst_m, run.ate_m);
     best_m = std::min(best_m, run.ate_m);
