@@ -14,6 +14,7 @@
 #include "components/core/mapping/map_file.hpp"
 #include "components/core/place/vocabulary_setting.hpp"
 #include "components/frontend/message_checks.hpp"
+#include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/writer_identity.hpp"
 
@@ -104,6 +105,7 @@ void Frontend::configure(const runtime::Config& config) {
   odometry_writer_.emplace(participant(), topics().odometry());
   keyframe_writer_.emplace(participant(), topics().keyframes());
   frame_done_writer_.emplace(participant(), topics().frame_done());
+  resume_from_journal();
   log().info("HE ", to_string(options_.features.he.mode), ", ", options_.features.orb.features, " ORB features, ",
              options_.mapper_enabled ? "mirroring the local mapper's map" : "no local mapper (own map)",
              options_.wait_for_mapper ? ", lockstep waits for the mapper" : "",
@@ -124,6 +126,31 @@ void Frontend::configure(const runtime::Config& config) {
   }
 }
 
+void Frontend::resume_from_journal() {
+  if (options_.journal_file.empty()) return;
+  journal_.emplace(options_.journal_file);
+  const OdometryJournal::Opened resumed = journal_->open_for_run(runtime::supervisor_run_id());
+  if (resumed.frames.empty()) return;
+  last_seq_ = resumed.last_seq;
+  for (const msg::Odometry& odometry : resumed.frames) {
+    if (!last_seq_ || odometry.seq != *last_seq_) continue;  // the last finished frame
+    if (odometry.state == heslam_msg_TRACKING_OK) {
+      journal_last_pose_ = LastFramePose{odometry.reference_keyframe_id, to_pose(odometry.T_ref_c), to_pose(odometry.T_wc)};
+    } else {
+      journal_last_pose_.reset();  // lost then: relocalize
+    }
+  }
+  // Into our transient-local history: a recorder restarted after the old process died (its history
+  // with it) still gets every frame. A live recorder takes them again by seq, unchanged.
+  for (const msg::Odometry& odometry : resumed.frames) odometry_writer_->write(odometry);
+  stats().count("journal_frames", resumed.frames.size());
+  log().info("resuming after frame ", last_seq_ ? std::to_string(*last_seq_) : std::string("none"), ": ",
+             resumed.frames.size(), " frames from ",
+             journal_->path().string(),
+             resumed.torn_lines > 0 ? " (" + std::to_string(resumed.torn_lines) + " torn lines skipped)" : "",
+             "; their odometry published again");
+}
+
 void Frontend::run() {
   while (!shutdown_requested()) {
     const runtime::Wake wake = waitset_->wait(kWaitPeriod);
@@ -137,6 +164,8 @@ void Frontend::run() {
     if (!processor_ && wake == runtime::Wake::kData) std::this_thread::sleep_for(kNoCalibrationPoll);
   }
   count_frames_left();
+  // Stopped, not killed: the run is over (or interrupted for good), nothing will resume from it.
+  if (journal_) journal_->remove();
   log().flush_throttled();
   log_rejections();
   const auto counters = stats().counters();
@@ -194,37 +223,50 @@ void Frontend::take_calibration() {
   }
 }
 
+bool Frontend::mapper_map_file_of_this_run() const {
+  std::error_code error_code;
+  if (options_.mapper_map_file.empty() || !std::filesystem::exists(options_.mapper_map_file, error_code)) return false;
+  std::filesystem::path run_file = options_.mapper_map_file;
+  run_file += ".run";
+  std::ifstream in(run_file);
+  std::string run;
+  // The mapper writes FILE.run (its supervisor's identity, which is ours) before its first map.
+  return std::getline(in, run) && run == runtime::supervisor_run_id();
+}
+
 void Frontend::resume_in_mapper_map() {
   // A restarted frontend: the mapper's map must be in the tracker before the first frame, or that
   // frame would start a second map.
   Tracker& tracker = processor_->tracker();
-  // The mapper's map file exists at our start only after a restart, or when the mapper started
-  // from a saved map (--load-map); on a fresh run it writes it after the first keyframe, and the
-  // frontend starts before. Then wait for the mapper's stored states (transient-local: they arrive
-  // shortly after its writers match) before the first frame is tracked.
-  std::error_code error_code;
-  if (options_.mapper_map_file.empty() || !std::filesystem::exists(options_.mapper_map_file, error_code)) return;
-  const auto deadline = std::chrono::steady_clock::now() + kMapHistoryWait;
-  keyframe_state_reader_->wait_for_writers(1, kMapHistoryWait);
-  while (!keyframe_state_reader_->has_unread() && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(kNoCalibrationPoll);
+  // The mapper's map file of this run exists at our start only after a restart, or when the mapper
+  // started from a saved map (--load-map); on a fresh run it writes it after the first keyframe,
+  // and the frontend starts before. It holds every keyframe the mapper acknowledged (saved before
+  // each KeyframeDone), with features, which the state topics do not carry. It is loaded whether or
+  // not the mapper runs now: killed together with us it is restarting, and its states (newer poses,
+  // culls, merges) are applied as they arrive.
+  if (!mapper_map_file_of_this_run()) return;
+  try {
+    tracker.local_map() = load_map_file(options_.mapper_map_file).map;
+  } catch (const std::exception& error) {
+    stats().count("unreadable_mapper_map_files");
+    log().warn(error.what(), "; starting a new map");
   }
-  // States waiting: the mapper holds this run's map. They carry poses and links, not features: the
-  // keyframes themselves come from its map file, the states then bring them up to date.
-  if (keyframe_state_reader_->has_unread()) {
-    std::this_thread::sleep_for(kMapHistorySettle);
-    try {
-      tracker.local_map() = load_map_file(options_.mapper_map_file).map;
-    } catch (const std::exception& error) {
-      stats().count("unreadable_mapper_map_files");
-      log().warn(error.what(), "; starting a new map");
+  // States the mapper published already (it runs: only we were restarted) arrive shortly after the
+  // readers match; wait briefly so the first frame is relocalized with the newest poses.
+  if (keyframe_state_reader_->wait_for_writers(1, kMapHistoryWait)) {
+    const auto deadline = std::chrono::steady_clock::now() + kMapHistoryWait;
+    while (!keyframe_state_reader_->has_unread() && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(kNoCalibrationPoll);
     }
+    std::this_thread::sleep_for(kMapHistorySettle);
   }
   mirror_map_state();
-  if (tracker.resume_in_map()) {
+  if (tracker.resume_in_map(journal_last_pose_)) {
     stats().count("resumed_in_map");
     log().info("resuming in the local mapper's map (", tracker.local_map().keyframes.size(), " keyframes, ",
-               tracker.local_map().points.size(), " points): relocalizing instead of starting a new map");
+               tracker.local_map().points.size(), " points): ",
+               journal_last_pose_ ? "tracking on from the last journaled pose" : "relocalizing",
+               " instead of starting a new map");
   }
 }
 
@@ -320,6 +362,7 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
   }
   const OdometryMessage odometry(frame.stamp_ns, frame.seq, result, output.keypoints, output.timings);
   if (odometry_writer_->write(odometry.get()) == runtime::WriteResult::kTimeout) stats().count("odometry_timeouts");
+  if (journal_ && result.new_keyframe) journal_->append(odometry.get(), /*finished=*/false);
   log().debug("frame ", frame.seq, ": ", to_string(result.state), " (", to_string(result.method), "), ",
               result.tracked_points, " points, ", output.keypoints, " keypoints (", output.stereo_keypoints, " stereo), ",
               output.timings.back().ms, " ms");
@@ -330,6 +373,9 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
                options_.loop_closers.empty() ? "" : " and the loop closer", " within ",
                options_.mapper_timeout.count(), " ms; going on without it");
   }
+  // Journaled before the acknowledgement: killed in between, the restarted process acknowledges
+  // the frame the replay sends again instead of tracking it twice.
+  if (journal_) journal_->append(odometry.get(), /*finished=*/true);
   acknowledge(frame, &output);
 }
 

@@ -15,6 +15,7 @@
 #include "components/frontend/frame_processor.hpp"
 #include "components/frontend/frontend_options.hpp"
 #include "runtime/checked_reader.hpp"
+#include "components/frontend/odometry_journal.hpp"
 #include "runtime/component.hpp"
 
 namespace heslam::frontend {
@@ -28,6 +29,12 @@ class Frontend : public runtime::Component {
   void run() override;
   bool accepts_positional_args() const override { return true; }  // --mapper-map-file FILE
 
+  // With a journal: resume after the frames a previous process of this run finished, and publish
+  // their odometry again (a recorder that was down meanwhile gets it from our history).
+  void resume_from_journal();
+  // The mapper's map file, if this run's mapper wrote it (FILE.run): a restarted frontend resumes
+  // in it whether or not the mapper is running right now.
+  bool mapper_map_file_of_this_run() const;
   void take_calibration();
   // At the end of the run: frames still queued (real time, the replay ended while we were busy)
   // are not tracked but counted as missed, so every published frame is processed or missed.
@@ -59,6 +66,10 @@ class Frontend : public runtime::Component {
   std::optional<runtime::Writer<msg::Odometry>> odometry_writer_;
   std::optional<runtime::Writer<msg::Keyframe>> keyframe_writer_;
   std::optional<runtime::Writer<msg::FrameDone>> frame_done_writer_;
+  std::optional<OdometryJournal> journal_;
+  // The last journaled frame of a previous process of this run, when it was tracked: the restarted
+  // tracker continues from it instead of relocalizing.
+  std::optional<LastFramePose> journal_last_pose_;
   std::unique_ptr<runtime::WaitSet> waitset_;
   std::unique_ptr<FrameProcessor> processor_;  // from the first calibration
   std::optional<PinholeStereo> calibration_camera_;

@@ -118,18 +118,21 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
   options.vocabulary_file = config.get_string("vocabulary.file", "");
   options.vocabulary = load_vocabulary_setting(options.vocabulary_file);
   options.mapper_map_file = config.get_string("mapper.map_file", "");
+  options.journal_file = config.get_string("journal.file", "");
   std::string loop_closer = config.get_string("lockstep.loop_closer", "none");
   const std::string loop_closer_name = config.get_string("lockstep.loop_closer_name", "loop_closer");
   for (std::size_t i = 0; i < rest.size(); ++i) {
     if (rest[i] == "--mapper-map-file" && i + 1 < rest.size()) {
       options.mapper_map_file = rest[++i];
+    } else if (rest[i] == "--journal" && i + 1 < rest.size()) {
+      options.journal_file = rest[++i];
     } else if (rest[i] == "--loop-closer" && i + 1 < rest.size()) {
       loop_closer = rest[++i];
     } else if (rest[i] == "--localize") {
       options.localize = true;
     } else {
       throw std::runtime_error("unknown argument '" + rest[i] +
-                               "' (expected --mapper-map-file FILE, --loop-closer EXECUTABLE|none or --localize)");
+                               "' (expected --mapper-map-file FILE, --journal FILE, --loop-closer EXECUTABLE|none or --localize)");
     }
   }
   if (options.localize && (options.mapper_map_file.empty() || !options.mapper_enabled)) {

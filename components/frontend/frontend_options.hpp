@@ -43,18 +43,23 @@ struct FrontendOptions {
   std::chrono::milliseconds mapper_timeout{30000};
   // mapper.map_file / --mapper-map-file FILE: the local mapper's map file. A frontend restarted while
   // the mapper holds a map loads the keyframes (features included, which the state topics do not
-  // carry) from it, then relocalizes in that map (ARCHITECTURE.md, Recovery). Empty: a restarted
-  // frontend starts a new map.
+  // carry) from it, then relocalizes in that map (ARCHITECTURE.md, Recovery). Only a file of this
+  // run counts (FILE.run names the supervisor that wrote it). Empty: a restarted frontend starts a
+  // new map.
   std::filesystem::path mapper_map_file;
   // --localize: tracking in a saved map (config/pipelines/euroc_localize.yaml). The mapper's map file
   // must exist at start (the mapper loaded the saved map into it), the first tracked frame is reported
   // ("relocalized in the saved map at frame N"), and a run that never relocalizes fails (exit 1).
   bool localize = false;
+  // journal.file / --journal FILE: every finished frame is appended here (OdometryJournal); a
+  // restarted frontend of the same run resumes after its last seq and publishes the journaled
+  // odometry again. Empty: a restarted frontend tracks every frame it is sent.
+  std::filesystem::path journal_file;
   // frames.max_pending: frames that arrive before the calibration are kept (oldest dropped beyond).
   int max_pending_frames = 8;
 
   // Throws std::runtime_error (one line: file, field, expectation) on a bad field.
-  // `rest`: the command line's own arguments (--mapper-map-file FILE, --loop-closer EXECUTABLE, --localize),
+  // `rest`: the command line's own arguments (--mapper-map-file FILE, --journal FILE, --loop-closer EXECUTABLE, --localize),
   // which win over the config.
   static FrontendOptions from_config(const runtime::Config& config, const std::vector<std::string>& rest = {});
 };

@@ -137,10 +137,13 @@ void MapperNode::load_initial_map() {
     }
   }
   if (resume) {
-    loaded_is_resume_ = true;
     load_applied_corrections();
     log().info("resuming from ", options_.map_file.string(), ": ", loaded_->map.keyframes.size(), " keyframes, ",
                loaded_->map.points.size(), " points, map version ", loaded_->map.version);
+    // Published at once, not at the first keyframe: when the frontend died too (a power glitch, an
+    // OOM kill), no keyframe comes until a restarted frontend has resumed in this map, and it waits
+    // for these states to do so. The file is this run's (FILE.run), so there is nothing to confirm.
+    publish_all(loaded_->map);
   } else if (!options_.load_map.empty()) {
     options_.load_map = saved_map_path(options_.load_map);
     loaded_ = load_map_file(options_.load_map);
@@ -240,27 +243,9 @@ void MapperNode::process_pending() {
 }
 
 void MapperNode::start_mapper(const PendingKeyframe& first) {
-  const Keyframe& kf = first.decoded.keyframe;
-  if (loaded_ && loaded_is_resume_) {
-    // The resumed file must belong to this run: the keyframe either is in it with the same stamp, or
-    // is newer than everything in it.
-    const Map& map = loaded_->map;
-    const Keyframe* known = map.keyframe(kf.id);
-    const bool newer = map.keyframes.empty() || kf.id > map.keyframes.rbegin()->first;
-    if ((known != nullptr && known->stamp_ns != kf.stamp_ns) || (known == nullptr && !newer)) {
-      log().warn("map file ", options_.map_file.string(), " is from another run (keyframe ", kf.id,
-                 known != nullptr ? " has another stamp there" : " is older than its keyframes",
-                 "); starting a new map");
-      stats().count("stale_map_files");
-      loaded_.reset();
-      applied_corrections_.clear();
-      std::filesystem::remove(sidecar(".corrections"));
-    }
-  }
   if (loaded_) {
     mapper_ = std::make_unique<LocalMapper>(first.camera, options_.mapper, std::move(*loaded_));
     loaded_.reset();
-    if (loaded_is_resume_) publish_all(mapper_->map());
   } else {
     mapper_ = std::make_unique<LocalMapper>(first.camera, options_.mapper);
   }
@@ -271,7 +256,17 @@ void MapperNode::start_mapper(const PendingKeyframe& first) {
 void MapperNode::process_keyframe(PendingKeyframe keyframe) {
   if (!mapper_) start_mapper(keyframe);
   const KeyframeId id = keyframe.decoded.keyframe.id;
-  if (const Keyframe* known = mapper_->map().keyframe(id); known != nullptr) {
+  const Map& map = mapper_->map();
+  if (map.keyframe(id) == nullptr && !map.keyframes.empty() && id < map.keyframes.rbegin()->first) {
+    // Keyframe ids only grow within a run (a restarted frontend continues past the map's), so this
+    // one is not of this map: mapping it would mix two maps.
+    stats().count("foreign_keyframes");
+    log().warn_throttled("foreign_keyframes", "keyframe ", id, ": not in the map and older than its newest keyframe ",
+                         map.keyframes.rbegin()->first, "; ignored");
+    acknowledge(id);
+    return;
+  }
+  if (const Keyframe* known = map.keyframe(id); known != nullptr) {
     if (known->stamp_ns != keyframe.decoded.keyframe.stamp_ns) {
       stats().count("duplicate_keyframe_ids");
       log().warn_throttled("duplicate_keyframe_ids", "keyframe ", id, ": id already in the map with stamp ", known->stamp_ns, " ns, received with ",

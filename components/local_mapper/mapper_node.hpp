@@ -82,7 +82,6 @@ class MapperNode : public runtime::Component {
 
   // A loaded map waits here for the first keyframe (which brings the camera the mapper needs).
   std::optional<MapSnapshot> loaded_;
-  bool loaded_is_resume_ = false;  // from map_file (checked against the run) rather than load_map
   std::unique_ptr<LocalMapper> mapper_;
   std::map<KeyframeId, PendingKeyframe> pending_;          // taken, not yet processed; id order
   std::map<std::uint64_t, LoopCorrection> pending_corrections_;

@@ -71,6 +71,25 @@ TEST(TrajectoryRecorder, CulledKeyframeFollowsItsParent) {
   EXPECT_EQ(out.keyframes.size(), 1u);  // culled keyframes are not in the keyframe trajectory
 }
 
+// Recorder and frontend killed together: the Keyframe samples died with the frontend, the mapper's
+// states carry no stamp; the odometry of the frame that created the keyframe (republished from the
+// frontend's journal) gives its stamp and frame. A Keyframe sample wins over it.
+TEST(TrajectoryRecorder, KeyframeWithoutItsSampleTakesItsStampFromTheCreatingFrame) {
+  TrajectoryRecorder recorder;
+  recorder.update_keyframe(1, translation(1.5, 0, 0), kNoId, false);  // only the mapper's state
+  recorder.add_keyframe_frame(1, 2'000'000'000, 20, translation(1, 0, 0));
+  recorder.add_keyframe(2, 3'000'000'000, 30, translation(2, 0, 0));
+  recorder.add_keyframe_frame(2, 9'000'000'000, 90, translation(9, 0, 0));  // the sample wins
+  const RecordedTrajectories out = recorder.build();
+  ASSERT_EQ(out.keyframes.size(), 2u);
+  EXPECT_DOUBLE_EQ(out.keyframes.stamps_s[0], 2.0);
+  EXPECT_EQ(out.keyframes.frame_ids[0], 20);
+  EXPECT_TRUE(out.keyframes.poses_wc[0].translation().isApprox(Eigen::Vector3d(1.5, 0, 0)));  // the state's pose
+  EXPECT_DOUBLE_EQ(out.keyframes.stamps_s[1], 3.0);
+  EXPECT_EQ(out.keyframes.frame_ids[1], 30);
+  EXPECT_TRUE(out.keyframes.poses_wc[1].translation().isApprox(Eigen::Vector3d(2, 0, 0)));
+}
+
 TEST(TrajectoryRecorder, UntrackedFramesAreListedNotInvented) {
   TrajectoryRecorder recorder;
   recorder.add_keyframe(1, 0, 0, Pose3::Identity());

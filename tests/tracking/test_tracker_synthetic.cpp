@@ -187,5 +187,46 @@ TEST(TrackerSynthetic, ResumeInMapRelocalizesInTheOldMapAndContinuesIds) {
   EXPECT_EQ(creator_of(new_id), creator_of(last_id));
 }
 
+// A restarted frontend that knows where its previous process's last frame was (its journal): the
+// next frame is tracked from that pose against its reference keyframe, no relocalization needed,
+// and the tracker goes on as if never restarted.
+TEST(TrackerSynthetic, ResumeInMapFromTheLastFramePoseTracksTheNextFrameDirectly) {
+  const PinholeStereo camera = test::synthetic_camera();
+  const auto points = test::make_points(4000, 31);
+  Tracker first(camera, TrackerOptions{});
+  int k = 0;
+  TrackResult last;
+  for (; k < 40; ++k) {
+    last = first.track(k * kFramePeriodNs, static_cast<std::uint64_t>(k),
+                       test::make_frame(points, camera, test::trajectory_pose(k), 500 + static_cast<std::uint64_t>(k)));
+    ASSERT_EQ(last.state, TrackingState::kOk);
+  }
+  Tracker restarted(camera, TrackerOptions{});
+  restarted.local_map() = first.local_map();
+  ASSERT_TRUE(restarted.resume_in_map(LastFramePose{last.reference_kf, last.T_ref_c, last.T_wc}));
+  EXPECT_EQ(restarted.state(), TrackingState::kOk);
+  for (int n = 0; n < 5; ++n, ++k) {
+    const TrackResult r = restarted.track(k * kFramePeriodNs, static_cast<std::uint64_t>(k),
+                                          test::make_frame(points, camera, test::trajectory_pose(k), 900 + static_cast<std::uint64_t>(k)));
+    ASSERT_EQ(r.state, TrackingState::kOk) << "frame " << k;
+    EXPECT_NE(r.method, TrackingMethod::kRelocalization) << "frame " << k;
+    if (n == 0) {
+      EXPECT_EQ(r.method, TrackingMethod::kReferenceKeyframe);
+    }
+    EXPECT_LT((r.T_wc.translation() - truth_in_first_camera(k).translation()).norm(), 0.02) << "frame " << k;
+  }
+
+  // A reference keyframe the map does not hold (it died with the old process): the map's newest
+  // keyframe and the journaled world pose instead.
+  Tracker without_reference(camera, TrackerOptions{});
+  without_reference.local_map() = first.local_map();
+  ASSERT_TRUE(without_reference.resume_in_map(LastFramePose{last.reference_kf + 1000, last.T_ref_c, last.T_wc}));
+  const int next = 40;
+  const TrackResult r = without_reference.track(next * kFramePeriodNs, static_cast<std::uint64_t>(next),
+                                                test::make_frame(points, camera, test::trajectory_pose(next), 77));
+  ASSERT_EQ(r.state, TrackingState::kOk);
+  EXPECT_LT((r.T_wc.translation() - truth_in_first_camera(next).translation()).norm(), 0.02);
+}
+
 }  // namespace
 }  // namespace heslam

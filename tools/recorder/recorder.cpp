@@ -281,6 +281,9 @@ std::size_t Recorder::drain() {
     frame.T_ref_c = frontend::to_pose(odometry.T_ref_c);
     frame.T_wc = frontend::to_pose(odometry.T_wc);
     recorder_.add_frame(frame);
+    if (odometry.keyframe_created && frame.tracked && frame.reference != kNoId) {
+      recorder_.add_keyframe_frame(frame.reference, frame.stamp_ns, frame.seq, frame.T_wc);
+    }
     journal_->append(frame);
     stats().count(frame.tracked ? "frames" : "frames_untracked");
   }

@@ -25,7 +25,18 @@ void TrajectoryRecorder::add_keyframe(KeyframeId id, std::int64_t stamp_ns, std:
   record.stamp_ns = stamp_ns;
   record.frame_seq = frame_seq;
   record.T_wc_initial = T_wc;
+  record.from_keyframe_sample = true;
   if (inserted) record.T_wc = T_wc;  // a state that arrived first already holds the refined pose
+}
+
+void TrajectoryRecorder::add_keyframe_frame(KeyframeId id, std::int64_t stamp_ns, std::uint64_t frame_seq,
+                                            const Pose3& T_wc) {
+  auto [it, inserted] = keyframes_.try_emplace(id);
+  KeyframeRecord& record = it->second;
+  if (record.from_keyframe_sample) return;
+  record.stamp_ns = stamp_ns;
+  record.frame_seq = frame_seq;
+  if (inserted) record.T_wc_initial = record.T_wc = T_wc;
 }
 
 void TrajectoryRecorder::update_keyframe(KeyframeId id, const Pose3& T_wc, KeyframeId parent, bool culled) {

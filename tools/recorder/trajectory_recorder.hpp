@@ -61,6 +61,11 @@ class TrajectoryRecorder {
   void add_frame(const RecordedFrame& frame);
   // A keyframe as created (its initial pose).
   void add_keyframe(KeyframeId id, std::int64_t stamp_ns, std::uint64_t frame_seq, const Pose3& T_wc);
+  // The odometry of the frame that created keyframe `id` (its reference then): the keyframe's stamp
+  // and frame when its Keyframe sample never arrived (the frontend that wrote it died before this
+  // recorder, restarted too, could read it; the restarted frontend publishes its journal's odometry
+  // again). A Keyframe sample, earlier or later, wins.
+  void add_keyframe_frame(KeyframeId id, std::int64_t stamp_ns, std::uint64_t frame_seq, const Pose3& T_wc);
   // The mapper's latest state of a keyframe. A culled keyframe keeps its pose relative to its parent
   // from then on (ORB-SLAM2's Tcp), so frames referencing it follow the parent.
   void update_keyframe(KeyframeId id, const Pose3& T_wc, KeyframeId parent, bool culled);
@@ -82,6 +87,7 @@ class TrajectoryRecorder {
     KeyframeId parent = kNoId;
     bool culled = false;
     std::optional<Pose3> T_parent_kf;  // fixed when culled
+    bool from_keyframe_sample = false;  // stamp and frame from the Keyframe sample (else odometry or none)
   };
   // The keyframe's final pose, following culled keyframes up their parents; nullopt when unknown.
   std::optional<Pose3> final_pose(KeyframeId id, int depth = 0) const;

@@ -174,7 +174,7 @@ void Tracker::follow_reference_keyframe() {
   last_frame_.T_wc = reference->T_wc * last_T_ref_c_;
 }
 
-bool Tracker::resume_in_map() {
+bool Tracker::resume_in_map(const std::optional<LastFramePose>& last) {
   if (state_ != TrackingState::kNotInitialized || map_.keyframes.empty()) return false;
   const auto counter_of = [](std::uint64_t id) -> std::uint64_t { return id & ((std::uint64_t{1} << 56) - 1); };
   std::uint64_t keyframes = 0;
@@ -189,6 +189,16 @@ bool Tracker::resume_in_map() {
   point_counter_ = points + kResumeIdGap;
   reference_kf_ = map_.keyframes.rbegin()->first;
   state_ = TrackingState::kLost;  // the next frame goes to relocalization
+  if (last) {
+    // The next frame is tracked against the reference keyframe from this pose (track_reference_keyframe),
+    // which needs no place recognition: a frame just after a restart is as easy as any other.
+    const Keyframe* reference = map_.keyframe(last->reference);
+    if (reference != nullptr && !reference->culled) reference_kf_ = last->reference;
+    last_frame_.T_wc = reference != nullptr ? reference->T_wc * last->T_ref_c : last->T_wc;
+    last_T_ref_c_ = map_.keyframe(reference_kf_)->T_wc.inverse() * last_frame_.T_wc;
+    velocity_.reset();
+    state_ = TrackingState::kOk;
+  }
   sync_place_database();
   return true;
 }

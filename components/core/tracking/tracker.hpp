@@ -62,6 +62,14 @@ struct TrackResult {
   bool pose_valid() const { return state == TrackingState::kOk; }
 };
 
+// Where a previous tracker's last frame was: its reference keyframe and its pose in it, and in the
+// world (used when that keyframe is not in the map).
+struct LastFramePose {
+  KeyframeId reference = kNoId;
+  Pose3 T_ref_c = Pose3::Identity();
+  Pose3 T_wc = Pose3::Identity();
+};
+
 class Tracker {
  public:
   // `vocabulary` may be null: no keyframe database, relocalization against the newest keyframes.
@@ -80,7 +88,11 @@ class Tracker {
   // and keyframe / point ids continue after this creator's largest ids in it plus a gap, so they
   // cannot collide with ids the previous process published that the map does not hold yet.
   // Returns false (and changes nothing) when the map holds no keyframe or tracking already started.
-  bool resume_in_map();
+  // With `last` (the previous process's last frame, from its journal) the next frame is tracked from
+  // that pose against its reference keyframe, as if no restart happened (only the velocity is lost);
+  // relocalization is then the fallback, for the frame after it. A reference the map does not hold
+  // (its keyframe died with the old process) is replaced by the map's newest keyframe.
+  bool resume_in_map(const std::optional<LastFramePose>& last = std::nullopt);
 
   // Brings the keyframe database up to the map's keyframes (new ones transformed once, culled ones
   // dropped). The tracker does it itself after each keyframe it creates, before a relocalization and
