@@ -1,5 +1,5 @@
 // heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]
-//                   [--log-dir DIR] [--log-level LEVEL]
+//                   [--log-dir DIR] [--log-level LEVEL] [--security DIR]
 #include <signal.h>
 #include <unistd.h>
 
@@ -19,10 +19,12 @@ using namespace heslam;
 
 constexpr const char* kUsage =
     "usage: heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]\n"
-    "                         [--log-dir DIR] [--log-level debug|info|warn|error]\n"
+    "                         [--log-dir DIR] [--log-level debug|info|warn|error] [--security DIR]\n"
     "  --check      validate the pipeline file and every file it references; start nothing\n"
     "  --arg k=v    value for $(arg k) in the pipeline file (overrides its 'args' default)\n"
-    "  --log-dir    per-component logs (default: $HESLAM_LOG_DIR or ~/.heslam/log, + /<pipeline>-<time>)\n";
+    "  --log-dir    per-component logs (default: $HESLAM_LOG_DIR or ~/.heslam/log, + /<pipeline>-<time>)\n"
+    "  --security   DDS Security: run every process with its identity from DIR (heslam-security init DIR;\n"
+    "               overrides the file's 'security'; docs/security.md)\n";
 
 std::filesystem::path default_log_dir(const std::string& pipeline_name) {
   std::filesystem::path base;
@@ -77,6 +79,8 @@ int run(int argc, char** argv) {
       }
     } else if (arg == "--namespace") {
       overrides.ns = value_of(argc, argv, i, arg);
+    } else if (arg == "--security") {
+      overrides.security_dir = value_of(argc, argv, i, arg);
     } else if (arg == "--log-dir") {
       log_dir = value_of(argc, argv, i, arg);
     } else if (arg == "--log-level") {
@@ -104,7 +108,9 @@ int run(int argc, char** argv) {
     std::cout << pipeline_file.string() << ": OK (" << loaded.pipeline.components.size() << " components:";
     for (const auto& component : loaded.pipeline.components) std::cout << " " << component.name;
     for (const auto& name : loaded.pipeline.disabled_components) std::cout << " [" << name << " disabled]";
-    std::cout << ")\n";
+    std::cout << ")";
+    if (!loaded.pipeline.security_dir.empty()) std::cout << ", DDS security from " << loaded.pipeline.security_dir.string();
+    std::cout << "\n";
     return 0;
   }
   runtime::install_shutdown_handlers();
