@@ -57,8 +57,8 @@ void check_security_files(const SecurityFiles& files) {
                            &files.private_key, &files.permissions}) {
     if (!std::filesystem::is_regular_file(*path)) {
       throw std::runtime_error("DDS security: " + path->string() +
-                               " does not exist (make the folder with heslam-security init DIR; an extra identity "
-                               "with --identity NAME:PUBLISH:SUBSCRIBE)");
+                               " does not exist (make the folder with heslam-security init DIR; one more identity with "
+                               "heslam-security add DIR NAME:PUBLISH:SUBSCRIBE)");
     }
   }
 }

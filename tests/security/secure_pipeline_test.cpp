@@ -81,5 +81,31 @@ TEST(SecurePipeline, SynthRoomGivesThePlainTrajectoryWhileIntrudersPublish) {
   EXPECT_LT(max_difference_m, 1e-6);
 }
 
+// --check verifies the folder and every identity the pipeline needs; a missing one is one line.
+TEST(SecurePipeline, CheckNamesTheFolderAndAMissingIdentity) {
+  const test::ScratchDir dir("secure_check");
+  const fs::path security = test::make_security_folder(dir.path() / "sec", dir.path());
+  const fs::path pipeline = test::source_dir() / "config/pipelines/synth.yaml";
+  // --check only needs the dataset folder to exist.
+  test::ChildProcess check(test::bin_dir() / "heslam-supervisor",
+                           {pipeline.string(), "--check", "--arg", "dataset=" + dir.path().string(), "--arg",
+                            "security=" + security.string()},
+                           dir.path(), "check_ok");
+  ASSERT_EQ(check.wait(std::chrono::seconds(60)), 0) << check.err();
+  EXPECT_NE(check.out().find(", DDS security from " + security.string()), std::string::npos) << check.out();
+
+  fs::remove_all(security / "identities/recorder");
+  test::ChildProcess missing(test::bin_dir() / "heslam-supervisor",
+                             {pipeline.string(), "--check", "--arg", "dataset=" + dir.path().string(), "--security",
+                              security.string()},
+                             dir.path(), "check_missing");
+  ASSERT_EQ(missing.wait(std::chrono::seconds(60)), 1) << missing.out();
+  EXPECT_EQ(last_line(missing.err()), "heslam-supervisor: " + pipeline.string() +
+                                          ": component 'recorder': DDS security: " +
+                                          (security / "identities/recorder/cert.pem").string() +
+                                          " does not exist (make the folder with heslam-security init DIR; one more "
+                                          "identity with heslam-security add DIR NAME:PUBLISH:SUBSCRIBE)");
+}
+
 }  // namespace
 }  // namespace heslam
