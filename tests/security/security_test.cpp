@@ -278,6 +278,25 @@ TEST(SecureDds, ComponentWithoutPermissionCannotPublishImages) {
       << peer->out();
 }
 
+// A permissions document edited after signing (the frontend granting itself the images) fails the
+// signature check: no participant.
+TEST(SecureDds, TamperedPermissionsAreRejected) {
+  const test::ScratchDir dir("tampered");
+  const fs::path security = test::make_security_folder(dir.path() / "sec", dir.path());
+  const fs::path signed_document = security / "identities/frontend/permissions.p7s";
+  std::ifstream in(signed_document);
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  in.close();
+  const std::string granted = "<topic>*/odometry</topic>";
+  const auto at = text.find(granted);
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, granted.size(), "<topic>*/camera/stereo</topic>");
+  std::ofstream(signed_document) << text;
+  EXPECT_THROW(runtime::Participant(runtime::ParticipantOptions{test::exclusive_domain_id(), "",
+                                                                security / "identities/frontend"}),
+               std::runtime_error);
+}
+
 TEST(SecureDds, MissingIdentityFileIsOneClearError) {
   const test::ScratchDir dir("missing_identity");
   const fs::path security = test::make_security_folder(dir.path() / "sec", dir.path());
