@@ -2,13 +2,13 @@
 // a participant on that id is made, released with its last participant), one participant on it.
 #include "runtime/participant.hpp"
 
-#include "runtime/security.hpp"
-
 #include <cstdlib>
 #include <map>
 #include <mutex>
 #include <stdexcept>
 #include <utility>
+
+#include "runtime/security.hpp"
 
 namespace heslam::runtime {
 namespace {

@@ -45,8 +45,9 @@ SecurityFiles security_files(const std::filesystem::path& dir, const std::string
 }
 
 SecurityFiles security_files(const std::filesystem::path& identity_dir) {
-  // DIR/identities/NAME -> DIR
-  const std::filesystem::path root = std::filesystem::absolute(identity_dir).lexically_normal().parent_path().parent_path();
+  std::filesystem::path normal = std::filesystem::absolute(identity_dir).lexically_normal();
+  if (!normal.has_filename()) normal = normal.parent_path();  // "DIR/identities/NAME/"
+  const std::filesystem::path root = normal.parent_path().parent_path();  // DIR/identities/NAME -> DIR
   return SecurityFiles{root / "ca" / "identity_ca.pem", root / "ca" / "permissions_ca.pem",
                        root / "governance.p7s",         identity_dir / "cert.pem",
                        identity_dir / "key.pem",        identity_dir / "permissions.p7s"};

@@ -109,7 +109,9 @@ int run(int argc, char** argv) {
     for (const auto& component : loaded.pipeline.components) std::cout << " " << component.name;
     for (const auto& name : loaded.pipeline.disabled_components) std::cout << " [" << name << " disabled]";
     std::cout << ")";
-    if (!loaded.pipeline.security_dir.empty()) std::cout << ", DDS security from " << loaded.pipeline.security_dir.string();
+    if (!loaded.pipeline.security_dir.empty()) {
+      std::cout << ", DDS security from " << loaded.pipeline.security_dir.string();
+    }
     std::cout << "\n";
     return 0;
   }

@@ -168,7 +168,11 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
                                std::to_string(pipeline.domain_id));
     }
     pipeline.security_dir = std::filesystem::absolute(path).lexically_normal();
-    runtime::check_security_files(runtime::security_files(pipeline.security_dir, kSupervisorIdentity));
+    try {
+      runtime::check_security_files(runtime::security_files(pipeline.security_dir, kSupervisorIdentity));
+    } catch (const std::runtime_error& error) {
+      throw std::runtime_error(source + ": field 'security': " + error.what());
+    }
   });
 
   std::vector<Config> sections;
@@ -266,8 +270,8 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       spec.identity = substitute(where + ".identity", section.get_string("identity", spec.name));
       if (pipeline.security_dir.empty() || disabled) return;
       if (!valid_name(spec.identity)) {
-        throw std::runtime_error(source + ": " + label + ": field 'identity': expected letters, digits, '_' or '-', got '" +
-                                 spec.identity + "'");
+        throw std::runtime_error(source + ": " + label +
+                                 ": field 'identity': expected letters, digits, '_' or '-', got '" + spec.identity + "'");
       }
       const std::filesystem::path identity_dir = pipeline.security_dir / "identities" / spec.identity;
       try {

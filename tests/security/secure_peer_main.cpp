@@ -68,8 +68,8 @@ PeerArgs parse(int argc, char** argv) {
   }
   if (args.mode != "publish-stereo" && args.mode != "publish-correction" && args.mode != "publish-hostile" &&
       args.mode != "read-stereo") {
-    throw std::runtime_error("MODE: expected publish-stereo, publish-correction, publish-hostile or read-stereo, got '" +
-                             args.mode + "'");
+    throw std::runtime_error(
+        "MODE: expected publish-stereo, publish-correction, publish-hostile or read-stereo, got '" + args.mode + "'");
   }
   return args;
 }

@@ -69,8 +69,8 @@ TEST(SecurePipeline, SynthRoomGivesThePlainTrajectoryWhileAnIntruderPublishes) {
   double max_difference_m = 0.0;
   for (std::size_t i = 0; i < plain_poses.size(); ++i) {
     EXPECT_DOUBLE_EQ(secure_poses.stamps_s[i], plain_poses.stamps_s[i]);
-    max_difference_m =
-        std::max(max_difference_m, (secure_poses.poses_wc[i].translation() - plain_poses.poses_wc[i].translation()).norm());
+    const double difference_m = (secure_poses.poses_wc[i].translation() - plain_poses.poses_wc[i].translation()).norm();
+    max_difference_m = std::max(max_difference_m, difference_m);
   }
   std::cout << "[ figures ] secure vs plain: " << secure_poses.size() << " poses, largest position difference "
             << max_difference_m << " m; ATE plain " << test::ate_rmse_m(dataset, dir.path() / "plain.txt")

@@ -20,6 +20,7 @@
 #include "loopback_capture.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/reader.hpp"
+#include "runtime/security.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/topics.hpp"
 #include "runtime/waitset.hpp"
@@ -36,6 +37,7 @@ using namespace std::chrono_literals;
 
 // Bounds of a broken run (secure discovery is a handshake per pair: ~1 s on a loaded machine).
 constexpr auto kDeliveryBound = 60s;
+constexpr double kDeliveryBoundSeconds = 60.0;
 // How long a participant that must see nothing listens while the other publishes at 20 Hz: several
 // times a secure handshake plus first delivery between credentialed peers on this loaded machine.
 constexpr double kSilenceSeconds = 6.0;
@@ -146,6 +148,16 @@ TEST(SecurityInit, GrantsEachTopicOnlyToTheComponentsThatNeedIt) {
   }
 }
 
+TEST(SecurityFiles, IdentityFolderNamesTheFilesOfItsRunFolder) {
+  for (const char* identity : {"/sec/identities/frontend", "/sec/identities/frontend/", "/sec/x/../identities/frontend"}) {
+    const runtime::SecurityFiles files = runtime::security_files(identity);
+    EXPECT_EQ(files.governance, fs::path("/sec/governance.p7s")) << identity;
+    EXPECT_EQ(files.identity_ca, fs::path("/sec/ca/identity_ca.pem")) << identity;
+    EXPECT_EQ(files.permissions_ca, fs::path("/sec/ca/permissions_ca.pem")) << identity;
+    EXPECT_EQ(files.certificate.lexically_normal(), fs::path("/sec/identities/frontend/cert.pem")) << identity;
+  }
+}
+
 // Positive control of the tests below: credentialed replay -> credentialed frontend, and the wire.
 TEST(SecureDds, AuthorisedReaderGetsTheImagesAndTheWireCarriesNoImageBytes) {
   const int domain = test::exclusive_domain_id();
@@ -156,7 +168,7 @@ TEST(SecureDds, AuthorisedReaderGetsTheImagesAndTheWireCarriesNoImageBytes) {
   runtime::Participant participant(
       runtime::ParticipantOptions{domain, "", security / "identities/frontend"});
   auto peer = start_peer(dir.path(), "replay", domain, "publish-stereo", security / "identities/replay", 120);
-  const auto [received, with_pattern] = read_frames(participant, std::chrono::duration<double>(kDeliveryBound).count(), 5);
+  const auto [received, with_pattern] = read_frames(participant, kDeliveryBoundSeconds, 5);
   EXPECT_EQ(received, 5) << "the credentialed replay's frames did not arrive; peer: " << peer->out() << peer->err();
   EXPECT_EQ(with_pattern, received) << "frames arrived with other image bytes";
   std::cout << "[ figures ] secure: " << capture.datagrams() << " datagrams, " << capture.payload_bytes()
@@ -175,7 +187,7 @@ TEST(SecureDds, PlainModeControlTheCaptureSeesTheImageBytes) {
   if (!capture.error().empty()) GTEST_SKIP() << capture.error();
   runtime::Participant participant(runtime::ParticipantOptions{domain, ""});
   auto peer = start_peer(dir.path(), "replay", domain, "publish-stereo", "", 120);
-  const auto [received, with_pattern] = read_frames(participant, std::chrono::duration<double>(kDeliveryBound).count(), 5);
+  const auto [received, with_pattern] = read_frames(participant, kDeliveryBoundSeconds, 5);
   EXPECT_EQ(received, 5) << peer->err();
   EXPECT_EQ(with_pattern, received);
   std::cout << "[ figures ] plain: " << capture.datagrams() << " datagrams, " << capture.datagrams_with_pattern()
