@@ -265,6 +265,17 @@ TEST(SecureDds, WritersOfTopicsNotGrantedAreRefused) {
   }
 }
 
+// init --namespace robot1: the grants hold under robot1 only.
+TEST(SecureDds, NamespacePinnedGrantsHoldInThatNamespaceOnly) {
+  const int domain = test::exclusive_domain_id();
+  const test::ScratchDir dir("pinned_namespace");
+  const fs::path security = test::make_security_folder(dir.path() / "sec", dir.path(), {"--namespace", "robot1"});
+  runtime::Participant replay(runtime::ParticipantOptions{domain, "", security / "identities/replay"});
+  EXPECT_NO_THROW(runtime::Writer<msg::StereoFrame>(replay, runtime::Topics("robot1").stereo()));
+  EXPECT_THROW(runtime::Writer<msg::StereoFrame>(replay, runtime::Topics("robot2").stereo()), std::runtime_error);
+  EXPECT_THROW(runtime::Writer<msg::StereoFrame>(replay, runtime::Topics().stereo()), std::runtime_error);
+}
+
 TEST(SecureDds, SpyIdentityReadsEverythingAndWritesNothing) {
   const int domain = test::exclusive_domain_id();
   const test::ScratchDir dir("spy_grant");
