@@ -8,13 +8,26 @@
 #include <stdexcept>
 #include <utility>
 
+#include "runtime/security.hpp"
+
 namespace heslam::runtime {
 namespace {
 
-std::string chosen_config(const ParticipantOptions& options) {
+std::string base_config(const ParticipantOptions& options) {
   if (!options.dds_config.empty()) return options.dds_config;
   if (const char* uri = std::getenv("CYCLONEDDS_URI"); uri != nullptr && *uri != '\0') return uri;
   return default_dds_config();
+}
+
+std::filesystem::path chosen_identity(const ParticipantOptions& options) {
+  return options.security_identity.empty() ? security_identity_from_env() : options.security_identity;
+}
+
+// Cyclone merges a comma-separated list of XML texts and file:// URIs, later ones adding to earlier.
+std::string chosen_config(const ParticipantOptions& options) {
+  const std::filesystem::path identity = chosen_identity(options);
+  if (identity.empty()) return base_config(options);
+  return base_config(options) + "," + security_config_xml(security_files(identity));
 }
 
 // Domains are process-wide in Cyclone; share one per id between participants.
@@ -46,9 +59,19 @@ Participant::Participant(const ParticipantOptions& options) : domain_id_(options
     throw std::runtime_error("DDS domain " + std::to_string(options.domain_id) + ": expected an id in [0, " +
                              std::to_string(kMaxDomainId) + "]");
   }
+  const std::filesystem::path identity = chosen_identity(options);
+  if (!identity.empty() && options.domain_id > kMaxSecureDomainId) {
+    throw std::runtime_error("DDS domain " + std::to_string(options.domain_id) + ": DDS security supports domains 0-" +
+                             std::to_string(kMaxSecureDomainId) + " (Cyclone's access control rejects higher ids)");
+  }
   domain_ = acquire_domain(options.domain_id, chosen_config(options));
+  const std::string secure_hint =
+      identity.empty() ? std::string()
+                       : " with DDS security identity " + identity.string() +
+                             " (Cyclone's reason is on stderr: e.g. a certificate or permissions document not signed "
+                             "by this folder's CA, or expired)";
   handle_ = check_dds(dds_create_participant(static_cast<dds_domainid_t>(options.domain_id), nullptr, nullptr),
-                      "DDS domain " + std::to_string(options.domain_id) + ": cannot create participant");
+                      "DDS domain " + std::to_string(options.domain_id) + ": cannot create participant" + secure_hint);
 }
 
 Participant::~Participant() {

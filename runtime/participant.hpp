@@ -1,8 +1,10 @@
 // A DDS domain participant on domain N, configured from the project's loopback Cyclone XML
-// (config/cyclonedds.xml, compiled in) unless the caller or $CYCLONEDDS_URI says otherwise.
+// (config/cyclonedds.xml, compiled in) unless the caller or $CYCLONEDDS_URI says otherwise; with a
+// DDS Security identity (runtime/security.hpp) when one is given or $HESLAM_SECURITY names one.
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <string>
 
@@ -18,6 +20,11 @@ struct ParticipantOptions {
   // Cyclone configuration: XML text or "file://path". Empty: $CYCLONEDDS_URI when set, else the
   // project's tuned loopback XML (config/cyclonedds.xml embedded at build time).
   std::string dds_config;
+  // DDS Security identity folder (DIR/identities/NAME from heslam-security init): its <Security>
+  // section is added to the configuration. Empty: $HESLAM_SECURITY; plain DDS when that is unset too.
+  // The domain is created once per id per process, so every participant of a process on one domain
+  // has the identity of the first.
+  std::filesystem::path security_identity = {};
 };
 
 // The XML of config/cyclonedds.xml as built into this binary.

@@ -9,6 +9,7 @@ packages=(
   libopencv-dev opencv-doc libopencv-viz-dev
   xvfb
   zlib1g-dev
+  openssl
   libeigen3-dev libceres-dev
   googletest libgtest-dev libbenchmark-dev
 )

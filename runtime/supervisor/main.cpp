@@ -1,5 +1,6 @@
 // heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]
 //                   [--log-dir DIR] [--log-level LEVEL] [--host NAME | --only a,b] [--no-progress]
+//                   [--security DIR]
 #include <signal.h>
 #include <unistd.h>
 
@@ -21,13 +22,15 @@ using namespace heslam;
 constexpr const char* kUsage =
     "usage: heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]\n"
     "                         [--log-dir DIR] [--log-level debug|info|warn|error] [--host NAME | --only a,b]\n"
-    "                         [--no-progress]\n"
+    "                         [--no-progress] [--security DIR]\n"
     "  --check      validate the pipeline file and every file it references; start nothing\n"
     "  --arg k=v    value for $(arg k) in the pipeline file (overrides its 'args' default)\n"
     "  --log-dir    per-component logs (default: $HESLAM_LOG_DIR or ~/.heslam/log, + /<pipeline>-<time>)\n"
     "  --host NAME  run only the components of the file's hosts.NAME group; the others run on other hosts\n"
     "  --only a,b   run only these components; the others run on other hosts (docs/deployment.md)\n"
-    "  --no-progress  no run progress (default: a line redrawn on a terminal, else a line per 10 %)\n";
+    "  --no-progress  no run progress (default: a line redrawn on a terminal, else a line per 10 %)\n"
+    "  --security   DDS Security: run every process with its identity from DIR (heslam-security init DIR;\n"
+    "               overrides the file's 'security'; docs/security.md)\n";
 
 std::filesystem::path default_log_dir(const std::string& pipeline_name) {
   std::filesystem::path base;
@@ -92,6 +95,8 @@ int run(int argc, char** argv) {
       const std::string text = value_of(argc, argv, i, arg);
       overrides.only = runtime::split_list(text);
       if (overrides.only.empty()) throw std::runtime_error("--only: expected component names, e.g. --only frontend,replay");
+    } else if (arg == "--security") {
+      overrides.security_dir = value_of(argc, argv, i, arg);
     } else if (arg == "--log-dir") {
       log_dir = value_of(argc, argv, i, arg);
     } else if (arg == "--log-level") {
@@ -121,7 +126,11 @@ int run(int argc, char** argv) {
       std::cout << " " << component.name << (component.remote ? " [other host]" : "");
     }
     for (const auto& name : loaded.pipeline.disabled_components) std::cout << " [" << name << " disabled]";
-    std::cout << ")\n";
+    std::cout << ")";
+    if (!loaded.pipeline.security_dir.empty()) {
+      std::cout << ", DDS security from " << loaded.pipeline.security_dir.string();
+    }
+    std::cout << "\n";
     return 0;
   }
   runtime::install_shutdown_handlers();

@@ -14,6 +14,7 @@
 
 #include "runtime/config.hpp"
 #include "runtime/participant.hpp"
+#include "runtime/security.hpp"
 #include "runtime/topics.hpp"
 
 namespace heslam::supervisor {
@@ -271,6 +272,29 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       pipeline.hosts[group] = runtime::split_list(substitute("hosts." + group, names));
     }
   });
+  collect(problems, [&] {
+    std::string text = substitute("security", config->get_string("security", ""));
+    if (overrides.security_dir) text = *overrides.security_dir;
+    if (text.empty()) return;
+    // Like inputs, a folder given on the command line is relative to where the user is.
+    std::filesystem::path path = text;
+    if (path.is_relative()) path = std::filesystem::current_path() / path;
+    if (!std::filesystem::is_directory(path)) {
+      throw std::runtime_error(source + ": field 'security': folder " + text +
+                               " does not exist (make it with heslam-security init " + text + ")");
+    }
+    if (pipeline.domain_id > runtime::kMaxSecureDomainId) {
+      throw std::runtime_error(source + ": field 'security': DDS security supports domains 0-" +
+                               std::to_string(runtime::kMaxSecureDomainId) + ", the pipeline runs on domain " +
+                               std::to_string(pipeline.domain_id));
+    }
+    pipeline.security_dir = std::filesystem::absolute(path).lexically_normal();
+    try {
+      runtime::check_security_files(runtime::security_files(pipeline.security_dir, kSupervisorIdentity));
+    } catch (const std::runtime_error& error) {
+      throw std::runtime_error(source + ": field 'security': " + error.what());
+    }
+  });
 
   std::vector<Config> sections;
   collect(problems, [&] { sections = config->get_sections("components"); });
@@ -372,6 +396,22 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       spec.shutdown_on_exit = section.get_choice("on_exit", "none", {"none", "shutdown"}) == "shutdown";
     });
     collect(problems, [&] { spec.common_args = section.get_bool("common_args", true); });
+    collect(problems, [&] {
+      spec.identity = substitute(where + ".identity", section.get_string("identity", spec.name));
+      if (pipeline.security_dir.empty() || disabled) return;
+      if (!valid_name(spec.identity)) {
+        throw std::runtime_error(source + ": " + label +
+                                 ": field 'identity': expected letters, digits, '_' or '-', got '" + spec.identity + "'");
+      }
+      const std::filesystem::path identity_dir = pipeline.security_dir / "identities" / spec.identity;
+      try {
+        runtime::check_security_files(runtime::security_files(identity_dir));
+      } catch (const std::runtime_error& error) {
+        throw std::runtime_error(source + ": " + label + ": " + error.what());
+      }
+      // Its own identity unless the pipeline gave it one explicitly in env.
+      spec.env.emplace(runtime::kSecurityEnv, identity_dir.string());
+    });
     collect(problems, [&] { section.reject_unknown(); });
     if (disabled) {
       pipeline.disabled_components.push_back(spec.name);

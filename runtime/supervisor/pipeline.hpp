@@ -35,6 +35,9 @@ struct ComponentSpec {
   // Runs on another host (hosts: groups, --host / --only): never started, stopped or restarted here;
   // its readiness is read from the status topic (docs/deployment.md).
   bool remote = false;
+  // DDS Security identity in a secure pipeline (SECURITY_DIR/identities/IDENTITY, given to the process
+  // as $HESLAM_SECURITY); default: the component's name. Unused in a plain pipeline.
+  std::string identity;
 };
 
 struct Pipeline {
@@ -43,6 +46,9 @@ struct Pipeline {
   int domain_id = 0;
   std::string ns = "heslam";
   std::string dds_config;                 // "file://ABS" or "" (built-in loopback XML)
+  // Secure mode: the folder made by heslam-security init (absolute); empty: plain DDS. The
+  // supervisor runs as identity "supervisor", each component as its own (docs/security.md).
+  std::filesystem::path security_dir;
   double stop_timeout_s = 5.0;            // SIGTERM -> SIGKILL
   std::vector<ComponentSpec> components;  // start order
   // Components whose executable is "none" (e.g. --arg loop_closer=none): validated, not started.
@@ -73,7 +79,11 @@ struct PipelineOverrides {
   std::optional<std::string> ns;
   std::string host;               // --host NAME: run the components of the file's hosts.NAME group
   std::vector<std::string> only;  // --only a,b: run only these components (the others run elsewhere)
+  std::optional<std::string> security_dir;  // --security DIR ("" = plain even if the file says otherwise)
 };
+
+// The identity the supervisor itself runs as in a secure pipeline.
+inline constexpr const char* kSupervisorIdentity = "supervisor";
 
 // Loads and validates. Problems are collected, one line each ("FILE: ..."); the pipeline is only
 // usable when problems is empty. bin_dir is searched first for executables, then $PATH.

@@ -73,7 +73,10 @@ struct StatusSeen {
 
 struct Supervisor::Dds {
   Dds(const Pipeline& pipeline)
-      : participant(runtime::ParticipantOptions{pipeline.domain_id, pipeline.dds_config}),
+      : participant(runtime::ParticipantOptions{
+            pipeline.domain_id, pipeline.dds_config,
+            pipeline.security_dir.empty() ? std::filesystem::path()
+                                          : pipeline.security_dir / "identities" / kSupervisorIdentity}),
         topics(pipeline.ns),
         status_reader(participant, topics.status()),
         status(participant, topics, supervisor_status_name(pipeline), stats),

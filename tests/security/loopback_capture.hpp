@@ -1,0 +1,89 @@
+// A capture of the UDP datagrams one DDS domain receives (all of its ports), through a raw socket, as
+// tcpdump would see them: counts datagrams and bytes and those whose payload holds the test pattern.
+// Needs CAP_NET_RAW (root); error() says why not otherwise, for a GTEST_SKIP.
+#pragma once
+
+#include <netinet/in.h>
+#include <netinet/ip.h>
+#include <netinet/udp.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <span>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "secure_pattern.hpp"
+
+namespace heslam::test {
+
+// Cyclone's default port mapping: domain d owns ports 7400 + 250 d ... + 249 (PB 7400, DG 250).
+inline constexpr int kCyclonePortBase = 7400;
+inline constexpr int kCyclonePortsPerDomain = 250;
+
+class LoopbackCapture {
+ public:
+  explicit LoopbackCapture(int domain_id)
+      : first_port_(kCyclonePortBase + kCyclonePortsPerDomain * domain_id),
+        last_port_(first_port_ + kCyclonePortsPerDomain - 1) {
+    fd_ = ::socket(AF_INET, SOCK_RAW | SOCK_CLOEXEC, IPPROTO_UDP);
+    if (fd_ < 0) {
+      error_ = std::string("cannot open a raw UDP socket (needs root / CAP_NET_RAW): ") + std::strerror(errno);
+      return;
+    }
+    const int buffer_bytes = 8 << 20;  // 8 MB: image fragments arrive in bursts
+    ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &buffer_bytes, sizeof buffer_bytes);
+    thread_ = std::thread([this] { loop(); });
+  }
+  ~LoopbackCapture() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+    if (fd_ >= 0) ::close(fd_);
+  }
+  LoopbackCapture(const LoopbackCapture&) = delete;
+  LoopbackCapture& operator=(const LoopbackCapture&) = delete;
+
+  const std::string& error() const { return error_; }
+  long datagrams() const { return datagrams_; }
+  long payload_bytes() const { return payload_bytes_; }
+  long datagrams_with_pattern() const { return with_pattern_; }
+
+ private:
+  void loop() {
+    std::vector<uint8_t> packet(70000);
+    while (!stop_) {
+      pollfd fds{fd_, POLLIN, 0};
+      if (::poll(&fds, 1, 50) <= 0) continue;
+      const ssize_t n = ::recv(fd_, packet.data(), packet.size(), 0);
+      if (n < static_cast<ssize_t>(sizeof(iphdr))) continue;
+      const auto* ip = reinterpret_cast<const iphdr*>(packet.data());
+      const std::size_t ip_bytes = static_cast<std::size_t>(ip->ihl) * 4;
+      if (static_cast<std::size_t>(n) < ip_bytes + sizeof(udphdr)) continue;
+      const auto* udp = reinterpret_cast<const udphdr*>(packet.data() + ip_bytes);
+      const int port = ntohs(udp->dest);
+      if (port < first_port_ || port > last_port_) continue;
+      const std::span<const uint8_t> payload(packet.data() + ip_bytes + sizeof(udphdr),
+                                             static_cast<std::size_t>(n) - ip_bytes - sizeof(udphdr));
+      ++datagrams_;
+      payload_bytes_ += static_cast<long>(payload.size());
+      if (has_pattern(payload)) ++with_pattern_;
+    }
+  }
+
+  int first_port_;
+  int last_port_;
+  int fd_ = -1;
+  std::string error_;
+  std::atomic<bool> stop_{false};
+  std::atomic<long> datagrams_{0};
+  std::atomic<long> payload_bytes_{0};
+  std::atomic<long> with_pattern_{0};
+  std::thread thread_;
+};
+
+}  // namespace heslam::test
