@@ -28,7 +28,7 @@ constexpr double kFunctionTolerance = 1e-6;
 // ... and, as Ceres, at a gradient below this (max norm) or a step below this relative size.
 constexpr double kGradientTolerance = 1e-10;
 constexpr double kParameterTolerance = 1e-8;
-// Damping is multiplied by up to this per rejected step; past kMaxLambda the round gives up.
+// Rejected steps raise the damping; beyond this the step would be negligible, so the round ends.
 constexpr double kMaxLambda = 1e16;
 // LM scales its damping by the diagonal of J^T J clamped to this range (Ceres' min / max_lm_diagonal).
 constexpr double kMinDiagonal = 1e-6;
