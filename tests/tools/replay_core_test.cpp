@@ -75,7 +75,8 @@ std::string option_error(const std::vector<std::string>& args) {
 TEST(ReplayOptions, ParsesEveryOption) {
   const ReplayOptions options =
       parse_replay_options({"/data/V101", "--format", "euroc", "--rate", "0.5", "--loop", "--start-offset", "1.5",
-                            "--duration", "2", "--start-paused", "--strict", "--wait", "0", "--no-progress"});
+                            "--duration", "2", "--start-paused", "--strict", "--wait", "0", "--no-progress",
+                            "--preload", "200"});
   EXPECT_EQ(options.dataset, "/data/V101");
   EXPECT_EQ(options.format, DatasetFormat::kEuroc);
   EXPECT_DOUBLE_EQ(options.rate, 0.5);
@@ -87,6 +88,8 @@ TEST(ReplayOptions, ParsesEveryOption) {
   EXPECT_DOUBLE_EQ(options.wait_subscriber_s, 0.0);
   EXPECT_FALSE(options.progress);
   EXPECT_FALSE(options.lockstep);
+  EXPECT_DOUBLE_EQ(options.preload_mb, 200.0);
+  EXPECT_DOUBLE_EQ(parse_replay_options({"d"}).preload_mb, 0.0);  // off unless asked
   const ReplayOptions lockstep = parse_replay_options({"d", "--lockstep", "--ack-timeout", "3"});
   EXPECT_TRUE(lockstep.lockstep);
   EXPECT_DOUBLE_EQ(lockstep.ack_timeout_s, 3.0);
@@ -96,6 +99,7 @@ TEST(ReplayOptions, EachBadOptionHasItsMessage) {
   EXPECT_EQ(option_error({}), "missing DATASET argument (see --help)");
   EXPECT_EQ(option_error({"d", "--rate", "fast"}), "--rate: expected a number >= 0, got 'fast'");
   EXPECT_EQ(option_error({"d", "--rate"}), "--rate: missing value");
+  EXPECT_EQ(option_error({"d", "--preload", "-1"}), "--preload: expected a number >= 0, got '-1'");
   EXPECT_EQ(option_error({"d", "--format", "bag"}), "--format: unknown format 'bag' (expected euroc, kitti or auto)");
   EXPECT_EQ(option_error({"d", "--lockstep", "--rate", "1"}),
             "--rate and --lockstep exclude each other (lockstep is paced by the consumer)");

@@ -1,5 +1,5 @@
 // heslam-replay and heslam-spy as real processes on loopback DDS, each test on its own domain:
-// lockstep replay delivers every EuRoC pair bit-identical to the PNGs; spy hz measures a --rate 1
+// lockstep replay delivers every EuRoC pair bit-identical to the PNGs (also with --preload); spy hz measures a --rate 1
 // replay (at most 20 Hz; the rate itself is a printed figure); spy list / echo / info show the topics; replay's errors are one clear line.
 #include <unistd.h>
 
@@ -61,14 +61,18 @@ class ReplaySpy : public ::testing::Test {
     return code.value_or(-1);
   }
 
+  std::string replay_lockstep_and_compare(const std::vector<std::string>& extra_args);
+
   fs::path log_dir_;
   int domain_ = test_domain(0);
 };
 
-TEST_F(ReplaySpy, LockstepDeliversEveryPairBitIdenticalToThePngs) {
-  HESLAM_REQUIRE_SHARED_DATA(kClip);
+// Replays the clip in lockstep with `extra_args`, acknowledging each pair, and checks that every
+// pair arrives in order, bit-identical to the PNGs; returns the replay's stderr.
+std::string ReplaySpy::replay_lockstep_and_compare(const std::vector<std::string>& extra_args) {
   const StereoDataset dataset = open_dataset(test::shared_dataset(kClip));
-  ASSERT_EQ(dataset.frames.size(), kClipPairs);
+  EXPECT_EQ(dataset.frames.size(), kClipPairs);
+  if (dataset.frames.size() != kClipPairs) return "";
 
   runtime::Participant participant({.domain_id = domain_, .dds_config = ""});
   const runtime::Topics topics;
@@ -78,9 +82,10 @@ TEST_F(ReplaySpy, LockstepDeliversEveryPairBitIdenticalToThePngs) {
   runtime::WaitSet waitset(participant);
   waitset.attach(frames);
 
-  auto replay = start("replay", {test::shared_dataset(kClip).string(), "--lockstep", "--ack-timeout", "20",
-                                 "--no-progress", "--no-keyboard"},
-                      "replay");
+  std::vector<std::string> args{test::shared_dataset(kClip).string(), "--lockstep", "--ack-timeout", "20",
+                                "--no-progress", "--no-keyboard"};
+  args.insert(args.end(), extra_args.begin(), extra_args.end());
+  auto replay = start("replay", args, "replay");
   std::size_t received = 0;
   std::size_t identical = 0;
   const auto deadline = std::chrono::steady_clock::now() + seconds(90);
@@ -89,7 +94,8 @@ TEST_F(ReplaySpy, LockstepDeliversEveryPairBitIdenticalToThePngs) {
     for (auto& frame : frames.take()) {
       if (!frame.info.valid_data) continue;
       const msg::StereoFrame& sample = *frame.sample;
-      ASSERT_EQ(sample.seq, received) << "frames must arrive in order, none lost";
+      EXPECT_EQ(sample.seq, received) << "frames must arrive in order, none lost";
+      if (sample.seq != received) return replay->err();
       const StereoFrameFiles& files = dataset.frames[received];
       EXPECT_EQ(sample.stamp_ns, files.stamp_ns);
       const StereoImages png = load_stereo_images(files);
@@ -116,13 +122,28 @@ TEST_F(ReplaySpy, LockstepDeliversEveryPairBitIdenticalToThePngs) {
 
   // The calibration is transient-local: this reader existed before the replay, so it has it.
   const auto calibrations = calibration.take();
-  ASSERT_FALSE(calibrations.empty());
+  EXPECT_FALSE(calibrations.empty());
+  if (calibrations.empty()) return replay->err();
   const msg::StereoCalibration& calib = *calibrations.back().sample;
   EXPECT_DOUBLE_EQ(calib.left.fx_px, 458.654);
   EXPECT_EQ(calib.left.width_px, 752u);
   EXPECT_FALSE(calib.input_rectified);
   EXPECT_GT(calib.rectified.fx_px, 0.0);
   EXPECT_NEAR(calib.rectified.baseline_m, 0.110, 0.002);  // EuRoC rig: 11 cm
+  return replay->err();
+}
+
+TEST_F(ReplaySpy, LockstepDeliversEveryPairBitIdenticalToThePngs) {
+  HESLAM_REQUIRE_SHARED_DATA(kClip);
+  replay_lockstep_and_compare({});
+}
+
+// --preload 20: the first 29 pairs (722 KB each) are decoded before frame 0, the other 66 during the
+// run; either way every pair arrives bit-identical.
+TEST_F(ReplaySpy, PreloadDeliversTheSamePairsAndSaysHowManyFit) {
+  HESLAM_REQUIRE_SHARED_DATA(kClip);
+  const std::string err = replay_lockstep_and_compare({"--preload", "20"});
+  EXPECT_NE(err.find("preloaded 29 of 95 pairs (19 MiB)"), std::string::npos) << err;
 }
 
 TEST_F(ReplaySpy, SpyHzMeasuresRealTimeReplayAtMost20Hz) {

@@ -37,6 +37,8 @@ const char* replay_usage() {
          "  --duration S                replay only S seconds\n"
          "  --start-paused              start paused (space on the TTY or SIGUSR2 resumes)\n"
          "  --strict                    stop at the first missing/corrupt image or unpaired row\n"
+         "  --preload MB                decode pairs before frame 0 while they fit in MB megabytes (0 = off,\n"
+         "                              default): no PNG decoding during the run, as from a live camera\n"
          "  --no-progress, --no-keyboard\n"
          "  Pause/resume: space on the TTY, or SIGUSR1 (pause) / SIGUSR2 (resume).\n";
 }
@@ -71,6 +73,8 @@ ReplayOptions parse_replay_options(const std::vector<std::string>& args) {
       options.start_paused = true;
     } else if (arg == "--strict") {
       options.strict = true;
+    } else if (arg == "--preload") {
+      options.preload_mb = parse_double(arg, value(), 0.0);
     } else if (arg == "--no-progress") {
       options.progress = false;
     } else if (arg == "--no-keyboard") {

@@ -25,6 +25,10 @@ struct ReplayOptions {
   double wait_subscriber_s = 2.0;     // --wait: before frame 0, wait this long for a frame reader
   bool progress = true;               // --no-progress: no progress line even on a TTY
   bool keyboard = true;               // --no-keyboard: do not read the TTY (space = pause)
+  // --preload MB: decode the pairs before frame 0 while they fit in MB megabytes (0 = off), so that
+  // PNG decoding does not compete with the consumers for the cores during the run, as with a live
+  // camera whose driver hands over decoded images (benchmarks of the whole system, issue 17).
+  double preload_mb = 0.0;
 };
 
 // args: what parse_common_args left. Throws std::runtime_error naming the option and what was expected.

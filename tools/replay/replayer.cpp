@@ -133,6 +133,7 @@ class Replay {
     announce();
     calibration_writer_.write(calibration_message_.get());
     status_.set_state(runtime::ComponentState::kRunning);
+    preload();
     if (!wait_for_consumer()) return finish();
 
     const std::int64_t first_stamp_ns = dataset_.frames.front().stamp_ns;
@@ -298,10 +299,42 @@ class Replay {
     });
   }
 
+  // --preload: decodes pairs from the first on, before frame 0, while the decoded pairs fit in the
+  // budget (the rest are decoded during the run as usual). Pairs that fail are counted and skipped by
+  // load() as they would be during the run.
+  void preload() {
+    if (!(options_.preload_mb > 0.0)) return;
+    const auto budget_bytes = static_cast<std::size_t>(options_.preload_mb * 1024.0 * 1024.0);
+    const auto start = Clock::now();
+    decoded_.resize(dataset_.frames.size());
+    std::size_t bytes = 0;
+    std::size_t count = 0;
+    for (std::size_t index = 0; index < dataset_.frames.size() && !quit_ && !runtime::shutdown_requested(); ++index) {
+      const std::optional<StereoImages> images = load(index);
+      if (!images) {
+        preload_failed_.resize(index + 1);
+        preload_failed_[index] = true;  // counted and warned once, here
+        continue;
+      }
+      const std::size_t pair_bytes = images->left.total() * images->left.elemSize() +
+                                     images->right.total() * images->right.elemSize();
+      if (bytes + pair_bytes > budget_bytes) {
+        decoded_[index].reset();
+        break;
+      }
+      bytes += pair_bytes;
+      count = index + 1;
+    }
+    decoded_.resize(count);  // pairs after the budget are decoded during the run and not kept
+    log_.info("preloaded ", count, " of ", dataset_.frames.size(), " pairs (", bytes >> 20, " MiB) in ",
+              std::chrono::duration<double>(Clock::now() - start).count(), " s");
+  }
+
   // The pair's images, or nothing when a file is missing or corrupt (counted; fatal with --strict).
   // With --loop, a recording whose decoded pairs fit in kMaxLoopCacheBytes is decoded only once.
   std::optional<StereoImages> load(std::size_t index) {
     if (is_cached(index)) return decoded_[index];
+    if (index < preload_failed_.size() && preload_failed_[index]) return std::nullopt;
     DecodedPair pair = decode_on_helper(index).get();
     if (!pair.images) {
       if (options_.strict) throw std::runtime_error(pair.error + " (--strict)");
@@ -425,7 +458,8 @@ class Replay {
   ProgressLine progress_;
   ReplayPacer pacer_;
   ReplayCounts counts_;
-  std::vector<std::optional<StereoImages>> decoded_;  // --loop cache, empty when not caching
+  std::vector<std::optional<StereoImages>> decoded_;  // --loop / --preload cache, empty when not caching
+  std::vector<bool> preload_failed_;                  // --preload: pairs that could not be decoded
   std::uint64_t seq_ = 0;
   double decode_estimate_ms_ = kInitialDecodeEstimateMs;
   std::int64_t start_ns_ = 0;

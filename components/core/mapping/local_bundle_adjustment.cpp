@@ -2,6 +2,7 @@
 #include "components/core/mapping/local_bundle_adjustment.hpp"
 
 #include <array>
+#include <deque>
 #include <functional>
 #include <cmath>
 #include <map>
@@ -107,6 +108,12 @@ LocalBundleAdjustmentResult local_bundle_adjustment(Map& map, KeyframeId kf_id, 
   }
 
   PoseManifold pose_manifold;
+  // One loss per threshold and the costs in one array, owned here: a problem of thousands of
+  // residuals otherwise makes two heap allocations per residual and frees them again (measured:
+  // allocation was about a tenth of a local BA's time; docs/benchmarks.md, issue 17).
+  ceres::HuberLoss mono_loss(std::sqrt(options.mono_chi2));
+  ceres::HuberLoss stereo_loss(std::sqrt(options.stereo_chi2));
+  std::deque<ReprojectionCost> costs;  // a deque: elements never move, Ceres keeps their addresses
   const auto build_problem = [&](ceres::Problem& problem) {
     for (Observation& obs : observations) {
       obs.block = nullptr;
@@ -115,12 +122,10 @@ LocalBundleAdjustmentResult local_bundle_adjustment(Map& map, KeyframeId kf_id, 
       const std::size_t i = static_cast<std::size_t>(obs.index);
       const Keypoint& kp = observer.features.keypoints[i];
       const double inv_sigma = std::sqrt(observer.features.pyramid.inv_sigma2[static_cast<std::size_t>(kp.octave)]);
-      auto* loss = new ceres::HuberLoss(std::sqrt(obs.chi2_threshold));
-      auto* cost = new ReprojectionCost(camera, kp.u_px, kp.v_px,
-                                        obs.stereo ? observer.features.u_right_px[i] : 0.0, inv_sigma, obs.stereo,
-                                        options.disparity_sigma_ratio);
-      // Ceres takes ownership of cost and loss (the problem's default ownership).
-      obs.block = problem.AddResidualBlock(cost, loss, pose_of(obs.kf_id).data(), point_of(obs.point_id).data());
+      costs.emplace_back(camera, kp.u_px, kp.v_px, obs.stereo ? observer.features.u_right_px[i] : 0.0, inv_sigma,
+                         obs.stereo, options.disparity_sigma_ratio);
+      obs.block = problem.AddResidualBlock(&costs.back(), obs.stereo ? &stereo_loss : &mono_loss,
+                                           pose_of(obs.kf_id).data(), point_of(obs.point_id).data());
     }
     for (PoseBlock& pose : pose_storage) {
       if (problem.HasParameterBlock(pose.data())) problem.SetManifold(pose.data(), &pose_manifold);
@@ -172,6 +177,8 @@ LocalBundleAdjustmentResult local_bundle_adjustment(Map& map, KeyframeId kf_id, 
   }
   ceres::Problem::Options problem_options;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;  // one manifold shared by all poses
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;  // `costs` above
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;  // the two losses above
   problem_options.enable_fast_removal = true;                         // outliers leave between passes
   ceres::Problem problem(problem_options);
   build_problem(problem);

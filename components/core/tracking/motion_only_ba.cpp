@@ -1,89 +1,163 @@
-// Motion-only bundle adjustment with Ceres: pose as angle-axis + translation of T_cw.
+// Motion-only bundle adjustment: a 6-dof Levenberg-Marquardt on the pose alone with analytic Jacobians.
+//
+// The problem is one 6-parameter block against a few hundred fixed points, solved 8 times a frame
+// (2 optimizations x 4 rounds). With Ceres, building a Problem per round, its preprocessing and the
+// autodiff Jacobians through angle-axis rotations cost more than the arithmetic itself; here one pass
+// over the observations accumulates the 6x6 normal equations directly (g2o's way, as in ORB-SLAM2).
 #include "components/core/tracking/motion_only_ba.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
-#include <memory>
 #include <stdexcept>
 
-#include <ceres/ceres.h>
-#include <ceres/rotation.h>
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
 
 namespace heslam {
 namespace {
 
 // Fewer residuals than this and another round cannot classify anything reliably (ORB-SLAM2 stops too).
 constexpr int kMinEdgesToContinue = 10;
+// A point this close to (or behind) the camera plane gives no usable projection in an iteration.
+constexpr double kMinDepthM = 1e-9;
+// Ceres' defaults, kept from the Ceres version of this solver: initial damping 1 / trust radius 1e4,
+// stop when an accepted step lowers the cost by less than this fraction.
+constexpr double kInitialLambda = 1e-4;
+constexpr double kFunctionTolerance = 1e-6;
+// ... and, as Ceres, at a gradient below this (max norm) or a step below this relative size.
+constexpr double kGradientTolerance = 1e-10;
+constexpr double kParameterTolerance = 1e-8;
+// Rejected steps raise the damping; beyond this the step would be negligible, so the round ends.
+constexpr double kMaxLambda = 1e16;
+// LM scales its damping by the diagonal of J^T J clamped to this range (Ceres' min / max_lm_diagonal).
+constexpr double kMinDiagonal = 1e-6;
+constexpr double kMaxDiagonal = 1e32;
 
-template <typename T>
-void transform_point(const T* pose, const Eigen::Vector3d& p_w, T* p_c) {
-  const T p[3] = {T(p_w.x()), T(p_w.y()), T(p_w.z())};
-  ceres::AngleAxisRotatePoint(pose, p, p_c);
-  p_c[0] += pose[3];
-  p_c[1] += pose[4];
-  p_c[2] += pose[5];
-}
+using Matrix6 = Eigen::Matrix<double, 6, 6>;
+using Vector6 = Eigen::Matrix<double, 6, 1>;
 
-// Whitened reprojection error: residuals are pixel errors times 1 / sigma of the keypoint's level.
-struct MonoResidual {
-  MonoResidual(const PinholeStereo& camera, const PoseObservation& obs) : camera_(camera), obs_(obs) {
-    sqrt_info_ = std::sqrt(obs.inv_sigma2);
-  }
-  template <typename T>
-  bool operator()(const T* pose, T* residual) const {
-    T p_c[3];
-    transform_point(pose, obs_.p_w, p_c);
-    const T inv_z = T(1.0) / p_c[2];
-    residual[0] = (T(camera_.fx_px) * p_c[0] * inv_z + T(camera_.cx_px) - T(obs_.u_px)) * T(sqrt_info_);
-    residual[1] = (T(camera_.fy_px) * p_c[1] * inv_z + T(camera_.cy_px) - T(obs_.v_px)) * T(sqrt_info_);
-    return true;
-  }
-  PinholeStereo camera_;
-  PoseObservation obs_;
-  double sqrt_info_ = 1.0;
+// Robust (Huber) cost of one squared whitened error and the IRLS weight of its residual.
+struct Robust {
+  double cost;
+  double weight;
 };
 
-// Stereo: (u, v) as mono plus the disparity error, whitened by its own sigma (a fraction of the
-// keypoint's). Disparity comes from SAD subpixel refinement and is more precise than the keypoint
-// position; a u_right residual would repeat the u error in the third component (u_right = u - d).
-struct StereoResidual {
-  StereoResidual(const PinholeStereo& camera, const PoseObservation& obs, double disparity_sigma_ratio)
-      : camera_(camera), obs_(obs) {
-    sqrt_info_ = std::sqrt(obs.inv_sigma2);
-    disparity_sqrt_info_ = sqrt_info_ / disparity_sigma_ratio;
-  }
-  template <typename T>
-  bool operator()(const T* pose, T* residual) const {
-    T p_c[3];
-    transform_point(pose, obs_.p_w, p_c);
-    const T inv_z = T(1.0) / p_c[2];
-    const T u = T(camera_.fx_px) * p_c[0] * inv_z + T(camera_.cx_px);
-    residual[0] = (u - T(obs_.u_px)) * T(sqrt_info_);
-    residual[1] = (T(camera_.fy_px) * p_c[1] * inv_z + T(camera_.cy_px) - T(obs_.v_px)) * T(sqrt_info_);
-    residual[2] = (T(camera_.bf()) * inv_z - T(obs_.u_px - obs_.u_right_px)) * T(disparity_sqrt_info_);
-    return true;
-  }
-  PinholeStereo camera_;
-  PoseObservation obs_;
-  double sqrt_info_ = 1.0;
-  double disparity_sqrt_info_ = 1.0;
-};
-
-void pose_to_params(const Pose3& T_cw, double* params) {
-  const Eigen::Matrix3d R = T_cw.rotation();
-  ceres::RotationMatrixToAngleAxis(ceres::ColumnMajorAdapter3x3(R.data()), params);
-  params[3] = T_cw.translation().x();
-  params[4] = T_cw.translation().y();
-  params[5] = T_cw.translation().z();
+Robust huber(double squared_error, double delta2, bool robust) {
+  if (!robust || squared_error <= delta2) return {squared_error, 1.0};
+  const double error = std::sqrt(squared_error);
+  const double delta = std::sqrt(delta2);
+  return {2.0 * delta * error - delta2, delta / error};
 }
 
-Pose3 params_to_pose(const double* params) {
-  Eigen::Matrix3d R;
-  ceres::AngleAxisToRotationMatrix(params, ceres::ColumnMajorAdapter3x3(R.data()));
-  Pose3 T = Pose3::Identity();
-  T.linear() = R;
-  T.translation() = Eigen::Vector3d(params[3], params[4], params[5]);
-  return T;
+// Whitened residual (2 or 3 components) and, when asked, its Jacobian with respect to the pose
+// perturbation [w, r]: R' = Exp(w) R, t' = t + r (dp_c/dw = -[R p_w]x, dp_c/dr = I).
+struct Linearization {
+  Eigen::Vector3d residual = Eigen::Vector3d::Zero();
+  Eigen::Matrix<double, 3, 6> jacobian = Eigen::Matrix<double, 3, 6>::Zero();
+  int size = 0;  // 0: not usable at this pose (point at or behind the camera)
+};
+
+Linearization linearize(const PinholeStereo& camera, const PoseObservation& obs, const Eigen::Matrix3d& R,
+                        const Eigen::Vector3d& t, double disparity_sigma_ratio, bool with_jacobian) {
+  Linearization out;
+  const Eigen::Vector3d p_r = R * obs.p_w;
+  const Eigen::Vector3d p_c = p_r + t;
+  if (!(p_c.z() > kMinDepthM)) return out;
+  const double sqrt_info = std::sqrt(obs.inv_sigma2);
+  const double inv_z = 1.0 / p_c.z();
+  const double x = p_c.x() * inv_z;
+  const double y = p_c.y() * inv_z;
+  out.size = obs.stereo() ? 3 : 2;
+  out.residual(0) = (camera.fx_px * x + camera.cx_px - obs.u_px) * sqrt_info;
+  out.residual(1) = (camera.fy_px * y + camera.cy_px - obs.v_px) * sqrt_info;
+  const double disparity_sqrt_info = sqrt_info / disparity_sigma_ratio;
+  if (obs.stereo()) out.residual(2) = (camera.bf() * inv_z - (obs.u_px - obs.u_right_px)) * disparity_sqrt_info;
+  if (!with_jacobian) return out;
+  // d(residual)/d(p_c), whitened.
+  Eigen::Matrix3d d_p = Eigen::Matrix3d::Zero();
+  d_p(0, 0) = camera.fx_px * inv_z * sqrt_info;
+  d_p(0, 2) = -camera.fx_px * x * inv_z * sqrt_info;
+  d_p(1, 1) = camera.fy_px * inv_z * sqrt_info;
+  d_p(1, 2) = -camera.fy_px * y * inv_z * sqrt_info;
+  d_p(2, 2) = -camera.bf() * inv_z * inv_z * disparity_sqrt_info;
+  Eigen::Matrix3d skew;
+  skew << 0.0, -p_r.z(), p_r.y(), p_r.z(), 0.0, -p_r.x(), -p_r.y(), p_r.x(), 0.0;
+  out.jacobian.leftCols<3>() = -d_p * skew;
+  out.jacobian.rightCols<3>() = d_p;
+  if (!obs.stereo()) out.jacobian.row(2).setZero();
+  return out;
+}
+
+struct Active {
+  const PoseObservation* obs;
+  double delta2;  // Huber threshold on the squared whitened error
+};
+
+// Total robust cost at a pose (half the sum, as Ceres reports it).
+double total_cost(const PinholeStereo& camera, const std::vector<Active>& active, const Eigen::Matrix3d& R,
+                  const Eigen::Vector3d& t, double disparity_sigma_ratio, bool robust) {
+  double cost = 0.0;
+  for (const Active& a : active) {
+    const Linearization l = linearize(camera, *a.obs, R, t, disparity_sigma_ratio, false);
+    if (l.size == 0) continue;
+    cost += huber(l.residual.squaredNorm(), a.delta2, robust).cost;
+  }
+  return 0.5 * cost;
+}
+
+// One round: at most `iterations` LM steps on the active observations; updates R and t.
+void solve_round(const PinholeStereo& camera, const std::vector<Active>& active, Eigen::Matrix3d& R,
+                 Eigen::Vector3d& t, double disparity_sigma_ratio, bool robust, int iterations) {
+  double lambda = kInitialLambda;
+  double lambda_factor = 2.0;  // grows while steps are rejected in a row (Ceres' decrease factor)
+  double cost = total_cost(camera, active, R, t, disparity_sigma_ratio, robust);
+  for (int iteration = 0; iteration < iterations; ++iteration) {
+    Matrix6 H = Matrix6::Zero();
+    Vector6 g = Vector6::Zero();
+    for (const Active& a : active) {
+      const Linearization l = linearize(camera, *a.obs, R, t, disparity_sigma_ratio, true);
+      if (l.size == 0) continue;
+      const double w = huber(l.residual.squaredNorm(), a.delta2, robust).weight;
+      H.noalias() += w * l.jacobian.transpose() * l.jacobian;
+      g.noalias() += w * l.jacobian.transpose() * l.residual;
+    }
+    if (g.lpNorm<Eigen::Infinity>() <= kGradientTolerance) return;
+    // Rejected steps raise the damping and retry from the same linearization, as Ceres' LM does.
+    bool accepted = false;
+    while (!accepted && lambda < kMaxLambda) {
+      Matrix6 damped = H;
+      for (int i = 0; i < 6; ++i) damped(i, i) += lambda * std::clamp(H(i, i), kMinDiagonal, kMaxDiagonal);
+      const Vector6 step = damped.ldlt().solve(-g);
+      if (!step.allFinite()) {
+        lambda *= 10.0;
+        continue;
+      }
+      if (step.norm() <= kParameterTolerance * (t.norm() + kParameterTolerance)) return;
+      const double angle = step.head<3>().norm();
+      const Eigen::Vector3d axis = angle > 0.0 ? Eigen::Vector3d(step.head<3>() / angle) : Eigen::Vector3d::UnitX();
+      const Eigen::Matrix3d R_new = Eigen::AngleAxisd(angle, axis).toRotationMatrix() * R;
+      const Eigen::Vector3d t_new = t + step.tail<3>();
+      const double new_cost = total_cost(camera, active, R_new, t_new, disparity_sigma_ratio, robust);
+      // Gain ratio: actual over predicted decrease of the (Gauss-Newton model of the) cost.
+      const double predicted = -(step.dot(g) + 0.5 * step.dot(H * step));
+      const double ratio = predicted > 0.0 ? (cost - new_cost) / predicted : -1.0;
+      if (ratio > 0.0) {
+        accepted = true;
+        R = R_new;
+        t = t_new;
+        const double decrease = cost - new_cost;
+        cost = new_cost;
+        lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * ratio - 1.0, 3));
+        lambda_factor = 2.0;
+        if (decrease <= kFunctionTolerance * (cost + decrease)) return;
+      } else {
+        lambda *= lambda_factor;
+        lambda_factor *= 2.0;
+      }
+    }
+    if (!accepted) return;
+  }
 }
 
 }  // namespace
@@ -111,57 +185,34 @@ MotionOnlyBaResult optimize_pose(const PinholeStereo& camera, const std::vector<
   result.outlier.assign(observations.size(), false);
   if (observations.empty()) return result;
 
-  std::vector<std::unique_ptr<ceres::CostFunction>> costs;
-  costs.reserve(observations.size());
-  for (const PoseObservation& obs : observations) {
-    if (obs.stereo()) {
-      costs.emplace_back(new ceres::AutoDiffCostFunction<StereoResidual, 3, 6>(new StereoResidual(camera, obs, options.disparity_sigma_ratio)));
-    } else {
-      costs.emplace_back(new ceres::AutoDiffCostFunction<MonoResidual, 2, 6>(new MonoResidual(camera, obs)));
-    }
-  }
-  ceres::HuberLoss huber_mono(std::sqrt(options.chi2_mono));
-  ceres::HuberLoss huber_stereo(std::sqrt(options.chi2_stereo));
-
-  double params[6];
-  pose_to_params(T_cw_guess, params);
-
-  ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;  // 6x6 normal equations: cheapest
-  solver_options.max_num_iterations = options.iterations_per_round;
-  solver_options.logging_type = ceres::SILENT;
-  solver_options.minimizer_progress_to_stdout = false;
-  solver_options.num_threads = 1;
-
-  ceres::Problem::Options problem_options;
-  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-
+  Eigen::Matrix3d R = T_cw_guess.rotation();
+  Eigen::Vector3d t = T_cw_guess.translation();
+  std::vector<Active> active;
+  active.reserve(observations.size());
   for (int round = 0; round < options.rounds; ++round) {
     const bool robust = round < options.robust_rounds;
-    ceres::Problem problem(problem_options);
-    problem.AddParameterBlock(params, 6);
-    int edges = 0;
+    active.clear();
     for (std::size_t i = 0; i < observations.size(); ++i) {
       if (result.outlier[i]) continue;
-      ceres::LossFunction* loss = nullptr;
-      if (robust) loss = observations[i].stereo() ? &huber_stereo : &huber_mono;
-      problem.AddResidualBlock(costs[i].get(), loss, params);
-      ++edges;
+      active.push_back({&observations[i], observations[i].stereo() ? options.chi2_stereo : options.chi2_mono});
     }
+    const int edges = static_cast<int>(active.size());
     if (edges < kMinEdgesToContinue && round > 0) break;
     if (edges == 0) break;
-    ceres::Solver::Summary summary;
-    ceres::Solve(solver_options, &problem, &summary);
+    solve_round(camera, active, R, t, options.disparity_sigma_ratio, robust, options.iterations_per_round);
 
     // Reclassify every observation (outliers may come back), as ORB-SLAM2 does.
-    const Pose3 T_cw = params_to_pose(params);
+    Pose3 T_cw = Pose3::Identity();
+    T_cw.linear() = R;
+    T_cw.translation() = t;
     for (std::size_t i = 0; i < observations.size(); ++i) {
       const double threshold = observations[i].stereo() ? options.chi2_stereo : options.chi2_mono;
       result.outlier[i] = !(observation_chi2(camera, observations[i], T_cw, options.disparity_sigma_ratio) <= threshold);
     }
   }
-  result.T_cw = params_to_pose(params);
+  result.T_cw = Pose3::Identity();
+  result.T_cw.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();  // steps leave rounding in R
+  result.T_cw.translation() = t;
   result.inliers = 0;
   for (bool o : result.outlier) result.inliers += o ? 0 : 1;
   return result;

@@ -1,5 +1,5 @@
 // Motion-only bundle adjustment: refines one camera pose against fixed map points (ORB-SLAM2's
-// Optimizer::PoseOptimization), with Ceres.
+// Optimizer::PoseOptimization), with a Levenberg-Marquardt of its own on the 6-dof pose (motion_only_ba.cpp).
 //
 // Observations are monocular (u, v) or stereo (u, v, disparity), weighted by the keypoint's pyramid
 // level; the disparity error has its own sigma, disparity_sigma_ratio x the keypoint's.
