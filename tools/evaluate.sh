@@ -174,7 +174,7 @@ tracked() { grep -o 'tracked [0-9]*/[0-9]*' "$1/supervisor.err" | tail -n 1 | aw
 
 ape_args() {  # $1 kind, $2 dataset, $3 gt -> the ground-truth arguments of heslam-eval
   if [[ $1 == euroc ]]; then
-    echo "--gt $3 --extrinsic $2/mav0/cam0/sensor.yaml"
+    echo "--gt $3"  # the trajectory is of the body frame (the recorder's default), as EuRoC's ground truth
   else
     echo "--gt $3 --gt-times $2/times.txt --gt-format kitti"
   fi

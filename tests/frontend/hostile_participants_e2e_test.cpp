@@ -86,7 +86,7 @@ TEST(HostileParticipants, LockstepRunIsUnchangedAndEveryRefusalIsCounted) {
   ASSERT_EQ(clean_rows.size(), 160u);
 
   auto run = test::start_pipeline("euroc", dataset, dir.path(), "hostile", domain, {"loop_closer=none"});
-  const fs::path map_file = dir.path() / "hostile.txt.map";
+  const fs::path map_file = dir.path() / "hostile.map";  // STEM.map beside hostile.txt
   const auto deadline = std::chrono::steady_clock::now() + test::kPipelineTimeout;
   while (keyframes_in(map_file) < kKeyframesBeforeHostiles && std::chrono::steady_clock::now() < deadline &&
          !run->wait(std::chrono::milliseconds(0))) {
