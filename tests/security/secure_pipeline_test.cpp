@@ -23,14 +23,7 @@ namespace fs = std::filesystem;
 
 constexpr int kFrames = 40;
 
-std::string last_line(const std::string& text) {
-  std::string last;
-  std::istringstream lines(text);
-  for (std::string line; std::getline(lines, line);) {
-    if (!line.empty()) last = line;
-  }
-  return last;
-}
+using test::last_line;
 
 std::unique_ptr<test::ChildProcess> start_intruder(const fs::path& dir, const std::string& mode, int domain) {
   // Longer than any run: killed when the test ends.

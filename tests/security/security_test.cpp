@@ -96,14 +96,7 @@ std::pair<int, int> read_frames(runtime::Participant& participant, double second
   return {received, with_pattern};
 }
 
-std::string last_line(const std::string& text) {
-  std::string last;
-  std::istringstream lines(text);
-  for (std::string line; std::getline(lines, line);) {
-    if (!line.empty()) last = line;
-  }
-  return last;
-}
+using test::last_line;
 
 TEST(SecurityInit, GrantsEachTopicOnlyToTheComponentsThatNeedIt) {
   const test::ScratchDir dir("security_init");

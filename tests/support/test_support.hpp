@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -22,6 +23,16 @@ inline std::filesystem::path source_dir() { return HESLAM_SOURCE_DIR; }
 inline std::filesystem::path shared_dataset(const std::string& name) {
   const auto dir = shared_data() / name;
   return std::filesystem::exists(dir) ? dir : std::filesystem::path{};
+}
+
+// The last non-empty line of a process's output: where heslam's tools say what happened.
+inline std::string last_line(const std::string& text) {
+  std::string last;
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    if (!line.empty()) last = line;
+  }
+  return last;
 }
 
 // A scratch folder per test process, removed when the test passes (kept for a look when it fails).

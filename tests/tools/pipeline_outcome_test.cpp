@@ -37,14 +37,7 @@ constexpr auto kEventBound = std::chrono::seconds(120);
 
 int test_domain() { return test::exclusive_domain_id(); }
 
-std::string last_line(const std::string& text) {
-  std::string last;
-  std::istringstream lines(text);
-  for (std::string line; std::getline(lines, line);) {
-    if (!line.empty()) last = line;
-  }
-  return last;
-}
+using test::last_line;
 
 // Poses in a trajectory file, 0 while it does not exist or is empty.
 std::size_t poses_in(const fs::path& trajectory) {
