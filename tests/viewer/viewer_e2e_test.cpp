@@ -168,7 +168,12 @@ TEST(ViewerEndToEnd, JoinsAMh01RunDrawsEveryKeyframeAndLeavesTheOutputBitIdentic
   ASSERT_FALSE(headless_stats.empty()) << headless_output;
   EXPECT_EQ(headless_stats.at("display"), "headless");
   EXPECT_EQ(headless_stats.at("frustums_drawn"), std::to_string(keyframes)) << headless_output;
-  EXPECT_GT(std::stoi(headless_stats.at("ground_truth_points")), 100) << headless_output;
+  // How many poses a viewer that joins mid-run sees depends on the machine's load; what must hold is
+  // that the ground truth covers the whole stretch of the run it saw (one row per frame, so at least
+  // one per pose it received).
+  const int headless_trajectory = std::stoi(headless_stats.at("trajectory_points"));
+  EXPECT_GT(headless_trajectory, 20) << headless_output;
+  EXPECT_GE(std::stoi(headless_stats.at("ground_truth_points")), headless_trajectory) << headless_output;
   EXPECT_TRUE(fs::exists(dir.path() / "headless/map_final.png"));
 
   // The top view: frustums (the only pure-blue pixels) and points on a white background.

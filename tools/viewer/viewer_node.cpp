@@ -328,6 +328,7 @@ void ViewerNode::draw_loop() {
         {"covisibility_edges", std::to_string(scene.covisibility.size())},
         {"spanning_tree_edges", std::to_string(scene.spanning_tree.size())},
         {"loop_corrections", std::to_string(scene.loop_corrections)},
+        {"trajectory_points", std::to_string(scene.trajectory_w.size())},
         {"ground_truth_points", std::to_string(scene.ground_truth_w.size())},
         {"display", headless_ ? "headless" : (map_window ? "viz" : "highgui")},
     };

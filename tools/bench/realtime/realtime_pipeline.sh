@@ -42,7 +42,8 @@ ate_mm() {
   local trajectory=$1 gt=$dataset/mav0/state_groundtruth_estimate0/data.csv rmse
   [[ $kind == euroc && -f $gt && -s $trajectory ]] || { echo "-"; return; }
   # heslam-eval prints "rmse VALUE UNIT" with the unit it finds readable (m, cm, mm).
-  rmse=$("$bin/heslam-eval" ape --gt "$gt" --extrinsic "$dataset/mav0/cam0/sensor.yaml" --est "$trajectory" 2>/dev/null |
+  # The trajectory's header names its frame (body by default), which heslam-eval matches to the ground truth.
+  rmse=$("$bin/heslam-eval" ape --gt "$gt" --est "$trajectory" 2>/dev/null |
     grep -m1 -E '^ *rmse' | awk '{ s = $3 == "m" ? 1000 : $3 == "cm" ? 10 : $3 == "mm" ? 1 : $3 == "um" ? 0.001 : -1
                                    if (s > 0) printf "%.2f", $2 * s }' || true)
   [[ -n $rmse ]] && echo "$rmse" || echo "-"
