@@ -5,15 +5,20 @@
 // - Validation: an optional check (the component's, e.g. frontend::check) returns what is wrong with
 //   a sample; such a sample is dropped, counted under `rejected_counter` and reported by a
 //   rate-limited warning naming the topic (Logger::warn_throttled).
-// - One writer: the first writer whose sample arrives owns the stream. A sample of another writer
-//   while the owner is still matched is held back, counted (`second_writer_samples`), and the
-//   writer is announced once with one line naming the topic and both GUIDs. If the owner goes away
-//   (deleted, or its process died and the 2 s lease expired), the writer whose held sample is the
-//   oldest takes over and its held samples are handed out in arrival order: that is a restarted
-//   publisher (the supervisor restarts a killed replay / mapper / loop closer well within a lease,
-//   so its first samples arrive while the dead one still counts as matched). A hostile writer next
-//   to a live owner never gets through. Held samples of writers that left too are dropped then.
-//   Not handled: a hostile writer that is alive when the owner dies and was held first wins.
+// - One writer: the first writer whose sample arrives owns the stream. Every sample of another
+//   writer is counted (`second_writer_samples`) and the writer is announced once with one line
+//   naming the topic, both GUIDs and both runs.
+// - Who may take over: only a writer of the owner's run (the run id every Writer carries in its user
+//   data, runtime/run_id.hpp: the supervisor's pid and start time, the same for a component it
+//   restarted). A writer of another run can never own the stream: its samples are dropped on arrival
+//   (`other_run_writers` counts such writers). A sample of a writer of the owner's run while the
+//   owner is still matched is held back; if the owner goes away (deleted, or its process died and
+//   the 2 s lease expired), the one with the oldest held sample takes over and its held samples are
+//   handed out in arrival order (`take_overs`): that is a restarted publisher (the supervisor
+//   restarts a killed replay / mapper / loop closer well within a lease, so its first samples arrive
+//   while the dead one still counts as matched). So an owner that leaves at the end of the run is
+//   never replaced by a stray that is still alive, whatever the order in which processes exit.
+//   Held samples of writers that left too are dropped at a take-over.
 //
 // Invalid-data notices without a dispose (a writer unregistered / left) carry no data and pass.
 #pragma once
@@ -31,6 +36,7 @@
 
 #include "runtime/log.hpp"
 #include "runtime/reader.hpp"
+#include "runtime/run_id.hpp"
 #include "runtime/stats.hpp"
 #include "runtime/writer_identity.hpp"
 
@@ -45,13 +51,19 @@ struct CheckedReaderOptions {
   std::string rejected_counter = "rejected_samples";
   // Whether the topic has one writer (all heslam data topics but KeyframeDone and status).
   bool single_writer = true;
-  // Samples of other writers kept for a possible take-over; the oldest go first when full. A
-  // restarted mapper republishes its whole map at once, so map state readers need many.
+  // Samples of other writers of the owner's run kept for a possible take-over; the oldest go first
+  // when full. A restarted mapper republishes its whole map at once, so map state readers need many.
   std::size_t max_held = 64;
 };
 
 // Counter of samples from a second writer (held back, and dropped unless it takes over).
 inline constexpr const char* kSecondWriterSamples = "second_writer_samples";
+// Counter of writers other than the owner, announced once each.
+inline constexpr const char* kSecondWriters = "second_writers";
+// Counter of second writers of another run than the owner's: never take over, samples dropped.
+inline constexpr const char* kOtherRunWriters = "other_run_writers";
+// Counter of take-overs by a writer of the owner's run (a restarted publisher).
+inline constexpr const char* kTakeOvers = "take_overs";
 
 template <Message T>
 class CheckedReader {
@@ -116,7 +128,8 @@ class CheckedReader {
     return false;
   }
 
-  // True when `received` is the owner's (or carries no data); otherwise it is moved into held_.
+  // True when `received` is the owner's (or carries no data); otherwise it is dropped (a writer of
+  // another run) or moved into held_ (a writer of the owner's run, a possible successor).
   // Only data takes over a stream: a dispose notice is held like data but never makes its writer the
   // owner (a writer deleted at exit disposes its instances, and would otherwise own the topic).
   bool admit(Received<T>& received) {
@@ -124,10 +137,22 @@ class CheckedReader {
     if (!received.info.valid_data && !received.info.disposed) return true;
     const dds_instance_handle_t writer = received.info.publication_handle;
     if (!owner_) {
-      if (received.info.valid_data) owner_ = writer;
+      if (received.info.valid_data) own(writer);
       return true;
     }
     if (writer == *owner_) return true;
+    if (!of_owners_run(writer)) {
+      stats_.count(kSecondWriterSamples);
+      if (announced_.insert(writer).second) {
+        stats_.count(kSecondWriters);
+        stats_.count(kOtherRunWriters);
+        log_.warn("topic '", name(), "': a second writer (", describe_writer(handle(), writer), ", run ",
+                  run_of(writer).value_or("unknown: it left"), ") of another run than the stream's writer (",
+                  describe_writer(handle(), *owner_), ", run ", owner_run_, "): its samples are dropped and counted as ",
+                  kSecondWriterSamples, "; it never takes the topic over (only a restarted publisher of the same run does)");
+      }
+      return false;
+    }
     const bool owner_alive = writer_matched(handle(), *owner_);
     if (!owner_alive && received.info.valid_data) {
       take_over(writer);
@@ -138,16 +163,40 @@ class CheckedReader {
       return true;
     }
     if (owner_alive && received.info.valid_data && announced_.insert(writer).second) {
-      stats_.count("second_writers");
+      stats_.count(kSecondWriters);
       log_.warn("topic '", name(), "': a second writer (", describe_writer(handle(), writer),
-                ") while the run's first writer (", describe_writer(handle(), *owner_),
-                ") is alive: its samples are ignored and counted as ", kSecondWriterSamples,
+                ") of the same run while the run's first writer (", describe_writer(handle(), *owner_),
+                ") is alive: its samples are held back and counted as ", kSecondWriterSamples,
                 " (it takes over only if the first one goes away, as a restarted publisher would)");
     }
     stats_.count(kSecondWriterSamples);
     if (held_.size() >= options_.max_held) held_.pop_front();
     held_.push_back(std::move(received));
     return false;
+  }
+
+  // `writer` owns the stream from its first sample on; its run decides who may succeed it. When it
+  // left before it could be asked, the run is this process's (a reader expects its own run's data).
+  void own(dds_instance_handle_t writer) {
+    owner_ = writer;
+    owner_run_ = run_of(writer).value_or(process_run_id());
+  }
+
+  // The run `writer` advertises ("" for none); nothing once it is no longer matched. Asked once per
+  // writer while it is matched (a writer's QoS does not change).
+  std::optional<std::string> run_of(dds_instance_handle_t writer) {
+    const auto known = runs_.find(writer);
+    if (known != runs_.end()) return known->second;
+    std::optional<std::string> run = writer_run_id(handle(), writer);
+    if (run) runs_.emplace(writer, *run);
+    return run;
+  }
+
+  // Whether `writer` may succeed the owner: it is of the owner's run. A writer that left is not (it
+  // cannot come back; a restart is a new writer).
+  bool of_owners_run(dds_instance_handle_t writer) {
+    const std::optional<std::string> run = run_of(writer);
+    return run && *run == owner_run_;
   }
 
   void take_over_if_owner_left() {
@@ -174,9 +223,11 @@ class CheckedReader {
     }
     held_ = std::move(others);
     announced_.erase(writer);
+    stats_.count(kTakeOvers);
     // Counted above as second_writer_samples; these are used after all.
     log_.info("topic '", name(), "': the first writer left; ", describe_writer(handle(), writer),
-              " takes over (a restarted publisher), its ", released_.size(), " held samples are used");
+              " of the same run (", owner_run_, ") takes over (a restarted publisher), its ", released_.size(),
+              " held samples are used");
   }
 
   Reader<T> reader_;
@@ -185,6 +236,8 @@ class CheckedReader {
   SampleCheck<T> check_;
   CheckedReaderOptions options_;
   std::optional<dds_instance_handle_t> owner_;
+  std::string owner_run_;                              // the run of the owner (and its successors)
+  std::map<dds_instance_handle_t, std::string> runs_;  // writers' runs, asked while they were matched
   std::deque<Received<T>> held_;      // samples of other writers, arrival order
   std::deque<Received<T>> released_;  // held samples of a writer that took over, not yet taken
   std::set<dds_instance_handle_t> announced_;

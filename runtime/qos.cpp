@@ -1,7 +1,10 @@
 // The QoS profile of each role (figures and reasons: shared/notes/cyclonedds-0.10-findings.md).
 #include "runtime/qos.hpp"
 
+#include <string_view>
 #include <utility>
+
+#include "runtime/run_id.hpp"
 
 namespace heslam::runtime {
 namespace {
@@ -169,6 +172,21 @@ Qos& Qos::transient_local(int32_t replay_depth) {
 Qos& Qos::keep_instances_on_writer_exit() {
   dds_qset_writer_data_lifecycle(qos_, false);
   return *this;
+}
+
+Qos& Qos::run_identity(const std::string& run_id) {
+  const std::string user_data = std::string(kRunUserDataPrefix) + run_id;
+  dds_qset_userdata(qos_, user_data.data(), user_data.size());
+  return *this;
+}
+
+bool Qos::has_run_identity() const {
+  void* value = nullptr;
+  size_t size = 0;
+  if (!dds_qget_userdata(qos_, &value, &size) || value == nullptr) return false;
+  const bool is_run = std::string_view(static_cast<const char*>(value), size).starts_with(kRunUserDataPrefix);
+  dds_free(value);
+  return is_run;
 }
 
 }  // namespace heslam::runtime

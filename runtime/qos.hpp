@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <string>
 #include <string_view>
 
 #include <dds/dds.h>
@@ -44,6 +45,10 @@ class Qos {
   // Writers only: deleting the writer (process exit) unregisters its instances WITHOUT disposing
   // them, so readers keep the state (DDS default: dispose, i.e. "deleted").
   Qos& keep_instances_on_writer_exit();
+  // Writers only: the run the writer belongs to, as its user data (kRunUserDataPrefix + run_id;
+  // runtime/run_id.hpp). Writer<T> sets process_run_id() unless the QoS has a run already.
+  Qos& run_identity(const std::string& run_id);
+  bool has_run_identity() const;
 
   const dds_qos_t* get() const { return qos_; }
   QosRole role() const { return role_; }

@@ -27,4 +27,9 @@ std::string supervisor_run_id() {
   return std::to_string(parent) + ":" + field;
 }
 
+const std::string& process_run_id() {
+  static const std::string run_id = supervisor_run_id();
+  return run_id;
+}
+
 }  // namespace heslam::runtime

@@ -12,6 +12,7 @@
 
 #include "runtime/entity.hpp"
 #include "runtime/qos.hpp"
+#include "runtime/run_id.hpp"
 #include "runtime/topic.hpp"
 
 namespace heslam::runtime {
@@ -27,7 +28,9 @@ class Writer {
   // qos: override of the role's profile (rarely needed).
   Writer(const Participant& participant, const TopicSpec<T>& spec, std::optional<Qos> qos = std::nullopt)
       : topic_(participant, spec) {
-    const Qos effective = qos ? *qos : Qos(spec.role);
+    Qos effective = qos ? *qos : Qos(spec.role);
+    // Who may succeed this writer on a single-writer topic: a writer of the same run (a restart).
+    if (!effective.has_run_identity()) effective.run_identity(process_run_id());
     entity_ = Entity(check_dds(dds_create_writer(participant.handle(), topic_.handle(), effective.get(), nullptr),
                                "topic '" + spec.name + "': cannot create writer"));
   }

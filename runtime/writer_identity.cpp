@@ -3,6 +3,9 @@
 
 #include <cstdio>
 #include <memory>
+#include <string_view>
+
+#include "runtime/run_id.hpp"
 
 namespace heslam::runtime {
 namespace {
@@ -34,6 +37,19 @@ std::string describe_writer(dds_entity_t reader, dds_instance_handle_t publicati
     if (i % 4 == 3 && i != 15) text += ':';
   }
   return text;
+}
+
+std::optional<std::string> writer_run_id(dds_entity_t reader, dds_instance_handle_t publication) {
+  const Endpoint endpoint = matched_endpoint(reader, publication);
+  if (!endpoint) return std::nullopt;
+  void* value = nullptr;
+  size_t size = 0;
+  if (endpoint->qos == nullptr || !dds_qget_userdata(endpoint->qos, &value, &size) || value == nullptr) return std::string();
+  const std::string_view user_data(static_cast<const char*>(value), size);
+  std::string run_id;
+  if (user_data.starts_with(kRunUserDataPrefix)) run_id = std::string(user_data.substr(kRunUserDataPrefix.size()));
+  dds_free(value);
+  return run_id;
 }
 
 }  // namespace heslam::runtime

@@ -1,7 +1,9 @@
-// Who wrote a sample: the matched writers of a reader and their GUIDs, for readers of topics that
-// expect one writer (runtime/single_writer_reader.hpp). Plain functions over the Cyclone C API.
+// Who wrote a sample: the matched writers of a reader, their GUIDs and the run they belong to, for
+// readers of topics that expect one writer (runtime/checked_reader.hpp). Plain functions over the
+// Cyclone C API.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include <dds/dds.h>
@@ -15,5 +17,10 @@ bool writer_matched(dds_entity_t reader, dds_instance_handle_t publication);
 // "GUID 0110abcd:...:00000102" of a matched writer (the participant's prefix identifies the process),
 // or "publication handle N" when it is no longer matched.
 std::string describe_writer(dds_entity_t reader, dds_instance_handle_t publication);
+
+// The run id a matched writer advertises in its user data (Writer<T> sets the process's run,
+// runtime/run_id.hpp): "" when it advertises none (a writer that is not heslam's), nothing when it
+// is no longer matched (nothing can be known about it then).
+std::optional<std::string> writer_run_id(dds_entity_t reader, dds_instance_handle_t publication);
 
 }  // namespace heslam::runtime

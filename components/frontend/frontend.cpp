@@ -39,7 +39,8 @@ constexpr std::size_t kHeldFrames = 4;
 constexpr std::size_t kHeldCalibrations = 4;
 // Counters of samples refused from the topics' writers or from other participants (log_rejections).
 constexpr const char* kRejectionCounters[] = {"rejected_calibrations", "refused_calibrations", "rejected_keyframe_states",
-                                             "rejected_points", runtime::kSecondWriterSamples, "second_writers"};
+                                             "rejected_points", runtime::kSecondWriterSamples, runtime::kSecondWriters,
+                                             runtime::kOtherRunWriters};
 
 bool same_camera(const PinholeStereo& a, const PinholeStereo& b) {
   return std::abs(a.fx_px - b.fx_px) < kCameraTolerance && std::abs(a.fy_px - b.fy_px) < kCameraTolerance &&

@@ -433,7 +433,8 @@ void MapperNode::log_summary() {
   log().info(totals.str());
   if (counter(counters, runtime::kSecondWriterSamples) > 0 || counter(counters, "bad_corrections") > 0) {
     log().warn("samples refused: ", counter(counters, runtime::kSecondWriterSamples), " from second writers (",
-               counter(counters, "second_writers"), " writers), ", counter(counters, "bad_corrections"), " bad corrections");
+               counter(counters, runtime::kSecondWriters), " writers, ", counter(counters, runtime::kOtherRunWriters),
+               " of another run), ", counter(counters, "bad_corrections"), " bad corrections");
   }
   if (mapper_) {
     log().info("map: ", mapper_->map().keyframes.size(), " keyframes, ", mapper_->map().points.size(),

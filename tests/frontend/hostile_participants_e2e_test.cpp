@@ -5,7 +5,9 @@
 // LoopCorrection, and valid but wrong state / odometry) plus a second heslam-replay of the same data
 // published mid-run. The trajectory must come out identical (lockstep runs are repeatable) and every
 // refusal must be reported and counted. Before the fix, the stray frame alone truncated the run to a
-// few poses with exit code 0.
+// few poses with exit code 0. The hostile writers are of another run (not started by the run's
+// supervisor), so none of them may take a topic over, even when the run's writers exit before the
+// recorder while they are still alive (which recorded a hostile pose once in three runs before).
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -74,14 +76,21 @@ void expect_contains(const std::string& text, const std::string& part) {
   EXPECT_NE(text.find(part), std::string::npos) << "expected '" << part << "' in the logs";
 }
 
-// DISABLED (2026-11-26): fails intermittently on a real defect, not on the test. When the run ends,
-// the frontend and the mapper exit first; a hostile writer still alive at that moment is taken for a
-// restarted publisher by the recorder's single-writer rule (runtime/checked_reader.hpp), takes the
-// topic over and its held sample is recorded (seen once in three runs: pose 1 replaced by the
-// hostile odometry). Fix: a take-over must not follow an owner that left cleanly (end of run), or
-// held samples must be dropped when the run is ending. Run by hand until then:
-//   build/tests/heslam_hostile_participants_test --gtest_also_run_disabled_tests --gtest_filter='HostileParticipants.*'
-TEST(HostileParticipants, DISABLED_LockstepRunIsUnchangedAndEveryRefusalIsCounted) {
+// The value N of "NAME N" in a component's refusal summary at exit; -1 when absent.
+long summary_count(const std::string& log, const std::string& name) {
+  const std::size_t at = log.rfind(name + " ");
+  if (at == std::string::npos) return -1;
+  return std::stol(log.substr(at + name.size() + 1));
+}
+
+// Every second writer a component met was of another run, and none took a topic over.
+void expect_only_other_runs(const std::string& log, const std::string& component) {
+  EXPECT_GT(summary_count(log, "second_writers"), 0) << component << ":\n" << log;
+  EXPECT_EQ(summary_count(log, "other_run_writers"), summary_count(log, "second_writers")) << component << ":\n" << log;
+  EXPECT_EQ(log.find("takes over"), std::string::npos) << component << ":\n" << log;
+}
+
+TEST(HostileParticipants, LockstepRunIsUnchangedAndEveryRefusalIsCounted) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
   const test::ScratchDir dir("hostile");
@@ -140,6 +149,9 @@ TEST(HostileParticipants, DISABLED_LockstepRunIsUnchangedAndEveryRefusalIsCounte
   expect_contains(recorder_log, "topic 'heslam/odometry': a second writer");
   expect_contains(mapper_log, "topic 'heslam/map/keyframes': a second writer");
   expect_contains(mapper_log, "1 bad corrections");
+  expect_only_other_runs(frontend_log, "frontend");
+  expect_only_other_runs(recorder_log, "recorder");
+  EXPECT_EQ(mapper_log.find("takes over"), std::string::npos) << mapper_log;
 }
 
 // Polls a child's stderr for `part` (bounded: discovery and start-up take a moment).

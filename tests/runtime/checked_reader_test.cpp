@@ -1,7 +1,10 @@
 // CheckedReader (issue 16 section 3): validation with a counted, rate-limited warning, the first
 // writer owning the stream, a second writer's samples held and ignored while the first is alive, and
 // its take-over (held samples first, in order) once the first writer is gone — the restarted-publisher
-// case. Writers sit in their own participants, as other processes would.
+// case — only by a writer of the owner's run: a writer of another run never gets a sample through,
+// whether the owner left cleanly (the end of a run) or crashed (kill -9 of a writer process, then the
+// lease). Writers sit in their own participants, as other processes would; the runs are set
+// explicitly (Qos::run_identity), all of this process's writers being of one run otherwise.
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -16,6 +19,8 @@
 #include "runtime/participant.hpp"
 #include "runtime/topics.hpp"
 #include "runtime/writer.hpp"
+#include "runtime/writer_identity.hpp"
+#include "child_process.hpp"
 #include "test_domain.hpp"
 
 namespace heslam::runtime {
@@ -25,6 +30,11 @@ using namespace std::chrono_literals;
 
 // Discovery + delivery on loopback take milliseconds; this only bounds a broken run.
 constexpr auto kDeadline = 5s;
+// A killed writer stays matched until its lease (2 s, config/cyclonedds.xml) expires: the bound of
+// a take-over after a crash, with room for a loaded machine.
+constexpr auto kCrashDeadline = 15s;
+// A run id other than this process's (another supervisor, a tool started by hand).
+constexpr const char* kOtherRun = "4242:1";
 
 std::optional<std::string> finite_pose(const msg::Odometry& odometry) {
   if (std::isfinite(odometry.T_wc.position_m[0])) return std::nullopt;
@@ -62,16 +72,19 @@ class CheckedReaderTest : public ::testing::Test {
     return seqs;
   }
 
-  // Nothing more arrives within a short while (what a second writer sent is held back).
-  std::vector<std::uint64_t> take_for(CheckedReader<msg::Odometry>& reader, std::chrono::milliseconds period) {
+  // Seqs handed out while taking until the counter `name` reached `value` (or the deadline passed):
+  // what a second writer sent has arrived and was refused or held by then.
+  std::vector<std::uint64_t> take_until_counted(CheckedReader<msg::Odometry>& reader, const std::string& name,
+                                                std::uint64_t value) {
     std::vector<std::uint64_t> seqs;
-    const auto until = std::chrono::steady_clock::now() + period;
-    while (std::chrono::steady_clock::now() < until) {
+    const auto deadline = std::chrono::steady_clock::now() + kDeadline;
+    while (counter(name) < value && std::chrono::steady_clock::now() < deadline) {
       for (auto& received : reader.take()) {
         if (received.info.valid_data) seqs.push_back(received.sample->seq);
       }
       std::this_thread::sleep_for(5ms);
     }
+    EXPECT_EQ(counter(name), value) << name;
     return seqs;
   }
 
@@ -80,7 +93,13 @@ class CheckedReaderTest : public ::testing::Test {
     return counters.count(name) != 0 ? counters.at(name) : 0;
   }
 
-  Topics topics{"checkedreadertest_" + std::to_string(getpid())};
+  // A writer of `run` in `participant`.
+  Writer<msg::Odometry> writer_of_run(const Participant& participant, const std::string& run) {
+    return Writer<msg::Odometry>(participant, topics.odometry(), Qos(QosRole::kOdometry).run_identity(run));
+  }
+
+  std::string topic_namespace = "checkedreadertest_" + std::to_string(getpid());
+  Topics topics{topic_namespace};
   Logger log{"test"};
   Stats stats;
 };
@@ -112,9 +131,11 @@ TEST_F(CheckedReaderTest, ASecondWriterIsIgnoredWhileTheFirstIsAlive) {
   ASSERT_EQ(take_seqs(reader, 1), (std::vector<std::uint64_t>{0}));
   second.write(odometry(1'000'000, 1.0));  // a stray sample with a high seq
   second.write(odometry(1'000'001, 1.0));
+  // Nothing of it comes out (taken until both were counted: no timing involved).
+  EXPECT_TRUE(take_until_counted(reader, kSecondWriterSamples, 2).empty());
   first.write(odometry(1, 1.0));
   // Only the first writer's sample comes out.
-  EXPECT_EQ(take_for(reader, 300ms), (std::vector<std::uint64_t>{1}));
+  EXPECT_EQ(take_seqs(reader, 1), (std::vector<std::uint64_t>{1}));
   EXPECT_EQ(counter(kSecondWriterSamples), 2u);
   EXPECT_EQ(counter("second_writers"), 1u);
 }
@@ -134,7 +155,7 @@ TEST_F(CheckedReaderTest, ASecondWriterTakesOverWhenTheFirstLeaves) {
     // A restarted publisher whose first samples arrive while the dead one still counts as matched.
     second.write(odometry(0, 1.0));
     second.write(odometry(1, 1.0));
-    EXPECT_TRUE(take_for(reader, 200ms).empty());
+    EXPECT_TRUE(take_until_counted(reader, kSecondWriterSamples, 2).empty());  // held
   }  // the first writer is deleted
   second.write(odometry(2, 1.0));
   // Held samples first, in order, then the new ones.
@@ -154,12 +175,101 @@ TEST_F(CheckedReaderTest, HeldSamplesAreReleasedWithoutANewSampleOnceTheFirstWri
     first.write(odometry(0, 1.0));
     ASSERT_EQ(take_seqs(reader, 1), (std::vector<std::uint64_t>{0}));
     second.write(odometry(5, 1.0));
-    EXPECT_TRUE(take_for(reader, 200ms).empty());
+    EXPECT_TRUE(take_until_counted(reader, kSecondWriterSamples, 1).empty());  // held
   }
   // A lockstep publisher sends one frame and waits: nothing new arrives to trigger the take-over.
   const auto deadline = std::chrono::steady_clock::now() + kDeadline;
   while (!reader.has_unread() && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(5ms);
   EXPECT_EQ(take_seqs(reader, 1), (std::vector<std::uint64_t>{5}));
+}
+
+TEST_F(CheckedReaderTest, WritersAdvertiseTheirRun) {
+  Participant reading = make_participant();
+  Participant writing = make_participant();
+  CheckedReader<msg::Odometry> reader(reading, topics.odometry(), log, stats, finite_pose, options());
+  Writer<msg::Odometry> plain(writing, topics.odometry());
+  Writer<msg::Odometry> other = writer_of_run(writing, kOtherRun);
+  ASSERT_TRUE(plain.wait_for_readers(1, kDeadline));
+  ASSERT_TRUE(other.wait_for_readers(1, kDeadline));
+  plain.write(odometry(0, 1.0));
+  ASSERT_EQ(take_seqs(reader, 1), (std::vector<std::uint64_t>{0}));
+  other.write(odometry(1, 1.0));
+  // The other run's sample is dropped on arrival, never handed out.
+  EXPECT_TRUE(take_until_counted(reader, kSecondWriterSamples, 1).empty());
+  EXPECT_EQ(counter(kOtherRunWriters), 1u);
+  EXPECT_EQ(writer_run_id(reader.handle(), reader.owner()), process_run_id());
+  EXPECT_EQ(writer_run_id(reader.handle(), 0), std::nullopt);  // not a matched writer
+}
+
+// The end of a run: the owner is deleted (its process exits cleanly) while a writer of another run is
+// still alive with a sample sent: nothing of it is ever handed out, before or after.
+TEST_F(CheckedReaderTest, AWriterOfAnotherRunNeverTakesOverWhenTheOwnerLeavesCleanly) {
+  Participant reading = make_participant();
+  Participant stray_participant = make_participant();
+  CheckedReader<msg::Odometry> reader(reading, topics.odometry(), log, stats, finite_pose, options());
+  Writer<msg::Odometry> stray = writer_of_run(stray_participant, kOtherRun);
+  {
+    Participant owner_participant = make_participant();
+    Writer<msg::Odometry> owner(owner_participant, topics.odometry());
+    ASSERT_TRUE(owner.wait_for_readers(1, kDeadline));
+    ASSERT_TRUE(stray.wait_for_readers(1, kDeadline));
+    owner.write(odometry(0, 1.0));
+    ASSERT_EQ(take_seqs(reader, 1), (std::vector<std::uint64_t>{0}));
+    stray.write(odometry(1, 1.0));  // valid, but another run's
+    EXPECT_TRUE(take_until_counted(reader, kSecondWriterSamples, 1).empty());
+    owner.write(odometry(1, 2.0));
+    EXPECT_EQ(take_seqs(reader, 1), (std::vector<std::uint64_t>{1}));
+  }  // the owner is deleted: the end of its stream
+  stray.write(odometry(2, 1.0));
+  EXPECT_TRUE(take_until_counted(reader, kSecondWriterSamples, 2).empty());
+  EXPECT_FALSE(reader.has_unread());
+  EXPECT_EQ(counter(kSecondWriterSamples), 2u);
+  EXPECT_EQ(counter(kSecondWriters), 1u);
+  EXPECT_EQ(counter(kOtherRunWriters), 1u);
+  EXPECT_EQ(counter(kTakeOvers), 0u);
+}
+
+// The owner, a writer process, crashes (kill -9: it stays matched until its lease expires). A writer
+// of another run wrote before the restarted publisher of the owner's run did: only the restarted one
+// takes over, its held samples first.
+TEST_F(CheckedReaderTest, OnlyAWriterOfTheOwnersRunTakesOverWhenTheOwnerCrashes) {
+  const std::string owners_run = "31337:7";  // the crashed writer's supervisor, say
+  const test::ScratchDir dir("checked_reader_crash");
+  Participant reading = make_participant();
+  Participant stray_participant = make_participant();
+  Participant restarted_participant = make_participant();
+  CheckedReader<msg::Odometry> reader(reading, topics.odometry(), log, stats, finite_pose, options());
+  test::ChildProcess owner(test::bin_dir() / "heslam-test-odometry-writer",
+                           {std::to_string(test::test_domain_id()), topic_namespace, owners_run, "2"}, dir.path(), "owner");
+  ASSERT_EQ(take_seqs(reader, 2), (std::vector<std::uint64_t>{0, 1})) << owner.err();
+  Writer<msg::Odometry> stray = writer_of_run(stray_participant, kOtherRun);
+  Writer<msg::Odometry> restarted = writer_of_run(restarted_participant, owners_run);
+  ASSERT_TRUE(stray.wait_for_readers(1, kDeadline));
+  ASSERT_TRUE(restarted.wait_for_readers(1, kDeadline));
+  stray.write(odometry(1'000'000, 1.0));  // the oldest sample of a second writer
+  restarted.write(odometry(2, 1.0));      // a restart's first samples while the owner is alive: held
+  restarted.write(odometry(3, 1.0));
+  EXPECT_TRUE(take_until_counted(reader, kSecondWriterSamples, 3).empty());
+  owner.signal(SIGKILL);
+  ASSERT_EQ(owner.wait(kDeadline), 128 + SIGKILL);
+  stray.write(odometry(1'000'001, 1.0));
+  std::vector<std::uint64_t> seqs;
+  const auto deadline = std::chrono::steady_clock::now() + kCrashDeadline;
+  while (seqs.size() < 2 && std::chrono::steady_clock::now() < deadline) {
+    for (auto& received : reader.take()) {
+      if (received.info.valid_data) seqs.push_back(received.sample->seq);
+    }
+    std::this_thread::sleep_for(5ms);
+  }
+  EXPECT_EQ(seqs, (std::vector<std::uint64_t>{2, 3}));
+  restarted.write(odometry(4, 1.0));
+  EXPECT_EQ(take_seqs(reader, 1), (std::vector<std::uint64_t>{4}));
+  stray.write(odometry(1'000'002, 1.0));
+  EXPECT_TRUE(take_until_counted(reader, kSecondWriterSamples, 5).empty());
+  EXPECT_EQ(counter(kTakeOvers), 1u);
+  EXPECT_EQ(counter(kOtherRunWriters), 1u);
+  EXPECT_EQ(counter(kSecondWriters), 2u);        // the stray, and the restart while the owner lived
+  EXPECT_EQ(counter(kSecondWriterSamples), 5u);  // 3 of the stray, 2 held of the restart
 }
 
 }  // namespace

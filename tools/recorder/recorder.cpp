@@ -31,7 +31,8 @@ constexpr std::size_t kHeldOdometry = 1200;
 constexpr std::size_t kHeldKeyframes = 64;
 // Counters of samples refused (invalid, or from a second writer), reported at exit.
 constexpr const char* kRejectionCounters[] = {"rejected_odometry", "rejected_keyframes", "rejected_keyframe_states",
-                                             runtime::kSecondWriterSamples};
+                                             runtime::kSecondWriterSamples, runtime::kSecondWriters,
+                                             runtime::kOtherRunWriters};
 
 const char* state_name(heslam_msg_TrackingState state) {
   switch (state) {
