@@ -184,8 +184,20 @@ TEST(LoopCloserEndToEnd, StartedByHandMidRunPicksUpTheMapFromDds) {
     for (frames = 0; std::getline(journal, line);) ++frames;
   }
   ASSERT_GE(frames, 50) << "the pipeline never tracked 50 frames";
+  // The replay pauses (SIGUSR1) while the loop closer loads its vocabulary and joins, so that on a
+  // loaded machine the run cannot end before it subscribes; then it resumes (SIGUSR2). Joining
+  // mid-run is what is tested, not the race with the end of the clip.
+  const pid_t replay = test::child_pid(supervisor->pid(), "heslam-replay");
+  ASSERT_GT(replay, 0) << "no replay process under the supervisor";
+  kill(replay, SIGUSR1);
   test::ChildProcess loop_closer(test::bin_dir() / "heslam-loop-closer", {"--domain", std::to_string(domain)},
                                  dir.path(), "loop_closer_by_hand");
+  for (const auto joined_by = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+       loop_closer.out().find("detector ") == std::string::npos && loop_closer.err().find("detector ") == std::string::npos &&
+       !loop_closer.wait(std::chrono::milliseconds(0)) && std::chrono::steady_clock::now() < joined_by;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  kill(replay, SIGUSR2);
   ASSERT_EQ(test::finish(*supervisor), 0) << supervisor->out() << supervisor->err();
   std::this_thread::sleep_for(std::chrono::seconds(1));  // the last acknowledgements reach it
   loop_closer.signal(SIGTERM);
