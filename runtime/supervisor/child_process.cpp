@@ -24,6 +24,8 @@ namespace {
 constexpr std::size_t kReadChunk = 64 * 1024;
 // The child's descriptor of the handshake pipe: the first one after stdin, stdout, stderr.
 constexpr int kChildNotifyFd = 3;
+// Tells the trampoline the niceness increment; removed from the environment before exec.
+constexpr const char* kNiceVariable = "HESLAM_CHILD_NICE";
 
 void close_fd(int& fd) {
   if (fd >= 0) close(fd);
@@ -33,7 +35,8 @@ void close_fd(int& fd) {
 }  // namespace
 
 ChildProcess ChildProcess::spawn(const std::filesystem::path& trampoline, const std::filesystem::path& program,
-                                 const std::vector<std::string>& args, const std::map<std::string, std::string>& env) {
+                                 const std::vector<std::string>& args, const std::map<std::string, std::string>& env,
+                                 int nice_increment) {
   int pipe_fds[2];
   if (pipe2(pipe_fds, O_CLOEXEC) != 0) {
     throw std::runtime_error("cannot start " + program.string() + ": pipe: " + std::strerror(errno));
@@ -78,6 +81,8 @@ ChildProcess ChildProcess::spawn(const std::filesystem::path& trampoline, const 
   for (const auto& [key, value] : env) environment[key] = value;
   environment["HESLAM_SUPERVISOR_PID"] = std::to_string(getpid());
   environment[runtime::kNotifyFdVariable] = std::to_string(kChildNotifyFd);
+  environment.erase(kNiceVariable);
+  if (nice_increment > 0) environment[kNiceVariable] = std::to_string(nice_increment);
   std::vector<std::string> env_text;
   for (const auto& [key, value] : environment) env_text.push_back(key + "=" + value);
   std::vector<char*> envp;
@@ -186,6 +191,16 @@ void exec_child(int argc, char** argv) {
   // If the supervisor died before the prctl, nobody will signal us: do not start at all.
   const char* parent = std::getenv("HESLAM_SUPERVISOR_PID");
   if (parent != nullptr && std::to_string(getppid()) != parent) _exit(127);
+  // Before exec: Linux niceness is per thread, and threads inherit their creator's.
+  if (const char* increment = std::getenv(kNiceVariable); increment != nullptr) {
+    errno = 0;
+    if (nice(std::atoi(increment)) == -1 && errno != 0) {
+      const std::string message = std::string("heslam-supervisor: cannot lower the priority of ") + argv[2] + ": " +
+                                  std::strerror(errno) + "\n";
+      [[maybe_unused]] const ssize_t ignored = write(STDERR_FILENO, message.data(), message.size());
+    }
+    unsetenv(kNiceVariable);
+  }
   std::vector<char*> args;
   std::string name = std::filesystem::path(argv[2]).filename().string();
   args.push_back(name.data());

@@ -16,9 +16,11 @@ namespace heslam::supervisor {
 
 class ChildProcess {
  public:
-  // Throws std::runtime_error("cannot start PROGRAM: reason").
+  // Throws std::runtime_error("cannot start PROGRAM: reason"). nice_increment (>= 0) is added to the
+  // niceness by the trampoline before exec, so every thread the program starts inherits it.
   static ChildProcess spawn(const std::filesystem::path& trampoline, const std::filesystem::path& program,
-                            const std::vector<std::string>& args, const std::map<std::string, std::string>& env);
+                            const std::vector<std::string>& args, const std::map<std::string, std::string>& env,
+                            int nice_increment = 0);
 
   ChildProcess() = default;
   ChildProcess(ChildProcess&& other) noexcept;

@@ -22,6 +22,9 @@ namespace {
 
 using runtime::Config;
 
+// The largest niceness Linux has (19) above a supervisor at 0; lowering it (negative) needs privileges.
+constexpr int kMaxNiceIncrement = 19;
+
 // A component name becomes a file name and a DDS key: keep it simple.
 bool valid_name(const std::string& name) {
   if (name.empty()) return false;
@@ -396,6 +399,7 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       spec.shutdown_on_exit = section.get_choice("on_exit", "none", {"none", "shutdown"}) == "shutdown";
     });
     collect(problems, [&] { spec.common_args = section.get_bool("common_args", true); });
+    collect(problems, [&] { spec.nice = section.get_int("nice", 0, 0, kMaxNiceIncrement); });
     collect(problems, [&] {
       spec.identity = substitute(where + ".identity", section.get_string("identity", spec.name));
       if (pipeline.security_dir.empty() || disabled) return;

@@ -32,6 +32,9 @@ struct ComponentSpec {
   bool required = true;                   // its failure fails the run (exit code 1)
   bool shutdown_on_exit = false;          // on_exit: shutdown — its end ends the run
   bool common_args = true;                // pass --domain --namespace --name [--config] --log-level --dds-config
+  // Added to the supervisor's own niceness for this process and all its threads (0-19): a real-time
+  // pipeline puts the mapper and the loop closer below the frontend, whose frames have a deadline.
+  int nice = 0;
   // Runs on another host (hosts: groups, --host / --only): never started, stopped or restarted here;
   // its readiness is read from the status topic (docs/deployment.md).
   bool remote = false;

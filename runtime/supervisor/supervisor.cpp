@@ -127,14 +127,19 @@ void Supervisor::start(Managed& component) {
     component.log_file.open(options_.log_dir / (component.spec.name + ".log"), std::ios::app);
   }
   component.process =
-      ChildProcess::spawn(options_.self_executable, component.spec.executable, child_args(component), component.spec.env);
+      ChildProcess::spawn(options_.self_executable, component.spec.executable, child_args(component), component.spec.env,
+                          component.spec.nice);
   component.phase = Phase::kRunning;
   component.started_at = Clock::now();
   component.ready = component.spec.ready == Readiness::kStarted;
   component.stopping = false;
   component.killed_at_stop = false;
   component.last_line.clear();
-  log_.info("started ", component.spec.name, " (pid ", component.process.pid(), ")");
+  if (component.spec.nice > 0) {
+    log_.info("started ", component.spec.name, " (pid ", component.process.pid(), "), nice +", component.spec.nice);
+  } else {
+    log_.info("started ", component.spec.name, " (pid ", component.process.pid(), ")");
+  }
 }
 
 bool Supervisor::wait_ready(Managed& component) {

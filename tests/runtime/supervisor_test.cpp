@@ -233,6 +233,34 @@ TEST_F(SupervisorTest, KilledSupervisorLeavesNoOrphans) {
   EXPECT_TRUE(all_children_gone(kExitBound)) << output();
 }
 
+// nice: N lowers the component's priority (all its threads: set before exec) by N relative to the
+// supervisor's own; other components keep the supervisor's.
+TEST_F(SupervisorTest, NiceLowersTheComponentsPriority) {
+  start(pipeline("  - name: background\n    executable: /bin/sleep\n    args: [\"600\"]\n"
+                 "    common_args: false\n    ready: started\n    nice: 7\n"
+                 "  - name: foreground\n    executable: /bin/sleep\n    args: [\"600\"]\n"
+                 "    common_args: false\n    ready: started\n"));
+  ASSERT_TRUE(wait_for_output("started foreground", kStartupBound)) << output();
+  EXPECT_TRUE(wait_for_output("started background \\(pid [0-9]+\\), nice \\+7", kStartupBound)) << output();
+  // Field 19 of /proc/PID/stat is the niceness; the process may still be the trampoline for a moment.
+  auto niceness = [](pid_t pid) {
+    std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+    std::string text((std::istreambuf_iterator<char>(stat)), {});
+    std::istringstream fields(text.substr(text.rfind(')') + 2));
+    std::string field;
+    for (int i = 3; i <= 19; ++i) fields >> field;
+    return std::stoi(field);
+  };
+  const int own = niceness(getpid());  // the supervisor inherits the test's niceness
+  ASSERT_EQ(started_pids("background").size(), 1u);
+  ASSERT_EQ(started_pids("foreground").size(), 1u);
+  const pid_t background = started_pids("background")[0];
+  const auto deadline = Clock::now() + kStartupBound;
+  while (niceness(background) != std::min(own + 7, 19) && Clock::now() < deadline) std::this_thread::sleep_for(10ms);
+  EXPECT_EQ(niceness(background), std::min(own + 7, 19));
+  EXPECT_EQ(niceness(started_pids("foreground")[0]), own);
+}
+
 // Killed at stop, a component did not finish its shutdown work (the recorder's final files, the
 // mapper's map): the run is not a success (issue 16).
 TEST_F(SupervisorTest, ComponentIgnoringSigtermIsKilledAndFailsTheRun) {
@@ -442,6 +470,12 @@ TEST_F(SupervisorCheck, ArgOverridesAreSubstitutedAndUndeclaredOnesRejected) {
   std::tie(code, text) = check(pipeline(std::string(kTalker), "args:\n  mode: a\n"), {"--arg", "speed=2"});
   EXPECT_EQ(code, 1);
   EXPECT_EQ(text, "heslam-supervisor: " + file() + ": --arg speed: the pipeline declares no such argument (declared: mode)\n");
+}
+
+TEST_F(SupervisorCheck, RejectsANegativeNice) {
+  const auto [code, text] = check(pipeline(std::string(kTalker) + "    nice: -5\n"));
+  EXPECT_EQ(code, 1);
+  EXPECT_NE(text.find("components[0].nice"), std::string::npos) << text;
 }
 
 TEST_F(SupervisorCheck, RejectsUnknownFieldsAndBadValues) {

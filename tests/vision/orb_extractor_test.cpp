@@ -177,6 +177,38 @@ TEST(OrbExtractor, LowContrastCellsFallBackToTheMinimumThreshold) {
   EXPECT_GT(with_fallback, 1.5 * without_fallback);
 }
 
+// The pyramid is built in place (each level resized straight into its padded buffer, the border
+// reflected around it): every padded level must equal cv::resize of the level above followed by
+// cv::copyMakeBorder(BORDER_REFLECT_101), as before. 60x40 also takes the path for levels smaller
+// than the border.
+TEST(OrbExtractor, PyramidLevelsAndBordersEqualOpenCvs) {
+  HESLAM_REQUIRE_TEXTURE();
+  const cv::Mat texture = texture_752x480();
+  for (const cv::Mat& image : {texture, cv::Mat(texture(cv::Rect(100, 100, 60, 40)).clone())}) {
+    OrbExtractor extractor;
+    for (int frame = 0; frame < 2; ++frame) {  // the second frame reuses the buffers
+      OrbFeatures features;
+      extractor.extract(frame == 0 ? image : cv::Mat(255 - image), features);
+      cv::Mat level = frame == 0 ? image : cv::Mat(255 - image);
+      ASSERT_EQ(features.pyramid.size(), static_cast<std::size_t>(extractor.options().levels));
+      for (std::size_t l = 0; l < features.pyramid.size(); ++l) {
+        if (l > 0) {
+          cv::Mat smaller;
+          cv::resize(level, smaller, features.pyramid[l].size(), 0, 0, cv::INTER_LINEAR);
+          level = smaller;
+        }
+        cv::Mat expected;
+        cv::copyMakeBorder(level, expected, kOrbBorderPx, kOrbBorderPx, kOrbBorderPx, kOrbBorderPx,
+                           cv::BORDER_REFLECT_101);
+        cv::Mat padded = features.pyramid[l];
+        padded.adjustROI(kOrbBorderPx, kOrbBorderPx, kOrbBorderPx, kOrbBorderPx);
+        ASSERT_EQ(padded.size(), expected.size()) << "level " << l;
+        EXPECT_EQ(cv::countNonZero(padded != expected), 0) << "level " << l << " of " << image.size();
+      }
+    }
+  }
+}
+
 TEST(OrbExtractor, Deterministic) {
   HESLAM_REQUIRE_TEXTURE();
   const cv::Mat image = texture_752x480();

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cstddef>
 #include <stdexcept>
 
@@ -71,7 +72,7 @@ using SimdLanes = ScalarLanes;
 // the largest t' for which this polarity's arc test passes with "difference >= t'". Arcs of 9 are
 // built as 8 (= 2 x 4 = 2 x 2 x 2) plus 1.
 template <class L>
-typename L::V arc_strength(const typename L::V (&d)[16]) {
+[[gnu::always_inline]] inline typename L::V arc_strength(const typename L::V (&d)[16]) {
   // Plain arrays: std::array of a vector type drops its alignment attribute.
   typename L::V min2[16];
   typename L::V min4[16];
@@ -100,6 +101,27 @@ void score_lanes(const std::uint8_t* centre, const std::array<std::ptrdiff_t, 16
   const typename L::V strength = L::max(arc_strength<L>(darker), arc_strength<L>(brighter));
   L::store(out, L::subs(strength, L::splat(1)));
 }
+
+// Bit k set when p[k] >= t, for kMaskWidth bytes.
+using MaskBits = std::uint32_t;
+#if defined(__AVX2__)
+constexpr int kMaskWidth = 32;
+MaskBits at_least(const std::uint8_t* p, std::uint8_t t) {
+  const __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
+  const __m256i at_least_t = _mm256_cmpeq_epi8(_mm256_max_epu8(v, _mm256_set1_epi8(static_cast<char>(t))), v);
+  return static_cast<MaskBits>(_mm256_movemask_epi8(at_least_t));
+}
+#elif defined(__SSE2__)
+constexpr int kMaskWidth = 16;
+MaskBits at_least(const std::uint8_t* p, std::uint8_t t) {
+  const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+  const __m128i at_least_t = _mm_cmpeq_epi8(_mm_max_epu8(v, _mm_set1_epi8(static_cast<char>(t))), v);
+  return static_cast<MaskBits>(_mm_movemask_epi8(at_least_t));
+}
+#else
+constexpr int kMaskWidth = 1;
+MaskBits at_least(const std::uint8_t* p, std::uint8_t t) { return *p >= t ? 1u : 0u; }
+#endif
 
 }  // namespace
 
@@ -151,9 +173,8 @@ void FastScoreMap::corners(const cv::Rect& region, int threshold, std::vector<Sc
     // candidate (score >= t >= 1) beats them, so they are simply not compared.
     const bool has_up = y > region.y;
     const bool has_down = y + 1 < region.y + region.height;
-    for (int i = 0; i <= last_x; ++i) {
+    auto consider = [&](int i) {
       const std::uint8_t s = row[i];
-      if (s < t) continue;
       const int lo = i > 0 ? -1 : 0;
       const int hi = i < last_x ? 1 : 0;
       bool is_max = (lo == 0 || s > row[i - 1]) && (hi == 0 || s > row[i + 1]);
@@ -162,6 +183,14 @@ void FastScoreMap::corners(const cv::Rect& region, int threshold, std::vector<Sc
         if (has_down && !(s > row[i + dx + stride])) is_max = false;
       }
       if (is_max) out.push_back({static_cast<float>(region.x + i), static_cast<float>(y), static_cast<float>(s)});
+    };
+    // Most pixels score below the threshold: find the candidates a vector at a time, in order.
+    int i = 0;
+    for (; i + kMaskWidth <= region.width; i += kMaskWidth) {
+      for (MaskBits bits = at_least(row + i, t); bits != 0; bits &= bits - 1) consider(i + std::countr_zero(bits));
+    }
+    for (; i <= last_x; ++i) {
+      if (row[i] >= t) consider(i);
     }
   }
 }

@@ -3,7 +3,10 @@
 #include "components/core/feature/orb_extractor.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <numbers>
 #include <stdexcept>
 
@@ -12,23 +15,58 @@
 #include "components/core/feature/fast_score_map.hpp"
 #include "components/core/feature/orb_pattern.hpp"
 #include "components/core/feature/quadtree_distribution.hpp"
+#include "components/core/feature/rotated_orb_pattern.hpp"
 #include "components/core/image/yaml_option.hpp"
 
 namespace heslam {
 namespace {
 
 // Radius of the intensity-centroid patch (ORB's 31x31 patch).
-constexpr int kOrientationRadiusPx = 15;
+constexpr int kOrientationRadiusPx = IntensityCentroid::kRadiusPx;
 // Keypoints are detected this far from the level edge (ORB-SLAM2: EDGE_THRESHOLD - 3): the
 // orientation patch (radius 15) then lies inside the level image.
 constexpr int kDetectionMarginPx = kOrbBorderPx - 3;
 // FAST's Bresenham circle radius.
 constexpr int kFastRadiusPx = FastScoreMap::kRadiusPx;
-// Descriptor smoothing (ORB-SLAM2): 7x7 Gaussian, sigma 2, against BRIEF's noise sensitivity.
-constexpr int kBlurSizePx = 7;
-constexpr double kBlurSigmaPx = 2.0;
+// How far from its keypoint a rotated pattern point can be read: the smallest integer radius holding
+// every pattern point (a rounded rotated offset cannot leave that circle).
+constexpr int descriptor_reach_px() {
+  int largest_squared = 0;
+  for (const auto& q : kOrbPattern) {
+    largest_squared = std::max({largest_squared, q[0] * q[0] + q[1] * q[1], q[2] * q[2] + q[3] * q[3]});
+  }
+  int reach = 0;
+  while (reach * reach < largest_squared) ++reach;
+  return reach;
+}
+constexpr int kDescriptorReachPx = descriptor_reach_px();
+// Descriptor smoothing (ORB-SLAM2's 7x7 Gaussian, sigma 2, against BRIEF's noise sensitivity) reads
+// this far beyond the patterns: it must stay inside the padded level.
+static_assert(kDescriptorReachPx - kDetectionMarginPx + DescriptorBlur::kRadiusPx <= kOrbBorderPx,
+              "the blurred patch area must lie inside the level's border");
 
+// The orientation patch reads one column beyond its radius (IntensityCentroid's 32-byte rows).
+static_assert(kOrientationRadiusPx + 1 <= kDetectionMarginPx, "the orientation patch must lie inside the level");
 static_assert(kOrbPatternRadiusPx * 1.4143 < kOrbBorderPx, "rotated pattern must stay inside the border");
+
+// Fills a border of `border` pixels around the inner image of `padded` as cv::BORDER_REFLECT_101
+// does (pixel -k = pixel k), in place. The inner image must be larger than the border.
+void reflect_border(cv::Mat& padded, int border) {
+  const int width = padded.cols - 2 * border;
+  const int height = padded.rows - 2 * border;
+  for (int y = border; y < border + height; ++y) {
+    std::uint8_t* row = padded.ptr<std::uint8_t>(y);
+    for (int k = 1; k <= border; ++k) {
+      row[border - k] = row[border + k];
+      row[border + width - 1 + k] = row[border + width - 1 - k];
+    }
+  }
+  for (int k = 1; k <= border; ++k) {
+    const auto bytes = static_cast<std::size_t>(padded.cols);
+    std::memcpy(padded.ptr<std::uint8_t>(border - k), padded.ptr<std::uint8_t>(border + k), bytes);
+    std::memcpy(padded.ptr<std::uint8_t>(border + height - 1 + k), padded.ptr<std::uint8_t>(border + height - 1 - k), bytes);
+  }
+}
 
 }  // namespace
 
@@ -69,15 +107,10 @@ OrbExtractor::OrbExtractor(const OrbOptions& options)
   }
   features_per_level_.back() = std::max(options.features - assigned, 0);
 
-  // Half width of each row of the circular orientation patch.
-  circle_half_width_.resize(kOrientationRadiusPx + 1);
-  for (int v = 0; v <= kOrientationRadiusPx; ++v) {
-    circle_half_width_[v] =
-        static_cast<int>(std::lround(std::sqrt(static_cast<double>(kOrientationRadiusPx * kOrientationRadiusPx - v * v))));
-  }
   padded_.resize(static_cast<std::size_t>(options.levels));
   level_.resize(static_cast<std::size_t>(options.levels));
   blurred_.resize(static_cast<std::size_t>(options.levels));
+  blurs_.resize(static_cast<std::size_t>(options.levels));
   level_keypoints_.resize(static_cast<std::size_t>(options.levels));
   score_maps_.resize(static_cast<std::size_t>(options.levels));
   level_points_.resize(static_cast<std::size_t>(options.levels));
@@ -95,14 +128,28 @@ void OrbExtractor::build_pyramid(const cv::Mat& image) {
   for (int l = 0; l < options_.levels; ++l) {
     const cv::Size size(static_cast<int>(std::lround(image.cols * scales_.inv_scale[l])),
                         static_cast<int>(std::lround(image.rows * scales_.inv_scale[l])));
-    const cv::Mat* source = &image;
-    if (l > 0) {
-      cv::resize(level_[l - 1], resize_scratch_, size, 0, 0, cv::INTER_LINEAR);
-      source = &resize_scratch_;
+    if (size.width <= kOrbBorderPx || size.height <= kOrbBorderPx) {
+      // Too small to reflect in place: cv::copyMakeBorder reflects repeatedly.
+      const cv::Mat* source = &image;
+      if (l > 0) {
+        cv::resize(level_[l - 1], resize_scratch_, size, 0, 0, cv::INTER_LINEAR);
+        source = &resize_scratch_;
+      }
+      cv::copyMakeBorder(*source, padded_[l], kOrbBorderPx, kOrbBorderPx, kOrbBorderPx, kOrbBorderPx,
+                         cv::BORDER_REFLECT_101);
+      level_[l] = padded_[l](cv::Rect(kOrbBorderPx, kOrbBorderPx, size.width, size.height));
+      continue;
     }
-    cv::copyMakeBorder(*source, padded_[l], kOrbBorderPx, kOrbBorderPx, kOrbBorderPx, kOrbBorderPx,
-                       cv::BORDER_REFLECT_101);
+    // The level straight into its padded buffer (reused across frames; create() is a no-op at the
+    // same size), then the border around it: no copy of the level.
+    padded_[l].create(size.height + 2 * kOrbBorderPx, size.width + 2 * kOrbBorderPx, CV_8UC1);
     level_[l] = padded_[l](cv::Rect(kOrbBorderPx, kOrbBorderPx, size.width, size.height));
+    if (l == 0) {
+      image.copyTo(level_[l]);
+    } else {
+      cv::resize(level_[l - 1], level_[l], size, 0, 0, cv::INTER_LINEAR);
+    }
+    reflect_border(padded_[l], kOrbBorderPx);
   }
 }
 
@@ -165,26 +212,7 @@ void OrbExtractor::detect_level(int level) {
   for (int i : kept) {
     const ScoredPoint& p = points[static_cast<std::size_t>(i)];
     const std::uint8_t* center = image.ptr<std::uint8_t>(static_cast<int>(p.y)) + static_cast<int>(p.x);
-    int m10 = 0;
-    int m01 = 0;
-    for (int u = -kOrientationRadiusPx; u <= kOrientationRadiusPx; ++u) m10 += u * center[u];
-    for (int v = 1; v <= kOrientationRadiusPx; ++v) {
-      const int half = circle_half_width_[v];
-      const std::uint8_t* below = center + v * step;
-      const std::uint8_t* above = center - v * step;
-      int sum_v = 0;
-      for (int u = -half; u <= half; ++u) {
-        const int b = below[u];
-        const int a = above[u];
-        sum_v += b - a;
-        m10 += u * (b + a);
-      }
-      m01 += v * sum_v;
-    }
-    float angle = static_cast<float>(std::atan2(static_cast<double>(m01), static_cast<double>(m10)) *
-                                     (180.0 / std::numbers::pi));
-    if (angle < 0.f) angle += 360.f;
-    if (angle >= 360.f) angle -= 360.f;
+    const float angle = centroid_.angle_deg(center, step);
     result.push_back({p.x, p.y, p.response, angle});
   }
 }
@@ -221,8 +249,20 @@ void OrbExtractor::describe_level(int l) {
   if (kps.empty()) return;
   level_out.keypoints.reserve(kps.size());
   level_out.descriptors.reserve(kps.size());
-  cv::GaussianBlur(padded_[l], blurred_[l], cv::Size(kBlurSizePx, kBlurSizePx), kBlurSigmaPx, kBlurSigmaPx,
-                   cv::BORDER_REFLECT_101);
+  // Blur only the keypoints' bounding box grown by the patterns' reach (padded coordinates): the
+  // same pixels there as cv::GaussianBlur of the whole padded level (DescriptorBlur is bit-exact).
+  float min_x = kps.front().x, max_x = min_x, min_y = kps.front().y, max_y = min_y;
+  for (const LevelKeypoint& k : kps) {
+    min_x = std::min(min_x, k.x);
+    max_x = std::max(max_x, k.x);
+    min_y = std::min(min_y, k.y);
+    max_y = std::max(max_y, k.y);
+  }
+  const int x0 = static_cast<int>(min_x) + kOrbBorderPx - kDescriptorReachPx;
+  const int y0 = static_cast<int>(min_y) + kOrbBorderPx - kDescriptorReachPx;
+  const int x1 = static_cast<int>(max_x) + kOrbBorderPx + kDescriptorReachPx + 1;  // exclusive
+  const int y1 = static_cast<int>(max_y) + kOrbBorderPx + kDescriptorReachPx + 1;
+  blurs_[static_cast<std::size_t>(l)].apply(padded_[l], cv::Rect(x0, y0, x1 - x0, y1 - y0), blurred_[l]);
   const cv::Mat& blurred = blurred_[l];
   const auto step = static_cast<int>(blurred.step1());
   const float scale = scales_.scale[static_cast<std::size_t>(l)];
@@ -232,20 +272,14 @@ void OrbExtractor::describe_level(int l) {
     const float radians = k.angle_deg * static_cast<float>(std::numbers::pi / 180.0);
     const float c = std::cos(radians);
     const float s = std::sin(radians);
-    // Pattern points rotated by the keypoint angle (column x c - y s, row x s + y c) as offsets
-    // into the blurred image; cvRound is the inlined SSE conversion (lround is a libm call).
-    std::array<int, 2 * kOrbPattern.size()> offsets;
-    for (std::size_t t = 0; t < kOrbPattern.size(); ++t) {
-      const auto& q = kOrbPattern[t];
-      offsets[2 * t] = cvRound(q[0] * s + q[1] * c) * step + cvRound(q[0] * c - q[1] * s);
-      offsets[2 * t + 1] = cvRound(q[2] * s + q[3] * c) * step + cvRound(q[2] * c - q[3] * s);
-    }
+    RotatedOrbPattern offsets;
+    rotate_orb_pattern(c, s, step, offsets);
     Descriptor d{};
     for (std::size_t byte = 0; byte < d.size(); ++byte) {
       std::uint8_t bits = 0;
       for (std::size_t bit = 0; bit < 8; ++bit) {
         const std::size_t t = byte * 8 + bit;
-        bits |= static_cast<std::uint8_t>((center[offsets[2 * t]] < center[offsets[2 * t + 1]]) << bit);
+        bits |= static_cast<std::uint8_t>((center[offsets.first[t]] < center[offsets.second[t]]) << bit);
       }
       d[byte] = bits;
     }

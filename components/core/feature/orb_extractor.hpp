@@ -8,7 +8,9 @@
 
 #include <opencv2/core.hpp>
 
+#include "components/core/feature/descriptor_blur.hpp"
 #include "components/core/feature/fast_score_map.hpp"
+#include "components/core/feature/intensity_centroid.hpp"
 #include "components/core/feature/features.hpp"
 
 namespace heslam {
@@ -81,11 +83,13 @@ class OrbExtractor {
   OrbOptions options_;
   ScalePyramid scales_;
   std::vector<int> features_per_level_;
-  std::vector<int> circle_half_width_;  // intensity-centroid patch: half row width for each |dv|
+  IntensityCentroid centroid_;  // keypoint orientation
 
   std::vector<cv::Mat> padded_;   // level image with border
   std::vector<cv::Mat> level_;    // ROI of padded_ without border
-  std::vector<cv::Mat> blurred_;  // padded_ blurred for the descriptors
+  // padded_ blurred for the descriptors: only the part the keypoints' patterns read is computed.
+  std::vector<cv::Mat> blurred_;
+  std::vector<DescriptorBlur> blurs_;  // one per level: levels may be described on different threads
   cv::Mat resize_scratch_;
   std::vector<FastScoreMap> score_maps_;                // FAST scores per level (reused buffers)
   std::vector<std::vector<ScoredPoint>> level_points_;  // FAST corners per level before distribution
