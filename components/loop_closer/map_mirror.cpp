@@ -39,6 +39,8 @@ void MapMirror::add_keyframe(const msg::Keyframe& message) {
     keyframe.covisible = std::move(pending->second.covisible);
     keyframe.culled = pending->second.culled;
     pending_states_.erase(pending);
+  } else {
+    awaiting_state_.insert(id);
   }
 }
 
@@ -46,7 +48,10 @@ void MapMirror::apply_keyframe_state(const msg::KeyframeState& message) {
   if (frontend::is_version_marker(message)) return;  // count_markers() takes those
   if (auto problem = frontend::check(message)) throw std::runtime_error(*problem);
   const Pose3 T_wc = frontend::to_pose(message.T_wc);
-  if (frontend::apply_keyframe_state(map_, message)) return;
+  if (frontend::apply_keyframe_state(map_, message)) {
+    awaiting_state_.erase(message.id);
+    return;
+  }
   PendingState& pending = pending_states_[message.id];
   pending.T_wc = T_wc;
   pending.parent = message.parent_id;

@@ -8,6 +8,7 @@
 
 #include <map>
 #include <optional>
+#include <set>
 
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/map/map.hpp"
@@ -32,6 +33,8 @@ class MapMirror {
   void count_markers(const frontend::MirrorVersion& markers);
 
   const Map& map() const { return map_; }
+  // Keyframes received from the frontend that have no state from the mapper yet.
+  std::size_t keyframes_awaiting_state() const { return awaiting_state_.size(); }
   // The rectified camera of the first keyframe (every keyframe of a run shares it).
   const std::optional<PinholeStereo>& camera() const { return camera_; }
 
@@ -47,6 +50,7 @@ class MapMirror {
   frontend::MirrorVersion version_;
   std::optional<PinholeStereo> camera_;
   std::map<KeyframeId, PendingState> pending_states_;  // states of keyframes not received yet
+  std::set<KeyframeId> awaiting_state_;                // keyframes without a mapper state yet
 };
 
 }  // namespace heslam::loop_closer
