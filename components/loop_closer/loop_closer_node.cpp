@@ -196,11 +196,11 @@ void LoopCloserNode::process_keyframe(KeyframeId id) {
   log().info("loop closed: keyframe ", id, " -> ", correction.matched_kf, " with ", result.loop_matches,
              " matches; correcting ", correction.corrected_T_wc.size(), " keyframes, merging ",
              correction.point_merges.size(), " points (map version ", mirror_.map().version, ", ", awaiting_state,
-             " keyframes from the frontend without a mapper state yet)");
+             " keyframes from the frontend left out: not mapped yet)");
   if (!publish_and_wait(std::move(correction)) || !options_.global_bundle_adjustment) return;
 
   log().info("global BA started on map version ", mirror_.map().version, ": ", mirror_.map().keyframes.size(),
-             " keyframes, ", mirror_.keyframes_awaiting_state(), " keyframes from the frontend without a mapper state yet");
+             " keyframes (", mirror_.keyframes_awaiting_state(), " more from the frontend left out: not mapped yet)");
   global_ba_.start(*closing_, mirror_.map(), id);
   if (!options_.real_time) finish_global_ba();
 }

@@ -4,11 +4,17 @@
 //
 // Samples of different topics arrive in any order: a keyframe state or a point observation that
 // refers to a keyframe not yet received is kept and applied when the keyframe arrives.
+//
+// A keyframe enters the copy only with its first state from the mapper. Its Keyframe sample alone
+// holds the frontend's pose at creation, which in real time may predate a loop correction the
+// mapper applied since (the mapper moves such a keyframe with its reference keyframe when it inserts
+// it): a loop correction or global BA computed on a copy holding that pose listed it as the
+// keyframe's new pose and moved it back into the uncorrected frame, with every keyframe later
+// created on it (the 1 m seam of the real-time street, docs/loop_closer.md).
 #pragma once
 
 #include <map>
 #include <optional>
-#include <set>
 
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/map/map.hpp"
@@ -33,7 +39,7 @@ class MapMirror {
   void count_markers(const frontend::MirrorVersion& markers);
 
   const Map& map() const { return map_; }
-  // Keyframes received from the frontend that have no state from the mapper yet.
+  // Keyframes received from the frontend that have no state from the mapper yet (not in map()).
   std::size_t keyframes_awaiting_state() const { return awaiting_state_.size(); }
   // The rectified camera of the first keyframe (every keyframe of a run shares it).
   const std::optional<PinholeStereo>& camera() const { return camera_; }
@@ -46,11 +52,15 @@ class MapMirror {
     bool culled = false;
   };
 
+  // Puts a keyframe into map_ with the point ids of the observations already received.
+  Keyframe& insert(Keyframe keyframe);
+
   Map map_;
   frontend::MirrorVersion version_;
   std::optional<PinholeStereo> camera_;
   std::map<KeyframeId, PendingState> pending_states_;  // states of keyframes not received yet
-  std::set<KeyframeId> awaiting_state_;                // keyframes without a mapper state yet
+  // Keyframe samples without a mapper state yet: kept out of map_ until their first state.
+  std::map<KeyframeId, Keyframe> awaiting_state_;
 };
 
 }  // namespace heslam::loop_closer
