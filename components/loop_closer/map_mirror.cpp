@@ -28,7 +28,11 @@ void MapMirror::add_keyframe(const msg::Keyframe& message) {
   for (std::size_t i = 0; i < incoming.point_ids.size(); ++i) incoming.point_ids[i] = kNoId;
   auto pending = pending_states_.find(id);
   if (pending == pending_states_.end()) {
-    awaiting_state_[id] = std::move(incoming);  // the frontend's pose: not the map's yet
+    if (admission_ == KeyframeAdmission::kWithSample) {
+      insert(std::move(incoming));
+    } else {
+      awaiting_state_[id] = std::move(incoming);  // the frontend's pose: not the map's yet
+    }
     return;
   }
   Keyframe& keyframe = insert(std::move(incoming));

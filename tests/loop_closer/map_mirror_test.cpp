@@ -84,7 +84,7 @@ class MirrorOfARealTimeRun : public ::testing::Test {
   test::SyntheticWorld world_;
   test::FrontendEmulator frontend_;
   LocalMapper mapper_;
-  MapMirror mirror_;
+  MapMirror mirror_{KeyframeAdmission::kWithMapperState};
 };
 
 TEST_F(MirrorOfARealTimeRun, AKeyframeEntersTheCopyWithItsFirstMapperState) {
@@ -93,6 +93,12 @@ TEST_F(MirrorOfARealTimeRun, AKeyframeEntersTheCopyWithItsFirstMapperState) {
   auto second = publish_keyframe(2, truth(2), 1, mapper_.map().version);
   EXPECT_EQ(mirror_.map().keyframes.size(), 1u) << "keyframe 2 has no mapper state yet";
   EXPECT_EQ(mirror_.keyframes_awaiting_state(), 1u);
+  // The viewer's mirror shows it at once, at the frontend's pose.
+  MapMirror viewer_mirror(KeyframeAdmission::kWithSample);
+  const frontend::KeyframeMessage sample(second.first, 2, second.second, world_.camera, 1, mapper_.map().version);
+  viewer_mirror.add_keyframe(sample.get());
+  ASSERT_NE(viewer_mirror.map().keyframe(2), nullptr);
+  EXPECT_EQ(viewer_mirror.map().keyframe(2)->T_wc.matrix(), truth(2).matrix());
   map(std::move(second), 1, mapper_.map().version);
   publish_map();
   ASSERT_NE(mirror_.map().keyframe(2), nullptr);
