@@ -6,11 +6,12 @@
 // refers to a keyframe not yet received is kept and applied when the keyframe arrives.
 //
 // The loop closer's copy (KeyframeAdmission::kWithMapperState) takes a keyframe only with its first
-// state from the mapper. Its Keyframe sample alone holds the frontend's pose at creation, which in real time may predate a loop correction the
-// mapper applied since (the mapper moves such a keyframe with its reference keyframe when it inserts
-// it): a loop correction or global BA computed on a copy holding that pose listed it as the
-// keyframe's new pose and moved it back into the uncorrected frame, with every keyframe later
-// created on it (the 1 m seam of the real-time street, docs/loop_closer.md).
+// state from the mapper. The Keyframe sample alone holds the frontend's pose at creation, which in
+// real time may predate a loop correction the mapper applied since (the mapper moves such a keyframe
+// with its reference keyframe when it inserts it): a global BA computed on a copy holding that pose
+// listed it as the keyframe's new pose, and the mapper moved the keyframe back into the uncorrected
+// frame with every keyframe created on it since (the 1 m seam of the real-time street,
+// docs/loop_closer.md). A keyframe sent again once in the copy (a restarted frontend) is ignored.
 #pragma once
 
 #include <map>
