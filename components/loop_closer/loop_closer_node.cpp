@@ -171,6 +171,7 @@ void LoopCloserNode::process_keyframe(KeyframeId id) {
     closing_ = std::make_unique<LoopClosing>(*mirror_.camera(), std::move(detector_), options_.closing);
     for (const auto& [loop_kf, matched_kf] : restored_loops_) closing_->add_loop_edge(loop_kf, matched_kf);
   }
+  const std::size_t awaiting_state = mirror_.keyframes_awaiting_state();
   LoopClosingResult result = closing_->process_keyframe(mirror_.map(), id);
   stats().record_ms("detection", result.timings.detection_ms);
   if (!result.candidates.keyframes.empty()) {
@@ -194,9 +195,12 @@ void LoopCloserNode::process_keyframe(KeyframeId id) {
   LoopCorrection correction = std::move(*result.correction);
   log().info("loop closed: keyframe ", id, " -> ", correction.matched_kf, " with ", result.loop_matches,
              " matches; correcting ", correction.corrected_T_wc.size(), " keyframes, merging ",
-             correction.point_merges.size(), " points");
+             correction.point_merges.size(), " points (map version ", mirror_.map().version, ", ", awaiting_state,
+             " keyframes from the frontend left out: not mapped yet)");
   if (!publish_and_wait(std::move(correction)) || !options_.global_bundle_adjustment) return;
 
+  log().info("global BA started on map version ", mirror_.map().version, ": ", mirror_.map().keyframes.size(),
+             " keyframes (", mirror_.keyframes_awaiting_state(), " more from the frontend left out: not mapped yet)");
   global_ba_.start(*closing_, mirror_.map(), id);
   if (!options_.real_time) finish_global_ba();
 }

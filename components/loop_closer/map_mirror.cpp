@@ -22,9 +22,29 @@ void MapMirror::add_keyframe(const msg::Keyframe& message) {
   }
   if (!camera_) camera_ = camera;
   // The frontend's point ids at creation: the mapper's point states (observations) are authoritative,
-  // so only ids of points this mirror already holds with that observation survive.
+  // so only ids of points this mirror already holds with that observation survive (insert()).
   const KeyframeId id = message.id;
+  if (map_.keyframe(id) != nullptr) return;  // sent again (a restarted frontend): the copy has it
   for (std::size_t i = 0; i < incoming.point_ids.size(); ++i) incoming.point_ids[i] = kNoId;
+  auto pending = pending_states_.find(id);
+  if (pending == pending_states_.end()) {
+    if (admission_ == KeyframeAdmission::kWithSample) {
+      insert(std::move(incoming));
+    } else {
+      awaiting_state_[id] = std::move(incoming);  // the frontend's pose: not the map's yet
+    }
+    return;
+  }
+  Keyframe& keyframe = insert(std::move(incoming));
+  keyframe.T_wc = pending->second.T_wc;
+  keyframe.parent = pending->second.parent;
+  keyframe.covisible = std::move(pending->second.covisible);
+  keyframe.culled = pending->second.culled;
+  pending_states_.erase(pending);
+}
+
+Keyframe& MapMirror::insert(Keyframe incoming) {
+  const KeyframeId id = incoming.id;
   Keyframe& keyframe = map_.keyframes[id] = std::move(incoming);
   for (const auto& [point_id, point] : map_.points) {
     for (const auto& [kf_id, index] : point.observations) {
@@ -33,22 +53,19 @@ void MapMirror::add_keyframe(const msg::Keyframe& message) {
       }
     }
   }
-  if (auto pending = pending_states_.find(id); pending != pending_states_.end()) {
-    keyframe.T_wc = pending->second.T_wc;
-    keyframe.parent = pending->second.parent;
-    keyframe.covisible = std::move(pending->second.covisible);
-    keyframe.culled = pending->second.culled;
-    pending_states_.erase(pending);
-  }
+  return keyframe;
 }
 
 void MapMirror::apply_keyframe_state(const msg::KeyframeState& message) {
   if (frontend::is_version_marker(message)) return;  // count_markers() takes those
   if (auto problem = frontend::check(message)) throw std::runtime_error(*problem);
-  const Pose3 T_wc = frontend::to_pose(message.T_wc);
+  if (auto awaiting = awaiting_state_.find(message.id); awaiting != awaiting_state_.end()) {
+    insert(std::move(awaiting->second));
+    awaiting_state_.erase(awaiting);
+  }
   if (frontend::apply_keyframe_state(map_, message)) return;
   PendingState& pending = pending_states_[message.id];
-  pending.T_wc = T_wc;
+  pending.T_wc = frontend::to_pose(message.T_wc);
   pending.parent = message.parent_id;
   pending.covisible.clear();
   for (const msg::CovisibleKeyframe& neighbour : runtime::view(message.covisible)) {

@@ -4,6 +4,14 @@
 //
 // Samples of different topics arrive in any order: a keyframe state or a point observation that
 // refers to a keyframe not yet received is kept and applied when the keyframe arrives.
+//
+// The loop closer's copy (KeyframeAdmission::kWithMapperState) takes a keyframe only with its first
+// state from the mapper. The Keyframe sample alone holds the frontend's pose at creation, which in
+// real time may predate a loop correction the mapper applied since (the mapper moves such a keyframe
+// with its reference keyframe when it inserts it): a global BA computed on a copy holding that pose
+// listed it as the keyframe's new pose, and the mapper moved the keyframe back into the uncorrected
+// frame with every keyframe created on it since (the 1 m seam of the real-time street,
+// docs/loop_closer.md). A keyframe sent again once in the copy (a restarted frontend) is ignored.
 #pragma once
 
 #include <map>
@@ -16,8 +24,16 @@
 
 namespace heslam::loop_closer {
 
+// When a keyframe enters map().
+enum class KeyframeAdmission {
+  kWithSample,       // at once, at the frontend's pose until the mapper's state comes (the viewer)
+  kWithMapperState,  // once mapped: every keyframe of the copy is in the mapper's frame (loop closing)
+};
+
 class MapMirror {
  public:
+  explicit MapMirror(KeyframeAdmission admission = KeyframeAdmission::kWithSample) : admission_(admission) {}
+
   // Throws std::runtime_error naming the keyframe when the sample is malformed (frontend::check:
   // lengths, non-finite numbers, bad camera); the mirror is unchanged then.
   void add_keyframe(const msg::Keyframe& message);
@@ -32,6 +48,8 @@ class MapMirror {
   void count_markers(const frontend::MirrorVersion& markers);
 
   const Map& map() const { return map_; }
+  // kWithMapperState: keyframes received from the frontend without a mapper state yet (not in map()).
+  std::size_t keyframes_awaiting_state() const { return awaiting_state_.size(); }
   // The rectified camera of the first keyframe (every keyframe of a run shares it).
   const std::optional<PinholeStereo>& camera() const { return camera_; }
 
@@ -43,10 +61,16 @@ class MapMirror {
     bool culled = false;
   };
 
+  // Puts a keyframe into map_ with the point ids of the observations already received.
+  Keyframe& insert(Keyframe keyframe);
+
+  KeyframeAdmission admission_;
   Map map_;
   frontend::MirrorVersion version_;
   std::optional<PinholeStereo> camera_;
   std::map<KeyframeId, PendingState> pending_states_;  // states of keyframes not received yet
+  // Keyframe samples without a mapper state yet: kept out of map_ until their first state.
+  std::map<KeyframeId, Keyframe> awaiting_state_;
 };
 
 }  // namespace heslam::loop_closer

@@ -1,7 +1,8 @@
 // Keyframes that reach the mapper after a loop correction they predate (real time: the frontend
 // tracked them against its uncorrected mirror) are moved with their reference keyframe, exactly
 // T_new(ref) T_old(ref)^-1, with the points they create; later keyframes are left alone; several
-// corrections compose; the record survives a map file round trip.
+// corrections compose; a global BA after a loop correction moves each keyframe once; the record
+// survives a map file round trip.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -121,6 +122,41 @@ TEST_F(LocalMapperLateKeyframes, TwoCorrectionsComposeAndChainsOfLateKeyframesFo
   expect_moved(mapper, 6, six, B * A);
   // kf 7: tracked after the first correction, before the second.
   const Sent seven = insert(mapper, 7, 4, between);
+  expect_moved(mapper, 7, seven, B);
+}
+
+TEST_F(LocalMapperLateKeyframes, GlobalBaAfterALoopCorrectionMovesEveryKeyframeOnce) {
+  // Real time: a loop correction (A, computed at version v) applied after keyframe 5 was tracked;
+  // a global BA computed at version g, after 5 arrived (moved by A), moving the whole map by B;
+  // keyframe 6 inserted between g and the global BA's application, keyframe 7 in flight across it.
+  LocalMapper mapper(world_.camera, insertion_only());
+  for (KeyframeId k = 1; k <= 4; ++k) insert(mapper, k, k - 1, mapper.map().version);
+  const std::uint64_t before_loop = mapper.map().version;
+  const Pose3 A = motion(0.05, Eigen::Vector3d(0.0, 1.0, 0.2), Eigen::Vector3d(0.3, 0.0, -0.1));
+  mapper.apply_correction(correct_3_and_4(mapper, A, 1));
+  const Sent five = insert(mapper, 5, 4, before_loop);
+  expect_moved(mapper, 5, five, A);
+
+  const Pose3 B = motion(-0.02, Eigen::Vector3d(1.0, 0.1, 0.0), Eigen::Vector3d(-0.05, 0.02, 0.1));
+  LoopCorrection global_ba;
+  global_ba.id = 2;
+  global_ba.kind = CorrectionKind::kGlobalBundleAdjustment;
+  global_ba.map_version = mapper.map().version;
+  std::map<KeyframeId, Pose3> at_g;
+  for (const auto& [id, kf] : mapper.map().keyframes) {
+    at_g[id] = kf.T_wc;
+    global_ba.corrected_T_wc.emplace_back(id, B * kf.T_wc);
+  }
+  const std::uint64_t g = mapper.map().version;
+  const Sent six = insert(mapper, 6, 5, g);    // mapped before the global BA lands: follows its parent
+  mapper.apply_correction(global_ba);
+  const Sent seven = insert(mapper, 7, 5, g);  // tracked before it landed: moved with keyframe 5
+
+  for (KeyframeId k = 1; k <= 5; ++k) {
+    EXPECT_LT(test::max_abs_difference(mapper.map().keyframes.at(k).T_wc, B * at_g.at(k)), 1e-12) << "keyframe " << k;
+  }
+  expect_moved(mapper, 5, five, B * A);  // once by each correction, not twice by either
+  EXPECT_LT(test::max_abs_difference(mapper.map().keyframes.at(6).T_wc, B * six.T_wc), 1e-12);
   expect_moved(mapper, 7, seven, B);
 }
 
