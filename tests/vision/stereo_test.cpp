@@ -29,27 +29,29 @@ double percentile(std::vector<double> v, double p) {
   return v[static_cast<std::size_t>(p * static_cast<double>(v.size() - 1))];
 }
 
-TEST(StereoMatcher, KnownDepthOfASlantedPlaneAround5m) {
-  HESLAM_REQUIRE_TEXTURE();
-  const PinholeStereo camera = euroc_rig();
-  const cv::Mat texture = test::load_texture();
-  ASSERT_GE(texture.cols, camera.width_px + 24);
-  ASSERT_GE(texture.rows, camera.height_px);
+// A real texture seen as a plane whose depth goes from 5.5 m (top row) to 4.5 m (bottom row): for a
+// plane 1/depth is affine in the image row, so disparity(v) = bf (a + b v) exactly, and the right
+// image row v is the left row shifted by disparity(v).
+struct SlantedPlane {
+  static constexpr double kNearM = 4.5;
+  static constexpr double kFarM = 5.5;
+  PinholeStereo camera;
+  cv::Mat left, right;
 
-  // A plane whose depth goes from 5.5 m (top row) to 4.5 m (bottom row): for a plane 1/depth is
-  // affine in the image row, so disparity(v) = bf (a + b v) exactly, and the right image row v is
-  // the left row shifted by disparity(v).
-  const double near_m = 4.5;
-  const double far_m = 5.5;
-  auto inverse_depth = [&](double v) {
-    return 1.0 / far_m + (1.0 / near_m - 1.0 / far_m) * v / (camera.height_px - 1);
-  };
+  double inverse_depth(double v) const {
+    return 1.0 / kFarM + (1.0 / kNearM - 1.0 / kFarM) * v / (camera.height_px - 1);
+  }
+};
+
+SlantedPlane render_slanted_plane(const cv::Mat& texture) {
+  SlantedPlane plane{euroc_rig(), {}, {}};
+  const PinholeStereo& camera = plane.camera;
   cv::Mat map_left_x(camera.height_px, camera.width_px, CV_32F);
   cv::Mat map_right_x(camera.height_px, camera.width_px, CV_32F);
   cv::Mat map_y(camera.height_px, camera.width_px, CV_32F);
   const double origin_x = 12.0;  // texture column of the left image's column 0
   for (int v = 0; v < camera.height_px; ++v) {
-    const double disparity = camera.bf() * inverse_depth(v);
+    const double disparity = camera.bf() * plane.inverse_depth(v);
     for (int u = 0; u < camera.width_px; ++u) {
       map_left_x.at<float>(v, u) = static_cast<float>(origin_x + u);
       // Right pixel u sees the scene point of left pixel u + disparity.
@@ -59,29 +61,82 @@ TEST(StereoMatcher, KnownDepthOfASlantedPlaneAround5m) {
   }
   cv::Mat smooth;
   cv::GaussianBlur(texture, smooth, cv::Size(0, 0), 0.7);  // band-limit before resampling
-  cv::Mat left, right;
-  cv::remap(smooth, left, map_left_x, map_y, cv::INTER_CUBIC, cv::BORDER_REFLECT_101);
-  cv::remap(smooth, right, map_right_x, map_y, cv::INTER_CUBIC, cv::BORDER_REFLECT_101);
+  cv::remap(smooth, plane.left, map_left_x, map_y, cv::INTER_CUBIC, cv::BORDER_REFLECT_101);
+  cv::remap(smooth, plane.right, map_right_x, map_y, cv::INTER_CUBIC, cv::BORDER_REFLECT_101);
+  return plane;
+}
 
-  StereoFeaturePipelineOptions options;
-  StereoFeaturePipeline pipeline(camera, options);
+struct PlaneFigures {
+  double matched = 0.0;           // share of left keypoints with depth
+  double depth_error_median = 1.0;  // relative
+  double depth_error_p90 = 1.0;
+  double disparity_error_median_px = 1e9;
+};
+
+PlaneFigures measure_plane(const SlantedPlane& plane, const cv::Mat& left, const cv::Mat& right,
+                           const StereoFeaturePipelineOptions& options, const char* label) {
+  StereoFeaturePipeline pipeline(plane.camera, options);
   const StereoFeatures features = pipeline.process(left, right);
   std::vector<double> relative_error;
   std::vector<double> disparity_error_px;
   for (std::size_t i = 0; i < features.size(); ++i) {
     if (!features.has_stereo(i)) continue;
-    const double true_depth = 1.0 / inverse_depth(features.keypoints[i].v_px);
+    const double true_depth = 1.0 / plane.inverse_depth(features.keypoints[i].v_px);
     relative_error.push_back(std::abs(features.depth_m[i] - true_depth) / true_depth);
     disparity_error_px.push_back(std::abs(features.keypoints[i].u_px - features.u_right_px[i] -
-                                          camera.bf() / true_depth));
+                                          plane.camera.bf() / true_depth));
   }
-  const double matched = static_cast<double>(relative_error.size()) / static_cast<double>(features.size());
-  std::printf("synthetic plane 4.5-5.5 m: %zu of %zu keypoints matched (%.0f %%), depth error median %.3f %% "
-              "(90th pct %.3f %%), disparity error median %.3f px\n",
-              relative_error.size(), features.size(), 100 * matched, 100 * median(relative_error),
-              100 * percentile(relative_error, 0.9), median(disparity_error_px));
-  EXPECT_GT(matched, 0.5);
-  EXPECT_LT(median(relative_error), 0.01);
+  PlaneFigures f;
+  if (relative_error.empty()) return f;
+  f.matched = static_cast<double>(relative_error.size()) / static_cast<double>(features.size());
+  f.depth_error_median = median(relative_error);
+  f.depth_error_p90 = percentile(relative_error, 0.9);
+  f.disparity_error_median_px = median(disparity_error_px);
+  std::printf("%s: %zu of %zu keypoints matched (%.0f %%), depth error median %.3f %% (90th pct %.3f %%), "
+              "disparity error median %.3f px\n",
+              label, relative_error.size(), features.size(), 100 * f.matched, 100 * f.depth_error_median,
+              100 * f.depth_error_p90, f.disparity_error_median_px);
+  return f;
+}
+
+TEST(StereoMatcher, KnownDepthOfASlantedPlaneAround5m) {
+  HESLAM_REQUIRE_TEXTURE();
+  const cv::Mat texture = test::load_texture();
+  ASSERT_GE(texture.cols, euroc_rig().width_px + 24);
+  ASSERT_GE(texture.rows, euroc_rig().height_px);
+  const SlantedPlane plane = render_slanted_plane(texture);
+  const PlaneFigures f = measure_plane(plane, plane.left, plane.right, {}, "synthetic plane 4.5-5.5 m");
+  EXPECT_GT(f.matched, 0.5);
+  EXPECT_LT(f.depth_error_median, 0.01);
+}
+
+// Stereo.cost zncc and census: the known plane depth with the right image exposed apart (x0.6 + 40
+// grey levels, no clipping) and HE off, so that only the matching cost can absorb the difference;
+// SAD (mean-normalized, the default) is shown for comparison, it removes only the offset.
+TEST(StereoMatcher, GainInvariantCostsFindThePlaneWithTheRightImageExposedApart) {
+  HESLAM_REQUIRE_TEXTURE();
+  const cv::Mat texture = test::load_texture();
+  ASSERT_GE(texture.cols, euroc_rig().width_px + 24);
+  const SlantedPlane plane = render_slanted_plane(texture);
+  cv::Mat right_apart;
+  plane.right.convertTo(right_apart, CV_8U, 0.6, 40.0);
+  StereoFeaturePipelineOptions options;
+  options.he.mode = HeMode::kNone;
+  measure_plane(plane, plane.left, right_apart, options, "sad, right x0.6 + 40");
+  for (const auto cost : {StereoMatcherOptions::MatchCost::kZncc, StereoMatcherOptions::MatchCost::kCensus}) {
+    const bool zncc = cost == StereoMatcherOptions::MatchCost::kZncc;
+    options.stereo.cost = cost;
+    // ZNCC is smooth at its minimum: the parabola fits it (the equiangular fit is for SAD's V).
+    options.stereo.subpixel_fit =
+        zncc ? StereoMatcherOptions::SubpixelFit::kParabola : StereoMatcherOptions::SubpixelFit::kEquiangular;
+    const PlaneFigures equal = measure_plane(plane, plane.left, plane.right, options, zncc ? "zncc, equal" : "census, equal");
+    const PlaneFigures apart =
+        measure_plane(plane, plane.left, right_apart, options, zncc ? "zncc, right x0.6 + 40" : "census, right x0.6 + 40");
+    for (const PlaneFigures* f : {&equal, &apart}) {
+      EXPECT_GT(f->matched, 0.5) << (zncc ? "zncc" : "census");
+      EXPECT_LT(f->depth_error_median, 0.01) << (zncc ? "zncc" : "census");
+    }
+  }
 }
 
 TEST(StereoMatcher, RealEurocPairsMatchOnTheSameRow) {
@@ -177,6 +232,7 @@ TEST(StereoFeaturePipeline, ShippedSettingsGiveTheDocumentedOptions) {
   EXPECT_EQ(euroc.orb.features, 1200);
   EXPECT_EQ(euroc.he.mode, HeMode::kClipped);
   EXPECT_EQ(euroc.stereo.max_distance, 100);
+  EXPECT_EQ(euroc.stereo.cost, StereoMatcherOptions::MatchCost::kSad);
   EXPECT_EQ(euroc.right_features_factor, 2.f);
   for (const char* name : {"KITTI00-02.yaml", "KITTI03.yaml", "KITTI04-12.yaml"}) {
     const StereoFeaturePipelineOptions kitti = StereoFeaturePipelineOptions::load(dir / name);

@@ -1,0 +1,155 @@
+// heslam-bench-stereo-compare: where does stereo lose accuracy when the cameras are exposed apart?
+// Runs the per-frame feature pipeline (HE -> ORB -> stereo) on MH01 pairs twice, exposed equally and
+// with the left x L / right x R, and compares the disparity of the same left keypoint (same octave,
+// within 0.25 px) in both runs: count, bias and spread, split by whether the right patch touches a
+// saturated pixel.
+//
+// usage: heslam-bench-stereo-compare DATASET L,R [--step N] [--he-stereo shared|matched|separate]
+//        [--reference L,R] [--settings FILE]
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "components/core/camera/stereo_calibration.hpp"
+#include "components/core/camera/stereo_rectifier.hpp"
+#include "components/core/feature/stereo_feature_pipeline.hpp"
+#include "tools/bench/bench_util.hpp"
+#include "tools/bench/frontend_offline/euroc_sequence.hpp"
+#include "tools/bench/frontend_offline/photometric_variant.hpp"
+
+namespace {
+
+struct Group {
+  std::vector<double> diff_px;
+  void add(double d) { diff_px.push_back(d); }
+  void print(const char* name) const {
+    if (diff_px.empty()) {
+      std::printf("  %-14s n 0\n", name);
+      return;
+    }
+    std::vector<double> v = diff_px;
+    std::sort(v.begin(), v.end());
+    double sum = 0, sum2 = 0;
+    int over_half = 0, over_one = 0;
+    for (double d : v) {
+      sum += d;
+      sum2 += d * d;
+      over_half += std::abs(d) > 0.5 ? 1 : 0;
+      over_one += std::abs(d) > 1.0 ? 1 : 0;
+    }
+    std::vector<double> a;
+    for (double d : v) a.push_back(std::abs(d));
+    std::sort(a.begin(), a.end());
+    const double n = static_cast<double>(v.size());
+    std::printf("  %-14s n %6zu  mean %+.3f  median %+.3f  median|d| %.3f  p90|d| %.3f  rms %.3f  >0.5px %.1f%%  >1px %.1f%%\n",
+                name, v.size(), sum / n, v[v.size() / 2], a[a.size() / 2], a[a.size() * 9 / 10], std::sqrt(sum2 / n),
+                100.0 * over_half / n, 100.0 * over_one / n);
+  }
+};
+
+heslam::bench::StereoGain parse(const std::string& s) { return heslam::bench::parse_stereo_gain(s); }
+
+int run(int argc, char** argv) {
+  if (argc < 3) throw std::runtime_error("usage: heslam-bench-stereo-compare DATASET L,R [--step N] [--he-stereo M] [--reference L,R]");
+  const auto sequence = heslam::bench::load_euroc_sequence(argv[1]);
+  const auto gain = parse(argv[2]);
+  heslam::bench::StereoGain reference;
+  int step = 4;
+  heslam::StereoFeaturePipelineOptions options;
+  options.parallel = false;
+  for (int i = 3; i + 1 < argc; i += 2) {
+    const std::string arg = argv[i];
+    if (arg == "--step") step = std::stoi(argv[i + 1]);
+    else if (arg == "--he-stereo") options.he.stereo = heslam::parse_stereo_photometry(argv[i + 1]);
+    else if (arg == "--reference") reference = parse(argv[i + 1]);
+    else if (arg == "--settings") {
+      options = heslam::StereoFeaturePipelineOptions::load(argv[i + 1]);
+      options.parallel = false;
+    }
+    else throw std::runtime_error("unknown option " + arg);
+  }
+  const heslam::StereoRectifier rectifier(heslam::load_euroc_calibration(sequence.mav0_dir));
+  heslam::StereoFeaturePipeline pipeline_ref(rectifier.camera(), options);
+  heslam::StereoFeaturePipeline pipeline_gain(rectifier.camera(), options);
+  Group all, saturated, clear;
+  long stereo_ref = 0, stereo_gain = 0, features_gain = 0, common_keypoints = 0, lost = 0, gained = 0;
+  for (std::size_t k = 0; k < sequence.frames.size(); k += static_cast<std::size_t>(step)) {
+    const cv::Mat left = cv::imread(sequence.frames[k].left_png.string(), cv::IMREAD_GRAYSCALE);
+    const cv::Mat right = cv::imread(sequence.frames[k].right_png.string(), cv::IMREAD_GRAYSCALE);
+    cv::Mat l_ref = left.clone(), r_ref = right.clone(), l_gain = left.clone(), r_gain = right.clone();
+    heslam::bench::apply_gain(l_ref, reference.left);
+    heslam::bench::apply_gain(r_ref, reference.right);
+    heslam::bench::apply_gain(l_gain, gain.left);
+    heslam::bench::apply_gain(r_gain, gain.right);
+    cv::Mat lr, rr, lg, rg;
+    rectifier.rectify(l_ref, r_ref, lr, rr);
+    rectifier.rectify(l_gain, r_gain, lg, rg);
+    const heslam::StereoFeatures a = pipeline_ref.process(lr, rr);
+    const heslam::StereoFeatures b = pipeline_gain.process(lg, rg);
+    std::map<std::pair<int, int>, std::vector<std::size_t>> grid;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      grid[{static_cast<int>(a.keypoints[i].u_px), static_cast<int>(a.keypoints[i].v_px)}].push_back(i);
+      stereo_ref += a.has_stereo(i) ? 1 : 0;
+    }
+    features_gain += static_cast<long>(b.size());
+    for (std::size_t i = 0; i < b.size(); ++i) {
+      stereo_gain += b.has_stereo(i) ? 1 : 0;
+      const auto& kb = b.keypoints[i];
+      long match = -1;
+      for (int du = -1; du <= 1 && match < 0; ++du) {
+        for (int dv = -1; dv <= 1 && match < 0; ++dv) {
+          const auto it = grid.find({static_cast<int>(kb.u_px) + du, static_cast<int>(kb.v_px) + dv});
+          if (it == grid.end()) continue;
+          for (std::size_t j : it->second) {
+            const auto& ka = a.keypoints[j];
+            if (ka.octave == kb.octave && std::abs(ka.u_px - kb.u_px) < 0.25f && std::abs(ka.v_px - kb.v_px) < 0.25f) {
+              match = static_cast<long>(j);
+              break;
+            }
+          }
+        }
+      }
+      if (match < 0) continue;
+      ++common_keypoints;
+      const auto j = static_cast<std::size_t>(match);
+      if (a.has_stereo(j) && !b.has_stereo(i)) ++lost;
+      if (!a.has_stereo(j) && b.has_stereo(i)) ++gained;
+      if (!a.has_stereo(j) || !b.has_stereo(i)) continue;
+      const double d = static_cast<double>((kb.u_px - b.u_right_px[i]) - (a.keypoints[j].u_px - a.u_right_px[j]));
+      all.add(d);
+      // Does the right patch (window 5 on the level, plus the search) touch a saturated raw pixel?
+      const float scale = b.pyramid.scale[static_cast<std::size_t>(kb.octave)];
+      const int r = static_cast<int>(std::ceil(6 * scale));
+      const int u0 = static_cast<int>(std::lround(b.u_right_px[i])), v0 = static_cast<int>(std::lround(kb.v_px));
+      bool sat = false;
+      for (int v = std::max(0, v0 - r); v <= std::min(rg.rows - 1, v0 + r) && !sat; ++v) {
+        for (int u = std::max(0, u0 - r); u <= std::min(rg.cols - 1, u0 + r); ++u) {
+          if (rg.at<std::uint8_t>(v, u) >= 250) {
+            sat = true;
+            break;
+          }
+        }
+      }
+      (sat ? saturated : clear).add(d);
+    }
+  }
+  std::printf("gain %s vs reference %s: stereo points ref %ld, gain %ld of %ld features; common keypoints %ld "
+              "(stereo lost %ld, gained %ld)\n",
+              gain.describe().c_str(), reference.describe().c_str(), stereo_ref, stereo_gain, features_gain,
+              common_keypoints, lost, gained);
+  std::printf("disparity(gain) - disparity(ref), px at level 0, common keypoints with stereo in both:\n");
+  all.print("all");
+  clear.print("right clear");
+  saturated.print("right sat.");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return heslam::bench::bench_main("heslam-bench-stereo-compare", argc, argv, run); }
