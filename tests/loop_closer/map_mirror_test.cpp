@@ -17,32 +17,19 @@
 #include "components/frontend/message_adapter.hpp"
 #include "components/local_mapper/message_adapter.hpp"
 #include "components/loop_closer/map_mirror.hpp"
+#include "tests/mapping/correction_test_util.hpp"
 #include "tests/mapping/synthetic_world.hpp"
 
 namespace heslam::loop_closer {
 namespace {
 
+using test::insertion_only;
+using test::motion;
+
 // Poses equal to this (m and rotation-matrix entries): a noise-free global BA changes nothing else.
 constexpr double kTolerance = 1e-6;
 
 double max_abs_difference(const Pose3& a, const Pose3& b) { return (a.matrix() - b.matrix()).cwiseAbs().maxCoeff(); }
-
-Pose3 motion(double angle_rad, const Eigen::Vector3d& axis, const Eigen::Vector3d& t) {
-  Pose3 T = Pose3::Identity();
-  T.linear() = Eigen::AngleAxisd(angle_rad, axis.normalized()).toRotationMatrix();
-  T.translation() = t;
-  return T;
-}
-
-// Only insertion and covisibility: poses change only through the corrections under test.
-LocalMapperOptions insertion_only() {
-  LocalMapperOptions options;
-  options.enable_triangulation = false;
-  options.enable_fusion = false;
-  options.enable_bundle_adjustment = false;
-  options.enable_keyframe_culling = false;
-  return options;
-}
 
 class MirrorOfARealTimeRun : public ::testing::Test {
  protected:

@@ -9,28 +9,14 @@
 #include <unistd.h>
 
 #include "components/core/mapping/local_mapper.hpp"
+#include "tests/mapping/correction_test_util.hpp"
 #include "tests/mapping/mapping_test_util.hpp"
 
 namespace heslam {
 namespace {
 
-// Every stage that would move a pose or a point after insertion is off: what is checked is the
-// insertion itself, to the last bit.
-LocalMapperOptions insertion_only() {
-  LocalMapperOptions options;
-  options.enable_triangulation = false;
-  options.enable_fusion = false;
-  options.enable_bundle_adjustment = false;
-  options.enable_keyframe_culling = false;
-  return options;
-}
-
-Pose3 motion(double angle_rad, const Eigen::Vector3d& axis, const Eigen::Vector3d& t) {
-  Pose3 T = Pose3::Identity();
-  T.linear() = Eigen::AngleAxisd(angle_rad, axis.normalized()).toRotationMatrix();
-  T.translation() = t;
-  return T;
-}
+using test::insertion_only;
+using test::motion;
 
 class LocalMapperLateKeyframes : public ::testing::Test {
  protected:

@@ -252,5 +252,30 @@ TEST(StereoFeaturePipeline, ShippedSettingsGiveTheDocumentedOptions) {
   }
 }
 
+// The named choices of the stereo matcher: each name gives its option, an absent key keeps the
+// default, and a name outside the list is one error naming the key and the accepted names.
+TEST(StereoMatcher, NamedChoicesFromYaml) {
+  using Options = StereoMatcherOptions;
+  cv::FileStorage fs("%YAML:1.0\nStereo.cost: census\nStereo.sadNormalization: none\nStereo.subpixelFit: parabola\n",
+                     cv::FileStorage::READ | cv::FileStorage::MEMORY);
+  const Options o = Options::from_yaml(fs.root(), "test.yaml");
+  EXPECT_EQ(o.cost, Options::MatchCost::kCensus);
+  EXPECT_EQ(o.sad_normalization, Options::SadNormalization::kNone);
+  EXPECT_EQ(o.subpixel_fit, Options::SubpixelFit::kParabola);
+  cv::FileStorage empty("%YAML:1.0\nStereo.maxDistance: 90\n", cv::FileStorage::READ | cv::FileStorage::MEMORY);
+  const Options defaults = Options::from_yaml(empty.root(), "test.yaml");
+  EXPECT_EQ(defaults.cost, Options::MatchCost::kSad);
+  EXPECT_EQ(defaults.sad_normalization, Options::SadNormalization::kMean);
+  EXPECT_EQ(defaults.subpixel_fit, Options::SubpixelFit::kEquiangular);
+  cv::FileStorage bad("%YAML:1.0\nStereo.cost: ncc\n", cv::FileStorage::READ | cv::FileStorage::MEMORY);
+  try {
+    Options::from_yaml(bad.root(), "bad.yaml");
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.yaml: Stereo.cost"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("sad | zncc | census, got 'ncc'"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace heslam

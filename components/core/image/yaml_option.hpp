@@ -3,8 +3,10 @@
 // type is one clear error naming the source and the key.
 #pragma once
 
+#include <initializer_list>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <opencv2/core/persistence.hpp>
 
@@ -51,6 +53,25 @@ inline void read(const cv::FileNode& root, const std::string& key, const std::st
   const cv::FileNode node = root[key];
   if (!node.isString()) fail(source, key, "a string");
   value = static_cast<std::string>(node);
+}
+
+// A named choice, e.g. `Stereo.cost: sad | zncc | census`; `value` keeps its default when the key is
+// absent, and a name outside `choices` fails with the list of the accepted ones.
+template <typename Choice>
+void read_choice(const cv::FileNode& root, const std::string& key, const std::string& source,
+                 std::initializer_list<std::pair<const char*, Choice>> choices, Choice& value) {
+  if (!present(root, key)) return;
+  std::string name;
+  read(root, key, source, name);
+  std::string accepted;
+  for (const auto& [choice_name, choice] : choices) {
+    if (name == choice_name) {
+      value = choice;
+      return;
+    }
+    accepted += (accepted.empty() ? "" : " | ") + std::string(choice_name);
+  }
+  fail(source, key, accepted + ", got '" + name + "'");
 }
 
 }  // namespace heslam::yaml_option

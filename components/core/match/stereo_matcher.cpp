@@ -183,37 +183,20 @@ StereoMatcherOptions StereoMatcherOptions::from_yaml(const cv::FileNode& root, c
   yaml_option::read(root, "Stereo.minDepthBaselines", source, o.min_depth_baselines);
   yaml_option::read(root, "Stereo.sadOutlierFactor", source, o.sad_outlier_factor);
   yaml_option::read(root, "Stereo.relativeSadOutliers", source, o.relative_sad_outliers);
-  std::string normalization = "mean";
-  yaml_option::read(root, "Stereo.sadNormalization", source, normalization);
-  if (normalization == "center") {
-    o.sad_normalization = SadNormalization::kCenter;
-  } else if (normalization == "mean") {
-    o.sad_normalization = SadNormalization::kMean;
-  } else if (normalization == "none") {
-    o.sad_normalization = SadNormalization::kNone;
-  } else {
-    yaml_option::fail(source, "Stereo.sadNormalization", "center | mean | none, got '" + normalization + "'");
-  }
-  std::string fit = "equiangular";
-  yaml_option::read(root, "Stereo.subpixelFit", source, fit);
-  if (fit == "parabola") {
-    o.subpixel_fit = SubpixelFit::kParabola;
-  } else if (fit == "equiangular") {
-    o.subpixel_fit = SubpixelFit::kEquiangular;
-  } else {
-    yaml_option::fail(source, "Stereo.subpixelFit", "parabola | equiangular, got '" + fit + "'");
-  }
-  std::string cost = "sad";
-  yaml_option::read(root, "Stereo.cost", source, cost);
-  if (cost == "sad") {
-    o.cost = MatchCost::kSad;
-  } else if (cost == "zncc") {
-    o.cost = MatchCost::kZncc;
-  } else if (cost == "census") {
-    o.cost = MatchCost::kCensus;
-  } else {
-    yaml_option::fail(source, "Stereo.cost", "sad | zncc | census, got '" + cost + "'");
-  }
+  using Options = StereoMatcherOptions;
+  yaml_option::read_choice(root, "Stereo.sadNormalization", source,
+                           {{"center", Options::SadNormalization::kCenter},
+                            {"mean", Options::SadNormalization::kMean},
+                            {"none", Options::SadNormalization::kNone}},
+                           o.sad_normalization);
+  yaml_option::read_choice(root, "Stereo.subpixelFit", source,
+                           {{"parabola", Options::SubpixelFit::kParabola},
+                            {"equiangular", Options::SubpixelFit::kEquiangular}},
+                           o.subpixel_fit);
+  yaml_option::read_choice(root, "Stereo.cost", source,
+                           {{"sad", Options::MatchCost::kSad}, {"zncc", Options::MatchCost::kZncc},
+                            {"census", Options::MatchCost::kCensus}},
+                           o.cost);
   if (o.max_distance < 0 || o.max_distance > 256) yaml_option::fail(source, "Stereo.maxDistance", "an integer in [0, 256]");
   if (!(o.row_band_px > 0.f)) yaml_option::fail(source, "Stereo.rowBand", "a positive number");
   if (o.sad_half_window_px < 1 || o.sad_half_window_px > kOrbBorderPx / 2) {
