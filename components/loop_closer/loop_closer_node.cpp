@@ -321,7 +321,9 @@ void LoopCloserNode::log_summary() {
              count("loops_accepted"), " loops accepted, ", count("loops_rejected"), " rejected, ",
              count("global_bundle_adjustments"), " global BAs (", count("global_ba_aborted"), " aborted), ", count("correction_timeouts"), " corrections unacknowledged");
   if (count(runtime::kSecondWriterSamples) + count("bad_keyframes") + count("bad_keyframe_states") + count("bad_point_states") > 0) {
-    log().warn("samples refused: ", count(runtime::kSecondWriterSamples), " from second writers, ", count("bad_keyframes"),
+    log().warn("samples refused: ", count(runtime::kSecondWriterSamples), " from second writers (",
+               count(runtime::kSecondWriters), " writers, ", count(runtime::kOtherRunWriters), " of another run), ",
+               count("bad_keyframes"),
                " bad keyframes, ", count("bad_keyframe_states"), " bad keyframe states, ", count("bad_point_states"),
                " bad point states");
   }
