@@ -7,7 +7,7 @@
 # Figures come from the components' end-of-run summaries in their logs (OUT_DIR/logs_*/NAME.log).
 #   tools/bench/realtime/realtime_pipeline.sh DATASET OUT_DIR [RUNS] [DOMAIN] [euroc|kitti]
 # euroc: config/pipelines/euroc_realtime.yaml against euroc.yaml (EuRoC folder, 20 Hz);
-# kitti: kitti_realtime.yaml against kitti.yaml (a KITTI odometry folder, e.g. heslam-synth --preset street, 10 Hz).
+# kitti: kitti_realtime.yaml against kitti.yaml (a KITTI sequence folder DIR/sequences/NN, e.g. heslam-synth --preset street --format kitti, 10 Hz; ATE against DIR/poses/NN.txt).
 # PRELOAD_MB=N (environment): real-time runs decode the images before frame 0 (replay --preload N), so
 # that PNG decoding (about a quarter of the pipeline's CPU on MH01) does not compete with the system.
 # Not repeatable run to run (real time depends on the machine's load): report the load with the figures.
@@ -37,13 +37,21 @@ field() {
   [[ -n $value ]] && echo "$value" || echo "-"
 }
 
-# ATE rmse in mm of a trajectory, or "-" without ground truth (EuRoC: the state ground truth).
+# ATE rmse in mm of a trajectory, or "-" without ground truth (EuRoC: the state ground truth; KITTI:
+# DATASET/../../poses/NN.txt with DATASET/times.txt, as heslam-synth --format kitti writes them).
 ate_mm() {
-  local trajectory=$1 gt=$dataset/mav0/state_groundtruth_estimate0/data.csv rmse
-  [[ $kind == euroc && -f $gt && -s $trajectory ]] || { echo "-"; return; }
+  local trajectory=$1 rmse gt gt_args
+  if [[ $kind == euroc ]]; then
+    gt=$dataset/mav0/state_groundtruth_estimate0/data.csv
+    gt_args=(--gt "$gt")
+  else
+    gt=$(dirname "$(dirname "$dataset")")/poses/$(basename "$dataset").txt
+    gt_args=(--gt "$gt" --gt-times "$dataset/times.txt" --gt-format kitti)
+  fi
+  [[ -f $gt && -s $trajectory ]] || { echo "-"; return; }
   # heslam-eval prints "rmse VALUE UNIT" with the unit it finds readable (m, cm, mm).
   # The trajectory's header names its frame (body by default), which heslam-eval matches to the ground truth.
-  rmse=$("$bin/heslam-eval" ape --gt "$gt" --est "$trajectory" 2>/dev/null |
+  rmse=$("$bin/heslam-eval" ape "${gt_args[@]}" --est "$trajectory" 2>/dev/null |
     grep -m1 -E '^ *rmse' | awk '{ s = $3 == "m" ? 1000 : $3 == "cm" ? 10 : $3 == "mm" ? 1 : $3 == "um" ? 0.001 : -1
                                    if (s > 0) printf "%.2f", $2 * s }' || true)
   [[ -n $rmse ]] && echo "$rmse" || echo "-"
