@@ -23,7 +23,8 @@ struct FrameOutput {
   std::uint32_t keypoints = 0;         // extracted in the left image
   std::uint32_t stereo_keypoints = 0;  // ... of which with a stereo match
   // rectify, he, extract, stereo, features, track_initial, track_local_map, track_keyframe, track,
-  // total — in this order (odometry stage_times and status stages use the same names).
+  // cpu (the process's CPU time over the frame, all threads), total — in this order (odometry
+  // stage_times and status stages use the same names); total is wall time and last.
   std::vector<StageTiming> timings;
 };
 

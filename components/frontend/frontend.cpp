@@ -62,7 +62,7 @@ std::uint64_t peak_resident_bytes() {
 // One summary line per stage, in pipeline order: the per-frame breakdown of the run.
 void log_stage_summary(const runtime::Logger& log, const runtime::Stats& stats) {
   static const char* const kOrder[] = {"rectify", "he", "extract", "stereo", "features", "track_initial",
-                                       "track_local_map", "track_keyframe", "track", "total"};
+                                       "track_local_map", "track_keyframe", "track", "cpu", "total"};
   const std::vector<runtime::StageSummary> stages = stats.stages();
   for (const char* name : kOrder) {
     for (const runtime::StageSummary& stage : stages) {

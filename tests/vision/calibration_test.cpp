@@ -2,6 +2,7 @@
 // (EuRoC's VI-Sensor), and each malformed file gives one clear line naming the file and the field.
 #include <fstream>
 #include <string>
+#include <thread>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -232,6 +233,30 @@ TEST(Calibration, RectifiedEurocRowsAgreeOnRealImages) {
   // Wrong size is one clear error.
   const std::string error = error_of([&] { rectifier.rectify(left.colRange(0, 700), right, left_rect, right_rect); });
   expect_one_line_naming(error, "StereoRectifier", "left");
+}
+
+// The frontend rectifies the two images at once, one per thread: the same pixels as rectify().
+TEST(Calibration, RectifyingTheImagesOnTwoThreadsGivesTheSamePixels) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const fs::path mav0 = test::shared_dataset("euroc_mh01_handheld") / "mav0";
+  const StereoRectifier rectifier(load_euroc_calibration(mav0));
+  const std::string name = "1403636584763555584.png";
+  const cv::Mat left = cv::imread((mav0 / "cam0" / "data" / name).string(), cv::IMREAD_GRAYSCALE);
+  const cv::Mat right = cv::imread((mav0 / "cam1" / "data" / name).string(), cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(left.empty());
+  ASSERT_FALSE(right.empty());
+  cv::Mat left_rect, right_rect;
+  rectifier.rectify(left, right, left_rect, right_rect);
+  cv::Mat left_threaded, right_threaded;
+  std::thread right_thread([&] { rectifier.rectify_right(right, right_threaded); });
+  rectifier.rectify_left(left, left_threaded);
+  right_thread.join();
+  EXPECT_EQ(cv::norm(left_rect, left_threaded, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(right_rect, right_threaded, cv::NORM_INF), 0.0);
+  // The left and right maps differ: the two outputs are not the same image.
+  EXPECT_GT(cv::norm(left_threaded, right_threaded, cv::NORM_L1), 0.0);
+  const std::string error = error_of([&] { rectifier.rectify_right(right.rowRange(0, 400), right_threaded); });
+  expect_one_line_naming(error, "StereoRectifier", "right");
 }
 
 TEST(Calibration, MalformedEurocFilesGiveOneClearLine) {

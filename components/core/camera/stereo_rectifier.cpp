@@ -131,12 +131,25 @@ void StereoRectifier::rectify(const cv::Mat& left_raw, const cv::Mat& right_raw,
                               cv::Mat& right_rect) const {
   check_image(left_raw, raw_size_, "left");
   check_image(right_raw, raw_size_, "right");
+  rectify_left(left_raw, left_rect);
+  rectify_right(right_raw, right_rect);
+}
+
+void StereoRectifier::rectify_left(const cv::Mat& left_raw, cv::Mat& left_rect) const {
+  check_image(left_raw, raw_size_, "left");
   if (passthrough_) {
     left_rect = left_raw;
-    right_rect = right_raw;
     return;
   }
   cv::remap(left_raw, left_rect, left_map_xy_, left_map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+}
+
+void StereoRectifier::rectify_right(const cv::Mat& right_raw, cv::Mat& right_rect) const {
+  check_image(right_raw, raw_size_, "right");
+  if (passthrough_) {
+    right_rect = right_raw;
+    return;
+  }
   cv::remap(right_raw, right_rect, right_map_xy_, right_map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
 }
 

@@ -33,6 +33,11 @@ class StereoRectifier {
   // when an image has the wrong size or type.
   void rectify(const cv::Mat& left_raw, const cv::Mat& right_raw, cv::Mat& left_rect, cv::Mat& right_rect) const;
 
+  // One image of the pair, as rectify() does it: the two may run at once on two threads (const, the
+  // maps are only read), with the same pixels as rectify().
+  void rectify_left(const cv::Mat& left_raw, cv::Mat& left_rect) const;
+  void rectify_right(const cv::Mat& right_raw, cv::Mat& right_rect) const;
+
  private:
   // The rectified model and remap tables for raw (not yet rectified) input; OpenCV may throw.
   void compute_rectification(const StereoCalibration& calibration);

@@ -123,6 +123,52 @@ constexpr int kMaskWidth = 1;
 MaskBits at_least(const std::uint8_t* p, std::uint8_t t) { return *p >= t ? 1u : 0u; }
 #endif
 
+// Bit k set when p[k] is strictly greater than its 8 neighbours (only its left and right ones when
+// !up and !down, the row above when up, the row below when down), for kMaskWidth bytes: the 3x3
+// non-maximum suppression of a whole vector of candidates at once. p[-1] .. p[kMaskWidth] and,
+// as asked, the same columns stride bytes above / below must be readable.
+#if defined(__AVX2__)
+constexpr bool kVectorMaxima = true;
+MaskBits strict_maxima(const std::uint8_t* p, std::ptrdiff_t stride, bool up, bool down) {
+  const auto load = [](const std::uint8_t* q) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(q)); };
+  const __m256i s = load(p);
+  // n >= s exactly when max(n, s) == n: such a neighbour suppresses the pixel.
+  const auto not_below = [&](const std::uint8_t* q) {
+    const __m256i n = load(q);
+    return _mm256_cmpeq_epi8(_mm256_max_epu8(n, s), n);
+  };
+  __m256i suppressed = _mm256_or_si256(not_below(p - 1), not_below(p + 1));
+  for (const std::ptrdiff_t row : {up ? -stride : std::ptrdiff_t{0}, down ? stride : std::ptrdiff_t{0}}) {
+    if (row == 0) continue;
+    suppressed = _mm256_or_si256(suppressed, not_below(p + row - 1));
+    suppressed = _mm256_or_si256(suppressed, not_below(p + row));
+    suppressed = _mm256_or_si256(suppressed, not_below(p + row + 1));
+  }
+  return ~static_cast<MaskBits>(_mm256_movemask_epi8(suppressed));
+}
+#elif defined(__SSE2__)
+constexpr bool kVectorMaxima = true;
+MaskBits strict_maxima(const std::uint8_t* p, std::ptrdiff_t stride, bool up, bool down) {
+  const auto load = [](const std::uint8_t* q) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(q)); };
+  const __m128i s = load(p);
+  const auto not_below = [&](const std::uint8_t* q) {
+    const __m128i n = load(q);
+    return _mm_cmpeq_epi8(_mm_max_epu8(n, s), n);
+  };
+  __m128i suppressed = _mm_or_si128(not_below(p - 1), not_below(p + 1));
+  for (const std::ptrdiff_t row : {up ? -stride : std::ptrdiff_t{0}, down ? stride : std::ptrdiff_t{0}}) {
+    if (row == 0) continue;
+    suppressed = _mm_or_si128(suppressed, not_below(p + row - 1));
+    suppressed = _mm_or_si128(suppressed, not_below(p + row));
+    suppressed = _mm_or_si128(suppressed, not_below(p + row + 1));
+  }
+  return static_cast<MaskBits>(~_mm_movemask_epi8(suppressed) & 0xFFFF);
+}
+#else
+constexpr bool kVectorMaxima = false;
+MaskBits strict_maxima(const std::uint8_t*, std::ptrdiff_t, bool, bool) { return 0; }
+#endif
+
 }  // namespace
 
 void FastScoreMap::compute(const cv::Mat& image, const cv::Rect& area) {
@@ -184,10 +230,21 @@ void FastScoreMap::corners(const cv::Rect& region, int threshold, std::vector<Sc
       }
       if (is_max) out.push_back({static_cast<float>(region.x + i), static_cast<float>(y), static_cast<float>(s)});
     };
-    // Most pixels score below the threshold: find the candidates a vector at a time, in order.
+    // Most pixels score below the threshold: find the candidates a vector at a time, in order. Where
+    // the vector's left and right neighbours are inside the region, suppress non-maxima a vector at
+    // a time too (the same comparisons as consider's).
     int i = 0;
     for (; i + kMaskWidth <= region.width; i += kMaskWidth) {
-      for (MaskBits bits = at_least(row + i, t); bits != 0; bits &= bits - 1) consider(i + std::countr_zero(bits));
+      MaskBits bits = at_least(row + i, t);
+      if (bits == 0) continue;
+      if (kVectorMaxima && i >= 1 && i + kMaskWidth + 1 <= region.width) {
+        for (bits &= strict_maxima(row + i, stride, has_up, has_down); bits != 0; bits &= bits - 1) {
+          const int x = i + std::countr_zero(bits);
+          out.push_back({static_cast<float>(region.x + x), static_cast<float>(y), static_cast<float>(row[x])});
+        }
+        continue;
+      }
+      for (; bits != 0; bits &= bits - 1) consider(i + std::countr_zero(bits));
     }
     for (; i <= last_x; ++i) {
       if (row[i] >= t) consider(i);

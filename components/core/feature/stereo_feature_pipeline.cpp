@@ -62,6 +62,15 @@ StereoFeaturePipeline::StereoFeaturePipeline(const PinholeStereo& camera, const 
   if (options.parallel) worker_ = std::make_unique<PairWorker>();
 }
 
+void StereoFeaturePipeline::run_on_both(const std::function<void()>& right_job, const std::function<void()>& left_job) {
+  if (worker_) {
+    worker_->run(right_job, left_job);
+  } else {
+    left_job();
+    right_job();
+  }
+}
+
 StereoFeatures StereoFeaturePipeline::process(const cv::Mat& left_rect, const cv::Mat& right_rect,
                                               StereoFeatureTimings* timings) {
   const cv::Size expected(camera_.width_px, camera_.height_px);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -49,6 +50,11 @@ class StereoFeaturePipeline {
   // Inputs: rectified 8-bit grey images of the camera's size. Output: StereoFeatures, fully filled.
   // Deterministic: the same pair gives the same output whether parallel or not. Not thread-safe.
   StereoFeatures process(const cv::Mat& left_rect, const cv::Mat& right_rect, StereoFeatureTimings* timings = nullptr);
+
+  // Runs `right_job` on the pipeline's second thread and `left_job` on the caller at once (one after
+  // the other when not parallel), e.g. the rectification of the two raw images before process():
+  // the same thread pair, no second worker. Exceptions are rethrown here.
+  void run_on_both(const std::function<void()>& right_job, const std::function<void()>& left_job);
 
   // Whether the last pair was equalized (adaptive HE switches on and off).
   bool he_active() const { return equalizer_.active(); }

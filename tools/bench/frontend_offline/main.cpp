@@ -5,7 +5,8 @@
 // usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]
 //                                [--he none|global|clipped|clahe|adaptive] [--he-stereo shared|matched|separate]
 //                                [--variant none|dark|low_contrast]
-//                                [--stereo-gain L,R[/L,R...]] [--first-frame K] [--frames N] [--stationary-chi2 X] [--rotation-chi2 X]
+//                                [--stereo-gain L,R[/L,R...]] [--first-frame K] [--frames N] [--period-ms P]
+//                                [--stationary-chi2 X] [--rotation-chi2 X]
 //                                [--kidnap DIR [--kidnap-plan B,R,S[,N]]] [--vocabulary FILE|none]
 #include <algorithm>
 #include <charconv>
@@ -36,6 +37,7 @@ constexpr const char* kUsage =
     "       [--stereo-gain L,R[/L,R...]]   (left image x L, right x R, saturated to 8 bit: cameras exposed\n"
     "                                       differently; several: the run split into equal blocks)\n"
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
+    "       [--period-ms P]   (start a frame every P ms, idle in between, as a camera: 50 for EuRoC's 20 Hz)\n"
     "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n"
     "       [--kidnap DIR]   (run on a kidnapped-camera copy written to DIR: frames 60-79 black, 80-159 = 0-79)\n"
     "       [--kidnap-plan B,R,S[,N]]   (the copy's plan: frames B..R-1 black, from R on the source's frames\n"
@@ -139,6 +141,9 @@ int run(int argc, char** argv) {
       options.first_frame = parse_number<int>(arg, value);
     } else if (arg == "--frames") {
       options.max_frames = parse_number<int>(arg, value);
+    } else if (arg == "--period-ms") {
+      options.period_ms = parse_number<double>(arg, value);
+      if (!(options.period_ms >= 0.0)) throw std::runtime_error("--period-ms: expected a number >= 0, got '" + value + "'");
     } else if (arg == "--stationary-chi2") {
       options.tracker.stationary_test_chi2 = parse_number<double>(arg, value);
     } else if (arg == "--vocabulary") {
@@ -217,6 +222,7 @@ int run(int argc, char** argv) {
   print_stage("tracking", result.frames, &FrameRecord::tracking_ms);
   print_stage("track cpu", result.frames, &FrameRecord::tracking_cpu_ms);
   print_stage("total", result.frames, &FrameRecord::total_ms);
+  print_stage("total cpu", result.frames, &FrameRecord::cpu_ms);
   if (std::getenv("HESLAM_FRONTEND_OFFLINE_PER_FRAME") != nullptr) {
     for (std::size_t k = 0; k < result.frames.size(); ++k) {
       const FrameRecord& f = result.frames[k];

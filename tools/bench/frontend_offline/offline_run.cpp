@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <thread>
 #include <ctime>
 #include <cmath>
 #include <fstream>
@@ -25,6 +26,12 @@ constexpr std::uint64_t kRightImageSeedOffset = 0x100000000ULL;
 double thread_cpu_ms() {
   timespec now{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) * 1e3 + static_cast<double>(now.tv_nsec) * 1e-6;
+}
+
+double process_cpu_ms() {
+  timespec now{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
   return static_cast<double>(now.tv_sec) * 1e3 + static_cast<double>(now.tv_nsec) * 1e-6;
 }
 
@@ -77,7 +84,14 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
   cv::Mat left_rect;
   cv::Mat right_rect;
   // k is the frame's index in the sequence, so a run that skips frames sees the same noise per frame.
+  auto next_frame_start = std::chrono::steady_clock::now();
   for (std::size_t k = first; k < first + count; ++k) {
+    if (options.period_ms > 0.0) {
+      std::this_thread::sleep_until(next_frame_start);
+      next_frame_start = std::chrono::steady_clock::now() +
+                         std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                             std::chrono::duration<double, std::milli>(options.period_ms));
+    }
     const EurocFrame& input = sequence.frames[k];
     cv::Mat left = read_grey(input.left_png);
     cv::Mat right = read_grey(input.right_png);
@@ -90,7 +104,10 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
     FrameRecord record;
     record.stamp_ns = input.stamp_ns;
     const auto start = std::chrono::steady_clock::now();
-    rectifier.rectify(left, right, left_rect, right_rect);
+    const double cpu_start = process_cpu_ms();
+    // As the frontend's FrameProcessor: each image rectified on its own thread of the pipeline's pair.
+    pipeline.run_on_both([&] { rectifier.rectify_right(right, right_rect); },
+                         [&] { rectifier.rectify_left(left, left_rect); });
     record.rectify_ms = elapsed_ms(start);
     StereoFeatureTimings timings;
     StereoFeatures features = pipeline.process(left_rect, right_rect, &timings);
@@ -105,6 +122,7 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
     record.tracking_cpu_ms = thread_cpu_ms() - track_cpu_start;
     record.tracking_ms = elapsed_ms(track_start);
     record.total_ms = elapsed_ms(start);
+    record.cpu_ms = process_cpu_ms() - cpu_start;
     record.state = result.state;
     record.method = result.method;
     record.T_wc = result.T_wc;

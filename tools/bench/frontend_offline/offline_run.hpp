@@ -28,6 +28,9 @@ struct OfflineRunOptions {
   std::vector<StereoGain> stereo_gain;
   int first_frame = 0;  // frames of the sequence skipped: the run starts (initializes) here
   int max_frames = 0;   // 0: the whole sequence
+  // > 0: each frame starts this long after the previous one (a camera's period; the decoding of the
+  // next pair inside it), the cores idle in between as in a real-time run. 0: back to back.
+  double period_ms = 0.0;
 };
 
 struct FrameRecord {
@@ -48,6 +51,7 @@ struct FrameRecord {
   double tracking_ms = 0.0;
   double tracking_cpu_ms = 0.0;  // CPU time of the tracking call: what wall time would be on an idle core
   double total_ms = 0.0;  // all of the above plus feature bookkeeping (image decoding excluded)
+  double cpu_ms = 0.0;    // CPU time of the process (both threads) over total_ms: the work, not the waiting
 };
 
 struct OfflineRun {
