@@ -105,7 +105,7 @@ std::string common_args_usage() {
          "  --dds-config XML    Cyclone configuration, XML or file://PATH (default: $CYCLONEDDS_URI,\n"
          "                      else the built-in loopback config/cyclonedds.xml)\n"
          "  --image-transport T udp (default) or shm: the stereo images over iceoryx shared memory on\n"
-         "                      --image-domain N (needs iox-roudi running; docs/topics.md)\n"
+         "                      --image-domain N (replay, frontend, viewer; needs iox-roudi; docs/topics.md)\n"
          "  -h, --help          this help\n";
 }
 
