@@ -142,6 +142,7 @@ CaseSpec spec_of(const std::string& name) {
     spec.topic = int_key ? "bench_shm/status_int" : "bench_shm/status_string";
     spec.qos = runtime::Qos(runtime::QosRole::kStatus);
     if (name.find("-nolive") != std::string::npos) {
+      // runtime::Qos has no liveliness setter; its dds_qos_t is its own (non-const) allocation.
       dds_qset_liveliness(const_cast<dds_qos_t*>(spec.qos.get()), DDS_LIVELINESS_AUTOMATIC, DDS_INFINITY);
     }
     spec.frames = false;
