@@ -32,6 +32,9 @@ bool iox_roudi_running();
 class ImageParticipant {
  public:
   ImageParticipant(const Participant& main, ImageTransport transport, int image_domain_id, std::string dds_config);
+  // Holds a reference to `main`: neither copied nor moved, so it cannot outlive or lose it.
+  ImageParticipant(const ImageParticipant&) = delete;
+  ImageParticipant& operator=(const ImageParticipant&) = delete;
   const Participant& get();
   ImageTransport transport() const { return transport_; }
   // True when the images are on a domain of their own (readers of them need a waitset that spans
