@@ -74,11 +74,23 @@ CommonArgs parse_common_args(int argc, const char* const* argv, std::string_view
       args.log_level = *level;
     } else if (flag == "--dds-config") {
       args.dds_config = value();
+    } else if (flag == "--image-transport") {
+      const std::string text = value();
+      const auto transport = parse_image_transport(text);
+      if (!transport) throw std::runtime_error("--image-transport: expected udp or shm, got '" + text + "'");
+      args.image_transport = *transport;
+    } else if (flag == "--image-domain") {
+      args.image_domain_id = parse_domain(flag, value());
     } else if (arg == "-h" || arg == "--help") {
       args.help = true;
     } else {
       args.rest.push_back(arg);
     }
+  }
+  if (args.image_transport == ImageTransport::kShm &&
+      (args.image_domain_id < 0 || args.image_domain_id == args.domain_id)) {
+    throw std::runtime_error("--image-transport shm: needs --image-domain N, a domain other than --domain (" +
+                             std::to_string(args.domain_id) + ")");
   }
   return args;
 }
@@ -92,6 +104,8 @@ std::string common_args_usage() {
          "  --log-level LEVEL   debug, info, warn, error or off (default: info)\n"
          "  --dds-config XML    Cyclone configuration, XML or file://PATH (default: $CYCLONEDDS_URI,\n"
          "                      else the built-in loopback config/cyclonedds.xml)\n"
+         "  --image-transport T udp (default) or shm: the stereo images over iceoryx shared memory on\n"
+         "                      --image-domain N (replay, frontend, viewer; needs iox-roudi; docs/topics.md)\n"
          "  -h, --help          this help\n";
 }
 

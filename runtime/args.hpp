@@ -1,5 +1,6 @@
 // The command-line flags every component and tool shares (the pipeline file sets them):
 //   --domain N  --namespace NAME  --name NAME  --config FILE  --log-level LEVEL  --dds-config XML|file://…
+//   --image-transport udp|shm  --image-domain N
 // parse_common_args() takes these out and leaves every other argument, in order, for the tool.
 #pragma once
 
@@ -8,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include "runtime/image_transport.hpp"
 #include "runtime/log.hpp"
 
 namespace heslam::runtime {
@@ -20,6 +22,10 @@ struct CommonArgs {
   std::filesystem::path config_file;  // empty: every option at its documented default
   LogLevel log_level = LogLevel::kInfo;
   std::string dds_config;             // empty: see ParticipantOptions::dds_config
+  // The stereo image topic: UDP on domain_id, or iceoryx shared memory on image_domain_id (required
+  // then, and different from domain_id; runtime/image_transport.hpp).
+  ImageTransport image_transport = ImageTransport::kUdp;
+  int image_domain_id = -1;
   bool help = false;                  // -h / --help seen
   std::vector<std::string> rest;      // everything else, in order (argv[0] excluded)
 };

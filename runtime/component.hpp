@@ -24,6 +24,7 @@
 
 #include "runtime/args.hpp"
 #include "runtime/config.hpp"
+#include "runtime/image_transport.hpp"
 #include "runtime/log.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/reader.hpp"
@@ -73,6 +74,9 @@ class Component {
   const std::string& name() const { return name_; }
   const CommonArgs& args() const { return args_; }
   Participant& participant() { return participant_; }
+  // The participant of the stereo image topic (--image-transport): participant() for UDP, else a
+  // second one on the shared-memory image domain, created on first use (throws when iox-roudi is down).
+  ImageParticipant& image_participant() { return image_participant_; }
   const Topics& topics() const { return topics_; }
   const Logger& log() const { return log_; }
   Stats& stats() { return stats_; }
@@ -102,6 +106,7 @@ class Component {
   CommonArgs args_;
   Logger log_;
   Participant participant_;
+  ImageParticipant image_participant_;
   Topics topics_;
   Stats stats_;
   std::unique_ptr<StatusPublisher> status_;

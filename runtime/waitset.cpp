@@ -13,8 +13,10 @@ constexpr dds_attach_t kShutdownToken = -2;
 
 }  // namespace
 
-WaitSet::WaitSet(const Participant& participant) : participant_(participant.handle()) {
-  waitset_ = Entity(check_dds(dds_create_waitset(participant_), "waitset: cannot create"));
+WaitSet::WaitSet(const Participant& participant, WaitScope scope) : participant_(participant.handle()) {
+  // Cyclone lets a waitset attach only entities under its owner; the library root owns every domain.
+  const dds_entity_t owner = scope == WaitScope::kAllDomains ? DDS_CYCLONEDDS_HANDLE : participant_;
+  waitset_ = Entity(check_dds(dds_create_waitset(owner), "waitset: cannot create"));
   wake_guard_ = Entity(check_dds(dds_create_guardcondition(participant_), "waitset: cannot create guard"));
   shutdown_guard_ = Entity(check_dds(dds_create_guardcondition(participant_), "waitset: cannot create guard"));
   check_dds(dds_waitset_attach(waitset_.get(), wake_guard_.get(), kWakeToken), "waitset: attach");

@@ -19,9 +19,13 @@ enum class Wake {
   kWoken,     // wake() was called from another thread
 };
 
+// Which readers a WaitSet may attach: those of its participant, or of any participant of the process
+// (a frontend whose images arrive on a shared-memory domain of their own, runtime/image_transport.hpp).
+enum class WaitScope { kParticipant, kAllDomains };
+
 class WaitSet {
  public:
-  explicit WaitSet(const Participant& participant);
+  explicit WaitSet(const Participant& participant, WaitScope scope = WaitScope::kParticipant);
   ~WaitSet();
   WaitSet(const WaitSet&) = delete;
   WaitSet& operator=(const WaitSet&) = delete;

@@ -6,6 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config ccache
   cyclonedds-dev cyclonedds-tools
+  iceoryx  # iox-roudi: image_transport shm (docs/topics.md) and its pipeline test
   libopencv-dev opencv-doc libopencv-viz-dev
   xvfb
   zlib1g-dev

@@ -83,14 +83,17 @@ Frontend::Frontend(const runtime::CommonArgs& args) : Component("frontend", args
 
 void Frontend::configure(const runtime::Config& config) {
   options_ = FrontendOptions::from_config(config, args().rest);
-  waitset_ = std::make_unique<runtime::WaitSet>(participant());
+  // Frames on a shared-memory domain of their own (--image-transport shm) need a waitset across domains.
+  waitset_ = std::make_unique<runtime::WaitSet>(participant(), image_participant().separate_domain()
+                                                                   ? runtime::WaitScope::kAllDomains
+                                                                   : runtime::WaitScope::kParticipant);
   calibration_reader_.emplace(participant(), topics().calibration(), log(), stats(),
                               sample_check<msg::StereoCalibration>(), checked_options<msg::StereoCalibration>(kHeldCalibrations));
   // Frames are checked by process_frame (a bad frame of the replay is still acknowledged).
   runtime::CheckedReaderOptions frame_options;
   frame_options.rejected_counter = "bad_frames";
   frame_options.max_held = kHeldFrames;
-  frame_reader_.emplace(participant(), topics().stereo(), log(), stats(), nullptr, frame_options);
+  frame_reader_.emplace(image_participant().get(), topics().stereo(), log(), stats(), nullptr, frame_options);
   waitset_->attach(*calibration_reader_);
   waitset_->attach(*frame_reader_);
   if (options_.mapper_enabled) {

@@ -1,6 +1,6 @@
 // heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]
 //                   [--log-dir DIR] [--log-level LEVEL] [--host NAME | --only a,b] [--no-progress]
-//                   [--security DIR]
+//                   [--security DIR] [--image-transport udp|shm] [--image-domain N]
 #include <signal.h>
 #include <unistd.h>
 
@@ -22,7 +22,7 @@ using namespace heslam;
 constexpr const char* kUsage =
     "usage: heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]\n"
     "                         [--log-dir DIR] [--log-level debug|info|warn|error] [--host NAME | --only a,b]\n"
-    "                         [--no-progress] [--security DIR]\n"
+    "                         [--no-progress] [--security DIR] [--image-transport udp|shm] [--image-domain N]\n"
     "  --check      validate the pipeline file and every file it references; start nothing\n"
     "  --arg k=v    value for $(arg k) in the pipeline file (overrides its 'args' default)\n"
     "  --log-dir    per-component logs (default: $HESLAM_LOG_DIR or ~/.heslam/log, + /<pipeline>-<time>)\n"
@@ -30,7 +30,9 @@ constexpr const char* kUsage =
     "  --only a,b   run only these components; the others run on other hosts (docs/deployment.md)\n"
     "  --no-progress  no run progress (default: a line redrawn on a terminal, else a line per 10 %)\n"
     "  --security   DDS Security: run every process with its identity from DIR (heslam-security init DIR;\n"
-    "               overrides the file's 'security'; docs/security.md)\n";
+    "               overrides the file's 'security'; docs/security.md)\n"
+    "  --image-transport  shm: the stereo images over iceoryx shared memory on --image-domain (default:\n"
+    "               domain + 1); the supervisor uses a running iox-roudi or starts one (docs/topics.md)\n";
 
 std::filesystem::path default_log_dir(const std::string& pipeline_name) {
   std::filesystem::path base;
@@ -97,6 +99,19 @@ int run(int argc, char** argv) {
       if (overrides.only.empty()) throw std::runtime_error("--only: expected component names, e.g. --only frontend,replay");
     } else if (arg == "--security") {
       overrides.security_dir = value_of(argc, argv, i, arg);
+    } else if (arg == "--image-transport") {
+      overrides.image_transport = value_of(argc, argv, i, arg);
+    } else if (arg == "--image-domain") {
+      const std::string text = value_of(argc, argv, i, arg);
+      try {
+        std::size_t used = 0;
+        const int domain = std::stoi(text, &used);
+        if (used != text.size() || domain < 0 || domain > runtime::kMaxDomainId) throw std::out_of_range(text);
+        overrides.image_domain_id = domain;
+      } catch (const std::logic_error&) {
+        throw std::runtime_error("--image-domain: expected an integer in [0, " + std::to_string(runtime::kMaxDomainId) +
+                                 "], got '" + text + "'");
+      }
     } else if (arg == "--log-dir") {
       log_dir = value_of(argc, argv, i, arg);
     } else if (arg == "--log-level") {

@@ -266,6 +266,37 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
     pipeline.dds_config = "file://" + std::filesystem::absolute(path).string();
   });
   collect(problems, [&] { pipeline.stop_timeout_s = config->get_double("stop_timeout_s", 5.0, 0.1, 600.0); });
+  collect(problems, [&] {
+    std::string text = substitute("image_transport", config->get_string("image_transport", "udp"));
+    if (overrides.image_transport) text = *overrides.image_transport;
+    const auto transport = runtime::parse_image_transport(text);
+    if (!transport) throw std::runtime_error(source + ": field 'image_transport': expected udp or shm, got '" + text + "'");
+    pipeline.image_transport = *transport;
+    // Read even for udp: every field of the file is consumed (unknown ones are an error).
+    const std::string domain_text = substitute("image_domain", config->get_scalar("image_domain", ""));
+    std::filesystem::path roudi = substitute("roudi_config", config->get_string("roudi_config", ""));
+    if (pipeline.image_transport == runtime::ImageTransport::kUdp) return;
+    if (overrides.image_domain_id) {
+      pipeline.image_domain_id = *overrides.image_domain_id;
+    } else if (domain_text.empty()) {
+      pipeline.image_domain_id = pipeline.domain_id < runtime::kMaxDomainId ? pipeline.domain_id + 1 : pipeline.domain_id - 1;
+    } else {
+      std::istringstream parse(domain_text);
+      if (!(parse >> pipeline.image_domain_id) || !parse.eof()) pipeline.image_domain_id = -1;
+    }
+    if (pipeline.image_domain_id < 0 || pipeline.image_domain_id > runtime::kMaxDomainId ||
+        pipeline.image_domain_id == pipeline.domain_id) {
+      throw std::runtime_error(source + ": field 'image_domain': expected an integer in [0, " +
+                               std::to_string(runtime::kMaxDomainId) + "] other than the domain (" +
+                               std::to_string(pipeline.domain_id) + ")");
+    }
+    if (roudi.empty()) roudi = folder / ".." / "iceoryx" / "roudi.toml";
+    if (roudi.is_relative()) roudi = folder / roudi;
+    if (!std::filesystem::is_regular_file(roudi)) {
+      throw std::runtime_error(source + ": field 'roudi_config': file " + roudi.string() + " does not exist");
+    }
+    pipeline.roudi_config = std::filesystem::absolute(roudi).lexically_normal();
+  });
   load_network_profile(*config, pipeline, problems, substitute);
   collect(problems, [&] {
     pipeline.remote_ready_timeout_s = config->get_double("remote_ready_timeout_s", 120.0, 0.1, 86400.0);
@@ -290,6 +321,10 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       throw std::runtime_error(source + ": field 'security': DDS security supports domains 0-" +
                                std::to_string(runtime::kMaxSecureDomainId) + ", the pipeline runs on domain " +
                                std::to_string(pipeline.domain_id));
+    }
+    if (pipeline.image_transport == runtime::ImageTransport::kShm) {
+      throw std::runtime_error(source + ": field 'security': DDS security with image_transport shm is not supported "
+                               "(untested); use image_transport udp");
     }
     pipeline.security_dir = std::filesystem::absolute(path).lexically_normal();
     try {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "runtime/dds_network_profile.hpp"
+#include "runtime/image_transport.hpp"
 
 namespace heslam::supervisor {
 
@@ -52,6 +53,12 @@ struct Pipeline {
   // Secure mode: the folder made by heslam-security init (absolute); empty: plain DDS. The
   // supervisor runs as identity "supervisor", each component as its own (docs/security.md).
   std::filesystem::path security_dir;
+  // image_transport: udp (default) or shm — the stereo images over iceoryx shared memory on domain
+  // image_domain (default: domain + 1, or domain - 1 on the last id), every other topic stays on UDP.
+  // The supervisor uses a running iox-roudi or starts one with roudi_config (docs/topics.md).
+  runtime::ImageTransport image_transport = runtime::ImageTransport::kUdp;
+  int image_domain_id = -1;
+  std::filesystem::path roudi_config;     // default: FOLDER/../iceoryx/roudi.toml (config/iceoryx/)
   double stop_timeout_s = 5.0;            // SIGTERM -> SIGKILL
   std::vector<ComponentSpec> components;  // start order
   // Components whose executable is "none" (e.g. --arg loop_closer=none): validated, not started.
@@ -83,6 +90,8 @@ struct PipelineOverrides {
   std::string host;               // --host NAME: run the components of the file's hosts.NAME group
   std::vector<std::string> only;  // --only a,b: run only these components (the others run elsewhere)
   std::optional<std::string> security_dir;  // --security DIR ("" = plain even if the file says otherwise)
+  std::optional<std::string> image_transport;  // --image-transport udp|shm
+  std::optional<int> image_domain_id;          // --image-domain N
 };
 
 // The identity the supervisor itself runs as in a secure pipeline.

@@ -118,6 +118,9 @@ std::vector<std::string> Supervisor::child_args(const Managed& component) const 
                              component.spec.name, "--log-level", std::string(runtime::to_string(options_.log_level))});
     if (!component.spec.config.empty()) args.insert(args.end(), {"--config", component.spec.config.string()});
     if (!pipeline_.dds_config.empty()) args.insert(args.end(), {"--dds-config", pipeline_.dds_config});
+    if (pipeline_.image_transport == runtime::ImageTransport::kShm) {
+      args.insert(args.end(), {"--image-transport", "shm", "--image-domain", std::to_string(pipeline_.image_domain_id)});
+    }
   }
   return args;
 }
@@ -472,7 +475,19 @@ int Supervisor::run() {
             "'; logs in ", options_.log_dir.string());
   dds_->status.set_state(runtime::ComponentState::kRunning);
   bool started_all = true;
+  if (pipeline_.image_transport == runtime::ImageTransport::kShm) {
+    log_.info("stereo images over shared memory on domain ", pipeline_.image_domain_id, ", every other topic on ",
+              pipeline_.domain_id);
+    try {
+      roudi_ = RoudiProcess::ensure(pipeline_.roudi_config, options_.log_dir / "iox-roudi.log", log_);
+    } catch (const std::exception& error) {
+      log_.error(error.what());
+      fail(error.what());
+      started_all = false;
+    }
+  }
   for (auto& component : components_) {
+    if (!started_all) break;
     if (component->spec.remote) {
       if (!wait_remote_ready(*component)) {
         started_all = false;
@@ -505,6 +520,7 @@ int Supervisor::run() {
   // Why, for the supervisors of other hosts that follow this one's end (empty: a normal end).
   dds_->status.set_state(runtime::ComponentState::kShuttingDown, failed_ ? "pipeline failed: " + failure_ : "");
   stop_all();
+  roudi_.reset();  // after every component that used its shared memory
   read_status();  // the last results
   clear_progress();
   if (failed_) {

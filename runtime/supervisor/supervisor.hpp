@@ -13,6 +13,7 @@
 #include "runtime/log.hpp"
 #include "runtime/supervisor/child_process.hpp"
 #include "runtime/supervisor/pipeline.hpp"
+#include "runtime/supervisor/roudi_process.hpp"
 #include "runtime/supervisor/run_progress.hpp"
 
 namespace heslam::supervisor {
@@ -87,6 +88,9 @@ class Supervisor {
   SupervisorOptions options_;
   runtime::Logger log_;
   std::unique_ptr<Dds> dds_;
+  // image_transport shm: the iox-roudi this supervisor started (null: udp, or one was running already);
+  // stopped after the components.
+  std::unique_ptr<RoudiProcess> roudi_;
   std::vector<std::unique_ptr<Managed>> components_;
   std::size_t name_width_ = 0;
   bool failed_ = false;

@@ -13,7 +13,10 @@
 #include <thread>
 #include <vector>
 
+#include <dds/ddsc/dds_loan_api.h>
+
 #include "components/core/camera/stereo_rectifier.hpp"
+#include "runtime/image_transport.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/reader.hpp"
 #include "runtime/shutdown.hpp"
@@ -112,9 +115,10 @@ class Replay {
         rectifier_(dataset_.calibration),
         calibration_message_(dataset_.calibration, rectifier_.camera()),
         participant_({.domain_id = common.domain_id, .dds_config = common.dds_config}),
+        image_participant_(participant_, common.image_transport, common.image_domain_id, common.dds_config),
         topics_(common.ns),
         calibration_writer_(participant_, topics_.calibration()),
-        frame_writer_(participant_, topics_.stereo()),
+        frame_writer_(image_participant_.get(), topics_.stereo()),
         status_(participant_, topics_, common.name, stats_),
         progress_(options.progress),
         pacer_(options.rate) {
@@ -127,6 +131,16 @@ class Replay {
     // Frames per pass, for whoever shows the progress of the whole run (heslam-supervisor).
     stats_.count("frames_total", counts_.total);
     counts_.unpaired_rows = static_cast<std::size_t>(dataset_.skipped_rows);
+  }
+
+  // "" for UDP; for --image-transport shm the images' domain, and whether Cyclone really uses shared
+  // memory for the frame writer (it falls back to UDP silently when a QoS or the type does not qualify).
+  std::string image_transport_note() {
+    if (!image_participant_.separate_domain()) return "";
+    const std::string domain = std::to_string(image_participant_.get().domain_id());
+    return dds_is_shared_memory_available(frame_writer_.handle())
+               ? " (shared memory, domain " + domain + ")"
+               : " (domain " + domain + ", shared memory NOT available: Cyclone sends over UDP)";
   }
 
   int run() {
@@ -195,7 +209,8 @@ class Replay {
     char rate[32];
     std::snprintf(rate, sizeof(rate), "rate %g", options_.rate);
     log_.info("replaying ", dataset_.root.string(), " (", to_string(dataset_.format), ", ", dataset_.frames.size(),
-              " frames, ", span, " s) on domain ", participant_.domain_id(), " as '", frame_writer_.name(), "', ",
+              " frames, ", span, " s) on domain ", participant_.domain_id(), " as '", frame_writer_.name(), "'",
+              image_transport_note(), ", ",
               options_.lockstep ? "lockstep" : rate);
   }
 
@@ -448,6 +463,7 @@ class Replay {
   StereoRectifier rectifier_;
   CalibrationMessage calibration_message_;
   runtime::Participant participant_;
+  runtime::ImageParticipant image_participant_;  // the frames' (--image-transport shm: a domain of their own)
   runtime::Topics topics_;
   runtime::Writer<msg::StereoCalibration> calibration_writer_;
   runtime::Writer<msg::StereoFrame> frame_writer_;

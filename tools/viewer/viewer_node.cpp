@@ -76,7 +76,10 @@ void ViewerNode::configure(const runtime::Config& /*config*/) {
   point_state_reader_.emplace(participant(), topics().map_points());
   correction_reader_.emplace(participant(), topics().loop_corrections(),
                              runtime::Qos(runtime::QosRole::kCorrections).keep_last(kCorrectionDepth));
-  waitset_ = std::make_unique<runtime::WaitSet>(participant());
+  // Frames on a shared-memory domain of their own (--image-transport shm) need a waitset across domains.
+  waitset_ = std::make_unique<runtime::WaitSet>(participant(), image_participant().separate_domain()
+                                                                   ? runtime::WaitScope::kAllDomains
+                                                                   : runtime::WaitScope::kParticipant);
   waitset_->attach(*odometry_reader_);
   waitset_->attach(*calibration_reader_);
   waitset_->attach(*keyframe_reader_);
@@ -134,7 +137,7 @@ void ViewerNode::maybe_subscribe_frames() {
   const bool no_frontend = odometry_reader_->matched_writers() == 0 && Clock::now() - started_ >= kNoFrontendWait;
   if (!odometry_seen_ && !no_frontend) return;
   // Best effort, keep the newest only: a slow viewer drops frames, never the camera's.
-  frame_reader_.emplace(participant(), topics().stereo(), runtime::Qos(runtime::QosRole::kSpy));
+  frame_reader_.emplace(image_participant().get(), topics().stereo(), runtime::Qos(runtime::QosRole::kSpy));
   waitset_->attach(*frame_reader_);
   log().debug("reading ", topics().stereo().name, odometry_seen_ ? " (the frontend is running)" : " (no frontend)");
 }

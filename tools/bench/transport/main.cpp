@@ -13,6 +13,9 @@
 //   heslam-bench-transport [--frames N] [--domain D] [--bin DIR] [--euroc DIR] [--ddsperf-seconds S]
 //                          [--take reuse|fresh]   (reuse, the default: take_into one sample, as the frontend)
 //                          [--no-plain-c]         (skip the plain C API reference rows)
+//                          [--image-transport shm --image-domain N]  (replay -> subscriber over iceoryx
+//                           shared memory, docs/topics.md; needs iox-roudi running; the plain C and
+//                           ddsperf rows stay UDP)
 //                          [--replay-via "ip netns exec NS"]  (start the replay through this command, e.g.
 //                           in another network namespace: the latency over a real link; docs/deployment.md)
 //
@@ -50,6 +53,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "runtime/args.hpp"
+#include "runtime/image_transport.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/qos.hpp"
 #include "runtime/reader.hpp"
@@ -136,16 +140,21 @@ double percentile(std::vector<double> values, double p) {
 
 Result measure(const std::string& name, const fs::path& dataset, const fs::path& bin_dir, int domain,
                std::size_t frames, std::size_t recording_frames, bool reuse_buffers,
-               const std::vector<std::string>& replay_via) {
+               const std::vector<std::string>& replay_via, runtime::ImageTransport transport, int image_domain) {
   runtime::Participant participant({.domain_id = domain, .dds_config = ""});
+  // --image-transport shm: the frames on their shared-memory domain, as the frontend reads them.
+  runtime::ImageParticipant images(participant, transport, image_domain, "");
   const runtime::Topics topics;
-  runtime::Reader<msg::StereoFrame> reader(participant, topics.stereo());
-  runtime::WaitSet waitset(participant);
+  runtime::Reader<msg::StereoFrame> reader(images.get(), topics.stereo());
+  runtime::WaitSet waitset(images.get());
   waitset.attach(reader);
 
   std::vector<std::string> args{(bin_dir / "heslam-replay").string(), dataset.string(), "--rate", "1", "--loop",
                                 "--domain", std::to_string(domain), "--no-progress", "--no-keyboard",
                                 "--log-level", "error"};
+  if (images.separate_domain()) {
+    args.insert(args.end(), {"--image-transport", "shm", "--image-domain", std::to_string(image_domain)});
+  }
   args.insert(args.begin(), replay_via.begin(), replay_via.end());
   std::vector<char*> argv;
   for (std::string& arg : args) argv.push_back(arg.data());
@@ -395,9 +404,11 @@ int run(int argc, char** argv) {
               "p99_us", "max_us", "wake_p50");
   std::fflush(stdout);
   try {
-    print(measure("EuRoC 752x480", euroc_dir, bin_dir, common.domain_id, frames, euroc.frames.size(), reuse_buffers, replay_via));
+    print(measure("EuRoC 752x480", euroc_dir, bin_dir, common.domain_id, frames, euroc.frames.size(), reuse_buffers, replay_via,
+                  common.image_transport, common.image_domain_id));
     std::fflush(stdout);
-    print(measure("KITTI 1241x376", kitti, bin_dir, common.domain_id, frames, euroc.frames.size(), reuse_buffers, replay_via));
+    print(measure("KITTI 1241x376", kitti, bin_dir, common.domain_id, frames, euroc.frames.size(), reuse_buffers, replay_via,
+                  common.image_transport, common.image_domain_id));
   } catch (...) {
     fs::remove_all(kitti);
     throw;
