@@ -154,7 +154,7 @@ TEST_F(MultiHost, LockstepOverTwoHostsIsBitIdenticalToOneHost) {
   EXPECT_EQ(read_file(dir_.path() / "two.keyframes.txt"), read_file(dir_.path() / "single.keyframes.txt"));
   std::cout << "[ figures ] MH01 lockstep over two namespaces: ATE " << test::ate_rmse_m(dataset_, dir_.path() / "two.txt") * 1000
             << " mm (single host " << test::ate_rmse_m(dataset_, dir_.path() / "single.txt") * 1000 << " mm), "
-            << std::count(split.begin(), split.end(), '\n') << " poses\n";
+            << count_poses(dir_.path() / "two.txt") << " poses\n";
 }
 
 // Real time, and the link between the hosts cut for 2 s mid-run: the run goes on and ends normally;
