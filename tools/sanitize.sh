@@ -29,9 +29,11 @@ asan_targets=(heslam_runtime_tests heslam_runtime_shutdown_tests heslam_runtime_
   heslam_loop_closer_unit_test heslam_loop_closer_e2e_test heslam-loop-closer heslam-local-mapper)
 # Under ASan the multi-process tests run 2-4x slower: the long sequences (corridor loop, a loop
 # closer started by hand mid-run) are left out; the full system on MH01 and the room stay.
+# The real-time pipelines are named one by one: a bare "RealTime" also left out unit tests
+# (MirrorOfARealTimeRun.*, ReplayPacer.RealTimeDoubleSpeedAndFlatOut) until 2026-11-26.
 # ctest lists a test executable that this build did not make as one test named TARGET_NOT_BUILT;
 # the pattern below leaves those out (they are the executables outside asan_targets).
-asan_excluded='Corridor|Street|Kidnapped|Teleported|Soak|RealTime|FullSystemDeterministic|StartedByHand|_NOT_BUILT'
+asan_excluded='Corridor|Street|Kidnapped|Teleported|Soak|Mh01RealTime|MultiHost\.RealTime|PipelineOutcomeRealTime|SpyHzMeasuresRealTime|FullSystemDeterministic|StartedByHand|_NOT_BUILT'
 # TSan: the test executables whose code starts threads — the runtime (status heartbeat, shutdown
 # watcher, supervisor with real processes), the right-image worker of the stereo pipeline (vision
 # tests and the frontend on real images), the loop closer's global BA thread — and one lockstep run

@@ -10,6 +10,7 @@
 #include "components/core/camera/image_limits.hpp"
 #include "components/frontend/message_checks.hpp"
 #include "runtime/sequence.hpp"
+#include "runtime/wire_enum.hpp"
 
 namespace heslam::frontend {
 namespace {
@@ -44,12 +45,12 @@ CameraModel to_camera_model(const msg::CameraModel& message, const std::string& 
     throw std::runtime_error("calibration '" + source + "': " + which +
                              ": expected a positive image size and focal length");
   }
-  switch (message.distortion_model) {
+  switch (runtime::wire_value(message.distortion_model)) {  // any value may come (runtime/wire_enum.hpp)
     case heslam_msg_DISTORTION_NONE: camera.distortion_model = DistortionModel::kNone; break;
     case heslam_msg_DISTORTION_RADIAL_TANGENTIAL: camera.distortion_model = DistortionModel::kRadialTangential; break;
     default:
       throw std::runtime_error("calibration '" + source + "': " + which + ".distortion_model: unknown value " +
-                               std::to_string(static_cast<int>(message.distortion_model)));
+                               std::to_string(runtime::wire_value(message.distortion_model)));
   }
   const auto distortion = runtime::view(message.distortion);
   camera.distortion.assign(distortion.begin(), distortion.end());

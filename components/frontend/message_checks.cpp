@@ -7,6 +7,7 @@
 
 #include "components/core/camera/image_limits.hpp"
 #include "runtime/sequence.hpp"
+#include "runtime/wire_enum.hpp"
 
 namespace heslam::frontend {
 namespace {
@@ -99,10 +100,11 @@ std::optional<std::string> check(const msg::StereoFrame& frame) {
     return text("width_px x height_px ", frame.width_px, "x", frame.height_px, ": ", image_size_expectation());
   }
   std::size_t channels = 0;
-  switch (frame.encoding) {
+  // Enum fields are read as the integers on the wire (runtime/wire_enum.hpp): any value may come.
+  switch (runtime::wire_value(frame.encoding)) {
     case heslam_msg_ENCODING_MONO8: channels = 1; break;
     case heslam_msg_ENCODING_BGR8: channels = 3; break;
-    default: return text("unknown encoding ", static_cast<int>(frame.encoding));
+    default: return text("unknown encoding ", runtime::wire_value(frame.encoding));
   }
   const std::size_t expected = std::size_t{frame.width_px} * frame.height_px * channels;
   const std::size_t left = frame.left._length;
@@ -131,9 +133,9 @@ std::optional<std::string> check(const msg::StereoCalibration& calibration) {
 }
 
 std::optional<std::string> check(const msg::Odometry& odometry) {
-  if (odometry.state != heslam_msg_TRACKING_NOT_INITIALIZED && odometry.state != heslam_msg_TRACKING_OK &&
-      odometry.state != heslam_msg_TRACKING_LOST) {
-    return text("state ", static_cast<int>(odometry.state), " is not a TrackingState");
+  if (!runtime::wire_value_is_one_of(odometry.state, heslam_msg_TRACKING_NOT_INITIALIZED, heslam_msg_TRACKING_OK,
+                                     heslam_msg_TRACKING_LOST)) {
+    return text("state ", runtime::wire_value(odometry.state), " is not a TrackingState");
   }
   if (auto problem = check(odometry.T_wc, "T_wc")) return problem;
   return check(odometry.T_ref_c, "T_ref_c");
@@ -204,8 +206,8 @@ std::optional<std::string> check(const msg::MapPointState& point) {
 std::optional<std::string> check(const msg::LoopCorrection& correction) {
   if (correction.id == 0) return std::string("id is 0 (no correction)");
   const std::string name = text("correction ", correction.id, ": ");
-  if (correction.kind != heslam_msg_CORRECTION_LOOP && correction.kind != heslam_msg_CORRECTION_GLOBAL_BA) {
-    return text(name, "kind ", static_cast<int>(correction.kind), " is not a CorrectionKind");
+  if (!runtime::wire_value_is_one_of(correction.kind, heslam_msg_CORRECTION_LOOP, heslam_msg_CORRECTION_GLOBAL_BA)) {
+    return text(name, "kind ", runtime::wire_value(correction.kind), " is not a CorrectionKind");
   }
   if (auto problem = check(correction.T_matched_loop, "T_matched_loop")) return name + *problem;
   for (const msg::CorrectedKeyframePose& pose : runtime::view(correction.corrected_poses)) {

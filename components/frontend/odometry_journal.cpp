@@ -37,6 +37,10 @@ bool read_line(const std::string& line, msg::Odometry& odometry, bool& finished)
       end != ";") {
     return false;
   }
+  // A state that is no TrackingState is a damaged line (casting it to the enum would be undefined).
+  if (state != heslam_msg_TRACKING_NOT_INITIALIZED && state != heslam_msg_TRACKING_OK && state != heslam_msg_TRACKING_LOST) {
+    return false;
+  }
   odometry.seq = seq;
   odometry.stamp_ns = stamp_ns;
   odometry.state = static_cast<heslam_msg_TrackingState>(state);

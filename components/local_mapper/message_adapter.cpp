@@ -8,6 +8,7 @@
 
 #include "components/frontend/message_adapter.hpp"
 #include "runtime/sequence.hpp"
+#include "runtime/wire_enum.hpp"
 
 namespace heslam::local_mapper {
 
@@ -100,8 +101,9 @@ LoopCorrection to_loop_correction(const msg::LoopCorrection& message) {
     }
     correction.point_merges.emplace_back(merge.from_id, merge.into_id);
   }
-  if (message.kind != heslam_msg_CORRECTION_LOOP && message.kind != heslam_msg_CORRECTION_GLOBAL_BA) {
-    throw std::runtime_error(name + ": kind " + std::to_string(static_cast<int>(message.kind)) + " is unknown");
+  // Any value may come in an enum field (runtime/wire_enum.hpp): checked as the integer first.
+  if (!runtime::wire_value_is_one_of(message.kind, heslam_msg_CORRECTION_LOOP, heslam_msg_CORRECTION_GLOBAL_BA)) {
+    throw std::runtime_error(name + ": kind " + std::to_string(runtime::wire_value(message.kind)) + " is unknown");
   }
   correction.kind = message.kind == heslam_msg_CORRECTION_GLOBAL_BA ? CorrectionKind::kGlobalBundleAdjustment
                                                              : CorrectionKind::kLoop;

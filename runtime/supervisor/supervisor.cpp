@@ -21,6 +21,7 @@
 #include "runtime/stats.hpp"
 #include "runtime/status.hpp"
 #include "runtime/topics.hpp"
+#include "runtime/wire_enum.hpp"
 
 namespace heslam::supervisor {
 namespace {
@@ -188,6 +189,11 @@ void Supervisor::read_status() {
   for (auto& received : dds_->status_reader.take()) {
     if (!received.info.valid_data) continue;
     const msg::ComponentStatus& status = *received.sample;
+    // A state of no enumerator (runtime/wire_enum.hpp) says nothing about the component: ignored.
+    if (!runtime::wire_value_is_one_of(status.state, heslam_msg_STATE_CONFIGURING, heslam_msg_STATE_RUNNING,
+                                       heslam_msg_STATE_SHUTTING_DOWN, heslam_msg_STATE_FAILED)) {
+      continue;
+    }
     StatusSeen& seen = dds_->seen[runtime::to_string(status.name)];
     seen.pid = status.pid;
     seen.state = status.state;

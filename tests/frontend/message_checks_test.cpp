@@ -10,6 +10,7 @@
 
 #include "components/frontend/message_checks.hpp"
 #include "runtime/sequence.hpp"
+#include "runtime/wire_enum.hpp"
 
 namespace heslam::frontend {
 namespace {
@@ -50,8 +51,12 @@ TEST(MessageChecks, OdometryWithANanPoseOrUnknownStateIsRefused) {
   odometry.T_ref_c.position_m[0] = kNaN;
   EXPECT_NE(problem(check(odometry)).find("T_ref_c.position_m[0] is nan"), std::string::npos);
   odometry.T_ref_c = identity();
-  odometry.state = static_cast<heslam_msg_TrackingState>(7);
+  // As a sample from the wire holds it: 7 is no value of the C++ enum, so it is stored as bytes
+  // (a cast would be undefined behaviour, which UBSan reports; runtime/wire_enum.hpp).
+  runtime::set_wire_value(odometry.state, 7);
   EXPECT_NE(problem(check(odometry)).find("state 7"), std::string::npos);
+  runtime::set_wire_value(odometry.state, 0xFFFFFFFF);
+  EXPECT_NE(problem(check(odometry)).find("state 4294967295 is not a TrackingState"), std::string::npos);
 }
 
 TEST(MessageChecks, KeyframeSizesIdsAndNumbers) {
@@ -127,6 +132,9 @@ TEST(MessageChecks, CorrectionsWithNanPosesOrZeroIdsAreRefused) {
             std::string::npos);
   poses[0] = {0, identity()};
   EXPECT_NE(problem(check(correction)).find("keyframe id 0"), std::string::npos);
+  poses[0] = {7, identity()};
+  runtime::set_wire_value(correction.kind, 5);
+  EXPECT_EQ(problem(check(correction)), "correction 11: kind 5 is not a CorrectionKind");
 }
 
 TEST(MessageChecks, CalibrationWithANanFieldIsRefused) {
@@ -151,6 +159,8 @@ TEST(MessageChecks, FrameSizesMustMatch) {
   EXPECT_FALSE(check(frame));
   runtime::borrow(frame.right, short_image);
   EXPECT_EQ(problem(check(frame)), "expected 12 bytes per image for 4x3x1, right has 8");
+  runtime::set_wire_value(frame.encoding, 9);
+  EXPECT_EQ(problem(check(frame)), "unknown encoding 9");
 }
 
 }  // namespace

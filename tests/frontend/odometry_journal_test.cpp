@@ -5,6 +5,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
+#include <string>
 
 #include "components/frontend/odometry_journal.hpp"
 
@@ -74,6 +76,34 @@ TEST(OdometryJournal, ResumesTheFramesOfItsRunExactlyAndSurvivesATornLine) {
   EXPECT_TRUE(journal.open_for_run("run-a").frames.empty());  // ... and gone for good
   journal.remove();
   EXPECT_FALSE(std::filesystem::exists(path));
+}
+
+// A line whose state is no TrackingState (a damaged file) is skipped and counted like a torn one:
+// it is never turned into the enum (undefined for such a value; runtime/wire_enum.hpp).
+TEST(OdometryJournal, ALineWithAnUnknownStateIsSkipped) {
+  const std::filesystem::path path = std::filesystem::temp_directory_path() / "heslam_odometry_journal_state.frontend";
+  std::filesystem::remove(path);
+  {
+    OdometryJournal journal(path);
+    journal.open_for_run("run-a");
+    journal.append(odometry(0, heslam_msg_TRACKING_OK, 1.0), true);
+    journal.append(odometry(1, heslam_msg_TRACKING_OK, 2.0), true);
+  }
+  std::stringstream text;
+  text << std::ifstream(path).rdbuf();
+  std::string content = text.str();
+  const std::size_t last = content.rfind('\n', content.size() - 2) + 1;  // the start of seq 1's line
+  const std::size_t state_at = content.find(' ', content.find(' ', last) + 1) + 1;  // its third field
+  ASSERT_EQ(content.substr(last, 2), "1 ");
+  ASSERT_EQ(content[state_at], '1');  // TRACKING_OK
+  content[state_at] = '7';
+  std::ofstream(path, std::ios::trunc) << content;
+  OdometryJournal journal(path);
+  const OdometryJournal::Opened opened = journal.open_for_run("run-a");
+  ASSERT_EQ(opened.frames.size(), 1u);
+  EXPECT_EQ(opened.frames[0].seq, 0u);
+  EXPECT_EQ(opened.torn_lines, 1);
+  journal.remove();
 }
 
 TEST(OdometryJournal, UnwritablePathThrowsNamingTheFile) {

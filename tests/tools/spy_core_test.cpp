@@ -9,6 +9,7 @@
 #include "components/core/map/ids.hpp"
 
 #include "runtime/sequence.hpp"
+#include "runtime/wire_enum.hpp"
 #include "tools/spy/arrival_window.hpp"
 #include "tools/spy/endpoint_qos.hpp"
 #include "tools/spy/message_format.hpp"
@@ -116,6 +117,23 @@ TEST(MessageFormat, StereoFrameIsSummarised) {
   EXPECT_NE(text.find("mean_intensity_left_right: 10.00 / 31.00\n"), std::string::npos);
   EXPECT_EQ(text.find("0a0a0a"), std::string::npos);  // no pixel bytes in the summary
   EXPECT_NE(format_message(frame, {.full = true}).find("0a0a0a0a"), std::string::npos);
+}
+
+// Enum fields holding a value of no enumerator (a hostile or newer writer) are shown as unknown,
+// read as their wire integers (runtime/wire_enum.hpp), never loaded as the enum.
+TEST(MessageFormat, UnknownEnumValuesAreShownAsUnknown) {
+  msg::Odometry odometry{};
+  odometry.T_wc.orientation_xyzw[3] = odometry.T_ref_c.orientation_xyzw[3] = 1.0;
+  odometry.state = heslam_msg_TRACKING_LOST;
+  EXPECT_NE(format_message(odometry, {}).find("state: LOST\n"), std::string::npos);
+  runtime::set_wire_value(odometry.state, 7);
+  EXPECT_NE(format_message(odometry, {}).find("state: unknown\n"), std::string::npos);
+  msg::ComponentStatus status{};
+  runtime::set_wire_value(status.state, 9);
+  EXPECT_NE(format_message(status, {}).find("state: unknown\n"), std::string::npos);
+  msg::StereoFrame frame{};
+  runtime::set_wire_value(frame.encoding, 3);
+  EXPECT_NE(format_message(frame, {}).find("size: 0x0 unknown\n"), std::string::npos);
 }
 
 TEST(MessageFormat, KeyframeShowsIdPoseAndKeypointCount) {

@@ -11,6 +11,7 @@
 #include "components/frontend/message_checks.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
+#include "runtime/wire_enum.hpp"
 
 namespace heslam::recorder {
 namespace {
@@ -34,8 +35,9 @@ constexpr const char* kRejectionCounters[] = {"rejected_odometry", "rejected_key
                                              runtime::kSecondWriterSamples, runtime::kSecondWriters,
                                              runtime::kOtherRunWriters};
 
-const char* state_name(heslam_msg_TrackingState state) {
-  switch (state) {
+// The field as its wire integer (runtime/wire_enum.hpp): a sample may hold a value of no enumerator.
+const char* state_name(const heslam_msg_TrackingState& field) {
+  switch (runtime::wire_value(field)) {
     case heslam_msg_TRACKING_OK: return "OK";
     case heslam_msg_TRACKING_LOST: return "LOST";
     case heslam_msg_TRACKING_NOT_INITIALIZED: return "NOT_INITIALIZED";
@@ -276,7 +278,7 @@ std::size_t Recorder::drain() {
     RecordedFrame frame;
     frame.stamp_ns = odometry.stamp_ns;
     frame.seq = odometry.seq;
-    frame.tracked = odometry.state == heslam_msg_TRACKING_OK;
+    frame.tracked = runtime::wire_value(odometry.state) == heslam_msg_TRACKING_OK;
     frame.state = state_name(odometry.state);
     frame.reference = odometry.reference_keyframe_id;
     frame.T_ref_c = frontend::to_pose(odometry.T_ref_c);

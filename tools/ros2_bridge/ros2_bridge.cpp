@@ -3,6 +3,8 @@
 
 #include <stdexcept>
 
+#include "runtime/wire_enum.hpp"
+
 namespace heslam::ros2 {
 
 namespace {
@@ -83,7 +85,7 @@ void Ros2Bridge::configure(const runtime::Config& config) {
 void Ros2Bridge::on_odometry(const msg::Odometry& odometry) {
   newest_stamp_ns_ = std::max(newest_stamp_ns_, odometry.stamp_ns);
   // A frame that is not tracked carries no pose (the identity): ROS 2 gets nothing for it.
-  if (odometry.state != heslam_msg_TRACKING_OK) {
+  if (runtime::wire_value(odometry.state) != heslam_msg_TRACKING_OK) {  // any value may come (runtime/wire_enum.hpp)
     stats().count("untracked_frames_skipped");
     return;
   }

@@ -8,6 +8,7 @@
 
 #include "components/core/map/ids.hpp"
 #include "runtime/sequence.hpp"
+#include "runtime/wire_enum.hpp"
 
 namespace heslam {
 
@@ -80,8 +81,10 @@ std::string camera(const msg::RectifiedStereoCamera& value) {
          std::to_string(value.width_px) + "x" + std::to_string(value.height_px) + "}";
 }
 
-const char* encoding_name(heslam_msg_ImageEncoding encoding) {
-  switch (encoding) {
+// Enum fields are shown from their wire integers (runtime/wire_enum.hpp): a spied sample may hold
+// a value of no enumerator, shown as "unknown".
+const char* encoding_name(const heslam_msg_ImageEncoding& field) {
+  switch (runtime::wire_value(field)) {
     case heslam_msg_ENCODING_MONO8: return "mono8";
     case heslam_msg_ENCODING_BGR8: return "bgr8";
   }
@@ -96,7 +99,7 @@ std::string raw_camera(const msg::CameraModel& value) {
   return "{size: " + std::to_string(value.width_px) + "x" + std::to_string(value.height_px) + ", fx_px: " +
          number(value.fx_px) + ", fy_px: " + number(value.fy_px) + ", cx_px: " + number(value.cx_px) +
          ", cy_px: " + number(value.cy_px) + ", distortion: " +
-         (value.distortion_model == heslam_msg_DISTORTION_RADIAL_TANGENTIAL ? "radtan " : "none ") + distortion +
+         (runtime::wire_value(value.distortion_model) == heslam_msg_DISTORTION_RADIAL_TANGENTIAL ? "radtan " : "none ") + distortion +
          ", T_BS: " + array(value.T_BS) + "}";
 }
 
@@ -149,9 +152,11 @@ std::string format_message(const msg::StereoCalibration& calibration, const Form
 
 std::string format_message(const msg::Odometry& odometry, const FormatOptions& options) {
   Text text;
-  const char* state = odometry.state == heslam_msg_TRACKING_OK         ? "OK"
-                      : odometry.state == heslam_msg_TRACKING_LOST     ? "LOST"
-                                                                       : "NOT_INITIALIZED";
+  const std::int64_t tracking = runtime::wire_value(odometry.state);
+  const char* state = tracking == heslam_msg_TRACKING_OK                 ? "OK"
+                      : tracking == heslam_msg_TRACKING_LOST             ? "LOST"
+                      : tracking == heslam_msg_TRACKING_NOT_INITIALIZED  ? "NOT_INITIALIZED"
+                                                                         : "unknown";
   text.line(0, "seq", std::to_string(odometry.seq));
   text.line(0, "stamp_ns", std::to_string(odometry.stamp_ns));
   text.line(0, "state", state);
@@ -272,10 +277,12 @@ std::string format_message(const msg::KeyframeDone& done, const FormatOptions& /
 
 std::string format_message(const msg::ComponentStatus& status, const FormatOptions& options) {
   Text text;
-  const char* state = status.state == heslam_msg_STATE_CONFIGURING   ? "CONFIGURING"
-                      : status.state == heslam_msg_STATE_RUNNING     ? "RUNNING"
-                      : status.state == heslam_msg_STATE_SHUTTING_DOWN ? "SHUTTING_DOWN"
-                                                                       : "FAILED";
+  const std::int64_t component_state = runtime::wire_value(status.state);
+  const char* state = component_state == heslam_msg_STATE_CONFIGURING     ? "CONFIGURING"
+                      : component_state == heslam_msg_STATE_RUNNING       ? "RUNNING"
+                      : component_state == heslam_msg_STATE_SHUTTING_DOWN ? "SHUTTING_DOWN"
+                      : component_state == heslam_msg_STATE_FAILED        ? "FAILED"
+                                                                          : "unknown";
   text.line(0, "name", runtime::to_string(status.name));
   text.line(0, "pid", std::to_string(status.pid));
   text.line(0, "executable", runtime::to_string(status.executable));

@@ -6,6 +6,7 @@
 
 #include "components/frontend/message_adapter.hpp"
 #include "runtime/sequence.hpp"
+#include "runtime/wire_enum.hpp"
 
 namespace heslam::viewer {
 namespace {
@@ -94,7 +95,7 @@ void ViewerModel::add_frame(const msg::StereoFrame& message) {
 
 void ViewerModel::add_odometry(const msg::Odometry& message, Clock::time_point now) {
   OdometryEntry entry;
-  switch (message.state) {
+  switch (runtime::wire_value(message.state)) {  // any value may come (runtime/wire_enum.hpp)
     case heslam_msg_TRACKING_OK: entry.status = TrackingStatus::kTracking; break;
     case heslam_msg_TRACKING_LOST: entry.status = TrackingStatus::kLost; break;
     default: entry.status = TrackingStatus::kNotInitialized; break;
