@@ -85,6 +85,7 @@ void read_tracker(const runtime::Config& c, TrackerOptions& t) {
   read(c, "tracker.pose_optimization_rounds", t.pose_optimization_rounds, 1, 100);
   read(c, "tracker.pose_optimization_iterations", t.pose_optimization_iterations, 1, 1000);
   read(c, "tracker.disparity_sigma_ratio", t.disparity_sigma_ratio, 0.01, 100.0);
+  read(c, "tracker.near_clip_disparity_sigma_factor", t.near_clip_disparity_sigma_factor, 0.0, 1000.0);
   read(c, "tracker.stationary_test_chi2", t.stationary_test_chi2, 0.0, 1e6);
   read(c, "tracker.rotation_only_test_chi2", t.rotation_only_test_chi2, 0.0, 1e6);
   read(c, "tracker.max_frames_between_keyframes", t.max_frames_between_keyframes, 1);

@@ -234,6 +234,9 @@ TEST(StereoFeaturePipeline, ShippedSettingsGiveTheDocumentedOptions) {
   EXPECT_EQ(euroc.stereo.max_distance, 100);
   EXPECT_EQ(euroc.stereo.cost, StereoMatcherOptions::MatchCost::kSad);
   EXPECT_EQ(euroc.right_features_factor, 2.f);
+  EXPECT_FALSE(euroc.stereo.clip_masked_sad);
+  EXPECT_EQ(euroc.clip_edge.radius_px, 6);
+  EXPECT_EQ(euroc.clip_edge.min_clipped_fraction, 0.01);
   for (const char* name : {"KITTI00-02.yaml", "KITTI03.yaml", "KITTI04-12.yaml"}) {
     const StereoFeaturePipelineOptions kitti = StereoFeaturePipelineOptions::load(dir / name);
     EXPECT_EQ(kitti.orb.features, 2000) << name;
@@ -248,6 +251,14 @@ TEST(StereoFeaturePipeline, ShippedSettingsGiveTheDocumentedOptions) {
     FAIL() << "expected an error";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("heslam_bad_pipeline.yaml: ORBextractor.nFeatures"), std::string::npos)
+        << e.what();
+  }
+  std::ofstream(bad) << "%YAML:1.0\nStereo.clipEdgeRadius: -1\n";
+  try {
+    StereoFeaturePipelineOptions::load(bad);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("heslam_bad_pipeline.yaml: Stereo.clipEdgeRadius"), std::string::npos)
         << e.what();
   }
 }

@@ -67,10 +67,15 @@ struct StereoFeatures {
   std::vector<Descriptor> descriptors;
   std::vector<float> u_right_px;  // kNoStereo where no stereo match
   std::vector<float> depth_m;     // kNoStereo where no stereo match
+  // Per keypoint, or empty (= none): 1 where the stereo match's window touches a clip edge of a pair
+  // whose cameras are exposed apart (match/clip_edge.hpp). Its depth still seeds map points; its
+  // disparity, biased by where each camera's exposure put the edge, is trusted less in tracking.
+  std::vector<std::uint8_t> near_clip;
   ScalePyramid pyramid = ScalePyramid::make(8, 1.2f);
 
   std::size_t size() const { return keypoints.size(); }
   bool has_stereo(std::size_t i) const { return depth_m[i] > 0.f; }
+  bool stereo_near_clip(std::size_t i) const { return i < near_clip.size() && near_clip[i] != 0; }
 };
 
 }  // namespace heslam

@@ -30,6 +30,14 @@ StereoFeaturePipelineOptions StereoFeaturePipelineOptions::from_yaml(const cv::F
   o.he = HistogramEqualizerOptions::from_yaml(root, source);
   o.orb = OrbOptions::from_yaml(root, source);
   o.stereo = StereoMatcherOptions::from_yaml(root, source);
+  yaml_option::read(root, "Stereo.clipEdgeRadius", source, o.clip_edge.radius_px);
+  yaml_option::read(root, "Stereo.clipEdgeMinFraction", source, o.clip_edge.min_clipped_fraction);
+  if (o.clip_edge.radius_px < 0 || o.clip_edge.radius_px > 50) {
+    yaml_option::fail(source, "Stereo.clipEdgeRadius", "an integer in [0, 50] (pixels on the keypoint's level)");
+  }
+  if (!(o.clip_edge.min_clipped_fraction > 0.0) || o.clip_edge.min_clipped_fraction > 1.0) {
+    yaml_option::fail(source, "Stereo.clipEdgeMinFraction", "a fraction in (0, 1]");
+  }
   yaml_option::read(root, "Pipeline.parallel", source, o.parallel);
   yaml_option::read(root, "Pipeline.rightFeaturesFactor", source, o.right_features_factor);
   if (!(o.right_features_factor >= 1.f) || o.right_features_factor > 4.f) {
@@ -111,6 +119,15 @@ StereoFeatures StereoFeaturePipeline::process(const cv::Mat& left_rect, const cv
   const std::size_t n = left_.keypoints.size();
   out.u_right_px.assign(n, kNoStereo);
   out.depth_m.assign(n, kNoStereo);
+  // Cameras exposed apart: the matched HE applied a tone curve (see the header's clip_edge).
+  const bool exposed_apart = options_.he.stereo == StereoPhotometry::kMatched &&
+                             equalizer_.last_tone_shift() >= options_.he.match_shift_from;
+  ClipLevels clip_levels;
+  if (exposed_apart && options_.stereo.clip_masked_sad) {
+    clip_levels.left_top = clipped_top_level(left_he_, options_.clip_edge.min_clipped_fraction);
+    clip_levels.right_top = clipped_top_level(right_he_, options_.clip_edge.min_clipped_fraction);
+  }
+  stereo_matcher_.set_clip_levels(clip_levels);
   stereo_matcher_.prepare_rows(right_, right_rows_);
   sad_left_half_.clear();
   sad_right_half_.clear();
@@ -131,6 +148,10 @@ StereoFeatures StereoFeaturePipeline::process(const cv::Mat& left_rect, const cv
   stereo_matcher_.reject_outliers(sad_left_half_, out.u_right_px, out.depth_m);
   out.keypoints = left_.keypoints;
   out.descriptors = left_.descriptors;
+  if (exposed_apart && options_.clip_edge.radius_px > 0) {
+    mark_near_clip(clipped_pixel_mask(left_he_, options_.clip_edge.min_clipped_fraction),
+                   clipped_pixel_mask(right_he_, options_.clip_edge.min_clipped_fraction), options_.clip_edge, out);
+  }
   const Clock::time_point t3 = Clock::now();
 
   if (timings) {

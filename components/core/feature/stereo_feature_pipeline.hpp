@@ -14,6 +14,7 @@
 #include "components/core/feature/orb_extractor.hpp"
 #include "components/core/feature/pair_worker.hpp"
 #include "components/core/image/histogram_equalizer.hpp"
+#include "components/core/match/clip_edge.hpp"
 #include "components/core/match/stereo_matcher.hpp"
 
 namespace heslam {
@@ -22,6 +23,10 @@ struct StereoFeaturePipelineOptions {
   HistogramEqualizerOptions he;
   OrbOptions orb;
   StereoMatcherOptions stereo;
+  // Stereo matches near a clip edge are marked (StereoFeatures::near_clip) only in pairs whose
+  // cameras are exposed apart, i.e. where HE.stereo: matched applies a tone curve (its mean shift at
+  // least HE.matchShiftFrom): equally exposed pairs keep their features exactly.
+  ClipEdgeOptions clip_edge;
   // Two threads: the pyramid levels of both images as jobs, then halves of stereo matching.
   bool parallel = true;
   // The right image keeps this many times orb.features (its keypoints serve only stereo matching):
@@ -29,7 +34,8 @@ struct StereoFeaturePipelineOptions {
   // counterpart was not kept on the right cannot get a depth. See docs/vision.md for the measurement.
   float right_features_factor = 2.0f;
 
-  // Reads the HE.*, ORBextractor.*, Stereo.* keys, Pipeline.parallel and Pipeline.rightFeaturesFactor.
+  // Reads the HE.*, ORBextractor.*, Stereo.* keys (Stereo.clipEdgeRadius, .clipEdgeMinFraction for
+  // clip_edge), Pipeline.parallel and Pipeline.rightFeaturesFactor.
   static StereoFeaturePipelineOptions from_yaml(const cv::FileNode& root, const std::string& source);
   // Same, from a settings file (e.g. config/camera/EuRoC.yaml). Throws std::runtime_error naming the
   // file and key on bad input.

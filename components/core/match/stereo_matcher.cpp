@@ -183,6 +183,7 @@ StereoMatcherOptions StereoMatcherOptions::from_yaml(const cv::FileNode& root, c
   yaml_option::read(root, "Stereo.minDepthBaselines", source, o.min_depth_baselines);
   yaml_option::read(root, "Stereo.sadOutlierFactor", source, o.sad_outlier_factor);
   yaml_option::read(root, "Stereo.relativeSadOutliers", source, o.relative_sad_outliers);
+  yaml_option::read(root, "Stereo.clipMaskedSad", source, o.clip_masked_sad);
   using Options = StereoMatcherOptions;
   yaml_option::read_choice(root, "Stereo.sadNormalization", source,
                            {{"center", Options::SadNormalization::kCenter},
@@ -253,6 +254,9 @@ void StereoMatcher::match_range(const OrbFeatures& left, const OrbFeatures& righ
   const int window = 2 * w + 1;
   std::vector<std::uint32_t> census_l(static_cast<std::size_t>(window * window));
   std::vector<std::uint32_t> census_r(static_cast<std::size_t>(window * (window + 2 * L)));
+  const bool masked = options_.clip_masked_sad && options_.cost == StereoMatcherOptions::MatchCost::kSad &&
+                      clip_levels_.any();
+  ClipMaskedSad masked_sad(w, L);
 
   for (std::size_t i = begin; i < end; ++i) {
     const Keypoint& kl = left.keypoints[i];
@@ -294,7 +298,7 @@ void StereoMatcher::match_range(const OrbFeatures& left, const OrbFeatures& righ
     const int vl = static_cast<int>(std::lround(kl.v_px * inv_scale));
     const int ur0 = static_cast<int>(std::lround(right.keypoints[static_cast<std::size_t>(best_right)].u_px * inv_scale));
     // The level images have kOrbBorderPx readable pixels around them.
-    const int reach = w + census_margin;
+    const int reach = w + census_margin + (masked ? 1 : 0);  // the clip mask looks at 4-neighbours
     if (ur0 - L - reach < -kOrbBorderPx || ur0 + L + reach >= image_r.cols + kOrbBorderPx) continue;
     if (vl - reach < -kOrbBorderPx || vl + reach >= image_l.rows + kOrbBorderPx) continue;
     if (ul - reach < -kOrbBorderPx || ul + reach >= image_l.cols + kOrbBorderPx) continue;
@@ -342,6 +346,15 @@ void StereoMatcher::match_range(const OrbFeatures& left, const OrbFeatures& righ
       if (sad < best_sad) {
         best_sad = sad;
         best_shift = shift;
+      }
+    }
+    if (masked && masked_sad.compute(center_l, step_l, row_r, ur0, step_r, clip_levels_, sads)) {
+      best_sad = std::numeric_limits<int>::max();
+      for (int shift = -L; shift <= L; ++shift) {
+        if (sads[static_cast<std::size_t>(shift + L)] < best_sad) {
+          best_sad = sads[static_cast<std::size_t>(shift + L)];
+          best_shift = shift;
+        }
       }
     }
     if (best_shift == -L || best_shift == L) {  // minimum at the edge: no fit possible

@@ -71,7 +71,7 @@ Linearization linearize(const PinholeStereo& camera, const PoseObservation& obs,
   out.size = obs.stereo() ? 3 : 2;
   out.residual(0) = (camera.fx_px * x + camera.cx_px - obs.u_px) * sqrt_info;
   out.residual(1) = (camera.fy_px * y + camera.cy_px - obs.v_px) * sqrt_info;
-  const double disparity_sqrt_info = sqrt_info / disparity_sigma_ratio;
+  const double disparity_sqrt_info = sqrt_info / (disparity_sigma_ratio * obs.disparity_sigma_scale);
   if (obs.stereo()) out.residual(2) = (camera.bf() * inv_z - (obs.u_px - obs.u_right_px)) * disparity_sqrt_info;
   if (!with_jacobian) return out;
   // d(residual)/d(p_c), whitened.
@@ -169,7 +169,8 @@ double observation_chi2(const PinholeStereo& camera, const PoseObservation& obs,
   const Eigen::Vector2d uv = camera.project(p_c);
   double e2 = (uv.x() - obs.u_px) * (uv.x() - obs.u_px) + (uv.y() - obs.v_px) * (uv.y() - obs.v_px);
   if (obs.stereo()) {
-    const double disparity_error = (camera.bf() / p_c.z() - (obs.u_px - obs.u_right_px)) / disparity_sigma_ratio;
+    const double disparity_error = (camera.bf() / p_c.z() - (obs.u_px - obs.u_right_px)) /
+                                   (disparity_sigma_ratio * obs.disparity_sigma_scale);
     e2 += disparity_error * disparity_error;
   }
   return e2 * obs.inv_sigma2;

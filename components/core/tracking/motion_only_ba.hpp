@@ -22,6 +22,9 @@ struct PoseObservation {
   double v_px = 0.0;
   double u_right_px = -1.0;  // < 0: monocular observation
   double inv_sigma2 = 1.0;   // 1 / (level scale)^2
+  // The disparity's sigma is this many times the usual (disparity_sigma_ratio x the keypoint's): a
+  // match near a clip edge (StereoFeatures::near_clip) is trusted less.
+  double disparity_sigma_scale = 1.0;
   bool stereo() const { return u_right_px >= 0.0; }
 };
 

@@ -4,7 +4,7 @@
 namespace heslam {
 
 std::vector<PoseObservation> frame_observations(const Frame& frame, const Map& map,
-                                                std::vector<std::size_t>* keypoint_of) {
+                                                std::vector<std::size_t>* keypoint_of, double near_clip_sigma_factor) {
   std::vector<PoseObservation> observations;
   if (keypoint_of != nullptr) keypoint_of->clear();
   for (std::size_t i = 0; i < frame.size(); ++i) {
@@ -17,6 +17,13 @@ std::vector<PoseObservation> frame_observations(const Frame& frame, const Map& m
     obs.u_px = kp.u_px;
     obs.v_px = kp.v_px;
     obs.u_right_px = frame.features.has_stereo(i) ? frame.features.u_right_px[i] : -1.0;
+    if (obs.stereo() && frame.features.stereo_near_clip(i)) {
+      if (near_clip_sigma_factor > 0.0) {
+        obs.disparity_sigma_scale = near_clip_sigma_factor;
+      } else {
+        obs.u_right_px = -1.0;  // monocular
+      }
+    }
     obs.inv_sigma2 = frame.features.pyramid.inv_sigma2[static_cast<std::size_t>(kp.octave)];
     observations.push_back(obs);
     if (keypoint_of != nullptr) keypoint_of->push_back(i);
@@ -30,7 +37,8 @@ int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camer
     if (frame.point_ids[i] != kNoId && map.point(frame.point_ids[i]) == nullptr) frame.point_ids[i] = kNoId;
   }
   std::vector<std::size_t> keypoint_of;
-  const std::vector<PoseObservation> observations = frame_observations(frame, map, &keypoint_of);
+  const std::vector<PoseObservation> observations =
+      frame_observations(frame, map, &keypoint_of, options.near_clip_disparity_sigma_factor);
   if (observations.empty()) return 0;
   MotionOnlyBaOptions ba;
   ba.rounds = options.pose_optimization_rounds;

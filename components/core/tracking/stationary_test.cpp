@@ -46,7 +46,7 @@ Pose3 rotation_about_centre(std::vector<PoseObservation> observations, const Pin
           camera.fy_px * p.y() * inv_z + camera.cy_px - obs.v_px, sqrt_info);
       if (obs.stereo()) {
         add({0.0, 0.0, -camera.bf() * inv_z * inv_z}, camera.bf() * inv_z - (obs.u_px - obs.u_right_px),
-            sqrt_info / options.disparity_sigma_ratio);
+            sqrt_info / (options.disparity_sigma_ratio * obs.disparity_sigma_scale));
       }
     }
     const Eigen::Vector3d omega = H.ldlt().solve(-g);
@@ -73,7 +73,8 @@ StationaryTestResult test_stationary(const Frame& frame, const Map& map, const P
                                      const TrackerOptions& options, const Pose3& T_wc_last) {
   StationaryTestResult result{FrameMotion::kMoving, frame.T_wc};
   if (!(options.stationary_test_chi2 > 0.0)) return result;
-  const std::vector<PoseObservation> observations = frame_observations(frame, map);
+  const std::vector<PoseObservation> observations =
+      frame_observations(frame, map, nullptr, options.near_clip_disparity_sigma_factor);
   const auto chi2_at = [&](const Pose3& T_wc) {
     const Pose3 T_cw = T_wc.inverse();
     double sum = 0.0;

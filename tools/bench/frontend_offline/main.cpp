@@ -38,6 +38,7 @@ constexpr const char* kUsage =
     "                                       differently; several: the run split into equal blocks)\n"
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
     "       [--period-ms P]   (start a frame every P ms, idle in between, as a camera: 50 for EuRoC's 20 Hz)\n"
+    "       [--near-clip-sigma X]   (tracker.near_clip_disparity_sigma_factor: 0 monocular, 1 as any stereo match)\n"
     "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n"
     "       [--kidnap DIR]   (run on a kidnapped-camera copy written to DIR: frames 60-79 black, 80-159 = 0-79)\n"
     "       [--kidnap-plan B,R,S[,N]]   (the copy's plan: frames B..R-1 black, from R on the source's frames\n"
@@ -121,6 +122,7 @@ int run(int argc, char** argv) {
   heslam::bench::KidnapPlan kidnap_plan;
   bool kidnap_plan_given = false;
   std::string vocabulary;
+  double near_clip_sigma = -1.0;  // < 0: the tracker's default
   for (int i = 2; i < argc; ++i) {
     const std::string arg = argv[i];
     if (i + 1 >= argc) throw std::runtime_error(arg + ": missing value\n" + kUsage);
@@ -153,6 +155,9 @@ int run(int argc, char** argv) {
     } else if (arg == "--kidnap-plan") {
       kidnap_plan = parse_kidnap_plan(arg, value);
       kidnap_plan_given = true;
+    } else if (arg == "--near-clip-sigma") {
+      near_clip_sigma = parse_number<double>(arg, value);
+      if (!(near_clip_sigma >= 0.0)) throw std::runtime_error(arg + ": expected a number >= 0, got '" + value + "'");
     } else if (arg == "--rotation-chi2") {
       options.tracker.rotation_only_test_chi2 = parse_number<double>(arg, value);
     } else {
@@ -163,6 +168,7 @@ int run(int argc, char** argv) {
     options.pipeline = heslam::StereoFeaturePipelineOptions::load(settings);
     heslam::bench::apply_orbslam2_tracker_settings(settings, options.tracker);
   }
+  if (near_clip_sigma >= 0.0) options.tracker.near_clip_disparity_sigma_factor = near_clip_sigma;
   if (!he_mode.empty()) {
     try {
       options.pipeline.he.mode = heslam::parse_he_mode(he_mode);
@@ -202,15 +208,18 @@ int run(int argc, char** argv) {
               heslam::bench::to_string(options.variant), heslam::bench::describe(options.stereo_gain).c_str());
   std::vector<double> features;
   std::vector<double> stereo;
+  std::vector<double> near_clip;
   int still = 0;
   int rotating = 0;
   for (const FrameRecord& f : result.frames) {
     features.push_back(f.features);
     stereo.push_back(f.stereo_features);
+    near_clip.push_back(f.near_clip_features);
     still += f.motion == heslam::FrameMotion::kStill ? 1 : 0;
     rotating += f.motion == heslam::FrameMotion::kRotatingInPlace ? 1 : 0;
   }
-  std::printf("features per frame: median %.0f (stereo %.0f)\n", percentile(features, 0.5), percentile(stereo, 0.5));
+  std::printf("features per frame: median %.0f (stereo %.0f, near a clip edge %.0f)\n", percentile(features, 0.5),
+              percentile(stereo, 0.5), percentile(near_clip, 0.5));
   std::printf("stationary test: %d frames still (last pose kept), %d rotating in place (last centre kept)\n", still,
               rotating);
   print_relocalization_summary(result);

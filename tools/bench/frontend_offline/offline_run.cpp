@@ -115,7 +115,10 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
     record.extract_ms = timings.extract_ms;
     record.stereo_ms = timings.stereo_ms;
     record.features = static_cast<int>(features.size());
-    for (std::size_t i = 0; i < features.size(); ++i) record.stereo_features += features.has_stereo(i) ? 1 : 0;
+    for (std::size_t i = 0; i < features.size(); ++i) {
+      record.stereo_features += features.has_stereo(i) ? 1 : 0;
+      record.near_clip_features += features.stereo_near_clip(i) ? 1 : 0;
+    }
     const auto track_start = std::chrono::steady_clock::now();
     const double track_cpu_start = thread_cpu_ms();
     const TrackResult result = tracker.track(input.stamp_ns, k, std::move(features));

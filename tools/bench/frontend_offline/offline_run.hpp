@@ -41,6 +41,7 @@ struct FrameRecord {
   std::optional<Pose3> T_wc_truth;          // rectified left camera in the ground-truth world
   int features = 0;
   int stereo_features = 0;
+  int near_clip_features = 0;  // stereo features marked near a clip edge (StereoFeatures::near_clip)
   int tracked_points = 0;
   bool keyframe = false;
   FrameMotion motion = FrameMotion::kMoving;  // the tracker's stationary test
