@@ -216,13 +216,26 @@ TEST(Calibration, ShippedKittiSettingsLoad) {
   }
 }
 
+// The first stereo pair of the MH01 clip with its calibration (callers skip without the shared data).
+struct Mh01FirstPair {
+  StereoCalibration calibration;
+  cv::Mat left;
+  cv::Mat right;
+};
+
+Mh01FirstPair load_mh01_first_pair() {
+  const fs::path mav0 = test::shared_dataset("euroc_mh01_handheld") / "mav0";
+  const std::string name = "1403636584763555584.png";
+  return {load_euroc_calibration(mav0), cv::imread((mav0 / "cam0" / "data" / name).string(), cv::IMREAD_GRAYSCALE),
+          cv::imread((mav0 / "cam1" / "data" / name).string(), cv::IMREAD_GRAYSCALE)};
+}
+
 TEST(Calibration, RectifiedEurocRowsAgreeOnRealImages) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
-  const fs::path mav0 = test::shared_dataset("euroc_mh01_handheld") / "mav0";
-  const StereoRectifier rectifier(load_euroc_calibration(mav0));
-  const std::string name = "1403636584763555584.png";
-  const cv::Mat left = cv::imread((mav0 / "cam0" / "data" / name).string(), cv::IMREAD_GRAYSCALE);
-  const cv::Mat right = cv::imread((mav0 / "cam1" / "data" / name).string(), cv::IMREAD_GRAYSCALE);
+  const Mh01FirstPair pair = load_mh01_first_pair();
+  const StereoRectifier rectifier(pair.calibration);
+  const cv::Mat& left = pair.left;
+  const cv::Mat& right = pair.right;
   ASSERT_FALSE(left.empty());
   cv::Mat left_rect, right_rect;
   rectifier.rectify(left, right, left_rect, right_rect);
@@ -238,11 +251,10 @@ TEST(Calibration, RectifiedEurocRowsAgreeOnRealImages) {
 // The frontend rectifies the two images at once, one per thread: the same pixels as rectify().
 TEST(Calibration, RectifyingTheImagesOnTwoThreadsGivesTheSamePixels) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
-  const fs::path mav0 = test::shared_dataset("euroc_mh01_handheld") / "mav0";
-  const StereoRectifier rectifier(load_euroc_calibration(mav0));
-  const std::string name = "1403636584763555584.png";
-  const cv::Mat left = cv::imread((mav0 / "cam0" / "data" / name).string(), cv::IMREAD_GRAYSCALE);
-  const cv::Mat right = cv::imread((mav0 / "cam1" / "data" / name).string(), cv::IMREAD_GRAYSCALE);
+  const Mh01FirstPair pair = load_mh01_first_pair();
+  const StereoRectifier rectifier(pair.calibration);
+  const cv::Mat& left = pair.left;
+  const cv::Mat& right = pair.right;
   ASSERT_FALSE(left.empty());
   ASSERT_FALSE(right.empty());
   cv::Mat left_rect, right_rect;

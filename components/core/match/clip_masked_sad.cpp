@@ -41,6 +41,11 @@ bool ClipMaskedSad::compute(const std::uint8_t* center_l, int step_l, const std:
   if (!any) return false;
   const int n = window * window;
   std::vector<int> costs(static_cast<std::size_t>(2 * search_ + 1));
+  // A pixel pair takes part when neither camera clipped it (or its neighbours).
+  const auto usable = [&](int dv, int du, int shift) {
+    return clipped_l_[static_cast<std::size_t>((dv + w_) * window + du + w_)] == 0 &&
+           clipped_r_[static_cast<std::size_t>((dv + w_) * span + du + w_ + shift + search_)] == 0;
+  };
   for (int shift = -search_; shift <= search_; ++shift) {
     // Mean normalization over the usable pixels, then SAD over them.
     int used = 0;
@@ -50,10 +55,7 @@ bool ClipMaskedSad::compute(const std::uint8_t* center_l, int step_l, const std:
       const std::uint8_t* l = center_l + dv * step_l;
       const std::uint8_t* r = row_r + dv * step_r + ur0 + shift;
       for (int du = -w_; du <= w_; ++du) {
-        if (clipped_l_[static_cast<std::size_t>((dv + w_) * window + du + w_)] != 0 ||
-            clipped_r_[static_cast<std::size_t>((dv + w_) * span + du + w_ + shift + search_)] != 0) {
-          continue;
-        }
+        if (!usable(dv, du, shift)) continue;
         ++used;
         sum_l += l[du];
         sum_r += r[du];
@@ -67,10 +69,7 @@ bool ClipMaskedSad::compute(const std::uint8_t* center_l, int step_l, const std:
       const std::uint8_t* l = center_l + dv * step_l;
       const std::uint8_t* r = row_r + dv * step_r + ur0 + shift;
       for (int du = -w_; du <= w_; ++du) {
-        if (clipped_l_[static_cast<std::size_t>((dv + w_) * window + du + w_)] != 0 ||
-            clipped_r_[static_cast<std::size_t>((dv + w_) * span + du + w_ + shift + search_)] != 0) {
-          continue;
-        }
+        if (!usable(dv, du, shift)) continue;
         sad += std::abs(static_cast<int>(l[du]) - r[du] - offset);
       }
     }
