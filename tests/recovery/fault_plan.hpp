@@ -30,7 +30,7 @@ inline std::string component_comm(const std::string& component) {
 }
 
 struct KillEvent {
-  int at_frame = 0;                     // once the run has recorded this many frames
+  int at_frame = 0;                     // once the run has done this many frames (processed or recorded)
   std::vector<std::string> components;  // killed in this order ...
   std::vector<int> gaps_ms;             // ... this long after the one before (gaps_ms[0] is 0)
 

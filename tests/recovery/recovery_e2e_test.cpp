@@ -51,9 +51,10 @@ struct RunResult {
   int keyframes_without_stamp = -1;  // in the keyframe trajectory (a keyframe whose creation was never seen)
 };
 
-// Frames the run has recorded so far: one more than the largest seq in the recorder's journal
-// (OUTPUT stem + .journal; it survives a recorder restart and is removed at the end of the run).
-std::size_t frames_recorded(const fs::path& journal) {
+// Frames a journal holds: one more than the largest seq at the start of a line after its header.
+// The recorder's (OUTPUT stem + .journal) and the frontend's (+ .frontend) both survive a restart
+// of their process and are removed at the end of the run.
+std::size_t frames_in_journal(const fs::path& journal) {
   std::ifstream in(journal);
   std::string line;
   std::getline(in, line);  // header
@@ -63,6 +64,14 @@ std::size_t frames_recorded(const fs::path& journal) {
     if (std::istringstream(line) >> seq) frames = std::max<std::size_t>(frames, seq + 1);
   }
   return frames;
+}
+
+// How far the run is: the frames the frontend has finished or the recorder has recorded, whichever
+// is more. The recorder can lag by up to a DDS lease (2 s) after a frontend kill: the restarted
+// frontend's odometry is held until the killed writer's lease expires (runtime/checked_reader.hpp),
+// so timing kills by the recorder alone could fire them after the replay ended, in the stop phase.
+std::size_t frames_done(const fs::path& dir, const std::string& label) {
+  return std::max(frames_in_journal(dir / (label + ".journal")), frames_in_journal(dir / (label + ".frontend")));
 }
 
 pid_t find_component(pid_t supervisor, const std::string& component) {
@@ -78,18 +87,17 @@ pid_t find_component(pid_t supervisor, const std::string& component) {
 RunResult run_with_faults(const fs::path& dataset, const fs::path& dir, const std::string& label,
                           const std::vector<test::KillEvent>& plan) {
   auto supervisor = test::start_pipeline("euroc", dataset, dir, label, test::exclusive_domain_id());
-  const fs::path journal = dir / (label + ".journal");
   const auto deadline = std::chrono::steady_clock::now() + test::kPipelineTimeout;
   RunResult result;
   std::size_t next = 0;
   while (next < plan.size() && std::chrono::steady_clock::now() < deadline &&
          !supervisor->wait(std::chrono::milliseconds(0))) {
     const test::KillEvent& event = plan[next];
-    if (frames_recorded(journal) < static_cast<std::size_t>(event.at_frame)) {
+    if (frames_done(dir, label) < static_cast<std::size_t>(event.at_frame)) {
       std::this_thread::sleep_for(kPoll);
       continue;
     }
-    std::string done = "frame " + std::to_string(frames_recorded(journal)) + ":";
+    std::string done = "frame " + std::to_string(frames_done(dir, label)) + ":";
     for (std::size_t i = 0; i < event.components.size(); ++i) {
       std::this_thread::sleep_for(std::chrono::milliseconds(event.gaps_ms[i]));
       const pid_t pid = find_component(supervisor->pid(), event.components[i]);
