@@ -99,6 +99,10 @@ class CheckedReader {
     return false;
   }
 
+  // Whether samples of a possible successor are held back (a writer of the owner's run while the
+  // owner still counts as matched, e.g. a restarted publisher within the killed one's lease).
+  bool holds_samples() const { return !held_.empty(); }
+
   // Whether a take would return something (data in the reader, or held samples now released).
   bool has_unread() {
     if (!released_.empty() || reader_.has_unread()) return true;

@@ -20,6 +20,11 @@ constexpr std::chrono::milliseconds kWaitPeriod{200};
 // At shutdown, samples still in flight from a frontend that just stopped: drain until the readers
 // stay empty this long.
 constexpr std::chrono::milliseconds kDrainQuietPeriod{300};
+// At the end of a run, how long to wait for held samples: a frontend (or mapper) restarted after a
+// kill -9 publishes while the killed one still counts as matched, until its DDS lease (2 s,
+// config/cyclonedds.xml) expires; only then do its held samples take over. Within the supervisor's
+// 5 s stop timeout.
+constexpr std::chrono::milliseconds kHeldSamplesWait{2500};
 // The files are rewritten whole (poses follow their keyframes' latest state), so the rewrites are
 // spaced by this many times the duration of the last one: at most 1/21 (~5%) of a core however long
 // the run, while a short run's files follow about every frame.
@@ -294,10 +299,20 @@ std::size_t Recorder::drain() {
 }
 
 void Recorder::on_shutdown() {
+  const auto holding = [&] {
+    return odometry_reader_->holds_samples() || keyframe_reader_->holds_samples() ||
+           keyframe_state_reader_->holds_samples();
+  };
+  const auto held_deadline = std::chrono::steady_clock::now() + kHeldSamplesWait;
   auto quiet_since = std::chrono::steady_clock::now();
-  while (std::chrono::steady_clock::now() - quiet_since < kDrainQuietPeriod) {
+  while (std::chrono::steady_clock::now() - quiet_since < kDrainQuietPeriod ||
+         (holding() && std::chrono::steady_clock::now() < held_deadline)) {
     if (drain() > 0) quiet_since = std::chrono::steady_clock::now();
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  if (holding()) {
+    log().warn("samples of a restarted frontend or mapper were still held back after ", kHeldSamplesWait.count(),
+               " ms (its predecessor still counts as matched): they are not recorded");
   }
   const RecordedTrajectories recording = recorder_.build();
   const FrameAccount account = write_files();
