@@ -32,6 +32,7 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
   o.real_time = config.get_bool("real_time", o.real_time);
   o.save_every_keyframes = config.get_int("save_every_keyframes", o.save_every_keyframes, 1, kMaxSaveEvery);
   o.sync_writes = config.get_bool("sync_writes", o.sync_writes);
+  o.batch_map_writes = config.get_bool("batch_map_writes", o.batch_map_writes);
   const double reader_wait_s = config.get_double("lockstep.reader_wait_s", 2.0, 0.0, kMaxReaderWaitS);
   o.reader_wait = std::chrono::milliseconds(static_cast<long long>(reader_wait_s * 1000.0));
 

@@ -40,6 +40,10 @@ struct MapperProcessOptions {
   // not yet taken), as ORB-SLAM2's local mapping does; the frontend is not held up by mapping. Off
   // (the default, and what lockstep runs need): every BA runs to completion, so runs are repeatable.
   bool real_time = false;
+  // batch_map_writes: the map state writers pack the samples of one publish into few network
+  // messages, flushed after the batch's version markers (write_batch.hpp), instead of one datagram
+  // per sample.
+  bool batch_map_writes = true;
 
   // Reads the config, then `--map-file FILE` / `--load-map FILE` / `--save-map FILE` from `rest` (the command line wins).
   // Throws std::runtime_error naming the config file and field, or the bad argument.

@@ -150,7 +150,7 @@ TEST(MapperAdapter, LoopCorrectionIsConvertedAndBadOnesAreRejectedWithTheirId) {
 TEST(MapperOptions, ConfigAndCommandLine) {
   const runtime::Config config = runtime::Config::parse(
       "bundle_adjustment: {threads: 2, second_pass_iterations: 4}\nsave_every_keyframes: 3\n"
-      "fusion: {enabled: false}\nmap_file: \"\"\n",
+      "fusion: {enabled: false}\nmap_file: \"\"\nbatch_map_writes: false\n",
       "mapper.yaml");
   const MapperProcessOptions options = MapperProcessOptions::from_config(config, {"--map-file", "/tmp/a.map"});
   EXPECT_EQ(options.mapper.bundle_adjustment.num_threads, 2);
@@ -160,6 +160,8 @@ TEST(MapperOptions, ConfigAndCommandLine) {
   EXPECT_EQ(options.save_every_keyframes, 3);
   EXPECT_EQ(options.map_file, "/tmp/a.map");
   EXPECT_TRUE(options.load_map.empty());
+  EXPECT_FALSE(options.batch_map_writes);
+  EXPECT_TRUE(MapperProcessOptions::from_config(runtime::Config::empty(), {}).batch_map_writes);  // the default
 
   const runtime::Config bad = runtime::Config::parse("bundle_adjustment: {threads: 0}\n", "mapper.yaml");
   try {

@@ -1,46 +1,33 @@
-// Local bundle adjustment of the new keyframe's neighbourhood with Ceres.
+// Local bundle adjustment of the new keyframe's neighbourhood (its own sparse Levenberg-Marquardt solver).
 #include "components/core/mapping/local_bundle_adjustment.hpp"
 
-#include <array>
-#include <deque>
-#include <functional>
 #include <cmath>
 #include <map>
 #include <memory>
 #include <vector>
 
-#include <ceres/ceres.h>
-
-#include "components/core/mapping/bundle_adjustment_terms.hpp"
+#include "components/core/mapping/bundle_adjustment_solver.hpp"
 #include "components/core/mapping/map_editing.hpp"
 #include "components/core/mapping/point_statistics.hpp"
 
 namespace heslam {
 namespace {
 
+// One observation with what its chi2 needs, looked up once: the chi2 is evaluated three or four
+// times per observation, and map / index lookups there were a third of the local BA's own time.
 struct Observation {
   KeyframeId kf_id;
   int index;
   PointId point_id;
   bool stereo;
   double chi2_threshold;
-  ceres::ResidualBlockId block = nullptr;
+  std::size_t pose = 0;   // index into the problem's poses
+  std::size_t point = 0;  // ... and points
+  double u_px = 0.0;
+  double v_px = 0.0;
+  double disparity_px = 0.0;  // u - u_right (computed in float, as the keypoints are)
+  double inv_sigma2 = 0.0;    // of the keypoint's pyramid level
   bool inlier = true;
-};
-
-// Stops the solver after an iteration once a stop is requested; the parameters reached so far are kept.
-class StopCallback : public ceres::IterationCallback {
- public:
-  explicit StopCallback(const std::function<bool()>& stop_requested) : stop_requested_(stop_requested) {}
-  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
-    if (stop_requested_ && stop_requested_()) stopped_ = true;
-    return stopped_ ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
-  }
-  bool stopped() const { return stopped_; }
-
- private:
-  const std::function<bool()>& stop_requested_;
-  bool stopped_ = false;
 };
 
 }  // namespace
@@ -79,77 +66,55 @@ LocalBundleAdjustmentResult local_bundle_adjustment(Map& map, KeyframeId kf_id, 
     free_kfs.erase(free_kfs.begin());
   }
 
-  // Parameters live in two vectors filled in id order: Ceres orders blocks of an elimination group
-  // by address, so contiguous storage makes the solve (and lockstep runs) reproducible.
-  std::vector<PoseBlock> pose_storage;
+  // Parameters in id order (the solver is sequential: lockstep runs are reproducible).
+  BundleAdjustmentProblem problem;
+  problem.camera = camera;
   std::map<KeyframeId, std::size_t> pose_index;
   for (const auto& [id, kf_unused] : map.keyframes) {
     if (free_kfs.count(id) == 0 && fixed_kfs.count(id) == 0) continue;
-    pose_index[id] = pose_storage.size();
-    pose_storage.push_back(to_pose_block(map.keyframe(id)->T_wc));
+    pose_index[id] = problem.poses.size();
+    problem.poses.push_back(to_pose_block(map.keyframe(id)->T_wc));
   }
-  std::vector<Eigen::Vector3d> point_storage;
   std::map<PointId, std::size_t> point_index;
   for (const PointId id : point_ids) {
-    point_index[id] = point_storage.size();
-    point_storage.push_back(map.point(id)->p_w);
+    point_index[id] = problem.points.size();
+    problem.points.push_back(map.point(id)->p_w);
   }
-  const auto pose_of = [&](KeyframeId id) -> PoseBlock& { return pose_storage[pose_index.at(id)]; };
-  const auto point_of = [&](PointId id) -> Eigen::Vector3d& { return point_storage[point_index.at(id)]; };
+  const auto pose_of = [&](KeyframeId id) -> PoseBlock& { return problem.poses[pose_index.at(id)]; };
 
   std::vector<Observation> observations;
   for (const PointId point_id : point_ids) {
+    const std::size_t point = point_index.at(point_id);
     for (const auto& [observer, index] : map.point(point_id)->observations) {
       const Keyframe* observer_kf = map.keyframe(observer);
-      if (observer_kf == nullptr || pose_index.count(observer) == 0) continue;
-      const bool stereo = observer_kf->features.has_stereo(static_cast<std::size_t>(index));
-      observations.push_back({observer, index, point_id, stereo, stereo ? options.stereo_chi2 : options.mono_chi2});
+      const auto pose = pose_index.find(observer);
+      if (observer_kf == nullptr || pose == pose_index.end()) continue;
+      const std::size_t i = static_cast<std::size_t>(index);
+      const StereoFeatures& features = observer_kf->features;
+      const Keypoint& kp = features.keypoints[i];
+      const bool stereo = features.has_stereo(i);
+      Observation obs{observer, index, point_id, stereo, stereo ? options.stereo_chi2 : options.mono_chi2};
+      obs.pose = pose->second;
+      obs.point = point;
+      obs.u_px = kp.u_px;
+      obs.v_px = kp.v_px;
+      obs.disparity_px = stereo ? kp.u_px - features.u_right_px[i] : 0.0;
+      obs.inv_sigma2 = features.pyramid.inv_sigma2[static_cast<std::size_t>(kp.octave)];
+      observations.push_back(obs);
     }
   }
 
-  PoseManifold pose_manifold;
-  // One loss per threshold and the costs in one array, owned here: a problem of thousands of
-  // residuals otherwise makes two heap allocations per residual and frees them again (measured:
-  // allocation was about a tenth of a local BA's time; docs/benchmarks.md, issue 17).
-  ceres::HuberLoss mono_loss(std::sqrt(options.mono_chi2));
-  ceres::HuberLoss stereo_loss(std::sqrt(options.stereo_chi2));
-  std::deque<ReprojectionCost> costs;  // a deque: elements never move, Ceres keeps their addresses
-  const auto build_problem = [&](ceres::Problem& problem) {
-    for (Observation& obs : observations) {
-      obs.block = nullptr;
-      if (!obs.inlier) continue;
-      const Keyframe& observer = *map.keyframe(obs.kf_id);
-      const std::size_t i = static_cast<std::size_t>(obs.index);
-      const Keypoint& kp = observer.features.keypoints[i];
-      const double inv_sigma = std::sqrt(observer.features.pyramid.inv_sigma2[static_cast<std::size_t>(kp.octave)]);
-      costs.emplace_back(camera, kp.u_px, kp.v_px, obs.stereo ? observer.features.u_right_px[i] : 0.0, inv_sigma,
-                         obs.stereo, options.disparity_sigma_ratio);
-      obs.block = problem.AddResidualBlock(&costs.back(), obs.stereo ? &stereo_loss : &mono_loss,
-                                           pose_of(obs.kf_id).data(), point_of(obs.point_id).data());
-    }
-    for (PoseBlock& pose : pose_storage) {
-      if (problem.HasParameterBlock(pose.data())) problem.SetManifold(pose.data(), &pose_manifold);
-    }
-    for (const KeyframeId id : fixed_kfs) {
-      if (problem.HasParameterBlock(pose_of(id).data())) problem.SetParameterBlockConstant(pose_of(id).data());
-    }
-  };
-
   // Whitened squared error and positive depth of one observation at the current parameters.
   const auto chi2_of = [&](const Observation& obs, double& chi2) {
-    const Keyframe& observer = *map.keyframe(obs.kf_id);
-    const std::size_t i = static_cast<std::size_t>(obs.index);
-    const Keypoint& kp = observer.features.keypoints[i];
-    const Eigen::Vector3d pc = transform_to_camera(pose_of(obs.kf_id), point_of(obs.point_id));
+    const Eigen::Vector3d pc = transform_to_camera(problem.poses[obs.pose], problem.points[obs.point]);
     if (pc.z() <= 0.0) return false;
     const Eigen::Vector2d uv = camera.project(pc);
-    double error2 = (uv - Eigen::Vector2d(kp.u_px, kp.v_px)).squaredNorm();
+    double error2 = (uv - Eigen::Vector2d(obs.u_px, obs.v_px)).squaredNorm();
     if (obs.stereo) {
-      const double disparity = kp.u_px - observer.features.u_right_px[i];
-      const double dd = (camera.bf() / pc.z() - disparity) / options.disparity_sigma_ratio;
+      const double dd = (camera.bf() / pc.z() - obs.disparity_px) / options.disparity_sigma_ratio;
       error2 += dd * dd;
     }
-    chi2 = error2 * observer.features.pyramid.inv_sigma2[static_cast<std::size_t>(kp.octave)];
+    chi2 = error2 * obs.inv_sigma2;
     return true;
   };
   const auto rms = [&]() {
@@ -166,7 +131,7 @@ LocalBundleAdjustmentResult local_bundle_adjustment(Map& map, KeyframeId kf_id, 
 
   result.free_keyframes = static_cast<int>(free_kfs.size());
   result.fixed_keyframes = static_cast<int>(fixed_kfs.size());
-  result.points = static_cast<int>(point_storage.size());
+  result.points = static_cast<int>(problem.points.size());
   result.observations = static_cast<int>(observations.size());
   result.initial_rms_px = rms();
   if (free_kfs.empty() || observations.empty()) return result;
@@ -175,54 +140,51 @@ LocalBundleAdjustmentResult local_bundle_adjustment(Map& map, KeyframeId kf_id, 
     double chi2 = 0.0;
     obs.inlier = chi2_of(obs, chi2);
   }
-  ceres::Problem::Options problem_options;
-  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;  // one manifold shared by all poses
-  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;  // `costs` above
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;  // the two losses above
-  problem_options.enable_fast_removal = true;                         // outliers leave between passes
-  ceres::Problem problem(problem_options);
-  build_problem(problem);
-
-  StopCallback stop_callback(options.stop_requested);
-  ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::DENSE_SCHUR;
-  solver_options.num_threads = options.num_threads;
-  solver_options.logging_type = ceres::SILENT;
-  solver_options.callbacks.push_back(&stop_callback);
-  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-  for (Eigen::Vector3d& p : point_storage) {
-    if (problem.HasParameterBlock(p.data())) ordering->AddElementToGroup(p.data(), 0);
+  problem.pose_fixed.assign(problem.poses.size(), false);
+  for (const KeyframeId id : fixed_kfs) problem.pose_fixed[pose_index.at(id)] = true;
+  problem.observations.reserve(observations.size());
+  for (const Observation& obs : observations) {  // grouped by point, as the solver wants
+    // The square root of the level's float inv_sigma2, in float (as the keypoint model always had it).
+    const double inv_sigma = std::sqrt(static_cast<float>(obs.inv_sigma2));
+    BundleAdjustmentObservation term;
+    term.pose = static_cast<int>(obs.pose);
+    term.point = static_cast<int>(obs.point);
+    term.u_px = obs.u_px;
+    term.v_px = obs.v_px;
+    term.disparity_px = obs.disparity_px;
+    term.weight = inv_sigma;
+    term.disparity_weight = inv_sigma / options.disparity_sigma_ratio;
+    term.huber_delta = std::sqrt(obs.chi2_threshold);  // Huber at the chi2 95 % threshold
+    term.stereo = obs.stereo;
+    term.active = obs.inlier;
+    problem.observations.push_back(term);
   }
-  for (PoseBlock& pose : pose_storage) {
-    if (problem.HasParameterBlock(pose.data())) ordering->AddElementToGroup(pose.data(), 1);
-  }
-  solver_options.linear_solver_ordering = ordering;
-  ceres::Solver::Summary summary;
 
-  solver_options.max_num_iterations = options.first_pass_iterations;
-  ceres::Solve(solver_options, &problem, &summary);
+  BundleAdjustmentSolverOptions solver_options;
+  solver_options.stop_requested = options.stop_requested;
+  solver_options.max_iterations = options.first_pass_iterations;
+  bool stopped = solve_bundle_adjustment(problem, solver_options).stopped;
   // As ORB-SLAM2: a stop requested during the first pass also skips the second.
-  if (!stop_callback.stopped()) {
+  if (!stopped) {
     // Second pass on the inliers of the first. ORB-SLAM2 also drops the robust kernel here; the
-    // Huber kernel is kept instead (so the problem is reused, not rebuilt): every remaining residual
-    // starts inside the kernel's quadratic region, where the two are identical.
-    for (Observation& obs : observations) {
+    // Huber kernel is kept instead: every remaining residual starts inside the kernel's quadratic
+    // region, where the two are identical.
+    for (std::size_t k = 0; k < observations.size(); ++k) {
       double chi2 = 0.0;
-      const bool inlier = chi2_of(obs, chi2) && chi2 <= obs.chi2_threshold;
-      if (!inlier && obs.block != nullptr) problem.RemoveResidualBlock(obs.block);
-      obs.inlier = inlier;
+      observations[k].inlier = chi2_of(observations[k], chi2) && chi2 <= observations[k].chi2_threshold;
+      problem.observations[k].active = observations[k].inlier;
     }
-    solver_options.max_num_iterations = options.second_pass_iterations;
-    ceres::Solve(solver_options, &problem, &summary);
+    solver_options.max_iterations = options.second_pass_iterations;
+    stopped = solve_bundle_adjustment(problem, solver_options).stopped;
   }
-  result.aborted = stop_callback.stopped();
+  result.aborted = stopped;
 
   // Write back, then unlink the observations that are still outliers.
   for (const KeyframeId id : free_kfs) {
     map.keyframe(id)->T_wc = from_pose_block(pose_of(id));
     changes.changed_keyframes.insert(id);
   }
-  for (const auto& [id, index] : point_index) map.point(id)->p_w = point_storage[index];
+  for (const auto& [id, index] : point_index) map.point(id)->p_w = problem.points[index];
   for (Observation& obs : observations) {
     double chi2 = 0.0;
     obs.inlier = chi2_of(obs, chi2) && chi2 <= obs.chi2_threshold;

@@ -1,4 +1,4 @@
-// Local bundle adjustment with Ceres (ORB-SLAM2's Optimizer::LocalBundleAdjustment).
+// Local bundle adjustment (ORB-SLAM2's Optimizer::LocalBundleAdjustment) with its own solver (bundle_adjustment_solver.hpp).
 //
 // Free: the keyframe and its covisible keyframes, and every point they observe. Fixed: the other
 // keyframes observing those points (they anchor the gauge), and the map's first keyframe. Residuals

@@ -2,6 +2,7 @@
 #include "components/core/mapping/local_mapper.hpp"
 
 #include <chrono>
+#include <ctime>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -24,6 +25,13 @@ namespace {
 constexpr std::size_t kMaxRememberedCorrections = 16;
 
 using Clock = std::chrono::steady_clock;
+
+// CPU time of the calling thread: what a stage costs whatever else runs on the machine.
+double thread_cpu_ms() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
 
 double ms_since(Clock::time_point& start) {
   const auto now = Clock::now();
@@ -224,9 +232,15 @@ MapChanges LocalMapper::process_keyframe(Keyframe kf, std::vector<MapPoint> new_
   changes.timings.fusion_ms = ms_since(stage);
 
   if (options_.enable_bundle_adjustment) {
+    const double cpu_start_ms = thread_cpu_ms();
     const auto ba = local_bundle_adjustment(map_, kf_id, camera_, options_.bundle_adjustment, changes);
+    changes.timings.bundle_adjustment_cpu_ms = thread_cpu_ms() - cpu_start_ms;
     changes.counts.bundle_adjustment_outliers = ba.outliers_removed;
     changes.counts.bundle_adjustment_aborted = ba.aborted;
+    changes.counts.bundle_adjustment_free_keyframes = ba.free_keyframes;
+    changes.counts.bundle_adjustment_fixed_keyframes = ba.fixed_keyframes;
+    changes.counts.bundle_adjustment_points = ba.points;
+    changes.counts.bundle_adjustment_observations = ba.observations;
   }
   changes.timings.bundle_adjustment_ms = ms_since(stage);
 

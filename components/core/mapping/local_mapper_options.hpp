@@ -45,7 +45,7 @@ struct LocalBundleAdjustmentOptions {
   // Disparity sigma / keypoint sigma of stereo observations; the tracker's motion-only BA uses the
   // same model (tracker.disparity_sigma_ratio), docs/tracking.md has the measurements.
   double disparity_sigma_ratio = 0.5;
-  int num_threads = 1;              // the machine is shared; the mapper is one process of several
+  int num_threads = 1;              // no effect: the local BA's own solver is single-threaded (configs still set it)
   // Real-time mode: asked after every solver iteration; true stops the BA there (a new keyframe is
   // waiting, as ORB-SLAM2's abort flag). The state reached so far is kept and outliers are still
   // removed; the second pass is skipped. Empty = never stop (lockstep: always complete).

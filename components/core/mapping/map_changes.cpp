@@ -20,6 +20,7 @@ void MapChanges::merge(const MapChanges& other) {
   timings.triangulation_ms += other.timings.triangulation_ms;
   timings.fusion_ms += other.timings.fusion_ms;
   timings.bundle_adjustment_ms += other.timings.bundle_adjustment_ms;
+  timings.bundle_adjustment_cpu_ms += other.timings.bundle_adjustment_cpu_ms;
   timings.keyframe_culling_ms += other.timings.keyframe_culling_ms;
   timings.total_ms += other.timings.total_ms;
   counts.rejected_observations += other.counts.rejected_observations;
@@ -27,6 +28,10 @@ void MapChanges::merge(const MapChanges& other) {
   counts.triangulated_points += other.counts.triangulated_points;
   counts.fused_points += other.counts.fused_points;
   counts.bundle_adjustment_outliers += other.counts.bundle_adjustment_outliers;
+  counts.bundle_adjustment_free_keyframes += other.counts.bundle_adjustment_free_keyframes;
+  counts.bundle_adjustment_fixed_keyframes += other.counts.bundle_adjustment_fixed_keyframes;
+  counts.bundle_adjustment_points += other.counts.bundle_adjustment_points;
+  counts.bundle_adjustment_observations += other.counts.bundle_adjustment_observations;
   counts.culled_keyframes += other.counts.culled_keyframes;
   counts.late_keyframes_moved += other.counts.late_keyframes_moved;
   counts.bundle_adjustment_aborted = counts.bundle_adjustment_aborted || other.counts.bundle_adjustment_aborted;

@@ -16,6 +16,7 @@ struct LocalMapperTimings {
   double triangulation_ms = 0.0;
   double fusion_ms = 0.0;
   double bundle_adjustment_ms = 0.0;
+  double bundle_adjustment_cpu_ms = 0.0;  // CPU time of the mapping thread in the local BA (load-independent)
   double keyframe_culling_ms = 0.0;
   double total_ms = 0.0;
 };
@@ -27,6 +28,11 @@ struct LocalMapperCounts {
   int triangulated_points = 0;
   int fused_points = 0;           // duplicates merged or observations added by fusion
   int bundle_adjustment_outliers = 0;
+  // Size of the local BA's problem (its cost scales with these).
+  int bundle_adjustment_free_keyframes = 0;
+  int bundle_adjustment_fixed_keyframes = 0;
+  int bundle_adjustment_points = 0;
+  int bundle_adjustment_observations = 0;
   int culled_keyframes = 0;
   bool bundle_adjustment_aborted = false;
   int late_keyframes_moved = 0;   // tracked before a correction applied since: moved into its frame

@@ -64,14 +64,24 @@ std::vector<std::pair<int, int>> search_for_triangulation(const Keyframe& kf1, c
   const auto& kps1 = kf1.features.keypoints;
   const auto& kps2 = kf2.features.keypoints;
 
-  std::vector<int> free2;
-  for (std::size_t j = 0; j < kps2.size(); ++j) {
-    if (kf2.point_ids[j] == kNoId) free2.push_back(static_cast<int>(j));
-  }
+  // The free keypoints of kf2 in flat arrays (position, epipolar threshold by octave): the
+  // epipolar test over all of them is the inner loop of the search, and a branch-free pass over
+  // contiguous doubles vectorises; the descriptor distance is then computed for the few that pass.
   std::vector<float> max_epipolar_sq(static_cast<std::size_t>(kf2.features.pyramid.levels));
   for (std::size_t l = 0; l < max_epipolar_sq.size(); ++l) {
     max_epipolar_sq[l] = options.epipolar_chi2 * kf2.features.pyramid.sigma2[l];
   }
+  std::vector<int> free2;
+  std::vector<double> u2, v2, threshold2;
+  for (std::size_t j = 0; j < kps2.size(); ++j) {
+    if (kf2.point_ids[j] != kNoId) continue;
+    free2.push_back(static_cast<int>(j));
+    u2.push_back(kps2[j].u_px);
+    v2.push_back(kps2[j].v_px);
+    threshold2.push_back(max_epipolar_sq[static_cast<std::size_t>(kps2[j].octave)]);
+  }
+  const std::size_t free_count = free2.size();
+  std::vector<unsigned char> near_line(free_count);
 
   // Best kf1 candidate per kf2 keypoint: (distance, kf1 index); one-to-one by keeping the closest.
   std::vector<std::pair<int, int>> best_for2(kps2.size(), {std::numeric_limits<int>::max(), -1});
@@ -80,13 +90,17 @@ std::vector<std::pair<int, int>> search_for_triangulation(const Keyframe& kf1, c
     const Eigen::Vector3d line = F21 * Eigen::Vector3d(kps1[i].u_px, kps1[i].v_px, 1.0);
     const double norm_sq = line.x() * line.x() + line.y() * line.y();
     if (norm_sq <= 0.0) continue;
+    const double a = line.x(), b = line.y(), c = line.z();
+    for (std::size_t k = 0; k < free_count; ++k) {
+      const double num = a * u2[k] + b * v2[k] + c;
+      near_line[k] = num * num < threshold2[k] * norm_sq;
+    }
     const Descriptor& d1 = kf1.features.descriptors[i];
     int best_distance = options.max_descriptor_distance + 1;
     int best_j = -1;
-    for (const int j : free2) {
-      const Keypoint& kp2 = kps2[static_cast<std::size_t>(j)];
-      const double num = line.x() * kp2.u_px + line.y() * kp2.v_px + line.z();
-      if (num * num >= max_epipolar_sq[static_cast<std::size_t>(kp2.octave)] * norm_sq) continue;
+    for (std::size_t k = 0; k < free_count; ++k) {
+      if (!near_line[k]) continue;
+      const int j = free2[k];
       const int distance = hamming_distance(d1, kf2.features.descriptors[static_cast<std::size_t>(j)]);
       if (distance < best_distance) {
         best_distance = distance;
