@@ -44,6 +44,9 @@ constexpr int kDescriptorReachPx = descriptor_reach_px();
 // this far beyond the patterns: it must stay inside the padded level.
 static_assert(kDescriptorReachPx - kDetectionMarginPx + DescriptorBlur::kRadiusPx <= kOrbBorderPx,
               "the blurred patch area must lie inside the level's border");
+// The descriptor's gathers read a few bytes past each sample point: still inside the padded level.
+static_assert(kDescriptorReachPx - kDetectionMarginPx + kSampleSlackBytes <= kOrbBorderPx,
+              "the sampled bytes must lie inside the level's border");
 
 // The orientation patch reads one column beyond its radius (IntensityCentroid's 32-byte rows).
 static_assert(kOrientationRadiusPx + 1 <= kDetectionMarginPx, "the orientation patch must lie inside the level");
@@ -111,6 +114,7 @@ OrbExtractor::OrbExtractor(const OrbOptions& options)
   level_.resize(static_cast<std::size_t>(options.levels));
   blurred_.resize(static_cast<std::size_t>(options.levels));
   blurs_.resize(static_cast<std::size_t>(options.levels));
+  resizes_.resize(static_cast<std::size_t>(options.levels));
   level_keypoints_.resize(static_cast<std::size_t>(options.levels));
   score_maps_.resize(static_cast<std::size_t>(options.levels));
   level_points_.resize(static_cast<std::size_t>(options.levels));
@@ -147,7 +151,8 @@ void OrbExtractor::build_pyramid(const cv::Mat& image) {
     if (l == 0) {
       image.copyTo(level_[l]);
     } else {
-      cv::resize(level_[l - 1], level_[l], size, 0, 0, cv::INTER_LINEAR);
+      // Bit-exact with cv::resize(..., INTER_LINEAR), at a fraction of its instructions.
+      resizes_[static_cast<std::size_t>(l)].apply(level_[l - 1], level_[l]);
     }
     reflect_border(padded_[l], kOrbBorderPx);
   }
@@ -275,14 +280,7 @@ void OrbExtractor::describe_level(int l) {
     RotatedOrbPattern offsets;
     rotate_orb_pattern(c, s, step, offsets);
     Descriptor d{};
-    for (std::size_t byte = 0; byte < d.size(); ++byte) {
-      std::uint8_t bits = 0;
-      for (std::size_t bit = 0; bit < 8; ++bit) {
-        const std::size_t t = byte * 8 + bit;
-        bits |= static_cast<std::uint8_t>((center[offsets.first[t]] < center[offsets.second[t]]) << bit);
-      }
-      d[byte] = bits;
-    }
+    sample_orb_tests(center, offsets, d);
     Keypoint kp;
     kp.u_px = k.x * scale;
     kp.v_px = k.y * scale;
