@@ -44,9 +44,6 @@ constexpr int kDescriptorReachPx = descriptor_reach_px();
 // this far beyond the patterns: it must stay inside the padded level.
 static_assert(kDescriptorReachPx - kDetectionMarginPx + DescriptorBlur::kRadiusPx <= kOrbBorderPx,
               "the blurred patch area must lie inside the level's border");
-// The descriptor's gathers read a few bytes past each sample point: still inside the padded level.
-static_assert(kDescriptorReachPx - kDetectionMarginPx + kSampleSlackBytes <= kOrbBorderPx,
-              "the sampled bytes must lie inside the level's border");
 
 // The orientation patch reads one column beyond its radius (IntensityCentroid's 32-byte rows).
 static_assert(kOrientationRadiusPx + 1 <= kDetectionMarginPx, "the orientation patch must lie inside the level");
@@ -280,7 +277,14 @@ void OrbExtractor::describe_level(int l) {
     RotatedOrbPattern offsets;
     rotate_orb_pattern(c, s, step, offsets);
     Descriptor d{};
-    sample_orb_tests(center, offsets, d);
+    for (std::size_t byte = 0; byte < d.size(); ++byte) {
+      std::uint8_t bits = 0;
+      for (std::size_t bit = 0; bit < 8; ++bit) {
+        const std::size_t t = byte * 8 + bit;
+        bits |= static_cast<std::uint8_t>((center[offsets.first[t]] < center[offsets.second[t]]) << bit);
+      }
+      d[byte] = bits;
+    }
     Keypoint kp;
     kp.u_px = k.x * scale;
     kp.v_px = k.y * scale;

@@ -4,11 +4,10 @@
 
 #include <cmath>
 #include <cstddef>
-#include <cstring>
 
 #include <opencv2/core.hpp>
 
-#if defined(__AVX2__)
+#if defined(__AVX2__) && defined(__FMA__)
 #include <immintrin.h>
 #endif
 
@@ -64,36 +63,6 @@ void rotate_orb_pattern(float c, float s, int step, RotatedOrbPattern& out) {
   for (; t < kOrbPattern.size(); ++t) {
     out.first[t] = rotated_offset(kPattern.x1[t], kPattern.y1[t], c, s, step);
     out.second[t] = rotated_offset(kPattern.x2[t], kPattern.y2[t], c, s, step);
-  }
-}
-
-void sample_orb_tests(const std::uint8_t* center, const RotatedOrbPattern& offsets, Descriptor& out) {
-  std::size_t t = 0;
-#if defined(__AVX2__)
-  // 32 tests (4 bytes of the descriptor) per round, 8 per gather pair; the 32-bit loads start at the
-  // sample points (unaligned, scale 1) and keep only their first byte.
-  const __m256i low_byte = _mm256_set1_epi32(0xFF);
-  const auto* base = reinterpret_cast<const int*>(center);
-  for (; t + 32 <= kOrbPattern.size(); t += 32) {
-    std::uint32_t bits = 0;
-    for (std::size_t g = 0; g < 4; ++g) {
-      const std::size_t first = t + 8 * g;
-      const __m256i i1 = _mm256_load_si256(reinterpret_cast<const __m256i*>(&offsets.first[first]));
-      const __m256i i2 = _mm256_load_si256(reinterpret_cast<const __m256i*>(&offsets.second[first]));
-      const __m256i a = _mm256_and_si256(_mm256_i32gather_epi32(base, i1, 1), low_byte);
-      const __m256i b = _mm256_and_si256(_mm256_i32gather_epi32(base, i2, 1), low_byte);
-      const int darker = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(b, a)));
-      bits |= static_cast<std::uint32_t>(darker) << (8 * g);
-    }
-    std::memcpy(&out[t / 8], &bits, sizeof bits);  // byte g of the little-endian word is byte t / 8 + g
-  }
-#endif
-  for (; t < kOrbPattern.size(); t += 8) {
-    std::uint8_t bits = 0;
-    for (std::size_t bit = 0; bit < 8; ++bit) {
-      bits |= static_cast<std::uint8_t>((center[offsets.first[t + bit]] < center[offsets.second[t + bit]]) << bit);
-    }
-    out[t / 8] = bits;
   }
 }
 

@@ -1,13 +1,10 @@
 // The rBRIEF pattern (orb_pattern.hpp) rotated by a keypoint's angle, as pixel offsets into an image
-// row-major with a given step: the two sample points of each of the 256 tests, and the descriptor read
-// with them. Eight tests at a time with AVX2; the same offsets and bits as the scalar formulas
-// ORB-SLAM2 and OpenCV use.
+// row-major with a given step: the two sample points of each of the 256 tests. Eight tests at a time
+// with AVX2; the same offsets as the scalar formula ORB-SLAM2 and OpenCV use.
 #pragma once
 
 #include <array>
-#include <cstdint>
 
-#include "components/core/feature/features.hpp"
 #include "components/core/feature/orb_pattern.hpp"
 
 namespace heslam {
@@ -24,12 +21,5 @@ struct RotatedOrbPattern {
 // compiled with -ffp-contract=fast; read from the disassembly), so descriptors stay bit-identical to
 // that build's. Without FMA: plain products and sums.
 void rotate_orb_pattern(float cos_angle, float sin_angle, int step, RotatedOrbPattern& out);
-
-// The 256 tests of the rotated pattern around `center` (a pixel of the blurred level): bit t % 8 of
-// byte t / 8 is set when the test's first point is darker than its second. With AVX2 the points are
-// read eight at a time by 32-bit gathers (their low byte kept), so kSampleSlackBytes bytes after every
-// sample point must be readable too (the level's border provides them).
-inline constexpr int kSampleSlackBytes = 3;
-void sample_orb_tests(const std::uint8_t* center, const RotatedOrbPattern& offsets, Descriptor& out);
 
 }  // namespace heslam
