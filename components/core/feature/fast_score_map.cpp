@@ -193,7 +193,8 @@ void FastScoreMap::compute(const cv::Mat& image, const cv::Rect& area) {
     throw std::invalid_argument("FastScoreMap: the area and a 3-pixel ring around it must lie inside the image");
   }
   area_ = area;
-  score_.resize(static_cast<std::size_t>(area.width) * static_cast<std::size_t>(area.height));
+  // kMaskWidth bytes of slack: corners() reads a whole vector where a row's region ends.
+  score_.resize(static_cast<std::size_t>(area.width) * static_cast<std::size_t>(area.height) + kMaskWidth);
   const auto step = static_cast<std::ptrdiff_t>(image.step1());
   constexpr int lanes = SimdLanes::kWidth;
   for (int row = 0; row < area.height; ++row) {
@@ -254,8 +255,14 @@ void FastScoreMap::corners(const cv::Rect& region, int threshold, std::vector<Sc
       }
       for (; bits != 0; bits &= bits - 1) consider(i + std::countr_zero(bits));
     }
-    for (; i <= last_x; ++i) {
-      if (row[i] >= t) consider(i);
+    // The rest of the row (narrower than a vector: all of a grid cell's row) as one vector too, the
+    // bits past the region's end masked off (score_ has a vector of slack after its last row).
+    if (i <= last_x) {
+      const int rest = region.width - i;  // < kMaskWidth <= 32
+      const MaskBits inside = (MaskBits{1} << rest) - 1;
+      for (MaskBits bits = at_least(row + i, t) & inside; bits != 0; bits &= bits - 1) {
+        consider(i + std::countr_zero(bits));
+      }
     }
   }
 }
