@@ -20,6 +20,9 @@ constexpr std::array<std::array<int, 2>, 16> kCircle = {{{0, 3}, {1, 3}, {2, 2},
                                                          {2, -2}, {1, -3}, {0, -3}, {-1, -3}, {-2, -2},
                                                          {-3, -1}, {-3, 0}, {-3, 1}, {-2, 2}, {-1, 3}}};
 
+// The circle's rows are those of the centre -3 .. +3: rows[kRadiusRows + dy].
+constexpr int kRadiusRows = FastScoreMap::kRadiusPx;
+
 struct ScalarLanes {
   using V = std::uint8_t;
   static constexpr int kWidth = 1;
@@ -69,32 +72,38 @@ using SimdLanes = ScalarLanes;
 #endif
 
 // FAST-9: max over the 16 arcs of 9 contiguous circle pixels of the arc's smallest difference, i.e.
-// the largest t' for which this polarity's arc test passes with "difference >= t'". Arcs of 9 are
-// built as 8 (= 2 x 4 = 2 x 2 x 2) plus 1.
+// the largest t' for which this polarity's arc test passes with "difference >= t'". The arcs starting
+// at 2j and 2j + 1 share the 8 pixels 2j + 1 .. 2j + 8, so only those 8 minima (from minima of 2 and 4
+// at odd starts) are built, and max(min(m, d[2j]), min(m, d[2j + 9])) is taken as
+// min(m, max(d[2j], d[2j + 9])): 47 min/max per polarity instead of 80, the same value.
 template <class L>
 [[gnu::always_inline]] inline typename L::V arc_strength(const typename L::V (&d)[16]) {
   // Plain arrays: std::array of a vector type drops its alignment attribute.
-  typename L::V min2[16];
-  typename L::V min4[16];
-  for (int k = 0; k < 16; ++k) min2[k] = L::min(d[k], d[(k + 1) & 15]);
-  for (int k = 0; k < 16; ++k) min4[k] = L::min(min2[k], min2[(k + 2) & 15]);
+  typename L::V min2[8];  // min2[j]: pixels 2j + 1 .. 2j + 2
+  typename L::V min4[8];  // min4[j]: pixels 2j + 1 .. 2j + 4
+  for (int j = 0; j < 8; ++j) min2[j] = L::min(d[2 * j + 1], d[(2 * j + 2) & 15]);
+  for (int j = 0; j < 8; ++j) min4[j] = L::min(min2[j], min2[(j + 1) & 7]);
   typename L::V best = L::splat(0);
-  for (int k = 0; k < 16; ++k) {
-    const typename L::V min8 = L::min(min4[k], min4[(k + 4) & 15]);
-    best = L::max(best, L::min(min8, d[(k + 8) & 15]));
+  for (int j = 0; j < 8; ++j) {
+    const typename L::V min8 = L::min(min4[j], min4[(j + 2) & 7]);  // pixels 2j + 1 .. 2j + 8
+    const typename L::V two_arcs = L::min(min8, L::max(d[2 * j], d[(2 * j + 9) & 15]));
+    best = j == 0 ? two_arcs : L::max(best, two_arcs);
   }
   return best;
 }
 
-// Scores of L::kWidth consecutive pixels starting at `centre`. A corner at threshold t has an arc
-// whose differences all exceed t, i.e. strength >= t + 1; cv::FAST reports strength - 1 as its score.
+// Scores of L::kWidth consecutive pixels starting at column x of the circle's 7 rows (rows[3] is the
+// centre row). Row pointers plus constant column offsets let every circle load be one addressing mode
+// (no per-pixel offset table read), and inlining keeps the rows in registers across a whole row.
+// A corner at threshold t has an arc whose differences all exceed t, i.e. strength >= t + 1;
+// cv::FAST reports strength - 1 as its score.
 template <class L>
-void score_lanes(const std::uint8_t* centre, const std::array<std::ptrdiff_t, 16>& offsets, std::uint8_t* out) {
-  const typename L::V v = L::load(centre);
+[[gnu::always_inline]] inline void score_lanes(const std::uint8_t* const (&rows)[2 * kRadiusRows + 1], std::ptrdiff_t x, std::uint8_t* out) {
+  const typename L::V v = L::load(rows[kRadiusRows] + x);
   typename L::V darker[16];
   typename L::V brighter[16];
   for (int k = 0; k < 16; ++k) {
-    const typename L::V p = L::load(centre + offsets[k]);
+    const typename L::V p = L::load(rows[kRadiusRows + kCircle[k][1]] + x + kCircle[k][0]);
     darker[k] = L::subs(v, p);
     brighter[k] = L::subs(p, v);
   }
@@ -184,23 +193,23 @@ void FastScoreMap::compute(const cv::Mat& image, const cv::Rect& area) {
     throw std::invalid_argument("FastScoreMap: the area and a 3-pixel ring around it must lie inside the image");
   }
   area_ = area;
-  score_.resize(static_cast<std::size_t>(area.width) * static_cast<std::size_t>(area.height));
+  // kMaskWidth bytes of slack: corners() reads a whole vector where a row's region ends.
+  score_.resize(static_cast<std::size_t>(area.width) * static_cast<std::size_t>(area.height) + kMaskWidth);
   const auto step = static_cast<std::ptrdiff_t>(image.step1());
-  std::array<std::ptrdiff_t, 16> offsets;
-  for (int k = 0; k < 16; ++k) offsets[k] = kCircle[k][0] + kCircle[k][1] * step;
-
   constexpr int lanes = SimdLanes::kWidth;
   for (int row = 0; row < area.height; ++row) {
     const std::uint8_t* centre = image.ptr<std::uint8_t>(area.y + row) + area.x;
+    const std::uint8_t* rows[2 * kRadiusRows + 1];
+    for (int dy = -kRadiusRows; dy <= kRadiusRows; ++dy) rows[kRadiusRows + dy] = centre + dy * step;
     std::uint8_t* out = &score_[static_cast<std::size_t>(row) * static_cast<std::size_t>(area.width)];
     int x = 0;
-    for (; x + lanes <= area.width; x += lanes) score_lanes<SimdLanes>(centre + x, offsets, out + x);
+    for (; x + lanes <= area.width; x += lanes) score_lanes<SimdLanes>(rows, x, out + x);
     if (x == area.width) continue;
     if (area.width >= lanes) {
       // The tail as one more full vector ending at the last pixel: a few pixels are scored twice.
-      score_lanes<SimdLanes>(centre + area.width - lanes, offsets, out + area.width - lanes);
+      score_lanes<SimdLanes>(rows, area.width - lanes, out + area.width - lanes);
     } else {
-      for (; x < area.width; ++x) score_lanes<ScalarLanes>(centre + x, offsets, out + x);
+      for (; x < area.width; ++x) score_lanes<ScalarLanes>(rows, x, out + x);
     }
   }
 }
@@ -246,8 +255,14 @@ void FastScoreMap::corners(const cv::Rect& region, int threshold, std::vector<Sc
       }
       for (; bits != 0; bits &= bits - 1) consider(i + std::countr_zero(bits));
     }
-    for (; i <= last_x; ++i) {
-      if (row[i] >= t) consider(i);
+    // The rest of the row (narrower than a vector: all of a grid cell's row) as one vector too, the
+    // bits past the region's end masked off (score_ has a vector of slack after its last row).
+    if (i <= last_x) {
+      const int rest = region.width - i;  // < kMaskWidth <= 32
+      const MaskBits inside = (MaskBits{1} << rest) - 1;
+      for (MaskBits bits = at_least(row + i, t) & inside; bits != 0; bits &= bits - 1) {
+        consider(i + std::countr_zero(bits));
+      }
     }
   }
 }

@@ -11,6 +11,7 @@
 #include "components/core/feature/descriptor_blur.hpp"
 #include "components/core/feature/fast_score_map.hpp"
 #include "components/core/feature/intensity_centroid.hpp"
+#include "components/core/feature/linear_resize.hpp"
 #include "components/core/feature/features.hpp"
 
 namespace heslam {
@@ -91,6 +92,7 @@ class OrbExtractor {
   std::vector<cv::Mat> blurred_;
   std::vector<DescriptorBlur> blurs_;  // one per level: levels may be described on different threads
   cv::Mat resize_scratch_;
+  std::vector<LinearResize> resizes_;  // one per level: its column plan is kept across frames
   std::vector<FastScoreMap> score_maps_;                // FAST scores per level (reused buffers)
   std::vector<std::vector<ScoredPoint>> level_points_;  // FAST corners per level before distribution
   std::vector<std::vector<LevelKeypoint>> level_keypoints_;
