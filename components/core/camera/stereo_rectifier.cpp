@@ -16,6 +16,26 @@ namespace {
 // alpha 0: the rectified image holds only valid pixels (no black borders), as ORB-SLAM2's EuRoC.yaml.
 constexpr double kRectifyAlpha = 0.0;
 
+// cv::remap splits its output over OpenCV's thread pool in dst.total() / 2^16 stripes and runs a call
+// of at most this many pixels as one stripe on the calling thread (OpenCV 4.6 imgwarp.cpp and
+// parallel.cpp: fewer than 1.5 stripes round to one). See remap_on_this_thread.
+constexpr int kRemapSerialPixels = 1 << 16;
+
+// cv::remap of the whole image in bands of at most kRemapSerialPixels output pixels, so it runs on
+// this thread only. The frontend rectifies the left and the right image at once on its two threads;
+// a whole-image cv::remap would also wake OpenCV's pool (TBB) and put a third thread on the two
+// cores, which then waits for the stripes that thread took. Every output pixel depends only on its
+// own map entries, so the bands give the same pixels as one call.
+void remap_on_this_thread(const cv::Mat& raw, const cv::Mat& map_xy, const cv::Mat& map_frac, cv::Mat& rect) {
+  rect.create(map_xy.size(), raw.type());
+  const int band_rows = std::max(1, kRemapSerialPixels / std::max(map_xy.cols, 1));
+  for (int row = 0; row < map_xy.rows; row += band_rows) {
+    const cv::Range rows(row, std::min(map_xy.rows, row + band_rows));
+    cv::Mat band = rect.rowRange(rows);
+    cv::remap(raw, band, map_xy.rowRange(rows), map_frac.rowRange(rows), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  }
+}
+
 cv::Mat camera_matrix(const CameraModel& c) {
   return (cv::Mat_<double>(3, 3) << c.fx_px, 0.0, c.cx_px, 0.0, c.fy_px, c.cy_px, 0.0, 0.0, 1.0);
 }
@@ -131,8 +151,14 @@ void StereoRectifier::rectify(const cv::Mat& left_raw, const cv::Mat& right_raw,
                               cv::Mat& right_rect) const {
   check_image(left_raw, raw_size_, "left");
   check_image(right_raw, raw_size_, "right");
-  rectify_left(left_raw, left_rect);
-  rectify_right(right_raw, right_rect);
+  if (passthrough_) {
+    left_rect = left_raw;
+    right_rect = right_raw;
+    return;
+  }
+  // One image after the other, each spread over OpenCV's pool.
+  cv::remap(left_raw, left_rect, left_map_xy_, left_map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  cv::remap(right_raw, right_rect, right_map_xy_, right_map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
 }
 
 void StereoRectifier::rectify_left(const cv::Mat& left_raw, cv::Mat& left_rect) const {
@@ -141,7 +167,7 @@ void StereoRectifier::rectify_left(const cv::Mat& left_raw, cv::Mat& left_rect) 
     left_rect = left_raw;
     return;
   }
-  cv::remap(left_raw, left_rect, left_map_xy_, left_map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  remap_on_this_thread(left_raw, left_map_xy_, left_map_frac_, left_rect);
 }
 
 void StereoRectifier::rectify_right(const cv::Mat& right_raw, cv::Mat& right_rect) const {
@@ -150,7 +176,7 @@ void StereoRectifier::rectify_right(const cv::Mat& right_raw, cv::Mat& right_rec
     right_rect = right_raw;
     return;
   }
-  cv::remap(right_raw, right_rect, right_map_xy_, right_map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  remap_on_this_thread(right_raw, right_map_xy_, right_map_frac_, right_rect);
 }
 
 }  // namespace heslam

@@ -33,8 +33,9 @@ class StereoRectifier {
   // when an image has the wrong size or type.
   void rectify(const cv::Mat& left_raw, const cv::Mat& right_raw, cv::Mat& left_rect, cv::Mat& right_rect) const;
 
-  // One image of the pair, as rectify() does it: the two may run at once on two threads (const, the
-  // maps are only read), with the same pixels as rectify().
+  // One image of the pair, with the same pixels as rectify(), on the calling thread only (no OpenCV
+  // pool): the two may run at once on two threads (const, the maps are only read). An output that
+  // already has the camera() size and type is written in place (no allocation).
   void rectify_left(const cv::Mat& left_raw, cv::Mat& left_rect) const;
   void rectify_right(const cv::Mat& right_raw, cv::Mat& right_rect) const;
 
