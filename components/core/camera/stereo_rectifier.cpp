@@ -16,26 +16,6 @@ namespace {
 // alpha 0: the rectified image holds only valid pixels (no black borders), as ORB-SLAM2's EuRoC.yaml.
 constexpr double kRectifyAlpha = 0.0;
 
-// cv::remap splits its output over OpenCV's thread pool in dst.total() / 2^16 stripes and runs a call
-// of at most this many pixels as one stripe on the calling thread (OpenCV 4.6 imgwarp.cpp and
-// parallel.cpp: fewer than 1.5 stripes round to one). See remap_on_this_thread.
-constexpr int kRemapSerialPixels = 1 << 16;
-
-// cv::remap of the whole image in bands of at most kRemapSerialPixels output pixels, so it runs on
-// this thread only. The frontend rectifies the left and the right image at once on its two threads;
-// a whole-image cv::remap would also wake OpenCV's pool (TBB) and put a third thread on the two
-// cores, which then waits for the stripes that thread took. Every output pixel depends only on its
-// own map entries, so the bands give the same pixels as one call.
-void remap_on_this_thread(const cv::Mat& raw, const cv::Mat& map_xy, const cv::Mat& map_frac, cv::Mat& rect) {
-  rect.create(map_xy.size(), raw.type());
-  const int band_rows = std::max(1, kRemapSerialPixels / std::max(map_xy.cols, 1));
-  for (int row = 0; row < map_xy.rows; row += band_rows) {
-    const cv::Range rows(row, std::min(map_xy.rows, row + band_rows));
-    cv::Mat band = rect.rowRange(rows);
-    cv::remap(raw, band, map_xy.rowRange(rows), map_frac.rowRange(rows), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-  }
-}
-
 cv::Mat camera_matrix(const CameraModel& c) {
   return (cv::Mat_<double>(3, 3) << c.fx_px, 0.0, c.cx_px, 0.0, c.fy_px, c.cy_px, 0.0, 0.0, 1.0);
 }
@@ -145,6 +125,8 @@ void StereoRectifier::compute_rectification(const StereoCalibration& calibration
     cv::initUndistortRectifyMap(camera_matrix(right), distortion_vector(right), R2, P2.colRange(0, 3),
                                 cv::Size(right.width_px, right.height_px), CV_16SC2, right_map_xy_, right_map_frac_);
   }
+  left_remap_ = BilinearRemap(left_map_xy_, left_map_frac_, raw_size_);
+  right_remap_ = BilinearRemap(right_map_xy_, right_map_frac_, cv::Size(right.width_px, right.height_px));
 }
 
 void StereoRectifier::rectify(const cv::Mat& left_raw, const cv::Mat& right_raw, cv::Mat& left_rect,
@@ -156,7 +138,7 @@ void StereoRectifier::rectify(const cv::Mat& left_raw, const cv::Mat& right_raw,
     right_rect = right_raw;
     return;
   }
-  // One image after the other, each spread over OpenCV's pool.
+  // cv::remap itself (each image spread over OpenCV's pool): the reference rectify_left / right match.
   cv::remap(left_raw, left_rect, left_map_xy_, left_map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
   cv::remap(right_raw, right_rect, right_map_xy_, right_map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
 }
@@ -167,7 +149,7 @@ void StereoRectifier::rectify_left(const cv::Mat& left_raw, cv::Mat& left_rect) 
     left_rect = left_raw;
     return;
   }
-  remap_on_this_thread(left_raw, left_map_xy_, left_map_frac_, left_rect);
+  left_remap_.apply(left_raw, left_rect);
 }
 
 void StereoRectifier::rectify_right(const cv::Mat& right_raw, cv::Mat& right_rect) const {
@@ -176,7 +158,7 @@ void StereoRectifier::rectify_right(const cv::Mat& right_raw, cv::Mat& right_rec
     right_rect = right_raw;
     return;
   }
-  remap_on_this_thread(right_raw, right_map_xy_, right_map_frac_, right_rect);
+  right_remap_.apply(right_raw, right_rect);
 }
 
 }  // namespace heslam
