@@ -66,6 +66,21 @@ TEST(BilinearRemap, EveryFractionAndTheLastRowsAndColumns) {
   expect_same_as_opencv(src, map_x, map_y);
 }
 
+TEST(BilinearRemap, ShiftedMapLikeARectificationGivesCvRemapsPixels) {
+  // About one source pixel per output pixel along a row, as a rectification map: most blocks read
+  // their neighbourhoods from one 16-byte window per half block; the shift crosses the borders.
+  const cv::Size size(96, 40);
+  const cv::Mat src = random_image(size, 5);
+  cv::Mat map_x(size, CV_32FC1), map_y(size, CV_32FC1);
+  for (int y = 0; y < size.height; ++y) {
+    for (int x = 0; x < size.width; ++x) {
+      map_x.at<float>(y, x) = 1.02f * static_cast<float>(x) - 3.22f;
+      map_y.at<float>(y, x) = static_cast<float>(y) + 0.01f * static_cast<float>(x) - 1.4f;
+    }
+  }
+  expect_same_as_opencv(src, map_x, map_y);
+}
+
 TEST(BilinearRemap, MapEntirelyOutsideGivesZeros) {
   const cv::Mat src = random_image(cv::Size(40, 30), 3);
   const cv::Mat map_x(src.size(), CV_32FC1, cv::Scalar(-5.f));

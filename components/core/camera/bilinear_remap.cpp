@@ -23,6 +23,13 @@ constexpr int kFracMask = kTab * kTab - 1;
 constexpr int kWeightBits = 10;
 constexpr int kRound = 1 << (kWeightBits - 1);
 
+// How a block of output pixels is computed (BilinearRemap::block_mode_).
+constexpr unsigned char kScalar = 0;
+constexpr unsigned char kGathers = 1;
+constexpr unsigned char kWindows = 2;
+// Bytes of one source window (an SSE register): the pixels of half a block and their right neighbours.
+constexpr int kWindow = 16;
+
 // The scalar formula for one output pixel; taps outside the source are 0.
 std::uint8_t remap_pixel(const cv::Mat& src, int sx, int sy, int frac) {
   const int fx = frac & (kTab - 1);
@@ -45,24 +52,39 @@ BilinearRemap::BilinearRemap(const cv::Mat& map_xy, const cv::Mat& map_frac, cv:
     throw std::invalid_argument("BilinearRemap: expected CV_16SC2 and CV_16UC1 maps of one size and a source of at least 2x2");
   }
   blocks_per_row_ = (map_xy.cols + kBlock - 1) / kBlock;
-  block_inside_.assign(static_cast<std::size_t>(blocks_per_row_) * static_cast<std::size_t>(map_xy.rows), 0);
-  // A block takes the vector path when every pixel's 2x2 neighbourhood is inside the source and the
-  // two 4-byte reads per pixel (rows sy and sy + 1 from sx) end inside a continuous source buffer.
-  const std::int64_t buffer_bytes = static_cast<std::int64_t>(src_size.width) * src_size.height;
+  const std::size_t blocks = static_cast<std::size_t>(blocks_per_row_) * static_cast<std::size_t>(map_xy.rows);
+  block_mode_.assign(blocks, kScalar);
+  block_window_.assign(2 * blocks, 0);
+  // A block takes a vector path when every pixel's 2x2 neighbourhood is inside the source and the
+  // reads (rows sy and sy + 1 from sx) end inside a continuous source buffer: 16-byte windows when
+  // each half block's pixels lie within one (a rectification map moves ~1 px per output pixel), else
+  // two 4-byte gathers per pixel.
+  const std::int64_t width = src_size.width;
+  const std::int64_t buffer_bytes = width * src_size.height;
   for (int y = 0; y < map_xy.rows; ++y) {
     const std::int16_t* xy = map_xy.ptr<std::int16_t>(y);
     for (int block = 0; block < blocks_per_row_; ++block) {
       const int x0 = block * kBlock;
       if (x0 + kBlock > map_xy.cols) continue;
+      const std::size_t b = static_cast<std::size_t>(y) * static_cast<std::size_t>(blocks_per_row_) + static_cast<std::size_t>(block);
       bool inside = true;
-      for (int x = x0; x < x0 + kBlock && inside; ++x) {
-        const int sx = xy[2 * x];
-        const int sy = xy[2 * x + 1];
-        const std::int64_t last_byte = static_cast<std::int64_t>(sy + 1) * src_size.width + sx + 3;
-        inside = sx >= 0 && sy >= 0 && sx <= src_size.width - 2 && sy <= src_size.height - 2 && last_byte < buffer_bytes;
+      bool windows = true;
+      for (int half = 0; half < 2; ++half) {
+        std::int64_t lowest = buffer_bytes;
+        std::int64_t highest = -1;
+        for (int x = x0 + half * kBlock / 2; x < x0 + (half + 1) * kBlock / 2; ++x) {
+          const int sx = xy[2 * x];
+          const int sy = xy[2 * x + 1];
+          const std::int64_t offset = sy * width + sx;
+          inside = inside && sx >= 0 && sy >= 0 && sx <= src_size.width - 2 && sy <= src_size.height - 2 &&
+                   offset + width + 3 < buffer_bytes;
+          lowest = std::min(lowest, offset);
+          highest = std::max(highest, offset);
+        }
+        windows = windows && highest + 1 - lowest < kWindow && lowest + width + kWindow <= buffer_bytes;
+        block_window_[2 * b + static_cast<std::size_t>(half)] = static_cast<std::int32_t>(std::max<std::int64_t>(lowest, 0));
       }
-      block_inside_[static_cast<std::size_t>(y) * static_cast<std::size_t>(blocks_per_row_) + static_cast<std::size_t>(block)] =
-          inside ? 1 : 0;
+      if (inside) block_mode_[b] = windows ? kWindows : kGathers;
     }
   }
 }
@@ -81,23 +103,45 @@ void BilinearRemap::apply(const cv::Mat& src, cv::Mat& dst) const {
     const std::int16_t* xy = map_xy_.ptr<std::int16_t>(y);
     const std::uint16_t* frac = map_frac_.ptr<std::uint16_t>(y);
     std::uint8_t* out = dst.ptr<std::uint8_t>(y);
-    const unsigned char* inside = block_inside_.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(blocks_per_row_);
+    const std::size_t row_blocks = static_cast<std::size_t>(y) * static_cast<std::size_t>(blocks_per_row_);
+    const unsigned char* mode = block_mode_.data() + row_blocks;
+    const std::int32_t* window = block_window_.data() + 2 * row_blocks;
     for (int block = 0; block < blocks_per_row_; ++block) {
       const int x0 = block * kBlock;
 #if defined(__AVX2__)
-      if (vector_ok && inside[block]) {
-        const auto* base = reinterpret_cast<const int*>(src.data);
-        const auto* base_below = reinterpret_cast<const int*>(src.data + src.cols);
+      if (vector_ok && mode[block] != kScalar) {
         // Lane k: sx + sy * width (the int16 pair (sx, sy) times (1, width)).
         const __m256i pair = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(xy + 2 * x0));
         const __m256i offset = _mm256_madd_epi16(pair, _mm256_set1_epi32((src.cols << 16) | 1));
-        const __m256i row0 = _mm256_i32gather_epi32(base, offset, 1);
-        const __m256i row1 = _mm256_i32gather_epi32(base_below, offset, 1);
-        // Bytes 0 and 1 of each lane as an int16 pair: (S00, S01) and (S10, S11).
-        const __m256i spread = _mm256_setr_epi8(0, -1, 1, -1, 4, -1, 5, -1, 8, -1, 9, -1, 12, -1, 13, -1,  //
-                                                0, -1, 1, -1, 4, -1, 5, -1, 8, -1, 9, -1, 12, -1, 13, -1);
-        const __m256i top = _mm256_shuffle_epi8(row0, spread);
-        const __m256i bottom = _mm256_shuffle_epi8(row1, spread);
+        // (S00, S01) and (S10, S11) of each lane as int16 pairs.
+        __m256i top, bottom;
+        if (mode[block] == kWindows) {
+          // Each half block's 2x2 neighbourhoods lie in the 16 bytes from its window start, in both rows:
+          // a byte shuffle picks (offset - start, offset - start + 1) per lane, zero-extended.
+          const std::int32_t low = window[2 * block];
+          const std::int32_t high = window[2 * block + 1];
+          const __m256i start = _mm256_setr_epi32(low, low, low, low, high, high, high, high);
+          const __m256i index = _mm256_sub_epi32(offset, start);
+          const __m256i control = _mm256_or_si256(
+              _mm256_add_epi32(_mm256_add_epi32(index, _mm256_slli_epi32(index, 16)), _mm256_set1_epi32(1 << 16)),
+              _mm256_set1_epi32(static_cast<int>(0x80008000u)));
+          const std::uint8_t* row0 = src.data;
+          const std::uint8_t* row1 = src.data + src.cols;
+          top = _mm256_shuffle_epi8(_mm256_loadu2_m128i(reinterpret_cast<const __m128i*>(row0 + high),
+                                                        reinterpret_cast<const __m128i*>(row0 + low)),
+                                    control);
+          bottom = _mm256_shuffle_epi8(_mm256_loadu2_m128i(reinterpret_cast<const __m128i*>(row1 + high),
+                                                           reinterpret_cast<const __m128i*>(row1 + low)),
+                                       control);
+        } else {
+          const __m256i row0 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(src.data), offset, 1);
+          const __m256i row1 = _mm256_i32gather_epi32(reinterpret_cast<const int*>(src.data + src.cols), offset, 1);
+          // Bytes 0 and 1 of each lane.
+          const __m256i spread = _mm256_setr_epi8(0, -1, 1, -1, 4, -1, 5, -1, 8, -1, 9, -1, 12, -1, 13, -1,  //
+                                                  0, -1, 1, -1, 4, -1, 5, -1, 8, -1, 9, -1, 12, -1, 13, -1);
+          top = _mm256_shuffle_epi8(row0, spread);
+          bottom = _mm256_shuffle_epi8(row1, spread);
+        }
         const __m256i f = _mm256_and_si256(
             _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(frac + x0))), _mm256_set1_epi32(kFracMask));
         const __m256i tab = _mm256_set1_epi32(kTab);
@@ -120,7 +164,8 @@ void BilinearRemap::apply(const cv::Mat& src, cv::Mat& dst) const {
       }
 #else
       (void)vector_ok;
-      (void)inside;
+      (void)mode;
+      (void)window;
 #endif
       const int x1 = std::min(x0 + kBlock, map_xy_.cols);
       for (int x = x0; x < x1; ++x) out[x] = remap_pixel(src, xy[2 * x], xy[2 * x + 1], frac[x]);

@@ -1,5 +1,5 @@
 // Bilinear remapping of an 8-bit grey image with fixed-point maps, pixel for pixel what
-// cv::remap(src, dst, map_xy, map_frac, INTER_LINEAR, BORDER_CONSTANT, 0) gives, in about a tenth of
+// cv::remap(src, dst, map_xy, map_frac, INTER_LINEAR, BORDER_CONSTANT, 0) gives, in about a fifth of
 // its instructions.
 //
 // cv::remap's 8-bit bilinear path is fixed point: map_xy (CV_16SC2) holds the integer source pixel
@@ -10,12 +10,14 @@
 // pixels both give the pixel itself.) Dividing by 32: (sum of w'_k S_k + 512) >> 10 with
 // w' = (32 - fx)(32 - fy), ..., which is what this computes.
 //
-// On the rectification of EuRoC pairs cv::remap spent 37 instructions per pixel (its per-block map
-// copies and per-pixel gathers; 27 M per frame, more than the whole tracking). Here blocks of 8 output
+// On the rectification of EuRoC pairs cv::remap spent about 36 instructions per pixel (its per-block
+// map copies and per-pixel loads; 26 M per pair, more than the whole tracking), this 7.7 (callgrind,
+// docs/benchmarks.md "Frontend critical path, fourth pass"). Here blocks of 8 output
 // pixels whose 2x2 neighbourhoods lie inside the image take two AVX2 gathers and a few multiply-adds;
 // the rest (image borders) the scalar formula. Without AVX2, the scalar formula everywhere.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -39,9 +41,10 @@ class BilinearRemap {
   cv::Mat map_xy_;
   cv::Mat map_frac_;
   cv::Size src_size_;
-  // Per block of kBlock output pixels of a row (row-major, blocks_per_row_ per row): whether all its
-  // pixels' neighbourhoods are inside the source and the 4-byte gathers stay inside its buffer.
-  std::vector<unsigned char> block_inside_;
+  // Per block of 8 output pixels of a row (row-major, blocks_per_row_ per row): how it is computed
+  // (scalar, gathers, windows; see the .cpp) and, for windows, each half block's first source byte.
+  std::vector<unsigned char> block_mode_;
+  std::vector<std::int32_t> block_window_;
   int blocks_per_row_ = 0;
 };
 
