@@ -1,5 +1,5 @@
 // Bilinear remapping of an 8-bit grey image with fixed-point maps, pixel for pixel what
-// cv::remap(src, dst, map_xy, map_frac, INTER_LINEAR, BORDER_CONSTANT, 0) gives, in about a fifth of
+// cv::remap(src, dst, map_xy, map_frac, INTER_LINEAR, BORDER_CONSTANT, 0) gives, in about a quarter of
 // its instructions.
 //
 // cv::remap's 8-bit bilinear path is fixed point: map_xy (CV_16SC2) holds the integer source pixel
@@ -10,11 +10,12 @@
 // pixels both give the pixel itself.) Dividing by 32: (sum of w'_k S_k + 512) >> 10 with
 // w' = (32 - fx)(32 - fy), ..., which is what this computes.
 //
-// On the rectification of EuRoC pairs cv::remap spent about 36 instructions per pixel (its per-block
-// map copies and per-pixel loads; 26 M per pair, more than the whole tracking), this 7.7 (callgrind,
-// docs/benchmarks.md "Frontend critical path, fourth pass"). Here blocks of 8 output
-// pixels whose 2x2 neighbourhoods lie inside the image take two AVX2 gathers and a few multiply-adds;
-// the rest (image borders) the scalar formula. Without AVX2, the scalar formula everywhere.
+// On the rectification of EuRoC pairs cv::remap spent about 36 instructions per pixel (26 M per pair,
+// more than the whole tracking), this about 10, in less than half the CPU time (callgrind and thread
+// CPU in docs/benchmarks.md "Frontend critical path, fourth pass"). Blocks of 8 output pixels whose
+// 2x2 neighbourhoods lie inside the image read them from one 16-byte window per half block (byte
+// shuffles) or, where the map jumps, with two AVX2 gathers, then a few multiply-adds; the rest (image
+// borders) use the scalar formula. Without AVX2, the scalar formula everywhere.
 #pragma once
 
 #include <cstdint>
