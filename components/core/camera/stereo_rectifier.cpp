@@ -125,14 +125,22 @@ void StereoRectifier::compute_rectification(const StereoCalibration& calibration
     cv::initUndistortRectifyMap(camera_matrix(right), distortion_vector(right), R2, P2.colRange(0, 3),
                                 cv::Size(right.width_px, right.height_px), CV_16SC2, right_map_xy_, right_map_frac_);
   }
+  left_remap_ = BilinearRemap(left_map_xy_, left_map_frac_, raw_size_);
+  right_remap_ = BilinearRemap(right_map_xy_, right_map_frac_, cv::Size(right.width_px, right.height_px));
 }
 
 void StereoRectifier::rectify(const cv::Mat& left_raw, const cv::Mat& right_raw, cv::Mat& left_rect,
                               cv::Mat& right_rect) const {
   check_image(left_raw, raw_size_, "left");
   check_image(right_raw, raw_size_, "right");
-  rectify_left(left_raw, left_rect);
-  rectify_right(right_raw, right_rect);
+  if (passthrough_) {
+    left_rect = left_raw;
+    right_rect = right_raw;
+    return;
+  }
+  // cv::remap itself (each image spread over OpenCV's pool): the reference rectify_left / right match.
+  cv::remap(left_raw, left_rect, left_map_xy_, left_map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  cv::remap(right_raw, right_rect, right_map_xy_, right_map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
 }
 
 void StereoRectifier::rectify_left(const cv::Mat& left_raw, cv::Mat& left_rect) const {
@@ -141,7 +149,7 @@ void StereoRectifier::rectify_left(const cv::Mat& left_raw, cv::Mat& left_rect) 
     left_rect = left_raw;
     return;
   }
-  cv::remap(left_raw, left_rect, left_map_xy_, left_map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  left_remap_.apply(left_raw, left_rect);
 }
 
 void StereoRectifier::rectify_right(const cv::Mat& right_raw, cv::Mat& right_rect) const {
@@ -150,7 +158,7 @@ void StereoRectifier::rectify_right(const cv::Mat& right_raw, cv::Mat& right_rec
     right_rect = right_raw;
     return;
   }
-  cv::remap(right_raw, right_rect, right_map_xy_, right_map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  right_remap_.apply(right_raw, right_rect);
 }
 
 }  // namespace heslam

@@ -96,7 +96,9 @@ StereoFeatures StereoFeaturePipeline::process(const cv::Mat& left_rect, const cv
     // thread is free: the right image has more features, so a fixed left || right split would leave
     // one core idle. Each job writes only its own level, so the result does not depend on which
     // thread ran it.
-    worker_->run([&] { right_extractor_.build_pyramid(right_he_); }, [&] { left_extractor_.build_pyramid(left_he_); });
+    // The level jobs follow at once, and stereo matching after them: the worker polls in between.
+    worker_->run([&] { right_extractor_.build_pyramid(right_he_); }, [&] { left_extractor_.build_pyramid(left_he_); },
+                 PairWorker::Then::kMoreSoon);
     const int levels = options_.orb.levels;
     std::atomic<int> next_job{0};
     auto run_jobs = [&] {
@@ -105,7 +107,7 @@ StereoFeatures StereoFeaturePipeline::process(const cv::Mat& left_rect, const cv
         extractor.detect_and_describe_level(job / 2);
       }
     };
-    worker_->run(run_jobs, run_jobs);
+    worker_->run(run_jobs, run_jobs, PairWorker::Then::kMoreSoon);
     left_extractor_.collect(left_);
     right_extractor_.collect(right_);
   } else {
@@ -139,7 +141,7 @@ StereoFeatures StereoFeaturePipeline::process(const cv::Mat& left_rect, const cv
     stereo_matcher_.match_range(left_, right_, right_rows_, half, n, out.u_right_px, out.depth_m, sad_right_half_);
   };
   if (worker_) {
-    worker_->run(second_half, first_half);
+    worker_->run(second_half, first_half, PairWorker::Then::kSleep);  // the frame's last hand-off
   } else {
     first_half();
     second_half();

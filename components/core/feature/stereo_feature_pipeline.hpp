@@ -2,6 +2,7 @@
 // both images (pyramid levels of both spread over two threads) -> stereo matching -> StereoFeatures.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -61,6 +62,11 @@ class StereoFeaturePipeline {
   // the other when not parallel), e.g. the rectification of the two raw images before process():
   // the same thread pair, no second worker. Exceptions are rethrown here.
   void run_on_both(const std::function<void()>& right_job, const std::function<void()>& left_job);
+
+  // Hand-offs between the pipeline's two threads so far, and how many found the other asleep (a
+  // futex wake-up); 0 when not parallel.
+  std::uint64_t hand_offs() const { return worker_ ? worker_->runs() : 0; }
+  std::uint64_t sleeping_hand_offs() const { return worker_ ? worker_->sleeping_hand_offs() : 0; }
 
   // Whether the last pair was equalized (adaptive HE switches on and off).
   bool he_active() const { return equalizer_.active(); }

@@ -45,7 +45,14 @@ int FeatureGrid::cell_row(float v_px) const {
 
 std::vector<int> FeatureGrid::in_area(float u_px, float v_px, float radius_px, int min_level, int max_level) const {
   std::vector<int> result;
-  if (u_px_.empty() || !(radius_px > 0.f)) return result;
+  in_area(u_px, v_px, radius_px, min_level, max_level, result);
+  return result;
+}
+
+void FeatureGrid::in_area(float u_px, float v_px, float radius_px, int min_level, int max_level,
+                          std::vector<int>& result) const {
+  result.clear();
+  if (u_px_.empty() || !(radius_px > 0.f)) return;
   const int col0 = cell_col(u_px - radius_px);
   const int col1 = cell_col(u_px + radius_px);
   const int row0 = cell_row(v_px - radius_px);
@@ -62,7 +69,6 @@ std::vector<int> FeatureGrid::in_area(float u_px, float v_px, float radius_px, i
     }
   }
   std::sort(result.begin(), result.end());
-  return result;
 }
 
 }  // namespace heslam

@@ -25,6 +25,9 @@ class FeatureGrid {
   // Indices (ascending) of keypoints with |u - u_px| < radius_px and |v - v_px| < radius_px (a square
   // window, as ORB-SLAM2) and min_level <= octave <= max_level; -1 means no limit on that side.
   std::vector<int> in_area(float u_px, float v_px, float radius_px, int min_level = -1, int max_level = -1) const;
+  // The same indices into `out` (cleared first): a search over many points reuses one buffer
+  // instead of allocating a vector per query.
+  void in_area(float u_px, float v_px, float radius_px, int min_level, int max_level, std::vector<int>& out) const;
 
   std::size_t size() const { return u_px_.size(); }
   int cols() const { return cols_; }

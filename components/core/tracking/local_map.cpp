@@ -5,7 +5,6 @@
 #include <cmath>
 #include <limits>
 #include <map>
-#include <set>
 
 #include "components/core/camera/pinhole_stereo.hpp"
 
@@ -105,26 +104,35 @@ void init_point_geometry(MapPoint& point, const Keyframe& keyframe, int keypoint
 
 LocalMapSelection select_local_map(const Frame& frame, const Map& map, const TrackerOptions& options) {
   LocalMapSelection selection;
-  // Votes: keyframes observing the frame's matched points.
-  std::map<KeyframeId, int> votes;
+  // Votes: keyframes observing the frame's matched points, one entry per observation, sorted so that
+  // equal ids form runs (ascending id, as a std::map of counts would give, without a node per id).
+  std::vector<KeyframeId> voters;
   for (std::size_t i = 0; i < frame.size(); ++i) {
     if (frame.point_ids[i] == kNoId || frame.outlier[i]) continue;
     const MapPoint* point = map.point(frame.point_ids[i]);
     if (point == nullptr || point->culled) continue;
-    for (const auto& observation : point->observations) ++votes[observation.first];
+    for (const auto& observation : point->observations) voters.push_back(observation.first);
   }
+  std::sort(voters.begin(), voters.end());
   int best_votes = 0;
-  std::set<KeyframeId> chosen;
-  for (const auto& [id, count] : votes) {
+  for (std::size_t run = 0; run < voters.size();) {
+    const KeyframeId id = voters[run];
+    std::size_t end = run + 1;
+    while (end < voters.size() && voters[end] == id) ++end;
+    const int count = static_cast<int>(end - run);
+    run = end;
     const Keyframe* kf = map.keyframe(id);
     if (kf == nullptr || kf->culled) continue;
     selection.keyframes.push_back(id);
-    chosen.insert(id);
     if (count > best_votes) {
       best_votes = count;
       selection.reference = id;
     }
   }
+  // At most local_map_max_keyframes (80) ids: a linear search is cheaper than a node-based set.
+  const auto chosen = [&](KeyframeId id) {
+    return std::find(selection.keyframes.begin(), selection.keyframes.end(), id) != selection.keyframes.end();
+  };
   // Neighbours of the voted keyframes: best covisible ones and the spanning-tree parent.
   const std::size_t voted = selection.keyframes.size();
   const std::size_t cap = static_cast<std::size_t>(std::max(options.local_map_max_keyframes, 1));
@@ -134,15 +142,13 @@ LocalMapSelection select_local_map(const Frame& frame, const Map& map, const Tra
     for (const auto& [neighbour, weight] : kf->covisible) {
       if (added >= options.local_map_neighbours_per_keyframe || selection.keyframes.size() >= cap) break;
       const Keyframe* other = map.keyframe(neighbour);
-      if (other == nullptr || other->culled || chosen.count(neighbour) != 0) continue;
+      if (other == nullptr || other->culled || chosen(neighbour)) continue;
       selection.keyframes.push_back(neighbour);
-      chosen.insert(neighbour);
       ++added;
     }
     const Keyframe* parent = map.keyframe(kf->parent);
-    if (parent != nullptr && !parent->culled && chosen.count(kf->parent) == 0 && selection.keyframes.size() < cap) {
+    if (parent != nullptr && !parent->culled && !chosen(kf->parent) && selection.keyframes.size() < cap) {
       selection.keyframes.push_back(kf->parent);
-      chosen.insert(kf->parent);
     }
   }
   // Gather, sort, dedupe: far cheaper than a node-based set for thousands of ids.

@@ -52,26 +52,43 @@ Robust huber(double squared_error, double delta2, bool robust) {
 
 // Whitened residual (2 or 3 components) and, when asked, its Jacobian with respect to the pose
 // perturbation [w, r]: R' = Exp(w) R, t' = t + r (dp_c/dw = -[R p_w]x, dp_c/dr = I).
+// The Jacobian is left unset where it is not asked for: zeroing it on every call (a memset, also in
+// each cost evaluation) was 3 % of the tracking's instructions.
 struct Linearization {
   Eigen::Vector3d residual = Eigen::Vector3d::Zero();
-  Eigen::Matrix<double, 3, 6> jacobian = Eigen::Matrix<double, 3, 6>::Zero();
+  Eigen::Matrix<double, 3, 6> jacobian;  // all 18 entries written when with_jacobian
   int size = 0;  // 0: not usable at this pose (point at or behind the camera)
 };
 
-Linearization linearize(const PinholeStereo& camera, const PoseObservation& obs, const Eigen::Matrix3d& R,
-                        const Eigen::Vector3d& t, double disparity_sigma_ratio, bool with_jacobian) {
+// An observation in a round, with its square-root informations computed once per round instead of at
+// every linearization (a square root and a division each time; the same values).
+struct Active {
+  const PoseObservation* obs;
+  double delta2;               // Huber threshold on the squared whitened error
+  double sqrt_info;            // sqrt(obs->inv_sigma2)
+  double disparity_sqrt_info;  // sqrt_info / (disparity_sigma_ratio * obs->disparity_sigma_scale)
+};
+
+Active make_active(const PoseObservation& obs, double delta2, double disparity_sigma_ratio) {
+  const double sqrt_info = std::sqrt(obs.inv_sigma2);
+  return {&obs, delta2, sqrt_info, sqrt_info / (disparity_sigma_ratio * obs.disparity_sigma_scale)};
+}
+
+Linearization linearize(const PinholeStereo& camera, const Active& a, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
+                        bool with_jacobian) {
   Linearization out;
+  const PoseObservation& obs = *a.obs;
   const Eigen::Vector3d p_r = R * obs.p_w;
   const Eigen::Vector3d p_c = p_r + t;
   if (!(p_c.z() > kMinDepthM)) return out;
-  const double sqrt_info = std::sqrt(obs.inv_sigma2);
+  const double sqrt_info = a.sqrt_info;
   const double inv_z = 1.0 / p_c.z();
   const double x = p_c.x() * inv_z;
   const double y = p_c.y() * inv_z;
   out.size = obs.stereo() ? 3 : 2;
   out.residual(0) = (camera.fx_px * x + camera.cx_px - obs.u_px) * sqrt_info;
   out.residual(1) = (camera.fy_px * y + camera.cy_px - obs.v_px) * sqrt_info;
-  const double disparity_sqrt_info = sqrt_info / (disparity_sigma_ratio * obs.disparity_sigma_scale);
+  const double disparity_sqrt_info = a.disparity_sqrt_info;
   if (obs.stereo()) out.residual(2) = (camera.bf() * inv_z - (obs.u_px - obs.u_right_px)) * disparity_sqrt_info;
   if (!with_jacobian) return out;
   // d(residual)/d(p_c), whitened.
@@ -89,17 +106,12 @@ Linearization linearize(const PinholeStereo& camera, const PoseObservation& obs,
   return out;
 }
 
-struct Active {
-  const PoseObservation* obs;
-  double delta2;  // Huber threshold on the squared whitened error
-};
-
 // Total robust cost at a pose (half the sum, as Ceres reports it).
 double total_cost(const PinholeStereo& camera, const std::vector<Active>& active, const Eigen::Matrix3d& R,
-                  const Eigen::Vector3d& t, double disparity_sigma_ratio, bool robust) {
+                  const Eigen::Vector3d& t, bool robust) {
   double cost = 0.0;
   for (const Active& a : active) {
-    const Linearization l = linearize(camera, *a.obs, R, t, disparity_sigma_ratio, false);
+    const Linearization l = linearize(camera, a, R, t, false);
     if (l.size == 0) continue;
     cost += huber(l.residual.squaredNorm(), a.delta2, robust).cost;
   }
@@ -108,15 +120,15 @@ double total_cost(const PinholeStereo& camera, const std::vector<Active>& active
 
 // One round: at most `iterations` LM steps on the active observations; updates R and t.
 void solve_round(const PinholeStereo& camera, const std::vector<Active>& active, Eigen::Matrix3d& R,
-                 Eigen::Vector3d& t, double disparity_sigma_ratio, bool robust, int iterations) {
+                 Eigen::Vector3d& t, bool robust, int iterations) {
   double lambda = kInitialLambda;
   double lambda_factor = 2.0;  // grows while steps are rejected in a row (Ceres' decrease factor)
-  double cost = total_cost(camera, active, R, t, disparity_sigma_ratio, robust);
+  double cost = total_cost(camera, active, R, t, robust);
   for (int iteration = 0; iteration < iterations; ++iteration) {
     Matrix6 H = Matrix6::Zero();
     Vector6 g = Vector6::Zero();
     for (const Active& a : active) {
-      const Linearization l = linearize(camera, *a.obs, R, t, disparity_sigma_ratio, true);
+      const Linearization l = linearize(camera, a, R, t, true);
       if (l.size == 0) continue;
       const double w = huber(l.residual.squaredNorm(), a.delta2, robust).weight;
       H.noalias() += w * l.jacobian.transpose() * l.jacobian;
@@ -138,7 +150,7 @@ void solve_round(const PinholeStereo& camera, const std::vector<Active>& active,
       const Eigen::Vector3d axis = angle > 0.0 ? Eigen::Vector3d(step.head<3>() / angle) : Eigen::Vector3d::UnitX();
       const Eigen::Matrix3d R_new = Eigen::AngleAxisd(angle, axis).toRotationMatrix() * R;
       const Eigen::Vector3d t_new = t + step.tail<3>();
-      const double new_cost = total_cost(camera, active, R_new, t_new, disparity_sigma_ratio, robust);
+      const double new_cost = total_cost(camera, active, R_new, t_new, robust);
       // Gain ratio: actual over predicted decrease of the (Gauss-Newton model of the) cost.
       const double predicted = -(step.dot(g) + 0.5 * step.dot(H * step));
       const double ratio = predicted > 0.0 ? (cost - new_cost) / predicted : -1.0;
@@ -195,12 +207,13 @@ MotionOnlyBaResult optimize_pose(const PinholeStereo& camera, const std::vector<
     active.clear();
     for (std::size_t i = 0; i < observations.size(); ++i) {
       if (result.outlier[i]) continue;
-      active.push_back({&observations[i], observations[i].stereo() ? options.chi2_stereo : options.chi2_mono});
+      active.push_back(make_active(observations[i], observations[i].stereo() ? options.chi2_stereo : options.chi2_mono,
+                                   options.disparity_sigma_ratio));
     }
     const int edges = static_cast<int>(active.size());
     if (edges < kMinEdgesToContinue && round > 0) break;
     if (edges == 0) break;
-    solve_round(camera, active, R, t, options.disparity_sigma_ratio, robust, options.iterations_per_round);
+    solve_round(camera, active, R, t, robust, options.iterations_per_round);
 
     // Reclassify every observation (outliers may come back), as ORB-SLAM2 does.
     Pose3 T_cw = Pose3::Identity();

@@ -49,6 +49,7 @@ int search_from_last_frame(Frame& current, const Frame& last, const Map& map, co
 
   RotationHistogram histogram;
   int matches = 0;
+  std::vector<int> candidates;  // reused by every point's query
   for (std::size_t i = 0; i < last.size(); ++i) {
     const PointId id = last.point_ids[i];
     if (id == kNoId || last.outlier[i]) continue;
@@ -62,14 +63,13 @@ int search_from_last_frame(Frame& current, const Frame& last, const Map& map, co
 
     const int last_octave = last.features.keypoints[i].octave;
     const float radius = radius_px * pyramid.scale[static_cast<std::size_t>(last_octave)];
-    std::vector<int> candidates;
     if (forward) {
-      candidates = current.grid.in_area(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius, last_octave);
+      current.grid.in_area(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius, last_octave, -1, candidates);
     } else if (backward) {
-      candidates = current.grid.in_area(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius, 0, last_octave);
+      current.grid.in_area(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius, 0, last_octave, candidates);
     } else {
-      candidates = current.grid.in_area(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius,
-                                        std::max(0, last_octave - 1), last_octave + 1);
+      current.grid.in_area(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius, std::max(0, last_octave - 1),
+                           last_octave + 1, candidates);
     }
     int best_distance = std::numeric_limits<int>::max();
     int best_index = -1;
@@ -102,10 +102,16 @@ int search_local_points(Frame& current, const std::vector<PointId>& local_points
   const ScalePyramid& pyramid = current.features.pyramid;
 
   // Points already matched in this frame are skipped (they were counted visible by the caller).
-  std::vector<PointId> matched(current.point_ids.begin(), current.point_ids.end());
+  // Only the matched keypoints' ids: no local point is kNoId.
+  std::vector<PointId> matched;
+  matched.reserve(current.point_ids.size());
+  for (PointId id : current.point_ids) {
+    if (id != kNoId) matched.push_back(id);
+  }
   std::sort(matched.begin(), matched.end());
 
   int matches = 0;
+  std::vector<int> candidates;  // reused by every point's query
   for (PointId id : local_points) {
     if (std::binary_search(matched.begin(), matched.end(), id)) continue;
     MapPoint* point = map.point(id);
@@ -129,8 +135,7 @@ int search_local_points(Frame& current, const std::vector<PointId>& local_points
     const float radius = radius_px * (view_cosine > kHeadOnCosine ? kHeadOnRadiusFactor : kObliqueRadiusFactor) *
                          pyramid.scale[static_cast<std::size_t>(level)];
     const double ur_predicted = uv.x() - camera.bf() / p_c.z();
-    const std::vector<int> candidates =
-        current.grid.in_area(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius, level - 1, level);
+    current.grid.in_area(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius, level - 1, level, candidates);
 
     int best_distance = std::numeric_limits<int>::max();
     int second_distance = std::numeric_limits<int>::max();
@@ -169,6 +174,7 @@ int search_keyframe_by_projection(Frame& current, const Keyframe& keyframe, cons
   const ScalePyramid& pyramid = current.features.pyramid;
   RotationHistogram histogram;
   int matches = 0;
+  std::vector<int> candidates;  // reused by every point's query
   for (std::size_t i = 0; i < keyframe.point_ids.size(); ++i) {
     const PointId id = keyframe.point_ids[i];
     if (id == kNoId) continue;
@@ -180,8 +186,8 @@ int search_keyframe_by_projection(Frame& current, const Keyframe& keyframe, cons
     if (!camera.in_image(uv.x(), uv.y())) continue;
     const int octave = keyframe.features.keypoints[i].octave;
     const float radius = radius_px * pyramid.scale[static_cast<std::size_t>(octave)];
-    const std::vector<int> candidates = current.grid.in_area(static_cast<float>(uv.x()), static_cast<float>(uv.y()),
-                                                             radius, std::max(0, octave - 2), octave + 2);
+    current.grid.in_area(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius, std::max(0, octave - 2),
+                         octave + 2, candidates);
     int best_distance = std::numeric_limits<int>::max();
     int second_distance = std::numeric_limits<int>::max();
     int best_index = -1;

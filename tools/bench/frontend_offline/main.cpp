@@ -225,6 +225,7 @@ int run(int argc, char** argv) {
   print_relocalization_summary(result);
   std::printf("per-frame time (image decoding excluded):\n");
   print_stage("rectify", result.frames, &FrameRecord::rectify_ms);
+  print_stage("rect cpu", result.frames, &FrameRecord::rectify_cpu_ms);
   print_stage("he", result.frames, &FrameRecord::he_ms);
   print_stage("extract", result.frames, &FrameRecord::extract_ms);
   print_stage("stereo", result.frames, &FrameRecord::stereo_ms);
@@ -232,6 +233,11 @@ int run(int argc, char** argv) {
   print_stage("track cpu", result.frames, &FrameRecord::tracking_cpu_ms);
   print_stage("total", result.frames, &FrameRecord::total_ms);
   print_stage("total cpu", result.frames, &FrameRecord::cpu_ms);
+  if (!result.frames.empty()) {
+    const double frames = static_cast<double>(result.frames.size());
+    std::printf("hand-offs between the pipeline's two threads: %.1f per frame, %.1f of them to a sleeping thread\n",
+                static_cast<double>(result.hand_offs) / frames, static_cast<double>(result.sleeping_hand_offs) / frames);
+  }
   if (std::getenv("HESLAM_FRONTEND_OFFLINE_PER_FRAME") != nullptr) {
     for (std::size_t k = 0; k < result.frames.size(); ++k) {
       const FrameRecord& f = result.frames[k];

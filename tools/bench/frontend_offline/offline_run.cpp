@@ -109,6 +109,7 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
     pipeline.run_on_both([&] { rectifier.rectify_right(right, right_rect); },
                          [&] { rectifier.rectify_left(left, left_rect); });
     record.rectify_ms = elapsed_ms(start);
+    record.rectify_cpu_ms = process_cpu_ms() - cpu_start;
     StereoFeatureTimings timings;
     StereoFeatures features = pipeline.process(left_rect, right_rect, &timings);
     record.he_ms = timings.he_ms;
@@ -138,6 +139,8 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
   }
   run.keyframes = static_cast<int>(tracker.local_map().keyframes.size());
   run.map_points = static_cast<int>(tracker.local_map().points.size());
+  run.hand_offs = pipeline.hand_offs();
+  run.sleeping_hand_offs = pipeline.sleeping_hand_offs();
   return run;
 }
 

@@ -46,6 +46,7 @@ struct FrameRecord {
   bool keyframe = false;
   FrameMotion motion = FrameMotion::kMoving;  // the tracker's stationary test
   double rectify_ms = 0.0;
+  double rectify_cpu_ms = 0.0;  // CPU time of the process over rectify_ms (both threads, OpenCV's pool)
   double he_ms = 0.0;
   double extract_ms = 0.0;
   double stereo_ms = 0.0;
@@ -60,6 +61,10 @@ struct OfflineRun {
   std::vector<FrameRecord> frames;
   int keyframes = 0;
   int map_points = 0;
+  // Hand-offs between the feature pipeline's two threads over the run, and how many of them found the
+  // other thread asleep (a futex wake-up).
+  std::uint64_t hand_offs = 0;
+  std::uint64_t sleeping_hand_offs = 0;
 
   int tracked_frames() const;
 };
