@@ -71,6 +71,10 @@ struct TrackerOptions {
   int min_frames_between_keyframes = 0;
   int close_tracked_needed = 100;   // fewer close points tracked ...
   int close_untracked_enough = 70;  // ... and this many close ones could be added: insert
+  // An untracked close feature whose stereo match is near a clip edge (StereoFeatures::near_clip, set
+  // only in pairs exposed apart) counts this much towards close_untracked_enough: its depth is the
+  // exposure's as much as the scene's. 1 (default): as any other; the tracked side is unchanged.
+  double close_untracked_near_clip_weight = 1.0;
   float reference_ratio_stereo = 0.75f;
   float reference_ratio_single_keyframe = 0.4f;
   int min_keyframe_inliers = 15;
