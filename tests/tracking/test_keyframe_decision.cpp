@@ -79,6 +79,9 @@ TEST(KeyframeDecision, UntrackedNearClipCountsByItsWeight) {
   input.keyframes_in_map = 5;
   input.reference_tracked_points = 70;  // 60 > 0.75 * 70: only the close-point rule can trigger
   TrackerOptions options;
+  EXPECT_DOUBLE_EQ(options.close_untracked_near_clip_weight, 0.9);  // 40 + 54 = 94 > 70
+  EXPECT_TRUE(decide_keyframe(frame, camera, input, options).insert);
+  options.close_untracked_near_clip_weight = 1.0;
   KeyframeDecision decision = decide_keyframe(frame, camera, input, options);  // weight 1: 100 > 70
   EXPECT_EQ(decision.tracked_close, 60);
   EXPECT_EQ(decision.untracked_close, 100);
