@@ -92,6 +92,7 @@ void read_tracker(const runtime::Config& c, TrackerOptions& t) {
   read(c, "tracker.min_frames_between_keyframes", t.min_frames_between_keyframes);
   read(c, "tracker.close_tracked_needed", t.close_tracked_needed);
   read(c, "tracker.close_untracked_enough", t.close_untracked_enough);
+  read(c, "tracker.close_untracked_near_clip_weight", t.close_untracked_near_clip_weight, 0.0, 1.0);
   read(c, "tracker.reference_ratio_stereo", t.reference_ratio_stereo, 0.0, 1.0);
   read(c, "tracker.reference_ratio_single_keyframe", t.reference_ratio_single_keyframe, 0.0, 1.0);
   read(c, "tracker.min_keyframe_inliers", t.min_keyframe_inliers);

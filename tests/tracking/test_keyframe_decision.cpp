@@ -65,6 +65,39 @@ TEST(KeyframeDecision, RatioToReferenceTriggers) {
   EXPECT_TRUE(decide_keyframe(frame, camera, input, TrackerOptions{}).insert);
 }
 
+// Cameras exposed apart: an untracked close feature whose stereo match is near a clip edge counts
+// close_untracked_near_clip_weight towards the 70 needed; the tracked side and the reported counts
+// stay as they are.
+TEST(KeyframeDecision, UntrackedNearClipCountsByItsWeight) {
+  const PinholeStereo camera = test::synthetic_camera();
+  Frame frame = make_counted_frame(camera, 60, 100);  // 100 untracked close: 60 + 40 near a clip edge
+  frame.features.near_clip.assign(frame.size(), 0);
+  for (std::size_t i = 0; i < frame.size(); ++i) frame.features.near_clip[i] = i < 40 || i >= 100 ? 1 : 0;
+  KeyframeDecisionInput input;
+  input.frames_since_keyframe = 3;
+  input.tracked_inliers = 60;
+  input.keyframes_in_map = 5;
+  input.reference_tracked_points = 70;  // 60 > 0.75 * 70: only the close-point rule can trigger
+  TrackerOptions options;
+  EXPECT_DOUBLE_EQ(options.close_untracked_near_clip_weight, 0.9);  // 40 + 54 = 94 > 70
+  EXPECT_TRUE(decide_keyframe(frame, camera, input, options).insert);
+  options.close_untracked_near_clip_weight = 1.0;
+  KeyframeDecision decision = decide_keyframe(frame, camera, input, options);  // weight 1: 100 > 70
+  EXPECT_EQ(decision.tracked_close, 60);
+  EXPECT_EQ(decision.untracked_close, 100);
+  EXPECT_TRUE(decision.insert);
+  options.close_untracked_near_clip_weight = 0.75;  // 40 + 0.75 * 60 = 85 > 70
+  EXPECT_TRUE(decide_keyframe(frame, camera, input, options).insert);
+  options.close_untracked_near_clip_weight = 0.5;  // 40 + 30 = 70, not more than 70
+  decision = decide_keyframe(frame, camera, input, options);
+  EXPECT_FALSE(decision.insert);
+  EXPECT_EQ(decision.tracked_close, 60);  // near-clip tracked points (0-39) still count as tracked
+  EXPECT_EQ(decision.untracked_close, 100);
+  // Equally exposed pairs carry no marks (near_clip empty): the weight changes nothing.
+  frame.features.near_clip.clear();
+  EXPECT_TRUE(decide_keyframe(frame, camera, input, options).insert);
+}
+
 TEST(KeyframeDecision, NoKeyframeRightAfterRelocalizationInABigMap) {
   const PinholeStereo camera = test::synthetic_camera();
   const Frame frame = make_counted_frame(camera, 20, 300);

@@ -30,6 +30,7 @@ KeyframeDecision decide_keyframe(const Frame& frame, const PinholeStereo& camera
     return decision;
   }
   const double close_depth_m = options.close_depth_baselines * camera.baseline_m;
+  double untracked_weight = 0.0;
   for (std::size_t i = 0; i < frame.size(); ++i) {
     const float depth = frame.features.depth_m[i];
     if (depth <= 0.f || depth >= close_depth_m) continue;
@@ -37,10 +38,11 @@ KeyframeDecision decide_keyframe(const Frame& frame, const PinholeStereo& camera
       ++decision.tracked_close;
     } else {
       ++decision.untracked_close;
+      untracked_weight += frame.features.stereo_near_clip(i) ? options.close_untracked_near_clip_weight : 1.0;
     }
   }
   const bool need_close = decision.tracked_close < options.close_tracked_needed &&
-                          decision.untracked_close > options.close_untracked_enough;
+                          untracked_weight > options.close_untracked_enough;
   const float ratio = input.keyframes_in_map < 2 ? options.reference_ratio_single_keyframe
                                                  : options.reference_ratio_stereo;
   const float reference = static_cast<float>(input.reference_tracked_points);

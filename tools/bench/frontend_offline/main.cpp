@@ -6,7 +6,8 @@
 //                                [--he none|global|clipped|clahe|adaptive] [--he-stereo shared|matched|separate]
 //                                [--variant none|dark|low_contrast]
 //                                [--stereo-gain L,R[/L,R...]] [--first-frame K] [--frames N] [--period-ms P]
-//                                [--stationary-chi2 X] [--rotation-chi2 X]
+//                                [--stationary-chi2 X] [--rotation-chi2 X] [--near-clip-sigma X]
+//                                [--close-untracked-near-clip-weight W]
 //                                [--kidnap DIR [--kidnap-plan B,R,S[,N]]] [--vocabulary FILE|none]
 #include <algorithm>
 #include <charconv>
@@ -39,6 +40,7 @@ constexpr const char* kUsage =
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
     "       [--period-ms P]   (start a frame every P ms, idle in between, as a camera: 50 for EuRoC's 20 Hz)\n"
     "       [--near-clip-sigma X]   (tracker.near_clip_disparity_sigma_factor: 0 monocular, 1 as any stereo match)\n"
+    "       [--close-untracked-near-clip-weight W]   (tracker.close_untracked_near_clip_weight, 0-1; default 0.9)\n"
     "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n"
     "       [--kidnap DIR]   (run on a kidnapped-camera copy written to DIR: frames 60-79 black, 80-159 = 0-79)\n"
     "       [--kidnap-plan B,R,S[,N]]   (the copy's plan: frames B..R-1 black, from R on the source's frames\n"
@@ -158,6 +160,12 @@ int run(int argc, char** argv) {
     } else if (arg == "--near-clip-sigma") {
       near_clip_sigma = parse_number<double>(arg, value);
       if (!(near_clip_sigma >= 0.0)) throw std::runtime_error(arg + ": expected a number >= 0, got '" + value + "'");
+    } else if (arg == "--close-untracked-near-clip-weight") {
+      options.tracker.close_untracked_near_clip_weight = parse_number<double>(arg, value);
+      const double weight = options.tracker.close_untracked_near_clip_weight;
+      if (!(weight >= 0.0 && weight <= 1.0)) {
+        throw std::runtime_error(arg + ": expected a number in [0, 1], got '" + value + "'");
+      }
     } else if (arg == "--rotation-chi2") {
       options.tracker.rotation_only_test_chi2 = parse_number<double>(arg, value);
     } else {
