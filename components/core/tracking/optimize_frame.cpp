@@ -31,7 +31,8 @@ std::vector<PoseObservation> frame_observations(const Frame& frame, const Map& m
   return observations;
 }
 
-int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camera, const TrackerOptions& options) {
+int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camera, const TrackerOptions& options,
+                        PairWorker* worker) {
   for (std::size_t i = 0; i < frame.size(); ++i) {
     frame.outlier[i] = false;
     if (frame.point_ids[i] != kNoId && map.point(frame.point_ids[i]) == nullptr) frame.point_ids[i] = kNoId;
@@ -44,7 +45,7 @@ int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camer
   ba.rounds = options.pose_optimization_rounds;
   ba.iterations_per_round = options.pose_optimization_iterations;
   ba.disparity_sigma_ratio = options.disparity_sigma_ratio;
-  const MotionOnlyBaResult result = optimize_pose(camera, observations, frame.T_cw(), ba);
+  const MotionOnlyBaResult result = optimize_pose(camera, observations, frame.T_cw(), ba, worker);
   frame.T_wc = result.T_cw.inverse();
   for (std::size_t k = 0; k < keypoint_of.size(); ++k) frame.outlier[keypoint_of[k]] = result.outlier[k];
   return result.inliers;
