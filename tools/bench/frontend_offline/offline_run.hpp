@@ -31,6 +31,10 @@ struct OfflineRunOptions {
   // > 0: each frame starts this long after the previous one (a camera's period; the decoding of the
   // next pair inside it), the cores idle in between as in a real-time run. 0: back to back.
   double period_ms = 0.0;
+  // The tracker's motion-only BA passes in halves on a second thread of their own (Tracker::
+  // set_pair_worker; the same poses bit for bit). Off by default, as in the frontend: on the loaded
+  // 2-core VM the ~20 hand-offs per frame cost more than the halves save (docs/benchmarks.md, track5).
+  bool tracking_worker = false;
 };
 
 struct FrameRecord {
@@ -51,7 +55,8 @@ struct FrameRecord {
   double extract_ms = 0.0;
   double stereo_ms = 0.0;
   double tracking_ms = 0.0;
-  double tracking_cpu_ms = 0.0;  // CPU time of the tracking call: what wall time would be on an idle core
+  double tracking_cpu_ms = 0.0;  // CPU time of the tracking call on its own thread: its critical path on an idle core
+  double tracking_process_cpu_ms = 0.0;  // ... of the process over it: with the tracker's worker's share
   double total_ms = 0.0;  // all of the above plus feature bookkeeping (image decoding excluded)
   double cpu_ms = 0.0;    // CPU time of the process (both threads) over total_ms: the work, not the waiting
 };
@@ -65,6 +70,8 @@ struct OfflineRun {
   // other thread asleep (a futex wake-up).
   std::uint64_t hand_offs = 0;
   std::uint64_t sleeping_hand_offs = 0;
+  std::uint64_t tracking_hand_offs = 0;  // to the tracker's worker (its BA passes in halves)
+  std::uint64_t tracking_sleeping_hand_offs = 0;
 
   int tracked_frames() const;
 };
