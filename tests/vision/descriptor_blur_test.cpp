@@ -1,6 +1,6 @@
 // DescriptorBlur gives exactly cv::GaussianBlur(7x7, sigma 2) on the pixels it blurs: random and
 // saturated images of odd sizes (SIMD tails, regions narrower than a vector), a real EuRoC image, and
-// leaves the pixels outside its region alone.
+// leaves the pixels outside its region alone; every region width and alignment.
 #include <random>
 
 #include <gtest/gtest.h>
@@ -70,6 +70,29 @@ TEST(DescriptorBlur, WritesOnlyItsRegionAndRejectsRegionsWithoutRing) {
   EXPECT_THROW(blur.apply(image, cv::Rect(2, 5, 10, 10), out), std::invalid_argument);
   EXPECT_THROW(blur.apply(image, cv::Rect(10, 30, 10, 8), out), std::invalid_argument);
   EXPECT_THROW(blur.apply(image, region, image), std::invalid_argument);
+}
+
+// Every region width from 1 to 150 (the SIMD blocks of 32 columns, the last one overlapping, and
+// the narrow regions' path) at every offset modulo 8, on noise and on the largest sums (only 0 and
+// 255, and a flat 255 image).
+TEST(DescriptorBlur, EqualsOpenCvForEveryRegionWidthAndOffset) {
+  std::mt19937 rng(23);
+  std::uniform_int_distribution<int> grey(0, 255);
+  cv::Mat noise(17, 170, CV_8UC1);
+  for (int y = 0; y < noise.rows; ++y) {
+    for (int x = 0; x < noise.cols; ++x) noise.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(grey(rng));
+  }
+  const cv::Mat flat(noise.size(), CV_8UC1, cv::Scalar(255));
+  const cv::Mat binary = noise > 127;
+  const int r = DescriptorBlur::kRadiusPx;
+  for (const cv::Mat& image : {noise, binary, flat}) {
+    for (int width = 1; width <= 150; ++width) {
+      for (int x = r; x < r + 8; ++x) {
+        const cv::Rect region(x, r + 1, width, image.rows - 2 * r - 2);
+        ASSERT_EQ(differing_pixels(image, region), 0) << "region " << region;
+      }
+    }
+  }
 }
 
 }  // namespace

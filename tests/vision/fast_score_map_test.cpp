@@ -1,6 +1,7 @@
 // FastScoreMap reports exactly the corners and responses of cv::FAST (threshold, non-maximum
 // suppression) on the same sub-image: whole areas and small grid cells, textured, noisy and
-// saturated images, thresholds from 1 to 60.
+// saturated images, thresholds from 1 to 60; and every pixel's score against the definition.
+#include <algorithm>
 #include <random>
 #include <vector>
 
@@ -100,6 +101,53 @@ TEST(FastScoreMap, ScoresAViewIntoAPaddedImage) {
     EXPECT_EQ(ours[i].response, reference[i].response);
   }
   EXPECT_THROW(map.compute(padded, cv::Rect(0, 0, 10, 10)), std::invalid_argument);
+}
+
+// The FAST-9 score from its definition, one pixel at a time: the largest t such that 9 contiguous
+// circle pixels are all brighter than centre + t or all darker than centre - t, i.e. the best arc's
+// smallest difference minus 1 (0 when no arc differs at all).
+int reference_score(const cv::Mat& image, int x, int y) {
+  constexpr int kCircle[16][2] = {{0, 3},  {1, 3},   {2, 2},   {3, 1},   {3, 0},  {3, -1}, {2, -2}, {1, -3},
+                                  {0, -3}, {-1, -3}, {-2, -2}, {-3, -1}, {-3, 0}, {-3, 1}, {-2, 2}, {-1, 3}};
+  const int v = image.at<std::uint8_t>(y, x);
+  int best = 0;
+  for (int start = 0; start < 16; ++start) {
+    int brighter = 255;
+    int darker = 255;
+    for (int k = 0; k < 9; ++k) {
+      const int* d = kCircle[(start + k) % 16];
+      const int p = image.at<std::uint8_t>(y + d[1], x + d[0]);
+      brighter = std::min(brighter, std::max(p - v, 0));
+      darker = std::min(darker, std::max(v - p, 0));
+    }
+    best = std::max({best, brighter, darker});
+  }
+  return std::max(best - 1, 0);
+}
+
+TEST(FastScoreMap, EveryScoreEqualsTheArcDefinition) {
+  std::mt19937 rng(13);
+  std::uniform_int_distribution<int> grey(0, 255);
+  cv::Mat noise(61, 131, CV_8UC1);  // odd width: vector tails
+  for (int y = 0; y < noise.rows; ++y) {
+    for (int x = 0; x < noise.cols; ++x) noise.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(grey(rng));
+  }
+  // Smooth ramps with a few steps (arcs of equal differences), and only 0 and 255 (saturation).
+  cv::Mat ramps(noise.size(), CV_8UC1);
+  for (int y = 0; y < ramps.rows; ++y) {
+    for (int x = 0; x < ramps.cols; ++x) ramps.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>((x * 7 + (y / 5) * 40) % 256);
+  }
+  const cv::Mat binary = noise > 127;
+  for (const cv::Mat& image : {noise, ramps, binary}) {
+    const cv::Rect area(kRing, kRing, image.cols - 2 * kRing, image.rows - 2 * kRing);
+    FastScoreMap map;
+    map.compute(image, area);
+    for (int y = area.y; y < area.y + area.height; ++y) {
+      for (int x = area.x; x < area.x + area.width; ++x) {
+        ASSERT_EQ(map.score(x, y), reference_score(image, x, y)) << "pixel " << x << ", " << y;
+      }
+    }
+  }
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // LinearResize writes exactly cv::resize(INTER_LINEAR)'s pixels: the ORB pyramid chains (EuRoC 752x480
 // and KITTI 1241x376 sizes, scale 1.2) of a real texture, noise and a two-valued image, other
-// downscale ratios, views into larger buffers (nothing written outside), repeated calls reusing the plan.
+// downscale ratios, every source width's last columns, views into larger buffers (nothing written
+// outside), repeated calls reusing the plan.
 #include <cmath>
 #include <random>
 #include <vector>
@@ -92,6 +93,19 @@ TEST(LinearResize, RejectsWrongTypes) {
   EXPECT_THROW(resize.apply(grey, colour), std::invalid_argument);
   cv::Mat empty;
   EXPECT_THROW(resize.apply(empty, grey), std::invalid_argument);
+}
+
+// Every source width from 16 to 140 with destination widths around the pyramid's ratios: the last
+// columns (the overlapping tail blocks of both passes, the clamped last column) at every alignment.
+TEST(LinearResize, EqualsOpenCvForEverySourceWidth) {
+  LinearResize resize;
+  for (int width = 16; width <= 140; ++width) {
+    const cv::Mat src = noise_image(width, 9, static_cast<unsigned>(width), width % 3 == 0);
+    for (double ratio : {1.0, 1.2, 1.44, 2.0}) {
+      const int dst_width = static_cast<int>(std::lround(width / ratio));
+      expect_same_as_opencv(resize, src, cv::Size(dst_width, 7));
+    }
+  }
 }
 
 }  // namespace

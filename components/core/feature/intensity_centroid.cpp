@@ -1,4 +1,4 @@
-// Intensity-centroid orientation: scalar sums, or 16-bit multiply-adds over whole patch rows.
+// Intensity-centroid orientation: scalar sums, or byte multiply-adds over whole patch rows.
 #include "components/core/feature/intensity_centroid.hpp"
 
 #include <cmath>
@@ -15,40 +15,35 @@ IntensityCentroid::IntensityCentroid() {
     const int half = static_cast<int>(std::lround(std::sqrt(static_cast<double>(kRadiusPx * kRadiusPx - v * v))));
     half_width_[static_cast<std::size_t>(v)] = half;
     for (int u = -half; u <= half; ++u) {
-      u_weight_[static_cast<std::size_t>(v)][static_cast<std::size_t>(u + kRadiusPx)] = static_cast<std::int16_t>(u);
-      v_weight_[static_cast<std::size_t>(v)][static_cast<std::size_t>(u + kRadiusPx)] = static_cast<std::int16_t>(v);
+      u_weight_[static_cast<std::size_t>(v)][static_cast<std::size_t>(u + kRadiusPx)] = static_cast<std::int8_t>(u);
+      v_weight_[static_cast<std::size_t>(v)][static_cast<std::size_t>(u + kRadiusPx)] = static_cast<std::int8_t>(v);
     }
   }
 }
 
 void IntensityCentroid::moments(const std::uint8_t* center, std::ptrdiff_t step, int& m10, int& m01) const {
 #if defined(__AVX2__)
-  // Row pair +-v: m10 += sum u (below + above), m01 += sum v (below - above), as 16-bit lanes
-  // (sums <= 510, differences >= -255) multiplied and added pairwise into 32-bit lanes (exact).
-  auto load = [](const std::uint8_t* p, __m256i& low, __m256i& high) {
-    const __m256i bytes = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
-    low = _mm256_cvtepu8_epi16(_mm256_castsi256_si128(bytes));
-    high = _mm256_cvtepu8_epi16(_mm256_extracti128_si256(bytes, 1));
+  // Row pair +-v: pmaddubsw multiplies the 32 pixels of a row (unsigned bytes) by the byte weights and
+  // adds neighbouring products into 16-bit lanes (|pair| <= 2 * 15 * 255 = 7650, no saturation); the
+  // m10 terms of both rows added (<= 15300) and the m01 terms subtracted (>= -15300) stay in 16 bits,
+  // and pmaddwd with ones widens them into the 32-bit sums (exact).
+  static_assert(2 * 2 * kRadiusPx * 255 <= 32767, "a row pair's 16-bit sums must not overflow");
+  const auto load = [](const std::uint8_t* p) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p)); };
+  const auto weights = [](const std::array<std::int8_t, kRowBytes>& w) {
+    return _mm256_load_si256(reinterpret_cast<const __m256i*>(w.data()));
   };
-  auto weights = [](const std::array<std::int16_t, kRowBytes>& w, __m256i& low, __m256i& high) {
-    low = _mm256_load_si256(reinterpret_cast<const __m256i*>(w.data()));
-    high = _mm256_load_si256(reinterpret_cast<const __m256i*>(w.data() + 16));
-  };
-  __m256i c_low, c_high, u_low, u_high;
-  load(center - kRadiusPx, c_low, c_high);
-  weights(u_weight_[0], u_low, u_high);
-  __m256i acc10 = _mm256_add_epi32(_mm256_madd_epi16(c_low, u_low), _mm256_madd_epi16(c_high, u_high));
+  const __m256i ones = _mm256_set1_epi16(1);
+  __m256i acc10 = _mm256_madd_epi16(_mm256_maddubs_epi16(load(center - kRadiusPx), weights(u_weight_[0])), ones);
   __m256i acc01 = _mm256_setzero_si256();
   for (int v = 1; v <= kRadiusPx; ++v) {
-    __m256i b_low, b_high, a_low, a_high, v_low, v_high;
-    load(center + v * step - kRadiusPx, b_low, b_high);
-    load(center - v * step - kRadiusPx, a_low, a_high);
-    weights(u_weight_[static_cast<std::size_t>(v)], u_low, u_high);
-    weights(v_weight_[static_cast<std::size_t>(v)], v_low, v_high);
-    acc10 = _mm256_add_epi32(acc10, _mm256_madd_epi16(_mm256_add_epi16(b_low, a_low), u_low));
-    acc10 = _mm256_add_epi32(acc10, _mm256_madd_epi16(_mm256_add_epi16(b_high, a_high), u_high));
-    acc01 = _mm256_add_epi32(acc01, _mm256_madd_epi16(_mm256_sub_epi16(b_low, a_low), v_low));
-    acc01 = _mm256_add_epi32(acc01, _mm256_madd_epi16(_mm256_sub_epi16(b_high, a_high), v_high));
+    const __m256i below = load(center + v * step - kRadiusPx);
+    const __m256i above = load(center - v * step - kRadiusPx);
+    const __m256i u = weights(u_weight_[static_cast<std::size_t>(v)]);
+    const __m256i w = weights(v_weight_[static_cast<std::size_t>(v)]);
+    const __m256i sum10 = _mm256_add_epi16(_mm256_maddubs_epi16(below, u), _mm256_maddubs_epi16(above, u));
+    const __m256i sum01 = _mm256_sub_epi16(_mm256_maddubs_epi16(below, w), _mm256_maddubs_epi16(above, w));
+    acc10 = _mm256_add_epi32(acc10, _mm256_madd_epi16(sum10, ones));
+    acc01 = _mm256_add_epi32(acc01, _mm256_madd_epi16(sum01, ones));
   }
   auto sum_lanes = [](__m256i x) {
     __m128i s = _mm_add_epi32(_mm256_castsi256_si128(x), _mm256_extracti128_si256(x, 1));

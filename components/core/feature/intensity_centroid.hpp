@@ -1,6 +1,7 @@
 // ORB's keypoint orientation: the angle of the intensity centroid of a circular patch of radius 15
 // around the keypoint (Rosin's moments m10 = sum u I(u, v), m01 = sum v I(u, v)), in exact integer
-// arithmetic; one patch row pair per step with AVX2 (the same moments as the scalar sums).
+// arithmetic; one patch row pair per step with AVX2, the pixels multiplied by byte weights in pairs
+// (pmaddubsw) without widening them (the same moments as the scalar sums).
 #pragma once
 
 #include <array>
@@ -29,9 +30,10 @@ class IntensityCentroid {
  private:
   static constexpr int kRowBytes = 32;
   std::array<int, kRadiusPx + 1> half_width_{};
-  // Per |v|: u for the columns of the patch row (u = column - 15), 0 outside it; and v inside it.
-  alignas(32) std::array<std::array<std::int16_t, kRowBytes>, kRadiusPx + 1> u_weight_{};
-  alignas(32) std::array<std::array<std::int16_t, kRowBytes>, kRadiusPx + 1> v_weight_{};
+  // Per |v|: u for the columns of the patch row (u = column - 15), 0 outside it; and v inside it
+  // (signed bytes: pmaddubsw's weights, |u|, v <= 15).
+  alignas(32) std::array<std::array<std::int8_t, kRowBytes>, kRadiusPx + 1> u_weight_{};
+  alignas(32) std::array<std::array<std::int8_t, kRowBytes>, kRadiusPx + 1> v_weight_{};
 };
 
 }  // namespace heslam

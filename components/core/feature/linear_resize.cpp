@@ -68,32 +68,79 @@ void LinearResize::plan(int src_width, int dst_width) {
     }
   }
   vector_blocks_ = blocks & ~1;
+
+  // The tail pair. A clamped last column (the whole weight on the row's last pixel, 0 on the next)
+  // takes its own pixel as the "next" one: the same sum, and no byte past the row is read.
+  tail_blocks_ = false;
+  tail_shuffle_.clear();
+  const int tail_first = dst_width - 2 * kBlockColumns;
+  if (vector_blocks_ * kBlockColumns < dst_width && tail_first >= 0 && src_width >= 16) {
+    bool fits = true;
+    for (int k = 0; k < 2; ++k) {
+      const int first = tail_first + k * kBlockColumns;
+      const int base = std::min(x_offset_[first], src_width - 16);
+      tail_base_[k] = base;
+      for (int i = first; i < first + kBlockColumns; ++i) {
+        const int left = x_offset_[i] - base;
+        const int right = std::min(x_offset_[i] + 1, src_width - 1) - base;
+        fits = fits && left >= 0 && right <= 15;
+        tail_shuffle_.push_back(static_cast<std::uint8_t>(left));
+        tail_shuffle_.push_back(static_cast<std::uint8_t>(right));
+      }
+    }
+    tail_blocks_ = fits;
+  }
 }
+
+#if defined(__AVX2__)
+namespace {
+
+// 2 x 8 destination columns from `first`: block k loads 16 bytes at src_row + base[k] and picks its
+// pixel pairs with shuffle + 16 k.
+[[gnu::always_inline]] inline void block_pair(const std::uint8_t* src_row, const int (&base)[2],
+                                              const std::uint8_t* shuffle, const std::int16_t* weights,
+                                              std::int16_t* out) {
+  __m256i h[2];
+  for (int k = 0; k < 2; ++k) {
+    const __m128i bytes = _mm_loadu_si128(reinterpret_cast<const __m128i*>(src_row + base[k]));
+    const __m128i pairs = _mm_shuffle_epi8(bytes, _mm_loadu_si128(reinterpret_cast<const __m128i*>(shuffle + 16 * k)));
+    const __m256i w = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(weights + 16 * k));
+    h[k] = _mm256_srai_epi32(_mm256_madd_epi16(_mm256_cvtepu8_epi16(pairs), w), 4);
+  }
+  // packs works per 128-bit lane: 64-bit quarters (0, 2, 1, 3) restore the column order.
+  const __m256i packed = _mm256_permute4x64_epi64(_mm256_packs_epi32(h[0], h[1]), 0xD8);
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(out), packed);
+}
+
+}  // namespace
+#endif
 
 void LinearResize::resize_row(const std::uint8_t* src_row, std::int16_t* out) const {
   int d = 0;
 #if defined(__AVX2__)
   for (int b = 0; b < vector_blocks_; b += 2, d += 2 * kBlockColumns) {
-    __m256i h[2];
-    for (int k = 0; k < 2; ++k) {
-      const int first = d + k * kBlockColumns;
-      const __m128i bytes = _mm_loadu_si128(reinterpret_cast<const __m128i*>(src_row + x_offset_[first]));
-      const __m128i pairs = _mm_shuffle_epi8(
-          bytes, _mm_loadu_si128(reinterpret_cast<const __m128i*>(&shuffle_[static_cast<std::size_t>(b + k) * 16])));
-      const __m256i weights = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(&x_weight_[2 * first]));
-      h[k] = _mm256_srai_epi32(_mm256_madd_epi16(_mm256_cvtepu8_epi16(pairs), weights), 4);
-    }
-    // packs works per 128-bit lane: 64-bit quarters (0, 2, 1, 3) restore the column order.
-    const __m256i packed = _mm256_permute4x64_epi64(_mm256_packs_epi32(h[0], h[1]), 0xD8);
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + d), packed);
+    const int base[2] = {x_offset_[d], x_offset_[d + kBlockColumns]};
+    block_pair(src_row, base, &shuffle_[static_cast<std::size_t>(b) * 16], &x_weight_[2 * static_cast<std::size_t>(d)],
+               out + d);
+  }
+  // Columns between the leading blocks and the tail pair (the leading blocks stop where a 16-byte
+  // load from their first pixel would pass the row's end), then the tail pair.
+  const int scalar_end = tail_blocks_ ? dst_width_ - 2 * kBlockColumns : dst_width_;
+  for (; d < scalar_end; ++d) out[d] = horizontal(src_row, d);
+  if (tail_blocks_ && d < dst_width_) {
+    const int first = dst_width_ - 2 * kBlockColumns;
+    block_pair(src_row, tail_base_, tail_shuffle_.data(), &x_weight_[2 * static_cast<std::size_t>(first)], out + first);
+    d = dst_width_;
   }
 #endif
-  for (; d < dst_width_; ++d) {
-    const int x = x_offset_[d];
-    const int right = std::min(x + 1, src_width_ - 1);  // weight 0 where clamped
-    const int sum = src_row[x] * x_weight_[2 * d] + src_row[right] * x_weight_[2 * d + 1];
-    out[d] = static_cast<std::int16_t>(sum >> 4);
-  }
+  for (; d < dst_width_; ++d) out[d] = horizontal(src_row, d);
+}
+
+std::int16_t LinearResize::horizontal(const std::uint8_t* src_row, int d) const {
+  const int x = x_offset_[d];
+  const int right = std::min(x + 1, src_width_ - 1);  // weight 0 where clamped
+  const int sum = src_row[x] * x_weight_[2 * d] + src_row[right] * x_weight_[2 * d + 1];
+  return static_cast<std::int16_t>(sum >> 4);
 }
 
 void LinearResize::apply(const cv::Mat& src, cv::Mat& dst) {
@@ -144,9 +191,15 @@ void LinearResize::apply(const cv::Mat& src, cv::Mat& dst) {
       const __m256i sum = _mm256_add_epi16(_mm256_mulhi_epi16(r0, w0), _mm256_mulhi_epi16(r1, w1));
       return _mm256_srai_epi16(_mm256_add_epi16(sum, two), 2);
     };
-    for (; x + 32 <= dst.cols; x += 32) {
-      const __m256i packed = _mm256_permute4x64_epi64(_mm256_packus_epi16(half(x), half(x + 16)), 0xD8);
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + x), packed);
+    const auto block = [&](int at) {
+      const __m256i packed = _mm256_permute4x64_epi64(_mm256_packus_epi16(half(at), half(at + 16)), 0xD8);
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + at), packed);
+    };
+    for (; x + 32 <= dst.cols; x += 32) block(x);
+    if (x < dst.cols && dst.cols >= 32) {
+      // The rest as one more block ending at the last column (a few columns written twice, the same).
+      block(dst.cols - 32);
+      x = dst.cols;
     }
 #endif
     for (; x < dst.cols; ++x) out[x] = vertical(h0[x], h1[x], b0, b1);

@@ -26,11 +26,12 @@ class LinearResize {
 
  private:
   // Destination columns per horizontal SIMD block: their two source pixels must lie within one
-  // 16-byte load (true for any downscale; upscales and the row's last columns go the scalar way).
+  // 16-byte load (true for any downscale; upscales go the scalar way).
   static constexpr int kBlockColumns = 8;
 
   void plan(int src_width, int dst_width);
   void resize_row(const std::uint8_t* src_row, std::int16_t* out) const;
+  std::int16_t horizontal(const std::uint8_t* src_row, int d) const;  // one column, scalar
 
   int src_width_ = 0;
   int dst_width_ = 0;
@@ -38,6 +39,11 @@ class LinearResize {
   std::vector<std::int16_t> x_weight_;  // per destination column: the weights of that pixel and the next
   int vector_blocks_ = 0;               // leading blocks of kBlockColumns columns done with SIMD
   std::vector<std::uint8_t> shuffle_;   // per SIMD block: 16 byte indices relative to its first pixel
+  // The row's last 2 kBlockColumns columns as one more pair of blocks (overlapping the leading ones),
+  // each loading the 16 bytes that end at the row's end when its first pixel is closer to it.
+  bool tail_blocks_ = false;
+  int tail_base_[2] = {0, 0};                // source pixel each tail block loads from
+  std::vector<std::uint8_t> tail_shuffle_;  // 2 x 16 byte indices relative to tail_base_
   std::vector<std::int16_t> rows_[2];   // horizontal pass (h >> 4) of two source rows
   int row_y_[2] = {-1, -1};             // the source row each buffer holds
 };

@@ -15,6 +15,7 @@
 #include "components/core/feature/fast_score_map.hpp"
 #include "components/core/feature/orb_pattern.hpp"
 #include "components/core/feature/quadtree_distribution.hpp"
+#include "components/core/feature/rbrief_descriptor.hpp"
 #include "components/core/feature/rotated_orb_pattern.hpp"
 #include "components/core/image/yaml_option.hpp"
 
@@ -276,15 +277,7 @@ void OrbExtractor::describe_level(int l) {
     const float s = std::sin(radians);
     RotatedOrbPattern offsets;
     rotate_orb_pattern(c, s, step, offsets);
-    Descriptor d{};
-    for (std::size_t byte = 0; byte < d.size(); ++byte) {
-      std::uint8_t bits = 0;
-      for (std::size_t bit = 0; bit < 8; ++bit) {
-        const std::size_t t = byte * 8 + bit;
-        bits |= static_cast<std::uint8_t>((center[offsets.first[t]] < center[offsets.second[t]]) << bit);
-      }
-      d[byte] = bits;
-    }
+    const Descriptor d = rbrief_descriptor(center, offsets);
     Keypoint kp;
     kp.u_px = k.x * scale;
     kp.v_px = k.y * scale;
