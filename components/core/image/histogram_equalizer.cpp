@@ -8,6 +8,10 @@
 #include <stdexcept>
 #include <vector>
 
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
+
 #include "components/core/image/histogram_matching.hpp"
 #include "components/core/image/yaml_option.hpp"
 
@@ -87,17 +91,47 @@ Lut compose(const Lut& first, const Lut& second) {
   return out;
 }
 
+// lut[src[x]] for x < n. With AVX2, 32 pixels at a time: the LUT as 16 tables of 16 entries, each
+// looked up by the low nibble (pshufb), the high nibble choosing among the 16 results in a tree of
+// byte blends (its bit 4 between pairs, bit 5 between those, ...): about 1.2 instructions per pixel
+// instead of 6 (callgrind; the scalar loop's loads and stores).
+void lut_row(const std::uint8_t* src, std::uint8_t* dst, std::size_t n, const Lut& lut) {
+  std::size_t x = 0;
+#if defined(__AVX2__)
+  __m256i tables[16];
+  for (int i = 0; i < 16; ++i) {
+    tables[i] = _mm256_broadcastsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(lut.data() + 16 * i)));
+  }
+  const __m256i low_nibble = _mm256_set1_epi8(0x0F);
+  for (; x + 32 <= n; x += 32) {
+    const __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(src + x));
+    const __m256i index = _mm256_and_si256(v, low_nibble);  // bit 7 clear: pshufb looks up, never zeroes
+    __m256i level[16];
+    for (int i = 0; i < 16; ++i) level[i] = _mm256_shuffle_epi8(tables[i], index);
+    // blendv takes each byte's top bit: bit 4 + k of the pixel moved there by a 16-bit shift (the
+    // bits shifted in from the neighbouring byte stay below the top bit).
+    for (int bit = 0, count = 16; bit < 4; ++bit, count /= 2) {
+      const __m256i select = _mm256_slli_epi16(v, 3 - bit);
+      for (int i = 0; i < count / 2; ++i) {
+        level[i] = _mm256_blendv_epi8(level[2 * i], level[2 * i + 1], select);
+      }
+    }
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + x), level[0]);
+  }
+#endif
+  for (; x < n; ++x) dst[x] = lut[src[x]];
+}
+
 // out = lut[in] on the calling thread (cv::LUT hands an image this large to OpenCV's pool, a third
 // thread on the frontend's two cores). `out` may be `in`.
 void apply_lut(const cv::Mat& in, cv::Mat& out, const Lut& lut) {
   out.create(in.size(), CV_8UC1);
-  const bool continuous = in.isContinuous() && out.isContinuous();
-  const int rows = continuous ? 1 : in.rows;
-  const auto cols = static_cast<std::size_t>(continuous ? in.total() : static_cast<std::size_t>(in.cols));
-  for (int y = 0; y < rows; ++y) {
-    const std::uint8_t* src = in.ptr<std::uint8_t>(y);
-    std::uint8_t* dst = out.ptr<std::uint8_t>(y);
-    for (std::size_t x = 0; x < cols; ++x) dst[x] = lut[src[x]];
+  if (in.isContinuous() && out.isContinuous()) {
+    lut_row(in.ptr<std::uint8_t>(0), out.ptr<std::uint8_t>(0), in.total(), lut);
+    return;
+  }
+  for (int y = 0; y < in.rows; ++y) {
+    lut_row(in.ptr<std::uint8_t>(y), out.ptr<std::uint8_t>(y), static_cast<std::size_t>(in.cols), lut);
   }
 }
 
