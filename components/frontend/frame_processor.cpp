@@ -6,8 +6,6 @@
 #include <stdexcept>
 #include <utility>
 
-#include "components/core/image/huge_page_allocator.hpp"
-
 namespace heslam::frontend {
 namespace {
 
@@ -28,13 +26,7 @@ double process_cpu_ms() {
 FrameProcessor::FrameProcessor(const StereoCalibration& calibration, const FrontendOptions& options)
     : rectifier_(calibration),
       pipeline_(rectifier_.camera(), options.features),
-      tracker_(rectifier_.camera(), options.tracker, options.vocabulary) {
-  // Rewritten every frame after the frontend slept between camera frames: 2 MB pages
-  // (huge_page_allocator.hpp).
-  const PinholeStereo& camera = rectifier_.camera();
-  create_in_huge_pages(left_rect_, camera.height_px, camera.width_px, CV_8UC1);
-  create_in_huge_pages(right_rect_, camera.height_px, camera.width_px, CV_8UC1);
-}
+      tracker_(rectifier_.camera(), options.tracker, options.vocabulary) {}
 
 FrameOutput FrameProcessor::process(std::int64_t stamp_ns, std::uint64_t seq, const cv::Mat& left_raw,
                                     const cv::Mat& right_raw) {

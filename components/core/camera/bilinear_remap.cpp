@@ -7,8 +7,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "components/core/image/huge_page_allocator.hpp"
-
 #if defined(__AVX2__)
 #include <immintrin.h>
 #endif
@@ -47,17 +45,12 @@ std::uint8_t remap_pixel(const cv::Mat& src, int sx, int sy, int frac) {
 
 }  // namespace
 
-BilinearRemap::BilinearRemap(const cv::Mat& map_xy, const cv::Mat& map_frac, cv::Size src_size) : src_size_(src_size) {
+BilinearRemap::BilinearRemap(const cv::Mat& map_xy, const cv::Mat& map_frac, cv::Size src_size)
+    : map_xy_(map_xy), map_frac_(map_frac), src_size_(src_size) {
   if (map_xy.type() != CV_16SC2 || map_frac.type() != CV_16UC1 || map_xy.size() != map_frac.size() ||
       map_xy.empty() || src_size.width < 2 || src_size.height < 2) {
     throw std::invalid_argument("BilinearRemap: expected CV_16SC2 and CV_16UC1 maps of one size and a source of at least 2x2");
   }
-  // Own copies in 2 MB pages: 2.2 MB of tables per EuRoC image are read every frame, often after the
-  // frontend slept between camera frames (huge_page_allocator.hpp).
-  create_in_huge_pages(map_xy_, map_xy.rows, map_xy.cols, CV_16SC2);
-  create_in_huge_pages(map_frac_, map_frac.rows, map_frac.cols, CV_16UC1);
-  map_xy.copyTo(map_xy_);
-  map_frac.copyTo(map_frac_);
   blocks_per_row_ = (map_xy.cols + kBlock - 1) / kBlock;
   const std::size_t blocks = static_cast<std::size_t>(blocks_per_row_) * static_cast<std::size_t>(map_xy.rows);
   block_mode_.assign(blocks, kScalar);

@@ -8,7 +8,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "components/core/image/huge_page_allocator.hpp"
 #include "components/core/image/yaml_option.hpp"
 
 namespace heslam {
@@ -78,9 +77,6 @@ StereoFeaturePipeline::StereoFeaturePipeline(const PinholeStereo& camera, const 
     throw std::invalid_argument("StereoFeaturePipeline: expected a rectified camera with size, fx and baseline");
   }
   if (options.parallel) worker_ = std::make_unique<PairWorker>();
-  // Rewritten every frame, often after the frontend slept between camera frames: 2 MB pages.
-  create_in_huge_pages(left_he_buffer_, camera.height_px, camera.width_px, CV_8UC1);
-  create_in_huge_pages(right_he_buffer_, camera.height_px, camera.width_px, CV_8UC1);
 }
 
 void StereoFeaturePipeline::run_on_both(const std::function<void()>& right_job, const std::function<void()>& left_job) {

@@ -15,7 +15,6 @@
 
 #include "components/core/camera/stereo_calibration.hpp"
 #include "components/core/camera/stereo_rectifier.hpp"
-#include "components/core/image/huge_page_allocator.hpp"
 #include "tools/eval/alignment.hpp"
 
 namespace heslam::bench {
@@ -84,9 +83,6 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
       options.max_frames > 0 ? std::min(available, static_cast<std::size_t>(options.max_frames)) : available;
   cv::Mat left_rect;
   cv::Mat right_rect;
-  // As the frontend's FrameProcessor: the rectified images in 2 MB pages.
-  create_in_huge_pages(left_rect, run.camera.height_px, run.camera.width_px, CV_8UC1);
-  create_in_huge_pages(right_rect, run.camera.height_px, run.camera.width_px, CV_8UC1);
   // k is the frame's index in the sequence, so a run that skips frames sees the same noise per frame.
   auto next_frame_start = std::chrono::steady_clock::now();
   for (std::size_t k = first; k < first + count; ++k) {
