@@ -47,8 +47,8 @@ struct StereoFeaturePipelineOptions {
 };
 
 struct StereoFeatureTimings {
-  // process_from only: making both images (e.g. rectifying them) and their histograms, wall time and
-  // the process's CPU time over it (both threads).
+  // Making both images (process_from: e.g. rectifying them; process: nothing) and their histograms,
+  // wall time and the process's CPU time over it (both threads).
   double source_ms = 0.0;
   double source_cpu_ms = 0.0;
   // The equalization's mappings from the two histograms (one thread, between two hand-offs); the
@@ -57,6 +57,7 @@ struct StereoFeatureTimings {
   double he_ms = 0.0;
   double extract_ms = 0.0;
   double stereo_ms = 0.0;
+  // he + extract + stereo (process: the whole call, the histograms included).
   double total_ms = 0.0;
 };
 
