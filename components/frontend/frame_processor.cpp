@@ -40,15 +40,22 @@ FrameOutput FrameProcessor::process(std::int64_t stamp_ns, std::uint64_t seq, co
                                ", the calibration expects " + std::to_string(raw.width) + "x" + std::to_string(raw.height));
     }
   }
-  // Each image rectified on its own thread of the feature pipeline's pair, at once: cv::remap's own
-  // parallel_for serializes a second concurrent call and needs its pool's worker awake, which a
-  // real-time frontend idle between frames often has to wake first.
-  pipeline_.run_on_both([&] { rectifier_.rectify_right(right_raw, right_rect_); },
-                        [&] { rectifier_.rectify_left(left_raw, left_rect_); });
-  const double rectify_ms = ms_since(start);
-
+  // Each image rectified on its own thread of the feature pipeline's pair, which goes on with it
+  // (histogram, HE mapping, pyramid) on the same thread: one hand-off for rectification and HE, no
+  // OpenCV pool (cv::remap's parallel_for serializes a second concurrent call and needs its pool's
+  // worker awake, which a real-time frontend idle between frames often has to wake first).
   StereoFeatureTimings feature_timings;
-  StereoFeatures features = pipeline_.process(left_rect_, right_rect_, &feature_timings);
+  StereoFeatures features = pipeline_.process_from(
+      [&]() -> const cv::Mat& {
+        rectifier_.rectify_left(left_raw, left_rect_);
+        return left_rect_;
+      },
+      [&]() -> const cv::Mat& {
+        rectifier_.rectify_right(right_raw, right_rect_);
+        return right_rect_;
+      },
+      &feature_timings);
+  const double rectify_ms = feature_timings.source_ms;
   FrameOutput output;
   output.keypoints = static_cast<std::uint32_t>(features.size());
   for (std::size_t i = 0; i < features.size(); ++i) output.stereo_keypoints += features.has_stereo(i) ? 1 : 0;

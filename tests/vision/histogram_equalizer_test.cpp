@@ -1,9 +1,13 @@
 // Histogram equalization: the paper's mapping as a known answer, one mapping for both images of a
 // pair, CLAHE with shared tile LUTs, adaptive switching with hysteresis, options from YAML, the
 // HE-SLAM claim on real EuRoC frames made dark or flat, and pairs whose cameras are exposed apart
-// (matched / separate mappings).
+// (matched / separate mappings); the split form (each image on its own thread) against the one-call
+// form.
 #include <numeric>
+#include <string>
+#include <thread>
 #include <tuple>
+#include <utility>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -319,6 +323,79 @@ TEST(HistogramEqualizer, EurocPairsExposedApartKeepTheirStereoMatches) {
       }
     }
   }
+}
+
+// The split form (each image measured and mapped on its own thread, the mappings computed once
+// between) against the one-call equalizer, pixel for pixel, for every mode and stereo mode, on real
+// MH01 pairs and on the same pairs with the cameras exposed apart or both made dark (adaptive
+// switches on there); one equalizer of each form sees the whole sequence (adaptive keeps state).
+TEST(HistogramEqualizer, SplitOnTwoThreadsGivesTheOneCallPixels) {
+  HESLAM_REQUIRE_SHARED_DATA(test::kEurocDataset);
+  const auto original = test::load_euroc_pairs({0, 60, 120}, nullptr);
+  std::vector<test::RectifiedPair> pairs;
+  for (const auto& [left_gain, right_gain] : {std::pair{1.0, 1.0}, std::pair{0.35, 2.0}, std::pair{1.0, 4.0},
+                                              std::pair{0.1, 0.1}, std::pair{1.0, 1.0}}) {
+    for (const auto& p : original) {
+      test::RectifiedPair q;
+      p.left.convertTo(q.left, CV_8U, left_gain);  // rounds and saturates
+      p.right.convertTo(q.right, CV_8U, right_gain);
+      pairs.push_back(q);
+    }
+  }
+  using Side = HistogramEqualizer::Side;
+  for (const HeMode mode : {HeMode::kNone, HeMode::kGlobal, HeMode::kClipped, HeMode::kClahe, HeMode::kAdaptive}) {
+    for (const StereoPhotometry stereo : {StereoPhotometry::kShared, StereoPhotometry::kMatched, StereoPhotometry::kSeparate}) {
+      HistogramEqualizer one_call(with_mode(mode, stereo));
+      HistogramEqualizer split(with_mode(mode, stereo));
+      cv::Mat left_buffer, right_buffer;
+      int switched_on = 0;
+      for (std::size_t p = 0; p < pairs.size(); ++p) {
+        const std::string where = std::string(to_string(mode)) + "/" + to_string(stereo) + " pair " + std::to_string(p);
+        cv::Mat left_expected, right_expected;
+        one_call.equalize(pairs[p].left, pairs[p].right, left_expected, right_expected);
+
+        const cv::Mat* right_out = nullptr;
+        std::thread right_thread([&] { split.add_histogram(Side::kRight, pairs[p].right); });
+        split.add_histogram(Side::kLeft, pairs[p].left);
+        right_thread.join();
+        split.compute_mappings();
+        right_thread = std::thread([&] { right_out = &split.apply(Side::kRight, pairs[p].right, right_buffer); });
+        const cv::Mat& left_out = split.apply(Side::kLeft, pairs[p].left, left_buffer);
+        right_thread.join();
+
+        ASSERT_EQ(left_out.size(), left_expected.size()) << where;
+        ASSERT_EQ(right_out->size(), right_expected.size()) << where;
+        EXPECT_EQ(cv::countNonZero(left_out != left_expected), 0) << where;
+        EXPECT_EQ(cv::countNonZero(*right_out != right_expected), 0) << where;
+        EXPECT_EQ(split.active(), one_call.active()) << where;
+        EXPECT_EQ(split.last_contrast(), one_call.last_contrast()) << where;
+        EXPECT_EQ(split.last_tone_shift(), one_call.last_tone_shift()) << where;
+        // Unchanged images are passed through, not copied; the caller's images are never written.
+        const bool unchanged = mode == HeMode::kNone ||
+                               (mode == HeMode::kAdaptive && !split.active() && stereo != StereoPhotometry::kMatched);
+        EXPECT_EQ(&left_out == &pairs[p].left, unchanged) << where;
+        EXPECT_EQ(right_out == &pairs[p].right, unchanged) << where;
+        switched_on += mode == HeMode::kAdaptive && split.active() ? 1 : 0;
+      }
+      if (mode == HeMode::kAdaptive) {
+        EXPECT_GT(switched_on, 0) << "the dark pairs switch adaptive HE on";
+      }
+    }
+  }
+  // The one-call equalizer's input images are left as they were (the split form wrote its buffers).
+  const auto fresh = test::load_euroc_pairs({0}, nullptr);
+  EXPECT_EQ(cv::countNonZero(pairs[0].left != fresh[0].left), 0);
+
+  // Bad input: an image of another size than the one measured, or histograms of two sizes.
+  HistogramEqualizer equalizer;
+  cv::Mat buffer;
+  equalizer.add_histogram(Side::kLeft, original[0].left);
+  equalizer.add_histogram(Side::kRight, original[0].right.colRange(0, 100));
+  EXPECT_THROW(equalizer.compute_mappings(), std::invalid_argument);
+  equalizer.add_histogram(Side::kRight, original[0].right);
+  equalizer.compute_mappings();
+  EXPECT_THROW(equalizer.apply(Side::kLeft, original[0].left.rowRange(0, 10), buffer), std::invalid_argument);
+  EXPECT_THROW(equalizer.add_histogram(Side::kLeft, cv::Mat(4, 4, CV_16UC1)), std::invalid_argument);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <stdexcept>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -218,6 +219,56 @@ TEST(StereoFeaturePipeline, ParallelEqualsSerial) {
   }
   EXPECT_GE(timings.total_ms, timings.extract_ms);
   EXPECT_THROW(parallel.process(left.colRange(0, 100), right), std::invalid_argument);
+}
+
+// process_from (each image made, measured, mapped and turned into its pyramid on its own thread)
+// gives what process() gives on the made images, parallel or not; a source's error reaches the
+// caller, a made image of the wrong size is refused, and the pipeline goes on afterwards.
+TEST(StereoFeaturePipeline, ProcessFromEqualsProcess) {
+  HESLAM_REQUIRE_TEXTURE();
+  const PinholeStereo camera = euroc_rig();
+  const cv::Mat texture = test::load_texture();
+  const cv::Mat left = texture(cv::Rect(20, 0, camera.width_px, camera.height_px)).clone();
+  const cv::Mat right = texture(cv::Rect(10, 0, camera.width_px, camera.height_px)).clone();
+  for (const bool parallel : {true, false}) {
+    for (const HeMode mode : {HeMode::kClipped, HeMode::kNone, HeMode::kClahe}) {
+      StereoFeaturePipelineOptions options;
+      options.parallel = parallel;
+      options.he.mode = mode;
+      StereoFeaturePipeline reference(camera, options);
+      StereoFeaturePipeline pipeline(camera, options);
+      cv::Mat left_made, right_made;
+      auto make_left = [&]() -> const cv::Mat& {
+        left.copyTo(left_made);
+        return left_made;
+      };
+      auto make_right = [&]() -> const cv::Mat& {
+        right.copyTo(right_made);
+        return right_made;
+      };
+      StereoFeatureTimings timings;
+      const StereoFeatures a = reference.process(left, right);
+      pipeline.process(right, left);  // a different pair in between: buffers are reused
+      const StereoFeatures b = pipeline.process_from(make_left, make_right, &timings);
+      ASSERT_EQ(a.size(), b.size());
+      for (std::size_t i = 0; i < a.size(); ++i) {
+        EXPECT_EQ(a.keypoints[i].u_px, b.keypoints[i].u_px);
+        EXPECT_EQ(a.descriptors[i], b.descriptors[i]);
+        EXPECT_EQ(a.u_right_px[i], b.u_right_px[i]);
+        EXPECT_EQ(a.depth_m[i], b.depth_m[i]);
+      }
+      EXPECT_GT(timings.source_ms, 0.0);
+      EXPECT_GE(timings.total_ms, timings.extract_ms);
+      EXPECT_EQ(cv::countNonZero(left_made != left), 0) << "the made image is not written";
+
+      const cv::Mat small = left.colRange(0, 100);
+      EXPECT_THROW(pipeline.process_from(make_left, [&]() -> const cv::Mat& { return small; }), std::invalid_argument);
+      EXPECT_THROW(pipeline.process_from([]() -> const cv::Mat& { throw std::runtime_error("no image"); }, make_right),
+                   std::runtime_error);
+      const StereoFeatures c = pipeline.process_from(make_left, make_right);
+      EXPECT_EQ(c.size(), a.size());
+    }
+  }
 }
 
 }  // namespace

@@ -4,7 +4,9 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <stdexcept>
+#include <string>
 
 #include "components/core/image/yaml_option.hpp"
 
@@ -15,6 +17,13 @@ using Clock = std::chrono::steady_clock;
 
 double ms_between(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+// CPU time of the whole process (all its threads), in ms.
+double process_cpu_ms() {
+  timespec now{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) * 1e3 + static_cast<double>(now.tv_nsec) * 1e-6;
 }
 
 OrbOptions right_options(const StereoFeaturePipelineOptions& options) {
@@ -79,17 +88,68 @@ void StereoFeaturePipeline::run_on_both(const std::function<void()>& right_job, 
   }
 }
 
+void StereoFeaturePipeline::check_image(const cv::Mat& image, const char* side) const {
+  const cv::Size expected(camera_.width_px, camera_.height_px);
+  if (image.type() != CV_8UC1 || image.size() != expected) {
+    throw std::invalid_argument(std::string("StereoFeaturePipeline: expected an 8-bit grey ") + side + " image of " +
+                                std::to_string(expected.width) + "x" + std::to_string(expected.height) + ", got " +
+                                std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                                (image.type() == CV_8UC1 ? "" : " not 8-bit grey"));
+  }
+}
+
 StereoFeatures StereoFeaturePipeline::process(const cv::Mat& left_rect, const cv::Mat& right_rect,
                                               StereoFeatureTimings* timings) {
-  const cv::Size expected(camera_.width_px, camera_.height_px);
-  if (left_rect.type() != CV_8UC1 || right_rect.type() != CV_8UC1 || left_rect.size() != expected ||
-      right_rect.size() != expected) {
-    throw std::invalid_argument("StereoFeaturePipeline: expected two 8-bit grey images of " +
-                                std::to_string(expected.width) + "x" + std::to_string(expected.height));
+  check_image(left_rect, "left");
+  check_image(right_rect, "right");
+  StereoFeatures out = process_from([&]() -> const cv::Mat& { return left_rect; },
+                                    [&]() -> const cv::Mat& { return right_rect; }, timings);
+  if (timings) {  // nothing to make: the "source" step was the histograms, part of HE here
+    timings->he_ms += timings->source_ms;
+    timings->total_ms += timings->source_ms;
   }
+  return out;
+}
+
+StereoFeatures StereoFeaturePipeline::process_from(const ImageSource& left_source, const ImageSource& right_source,
+                                                   StereoFeatureTimings* timings) {
+  using Side = HistogramEqualizer::Side;
   const Clock::time_point t0 = Clock::now();
-  equalizer_.equalize(left_rect, right_rect, left_he_, right_he_);
+  const double cpu0_ms = timings ? process_cpu_ms() : 0.0;
+  const cv::Mat* left_image = nullptr;
+  const cv::Mat* right_image = nullptr;
+  // Each thread: its image, then its histogram (the image still in its core's cache).
+  auto make_left = [&] {
+    left_image = &left_source();
+    check_image(*left_image, "left");
+    equalizer_.add_histogram(Side::kLeft, *left_image);
+  };
+  auto make_right = [&] {
+    right_image = &right_source();
+    check_image(*right_image, "right");
+    equalizer_.add_histogram(Side::kRight, *right_image);
+  };
+  // Each thread maps its image and builds its pyramid.
+  auto start_left = [&] {
+    left_he_ = equalizer_.apply(Side::kLeft, *left_image, left_he_buffer_);
+    if (worker_) left_extractor_.build_pyramid(left_he_);
+  };
+  auto start_right = [&] {
+    right_he_ = equalizer_.apply(Side::kRight, *right_image, right_he_buffer_);
+    if (worker_) right_extractor_.build_pyramid(right_he_);
+  };
+
+  // The mappings follow at once, then the pyramids: the worker polls in between.
+  if (worker_) {
+    worker_->run(make_right, make_left, PairWorker::Then::kMoreSoon);
+  } else {
+    make_left();
+    make_right();
+  }
   const Clock::time_point t1 = Clock::now();
+  const double cpu1_ms = timings ? process_cpu_ms() : 0.0;
+  equalizer_.compute_mappings();
+  const Clock::time_point t1b = Clock::now();
 
   if (worker_) {
     // Pyramids: one per thread. Then the (image, level) jobs, largest first, taken by whichever
@@ -97,8 +157,7 @@ StereoFeatures StereoFeaturePipeline::process(const cv::Mat& left_rect, const cv
     // one core idle. Each job writes only its own level, so the result does not depend on which
     // thread ran it.
     // The level jobs follow at once, and stereo matching after them: the worker polls in between.
-    worker_->run([&] { right_extractor_.build_pyramid(right_he_); }, [&] { left_extractor_.build_pyramid(left_he_); },
-                 PairWorker::Then::kMoreSoon);
+    worker_->run(start_right, start_left, PairWorker::Then::kMoreSoon);
     const int levels = options_.orb.levels;
     std::atomic<int> next_job{0};
     auto run_jobs = [&] {
@@ -111,6 +170,8 @@ StereoFeatures StereoFeaturePipeline::process(const cv::Mat& left_rect, const cv
     left_extractor_.collect(left_);
     right_extractor_.collect(right_);
   } else {
+    start_left();
+    start_right();
     left_extractor_.extract(left_he_, left_);
     right_extractor_.extract(right_he_, right_);
   }
@@ -157,10 +218,12 @@ StereoFeatures StereoFeaturePipeline::process(const cv::Mat& left_rect, const cv
   const Clock::time_point t3 = Clock::now();
 
   if (timings) {
-    timings->he_ms = ms_between(t0, t1);
-    timings->extract_ms = ms_between(t1, t2);
+    timings->source_ms = ms_between(t0, t1);
+    timings->source_cpu_ms = cpu1_ms - cpu0_ms;
+    timings->he_ms = ms_between(t1, t1b);
+    timings->extract_ms = ms_between(t1b, t2);
     timings->stereo_ms = ms_between(t2, t3);
-    timings->total_ms = ms_between(t0, t3);
+    timings->total_ms = ms_between(t1, t3);
   }
   return out;
 }

@@ -1,5 +1,8 @@
 // The per-frame feature pipeline: rectified stereo pair -> joint histogram equalization -> ORB on
 // both images (pyramid levels of both spread over two threads) -> stereo matching -> StereoFeatures.
+// On two threads: each image is made (rectified), measured (histogram), mapped (HE) and turned into
+// its pyramid on its own thread; the pair meets only to combine the histograms, to share out the
+// pyramid levels' jobs and to split the stereo matching.
 #pragma once
 
 #include <cstdint>
@@ -44,9 +47,17 @@ struct StereoFeaturePipelineOptions {
 };
 
 struct StereoFeatureTimings {
+  // Making both images (process_from: e.g. rectifying them; process: nothing) and their histograms,
+  // wall time and the process's CPU time over it (both threads).
+  double source_ms = 0.0;
+  double source_cpu_ms = 0.0;
+  // The equalization's mappings from the two histograms (one thread, between two hand-offs); the
+  // histograms are in source_ms (process_from) or here (process), the mappings' application is in
+  // extract_ms (each thread maps its image, then builds its pyramid).
   double he_ms = 0.0;
   double extract_ms = 0.0;
   double stereo_ms = 0.0;
+  // he + extract + stereo (process: the whole call, the histograms included).
   double total_ms = 0.0;
 };
 
@@ -58,9 +69,20 @@ class StereoFeaturePipeline {
   // Deterministic: the same pair gives the same output whether parallel or not. Not thread-safe.
   StereoFeatures process(const cv::Mat& left_rect, const cv::Mat& right_rect, StereoFeatureTimings* timings = nullptr);
 
+  // Makes an image of the pair on the calling thread (e.g. rectifies a raw image into a buffer it
+  // owns) and returns it; it must stay valid until process_from returns.
+  using ImageSource = std::function<const cv::Mat&()>;
+  // As process(), the images made by `left_source` (on the caller) and `right_source` (on the
+  // pipeline's second thread) at once: each thread measures its image's histogram right after making
+  // it, the equalization's mappings follow once, and each thread maps its image and goes on to its
+  // pyramid -- the making and the equalization share the frame's first hand-off. The same output as
+  // process() on the made images. Exceptions of the sources are rethrown here.
+  StereoFeatures process_from(const ImageSource& left_source, const ImageSource& right_source,
+                              StereoFeatureTimings* timings = nullptr);
+
   // Runs `right_job` on the pipeline's second thread and `left_job` on the caller at once (one after
-  // the other when not parallel), e.g. the rectification of the two raw images before process():
-  // the same thread pair, no second worker. Exceptions are rethrown here.
+  // the other when not parallel): the same thread pair, no second worker. Exceptions are rethrown
+  // here. (The frontend rectifies through process_from, which saves a hand-off.)
   void run_on_both(const std::function<void()>& right_job, const std::function<void()>& left_job);
 
   // Hand-offs between the pipeline's two threads so far, and how many found the other asleep (a
@@ -80,8 +102,12 @@ class StereoFeaturePipeline {
   OrbExtractor left_extractor_;
   OrbExtractor right_extractor_;
   StereoMatcher stereo_matcher_;
+  // Checks a made image's type and size; `side` names it in the message.
+  void check_image(const cv::Mat& image, const char* side) const;
+
   std::unique_ptr<PairWorker> worker_;  // only when parallel
-  cv::Mat left_he_, right_he_;
+  cv::Mat left_he_, right_he_;                // the equalized images: a buffer below or the input itself
+  cv::Mat left_he_buffer_, right_he_buffer_;  // written by the equalizer, reused frame to frame
   OrbFeatures left_, right_;
   std::vector<std::vector<int>> right_rows_;
   std::vector<std::pair<int, int>> sad_left_half_, sad_right_half_;

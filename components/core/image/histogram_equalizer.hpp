@@ -10,11 +10,19 @@
 // not stretch their neighbourhood into noise; the default, see docs/vision.md); clahe (contrast-limited, per tile, bilinear
 // between tiles, tile LUTs from both images); adaptive (global HE only while the pair's contrast is
 // low, switched with hysteresis so it does not flicker from frame to frame).
+//
+// Two forms, the same pixels: equalize() does the pair at once; the split form lets each image of
+// the pair be measured and mapped on its own thread (the frontend's pair: each thread rectifies its
+// image, takes its histogram, and after one barrier maps it and goes on to its ORB pyramid):
+// add_histogram(left) || add_histogram(right), then compute_mappings() once, then apply(left) ||
+// apply(right). equalize() is that same sequence on one thread.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <initializer_list>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -66,11 +74,25 @@ struct HistogramEqualizerOptions {
 
 class HistogramEqualizer {
  public:
+  enum class Side { kLeft = 0, kRight = 1 };
+
   explicit HistogramEqualizer(const HistogramEqualizerOptions& options = {});
 
   // Inputs: 8-bit grey images (the pair). Outputs may alias the inputs. Not thread-safe (adaptive
   // mode keeps its on/off state between calls).
   void equalize(const cv::Mat& left, const cv::Mat& right, cv::Mat& left_out, cv::Mat& right_out);
+
+  // The split form of equalize(), per pair: add_histogram for both sides (the two calls may run at
+  // once on two threads: each touches only its side's histograms), then compute_mappings() (one
+  // thread, after both), then apply for both sides (again at once if wanted). `image` must be the
+  // same in add_histogram and apply. Throws std::invalid_argument on an image that is not 8-bit grey
+  // and non-empty, or (compute_mappings) on a pair of different sizes.
+  void add_histogram(Side side, const cv::Mat& image);
+  void compute_mappings();
+  // Returns the equalized image: `image` itself when this side passes through unchanged (mode none,
+  // adaptive while off with no tone curve), else `buffer`, (re)allocated to image's size and written
+  // (buffer may be image: the mapping is per pixel).
+  const cv::Mat& apply(Side side, const cv::Mat& image, cv::Mat& buffer) const;
 
   // Adaptive mode: whether the last pair was equalized. Other modes: whether they equalize at all.
   bool active() const { return active_; }
@@ -82,10 +104,31 @@ class HistogramEqualizer {
   const HistogramEqualizerOptions& options() const { return options_; }
 
  private:
-  // Returns the pair's RMS contrast.
-  double equalize_clahe(const cv::Mat& left, const cv::Mat& right, cv::Mat& left_out, cv::Mat& right_out) const;
+  using Histogram = std::array<std::uint32_t, 256>;
+  using Lut = std::array<std::uint8_t, 256>;
+
+  // One image of the pair: what add_histogram measured and what compute_mappings made of it.
+  struct SideState {
+    cv::Size size;
+    Histogram histogram{};         // the whole image (modes but none)
+    std::vector<Histogram> tiles;  // CLAHE: per tile, row-major
+    bool pass_through = true;      // apply returns the image itself
+    // Global / clipped / adaptive: the whole mapping. CLAHE: the tone curve applied before the tile
+    // mappings (the identity unless matched).
+    Lut lut{};
+    std::size_t tile_luts = 0;  // CLAHE: this side's tile mappings, an index into clahe_luts_
+  };
+
+  bool clahe() const { return options_.mode == HeMode::kClahe; }
+  // CLAHE: the tile mappings of sides `images` (their tile histograms through their tone curves,
+  // summed per tile, clipped).
+  std::vector<Lut> clahe_tile_luts(std::initializer_list<const SideState*> images) const;
+  // CLAHE: maps `in` through `tone`, then the bilinear blend of the four nearest tiles' mappings.
+  void clahe_map(const cv::Mat& in, const Lut& tone, const std::vector<Lut>& luts, cv::Mat& out) const;
 
   HistogramEqualizerOptions options_;
+  std::array<SideState, 2> sides_;
+  std::array<std::vector<Lut>, 2> clahe_luts_;  // CLAHE: [0] shared (or the left's), [1] the right's when separate
   bool active_ = false;
   double last_contrast_ = 0.0;
   double last_tone_shift_ = 0.0;
