@@ -94,6 +94,7 @@ void read_tracker(const runtime::Config& c, TrackerOptions& t) {
   read(c, "tracker.close_untracked_enough", t.close_untracked_enough);
   read(c, "tracker.close_untracked_near_clip_weight", t.close_untracked_near_clip_weight, 0.0, 1.0);
   read(c, "tracker.reference_ratio_stereo", t.reference_ratio_stereo, 0.0, 1.0);
+  read(c, "tracker.reference_near_clip_weight", t.reference_near_clip_weight, 0.0, 1.0);
   read(c, "tracker.reference_ratio_single_keyframe", t.reference_ratio_single_keyframe, 0.0, 1.0);
   read(c, "tracker.min_keyframe_inliers", t.min_keyframe_inliers);
   read(c, "tracker.new_keyframe_min_points", t.new_keyframe_min_points);
