@@ -58,6 +58,7 @@ void read_features(const runtime::Config& c, StereoFeaturePipelineOptions& o) {
   read(c, "stereo.sad_search_px", stereo.sad_search_px, 0, 64);
   read(c, "stereo.min_depth_baselines", stereo.min_depth_baselines, 0.01, 1000.0);
   read(c, "stereo.sad_outlier_factor", stereo.sad_outlier_factor, 0.0, 1000.0);
+  read(c, "stereo.clip_masked_sad", stereo.clip_masked_sad);
 
   read(c, "pipeline.parallel", o.parallel);
 }
