@@ -58,6 +58,7 @@ void read_features(const runtime::Config& c, StereoFeaturePipelineOptions& o) {
   read(c, "stereo.sad_search_px", stereo.sad_search_px, 0, 64);
   read(c, "stereo.min_depth_baselines", stereo.min_depth_baselines, 0.01, 1000.0);
   read(c, "stereo.sad_outlier_factor", stereo.sad_outlier_factor, 0.0, 1000.0);
+  read(c, "stereo.clip_masked_sad", stereo.clip_masked_sad);
 
   read(c, "pipeline.parallel", o.parallel);
 }
@@ -94,6 +95,7 @@ void read_tracker(const runtime::Config& c, TrackerOptions& t) {
   read(c, "tracker.close_untracked_enough", t.close_untracked_enough);
   read(c, "tracker.close_untracked_near_clip_weight", t.close_untracked_near_clip_weight, 0.0, 1.0);
   read(c, "tracker.reference_ratio_stereo", t.reference_ratio_stereo, 0.0, 1.0);
+  read(c, "tracker.reference_near_clip_weight", t.reference_near_clip_weight, 0.0, 1.0);
   read(c, "tracker.reference_ratio_single_keyframe", t.reference_ratio_single_keyframe, 0.0, 1.0);
   read(c, "tracker.min_keyframe_inliers", t.min_keyframe_inliers);
   read(c, "tracker.new_keyframe_min_points", t.new_keyframe_min_points);

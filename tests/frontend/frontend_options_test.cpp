@@ -31,7 +31,8 @@ TEST(FrontendOptions, EmptyConfigKeepsTheCoreDefaults) {
 TEST(FrontendOptions, FieldsReachTheCoreOptions) {
   const auto config = runtime::Config::parse(
       "he:\n  mode: clahe\n  stereo: separate\n  match_shift_from: 10\n  match_shift_full: 30\n"
-      "orb:\n  features: 2000\ntracker:\n  max_frames_between_keyframes: 10\n"
+      "orb:\n  features: 2000\nstereo:\n  clip_masked_sad: true\n"
+      "tracker:\n  max_frames_between_keyframes: 10\n  reference_near_clip_weight: 0.25\n"
       "lockstep:\n  wait_for_mapper: true\n  mapper_timeout_s: 2.5\n",
       "test.yaml");
   const FrontendOptions options = FrontendOptions::from_config(config);
@@ -42,6 +43,8 @@ TEST(FrontendOptions, FieldsReachTheCoreOptions) {
   EXPECT_EQ(options.features.he.match_shift_full, 30.0);
   EXPECT_EQ(options.features.orb.features, 2000);
   EXPECT_EQ(options.tracker.max_frames_between_keyframes, 10);
+  EXPECT_TRUE(options.features.stereo.clip_masked_sad);
+  EXPECT_EQ(options.tracker.reference_near_clip_weight, 0.25);
   EXPECT_TRUE(options.mapper_enabled);  // waiting for a mapper implies one
   EXPECT_TRUE(options.wait_for_mapper);
   EXPECT_FALSE(options.tracker.maintain_map);  // the mapper owns the map

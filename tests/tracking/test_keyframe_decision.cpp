@@ -98,6 +98,36 @@ TEST(KeyframeDecision, UntrackedNearClipCountsByItsWeight) {
   EXPECT_TRUE(decide_keyframe(frame, camera, input, options).insert);
 }
 
+// Cameras exposed apart: in the reference-ratio rule, near-clip points count
+// reference_near_clip_weight on both sides (default 1: the rule as before).
+TEST(KeyframeDecision, ReferenceRatioWeighsNearClipPoints) {
+  const PinholeStereo camera = test::synthetic_camera();
+  const Frame frame = make_counted_frame(camera, 200, 50);  // 200 tracked close: the close rule is quiet
+  KeyframeDecisionInput input;
+  input.frames_since_keyframe = 3;
+  input.tracked_inliers = 340;            // 100 clear + 240 near a clip edge
+  input.tracked_inliers_near_clip = 240;
+  input.keyframes_in_map = 5;
+  input.reference_tracked_points = 480;   // 100 clear + 380 near a clip edge
+  input.reference_points_near_clip = 380;
+  TrackerOptions options;
+  EXPECT_DOUBLE_EQ(options.reference_near_clip_weight, 1.0);
+  EXPECT_TRUE(decide_keyframe(frame, camera, input, options).insert);  // 340 < 0.75 x 480 = 360
+  options.reference_near_clip_weight = 0.0;  // 100 clear tracked, not < 0.75 x 100 clear in the reference
+  EXPECT_FALSE(decide_keyframe(frame, camera, input, options).insert);
+  options.reference_near_clip_weight = 0.5;  // 100 + 120 = 220, not < 0.75 x (100 + 190) = 217.5
+  EXPECT_FALSE(decide_keyframe(frame, camera, input, options).insert);
+  input.tracked_inliers = 300;               // 70 clear + 230 near clip: 70 + 115 = 185 < 217.5
+  input.tracked_inliers_near_clip = 230;
+  EXPECT_TRUE(decide_keyframe(frame, camera, input, options).insert);
+  // No marks (equally exposed pairs): any weight leaves the rule as it was.
+  input.tracked_inliers = 340;
+  input.tracked_inliers_near_clip = 0;
+  input.reference_points_near_clip = 0;
+  options.reference_near_clip_weight = 0.0;
+  EXPECT_TRUE(decide_keyframe(frame, camera, input, options).insert);
+}
+
 TEST(KeyframeDecision, NoKeyframeRightAfterRelocalizationInABigMap) {
   const PinholeStereo camera = test::synthetic_camera();
   const Frame frame = make_counted_frame(camera, 20, 300);

@@ -21,6 +21,24 @@ int count_reference_points(const Keyframe& reference, const Map& map, int min_ob
   return count;
 }
 
+int count_reference_points_near_clip(const Keyframe& reference, const Map& map, int min_observations) {
+  int count = 0;
+  for (std::size_t i = 0; i < reference.point_ids.size(); ++i) {
+    if (!reference.features.stereo_near_clip(i)) continue;
+    const MapPoint* point = map.point(reference.point_ids[i]);
+    if (point != nullptr && !point->culled && static_cast<int>(point->observations.size()) >= min_observations) ++count;
+  }
+  return count;
+}
+
+int count_tracked_near_clip(const Frame& frame) {
+  int count = 0;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    if (frame.point_ids[i] != kNoId && !frame.outlier[i] && frame.features.stereo_near_clip(i)) ++count;
+  }
+  return count;
+}
+
 KeyframeDecision decide_keyframe(const Frame& frame, const PinholeStereo& camera, const KeyframeDecisionInput& input,
                                  const TrackerOptions& options) {
   KeyframeDecision decision;
@@ -45,8 +63,10 @@ KeyframeDecision decide_keyframe(const Frame& frame, const PinholeStereo& camera
                           untracked_weight > options.close_untracked_enough;
   const float ratio = input.keyframes_in_map < 2 ? options.reference_ratio_single_keyframe
                                                  : options.reference_ratio_stereo;
-  const float reference = static_cast<float>(input.reference_tracked_points);
-  const float tracked = static_cast<float>(input.tracked_inliers);
+  const double near_clip_discount = 1.0 - options.reference_near_clip_weight;
+  const auto reference = static_cast<float>(input.reference_tracked_points -
+                                            near_clip_discount * input.reference_points_near_clip);
+  const auto tracked = static_cast<float>(input.tracked_inliers - near_clip_discount * input.tracked_inliers_near_clip);
 
   const bool c1a = input.frames_since_keyframe >= options.max_frames_between_keyframes;
   const bool c1b = input.frames_since_keyframe >= options.min_frames_between_keyframes && input.mapper_idle;

@@ -79,6 +79,12 @@ struct TrackerOptions {
   // keyframes, frames lost). Equally exposed pairs carry no marks. docs/benchmarks.md, gain4.
   double close_untracked_near_clip_weight = 0.9;
   float reference_ratio_stereo = 0.75f;
+  // In the reference-ratio rule (tracked < reference_ratio_stereo x the reference keyframe's points),
+  // points whose keyframe / frame feature is near a clip edge (StereoFeatures::near_clip, pairs exposed
+  // apart only) count this much on both sides. Such points are found again less often than the others
+  // (a clip contour slides with the view), so at 1 the rule fires every frame or two on heavily clipped
+  // pairs in the full system. Equally exposed pairs carry no marks. docs/benchmarks.md, gain5.
+  double reference_near_clip_weight = 1.0;
   float reference_ratio_single_keyframe = 0.4f;
   int min_keyframe_inliers = 15;
   // Points created for a new keyframe: all close untracked ones, then far ones until this many in all.

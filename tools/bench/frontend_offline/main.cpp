@@ -43,6 +43,7 @@ constexpr const char* kUsage =
     "       [--tracking-worker on|off]   (the tracker's BA passes in halves on a second thread; default off)\n"
     "       [--near-clip-sigma X]   (tracker.near_clip_disparity_sigma_factor: 0 monocular, 1 as any stereo match)\n"
     "       [--close-untracked-near-clip-weight W]   (tracker.close_untracked_near_clip_weight, 0-1; default 0.9)\n"
+    "       [--reference-near-clip-weight W]   (tracker.reference_near_clip_weight, 0-1; default 1)\n"
     "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n"
     "       [--kidnap DIR]   (run on a kidnapped-camera copy written to DIR: frames 60-79 black, 80-159 = 0-79)\n"
     "       [--kidnap-plan B,R,S[,N]]   (the copy's plan: frames B..R-1 black, from R on the source's frames\n"
@@ -168,6 +169,12 @@ int run(int argc, char** argv) {
     } else if (arg == "--close-untracked-near-clip-weight") {
       options.tracker.close_untracked_near_clip_weight = parse_number<double>(arg, value);
       const double weight = options.tracker.close_untracked_near_clip_weight;
+      if (!(weight >= 0.0 && weight <= 1.0)) {
+        throw std::runtime_error(arg + ": expected a number in [0, 1], got '" + value + "'");
+      }
+    } else if (arg == "--reference-near-clip-weight") {
+      options.tracker.reference_near_clip_weight = parse_number<double>(arg, value);
+      const double weight = options.tracker.reference_near_clip_weight;
       if (!(weight >= 0.0 && weight <= 1.0)) {
         throw std::runtime_error(arg + ": expected a number in [0, 1], got '" + value + "'");
       }

@@ -20,9 +20,6 @@
 namespace heslam::bench {
 namespace {
 
-// Distinct noise streams for the left and right image of one frame.
-constexpr std::uint64_t kRightImageSeedOffset = 0x100000000ULL;
-
 double thread_cpu_ms() {
   timespec now{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
@@ -98,11 +95,8 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
     const EurocFrame& input = sequence.frames[k];
     cv::Mat left = read_grey(input.left_png);
     cv::Mat right = read_grey(input.right_png);
-    apply_photometric_variant(left, options.variant, static_cast<std::uint64_t>(k));
-    apply_photometric_variant(right, options.variant, static_cast<std::uint64_t>(k) + kRightImageSeedOffset);
-    const StereoGain gain = stereo_gain_at(options.stereo_gain, k - first, count);
-    apply_gain(left, gain.left);
-    apply_gain(right, gain.right);
+    photometric::apply_to_pair(left, right, options.variant, photometric::stereo_gain_at(options.stereo_gain, k - first, count),
+                               static_cast<std::uint64_t>(k));
 
     FrameRecord record;
     record.stamp_ns = input.stamp_ns;

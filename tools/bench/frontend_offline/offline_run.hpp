@@ -12,10 +12,18 @@
 #include "components/core/feature/stereo_feature_pipeline.hpp"
 #include "components/core/tracking/tracker.hpp"
 #include "tools/bench/frontend_offline/euroc_sequence.hpp"
-#include "tools/bench/frontend_offline/photometric_variant.hpp"
+#include "tools/photometric/photometric_variant.hpp"
 #include "tools/eval/kitti_metrics.hpp"
 
 namespace heslam::bench {
+
+// The offline run's image transforms are heslam-photometric's (tools/photometric).
+using photometric::PhotometricVariant;
+using photometric::StereoGain;
+using photometric::parse_photometric_variant;
+using photometric::parse_stereo_gain_schedule;
+using photometric::to_string;
+using photometric::describe;
 
 struct OfflineRunOptions {
   StereoFeaturePipelineOptions pipeline;

@@ -21,7 +21,7 @@
 #include "components/core/feature/stereo_feature_pipeline.hpp"
 #include "tools/bench/bench_util.hpp"
 #include "tools/bench/frontend_offline/euroc_sequence.hpp"
-#include "tools/bench/frontend_offline/photometric_variant.hpp"
+#include "tools/photometric/photometric_variant.hpp"
 
 namespace {
 
@@ -53,13 +53,13 @@ struct Group {
   }
 };
 
-heslam::bench::StereoGain parse(const std::string& s) { return heslam::bench::parse_stereo_gain(s); }
+heslam::photometric::StereoGain parse(const std::string& s) { return heslam::photometric::parse_stereo_gain(s); }
 
 int run(int argc, char** argv) {
   if (argc < 3) throw std::runtime_error("usage: heslam-bench-stereo-compare DATASET L,R [--step N] [--he-stereo M] [--reference L,R]");
   const auto sequence = heslam::bench::load_euroc_sequence(argv[1]);
   const auto gain = parse(argv[2]);
-  heslam::bench::StereoGain reference;
+  heslam::photometric::StereoGain reference;
   int step = 4;
   heslam::StereoFeaturePipelineOptions options;
   options.parallel = false;
@@ -83,10 +83,10 @@ int run(int argc, char** argv) {
     const cv::Mat left = cv::imread(sequence.frames[k].left_png.string(), cv::IMREAD_GRAYSCALE);
     const cv::Mat right = cv::imread(sequence.frames[k].right_png.string(), cv::IMREAD_GRAYSCALE);
     cv::Mat l_ref = left.clone(), r_ref = right.clone(), l_gain = left.clone(), r_gain = right.clone();
-    heslam::bench::apply_gain(l_ref, reference.left);
-    heslam::bench::apply_gain(r_ref, reference.right);
-    heslam::bench::apply_gain(l_gain, gain.left);
-    heslam::bench::apply_gain(r_gain, gain.right);
+    heslam::photometric::apply_gain(l_ref, reference.left);
+    heslam::photometric::apply_gain(r_ref, reference.right);
+    heslam::photometric::apply_gain(l_gain, gain.left);
+    heslam::photometric::apply_gain(r_gain, gain.right);
     cv::Mat lr, rr, lg, rg;
     rectifier.rectify(l_ref, r_ref, lr, rr);
     rectifier.rectify(l_gain, r_gain, lg, rg);

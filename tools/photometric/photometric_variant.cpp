@@ -1,19 +1,21 @@
 // Dark and low-contrast image variants, and per-camera gains.
-#include "tools/bench/frontend_offline/photometric_variant.hpp"
+#include "tools/photometric/photometric_variant.hpp"
 
 #include <algorithm>
 #include <cstdio>
-#include <algorithm>
 #include <cstdlib>
 #include <stdexcept>
 
-namespace heslam::bench {
+namespace heslam::photometric {
 namespace {
 
 constexpr double kDarkGain = 0.1;
 constexpr double kDarkNoiseSigma = 1.0;  // grey levels: read noise that stays once the signal is tiny
 constexpr double kLowContrastGain = 0.12;
 constexpr double kMidGrey = 128.0;
+// Added to the frame index to seed the right image's noise: independent of the left's, and of any
+// other frame's for sequences below 2^32 frames.
+constexpr std::uint64_t kRightImageSeedOffset = 0x100000000ULL;
 
 }  // namespace
 
@@ -103,4 +105,12 @@ void apply_gain(cv::Mat& image, double gain) {
   image.convertTo(image, CV_8U, gain);  // rounds and saturates to [0, 255]
 }
 
-}  // namespace heslam::bench
+void apply_to_pair(cv::Mat& left, cv::Mat& right, PhotometricVariant variant, const StereoGain& gain,
+                   std::uint64_t frame_index) {
+  apply_photometric_variant(left, variant, frame_index);
+  apply_photometric_variant(right, variant, frame_index + kRightImageSeedOffset);
+  apply_gain(left, gain.left);
+  apply_gain(right, gain.right);
+}
+
+}  // namespace heslam::photometric

@@ -1,7 +1,8 @@
 // Photometric variants of real images for robustness runs: dark (x0.1 plus sensor noise) and low
 // contrast (x0.12 around mid grey), generated deterministically per frame; and a stereo gain, a
 // different exposure of the left and right camera (x gain, clipped to 8 bit), as auto-exposure run
-// per camera or a flared / shaded lens gives.
+// per camera or a flared / shaded lens gives. Shared by heslam-frontend-offline (in memory) and
+// heslam-photometric (a transformed copy of a dataset folder), so both see the same images.
 #pragma once
 
 #include <cstdint>
@@ -10,7 +11,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace heslam::bench {
+namespace heslam::photometric {
 
 enum class PhotometricVariant { kNone, kDark, kLowContrast };
 
@@ -45,4 +46,10 @@ StereoGain stereo_gain_at(const std::vector<StereoGain>& schedule, std::size_t i
 // image = saturate(image x gain); no-op for gain 1.
 void apply_gain(cv::Mat& image, double gain);
 
-}  // namespace heslam::bench
+// The whole transform of stereo pair `frame_index` (its 0-based index in the sequence, which seeds
+// the variant's noise; the right image's noise is seeded apart from the left's): the variant on both
+// images, then `gain`.
+void apply_to_pair(cv::Mat& left, cv::Mat& right, PhotometricVariant variant, const StereoGain& gain,
+                   std::uint64_t frame_index);
+
+}  // namespace heslam::photometric
