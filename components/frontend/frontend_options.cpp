@@ -61,6 +61,7 @@ void read_features(const runtime::Config& c, StereoFeaturePipelineOptions& o) {
   read(c, "stereo.clip_masked_sad", stereo.clip_masked_sad);
 
   read(c, "pipeline.parallel", o.parallel);
+  read(c, "pipeline.pin_threads", o.pin_threads);
 }
 
 void read_tracker(const runtime::Config& c, TrackerOptions& t) {

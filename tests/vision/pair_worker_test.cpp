@@ -1,5 +1,8 @@
 // PairWorker: both jobs run, every hand-off sees the other thread's writes whether the worker polls
-// or sleeps between jobs, exceptions come back to the caller, the worker survives them.
+// or sleeps between jobs, exceptions come back to the caller, the worker survives them; the two
+// threads pinned to two different CPUs, or left alone when asked.
+#include <sched.h>
+
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -62,6 +65,48 @@ TEST(PairWorker, ExceptionsFromEitherSideReachTheCallerAndTheWorkerGoesOn) {
   bool ran = false;
   worker.run([&] { ran = true; }, [] {});
   EXPECT_TRUE(ran);
+}
+
+// How many CPUs this process may run on.
+int allowed_cpus() {
+  cpu_set_t allowed;
+  CPU_ZERO(&allowed);
+  return sched_getaffinity(0, sizeof(allowed), &allowed) == 0 ? CPU_COUNT(&allowed) : 0;
+}
+
+// The caller is a thread of its own, so that its pinning does not outlive the test.
+TEST(PairWorker, PinsTheCallerAndTheWorkerToTwoDifferentCpus) {
+  if (allowed_cpus() < 2) GTEST_SKIP() << "this process may run on fewer than two CPUs: nothing to pin";
+  std::thread caller([] {
+    PairWorker worker;
+    int worker_cpu = -1;
+    int caller_cpu = -1;
+    for (int i = 0; i < 20; ++i) {
+      worker.run([&] { worker_cpu = sched_getcpu(); }, [&] { caller_cpu = sched_getcpu(); });
+      EXPECT_TRUE(worker.pinned());
+      EXPECT_EQ(worker_cpu, worker.worker_cpu());
+      EXPECT_EQ(caller_cpu, worker.caller_cpu());
+    }
+    EXPECT_NE(worker.worker_cpu(), worker.caller_cpu());
+  });
+  caller.join();
+}
+
+TEST(PairWorker, LeavesThePlacementToTheSchedulerWhenAsked) {
+  std::thread caller([] {
+    PairWorkerOptions options;
+    options.pin_to_two_cpus = false;
+    PairWorker worker(options);
+    int runs = 0;
+    worker.run([&] { ++runs; }, [&] { ++runs; });
+    EXPECT_EQ(runs, 2);
+    EXPECT_FALSE(worker.pinned());
+    cpu_set_t mine;
+    CPU_ZERO(&mine);
+    ASSERT_EQ(sched_getaffinity(0, sizeof(mine), &mine), 0);
+    EXPECT_EQ(CPU_COUNT(&mine), allowed_cpus());  // the caller's own mask, untouched
+  });
+  caller.join();
 }
 
 }  // namespace

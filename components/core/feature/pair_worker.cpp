@@ -1,6 +1,9 @@
 // A persistent second thread for the left/right halves of the per-frame work.
 #include "components/core/feature/pair_worker.hpp"
 
+#include <pthread.h>
+#include <sched.h>
+
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
 #endif
@@ -17,9 +20,32 @@ void cpu_relax() {
 #endif
 }
 
+// The first two CPUs the calling thread may run on, or {-1, -1} when it may use fewer than two.
+void first_two_allowed_cpus(int (&cpus)[2]) {
+  cpu_set_t allowed;
+  CPU_ZERO(&allowed);
+  if (sched_getaffinity(0, sizeof(allowed), &allowed) != 0) return;
+  int found = 0;
+  for (int cpu = 0; cpu < CPU_SETSIZE && found < 2; ++cpu) {
+    if (CPU_ISSET(cpu, &allowed)) cpus[found++] = cpu;
+  }
+  if (found < 2) cpus[0] = cpus[1] = -1;
+}
+
+// Pins the calling thread to `cpu`; false when the kernel refuses (e.g. a cpuset changed meanwhile).
+bool pin_this_thread(int cpu) {
+  cpu_set_t one;
+  CPU_ZERO(&one);
+  CPU_SET(cpu, &one);
+  return pthread_setaffinity_np(pthread_self(), sizeof(one), &one) == 0;
+}
+
 }  // namespace
 
-PairWorker::PairWorker(const PairWorkerOptions& options) : options_(options), thread_([this] { loop(); }) {}
+PairWorker::PairWorker(const PairWorkerOptions& options) : options_(options) {
+  if (options_.pin_to_two_cpus) first_two_allowed_cpus(cpus_);
+  thread_ = std::thread([this] { loop(); });  // after cpus_ is set: the worker reads it
+}
 
 PairWorker::~PairWorker() {
   {
@@ -56,6 +82,7 @@ void PairWorker::signal(std::atomic<bool>& flag, std::condition_variable& cv) {
 }
 
 void PairWorker::loop() {
+  if (cpus_[1] >= 0) worker_pinned_.store(pin_this_thread(cpus_[1]), std::memory_order_release);
   std::chrono::microseconds spin{0};  // the first job comes with the first frame: sleep
   while (true) {
     if (wait_for(job_posted_, job_posted_cv_, spin)) sleeping_hand_offs_.fetch_add(1, std::memory_order_relaxed);
@@ -75,7 +102,7 @@ void PairWorker::loop() {
 }
 
 void PairWorker::run(const std::function<void()>& on_worker, const std::function<void()>& on_caller, Then then) {
-  ++runs_;
+  if (runs_++ == 0 && cpus_[0] >= 0) caller_pinned_ = pin_this_thread(cpus_[0]);
   job_ = &on_worker;
   then_ = then;
   error_ = nullptr;

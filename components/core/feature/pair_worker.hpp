@@ -24,6 +24,13 @@ struct PairWorkerOptions {
   // within tens of microseconds of each other (the two images' halves are balanced); a longer
   // wait means the other thread was preempted, and polling on would only take its core.
   std::chrono::microseconds spin{200};
+  // Keep the caller and the worker on two different CPUs: the first two the process may run on, the
+  // caller on the first, the worker on the second (each thread pins itself, the caller at its first
+  // run). Left to the scheduler on the 2-core VM, a worker woken after the camera's idle gap was
+  // often placed on the caller's CPU and the frame's stages ran one after the other: the frontend
+  // paced at 20 Hz took 12.0 ms a frame against 7.4 ms pinned (docs/benchmarks.md, ninth session).
+  // Without two allowed CPUs, or when the kernel refuses, the threads stay unpinned (see pinned()).
+  bool pin_to_two_cpus = true;
 };
 
 class PairWorker {
@@ -45,6 +52,10 @@ class PairWorker {
   // for benchmarks.
   std::uint64_t runs() const { return runs_; }
   std::uint64_t sleeping_hand_offs() const { return sleeping_hand_offs_.load(std::memory_order_relaxed); }
+  // Whether both threads run pinned (pin_to_two_cpus, once the first run() has returned), and where.
+  bool pinned() const { return caller_pinned_ && worker_pinned_.load(std::memory_order_acquire); }
+  int caller_cpu() const { return cpus_[0]; }
+  int worker_cpu() const { return cpus_[1]; }
 
  private:
   void loop();
@@ -65,6 +76,9 @@ class PairWorker {
   std::exception_ptr error_;                    // written before job_done_ is set
   std::uint64_t runs_ = 0;
   std::atomic<std::uint64_t> sleeping_hand_offs_{0};
+  int cpus_[2] = {-1, -1};  // the caller's and the worker's CPU when pinning; -1: not pinned
+  bool caller_pinned_ = false;
+  std::atomic<bool> worker_pinned_{false};
   std::thread thread_;
 };
 

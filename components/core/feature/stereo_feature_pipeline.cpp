@@ -48,6 +48,7 @@ StereoFeaturePipelineOptions StereoFeaturePipelineOptions::from_yaml(const cv::F
     yaml_option::fail(source, "Stereo.clipEdgeMinFraction", "a fraction in (0, 1]");
   }
   yaml_option::read(root, "Pipeline.parallel", source, o.parallel);
+  yaml_option::read(root, "Pipeline.pinThreads", source, o.pin_threads);
   yaml_option::read(root, "Pipeline.rightFeaturesFactor", source, o.right_features_factor);
   if (!(o.right_features_factor >= 1.f) || o.right_features_factor > 4.f) {
     yaml_option::fail(source, "Pipeline.rightFeaturesFactor", "a number in [1, 4]");
@@ -76,7 +77,11 @@ StereoFeaturePipeline::StereoFeaturePipeline(const PinholeStereo& camera, const 
   if (camera.width_px <= 0 || camera.height_px <= 0 || !(camera.fx_px > 0.0) || !(camera.baseline_m > 0.0)) {
     throw std::invalid_argument("StereoFeaturePipeline: expected a rectified camera with size, fx and baseline");
   }
-  if (options.parallel) worker_ = std::make_unique<PairWorker>();
+  if (options.parallel) {
+    PairWorkerOptions worker_options;
+    worker_options.pin_to_two_cpus = options.pin_threads;
+    worker_ = std::make_unique<PairWorker>(worker_options);
+  }
 }
 
 void StereoFeaturePipeline::run_on_both(const std::function<void()>& right_job, const std::function<void()>& left_job) {

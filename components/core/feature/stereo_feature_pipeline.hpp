@@ -33,13 +33,16 @@ struct StereoFeaturePipelineOptions {
   ClipEdgeOptions clip_edge;
   // Two threads: the pyramid levels of both images as jobs, then halves of stereo matching.
   bool parallel = true;
+  // The two threads pinned to two different CPUs (PairWorkerOptions::pin_to_two_cpus: the first two
+  // the process may use); false leaves their placement to the scheduler.
+  bool pin_threads = true;
   // The right image keeps this many times orb.features (its keypoints serve only stereo matching):
   // the quadtree picks partly different corners in the two images, and a left keypoint whose
   // counterpart was not kept on the right cannot get a depth. See docs/vision.md for the measurement.
   float right_features_factor = 2.0f;
 
   // Reads the HE.*, ORBextractor.*, Stereo.* keys (Stereo.clipEdgeRadius, .clipEdgeMinFraction for
-  // clip_edge), Pipeline.parallel and Pipeline.rightFeaturesFactor.
+  // clip_edge), Pipeline.parallel, Pipeline.pinThreads and Pipeline.rightFeaturesFactor.
   static StereoFeaturePipelineOptions from_yaml(const cv::FileNode& root, const std::string& source);
   // Same, from a settings file (e.g. config/camera/EuRoC.yaml). Throws std::runtime_error naming the
   // file and key on bad input.
@@ -89,6 +92,8 @@ class StereoFeaturePipeline {
   // futex wake-up); 0 when not parallel.
   std::uint64_t hand_offs() const { return worker_ ? worker_->runs() : 0; }
   std::uint64_t sleeping_hand_offs() const { return worker_ ? worker_->sleeping_hand_offs() : 0; }
+  // The pair's two threads pinned to two CPUs (after the first frame), for benchmarks and logs.
+  bool threads_pinned() const { return worker_ && worker_->pinned(); }
 
   // Whether the last pair was equalized (adaptive HE switches on and off).
   bool he_active() const { return equalizer_.active(); }

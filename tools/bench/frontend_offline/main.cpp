@@ -6,7 +6,7 @@
 //                                [--he none|global|clipped|clahe|adaptive] [--he-stereo shared|matched|separate]
 //                                [--variant none|dark|low_contrast]
 //                                [--stereo-gain L,R[/L,R...]] [--first-frame K] [--frames N] [--period-ms P]
-//                                [--tracking-worker on|off]
+//                                [--tracking-worker on|off] [--pin-threads on|off]
 //                                [--stationary-chi2 X] [--rotation-chi2 X] [--near-clip-sigma X]
 //                                [--close-untracked-near-clip-weight W]
 //                                [--kidnap DIR [--kidnap-plan B,R,S[,N]]] [--vocabulary FILE|none]
@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <system_error>
@@ -41,6 +42,7 @@ constexpr const char* kUsage =
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
     "       [--period-ms P]   (start a frame every P ms, idle in between, as a camera: 50 for EuRoC's 20 Hz)\n"
     "       [--tracking-worker on|off]   (the tracker's BA passes in halves on a second thread; default off)\n"
+    "       [--pin-threads on|off]       (the pipeline's two threads on two CPUs, Pipeline.pinThreads; default on)\n"
     "       [--near-clip-sigma X]   (tracker.near_clip_disparity_sigma_factor: 0 monocular, 1 as any stereo match)\n"
     "       [--close-untracked-near-clip-weight W]   (tracker.close_untracked_near_clip_weight, 0-1; default 0.9)\n"
     "       [--reference-near-clip-weight W]   (tracker.reference_near_clip_weight, 0-1; default 1)\n"
@@ -112,6 +114,7 @@ heslam::bench::KidnapPlan parse_kidnap_plan(const std::string& flag, const std::
 }
 
 int run(int argc, char** argv) {
+  std::optional<bool> pin_threads;  // --pin-threads: overrides the settings' Pipeline.pinThreads
   if (argc < 2) throw std::runtime_error(std::string("missing DATASET\n") + kUsage);
   std::string dataset = argv[1];
   if (dataset == "--help" || dataset == "-h") {
@@ -151,6 +154,9 @@ int run(int argc, char** argv) {
     } else if (arg == "--period-ms") {
       options.period_ms = parse_number<double>(arg, value);
       if (!(options.period_ms >= 0.0)) throw std::runtime_error("--period-ms: expected a number >= 0, got '" + value + "'");
+    } else if (arg == "--pin-threads") {
+      if (value != "on" && value != "off") throw std::runtime_error("--pin-threads: expected on or off, got '" + value + "'");
+      pin_threads = value == "on";
     } else if (arg == "--tracking-worker") {
       if (value != "on" && value != "off") throw std::runtime_error("--tracking-worker: expected on or off, got '" + value + "'");
       options.tracking_worker = value == "on";
@@ -189,6 +195,7 @@ int run(int argc, char** argv) {
     heslam::bench::apply_orbslam2_tracker_settings(settings, options.tracker);
   }
   if (near_clip_sigma >= 0.0) options.tracker.near_clip_disparity_sigma_factor = near_clip_sigma;
+  if (pin_threads) options.pipeline.pin_threads = *pin_threads;
   if (!he_mode.empty()) {
     try {
       options.pipeline.he.mode = heslam::parse_he_mode(he_mode);
@@ -256,8 +263,10 @@ int run(int argc, char** argv) {
   print_stage("total cpu", result.frames, &FrameRecord::cpu_ms);
   if (!result.frames.empty()) {
     const double frames = static_cast<double>(result.frames.size());
-    std::printf("hand-offs between the pipeline's two threads: %.1f per frame, %.1f of them to a sleeping thread\n",
-                static_cast<double>(result.hand_offs) / frames, static_cast<double>(result.sleeping_hand_offs) / frames);
+    std::printf("hand-offs between the pipeline's two threads: %.1f per frame, %.1f of them to a sleeping thread; "
+                "threads %s\n",
+                static_cast<double>(result.hand_offs) / frames, static_cast<double>(result.sleeping_hand_offs) / frames,
+                result.threads_pinned ? "pinned to two CPUs" : "not pinned");
     if (options.tracking_worker) {
       std::printf("hand-offs to the tracker's worker: %.1f per frame, %.1f of them to a sleeping thread\n",
                   static_cast<double>(result.tracking_hand_offs) / frames,

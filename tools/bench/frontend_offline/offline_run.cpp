@@ -148,6 +148,7 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
   run.map_points = static_cast<int>(tracker.local_map().points.size());
   run.hand_offs = pipeline.hand_offs();
   run.sleeping_hand_offs = pipeline.sleeping_hand_offs();
+  run.threads_pinned = pipeline.threads_pinned();
   if (tracking_worker) {
     run.tracking_hand_offs = tracking_worker->runs();
     run.tracking_sleeping_hand_offs = tracking_worker->sleeping_hand_offs();

@@ -78,6 +78,7 @@ struct OfflineRun {
   // other thread asleep (a futex wake-up).
   std::uint64_t hand_offs = 0;
   std::uint64_t sleeping_hand_offs = 0;
+  bool threads_pinned = false;  // the pipeline's two threads on two CPUs (Pipeline.pinThreads)
   std::uint64_t tracking_hand_offs = 0;  // to the tracker's worker (its BA passes in halves)
   std::uint64_t tracking_sleeping_hand_offs = 0;
 
