@@ -12,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "test_support.hpp"
+#include "tiny_euroc_sensor.hpp"
 #include "tools/replay/dataset/stereo_dataset.hpp"
 #include "tools/replay/dataset/stereo_images.hpp"
 
@@ -20,8 +21,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kWidth = 40;
-constexpr int kHeight = 30;
+constexpr int kWidth = test::kTinyEurocWidth;
+constexpr int kHeight = test::kTinyEurocHeight;
 
 void write_text(const fs::path& path, const std::string& text) {
   fs::create_directories(path.parent_path());
@@ -34,18 +35,6 @@ cv::Mat test_image(int index, int side) {
   for (int v = 0; v < kHeight; ++v)
     for (int u = 0; u < kWidth; ++u) image.at<uchar>(v, u) = static_cast<uchar>(u * 3 + v * 5 + index * 17 + side * 101);
   return image;
-}
-
-std::string sensor_yaml(double tx_m) {
-  return "%YAML:1.0\n"
-         "sensor_type: camera\n"
-         "T_BS:\n  cols: 4\n  rows: 4\n"
-         "  data: [1.0, 0.0, 0.0, " + std::to_string(tx_m) + ",\n"
-         "         0.0, 1.0, 0.0, 0.0,\n         0.0, 0.0, 1.0, 0.0,\n         0.0, 0.0, 0.0, 1.0]\n"
-         "rate_hz: 20\nresolution: [40, 30]\ncamera_model: pinhole\n"
-         "intrinsics: [50.0, 51.0, 20.0, 15.0]\n"
-         "distortion_model: radial-tangential\n"
-         "distortion_coefficients: [0.0, 0.0, 0.0, 0.0]\n";
 }
 
 class DatasetReader : public ::testing::Test {
@@ -63,8 +52,8 @@ class DatasetReader : public ::testing::Test {
     const fs::path mav0 = root_ / "mav0";
     write_text(mav0 / "cam0" / "data.csv", "#timestamp [ns],filename\n" + left_rows);
     write_text(mav0 / "cam1" / "data.csv", "#timestamp [ns],filename\n" + right_rows);
-    write_text(mav0 / "cam0" / "sensor.yaml", sensor_yaml(0.0));
-    write_text(mav0 / "cam1" / "sensor.yaml", sensor_yaml(0.11));
+    write_text(mav0 / "cam0" / "sensor.yaml", test::tiny_euroc_sensor_yaml(0.0));
+    write_text(mav0 / "cam1" / "sensor.yaml", test::tiny_euroc_sensor_yaml(0.11));
     fs::create_directories(mav0 / "cam0" / "data");
     fs::create_directories(mav0 / "cam1" / "data");
     if (!write_images) return;

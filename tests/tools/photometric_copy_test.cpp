@@ -19,6 +19,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "test_support.hpp"
+#include "tiny_euroc_sensor.hpp"
 #include "tools/photometric/dataset_copy.hpp"
 
 namespace heslam::photometric {
@@ -26,8 +27,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kWidth = 40;
-constexpr int kHeight = 30;
+constexpr int kWidth = test::kTinyEurocWidth;
+constexpr int kHeight = test::kTinyEurocHeight;
 constexpr int kFrames = 3;
 
 void write_text(const fs::path& path, const std::string& text) {
@@ -46,18 +47,6 @@ cv::Mat test_image(int index, int side) {
   for (int v = 0; v < kHeight; ++v)
     for (int u = 0; u < kWidth; ++u) image.at<uchar>(v, u) = static_cast<uchar>((u * 3 + v * 5 + index * 17 + side * 101) % 256);
   return image;
-}
-
-std::string sensor_yaml(double tx_m) {
-  return "%YAML:1.0\n"
-         "sensor_type: camera\n"
-         "T_BS:\n  cols: 4\n  rows: 4\n"
-         "  data: [1.0, 0.0, 0.0, " + std::to_string(tx_m) + ",\n"
-         "         0.0, 1.0, 0.0, 0.0,\n         0.0, 0.0, 1.0, 0.0,\n         0.0, 0.0, 0.0, 1.0]\n"
-         "rate_hz: 20\nresolution: [40, 30]\ncamera_model: pinhole\n"
-         "intrinsics: [50.0, 51.0, 20.0, 15.0]\n"
-         "distortion_model: radial-tangential\n"
-         "distortion_coefficients: [0.0, 0.0, 0.0, 0.0]\n";
 }
 
 const char* const kGroundTruth = "#timestamp,p_x\n100,1.0\n200,2.0\n300,3.0\n";
@@ -79,8 +68,8 @@ class PhotometricCopy : public ::testing::Test {
     const std::string rows = "#timestamp [ns],filename\n100,100.png\n200,200.png\n300,300.png\n";
     write_text(mav0 / "cam0" / "data.csv", rows);
     write_text(mav0 / "cam1" / "data.csv", rows);
-    write_text(mav0 / "cam0" / "sensor.yaml", sensor_yaml(0.0));
-    write_text(mav0 / "cam1" / "sensor.yaml", sensor_yaml(0.11));
+    write_text(mav0 / "cam0" / "sensor.yaml", test::tiny_euroc_sensor_yaml(0.0));
+    write_text(mav0 / "cam1" / "sensor.yaml", test::tiny_euroc_sensor_yaml(0.11));
     write_text(mav0 / "state_groundtruth_estimate0" / "data.csv", kGroundTruth);
     for (int k = 0; k < kFrames; ++k) {
       const std::string name = std::to_string(100 * (k + 1)) + ".png";
