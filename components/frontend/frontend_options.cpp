@@ -59,6 +59,12 @@ void read_features(const runtime::Config& c, StereoFeaturePipelineOptions& o) {
   read(c, "stereo.min_depth_baselines", stereo.min_depth_baselines, 0.01, 1000.0);
   read(c, "stereo.sad_outlier_factor", stereo.sad_outlier_factor, 0.0, 1000.0);
   read(c, "stereo.clip_masked_sad", stereo.clip_masked_sad);
+  {
+    using Cost = StereoMatcherOptions::MatchCost;
+    const char* current = stereo.cost == Cost::kZncc ? "zncc" : stereo.cost == Cost::kCensus ? "census" : "sad";
+    const std::string cost = c.get_choice("stereo.cost", current, {"sad", "zncc", "census"});
+    stereo.cost = cost == "zncc" ? Cost::kZncc : cost == "census" ? Cost::kCensus : Cost::kSad;
+  }
 
   read(c, "pipeline.parallel", o.parallel);
   read(c, "pipeline.pin_threads", o.pin_threads);

@@ -31,7 +31,7 @@ TEST(FrontendOptions, EmptyConfigKeepsTheCoreDefaults) {
 TEST(FrontendOptions, FieldsReachTheCoreOptions) {
   const auto config = runtime::Config::parse(
       "he:\n  mode: clahe\n  stereo: separate\n  match_shift_from: 10\n  match_shift_full: 30\n"
-      "orb:\n  features: 2000\nstereo:\n  clip_masked_sad: true\n"
+      "orb:\n  features: 2000\nstereo:\n  clip_masked_sad: true\n  cost: census\n"
       "tracker:\n  max_frames_between_keyframes: 10\n  reference_near_clip_weight: 0.25\n"
       "lockstep:\n  wait_for_mapper: true\n  mapper_timeout_s: 2.5\n",
       "test.yaml");
@@ -44,6 +44,7 @@ TEST(FrontendOptions, FieldsReachTheCoreOptions) {
   EXPECT_EQ(options.features.orb.features, 2000);
   EXPECT_EQ(options.tracker.max_frames_between_keyframes, 10);
   EXPECT_TRUE(options.features.stereo.clip_masked_sad);
+  EXPECT_EQ(options.features.stereo.cost, StereoMatcherOptions::MatchCost::kCensus);
   EXPECT_EQ(options.tracker.reference_near_clip_weight, 0.25);
   EXPECT_TRUE(options.mapper_enabled);  // waiting for a mapper implies one
   EXPECT_TRUE(options.wait_for_mapper);
@@ -60,6 +61,14 @@ TEST(FrontendOptions, BadFieldIsOneLineNamingFileAndField) {
     const std::string what = error.what();
     EXPECT_NE(what.find("frontend.yaml"), std::string::npos) << what;
     EXPECT_NE(what.find("orb.levels"), std::string::npos) << what;
+  }
+  const auto cost = runtime::Config::parse("stereo:\n  cost: ssd\n", "frontend.yaml");
+  try {
+    FrontendOptions::from_config(cost);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& error) {
+    const std::string what = error.what();
+    EXPECT_NE(what.find("stereo.cost"), std::string::npos) << what;
   }
   const auto typo = runtime::Config::parse("orb:\n  levle: 4\n", "frontend.yaml");
   FrontendOptions::from_config(typo);
