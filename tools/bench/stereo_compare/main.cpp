@@ -2,7 +2,10 @@
 // Runs the per-frame feature pipeline (HE -> ORB -> stereo) on MH01 pairs twice, exposed equally and
 // with the left x L / right x R, and compares the disparity of the same left keypoint (same octave,
 // within 0.25 px) in both runs: count, bias and spread, split by whether the right patch touches a
-// saturated pixel.
+// saturated pixel. Second, every stereo keypoint of the exposed-apart run against a reference: the
+// disparity a ZNCC block match finds at the same left pixel in the equally exposed pair (unclipped,
+// so it sees the texture the clip edge hides), split by StereoFeatures::near_clip. Its bias, in
+// pixels and relative to the disparity, is what a depth (and so the trajectory's scale) inherits.
 //
 // usage: heslam-bench-stereo-compare DATASET L,R [--step N] [--he-stereo shared|matched|separate]
 //        [--reference L,R] [--settings FILE]
@@ -10,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -53,6 +57,76 @@ struct Group {
   }
 };
 
+// Relative to the disparity too: a relative bias b scales the depths by about 1 / (1 + b).
+struct ReferenceGroup {
+  std::vector<double> diff_px, relative;
+  void add(double diff, double reference_px) {
+    diff_px.push_back(diff);
+    relative.push_back(diff / reference_px);
+  }
+  static void print_one(const char* name, std::vector<double> v, double unit, const char* unit_name) {
+    if (v.empty()) {
+      std::printf("  %-22s n 0\n", name);
+      return;
+    }
+    std::sort(v.begin(), v.end());
+    double sum = 0;
+    for (double d : v) sum += d;
+    const auto at = [&](double q) { return unit * v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))]; };
+    std::printf("  %-22s n %6zu  mean %+.4f  median %+.4f  p25 %+.4f  p75 %+.4f %s\n", name, v.size(),
+                unit * sum / static_cast<double>(v.size()), at(0.5), at(0.25), at(0.75), unit_name);
+  }
+  void print(const char* name) const {
+    print_one(name, diff_px, 1.0, "px");
+    print_one("  relative", relative, 100.0, "%");
+  }
+};
+
+// Kept where the reference is trustworthy: a textured left window, a clear ZNCC peak inside the search.
+constexpr double kMinWindowStdDev = 2.0;   // grey levels
+constexpr double kMinPeakZncc = 0.9;
+constexpr int kReferenceSearchPx = 4;      // +- around the exposed-apart run's disparity
+constexpr double kMaxReferenceDiffPx = 3;  // beyond this the two disagree on the match, not on its position
+
+// Disparity (u_left - u_right, level-0 pixels) at left pixel (u, v) by ZNCC of a (2 half + 1)^2 window
+// over whole-pixel disparities around `guess_px`, parabola through the peak; nothing where the window
+// is flat, the peak weak or on the edge of the search.
+std::optional<double> zncc_reference_disparity(const cv::Mat& left, const cv::Mat& right, float u_px, float v_px,
+                                               int half, double guess_px) {
+  const int u0 = static_cast<int>(std::lround(u_px)), v0 = static_cast<int>(std::lround(v_px));
+  if (v0 - half < 0 || v0 + half >= left.rows || u0 - half < 0 || u0 + half >= left.cols) return std::nullopt;
+  cv::Mat window_left;
+  left(cv::Rect(u0 - half, v0 - half, 2 * half + 1, 2 * half + 1)).convertTo(window_left, CV_32F);
+  cv::Scalar mean_left, std_left;
+  cv::meanStdDev(window_left, mean_left, std_left);
+  if (std_left[0] < kMinWindowStdDev) return std::nullopt;
+  window_left -= mean_left[0];
+  const int first = static_cast<int>(std::floor(guess_px)) - kReferenceSearchPx;
+  const int last = static_cast<int>(std::ceil(guess_px)) + kReferenceSearchPx;
+  std::vector<double> score;
+  for (int d = first; d <= last; ++d) {
+    const int u_right = u0 - d;
+    if (u_right - half < 0 || u_right + half >= right.cols) return std::nullopt;
+    cv::Mat window_right;
+    right(cv::Rect(u_right - half, v0 - half, 2 * half + 1, 2 * half + 1)).convertTo(window_right, CV_32F);
+    cv::Scalar mean_right, std_right;
+    cv::meanStdDev(window_right, mean_right, std_right);
+    if (std_right[0] <= 0.0) {
+      score.push_back(-1.0);
+      continue;
+    }
+    score.push_back(window_left.dot(window_right - mean_right[0]) /
+                    (std_left[0] * std_right[0] * static_cast<double>(window_left.total())));
+  }
+  const auto best = static_cast<std::size_t>(std::max_element(score.begin(), score.end()) - score.begin());
+  if (best == 0 || best + 1 == score.size() || score[best] < kMinPeakZncc) return std::nullopt;
+  const double curvature = score[best - 1] - 2.0 * score[best] + score[best + 1];
+  if (curvature >= 0.0) return std::nullopt;
+  // The window is centred on the rounded u: the keypoint's own fraction moves the disparity with it.
+  return first + static_cast<double>(best) + 0.5 * (score[best - 1] - score[best + 1]) / curvature +
+         (u_px - static_cast<float>(u0));
+}
+
 heslam::photometric::StereoGain parse(const std::string& s) { return heslam::photometric::parse_stereo_gain(s); }
 
 int run(int argc, char** argv) {
@@ -78,6 +152,7 @@ int run(int argc, char** argv) {
   heslam::StereoFeaturePipeline pipeline_ref(rectifier.camera(), options);
   heslam::StereoFeaturePipeline pipeline_gain(rectifier.camera(), options);
   Group all, saturated, clear;
+  ReferenceGroup reference_near_clip, reference_clear;
   long stereo_ref = 0, stereo_gain = 0, features_gain = 0, common_keypoints = 0, lost = 0, gained = 0;
   for (std::size_t k = 0; k < sequence.frames.size(); k += static_cast<std::size_t>(step)) {
     const cv::Mat left = cv::imread(sequence.frames[k].left_png.string(), cv::IMREAD_GRAYSCALE);
@@ -98,6 +173,16 @@ int run(int argc, char** argv) {
       stereo_ref += a.has_stereo(i) ? 1 : 0;
     }
     features_gain += static_cast<long>(b.size());
+    for (std::size_t i = 0; i < b.size(); ++i) {
+      if (!b.has_stereo(i)) continue;
+      const auto& kb = b.keypoints[i];
+      const float scale = b.pyramid.scale[static_cast<std::size_t>(kb.octave)];
+      const int half = std::max(options.stereo.sad_half_window_px, static_cast<int>(std::lround(options.stereo.sad_half_window_px * scale)));
+      const double disparity = kb.u_px - b.u_right_px[i];
+      const auto reference = zncc_reference_disparity(lr, rr, kb.u_px, kb.v_px, half, disparity);
+      if (!reference || std::abs(disparity - *reference) > kMaxReferenceDiffPx) continue;
+      (b.stereo_near_clip(i) ? reference_near_clip : reference_clear).add(disparity - *reference, *reference);
+    }
     for (std::size_t i = 0; i < b.size(); ++i) {
       stereo_gain += b.has_stereo(i) ? 1 : 0;
       const auto& kb = b.keypoints[i];
@@ -147,6 +232,10 @@ int run(int argc, char** argv) {
   all.print("all");
   clear.print("right clear");
   saturated.print("right sat.");
+  std::printf("disparity(gain) - ZNCC reference at the same left pixel of the reference pair, every stereo keypoint "
+              "of the gain run (|difference| <= %.0f px):\n", kMaxReferenceDiffPx);
+  reference_clear.print("not near a clip edge");
+  reference_near_clip.print("near a clip edge");
   return 0;
 }
 
