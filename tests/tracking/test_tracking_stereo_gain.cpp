@@ -11,6 +11,7 @@
 // clip-masked SAD option (issue 17 §1, third pass).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <future>
 
@@ -102,6 +103,61 @@ TEST(TrackingStereoGain, SyntheticRoomStereoGainEventTracksLikeEqualExposure) {
   EXPECT_EQ(equal.tracked, kFrames);
   expect_like_equal_exposure(exposed, equal);
   expect_like_equal_exposure(masked_exposed, equal);
+}
+
+// The diagnostic of heslam-frontend-offline --disparity-noise: zero mean, the asked sigma, depth
+// following the disparity, the same noise for the same seed, and matches pushed below the minimum
+// disparity dropped (counted) rather than turned into negative depths.
+TEST(DisparityNoise, ZeroMeanWithTheAskedSigmaAndDepthFollows) {
+  const PinholeStereo camera{458.0, 457.0, 367.0, 248.0, 0.11, 752, 480};
+  StereoFeatures clean;
+  constexpr int kFeatures = 20000;
+  for (int i = 0; i < kFeatures; ++i) {
+    Keypoint kp;
+    kp.u_px = 100.f + static_cast<float>(i % 500);
+    kp.v_px = 50.f + static_cast<float>(i / 500);
+    clean.keypoints.push_back(kp);
+    clean.descriptors.push_back({});
+    const float disparity_px = i % 10 == 0 ? 0.6f : 20.f;  // every 10th close to the minimum
+    clean.u_right_px.push_back(kp.u_px - disparity_px);
+    clean.depth_m.push_back(static_cast<float>(camera.bf() / disparity_px));
+  }
+  clean.u_right_px.back() = kNoStereo;  // one without stereo stays without
+  clean.depth_m.back() = kNoStereo;
+
+  StereoFeatures noisy = clean;
+  const int lost = bench::add_disparity_noise(noisy, camera, 0.5, 7);
+  double sum = 0.0, sum2 = 0.0;
+  int n = 0, dropped = 0;
+  for (std::size_t i = 0; i + 1 < noisy.size(); ++i) {
+    if (!noisy.has_stereo(i)) {
+      ++dropped;
+      EXPECT_EQ(i % 10, 0u) << "only matches near the minimum disparity can fall below it";
+      EXPECT_EQ(noisy.u_right_px[i], kNoStereo);
+      continue;
+    }
+    const double disparity_px = noisy.keypoints[i].u_px - noisy.u_right_px[i];
+    EXPECT_GT(disparity_px, bench::kMinNoisyDisparityPx);
+    EXPECT_NEAR(noisy.depth_m[i], camera.bf() / disparity_px, 1e-4 * noisy.depth_m[i]);
+    if (i % 10 != 0) {
+      const double error = disparity_px - 20.0;
+      sum += error;
+      sum2 += error * error;
+      ++n;
+    }
+  }
+  EXPECT_FALSE(noisy.has_stereo(noisy.size() - 1));
+  EXPECT_EQ(lost, dropped);
+  EXPECT_GT(dropped, 0);
+  EXPECT_NEAR(sum / n, 0.0, 0.02);
+  EXPECT_NEAR(std::sqrt(sum2 / n), 0.5, 0.02);
+
+  StereoFeatures again = clean;
+  bench::add_disparity_noise(again, camera, 0.5, 7);
+  EXPECT_EQ(again.u_right_px, noisy.u_right_px);
+  StereoFeatures other_seed = clean;
+  bench::add_disparity_noise(other_seed, camera, 0.5, 8);
+  EXPECT_NE(other_seed.u_right_px, noisy.u_right_px);
 }
 
 }  // namespace

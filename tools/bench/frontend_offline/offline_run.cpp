@@ -115,6 +115,9 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
           return right_rect;
         },
         &timings);
+    if (options.disparity_noise_px > 0.0) {
+      add_disparity_noise(features, rectifier.camera(), options.disparity_noise_px, static_cast<std::uint64_t>(k));
+    }
     record.rectify_ms = timings.source_ms;
     record.rectify_cpu_ms = timings.source_cpu_ms;
     record.he_ms = timings.he_ms;
@@ -154,6 +157,25 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
     run.tracking_sleeping_hand_offs = tracking_worker->sleeping_hand_offs();
   }
   return run;
+}
+
+int add_disparity_noise(StereoFeatures& features, const PinholeStereo& camera, double sigma_px, std::uint64_t seed) {
+  cv::RNG rng(seed);
+  int lost = 0;
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    if (!features.has_stereo(i)) continue;
+    const float u_px = features.keypoints[i].u_px;
+    const auto disparity_px = static_cast<float>(u_px - features.u_right_px[i] + rng.gaussian(sigma_px));
+    if (disparity_px <= kMinNoisyDisparityPx) {
+      features.u_right_px[i] = kNoStereo;
+      features.depth_m[i] = kNoStereo;
+      ++lost;
+      continue;
+    }
+    features.u_right_px[i] = u_px - disparity_px;
+    features.depth_m[i] = static_cast<float>(camera.bf() / disparity_px);
+  }
+  return lost;
 }
 
 std::optional<AteResult> compute_ate_se3(const OfflineRun& run) {

@@ -43,6 +43,10 @@ struct OfflineRunOptions {
   // set_pair_worker; the same poses bit for bit). Off by default, as in the frontend: on the loaded
   // 2-core VM the ~20 hand-offs per frame cost more than the halves save (docs/benchmarks.md, track5).
   bool tracking_worker = false;
+  // > 0: Gaussian noise of this sigma (level-0 pixels) added to every stereo disparity, seeded by the
+  // frame's index (repeatable). A diagnostic: how much trajectory scale does stereo noise alone cost?
+  // (Cameras exposed apart, docs/benchmarks.md tenth session.)
+  double disparity_noise_px = 0.0;
 };
 
 struct FrameRecord {
@@ -92,6 +96,12 @@ void apply_orbslam2_tracker_settings(const std::filesystem::path& settings_yaml,
 
 // Throws std::runtime_error (one line naming the file) on unreadable calibration or images.
 OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& options);
+
+// Adds N(0, sigma_px^2) to the disparity of every stereo feature (u_right and depth follow); a
+// disparity that falls to or below kMinNoisyDisparityPx loses its stereo match. Same seed, same noise.
+// Returns the number of matches lost that way.
+inline constexpr float kMinNoisyDisparityPx = 0.5f;
+int add_disparity_noise(StereoFeatures& features, const PinholeStereo& camera, double sigma_px, std::uint64_t seed);
 
 struct AteResult {
   double rmse_m = 0.0;
