@@ -7,8 +7,11 @@
 // so it sees the texture the clip edge hides), split by StereoFeatures::near_clip. Its bias, in
 // pixels and relative to the disparity, is what a depth (and so the trajectory's scale) inherits.
 //
+// With --motion: instead, whether the gain run's keypoints move between consecutive frames as the
+// ground truth says (feature_motion.hpp), with the run's depths or, --reference-depth, reference ones.
+//
 // usage: heslam-bench-stereo-compare DATASET L,R [--step N] [--he-stereo shared|matched|separate]
-//        [--reference L,R] [--settings FILE]
+//        [--reference L,R] [--settings FILE] [--motion [--reference-depth]]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -26,6 +29,8 @@
 #include "tools/bench/bench_util.hpp"
 #include "tools/bench/frontend_offline/euroc_sequence.hpp"
 #include "tools/photometric/photometric_variant.hpp"
+#include "tools/bench/stereo_compare/feature_motion.hpp"
+#include "tools/bench/stereo_compare/zncc_reference.hpp"
 
 namespace {
 
@@ -82,63 +87,29 @@ struct ReferenceGroup {
   }
 };
 
-// Kept where the reference is trustworthy: a textured left window, a clear ZNCC peak inside the search.
-constexpr double kMinWindowStdDev = 2.0;   // grey levels
-constexpr double kMinPeakZncc = 0.9;
-constexpr int kReferenceSearchPx = 4;      // +- around the exposed-apart run's disparity
-constexpr double kMaxReferenceDiffPx = 3;  // beyond this the two disagree on the match, not on its position
-
-// Disparity (u_left - u_right, level-0 pixels) at left pixel (u, v) by ZNCC of a (2 half + 1)^2 window
-// over whole-pixel disparities around `guess_px`, parabola through the peak; nothing where the window
-// is flat, the peak weak or on the edge of the search.
-std::optional<double> zncc_reference_disparity(const cv::Mat& left, const cv::Mat& right, float u_px, float v_px,
-                                               int half, double guess_px) {
-  const int u0 = static_cast<int>(std::lround(u_px)), v0 = static_cast<int>(std::lround(v_px));
-  if (v0 - half < 0 || v0 + half >= left.rows || u0 - half < 0 || u0 + half >= left.cols) return std::nullopt;
-  cv::Mat window_left;
-  left(cv::Rect(u0 - half, v0 - half, 2 * half + 1, 2 * half + 1)).convertTo(window_left, CV_32F);
-  cv::Scalar mean_left, std_left;
-  cv::meanStdDev(window_left, mean_left, std_left);
-  if (std_left[0] < kMinWindowStdDev) return std::nullopt;
-  window_left -= mean_left[0];
-  const int first = static_cast<int>(std::floor(guess_px)) - kReferenceSearchPx;
-  const int last = static_cast<int>(std::ceil(guess_px)) + kReferenceSearchPx;
-  std::vector<double> score;
-  for (int d = first; d <= last; ++d) {
-    const int u_right = u0 - d;
-    if (u_right - half < 0 || u_right + half >= right.cols) return std::nullopt;
-    cv::Mat window_right;
-    right(cv::Rect(u_right - half, v0 - half, 2 * half + 1, 2 * half + 1)).convertTo(window_right, CV_32F);
-    cv::Scalar mean_right, std_right;
-    cv::meanStdDev(window_right, mean_right, std_right);
-    if (std_right[0] <= 0.0) {
-      score.push_back(-1.0);
-      continue;
-    }
-    score.push_back(window_left.dot(window_right - mean_right[0]) /
-                    (std_left[0] * std_right[0] * static_cast<double>(window_left.total())));
-  }
-  const auto best = static_cast<std::size_t>(std::max_element(score.begin(), score.end()) - score.begin());
-  if (best == 0 || best + 1 == score.size() || score[best] < kMinPeakZncc) return std::nullopt;
-  const double curvature = score[best - 1] - 2.0 * score[best] + score[best + 1];
-  if (curvature >= 0.0) return std::nullopt;
-  // The window is centred on the rounded u: the keypoint's own fraction moves the disparity with it.
-  return first + static_cast<double>(best) + 0.5 * (score[best - 1] - score[best + 1]) / curvature +
-         (u_px - static_cast<float>(u0));
-}
-
 heslam::photometric::StereoGain parse(const std::string& s) { return heslam::photometric::parse_stereo_gain(s); }
 
 int run(int argc, char** argv) {
-  if (argc < 3) throw std::runtime_error("usage: heslam-bench-stereo-compare DATASET L,R [--step N] [--he-stereo M] [--reference L,R]");
+  if (argc < 3) {
+    throw std::runtime_error("usage: heslam-bench-stereo-compare DATASET L,R [--step N] [--he-stereo M] [--reference L,R] "
+                             "[--settings FILE] [--motion [--reference-depth]]");
+  }
   const auto sequence = heslam::bench::load_euroc_sequence(argv[1]);
   const auto gain = parse(argv[2]);
   heslam::photometric::StereoGain reference;
   int step = 4;
   heslam::StereoFeaturePipelineOptions options;
   options.parallel = false;
-  for (int i = 3; i + 1 < argc; i += 2) {
+  bool motion = false;
+  bool reference_depth = false;
+  for (int i = 3; i < argc; i += 2) {
     const std::string arg = argv[i];
+    if (arg == "--motion" || arg == "--reference-depth") {  // flags: no value
+      (arg == "--motion" ? motion : reference_depth) = true;
+      --i;
+      continue;
+    }
+    if (i + 1 >= argc) throw std::runtime_error(arg + ": expected a value");
     if (arg == "--step") step = std::stoi(argv[i + 1]);
     else if (arg == "--he-stereo") options.he.stereo = heslam::parse_stereo_photometry(argv[i + 1]);
     else if (arg == "--reference") reference = parse(argv[i + 1]);
@@ -148,6 +119,14 @@ int run(int argc, char** argv) {
     }
     else throw std::runtime_error("unknown option " + arg);
   }
+  if (motion) {
+    heslam::bench::FeatureMotionOptions motion_options;
+    motion_options.pipeline = options;
+    motion_options.reference_depth = reference_depth;
+    heslam::bench::print_feature_motion(sequence, gain, motion_options);
+    return 0;
+  }
+  if (reference_depth) throw std::runtime_error("--reference-depth: only with --motion");
   const heslam::StereoRectifier rectifier(heslam::load_euroc_calibration(sequence.mav0_dir));
   heslam::StereoFeaturePipeline pipeline_ref(rectifier.camera(), options);
   heslam::StereoFeaturePipeline pipeline_gain(rectifier.camera(), options);
@@ -179,8 +158,8 @@ int run(int argc, char** argv) {
       const float scale = b.pyramid.scale[static_cast<std::size_t>(kb.octave)];
       const int half = std::max(options.stereo.sad_half_window_px, static_cast<int>(std::lround(options.stereo.sad_half_window_px * scale)));
       const double disparity = kb.u_px - b.u_right_px[i];
-      const auto reference = zncc_reference_disparity(lr, rr, kb.u_px, kb.v_px, half, disparity);
-      if (!reference || std::abs(disparity - *reference) > kMaxReferenceDiffPx) continue;
+      const auto reference = heslam::bench::zncc_reference_disparity(lr, rr, kb.u_px, kb.v_px, half, disparity);
+      if (!reference || std::abs(disparity - *reference) > heslam::bench::kMaxReferenceDiffPx) continue;
       (b.stereo_near_clip(i) ? reference_near_clip : reference_clear).add(disparity - *reference, *reference);
     }
     for (std::size_t i = 0; i < b.size(); ++i) {
@@ -233,7 +212,7 @@ int run(int argc, char** argv) {
   clear.print("right clear");
   saturated.print("right sat.");
   std::printf("disparity(gain) - ZNCC reference at the same left pixel of the reference pair, every stereo keypoint "
-              "of the gain run (|difference| <= %.0f px):\n", kMaxReferenceDiffPx);
+              "of the gain run (|difference| <= %.0f px):\n", heslam::bench::kMaxReferenceDiffPx);
   reference_clear.print("not near a clip edge");
   reference_near_clip.print("near a clip edge");
   return 0;
