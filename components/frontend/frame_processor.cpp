@@ -45,16 +45,8 @@ FrameOutput FrameProcessor::process(std::int64_t stamp_ns, std::uint64_t seq, co
   // OpenCV pool (cv::remap's parallel_for serializes a second concurrent call and needs its pool's
   // worker awake, which a real-time frontend idle between frames often has to wake first).
   StereoFeatureTimings feature_timings;
-  StereoFeatures features = pipeline_.process_from(
-      [&]() -> const cv::Mat& {
-        rectifier_.rectify_left(left_raw, left_rect_);
-        return left_rect_;
-      },
-      [&]() -> const cv::Mat& {
-        rectifier_.rectify_right(right_raw, right_rect_);
-        return right_rect_;
-      },
-      &feature_timings);
+  StereoFeatures features =
+      pipeline_.process_raw(rectifier_, left_raw, right_raw, left_rect_, right_rect_, &feature_timings);
   const double rectify_ms = feature_timings.source_ms;
   FrameOutput output;
   output.keypoints = static_cast<std::uint32_t>(features.size());

@@ -116,6 +116,21 @@ StereoFeatures StereoFeaturePipeline::process(const cv::Mat& left_rect, const cv
   return out;
 }
 
+StereoFeatures StereoFeaturePipeline::process_raw(const StereoRectifier& rectifier, const cv::Mat& left_raw,
+                                                  const cv::Mat& right_raw, cv::Mat& left_rect, cv::Mat& right_rect,
+                                                  StereoFeatureTimings* timings) {
+  return process_from(
+      [&]() -> const cv::Mat& {
+        rectifier.rectify_left(left_raw, left_rect);
+        return left_rect;
+      },
+      [&]() -> const cv::Mat& {
+        rectifier.rectify_right(right_raw, right_rect);
+        return right_rect;
+      },
+      timings);
+}
+
 StereoFeatures StereoFeaturePipeline::process_from(const ImageSource& left_source, const ImageSource& right_source,
                                                    StereoFeatureTimings* timings) {
   using Side = HistogramEqualizer::Side;

@@ -14,6 +14,7 @@
 #include <opencv2/core.hpp>
 
 #include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/camera/stereo_rectifier.hpp"
 #include "components/core/feature/features.hpp"
 #include "components/core/feature/orb_extractor.hpp"
 #include "components/core/feature/pair_worker.hpp"
@@ -82,6 +83,11 @@ class StereoFeaturePipeline {
   // process() on the made images. Exceptions of the sources are rethrown here.
   StereoFeatures process_from(const ImageSource& left_source, const ImageSource& right_source,
                               StereoFeatureTimings* timings = nullptr);
+
+  // process_from() with each raw image rectified by `rectifier` on its own thread of the pair into
+  // the caller's buffer (kept for reuse across frames): the frontend's and the offline harness's chain.
+  StereoFeatures process_raw(const StereoRectifier& rectifier, const cv::Mat& left_raw, const cv::Mat& right_raw,
+                             cv::Mat& left_rect, cv::Mat& right_rect, StereoFeatureTimings* timings = nullptr);
 
   // Runs `right_job` on the pipeline's second thread and `left_job` on the caller at once (one after
   // the other when not parallel): the same thread pair, no second worker. Exceptions are rethrown

@@ -105,16 +105,7 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
     // As the frontend's FrameProcessor: each image rectified on its own thread of the pipeline's pair,
     // which goes on with it (histogram, HE mapping, pyramid).
     StereoFeatureTimings timings;
-    StereoFeatures features = pipeline.process_from(
-        [&]() -> const cv::Mat& {
-          rectifier.rectify_left(left, left_rect);
-          return left_rect;
-        },
-        [&]() -> const cv::Mat& {
-          rectifier.rectify_right(right, right_rect);
-          return right_rect;
-        },
-        &timings);
+    StereoFeatures features = pipeline.process_raw(rectifier, left, right, left_rect, right_rect, &timings);
     if (options.disparity_noise_px > 0.0) {
       add_disparity_noise(features, rectifier.camera(), options.disparity_noise_px, static_cast<std::uint64_t>(k));
     }
