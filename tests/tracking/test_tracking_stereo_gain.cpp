@@ -160,5 +160,33 @@ TEST(DisparityNoise, ZeroMeanWithTheAskedSigmaAndDepthFollows) {
   EXPECT_NE(other_seed.u_right_px, noisy.u_right_px);
 }
 
+TEST(DropStereoRightAbove, DropsExactlyTheMatchesLandingOnBrighterRightPixels) {
+  // Right image: columns 0-99 grey 100, columns 100-199 grey 200.
+  cv::Mat right(50, 200, CV_8UC1, cv::Scalar(100));
+  right.colRange(100, 200).setTo(200);
+  StereoFeatures features;
+  const float u_right[] = {10.f, 99.4f, 99.6f, 150.f, 199.f, kNoStereo};
+  for (float ur : u_right) {
+    Keypoint kp;
+    kp.u_px = 250.f;
+    kp.v_px = 20.f;
+    features.keypoints.push_back(kp);
+    features.descriptors.push_back({});
+    features.u_right_px.push_back(ur);
+    features.depth_m.push_back(ur == kNoStereo ? kNoStereo : 1.f);
+  }
+  StereoFeatures at_200 = features;
+  EXPECT_EQ(bench::drop_stereo_right_above(at_200, right, 200), 0) << "200 is not above 200";
+  EXPECT_EQ(bench::drop_stereo_right_above(features, right, 150), 3);
+  const bool kept[] = {true, true, false, false, false, false};
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    EXPECT_EQ(features.has_stereo(i), kept[i]) << "feature " << i;
+    if (!kept[i]) {
+      EXPECT_EQ(features.u_right_px[i], kNoStereo);
+    }
+  }
+  EXPECT_THROW(bench::drop_stereo_right_above(features, cv::Mat(), 100), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace heslam

@@ -6,6 +6,7 @@
 //                                [--he none|global|clipped|clahe|adaptive] [--he-stereo shared|matched|separate]
 //                                [--variant none|dark|low_contrast]
 //                                [--stereo-gain L,R[/L,R...]] [--disparity-noise SIGMA]
+//                                [--drop-stereo-right-above LEVEL]
 //                                [--first-frame K] [--frames N] [--period-ms P]
 //                                [--tracking-worker on|off] [--pin-threads on|off]
 //                                [--stationary-chi2 X] [--rotation-chi2 X] [--near-clip-sigma X]
@@ -42,6 +43,8 @@ constexpr const char* kUsage =
     "                                       differently; several: the run split into equal blocks)\n"
     "       [--disparity-noise SIGMA]   (Gaussian noise of SIGMA px added to every stereo disparity, seeded per\n"
     "                                    frame: what stereo noise alone costs the trajectory)\n"
+    "       [--drop-stereo-right-above LEVEL]   (no stereo match where the right pixel matched is above LEVEL,\n"
+    "                                            0-254: the stereo set of a brighter right camera, no pixel changed)\n"
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
     "       [--period-ms P]   (start a frame every P ms, idle in between, as a camera: 50 for EuRoC's 20 Hz)\n"
     "       [--tracking-worker on|off]   (the tracker's BA passes in halves on a second thread; default off)\n"
@@ -155,6 +158,11 @@ int run(int argc, char** argv) {
       if (!(options.disparity_noise_px >= 0.0)) {
         throw std::runtime_error("--disparity-noise: expected a sigma in pixels >= 0, got '" + value + "'");
       }
+    } else if (arg == "--drop-stereo-right-above") {
+      options.drop_stereo_right_above = parse_number<int>(arg, value);
+      if (options.drop_stereo_right_above < 0 || options.drop_stereo_right_above > 254) {
+        throw std::runtime_error("--drop-stereo-right-above: expected a grey level in 0..254, got '" + value + "'");
+      }
     } else if (arg == "--first-frame") {
       options.first_frame = parse_number<int>(arg, value);
     } else if (arg == "--frames") {
@@ -242,6 +250,9 @@ int run(int argc, char** argv) {
     char text[64];
     std::snprintf(text, sizeof text, ", disparity noise %g px", options.disparity_noise_px);
     noise_note = text;
+  }
+  if (options.drop_stereo_right_above >= 0) {
+    noise_note += ", stereo dropped where the right is above " + std::to_string(options.drop_stereo_right_above);
   }
   std::printf("dataset %s: %zu frames, %d tracked, %d keyframes, %d map points (HE %s %s, variant %s, stereo gain %s%s)\n",
               dataset.c_str(), result.frames.size(), result.tracked_frames(), result.keyframes, result.map_points,

@@ -109,6 +109,7 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
     if (options.disparity_noise_px > 0.0) {
       add_disparity_noise(features, rectifier.camera(), options.disparity_noise_px, static_cast<std::uint64_t>(k));
     }
+    if (options.drop_stereo_right_above >= 0) drop_stereo_right_above(features, right_rect, options.drop_stereo_right_above);
     record.rectify_ms = timings.source_ms;
     record.rectify_cpu_ms = timings.source_cpu_ms;
     record.he_ms = timings.he_ms;
@@ -167,6 +168,23 @@ int add_disparity_noise(StereoFeatures& features, const PinholeStereo& camera, d
     features.depth_m[i] = static_cast<float>(camera.bf() / disparity_px);
   }
   return lost;
+}
+
+int drop_stereo_right_above(StereoFeatures& features, const cv::Mat& right_rect, int level) {
+  if (right_rect.type() != CV_8UC1 || right_rect.empty()) {
+    throw std::invalid_argument("drop_stereo_right_above: the right image must be 8-bit grey and non-empty");
+  }
+  int dropped = 0;
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    if (!features.has_stereo(i)) continue;
+    const int x = std::clamp(static_cast<int>(std::lround(features.u_right_px[i])), 0, right_rect.cols - 1);
+    const int y = std::clamp(static_cast<int>(std::lround(features.keypoints[i].v_px)), 0, right_rect.rows - 1);
+    if (right_rect.at<std::uint8_t>(y, x) <= level) continue;
+    features.u_right_px[i] = kNoStereo;
+    features.depth_m[i] = kNoStereo;
+    ++dropped;
+  }
+  return dropped;
 }
 
 std::optional<AteResult> compute_ate_se3(const OfflineRun& run) {

@@ -47,6 +47,12 @@ struct OfflineRunOptions {
   // frame's index (repeatable). A diagnostic: how much trajectory scale does stereo noise alone cost?
   // (Cameras exposed apart, docs/benchmarks.md tenth session.)
   double disparity_noise_px = 0.0;
+  // In 0..254: every stereo match whose right pixel (the rectified right image the pipeline matched
+  // on, before HE) is brighter than this loses its stereo match. With equal exposure this is the set
+  // of stereo points a right camera gained by 255 / level would leave, without changing any pixel: a
+  // diagnostic that separates which points get depth from how their images look (docs/benchmarks.md,
+  // "Cameras exposed apart, seventh pass"). -1: off.
+  int drop_stereo_right_above = -1;
 };
 
 struct FrameRecord {
@@ -102,6 +108,10 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
 // Returns the number of matches lost that way.
 inline constexpr float kMinNoisyDisparityPx = 0.5f;
 int add_disparity_noise(StereoFeatures& features, const PinholeStereo& camera, double sigma_px, std::uint64_t seed);
+
+// Drops the stereo match of every feature whose match in `right_rect` (8-bit grey, rectified: the
+// pixel nearest (u_right, v)) is brighter than `level`. Returns the number dropped.
+int drop_stereo_right_above(StereoFeatures& features, const cv::Mat& right_rect, int level);
 
 struct AteResult {
   double rmse_m = 0.0;
