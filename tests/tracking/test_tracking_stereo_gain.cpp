@@ -160,6 +160,27 @@ TEST(DisparityNoise, ZeroMeanWithTheAskedSigmaAndDepthFollows) {
   EXPECT_NE(other_seed.u_right_px, noisy.u_right_px);
 }
 
+TEST(K1Offset, AddsToBothCamerasAndRefusesACameraWithoutDistortion) {
+  StereoCalibration calibration;
+  calibration.left.distortion = {-0.28, 0.07, 0.0002, 0.00002};
+  calibration.right.distortion = {-0.29, 0.08, -0.0001, -0.00003};
+  bench::apply_k1_offset(calibration, 0.005);
+  EXPECT_DOUBLE_EQ(calibration.left.distortion[0], -0.28 + 0.005);
+  EXPECT_DOUBLE_EQ(calibration.right.distortion[0], -0.29 + 0.005);
+  EXPECT_DOUBLE_EQ(calibration.left.distortion[1], 0.07) << "only k1 moves";
+  EXPECT_DOUBLE_EQ(calibration.right.distortion[3], -0.00003);
+
+  StereoCalibration rectified;
+  rectified.input_rectified = true;
+  rectified.source = "calib.txt";
+  try {
+    bench::apply_k1_offset(rectified, 0.005);
+    ADD_FAILURE() << "pre-rectified input has no k1 to offset";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("calib.txt: left camera"), std::string::npos) << e.what();
+  }
+}
+
 TEST(DropStereoRightAbove, DropsExactlyTheMatchesLandingOnBrighterRightPixels) {
   // Right image: columns 0-99 grey 100, columns 100-199 grey 200.
   cv::Mat right(50, 200, CV_8UC1, cv::Scalar(100));

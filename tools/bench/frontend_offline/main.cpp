@@ -6,7 +6,7 @@
 //                                [--he none|global|clipped|clahe|adaptive] [--he-stereo shared|matched|separate]
 //                                [--variant none|dark|low_contrast]
 //                                [--stereo-gain L,R[/L,R...]] [--disparity-noise SIGMA]
-//                                [--drop-stereo-right-above LEVEL]
+//                                [--drop-stereo-right-above LEVEL] [--k1-offset DK]
 //                                [--first-frame K] [--frames N] [--period-ms P]
 //                                [--tracking-worker on|off] [--pin-threads on|off]
 //                                [--stationary-chi2 X] [--rotation-chi2 X] [--near-clip-sigma X]
@@ -14,6 +14,7 @@
 //                                [--kidnap DIR [--kidnap-plan B,R,S[,N]]] [--vocabulary FILE|none]
 #include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -45,6 +46,8 @@ constexpr const char* kUsage =
     "                                    frame: what stereo noise alone costs the trajectory)\n"
     "       [--drop-stereo-right-above LEVEL]   (no stereo match where the right pixel matched is above LEVEL,\n"
     "                                            0-254: the stereo set of a brighter right camera, no pixel changed)\n"
+    "       [--k1-offset DK]   (DK added to both cameras' k1 before rectification: how much the trajectory\n"
+    "                           depends on the lens model at the image's edges)\n"
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
     "       [--period-ms P]   (start a frame every P ms, idle in between, as a camera: 50 for EuRoC's 20 Hz)\n"
     "       [--tracking-worker on|off]   (the tracker's BA passes in halves on a second thread; default off)\n"
@@ -163,6 +166,9 @@ int run(int argc, char** argv) {
       if (options.drop_stereo_right_above < 0 || options.drop_stereo_right_above > 254) {
         throw std::runtime_error("--drop-stereo-right-above: expected a grey level in 0..254, got '" + value + "'");
       }
+    } else if (arg == "--k1-offset") {
+      options.k1_offset = parse_number<double>(arg, value);
+      if (!std::isfinite(options.k1_offset)) throw std::runtime_error("--k1-offset: expected a number, got '" + value + "'");
     } else if (arg == "--first-frame") {
       options.first_frame = parse_number<int>(arg, value);
     } else if (arg == "--frames") {
@@ -250,6 +256,11 @@ int run(int argc, char** argv) {
     char text[64];
     std::snprintf(text, sizeof text, ", disparity noise %g px", options.disparity_noise_px);
     noise_note = text;
+  }
+  if (options.k1_offset != 0.0) {
+    char text[48];
+    std::snprintf(text, sizeof text, ", k1 %+g", options.k1_offset);
+    noise_note += text;
   }
   if (options.drop_stereo_right_above >= 0) {
     noise_note += ", stereo dropped where the right is above " + std::to_string(options.drop_stereo_right_above);

@@ -67,7 +67,8 @@ void apply_orbslam2_tracker_settings(const std::filesystem::path& settings_yaml,
 }
 
 OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& options) {
-  const StereoCalibration calibration = load_euroc_calibration(sequence.mav0_dir);
+  StereoCalibration calibration = load_euroc_calibration(sequence.mav0_dir);
+  if (options.k1_offset != 0.0) apply_k1_offset(calibration, options.k1_offset);
   const StereoRectifier rectifier(calibration);
   OfflineRun run;
   run.camera = rectifier.camera();
@@ -168,6 +169,16 @@ int add_disparity_noise(StereoFeatures& features, const PinholeStereo& camera, d
     features.depth_m[i] = static_cast<float>(camera.bf() / disparity_px);
   }
   return lost;
+}
+
+void apply_k1_offset(StereoCalibration& calibration, double offset) {
+  for (CameraModel* camera : {&calibration.left, &calibration.right}) {
+    if (calibration.input_rectified || camera->distortion.empty()) {
+      throw std::invalid_argument(calibration.source + ": " + (camera == &calibration.left ? "left" : "right") +
+                                  " camera has no radial distortion coefficient to offset");
+    }
+    camera->distortion[0] += offset;
+  }
 }
 
 int drop_stereo_right_above(StereoFeatures& features, const cv::Mat& right_rect, int level) {

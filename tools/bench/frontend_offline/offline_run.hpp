@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/camera/stereo_calibration.hpp"
 #include "components/core/feature/stereo_feature_pipeline.hpp"
 #include "components/core/tracking/tracker.hpp"
 #include "tools/bench/frontend_offline/euroc_sequence.hpp"
@@ -53,6 +54,10 @@ struct OfflineRunOptions {
   // diagnostic that separates which points get depth from how their images look (docs/benchmarks.md,
   // "Cameras exposed apart, seventh pass"). -1: off.
   int drop_stereo_right_above = -1;
+  // Added to the first radial distortion coefficient (k1) of both cameras before rectification: a
+  // diagnostic of how much the trajectory depends on the lens model at the image's edges
+  // (docs/benchmarks.md, "Cameras exposed apart, seventh pass"). 0: the calibration as read.
+  double k1_offset = 0.0;
 };
 
 struct FrameRecord {
@@ -108,6 +113,10 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
 // Returns the number of matches lost that way.
 inline constexpr float kMinNoisyDisparityPx = 0.5f;
 int add_disparity_noise(StereoFeatures& features, const PinholeStereo& camera, double sigma_px, std::uint64_t seed);
+
+// Adds `offset` to k1 of both cameras. Throws std::invalid_argument (naming the camera) when a camera
+// has no radial distortion coefficients (pre-rectified input).
+void apply_k1_offset(StereoCalibration& calibration, double offset);
 
 // Drops the stereo match of every feature whose match in `right_rect` (8-bit grey, rectified: the
 // pixel nearest (u_right, v)) is brighter than `level`. Returns the number dropped.
