@@ -41,6 +41,8 @@ void read_features(const runtime::Config& c, StereoFeaturePipelineOptions& o) {
   read(c, "he.match_shift_from", he.match_shift_from, 0.0, 255.0);
   // Above match_shift_from: the fade-in needs a positive width.
   read(c, "he.match_shift_full", he.match_shift_full, he.match_shift_from + 0.01, 255.0);
+  read(c, "he.match_gain_from", he.match_gain_from, 1.0001, 1000.0);
+  read(c, "he.tone_from_matches", o.tone_from_matches);
 
   OrbOptions& orb = o.orb;
   read(c, "orb.features", orb.features, 1, kMaxFeatures);

@@ -178,6 +178,37 @@ TEST(HistogramEqualizer, OptionsFromYaml) {
   EXPECT_THROW(HistogramEqualizerOptions::from_yaml(inverted.root(), "x.yaml"), std::runtime_error);
 }
 
+TEST(HistogramEqualizer, MatchGainFromOptionAndItsCheck) {
+  cv::FileStorage fs("%YAML:1.0\nHE.matchGainFrom: 2.5\n", cv::FileStorage::READ | cv::FileStorage::MEMORY);
+  EXPECT_EQ(HistogramEqualizerOptions::from_yaml(fs.root(), "test.yaml").match_gain_from, 2.5);
+  cv::FileStorage bad("%YAML:1.0\nHE.matchGainFrom: 1.0\n", cv::FileStorage::READ | cv::FileStorage::MEMORY);
+  try {
+    HistogramEqualizerOptions::from_yaml(bad.root(), "bad.yaml");
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.yaml: HE.matchGainFrom"), std::string::npos) << e.what();
+  }
+}
+
+TEST(HistogramEqualizer, ADarkPairExposedApartIsRecognisedByItsGain) {
+  // A dark texture (x0.1) seen at left x0.5 / right x1.5: the right's pixels move by only a few grey
+  // levels, under HE.matchShiftFrom, but the histograms' gain (~1/3) is beyond HE.matchGainFrom.
+  HESLAM_REQUIRE_TEXTURE();
+  const cv::Mat texture = test::load_texture()(cv::Rect(0, 0, 400, 300)).clone();
+  cv::Mat left, right;
+  texture.convertTo(left, CV_8U, 0.1 * 0.5);
+  texture.convertTo(right, CV_8U, 0.1 * 1.5);
+  HistogramEqualizer equalizer(with_mode(HeMode::kClipped, StereoPhotometry::kMatched));
+  cv::Mat left_out, right_out;
+  equalizer.equalize(left, right, left_out, right_out);
+  EXPECT_LT(equalizer.last_tone_shift(), equalizer.options().match_shift_from);
+  EXPECT_NEAR(equalizer.last_histogram_tone().gain, 1.0 / 3.0, 0.1);
+  EXPECT_TRUE(equalizer.last_exposed_apart());
+  // The same dark texture on both cameras is not.
+  equalizer.equalize(left, left, left_out, right_out);
+  EXPECT_FALSE(equalizer.last_exposed_apart());
+}
+
 TEST(HistogramEqualizer, MatchedUndoesTheRightCameraGain) {
   // The same image seen by a left camera at x1 and a right camera at x2 (a third of it clipped).
   // Matched: wherever the right is not clipped both outputs agree (measured: exactly), in every HE

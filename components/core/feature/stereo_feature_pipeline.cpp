@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -47,6 +48,7 @@ StereoFeaturePipelineOptions StereoFeaturePipelineOptions::from_yaml(const cv::F
   if (!(o.clip_edge.min_clipped_fraction > 0.0) || o.clip_edge.min_clipped_fraction > 1.0) {
     yaml_option::fail(source, "Stereo.clipEdgeMinFraction", "a fraction in (0, 1]");
   }
+  yaml_option::read(root, "HE.toneFromMatches", source, o.tone_from_matches);
   yaml_option::read(root, "Pipeline.parallel", source, o.parallel);
   yaml_option::read(root, "Pipeline.pinThreads", source, o.pin_threads);
   yaml_option::read(root, "Pipeline.rightFeaturesFactor", source, o.right_features_factor);
@@ -169,6 +171,15 @@ StereoFeatures StereoFeaturePipeline::process_from(const ImageSource& left_sourc
   const Clock::time_point t1 = Clock::now();
   const double cpu1_ms = timings ? process_cpu_ms() : 0.0;
   equalizer_.compute_mappings();
+  // Whether the tone is followed decides on the histograms' own curve, so that the curve applied
+  // cannot switch it off and on from pair to pair.
+  const bool follow_tone = options_.tone_from_matches && options_.he.stereo == StereoPhotometry::kMatched &&
+                           equalizer_.last_exposed_apart();
+  if (follow_tone) {
+    if (const std::optional<LinearTone> tone = tone_tracker_.predict(equalizer_.last_histogram_tone())) {
+      equalizer_.compute_mappings(&*tone);
+    }
+  }
   const Clock::time_point t1b = Clock::now();
 
   if (worker_) {
@@ -203,8 +214,7 @@ StereoFeatures StereoFeaturePipeline::process_from(const ImageSource& left_sourc
   out.u_right_px.assign(n, kNoStereo);
   out.depth_m.assign(n, kNoStereo);
   // Cameras exposed apart: the matched HE applied a tone curve (see the header's clip_edge).
-  const bool exposed_apart = options_.he.stereo == StereoPhotometry::kMatched &&
-                             equalizer_.last_tone_shift() >= options_.he.match_shift_from;
+  const bool exposed_apart = options_.he.stereo == StereoPhotometry::kMatched && equalizer_.last_exposed_apart();
   ClipLevels clip_levels;
   if (exposed_apart && options_.stereo.clip_masked_sad) {
     clip_levels.left_top = clipped_top_level(left_he_, options_.clip_edge.min_clipped_fraction);
@@ -234,6 +244,11 @@ StereoFeatures StereoFeaturePipeline::process_from(const ImageSource& left_sourc
   if (exposed_apart && options_.clip_edge.radius_px > 0) {
     mark_near_clip(clipped_pixel_mask(left_he_, options_.clip_edge.min_clipped_fraction),
                    clipped_pixel_mask(right_he_, options_.clip_edge.min_clipped_fraction), options_.clip_edge, out);
+  }
+  if (follow_tone) {
+    tone_tracker_.update(measure_stereo_tone(*left_image, *right_image, out), equalizer_.last_histogram_tone());
+  } else {
+    tone_tracker_.reset();
   }
   const Clock::time_point t3 = Clock::now();
 

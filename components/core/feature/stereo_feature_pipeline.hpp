@@ -18,6 +18,7 @@
 #include "components/core/feature/features.hpp"
 #include "components/core/feature/orb_extractor.hpp"
 #include "components/core/feature/pair_worker.hpp"
+#include "components/core/feature/stereo_tone.hpp"
 #include "components/core/image/histogram_equalizer.hpp"
 #include "components/core/match/clip_edge.hpp"
 #include "components/core/match/stereo_matcher.hpp"
@@ -32,6 +33,10 @@ struct StereoFeaturePipelineOptions {
   // cameras are exposed apart, i.e. where HE.stereo: matched applies a tone curve (its mean shift at
   // least HE.matchShiftFrom): equally exposed pairs keep their features exactly.
   ClipEdgeOptions clip_edge;
+  // HE.stereo matched, cameras exposed apart: the right image's tone curve is the cameras' relation
+  // measured on the previous pair's stereo matches (stereo_tone.hpp) instead of the quantile curve
+  // between the two histograms. HE.toneFromMatches; false: the quantile curve, as before.
+  bool tone_from_matches = true;
   // Two threads: the pyramid levels of both images as jobs, then halves of stereo matching.
   bool parallel = true;
   // The two threads pinned to two different CPUs (PairWorkerOptions::pin_to_two_cpus: the first two
@@ -43,7 +48,7 @@ struct StereoFeaturePipelineOptions {
   float right_features_factor = 2.0f;
 
   // Reads the HE.*, ORBextractor.*, Stereo.* keys (Stereo.clipEdgeRadius, .clipEdgeMinFraction for
-  // clip_edge), Pipeline.parallel, Pipeline.pinThreads and Pipeline.rightFeaturesFactor.
+  // clip_edge; HE.toneFromMatches), Pipeline.parallel, Pipeline.pinThreads and Pipeline.rightFeaturesFactor.
   static StereoFeaturePipelineOptions from_yaml(const cv::FileNode& root, const std::string& source);
   // Same, from a settings file (e.g. config/camera/EuRoC.yaml). Throws std::runtime_error naming the
   // file and key on bad input.
@@ -70,7 +75,8 @@ class StereoFeaturePipeline {
   StereoFeaturePipeline(const PinholeStereo& camera, const StereoFeaturePipelineOptions& options);
 
   // Inputs: rectified 8-bit grey images of the camera's size. Output: StereoFeatures, fully filled.
-  // Deterministic: the same pair gives the same output whether parallel or not. Not thread-safe.
+  // Deterministic: the same sequence of pairs gives the same outputs whether parallel or not (a pair
+  // exposed apart uses the tone measured on the pair before it, see tone_from_matches). Not thread-safe.
   StereoFeatures process(const cv::Mat& left_rect, const cv::Mat& right_rect, StereoFeatureTimings* timings = nullptr);
 
   // Makes an image of the pair on the calling thread (e.g. rectifies a raw image into a buffer it
@@ -113,6 +119,7 @@ class StereoFeaturePipeline {
   OrbExtractor left_extractor_;
   OrbExtractor right_extractor_;
   StereoMatcher stereo_matcher_;
+  StereoToneTracker tone_tracker_;
   // Checks a made image's type and size; `side` names it in the message.
   void check_image(const cv::Mat& image, const char* side) const;
 

@@ -236,6 +236,8 @@ HistogramEqualizerOptions HistogramEqualizerOptions::from_yaml(const cv::FileNod
   yaml_option::read(root, "HE.saturationExcess", source, o.saturation_excess);
   yaml_option::read(root, "HE.matchShiftFrom", source, o.match_shift_from);
   yaml_option::read(root, "HE.matchShiftFull", source, o.match_shift_full);
+  yaml_option::read(root, "HE.matchGainFrom", source, o.match_gain_from);
+  if (!(o.match_gain_from > 1.0)) yaml_option::fail(source, "HE.matchGainFrom", "a factor > 1");
   if (!(o.match_shift_from >= 0.0)) yaml_option::fail(source, "HE.matchShiftFrom", "a number >= 0");
   if (!(o.match_shift_full > o.match_shift_from)) yaml_option::fail(source, "HE.matchShiftFull", "a number > HE.matchShiftFrom");
   if (!(o.saturation_excess > 0.0) || o.saturation_excess > 1.0) yaml_option::fail(source, "HE.saturationExcess", "a number in (0, 1]");
@@ -290,7 +292,7 @@ void HistogramEqualizer::add_histogram(Side side, const cv::Mat& image) {
   }
 }
 
-void HistogramEqualizer::compute_mappings() {
+void HistogramEqualizer::compute_mappings(const LinearTone* measured_tone) {
   SideState& left = sides_[0];
   SideState& right = sides_[1];
   if (left.size != right.size || left.size.empty()) {
@@ -311,16 +313,25 @@ void HistogramEqualizer::compute_mappings() {
   Lut right_tone{};
   for (int v = 0; v < kLevels; ++v) left_tone[v] = right_tone[v] = static_cast<std::uint8_t>(v);
   last_tone_shift_ = 0.0;
+  last_exposed_apart_ = false;
   if (options_.stereo == StereoPhotometry::kMatched) {
-    const StereoToneCurves curves = align_stereo_tones(left_histogram, right_histogram, options_.saturation_excess);
+    last_histogram_tone_ = fit_linear_tone(match_histogram(right_histogram, left_histogram), right_histogram);
+    const StereoToneCurves curves =
+        align_stereo_tones(left_histogram, right_histogram, options_.saturation_excess, measured_tone);
     last_tone_shift_ = curves.mean_right_shift;
+    const double gain = last_histogram_tone_.gain;
+    const bool gain_apart = gain > options_.match_gain_from || gain * options_.match_gain_from < 1.0;
+    last_exposed_apart_ = curves.mean_right_shift >= options_.match_shift_from || gain_apart;
     left_tone = curves.left;
     right_tone = curves.right;
     if (!curves.left_clipped) {
       // The pair's own difference (EuRoC MH01's cameras: up to 18 grey levels) keeps the shared
       // mapping; the curve fades in linearly up to match_shift_full, so no frame-to-frame switch.
-      const double weight = std::clamp((curves.mean_right_shift - options_.match_shift_from) /
-                                           (options_.match_shift_full - options_.match_shift_from), 0.0, 1.0);
+      // A gain beyond match_gain_from applies it whole (dark images shift by few grey levels).
+      const double weight = gain_apart ? 1.0
+                                       : std::clamp((curves.mean_right_shift - options_.match_shift_from) /
+                                                        (options_.match_shift_full - options_.match_shift_from),
+                                                    0.0, 1.0);
       for (int v = 0; v < kLevels; ++v) {
         right_tone[v] = static_cast<std::uint8_t>(std::lround(v + weight * (curves.right[v] - v)));
       }

@@ -26,6 +26,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "components/core/image/histogram_matching.hpp"
+
 namespace heslam {
 
 enum class HeMode { kNone, kGlobal, kClahe, kAdaptive, kClipped };
@@ -67,8 +69,13 @@ struct HistogramEqualizerOptions {
   // from match_shift_full (right x1.5 against left x0.5 measures ~70), linear between.
   double match_shift_from = 20.0;
   double match_shift_full = 40.0;
+  // Matched: a pair whose histograms' fitted gain (fit_linear_tone of the quantile curve) is beyond
+  // this factor either way is exposed apart whatever its shift in grey levels: in dark images (EuRoC
+  // x0.1) a left x0.5 / right x1.5 pair moves its pixels by only ~12 levels. Equally exposed MH01
+  // pairs fit 0.89-1.04 (dark or not).
+  double match_gain_from = 1.5;
 
-  // Reads HE.mode, HE.stereo, HE.saturationExcess, HE.matchShiftFrom, HE.matchShiftFull, HE.globalClipLimit, HE.clipLimit, HE.tilesX, HE.tilesY, HE.adaptiveOnBelow, HE.adaptiveOffAbove.
+  // Reads HE.mode, HE.stereo, HE.saturationExcess, HE.matchShiftFrom, HE.matchShiftFull, HE.matchGainFrom, HE.globalClipLimit, HE.clipLimit, HE.tilesX, HE.tilesY, HE.adaptiveOnBelow, HE.adaptiveOffAbove.
   static HistogramEqualizerOptions from_yaml(const cv::FileNode& root, const std::string& source);
 };
 
@@ -88,7 +95,9 @@ class HistogramEqualizer {
   // same in add_histogram and apply. Throws std::invalid_argument on an image that is not 8-bit grey
   // and non-empty, or (compute_mappings) on a pair of different sizes.
   void add_histogram(Side side, const cv::Mat& image);
-  void compute_mappings();
+  // `measured_tone` (matched only): the cameras' relation measured on image content (stereo_tone.hpp)
+  // replaces the quantile curve between the two histograms; may be called again for the same pair.
+  void compute_mappings(const LinearTone* measured_tone = nullptr);
   // Returns the equalized image: `image` itself when this side passes through unchanged (mode none,
   // adaptive while off with no tone curve), else `buffer`, (re)allocated to image's size and written
   // (buffer may be image: the mapping is per pixel).
@@ -100,6 +109,12 @@ class HistogramEqualizer {
   double last_contrast() const { return last_contrast_; }
   // Matched: mean grey-level shift of the right image by its tone curve in the last pair (0 otherwise).
   double last_tone_shift() const { return last_tone_shift_; }
+  // Matched: whether the last pair's cameras were exposed apart -- a shift of at least
+  // match_shift_from, or a histogram gain beyond match_gain_from -- so that its tone curve applied.
+  bool last_exposed_apart() const { return last_exposed_apart_; }
+  // Matched: the line fitted to the last pair's quantile curve (fit_linear_tone), whatever curve was
+  // applied: how the histograms see the cameras' relation, to follow its change frame to frame.
+  const LinearTone& last_histogram_tone() const { return last_histogram_tone_; }
 
   const HistogramEqualizerOptions& options() const { return options_; }
 
@@ -132,6 +147,8 @@ class HistogramEqualizer {
   bool active_ = false;
   double last_contrast_ = 0.0;
   double last_tone_shift_ = 0.0;
+  LinearTone last_histogram_tone_;
+  bool last_exposed_apart_ = false;
 };
 
 }  // namespace heslam

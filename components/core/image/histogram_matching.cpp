@@ -53,10 +53,42 @@ int level_at_count(const GreyHistogram& histogram, double count) {
 
 }  // namespace
 
-StereoToneCurves align_stereo_tones(const GreyHistogram& left, const GreyHistogram& right, double saturation_excess) {
+LinearTone fit_linear_tone(const GreyLut& curve, const GreyHistogram& source) {
+  // Levels whose image is 3 or less / 250 or more sit on a clipped end of the curve.
+  constexpr int kLowestFitted = 3;
+  constexpr int kHighestFitted = 250;
+  double weight = 0.0, sum_x = 0.0, sum_y = 0.0, sum_xx = 0.0, sum_xy = 0.0;
+  int levels = 0;
+  for (int x = 0; x < 256; ++x) {
+    const double y = curve[x];
+    if (source[x] == 0 || y < kLowestFitted || y > kHighestFitted) continue;
+    const double w = source[x];
+    weight += w;
+    sum_x += w * x;
+    sum_y += w * y;
+    sum_xx += w * x * x;
+    sum_xy += w * x * y;
+    ++levels;
+  }
+  LinearTone line;
+  const double determinant = weight * sum_xx - sum_x * sum_x;
+  if (levels < 2 || !(determinant > 0.0)) return line;
+  line.gain = (weight * sum_xy - sum_x * sum_y) / determinant;
+  line.offset = (sum_y - line.gain * sum_x) / weight;
+  return line;
+}
+
+StereoToneCurves align_stereo_tones(const GreyHistogram& left, const GreyHistogram& right, double saturation_excess,
+                                    const LinearTone* measured) {
   StereoToneCurves curves;
   for (int v = 0; v < 256; ++v) curves.left[v] = static_cast<std::uint8_t>(v);
-  curves.right = match_histogram(right, left);
+  if (measured != nullptr) {
+    for (int x = 0; x < 256; ++x) {
+      curves.right[x] = static_cast<std::uint8_t>(std::clamp(std::lround(measured->gain * x + measured->offset), 0l, 255l));
+    }
+  } else {
+    curves.right = match_histogram(right, left);
+  }
   double left_total = 0.0;
   double right_total = 0.0;
   for (int v = 0; v < 256; ++v) {
@@ -68,7 +100,10 @@ StereoToneCurves align_stereo_tones(const GreyHistogram& left, const GreyHistogr
   // Right clipped at the top beyond the left: the left's top (same fraction) becomes one level.
   const double top_excess = right[255] / right_total - left[255] / left_total;
   if (top_excess > saturation_excess) {
-    const int ceiling = level_at_count(left, (1.0 - right[255] / right_total) * left_total);
+    // With a measured relation, where it says the right saturates; else at the same quantile.
+    const int ceiling = measured != nullptr
+                            ? static_cast<int>(std::clamp(std::lround(measured->gain * 255.0 + measured->offset), 1l, 255l))
+                            : level_at_count(left, (1.0 - right[255] / right_total) * left_total);
     for (int v = ceiling; v < 256; ++v) curves.left[v] = static_cast<std::uint8_t>(ceiling);
     curves.right[255] = static_cast<std::uint8_t>(ceiling);
     for (int v = 0; v < 255; ++v) curves.right[v] = std::min(curves.right[v], static_cast<std::uint8_t>(ceiling));
@@ -77,7 +112,8 @@ StereoToneCurves align_stereo_tones(const GreyHistogram& left, const GreyHistogr
   // The same at the bottom (a right camera crushing its shadows to 0).
   const double bottom_excess = right[0] / right_total - left[0] / left_total;
   if (bottom_excess > saturation_excess) {
-    const int floor = level_at_count(left, right[0] / right_total * left_total);
+    const int floor = measured != nullptr ? static_cast<int>(std::clamp(std::lround(measured->offset), 0l, 254l))
+                                          : level_at_count(left, right[0] / right_total * left_total);
     for (int v = 0; v <= floor; ++v) curves.left[v] = static_cast<std::uint8_t>(floor);
     curves.right[0] = static_cast<std::uint8_t>(floor);
     for (int v = 1; v < 256; ++v) curves.right[v] = std::max(curves.right[v], static_cast<std::uint8_t>(floor));

@@ -33,6 +33,21 @@ struct StereoToneCurves {
   // Mean |right[x] - x| over the right image's pixels, in grey levels: how far apart the cameras are.
   double mean_right_shift = 0.0;
 };
-StereoToneCurves align_stereo_tones(const GreyHistogram& left, const GreyHistogram& right, double saturation_excess);
+//
+// `measured`: the cameras' relation measured elsewhere (left ~ gain x right + offset, e.g. on the
+// last pairs' stereo matches, stereo_tone.hpp); the right's curve is then that line, clamped to
+// [0, 255], instead of the quantile curve, and a left clipped to the right's range is clipped where
+// the line puts the right's 255 (its 0) instead of at the same quantile.
+struct LinearTone {
+  double gain = 1.0;
+  double offset = 0.0;
+};
+StereoToneCurves align_stereo_tones(const GreyHistogram& left, const GreyHistogram& right, double saturation_excess,
+                                    const LinearTone* measured = nullptr);
+
+// The line that fits a tone curve best where the source image has pixels and the curve is off its
+// ends (levels mapped inside [3, 250]), weighted by the source's pixel counts; the identity when
+// fewer than two levels qualify. How the histograms see the cameras' relation, frame to frame.
+LinearTone fit_linear_tone(const GreyLut& curve, const GreyHistogram& source);
 
 }  // namespace heslam
