@@ -8,6 +8,8 @@
 # K1_OFFSET=DK (environment): added to k1 of both cameras in the copies' sensor.yaml (the lens-model
 #   sensitivity of docs/benchmarks.md, "Cameras exposed apart, seventh pass", item 7).
 # DOMAIN=N (environment, default 196): the DDS domain of the runs.
+# FRONTEND_CONFIG=FILE (environment): the pipeline's frontend_config (default: euroc.yaml's own), e.g. a
+#   copy of config/frontend/euroc_mapper.yaml with an option changed.
 # Exits 1, naming the run, when a run fails or records fewer poses than the dataset has frames.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)
@@ -22,6 +24,8 @@ pairs=("$@")
 k1_offset=${K1_OFFSET:-0}
 [[ $k1_offset =~ ^[-+]?[0-9]*\.?[0-9]+$ ]] || { echo "full_gain_ensemble.sh: K1_OFFSET '$k1_offset': expected a number" >&2; exit 2; }
 domain=${DOMAIN:-196}
+frontend_args=()
+[[ -z ${FRONTEND_CONFIG:-} ]] || frontend_args=(--arg "frontend_config=$(realpath "$FRONTEND_CONFIG")")
 frames=$(grep -c -v '^#' "$dataset/mav0/cam0/data.csv")
 mkdir -p "$out"
 
@@ -59,7 +63,7 @@ for pair in "${pairs[@]}"; do
     fi
     trajectory=$out/$gains.txt
     if ! timeout 600 "$bin/heslam-supervisor" "$root/config/pipelines/euroc.yaml" --domain "$domain" \
-        --arg dataset="$copy" --arg output="$trajectory" > "$out/$gains.log" 2>&1; then
+        --arg dataset="$copy" --arg output="$trajectory" "${frontend_args[@]}" > "$out/$gains.log" 2>&1; then
       echo "full_gain_ensemble.sh: the run at gains $gains failed: $out/$gains.log" >&2
       exit 1
     fi
