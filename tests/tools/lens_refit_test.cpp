@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "components/core/map/map.hpp"
+#include "tests/mapping/synthetic_world.hpp"
 #include "tools/bench/lens_refit/lens_refit.hpp"
 
 namespace heslam::bench {
@@ -19,17 +20,7 @@ constexpr int kKeyframes = 8;
 constexpr int kPoints = 900;
 constexpr double kNoisePx = 0.3;
 
-PinholeStereo test_camera() {
-  PinholeStereo camera;
-  camera.fx_px = 436.0;
-  camera.fy_px = 436.0;
-  camera.cx_px = 376.0;
-  camera.cy_px = 240.0;
-  camera.baseline_m = 0.11;
-  camera.width_px = 752;
-  camera.height_px = 480;
-  return camera;
-}
+PinholeStereo test_camera() { return test::euroc_like_camera(); }
 
 Pose3 true_T_wc(int i) {
   Pose3 T_wc = Pose3::Identity();
