@@ -18,6 +18,7 @@
 
 #include "components/core/camera/stereo_calibration.hpp"
 #include "components/core/camera/stereo_rectifier.hpp"
+#include "components/core/feature/stereo_tone.hpp"
 #include "components/core/feature/orb_extractor.hpp"
 #include "components/core/feature/stereo_feature_pipeline.hpp"
 #include "components/core/image/histogram_equalizer.hpp"
@@ -149,6 +150,23 @@ void BM_AlignStereoTones(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(align_stereo_tones(left, right, 0.1));
 }
 BENCHMARK(BM_AlignStereoTones)->Arg(0)->Unit(benchmark::kMicrosecond);
+
+// What HE.toneFromMatches adds per pair exposed apart: the gain and offset from the pair's stereo
+// matches (feature/stereo_tone.hpp), here the EuRoC pair at left x0.35 / right x2.
+void BM_MeasureStereoTone(benchmark::State& state) {
+  const Data& d = data();
+  cv::Mat left, right;
+  d.left.convertTo(left, CV_8U, 0.35);
+  d.right.convertTo(right, CV_8U, 2.0);
+  StereoFeaturePipelineOptions options;
+  options.parallel = false;
+  StereoFeaturePipeline pipeline(d.camera, options);
+  const StereoFeatures features = pipeline.process(left, right);
+  StereoToneMeasurement measurement;
+  for (auto _ : state) benchmark::DoNotOptimize(measurement = measure_stereo_tone(left, right, features));
+  state.counters["matches"] = measurement.matches;
+}
+BENCHMARK(BM_MeasureStereoTone)->Unit(benchmark::kMicrosecond);
 
 void BM_OrbPyramid(benchmark::State& state) {
   OrbExtractor extractor(orb_options(state));
