@@ -8,8 +8,8 @@
 # K1_OFFSET=DK (environment): added to k1 of both cameras in the copies' sensor.yaml (the lens-model
 #   sensitivity of docs/benchmarks.md, "Cameras exposed apart, seventh pass", item 7).
 # DOMAIN=N (environment, default 196): the DDS domain of the runs.
-# FRONTEND_CONFIG=FILE (environment): the pipeline's frontend_config (default: euroc.yaml's own), e.g. a
-#   copy of config/frontend/euroc_mapper.yaml with an option changed.
+# FRONTEND_CONFIG=FILE, MAPPER_CONFIG=FILE (environment): the pipeline's frontend_config / mapper_config
+#   (default: euroc.yaml's own), e.g. a copy of config/frontend/euroc_mapper.yaml with an option changed.
 # Exits 1, naming the run, when a run fails or records fewer poses than the dataset has frames.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)
@@ -26,6 +26,7 @@ k1_offset=${K1_OFFSET:-0}
 domain=${DOMAIN:-196}
 frontend_args=()
 [[ -z ${FRONTEND_CONFIG:-} ]] || frontend_args=(--arg "frontend_config=$(realpath "$FRONTEND_CONFIG")")
+[[ -z ${MAPPER_CONFIG:-} ]] || frontend_args+=(--arg "mapper_config=$(realpath "$MAPPER_CONFIG")")
 frames=$(grep -c -v '^#' "$dataset/mav0/cam0/data.csv")
 mkdir -p "$out"
 
