@@ -315,9 +315,9 @@ void HistogramEqualizer::compute_mappings(const LinearTone* measured_tone) {
   last_tone_shift_ = 0.0;
   last_exposed_apart_ = false;
   if (options_.stereo == StereoPhotometry::kMatched) {
-    last_histogram_tone_ = fit_linear_tone(match_histogram(right_histogram, left_histogram), right_histogram);
     const StereoToneCurves curves =
         align_stereo_tones(left_histogram, right_histogram, options_.saturation_excess, measured_tone);
+    last_histogram_tone_ = fit_linear_tone(curves.quantile, right_histogram);
     last_tone_shift_ = curves.mean_right_shift;
     const double gain = last_histogram_tone_.gain;
     const bool gain_apart = gain > options_.match_gain_from || gain * options_.match_gain_from < 1.0;

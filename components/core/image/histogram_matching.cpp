@@ -82,12 +82,13 @@ StereoToneCurves align_stereo_tones(const GreyHistogram& left, const GreyHistogr
                                     const LinearTone* measured) {
   StereoToneCurves curves;
   for (int v = 0; v < 256; ++v) curves.left[v] = static_cast<std::uint8_t>(v);
+  curves.quantile = match_histogram(right, left);
   if (measured != nullptr) {
     for (int x = 0; x < 256; ++x) {
       curves.right[x] = static_cast<std::uint8_t>(std::clamp(std::lround(measured->gain * x + measured->offset), 0l, 255l));
     }
   } else {
-    curves.right = match_histogram(right, left);
+    curves.right = curves.quantile;
   }
   double left_total = 0.0;
   double right_total = 0.0;

@@ -29,6 +29,9 @@ GreyLut match_histogram(const GreyHistogram& source, const GreyHistogram& refere
 struct StereoToneCurves {
   GreyLut left{};
   GreyLut right{};
+  // The right's histogram matched to the left's (match_histogram), before any measured line or
+  // clipping: what fit_linear_tone reads to see the relation from the histograms.
+  GreyLut quantile{};
   bool left_clipped = false;  // the left was clipped to the right's range
   // Mean |right[x] - x| over the right image's pixels, in grey levels: how far apart the cameras are.
   double mean_right_shift = 0.0;
