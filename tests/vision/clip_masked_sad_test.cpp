@@ -120,5 +120,36 @@ TEST(ClippedTopLevel, PlateauOnlyWhenLargeEnough) {
   EXPECT_EQ(clipped_top_level(image, 0.01), 256);
 }
 
+// mark_near_clip: a stereo match is near a clip edge when the box around its left keypoint holds a
+// pixel of the left plateau, or the box around its right match one of the right plateau; the box is
+// 6 px x the keypoint's level scale; features without a stereo match are never marked.
+TEST(MarkNearClip, EitherImagesPlateauInTheBoxMarksAStereoMatch) {
+  cv::Mat left_clipped(100, 200, CV_8UC1, cv::Scalar(0));
+  cv::Mat right_clipped(100, 200, CV_8UC1, cv::Scalar(0));
+  left_clipped(cv::Rect(0, 0, 50, 100)).setTo(1);     // left plateau: u < 50
+  right_clipped(cv::Rect(150, 0, 50, 100)).setTo(1);  // right plateau: u >= 150
+  StereoFeatures features;
+  features.pyramid = ScalePyramid::make(2, 2.f);
+  const auto add = [&](float u, float u_right, int octave) {
+    features.keypoints.push_back(Keypoint{u, 50.f, 0.f, 1.f, octave});
+    features.descriptors.push_back(Descriptor{});
+    features.u_right_px.push_back(u_right);
+    features.depth_m.push_back(u_right >= 0.f ? 2.f : kNoStereo);
+  };
+  add(54.f, 40.f, 0);       // left box [48, 60] reaches the left plateau
+  add(54.f, kNoStereo, 0);  // the same place without a stereo match
+  add(100.f, 146.f, 0);     // right box [140, 152] reaches the right plateau
+  add(100.f, 80.f, 0);      // clear of both
+  add(70.f, 60.f, 1);       // octave 1: left box [58, 82] clear, right box [48, 72] clear
+  add(62.f, 40.f, 1);       // octave 1: left box [50, 74] clear; right box [28, 52] holds no right plateau
+  add(60.f, 50.f, 1);       // octave 1: left box [48, 72] reaches the left plateau
+  mark_near_clip(left_clipped, right_clipped, ClipEdgeOptions{}, features);
+  EXPECT_EQ(features.near_clip, (std::vector<std::uint8_t>{1, 0, 1, 0, 0, 0, 1}));
+  ClipEdgeOptions off;
+  off.radius_px = 0;
+  mark_near_clip(left_clipped, right_clipped, off, features);
+  EXPECT_EQ(features.near_clip, std::vector<std::uint8_t>(7, 0));
+}
+
 }  // namespace
 }  // namespace heslam
