@@ -1,8 +1,9 @@
 // heslam-viewer as a real process beside a lockstep MH01 run (euroc pipeline, the full system): started by hand
 // while the run goes (it gets the map from the transient-local topics), on an Xvfb display when Xvfb
 // is installed (viz 3D window + highgui), else headless, plus a second headless viewer with the
-// ground truth. Asserts on the pictures and counts, and that the pipeline's output is bit-identical
-// with and without viewers.
+// ground truth that is up before the run starts (so it sees the frames whatever the machine's load).
+// Asserts on the pictures and counts, and that the pipeline's output is bit-identical with and without
+// viewers.
 #include <gtest/gtest.h>
 
 #include <signal.h>
@@ -35,6 +36,7 @@ using test::ChildProcess;
 constexpr std::chrono::milliseconds kViewerStartDelay{3000};
 constexpr std::chrono::seconds kViewerStop{30};
 constexpr std::chrono::seconds kXvfbStart{5};
+constexpr std::chrono::seconds kViewerReady{20};
 
 std::string read_file(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -81,6 +83,18 @@ int pixels_of(const cv::Mat& image, const cv::Scalar& bgr) {
   return cv::countNonZero(mask);
 }
 
+// The raw half of a viewer's frame picture is the dataset's left image of the frame it names, pixel for pixel.
+void expect_frame_view_shows_its_frame(const fs::path& picture, const fs::path& dataset, const std::string& frame_seq) {
+  const cv::Mat frame = cv::imread(picture.string());
+  ASSERT_FALSE(frame.empty()) << picture;
+  const int seq = std::stoi(frame_seq);
+  const cv::Mat expected = dataset_left(dataset, seq);
+  ASSERT_FALSE(expected.empty()) << "frame " << seq;
+  cv::Mat expected_bgr;
+  cv::cvtColor(expected, expected_bgr, cv::COLOR_GRAY2BGR);
+  EXPECT_EQ(cv::norm(frame(cv::Rect(0, 0, expected.cols, expected.rows)), expected_bgr, cv::NORM_INF), 0.0) << picture;
+}
+
 // An Xvfb server on a display number derived from the test's exclusive DDS domain, or nothing when
 // Xvfb is not installed or does not come up. The number is ours alone (the domain lock), so a socket
 // or lock file left by a killed earlier server is stale: removed first, or the socket would look ready.
@@ -121,18 +135,27 @@ TEST(ViewerEndToEnd, JoinsAMh01RunDrawsEveryKeyframeAndLeavesTheOutputBitIdentic
   } else {
     unsetenv("DISPLAY");
   }
+  // A headless viewer with the ground truth overlaid, up before the run: a viewer that joins mid-run
+  // may, on a loaded machine, join after the last frame (CI saw 1 of 160), so the frame and trajectory
+  // checks are made on this one.
+  const std::vector<std::string> headless_args{
+      "--domain", std::to_string(domain), "--headless", "--out", (dir.path() / "headless").string(), "--gt",
+      (dataset / "mav0/state_groundtruth_estimate0/data.csv").string(), "--gt-extrinsic",
+      (dataset / "mav0/cam0/sensor.yaml").string()};
+  ChildProcess headless(test::bin_dir() / "heslam-viewer", headless_args, dir.path(), "headless_viewer");
+  const auto ready_deadline = std::chrono::steady_clock::now() + kViewerReady;
+  while (headless.err().find("info: headless") == std::string::npos && std::chrono::steady_clock::now() < ready_deadline &&
+         !headless.wait(std::chrono::milliseconds(0))) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_NE(headless.err().find("info: headless"), std::string::npos) << headless.out() << headless.err();
+
   auto viewed = test::start_pipeline("euroc", dataset, dir.path(), "viewed", domain);
   std::this_thread::sleep_for(kViewerStartDelay);
   std::vector<std::string> viewer_args{"--domain", std::to_string(domain), "--out", (dir.path() / "pictures").string(),
                                        "--snapshot-every", "2", "--record", (dir.path() / "frames.mp4").string()};
   if (!xvfb) viewer_args.push_back("--headless");
   ChildProcess viewer(test::bin_dir() / "heslam-viewer", viewer_args, dir.path(), "viewer");
-  // A second, headless viewer at the same time, with the ground truth overlaid.
-  const std::vector<std::string> headless_args{
-      "--domain", std::to_string(domain), "--headless", "--out", (dir.path() / "headless").string(), "--gt",
-      (dataset / "mav0/state_groundtruth_estimate0/data.csv").string(), "--gt-extrinsic",
-      (dataset / "mav0/cam0/sensor.yaml").string()};
-  ChildProcess headless(test::bin_dir() / "heslam-viewer", headless_args, dir.path(), "headless_viewer");
   const int pipeline_code = test::finish(*viewed);
   viewer.signal(SIGTERM);  // the map stays with the viewer after the pipeline's writers left
   headless.signal(SIGTERM);
@@ -168,9 +191,9 @@ TEST(ViewerEndToEnd, JoinsAMh01RunDrawsEveryKeyframeAndLeavesTheOutputBitIdentic
   ASSERT_FALSE(headless_stats.empty()) << headless_output;
   EXPECT_EQ(headless_stats.at("display"), "headless");
   EXPECT_EQ(headless_stats.at("frustums_drawn"), std::to_string(keyframes)) << headless_output;
-  // How many poses a viewer that joins mid-run sees depends on the machine's load; what must hold is
-  // that the ground truth covers the whole stretch of the run it saw (one row per frame, so at least
-  // one per pose it received).
+  // The viewer up before the run sees most of its poses (a slow reader may miss some under load); the
+  // ground truth covers the whole stretch of the run it saw (one row per frame, so at least one per
+  // pose it received).
   const int headless_trajectory = std::stoi(headless_stats.at("trajectory_points"));
   EXPECT_GT(headless_trajectory, 20) << headless_output;
   EXPECT_GE(std::stoi(headless_stats.at("ground_truth_points")), headless_trajectory) << headless_output;
@@ -182,15 +205,13 @@ TEST(ViewerEndToEnd, JoinsAMh01RunDrawsEveryKeyframeAndLeavesTheOutputBitIdentic
   EXPECT_GT(pixels_of(map, viewer::colours::kKeyframe), 10 * keyframes);
   EXPECT_GT(pixels_of(map, viewer::colours::kMapPoint) + pixels_of(map, viewer::colours::kRecentPoint), 500);
 
-  // The 2D view shows the frame it says: its raw half is the dataset image, pixel for pixel.
-  const cv::Mat frame = cv::imread((dir.path() / "pictures/frame_final.png").string());
-  ASSERT_FALSE(frame.empty());
-  const int seq = std::stoi(stats.at("frame_seq"));
-  const cv::Mat expected = dataset_left(dataset, seq);
-  ASSERT_FALSE(expected.empty()) << "frame " << seq;
-  cv::Mat expected_bgr;
-  cv::cvtColor(expected, expected_bgr, cv::COLOR_GRAY2BGR);
-  EXPECT_EQ(cv::norm(frame(cv::Rect(0, 0, expected.cols, expected.rows)), expected_bgr, cv::NORM_INF), 0.0);
+  // The 2D view shows the frame it says: its raw half is the dataset image, pixel for pixel. The viewer
+  // that joined mid-run may have seen no frame at all on a loaded machine ("none").
+  ASSERT_NE(headless_stats.at("frame_seq"), "none") << headless_output;
+  expect_frame_view_shows_its_frame(dir.path() / "headless/frame_final.png", dataset, headless_stats.at("frame_seq"));
+  if (stats.at("frame_seq") != "none") {
+    expect_frame_view_shows_its_frame(dir.path() / "pictures/frame_final.png", dataset, stats.at("frame_seq"));
+  }
 
   if (xvfb) {
     // The viz window's picture: not one flat colour.
@@ -201,10 +222,10 @@ TEST(ViewerEndToEnd, JoinsAMh01RunDrawsEveryKeyframeAndLeavesTheOutputBitIdentic
     EXPECT_GT(high - low, 50.0);
   }
   std::printf("[ figures  ] viewer on MH01 (%s): %s frames received, %s drawn, %s dropped before drawing, %s never "
-              "received; %d keyframes, %s points\n",
+              "received; %d keyframes, %s points; the viewer up before the run: %d trajectory poses\n",
               xvfb ? "Xvfb, viz" : "headless", stats.at("frames_received").c_str(), stats.at("frames_drawn").c_str(),
               stats.at("frames_not_drawn").c_str(), stats.at("frames_missed").c_str(), keyframes,
-              stats.at("map_points").c_str());
+              stats.at("map_points").c_str(), headless_trajectory);
 }
 
 }  // namespace
