@@ -70,6 +70,7 @@ void read_features(const runtime::Config& c, StereoFeaturePipelineOptions& o) {
 
   read(c, "pipeline.parallel", o.parallel);
   read(c, "pipeline.pin_threads", o.pin_threads);
+  read(c, "pipeline.left_only_features", o.left_only_features, 0.0f, 4.0f);
 }
 
 void read_tracker(const runtime::Config& c, TrackerOptions& t) {

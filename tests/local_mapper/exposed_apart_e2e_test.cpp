@@ -2,11 +2,11 @@
 // config/pipelines/euroc.yaml with its shipped configs) on MH01 with the two cameras exposed apart
 // (issue 17 §1), as users run it: copies of the clip written by heslam-photometric's library with the
 // left x L / right x R (clipped to 8 bit), against the equal-exposure run of the same build.
-// Measured (docs/benchmarks.md, cameras exposed apart): equal 3.831 mm / 15 keyframes; x0.35/x2
-// 4.574 mm (1.19x) / 15; x1/x4 4.540 mm (1.19x) / 20. The issue's 15 % is met by the means over each
-// pair and two perturbations of it, not by these single runs: the excess is a 0.5-1.4 % shorter
-// trajectory from tracking on clip-edge keypoints (sixth pass). So the ATE bound here is 1.3x, a guard
-// against regressions, and the keyframe bound the issue's 1.5x.
+// Measured (docs/benchmarks.md, cameras exposed apart, tenth pass): equal 3.831 mm / 15 keyframes;
+// x0.35/x2 3.887 mm (1.01x) / 16; x1/x4 4.373 mm (1.14x) / 16 (before the left-only keypoints 4.965,
+// 1.30x). A single run is one draw from a spread (x1/x4 4.0-4.9 mm under 1-2 % gain changes), so the
+// ATE bound is 1.2x, a guard against regressions with room for the spread, and the keyframe bound the
+// issue's 1.5x.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -23,7 +23,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr double kMaxAteRatio = 1.3;
+constexpr double kMaxAteRatio = 1.2;
 constexpr double kMaxKeyframeRatio = 1.5;
 constexpr std::size_t kFrames = 160;
 

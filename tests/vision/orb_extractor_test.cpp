@@ -1,5 +1,5 @@
 // ORB extraction: rotation invariance of orientation and descriptors, coverage of the image by the
-// quadtree distribution, per-level counts in proportion to level area, determinism.
+// quadtree distribution, per-level counts in proportion to level area, a detection region, determinism.
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -207,6 +207,48 @@ TEST(OrbExtractor, PyramidLevelsAndBordersEqualOpenCvs) {
       }
     }
   }
+}
+
+// set_region: every keypoint inside the region (at level 0), the wanted count spread over it, and an
+// empty region gives back the whole-image extraction exactly.
+TEST(OrbExtractor, RegionHoldsEveryKeypointAndTheWantedCount) {
+  HESLAM_REQUIRE_TEXTURE();
+  const cv::Mat image = texture_752x480();
+  cv::Mat region = cv::Mat::zeros(image.size(), CV_8UC1);
+  cv::circle(region, cv::Point(500, 240), 150, cv::Scalar(255), cv::FILLED);
+  OrbExtractor whole;
+  OrbFeatures reference;
+  whole.extract(image, reference);
+
+  OrbExtractor extractor;
+  OrbFeatures inside;
+  extractor.set_region(region, 300);
+  extractor.extract(image, inside);
+  // The quadtree may hand out a few more than wanted, as over the whole image (1200 -> 1204-1208).
+  EXPECT_LE(inside.keypoints.size(), 315u);
+  EXPECT_GE(inside.keypoints.size(), 270u);  // graf1 has texture everywhere in the disc
+  int outside = 0;
+  int right_half = 0;
+  for (const Keypoint& k : inside.keypoints) {
+    const int x = std::min(static_cast<int>(std::lround(k.u_px)), image.cols - 1);
+    const int y = std::min(static_cast<int>(std::lround(k.v_px)), image.rows - 1);
+    if (region.at<std::uint8_t>(y, x) == 0) ++outside;
+    if (k.u_px >= 500.f) ++right_half;
+  }
+  EXPECT_EQ(outside, 0);
+  // Spread over the disc, not piled on one side of it.
+  EXPECT_GT(right_half, static_cast<int>(inside.keypoints.size()) / 3);
+  EXPECT_LT(right_half, 2 * static_cast<int>(inside.keypoints.size()) / 3);
+
+  extractor.set_region(cv::Mat(), 0);
+  OrbFeatures again;
+  extractor.extract(image, again);
+  ASSERT_EQ(again.keypoints.size(), reference.keypoints.size());
+  for (std::size_t i = 0; i < again.keypoints.size(); ++i) {
+    EXPECT_EQ(again.keypoints[i].u_px, reference.keypoints[i].u_px);
+    EXPECT_EQ(again.descriptors[i], reference.descriptors[i]);
+  }
+  EXPECT_THROW(extractor.set_region(cv::Mat::zeros(image.size(), CV_32FC1), 10), std::invalid_argument);
 }
 
 TEST(OrbExtractor, Deterministic) {

@@ -285,6 +285,7 @@ TEST(StereoFeaturePipeline, ShippedSettingsGiveTheDocumentedOptions) {
   EXPECT_EQ(euroc.stereo.max_distance, 100);
   EXPECT_EQ(euroc.stereo.cost, StereoMatcherOptions::MatchCost::kSad);
   EXPECT_EQ(euroc.right_features_factor, 2.f);
+  EXPECT_EQ(euroc.left_only_features, 1.f);
   EXPECT_FALSE(euroc.stereo.clip_masked_sad);
   EXPECT_EQ(euroc.clip_edge.radius_px, 6);
   EXPECT_EQ(euroc.clip_edge.min_clipped_fraction, 0.01);
@@ -293,6 +294,7 @@ TEST(StereoFeaturePipeline, ShippedSettingsGiveTheDocumentedOptions) {
     EXPECT_EQ(kitti.orb.features, 2000) << name;
     EXPECT_EQ(kitti.orb.levels, 8) << name;
     EXPECT_EQ(kitti.orb.fast_threshold_min, 7) << name;
+    EXPECT_EQ(kitti.left_only_features, 1.f) << name;
   }
   // A bad value is one line naming the file and the key.
   const auto bad = std::filesystem::path(::testing::TempDir()) / "heslam_bad_pipeline.yaml";
@@ -302,6 +304,14 @@ TEST(StereoFeaturePipeline, ShippedSettingsGiveTheDocumentedOptions) {
     FAIL() << "expected an error";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("heslam_bad_pipeline.yaml: ORBextractor.nFeatures"), std::string::npos)
+        << e.what();
+  }
+  std::ofstream(bad) << "%YAML:1.0\nPipeline.leftOnlyFeatures: -1\n";
+  try {
+    StereoFeaturePipelineOptions::load(bad);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("heslam_bad_pipeline.yaml: Pipeline.leftOnlyFeatures"), std::string::npos)
         << e.what();
   }
   std::ofstream(bad) << "%YAML:1.0\nStereo.clipEdgeRadius: -1\n";

@@ -96,17 +96,7 @@ OrbExtractor::OrbExtractor(const OrbOptions& options)
   if (options.levels < 1 || !(options.scale_factor > 1.f) || options.features < 1) {
     throw std::invalid_argument("OrbExtractor: expected levels >= 1, scale_factor > 1, features >= 1");
   }
-  // Geometric share per level: factor^l with factor = 1/s^2 (area) or 1/s (ORB-SLAM2).
-  const double factor = options.features_by_area ? 1.0 / (options.scale_factor * options.scale_factor)
-                                                 : 1.0 / options.scale_factor;
-  const double first = options.features * (1.0 - factor) / (1.0 - std::pow(factor, options.levels));
-  int assigned = 0;
-  features_per_level_.resize(static_cast<std::size_t>(options.levels));
-  for (int l = 0; l + 1 < options.levels; ++l) {
-    features_per_level_[l] = static_cast<int>(std::lround(first * std::pow(factor, l)));
-    assigned += features_per_level_[l];
-  }
-  features_per_level_.back() = std::max(options.features - assigned, 0);
+  share_features(options.features);
 
   padded_.resize(static_cast<std::size_t>(options.levels));
   level_.resize(static_cast<std::size_t>(options.levels));
@@ -117,6 +107,26 @@ OrbExtractor::OrbExtractor(const OrbOptions& options)
   score_maps_.resize(static_cast<std::size_t>(options.levels));
   level_points_.resize(static_cast<std::size_t>(options.levels));
   level_features_.resize(static_cast<std::size_t>(options.levels));
+}
+
+void OrbExtractor::share_features(int features) {
+  // Geometric share per level: factor^l with factor = 1/s^2 (area) or 1/s (ORB-SLAM2).
+  const double factor = options_.features_by_area ? 1.0 / (options_.scale_factor * options_.scale_factor)
+                                                  : 1.0 / options_.scale_factor;
+  const double first = features * (1.0 - factor) / (1.0 - std::pow(factor, options_.levels));
+  int assigned = 0;
+  features_per_level_.resize(static_cast<std::size_t>(options_.levels));
+  for (int l = 0; l + 1 < options_.levels; ++l) {
+    features_per_level_[l] = static_cast<int>(std::lround(first * std::pow(factor, l)));
+    assigned += features_per_level_[l];
+  }
+  features_per_level_.back() = std::max(features - assigned, 0);
+}
+
+void OrbExtractor::set_region(const cv::Mat& region, int features) {
+  if (!region.empty() && region.type() != CV_8UC1) throw std::invalid_argument("OrbExtractor: expected an 8-bit region mask");
+  region_ = region;
+  share_features(region.empty() ? options_.features : std::max(features, 0));
 }
 
 void OrbExtractor::extract(const cv::Mat& image, OrbFeatures& out) {
@@ -206,6 +216,14 @@ void OrbExtractor::detect_level(int level) {
     }
   }
 
+  if (!region_.empty()) {
+    const float scale = scales_.scale[static_cast<std::size_t>(level)];
+    std::erase_if(points, [&](const ScoredPoint& p) {
+      const int x = std::min(static_cast<int>(std::lround(p.x * scale)), region_.cols - 1);
+      const int y = std::min(static_cast<int>(std::lround(p.y * scale)), region_.rows - 1);
+      return region_.at<std::uint8_t>(y, x) == 0;
+    });
+  }
   const std::vector<int> kept = distribute_quadtree(points, static_cast<float>(min_x), static_cast<float>(max_x),
                                                     static_cast<float>(min_y), static_cast<float>(max_y), wanted);
 

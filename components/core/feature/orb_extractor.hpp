@@ -65,6 +65,13 @@ class OrbExtractor {
   void detect_and_describe_level(int level);
   void collect(OrbFeatures& out) const;
 
+  // Detection limited to `region` (8-bit, level-0 size, non-zero = allowed) with `features` wanted
+  // in all, shared over the levels as options().features is; an empty region restores the whole
+  // image and options().features. FAST corners outside the region are dropped before the quadtree
+  // distribution, so the features spread over the region alone. The region must stay valid until
+  // the next detection.
+  void set_region(const cv::Mat& region, int features);
+
   const ScalePyramid& scale_pyramid() const { return scales_; }
   const OrbOptions& options() const { return options_; }
   // Features wanted on each level (sums to options().features).
@@ -79,11 +86,13 @@ class OrbExtractor {
   };
 
   void detect_level(int level);
+  void share_features(int features);
   void describe_level(int level);
 
   OrbOptions options_;
   ScalePyramid scales_;
   std::vector<int> features_per_level_;
+  cv::Mat region_;  // set_region's; empty = the whole image
   IntensityCentroid centroid_;  // keypoint orientation
 
   std::vector<cv::Mat> padded_;   // level image with border

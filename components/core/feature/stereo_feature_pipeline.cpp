@@ -1,4 +1,5 @@
-// Per-frame feature pipeline: HE, ORB left || right, stereo matching split in two halves.
+// Per-frame feature pipeline: HE, ORB left || right, stereo matching split in two halves, and on
+// pairs exposed apart the left-only keypoints where the right saturates.
 #include "components/core/feature/stereo_feature_pipeline.hpp"
 
 #include <atomic>
@@ -8,6 +9,8 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+
+#include <opencv2/imgproc.hpp>
 
 #include "components/core/image/yaml_option.hpp"
 
@@ -26,6 +29,17 @@ double process_cpu_ms() {
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
   return static_cast<double>(now.tv_sec) * 1e3 + static_cast<double>(now.tv_nsec) * 1e-6;
 }
+
+// The left image equalized on its own histogram (the joint-histogram steps do not apply to one image).
+HistogramEqualizerOptions left_alone_options(const HistogramEqualizerOptions& he) {
+  HistogramEqualizerOptions alone = he;
+  alone.stereo = StereoPhotometry::kShared;
+  return alone;
+}
+
+// The left-only region keeps this far (pixels) from the clip contour, whose corners the stereo
+// keypoints already hold: FAST's circle (3) and a little more.
+constexpr int kLeftOnlyContourMarginPx = 5;
 
 OrbOptions right_options(const StereoFeaturePipelineOptions& options) {
   OrbOptions right = options.orb;
@@ -55,6 +69,10 @@ StereoFeaturePipelineOptions StereoFeaturePipelineOptions::from_yaml(const cv::F
   if (!(o.right_features_factor >= 1.f) || o.right_features_factor > 4.f) {
     yaml_option::fail(source, "Pipeline.rightFeaturesFactor", "a number in [1, 4]");
   }
+  yaml_option::read(root, "Pipeline.leftOnlyFeatures", source, o.left_only_features);
+  if (!(o.left_only_features >= 0.f) || o.left_only_features > 4.f) {
+    yaml_option::fail(source, "Pipeline.leftOnlyFeatures", "a number in [0, 4]");
+  }
   return o;
 }
 
@@ -75,7 +93,9 @@ StereoFeaturePipeline::StereoFeaturePipeline(const PinholeStereo& camera, const 
       equalizer_(options.he),
       left_extractor_(options.orb),
       right_extractor_(right_options(options)),
-      stereo_matcher_(camera, left_extractor_.scale_pyramid(), options.stereo) {
+      stereo_matcher_(camera, left_extractor_.scale_pyramid(), options.stereo),
+      left_alone_equalizer_(left_alone_options(options.he)),
+      left_only_extractor_(options.orb) {
   if (camera.width_px <= 0 || camera.height_px <= 0 || !(camera.fx_px > 0.0) || !(camera.baseline_m > 0.0)) {
     throw std::invalid_argument("StereoFeaturePipeline: expected a rectified camera with size, fx and baseline");
   }
@@ -245,6 +265,7 @@ StereoFeatures StereoFeaturePipeline::process_from(const ImageSource& left_sourc
     mark_near_clip(clipped_pixel_mask(left_he_, options_.clip_edge.min_clipped_fraction),
                    clipped_pixel_mask(right_he_, options_.clip_edge.min_clipped_fraction), options_.clip_edge, out);
   }
+  if (exposed_apart && options_.left_only_features > 0.f) add_left_only_features(*left_image, out);
   if (follow_tone) {
     tone_tracker_.update(measure_stereo_tone(*left_image, *right_image, out), equalizer_.last_histogram_tone());
   } else {
@@ -261,6 +282,32 @@ StereoFeatures StereoFeaturePipeline::process_from(const ImageSource& left_sourc
     timings->total_ms = ms_between(t1, t3);
   }
   return out;
+}
+
+void StereoFeaturePipeline::add_left_only_features(const cv::Mat& left_raw, StereoFeatures& out) {
+  using Side = HistogramEqualizer::Side;
+  // Where the equalized left sits on its top plateau but the raw left does not saturate: the left
+  // was clipped there to the right's range.
+  const int top = clipped_top_level(left_he_, options_.clip_edge.min_clipped_fraction);
+  if (top > 255) return;
+  const cv::Mat region = (left_he_ >= top) & (left_raw < 255);
+  const int side = 2 * kLeftOnlyContourMarginPx + 1;
+  cv::erode(region, left_only_region_, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(side, side)));
+  const double share =
+      static_cast<double>(cv::countNonZero(left_only_region_)) / static_cast<double>(left_only_region_.total());
+  const int wanted = static_cast<int>(std::lround(options_.left_only_features * options_.orb.features * share));
+  if (wanted <= 0) return;
+  left_alone_equalizer_.add_histogram(Side::kLeft, left_raw);
+  left_alone_equalizer_.add_histogram(Side::kRight, left_raw);
+  left_alone_equalizer_.compute_mappings();
+  const cv::Mat& left_alone = left_alone_equalizer_.apply(Side::kLeft, left_raw, left_alone_buffer_);
+  left_only_extractor_.set_region(left_only_region_, wanted);
+  left_only_extractor_.extract(left_alone, left_only_);
+  out.keypoints.insert(out.keypoints.end(), left_only_.keypoints.begin(), left_only_.keypoints.end());
+  out.descriptors.insert(out.descriptors.end(), left_only_.descriptors.begin(), left_only_.descriptors.end());
+  out.u_right_px.resize(out.keypoints.size(), kNoStereo);
+  out.depth_m.resize(out.keypoints.size(), kNoStereo);
+  if (!out.near_clip.empty()) out.near_clip.resize(out.keypoints.size(), 0);
 }
 
 }  // namespace heslam

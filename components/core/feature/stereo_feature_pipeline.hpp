@@ -2,7 +2,8 @@
 // both images (pyramid levels of both spread over two threads) -> stereo matching -> StereoFeatures.
 // On two threads: each image is made (rectified), measured (histogram), mapped (HE) and turned into
 // its pyramid on its own thread; the pair meets only to combine the histograms, to share out the
-// pyramid levels' jobs and to split the stereo matching.
+// pyramid levels' jobs and to split the stereo matching. On a pair exposed apart whose right camera
+// saturates where the left still sees, monocular keypoints from there follow (left_only_features).
 #pragma once
 
 #include <cstdint>
@@ -46,9 +47,17 @@ struct StereoFeaturePipelineOptions {
   // the quadtree picks partly different corners in the two images, and a left keypoint whose
   // counterpart was not kept on the right cannot get a depth. See docs/vision.md for the measurement.
   float right_features_factor = 2.0f;
+  // Cameras exposed apart, the left clipped to the right's range by the matched HE (the right
+  // saturates where the left still sees): the left's own texture there, equalized on the left's
+  // histogram alone, gives monocular keypoints (no stereo depth possible), this many times
+  // orb.features x the region's share of the image, appended after the stereo keypoints. 0: none
+  // (the clipped left only). Equally exposed pairs are not touched. Pipeline.leftOnlyFeatures; see
+  // docs/vision.md for the measurement.
+  float left_only_features = 1.0f;
 
   // Reads the HE.*, ORBextractor.*, Stereo.* keys (Stereo.clipEdgeRadius, .clipEdgeMinFraction for
-  // clip_edge; HE.toneFromMatches), Pipeline.parallel, Pipeline.pinThreads and Pipeline.rightFeaturesFactor.
+  // clip_edge; HE.toneFromMatches), Pipeline.parallel, Pipeline.pinThreads, Pipeline.rightFeaturesFactor
+  // and Pipeline.leftOnlyFeatures.
   static StereoFeaturePipelineOptions from_yaml(const cv::FileNode& root, const std::string& source);
   // Same, from a settings file (e.g. config/camera/EuRoC.yaml). Throws std::runtime_error naming the
   // file and key on bad input.
@@ -120,6 +129,13 @@ class StereoFeaturePipeline {
   OrbExtractor right_extractor_;
   StereoMatcher stereo_matcher_;
   StereoToneTracker tone_tracker_;
+  // left_only_features: the left's own equalization and the extractor of the region only it sees.
+  HistogramEqualizer left_alone_equalizer_;
+  OrbExtractor left_only_extractor_;
+  cv::Mat left_alone_buffer_, left_only_region_;
+  OrbFeatures left_only_;
+  // Appends the left-only keypoints (monocular) of the pair to `out`.
+  void add_left_only_features(const cv::Mat& left_raw, StereoFeatures& out);
   // Checks a made image's type and size; `side` names it in the message.
   void check_image(const cv::Mat& image, const char* side) const;
 

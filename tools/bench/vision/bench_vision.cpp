@@ -258,6 +258,29 @@ void BM_Pipeline(benchmark::State& state) {
 }
 BENCHMARK(BM_Pipeline)->ArgsProduct({{0, 1}, {0, 1}})->UseRealTime()->Unit(benchmark::kMillisecond);
 
+// What Pipeline.leftOnlyFeatures adds to a pair whose right camera saturates: the EuRoC pair at left
+// x1 / right x4, both threads, without (arg 0) and with (arg 1) the left-only keypoints.
+void BM_PipelineRightSaturated(benchmark::State& state) {
+  const Data& d = data();
+  cv::Mat right;
+  d.right.convertTo(right, CV_8U, 4.0);
+  StereoFeaturePipelineOptions o;
+  o.left_only_features = state.range(0) == 1 ? 1.f : 0.f;
+  StereoFeaturePipeline pipeline(d.camera, o);
+  std::size_t keypoints = 0;
+  std::size_t matched = 0;
+  for (auto _ : state) {
+    const StereoFeatures f = pipeline.process(d.left, right);
+    keypoints = f.size();
+    matched = 0;
+    for (std::size_t i = 0; i < f.size(); ++i) matched += f.has_stereo(i) ? 1 : 0;
+  }
+  state.counters["keypoints"] = static_cast<double>(keypoints);
+  state.counters["stereo"] = static_cast<double>(matched);
+  state.SetLabel(state.range(0) == 1 ? "left-only keypoints" : "none");
+}
+BENCHMARK(BM_PipelineRightSaturated)->Arg(0)->Arg(1)->UseRealTime()->Unit(benchmark::kMillisecond);
+
 }  // namespace
 }  // namespace heslam
 
