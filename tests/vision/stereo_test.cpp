@@ -298,29 +298,16 @@ TEST(StereoFeaturePipeline, ShippedSettingsGiveTheDocumentedOptions) {
   }
   // A bad value is one line naming the file and the key.
   const auto bad = std::filesystem::path(::testing::TempDir()) / "heslam_bad_pipeline.yaml";
-  std::ofstream(bad) << "%YAML:1.0\nORBextractor.nFeatures: many\n";
-  try {
-    StereoFeaturePipelineOptions::load(bad);
-    FAIL() << "expected an error";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("heslam_bad_pipeline.yaml: ORBextractor.nFeatures"), std::string::npos)
-        << e.what();
-  }
-  std::ofstream(bad) << "%YAML:1.0\nPipeline.leftOnlyFeatures: -1\n";
-  try {
-    StereoFeaturePipelineOptions::load(bad);
-    FAIL() << "expected an error";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("heslam_bad_pipeline.yaml: Pipeline.leftOnlyFeatures"), std::string::npos)
-        << e.what();
-  }
-  std::ofstream(bad) << "%YAML:1.0\nStereo.clipEdgeRadius: -1\n";
-  try {
-    StereoFeaturePipelineOptions::load(bad);
-    FAIL() << "expected an error";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("heslam_bad_pipeline.yaml: Stereo.clipEdgeRadius"), std::string::npos)
-        << e.what();
+  for (const auto& [key, value] : {std::pair{"ORBextractor.nFeatures", "many"}, std::pair{"Pipeline.leftOnlyFeatures", "-1"},
+                                   std::pair{"Stereo.clipEdgeRadius", "-1"}}) {
+    std::ofstream(bad) << "%YAML:1.0\n" << key << ": " << value << "\n";
+    try {
+      StereoFeaturePipelineOptions::load(bad);
+      ADD_FAILURE() << "expected an error for " << key;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("heslam_bad_pipeline.yaml: ") + key), std::string::npos)
+          << e.what();
+    }
   }
 }
 

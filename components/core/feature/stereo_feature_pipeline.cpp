@@ -37,8 +37,10 @@ HistogramEqualizerOptions left_alone_options(const HistogramEqualizerOptions& he
   return alone;
 }
 
-// The left-only region keeps this far (pixels) from the clip contour, whose corners the stereo
-// keypoints already hold: FAST's circle (3) and a little more.
+// The left-only region keeps this far (level-0 pixels) from the clip contour, whose corners the
+// stereo keypoints already hold: FAST's circle (3) and a little more. MH01 x1/x4, 16 full-system runs
+// each: 0 / 1 / 2 / 5 / 10 px gave 4.34 / 4.36 / 4.28 / 4.34 / 4.49 mm, alike up to 5; on the
+// synthetic room 2 px was worse than 5 (docs/benchmarks.md, tenth pass).
 constexpr int kLeftOnlyContourMarginPx = 5;
 
 OrbOptions right_options(const StereoFeaturePipelineOptions& options) {
@@ -251,11 +253,25 @@ StereoFeatures StereoFeaturePipeline::process_from(const ImageSource& left_sourc
   auto second_half = [&] {
     stereo_matcher_.match_range(left_, right_, right_rows_, half, n, out.u_right_px, out.depth_m, sad_right_half_);
   };
-  if (worker_) {
+  // Left-only keypoints (pairs exposed apart) need only the left image and its equalization: on a
+  // pair that has them the second thread makes them while the caller does the whole stereo matching
+  // (the same output as one after the other; the time measured in docs/benchmarks.md, tenth pass).
+  const bool left_only = exposed_apart && options_.left_only_features > 0.f;
+  if (left_only) prepare_left_only_region(*left_image);
+  const bool left_only_wanted = left_only && left_only_wanted_ > 0;
+  auto left_only_job = [&] { extract_left_only(*left_image); };
+  if (worker_ && left_only_wanted) {
+    auto all_stereo = [&] {
+      first_half();
+      second_half();
+    };
+    worker_->run(left_only_job, all_stereo, PairWorker::Then::kSleep);  // the frame's last hand-off
+  } else if (worker_) {
     worker_->run(second_half, first_half, PairWorker::Then::kSleep);  // the frame's last hand-off
   } else {
     first_half();
     second_half();
+    if (left_only_wanted) left_only_job();
   }
   sad_left_half_.insert(sad_left_half_.end(), sad_right_half_.begin(), sad_right_half_.end());
   stereo_matcher_.reject_outliers(sad_left_half_, out.u_right_px, out.depth_m);
@@ -265,7 +281,7 @@ StereoFeatures StereoFeaturePipeline::process_from(const ImageSource& left_sourc
     mark_near_clip(clipped_pixel_mask(left_he_, options_.clip_edge.min_clipped_fraction),
                    clipped_pixel_mask(right_he_, options_.clip_edge.min_clipped_fraction), options_.clip_edge, out);
   }
-  if (exposed_apart && options_.left_only_features > 0.f) add_left_only_features(*left_image, out);
+  if (left_only_wanted) append_left_only(out);
   if (follow_tone) {
     tone_tracker_.update(measure_stereo_tone(*left_image, *right_image, out), equalizer_.last_histogram_tone());
   } else {
@@ -284,8 +300,8 @@ StereoFeatures StereoFeaturePipeline::process_from(const ImageSource& left_sourc
   return out;
 }
 
-void StereoFeaturePipeline::add_left_only_features(const cv::Mat& left_raw, StereoFeatures& out) {
-  using Side = HistogramEqualizer::Side;
+void StereoFeaturePipeline::prepare_left_only_region(const cv::Mat& left_raw) {
+  left_only_wanted_ = 0;
   // Where the equalized left sits on its top plateau but the raw left does not saturate: the left
   // was clipped there to the right's range.
   const int top = clipped_top_level(left_he_, options_.clip_edge.min_clipped_fraction);
@@ -295,14 +311,20 @@ void StereoFeaturePipeline::add_left_only_features(const cv::Mat& left_raw, Ster
   cv::erode(region, left_only_region_, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(side, side)));
   const double share =
       static_cast<double>(cv::countNonZero(left_only_region_)) / static_cast<double>(left_only_region_.total());
-  const int wanted = static_cast<int>(std::lround(options_.left_only_features * options_.orb.features * share));
-  if (wanted <= 0) return;
+  left_only_wanted_ = static_cast<int>(std::lround(options_.left_only_features * options_.orb.features * share));
+}
+
+void StereoFeaturePipeline::extract_left_only(const cv::Mat& left_raw) {
+  using Side = HistogramEqualizer::Side;
   left_alone_equalizer_.add_histogram(Side::kLeft, left_raw);
   left_alone_equalizer_.add_histogram(Side::kRight, left_raw);
   left_alone_equalizer_.compute_mappings();
   const cv::Mat& left_alone = left_alone_equalizer_.apply(Side::kLeft, left_raw, left_alone_buffer_);
-  left_only_extractor_.set_region(left_only_region_, wanted);
+  left_only_extractor_.set_region(left_only_region_, left_only_wanted_);
   left_only_extractor_.extract(left_alone, left_only_);
+}
+
+void StereoFeaturePipeline::append_left_only(StereoFeatures& out) const {
   out.keypoints.insert(out.keypoints.end(), left_only_.keypoints.begin(), left_only_.keypoints.end());
   out.descriptors.insert(out.descriptors.end(), left_only_.descriptors.begin(), left_only_.descriptors.end());
   out.u_right_px.resize(out.keypoints.size(), kNoStereo);

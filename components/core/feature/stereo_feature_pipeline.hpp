@@ -133,9 +133,14 @@ class StereoFeaturePipeline {
   HistogramEqualizer left_alone_equalizer_;
   OrbExtractor left_only_extractor_;
   cv::Mat left_alone_buffer_, left_only_region_;
+  int left_only_wanted_ = 0;  // keypoints wanted in left_only_region_ this pair
   OrbFeatures left_only_;
-  // Appends the left-only keypoints (monocular) of the pair to `out`.
-  void add_left_only_features(const cv::Mat& left_raw, StereoFeatures& out);
+  // The pair's left-only region and how many keypoints it wants (after the equalization).
+  void prepare_left_only_region(const cv::Mat& left_raw);
+  // The left equalized alone and its keypoints in the region, into left_only_ (any thread).
+  void extract_left_only(const cv::Mat& left_raw);
+  // Appends left_only_ (monocular keypoints) to `out`.
+  void append_left_only(StereoFeatures& out) const;
   // Checks a made image's type and size; `side` names it in the message.
   void check_image(const cv::Mat& image, const char* side) const;
 
