@@ -59,17 +59,18 @@ TEST(LeftOnlyFeatures, RightCameraSaturatedGivesMonocularKeypointsWhereOnlyTheLe
       const int y = std::min(static_cast<int>(std::lround(k.v_px)), right_x4.rows - 1);
       // The right's saturation is offset by the disparity: look a little to the left of the keypoint.
       bool saturated = false;
-      for (int dx = 0; dx <= 40 && !saturated; dx += 4) saturated = right_x4.at<std::uint8_t>(y, std::max(x - dx, 0)) == 255;
+      for (int dx = 0; dx <= 40 && !saturated; dx += 4) {
+        saturated = right_x4.at<std::uint8_t>(y, std::max(x - dx, 0)) == 255;
+      }
       on_saturated_right += saturated ? 1 : 0;
     }
     // The region is where the equalized left sits on the plateau the right's range put it on, which
     // follows the tone curve rather than each pixel's counterpart (measured 93-99 %).
     EXPECT_GT(on_saturated_right, static_cast<int>(0.85 * static_cast<double>(added))) << "pair " << p;
-    std::printf("[ figures  ] MH01 pair %zu, right x4: %zu stereo-side keypoints (%d with depth), %zu left-only, "
+    const auto with_depth = std::count_if(plain.depth_m.begin(), plain.depth_m.end(), [](float d) { return d > 0.f; });
+    std::printf("[ figures  ] MH01 pair %zu, right x4: %zu stereo-side keypoints (%ld with depth), %zu left-only, "
                 "%d of them where the right saturates\n",
-                p, plain.size(),
-                static_cast<int>(std::count_if(plain.depth_m.begin(), plain.depth_m.end(), [](float d) { return d > 0.f; })),
-                added, on_saturated_right);
+                p, plain.size(), static_cast<long>(with_depth), added, on_saturated_right);
   }
 }
 

@@ -298,7 +298,8 @@ TEST(StereoFeaturePipeline, ShippedSettingsGiveTheDocumentedOptions) {
   }
   // A bad value is one line naming the file and the key.
   const auto bad = std::filesystem::path(::testing::TempDir()) / "heslam_bad_pipeline.yaml";
-  for (const auto& [key, value] : {std::pair{"ORBextractor.nFeatures", "many"}, std::pair{"Pipeline.leftOnlyFeatures", "-1"},
+  for (const auto& [key, value] : {std::pair{"ORBextractor.nFeatures", "many"},
+                                   std::pair{"Pipeline.leftOnlyFeatures", "-1"},
                                    std::pair{"Stereo.clipEdgeRadius", "-1"}}) {
     std::ofstream(bad) << "%YAML:1.0\n" << key << ": " << value << "\n";
     try {

@@ -124,7 +124,9 @@ void OrbExtractor::share_features(int features) {
 }
 
 void OrbExtractor::set_region(const cv::Mat& region, int features) {
-  if (!region.empty() && region.type() != CV_8UC1) throw std::invalid_argument("OrbExtractor: expected an 8-bit region mask");
+  if (!region.empty() && region.type() != CV_8UC1) {
+    throw std::invalid_argument("OrbExtractor: expected an 8-bit region mask");
+  }
   region_ = region;
   share_features(region.empty() ? options_.features : std::max(features, 0));
 }
