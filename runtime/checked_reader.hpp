@@ -2,7 +2,7 @@
 // sample validated before it is handed out. Guards a run against hostile or mistaken participants on
 // the same domain (a second replay, a stray tool, a sample full of NaN); docs/topics.md:
 //
-// - Validation: an optional check (the component's, e.g. frontend::check) returns what is wrong with
+// - Validation: an optional check (the component's, e.g. messages::check) returns what is wrong with
 //   a sample; such a sample is dropped, counted under `rejected_counter` and reported by a
 //   rate-limited warning naming the topic (Logger::warn_throttled).
 // - One writer: the first writer whose sample arrives owns the stream. Every sample of another

@@ -21,7 +21,8 @@ build_root=${HESLAM_SANITIZE_BUILD_ROOT:-$root}
 # end-to-end executables add build time (an ASan link each) and the same code paths.
 asan_targets=(heslam_runtime_tests heslam_runtime_shutdown_tests heslam_runtime_component_tests
   heslam_supervisor_unit_tests heslam_pipeline_hosts_tests heslam_test_place_vocabulary
-  heslam_test_place_database heslam_frontend_unit_test heslam_frame_processor_test heslam_mapping_tests
+  heslam_test_place_database heslam_messages_unit_test heslam_frontend_unit_test heslam_frame_processor_test
+  heslam_mapping_tests
   heslam_test_vision_calibration heslam_test_vision_matching heslam_test_vision_orb
   heslam_test_vision_stereo heslam_test_vision_he test_eval heslam_test_tracking_synthetic
   heslam_test_tracking_euroc heslam_test_loop heslam_dataset_test heslam_replay_core_test

@@ -8,7 +8,7 @@
 namespace heslam::frontend {
 
 void BatchedMirror::add(const msg::KeyframeState& state) {
-  if (is_version_marker(state)) {
+  if (messages::is_version_marker(state)) {
     markers_.keyframe_states = std::max(markers_.keyframe_states, state.map_version);
     if (state.correction_id != 0) correction_versions_.insert(state.map_version);
     return;
@@ -21,7 +21,7 @@ void BatchedMirror::add(const msg::KeyframeState& state) {
 }
 
 void BatchedMirror::add(const msg::MapPointState& state) {
-  if (is_version_marker(state)) {
+  if (messages::is_version_marker(state)) {
     markers_.point_states = std::max(markers_.point_states, state.map_version);
     return;
   }
@@ -34,7 +34,7 @@ void BatchedMirror::add(const msg::MapPointState& state) {
 }
 
 void BatchedMirror::dispose_point(PointId id) {
-  if (id == kVersionMarkerId) return;
+  if (id == messages::kVersionMarkerId) return;
   if (auto waiting = point_states_.find(id); waiting != point_states_.end()) {
     waiting->second.disposed_after = true;
     return;
@@ -58,7 +58,7 @@ BatchedMirror::Applied BatchedMirror::apply(Map& map) {
   Applied applied;
   version_.keyframe_states = std::max(version_.keyframe_states, markers_.keyframe_states);
   version_.point_states = std::max(version_.point_states, markers_.point_states);
-  markers_ = MirrorVersion{};
+  markers_ = messages::MirrorVersion{};
   const std::uint64_t complete = version_.complete();
 
   for (const PointId id : pending_disposes_) {
@@ -83,7 +83,7 @@ BatchedMirror::Applied BatchedMirror::apply(Map& map) {
     }
     if (const Keyframe* keyframe = map.keyframe(it->first)) old_T_wc.emplace(it->first, keyframe->T_wc);
     runtime::borrow(copy.sample.covisible, copy.covisible);
-    if (apply_keyframe_state(map, copy.sample)) {
+    if (messages::apply_keyframe_state(map, copy.sample)) {
       ++applied.keyframe_states;
     } else {
       ++applied.unknown_keyframe_states;
@@ -98,7 +98,7 @@ BatchedMirror::Applied BatchedMirror::apply(Map& map) {
       continue;
     }
     runtime::borrow(copy.sample.observations, copy.observations);
-    apply_point_state(map, copy.sample);
+    messages::apply_point_state(map, copy.sample);
     ++applied.point_states;
     if (copy.disposed_after) {
       if (MapPoint* point = map.point(it->first)) point->culled = true;

@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "components/core/map/map.hpp"
-#include "components/frontend/message_adapter.hpp"
+#include "components/messages/map_state.hpp"
 #include "runtime/messages.hpp"
 
 namespace heslam::frontend {
@@ -56,7 +56,7 @@ class BatchedMirror {
   Applied apply(Map& map);
 
   // The mapper's map version this mirror holds completely (all of it applied).
-  const MirrorVersion& version() const { return version_; }
+  const messages::MirrorVersion& version() const { return version_; }
   std::size_t waiting() const { return keyframe_states_.size() + point_states_.size(); }
 
  private:
@@ -77,8 +77,8 @@ class BatchedMirror {
   void move_keyframes_in_flight(Map& map, const std::map<KeyframeId, Pose3>& old_T_wc,
                                 std::uint64_t correction_version, Applied& applied);
 
-  MirrorVersion version_;
-  MirrorVersion markers_;                            // taken since the last apply
+  messages::MirrorVersion version_;
+  messages::MirrorVersion markers_;                  // taken since the last apply
   std::set<std::uint64_t> correction_versions_;      // marked, not yet applied
   std::set<std::uint64_t> applied_corrections_;      // versions applied as corrections
   std::map<KeyframeId, KeyframeStateCopy> keyframe_states_;

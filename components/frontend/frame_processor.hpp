@@ -14,7 +14,7 @@
 #include "components/core/feature/stereo_feature_pipeline.hpp"
 #include "components/core/tracking/tracker.hpp"
 #include "components/frontend/frontend_options.hpp"
-#include "components/frontend/message_adapter.hpp"
+#include "components/messages/odometry.hpp"
 
 namespace heslam::frontend {
 
@@ -25,7 +25,7 @@ struct FrameOutput {
   // rectify, he, extract, stereo, features, track_initial, track_local_map, track_keyframe, track,
   // cpu (the process's CPU time over the frame, all threads), total — in this order (odometry
   // stage_times and status stages use the same names); total is wall time and last.
-  std::vector<StageTiming> timings;
+  std::vector<messages::StageTiming> timings;
 };
 
 class FrameProcessor {

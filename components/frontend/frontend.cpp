@@ -13,7 +13,11 @@
 
 #include "components/core/mapping/map_file.hpp"
 #include "components/core/place/vocabulary_setting.hpp"
-#include "components/frontend/message_checks.hpp"
+#include "components/messages/camera.hpp"
+#include "components/messages/checks.hpp"
+#include "components/messages/keyframe.hpp"
+#include "components/messages/odometry.hpp"
+#include "components/messages/pose.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/writer_identity.hpp"
@@ -88,7 +92,8 @@ void Frontend::configure(const runtime::Config& config) {
                                                                    ? runtime::WaitScope::kAllDomains
                                                                    : runtime::WaitScope::kParticipant);
   calibration_reader_.emplace(participant(), topics().calibration(), log(), stats(),
-                              sample_check<msg::StereoCalibration>(), checked_options<msg::StereoCalibration>(kHeldCalibrations));
+                              messages::sample_check<msg::StereoCalibration>(),
+                              messages::checked_options<msg::StereoCalibration>(kHeldCalibrations));
   // Frames are checked by process_frame (a bad frame of the replay is still acknowledged).
   runtime::CheckedReaderOptions frame_options;
   frame_options.rejected_counter = "bad_frames";
@@ -98,9 +103,11 @@ void Frontend::configure(const runtime::Config& config) {
   waitset_->attach(*frame_reader_);
   if (options_.mapper_enabled) {
     keyframe_state_reader_.emplace(participant(), topics().keyframe_states(), log(), stats(),
-                                   sample_check<msg::KeyframeState>(), checked_options<msg::KeyframeState>(kMapStateHeld));
-    point_state_reader_.emplace(participant(), topics().map_points(), log(), stats(), sample_check<msg::MapPointState>(),
-                                checked_options<msg::MapPointState>(kMapStateHeld));
+                                   messages::sample_check<msg::KeyframeState>(),
+                                   messages::checked_options<msg::KeyframeState>(messages::kMapStateHeld));
+    point_state_reader_.emplace(participant(), topics().map_points(), log(), stats(),
+                                messages::sample_check<msg::MapPointState>(),
+                                messages::checked_options<msg::MapPointState>(messages::kMapStateHeld));
     keyframe_done_reader_.emplace(participant(), topics().keyframe_done());
     waitset_->attach(*keyframe_state_reader_);
     waitset_->attach(*point_state_reader_);
@@ -139,7 +146,8 @@ void Frontend::resume_from_journal() {
   for (const msg::Odometry& odometry : resumed.frames) {
     if (!last_seq_ || odometry.seq != *last_seq_) continue;  // the last finished frame
     if (odometry.state == heslam_msg_TRACKING_OK) {
-      journal_last_pose_ = LastFramePose{odometry.reference_keyframe_id, to_pose(odometry.T_ref_c), to_pose(odometry.T_wc)};
+      journal_last_pose_ = LastFramePose{odometry.reference_keyframe_id, messages::to_pose(odometry.T_ref_c),
+                                         messages::to_pose(odometry.T_wc)};
     } else {
       journal_last_pose_.reset();  // lost then: relocalize
     }
@@ -194,7 +202,7 @@ void Frontend::take_calibration() {
   for (auto& received : calibration_reader_->take()) {
     if (!received.info.valid_data) continue;
     const msg::StereoCalibration& message = *received.sample;
-    const PinholeStereo announced = to_camera(message.rectified);
+    const PinholeStereo announced = messages::to_camera(message.rectified);
     if (processor_ && calibration_camera_ && same_camera(*calibration_camera_, announced)) continue;
     if (processor_ && received.info.publication_handle != calibration_writer_) {
       stats().count("refused_calibrations");
@@ -205,7 +213,7 @@ void Frontend::take_calibration() {
       continue;
     }
     try {
-      const StereoCalibration calibration = to_calibration(message);
+      const StereoCalibration calibration = messages::to_calibration(message);
       auto processor = std::make_unique<FrameProcessor>(calibration, options_);
       if (announced.fx_px > 0.0 && !same_camera(processor->camera(), announced)) {
         log().warn("calibration '", calibration.source, "': the publisher's rectified camera (fx ", announced.fx_px,
@@ -323,9 +331,9 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
   }
   // Checked before its seq counts: a malformed frame with a high seq must not make every later
   // frame look processed already.
-  GreyPair images;
+  messages::GreyPair images;
   try {
-    images = to_grey_images(frame);
+    images = messages::to_grey_images(frame);
   } catch (const std::exception& error) {
     stats().count("bad_frames");
     log().warn_throttled("bad_frames", error.what());
@@ -353,18 +361,18 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
   if (result.state == TrackingState::kLost) stats().count("lost");
   if (result.motion == FrameMotion::kStill) stats().count("still_frames");
   if (result.motion == FrameMotion::kRotatingInPlace) stats().count("rotating_in_place_frames");
-  for (const StageTiming& timing : output.timings) stats().record_ms(timing.stage, timing.ms);
+  for (const messages::StageTiming& timing : output.timings) stats().record_ms(timing.stage, timing.ms);
 
   if (result.new_keyframe) {
     stats().count("keyframes");
-    const KeyframeMessage keyframe(*result.new_keyframe, frame.seq, result.new_points, processor_->camera(),
-                                   result.new_keyframe_reference, mirror_.version().complete());
+    const messages::KeyframeMessage keyframe(*result.new_keyframe, frame.seq, result.new_points, processor_->camera(),
+                                             result.new_keyframe_reference, mirror_.version().complete());
     keyframe_writer_->write(keyframe.get());
     if (options_.mapper_enabled) {
       mirror_.own_keyframe(result.new_keyframe->id, result.new_keyframe_reference, mirror_.version().complete());
     }
   }
-  const OdometryMessage odometry(frame.stamp_ns, frame.seq, result, output.keypoints, output.timings);
+  const messages::OdometryMessage odometry(frame.stamp_ns, frame.seq, result, output.keypoints, output.timings);
   if (odometry_writer_->write(odometry.get()) == runtime::WriteResult::kTimeout) stats().count("odometry_timeouts");
   if (journal_ && result.new_keyframe) journal_->append(odometry.get(), /*finished=*/false);
   log().debug("frame ", frame.seq, ": ", to_string(result.state), " (", to_string(result.method), "), ",
@@ -416,7 +424,7 @@ void Frontend::mirror_map_state() {
   if (!processor_) return;
   Map* map = &processor_->tracker().local_map();
   // Both readers are drained until empty before the version markers taken meanwhile count
-  // (MirrorVersion); the states wait in the mirror until their version is complete.
+  // (messages::MirrorVersion); the states wait in the mirror until their version is complete.
   for (bool drained = false; !drained;) {
     drained = true;
     for (auto& received : keyframe_state_reader_->take()) {

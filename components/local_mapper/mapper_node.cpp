@@ -9,8 +9,10 @@
 #include <stdexcept>
 #include <string>
 
-#include "components/frontend/message_checks.hpp"
-#include "components/local_mapper/message_adapter.hpp"
+#include "components/messages/camera.hpp"
+#include "components/messages/checks.hpp"
+#include "components/messages/loop_correction.hpp"
+#include "components/messages/map_state.hpp"
 #include "components/local_mapper/write_batch.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
@@ -53,9 +55,9 @@ void MapperNode::configure(const runtime::Config& config) {
   options_ = MapperProcessOptions::from_config(config, args().rest);
   waitset_ = std::make_unique<runtime::WaitSet>(participant());
   keyframe_reader_.emplace(participant(), topics().keyframes(), log(), stats(), nullptr,
-                           frontend::checked_options<msg::Keyframe>(kHeldKeyframes));
+                           messages::checked_options<msg::Keyframe>(kHeldKeyframes));
   correction_reader_.emplace(participant(), topics().loop_corrections(), log(), stats(), nullptr,
-                             frontend::checked_options<msg::LoopCorrection>(kHeldCorrections));
+                             messages::checked_options<msg::LoopCorrection>(kHeldCorrections));
   waitset_->attach(*keyframe_reader_);
   waitset_->attach(*correction_reader_);
   // The map outlives this process: a mapper that exits (or is restarted) must not make the readers
@@ -210,8 +212,8 @@ void MapperNode::take_keyframes() {
     if (!received.info.valid_data) continue;  // a frontend that left: its keyframes stay in the map
     const msg::Keyframe& message = *received.sample;
     try {
-      if (auto problem = frontend::check(message)) throw std::runtime_error("topic '" + keyframe_reader_->name() + "': " + *problem);
-      PendingKeyframe keyframe{frontend::to_keyframe(message), frontend::to_camera(message.camera)};
+      if (auto problem = messages::check(message)) throw std::runtime_error("topic '" + keyframe_reader_->name() + "': " + *problem);
+      PendingKeyframe keyframe{messages::to_keyframe(message), messages::to_camera(message.camera)};
       if (!(keyframe.camera.fx_px > 0.0) || !(keyframe.camera.baseline_m > 0.0)) {
         throw std::runtime_error("keyframe " + std::to_string(message.id) + ": camera fx " +
                                  std::to_string(keyframe.camera.fx_px) + " px, baseline " +
@@ -230,10 +232,10 @@ void MapperNode::take_corrections() {
   for (auto& received : correction_reader_->take()) {
     if (!received.info.valid_data) continue;
     try {
-      if (auto problem = frontend::check(*received.sample)) {
+      if (auto problem = messages::check(*received.sample)) {
         throw std::runtime_error("topic '" + correction_reader_->name() + "': " + *problem);
       }
-      LoopCorrection correction = to_loop_correction(*received.sample);
+      LoopCorrection correction = messages::to_loop_correction(*received.sample);
       if (applied_corrections_.count(correction.id) != 0) {
         // Replayed to us after a restart: applied already, but its loop closer may still wait for the
         // acknowledgement this process died before sending.
@@ -375,16 +377,16 @@ void MapperNode::publish(const MapChanges& changes, std::uint64_t correction_id)
   const Map& map = mapper_->map();
   for (const KeyframeId id : changes.changed_keyframes) {
     if (const Keyframe* keyframe = map.keyframe(id); keyframe != nullptr) {
-      keyframe_state_writer_->write(to_state_message(*keyframe, map.version, covisible_buffer_));
+      keyframe_state_writer_->write(messages::to_state_message(*keyframe, map.version, covisible_buffer_));
     }
   }
   for (const PointId id : changes.changed_points) {
     if (const MapPoint* point = map.point(id); point != nullptr) {
-      point_state_writer_->write(to_state_message(*point, map.version, observation_buffer_));
+      point_state_writer_->write(messages::to_state_message(*point, map.version, observation_buffer_));
     }
   }
   for (const auto& [id, into] : changes.removed_points) {
-    const msg::MapPointState last = merged_state_message(id, into, map.version);
+    const msg::MapPointState last = messages::merged_state_message(id, into, map.version);
     if (into != kNoId) point_state_writer_->write(last);  // readers redirect observations to `into`
     point_state_writer_->dispose(last);
     stats().count("disposed_points");
@@ -394,8 +396,8 @@ void MapperNode::publish(const MapChanges& changes, std::uint64_t correction_id)
 }
 
 void MapperNode::write_version_markers(std::uint64_t map_version, std::uint64_t correction_id) {
-  keyframe_state_writer_->write(keyframe_version_marker(map_version, correction_id));
-  point_state_writer_->write(point_version_marker(map_version));
+  keyframe_state_writer_->write(messages::keyframe_version_marker(map_version, correction_id));
+  point_state_writer_->write(messages::point_version_marker(map_version));
   // The markers end every batch of states: what is still packed leaves now.
   flush_writes({keyframe_state_writer_->handle(), point_state_writer_->handle()});
 }
@@ -403,10 +405,10 @@ void MapperNode::write_version_markers(std::uint64_t map_version, std::uint64_t 
 void MapperNode::publish_all(const Map& map) {
   const auto timer = stats().time("publish");
   for (const auto& [id, keyframe] : map.keyframes) {
-    keyframe_state_writer_->write(to_state_message(keyframe, map.version, covisible_buffer_));
+    keyframe_state_writer_->write(messages::to_state_message(keyframe, map.version, covisible_buffer_));
   }
   for (const auto& [id, point] : map.points) {
-    point_state_writer_->write(to_state_message(point, map.version, observation_buffer_));
+    point_state_writer_->write(messages::to_state_message(point, map.version, observation_buffer_));
   }
   write_version_markers(map.version);
   log().info("published the state of ", map.keyframes.size(), " keyframes and ", map.points.size(), " points");

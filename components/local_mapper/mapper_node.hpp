@@ -20,7 +20,7 @@
 
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/mapping/local_mapper.hpp"
-#include "components/frontend/message_adapter.hpp"
+#include "components/messages/keyframe.hpp"
 #include "components/local_mapper/mapper_process_options.hpp"
 #include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
@@ -33,7 +33,7 @@ class MapperNode : public runtime::Component {
 
  private:
   struct PendingKeyframe {
-    frontend::DecodedKeyframe decoded;
+    messages::DecodedKeyframe decoded;
     PinholeStereo camera;
   };
 
@@ -59,7 +59,7 @@ class MapperNode : public runtime::Component {
   // `correction_id`: the changes are that loop correction's (marked on the version marker).
   void publish(const MapChanges& changes, std::uint64_t correction_id = 0);
   void publish_all(const Map& map);
-  // Ends a batch of states: the version markers of both state topics (frontend::MirrorVersion).
+  // Ends a batch of states: the version markers of both state topics (messages::MirrorVersion).
   void write_version_markers(std::uint64_t map_version, std::uint64_t correction_id = 0);
   // KeyframeDone for a mapped keyframe, or (correction_id != 0) for an applied correction.
   void acknowledge(KeyframeId id, std::uint64_t correction_id = 0);

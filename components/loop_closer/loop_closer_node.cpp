@@ -8,8 +8,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "components/frontend/message_checks.hpp"
-#include "components/loop_closer/message_adapter.hpp"
+#include "components/messages/checks.hpp"
+#include "components/messages/loop_correction.hpp"
+#include "components/messages/map_state.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
 
@@ -46,11 +47,11 @@ void LoopCloserNode::configure(const runtime::Config& config) {
   detector_ = make_detector(config, options_);
   waitset_ = std::make_unique<runtime::WaitSet>(participant());
   keyframe_reader_.emplace(participant(), topics().keyframes(), log(), stats(), nullptr,
-                           frontend::checked_options<msg::Keyframe>(kHeldKeyframes));
+                           messages::checked_options<msg::Keyframe>(kHeldKeyframes));
   keyframe_state_reader_.emplace(participant(), topics().keyframe_states(), log(), stats(), nullptr,
-                                 frontend::checked_options<msg::KeyframeState>(frontend::kMapStateHeld));
+                                 messages::checked_options<msg::KeyframeState>(messages::kMapStateHeld));
   point_state_reader_.emplace(participant(), topics().map_points(), log(), stats(), nullptr,
-                              frontend::checked_options<msg::MapPointState>(frontend::kMapStateHeld));
+                              messages::checked_options<msg::MapPointState>(messages::kMapStateHeld));
   keyframe_done_reader_.emplace(participant(), topics().keyframe_done());
   waitset_->attach(*keyframe_reader_);
   waitset_->attach(*keyframe_state_reader_);
@@ -91,14 +92,14 @@ std::size_t LoopCloserNode::take_all() {
     }
   }
   // The state readers are drained until empty before the version markers taken meanwhile count
-  // (frontend::MirrorVersion).
-  frontend::MirrorVersion markers;
+  // (messages::MirrorVersion).
+  messages::MirrorVersion markers;
   for (std::size_t batch = 1; batch != 0;) {
     batch = 0;
     for (auto& received : keyframe_state_reader_->take()) {
       ++batch;
       if (!received.info.valid_data) continue;
-      if (frontend::is_version_marker(*received.sample)) {
+      if (messages::is_version_marker(*received.sample)) {
         markers.keyframe_states = std::max(markers.keyframe_states, received.sample->map_version);
         continue;
       }
@@ -112,12 +113,12 @@ std::size_t LoopCloserNode::take_all() {
     for (auto& received : point_state_reader_->take()) {
       ++batch;
       if (!received.info.valid_data) {
-        if (received.info.disposed && received.sample->id != frontend::kVersionMarkerId) {
+        if (received.info.disposed && received.sample->id != messages::kVersionMarkerId) {
           mirror_.point_disposed(received.sample->id);
         }
         continue;
       }
-      if (frontend::is_version_marker(*received.sample)) {
+      if (messages::is_version_marker(*received.sample)) {
         markers.point_states = std::max(markers.point_states, received.sample->map_version);
         continue;
       }
@@ -220,7 +221,7 @@ bool LoopCloserNode::publish_and_wait(LoopCorrection correction) {
   correction.id = make_id(kLoopCloserTag, ++correction_counter_);
   const std::uint64_t id = correction.id;
   {
-    const LoopCorrectionMessage message(correction);
+    const messages::LoopCorrectionMessage message(correction);
     if (correction_writer_->write(message.get()) == runtime::WriteResult::kTimeout) {
       stats().count("correction_write_timeouts");
       log().warn("loop correction ", id, ": write timed out (is the local mapper alive?)");

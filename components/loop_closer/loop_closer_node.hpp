@@ -55,7 +55,7 @@ class LoopCloserNode : public runtime::Component {
 
   LoopCloserProcessOptions options_;
   std::unique_ptr<runtime::WaitSet> waitset_;
-  // One writer each (runtime/checked_reader.hpp); the mirror checks the samples (frontend::check).
+  // One writer each (runtime/checked_reader.hpp); the mirror checks the samples (messages::check).
   std::optional<runtime::CheckedReader<msg::Keyframe>> keyframe_reader_;
   std::optional<runtime::CheckedReader<msg::KeyframeState>> keyframe_state_reader_;
   std::optional<runtime::CheckedReader<msg::MapPointState>> point_state_reader_;

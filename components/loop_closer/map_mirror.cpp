@@ -4,18 +4,20 @@
 #include <stdexcept>
 #include <string>
 
-#include "components/frontend/message_adapter.hpp"
-#include "components/frontend/message_checks.hpp"
+#include "components/messages/camera.hpp"
+#include "components/messages/checks.hpp"
+#include "components/messages/keyframe.hpp"
+#include "components/messages/pose.hpp"
 #include "runtime/sequence.hpp"
 
 namespace heslam::loop_closer {
 
 void MapMirror::add_keyframe(const msg::Keyframe& message) {
-  if (auto problem = frontend::check(message)) throw std::runtime_error(*problem);
-  frontend::DecodedKeyframe decoded = frontend::to_keyframe(message);
+  if (auto problem = messages::check(message)) throw std::runtime_error(*problem);
+  messages::DecodedKeyframe decoded = messages::to_keyframe(message);
   Keyframe& incoming = decoded.keyframe;
   const std::string name = "keyframe " + std::to_string(message.id);
-  const PinholeStereo camera = frontend::to_camera(message.camera);
+  const PinholeStereo camera = messages::to_camera(message.camera);
   if (!(camera.fx_px > 0.0) || !(camera.baseline_m > 0.0)) {
     throw std::runtime_error(name + ": camera fx " + std::to_string(camera.fx_px) + " px, baseline " +
                              std::to_string(camera.baseline_m) + " m (expected both > 0)");
@@ -57,15 +59,15 @@ Keyframe& MapMirror::insert(Keyframe incoming) {
 }
 
 void MapMirror::apply_keyframe_state(const msg::KeyframeState& message) {
-  if (frontend::is_version_marker(message)) return;  // count_markers() takes those
-  if (auto problem = frontend::check(message)) throw std::runtime_error(*problem);
+  if (messages::is_version_marker(message)) return;  // count_markers() takes those
+  if (auto problem = messages::check(message)) throw std::runtime_error(*problem);
   if (auto awaiting = awaiting_state_.find(message.id); awaiting != awaiting_state_.end()) {
     insert(std::move(awaiting->second));
     awaiting_state_.erase(awaiting);
   }
-  if (frontend::apply_keyframe_state(map_, message)) return;
+  if (messages::apply_keyframe_state(map_, message)) return;
   PendingState& pending = pending_states_[message.id];
-  pending.T_wc = frontend::to_pose(message.T_wc);
+  pending.T_wc = messages::to_pose(message.T_wc);
   pending.parent = message.parent_id;
   pending.covisible.clear();
   for (const msg::CovisibleKeyframe& neighbour : runtime::view(message.covisible)) {
@@ -75,16 +77,16 @@ void MapMirror::apply_keyframe_state(const msg::KeyframeState& message) {
 }
 
 void MapMirror::apply_point_state(const msg::MapPointState& message) {
-  if (frontend::is_version_marker(message)) return;
-  if (auto problem = frontend::check(message)) throw std::runtime_error(*problem);
-  frontend::apply_point_state(map_, message);
+  if (messages::is_version_marker(message)) return;
+  if (auto problem = messages::check(message)) throw std::runtime_error(*problem);
+  messages::apply_point_state(map_, message);
 }
 
 void MapMirror::point_disposed(PointId id) {
-  if (id != frontend::kVersionMarkerId) frontend::erase_point(map_, id);
+  if (id != messages::kVersionMarkerId) messages::erase_point(map_, id);
 }
 
-void MapMirror::count_markers(const frontend::MirrorVersion& markers) {
+void MapMirror::count_markers(const messages::MirrorVersion& markers) {
   version_.keyframe_states = std::max(version_.keyframe_states, markers.keyframe_states);
   version_.point_states = std::max(version_.point_states, markers.point_states);
   map_.version = std::max(map_.version, version_.complete());

@@ -19,7 +19,7 @@
 
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/map/map.hpp"
-#include "components/frontend/message_adapter.hpp"
+#include "components/messages/map_state.hpp"
 #include "runtime/messages.hpp"
 
 namespace heslam::loop_closer {
@@ -34,18 +34,18 @@ class MapMirror {
  public:
   explicit MapMirror(KeyframeAdmission admission = KeyframeAdmission::kWithSample) : admission_(admission) {}
 
-  // Throws std::runtime_error naming the keyframe when the sample is malformed (frontend::check:
+  // Throws std::runtime_error naming the keyframe when the sample is malformed (messages::check:
   // lengths, non-finite numbers, bad camera); the mirror is unchanged then.
   void add_keyframe(const msg::Keyframe& message);
-  // Throws std::runtime_error naming the keyframe / point when frontend::check refuses the sample
+  // Throws std::runtime_error naming the keyframe / point when messages::check refuses the sample
   // (non-finite pose or position, zero ids, ...).
   void apply_keyframe_state(const msg::KeyframeState& message);
   void apply_point_state(const msg::MapPointState& message);
   // A disposed point instance: removed by the mapper (a culled or merged point).
   void point_disposed(PointId id);
-  // The version markers taken since the readers were last drained (frontend::MirrorVersion): map().version
+  // The version markers taken since the readers were last drained (messages::MirrorVersion): map().version
   // becomes the mapper's map version this copy holds completely.
-  void count_markers(const frontend::MirrorVersion& markers);
+  void count_markers(const messages::MirrorVersion& markers);
 
   const Map& map() const { return map_; }
   // kWithMapperState: keyframes received from the frontend without a mapper state yet (not in map()).
@@ -66,7 +66,7 @@ class MapMirror {
 
   KeyframeAdmission admission_;
   Map map_;
-  frontend::MirrorVersion version_;
+  messages::MirrorVersion version_;
   std::optional<PinholeStereo> camera_;
   std::map<KeyframeId, PendingState> pending_states_;  // states of keyframes not received yet
   // Keyframe samples without a mapper state yet: kept out of map_ until their first state.

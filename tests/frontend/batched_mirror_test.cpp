@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include "components/frontend/batched_mirror.hpp"
+#include "components/messages/map_state.hpp"
+#include "components/messages/pose.hpp"
 #include "runtime/sequence.hpp"
 
 namespace heslam::frontend {
@@ -20,13 +22,13 @@ msg::KeyframeState keyframe_state(KeyframeId id, std::uint64_t version, const Po
   msg::KeyframeState state{};
   state.id = id;
   state.map_version = version;
-  state.T_wc = to_message(T_wc);
+  state.T_wc = messages::to_message(T_wc);
   return state;
 }
 
 msg::KeyframeState keyframe_marker(std::uint64_t version, std::uint64_t correction_id = 0) {
   msg::KeyframeState marker{};
-  marker.id = kVersionMarkerId;
+  marker.id = messages::kVersionMarkerId;
   marker.map_version = version;
   marker.correction_id = correction_id;
   return marker;
@@ -34,7 +36,7 @@ msg::KeyframeState keyframe_marker(std::uint64_t version, std::uint64_t correcti
 
 msg::MapPointState point_marker(std::uint64_t version) {
   msg::MapPointState marker{};
-  marker.id = kVersionMarkerId;
+  marker.id = messages::kVersionMarkerId;
   marker.map_version = version;
   return marker;
 }

@@ -7,6 +7,7 @@
 #include "components/core/camera/stereo_calibration.hpp"
 #include "components/core/camera/stereo_rectifier.hpp"
 #include "components/frontend/frame_processor.hpp"
+#include "components/messages/camera.hpp"
 #include "runtime/config.hpp"
 #include "test_support.hpp"
 #include "tools/bench/frontend_offline/offline_run.hpp"
@@ -45,7 +46,7 @@ TEST(FrameProcessor, CalibrationThroughTheMessageRectifiesTheSame) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_v101_head");
   const StereoCalibration calibration = load_euroc_calibration(test::shared_dataset("euroc_v101_head") / "mav0");
   const CalibrationMessage message(calibration, StereoRectifier(calibration).camera());
-  const StereoCalibration back = to_calibration(message.get());
+  const StereoCalibration back = messages::to_calibration(message.get());
   EXPECT_EQ(back.left.T_BS.matrix(), calibration.left.T_BS.matrix());
   EXPECT_EQ(back.right.T_BS.matrix(), calibration.right.T_BS.matrix());
   const FrontendOptions options = FrontendOptions::from_config(runtime::Config::empty());

@@ -14,9 +14,9 @@
 #include "components/core/loop/loop_closing.hpp"
 #include "components/core/loop/proximity_loop_detector.hpp"
 #include "components/core/mapping/local_mapper.hpp"
-#include "components/frontend/message_adapter.hpp"
-#include "components/local_mapper/message_adapter.hpp"
 #include "components/loop_closer/map_mirror.hpp"
+#include "components/messages/keyframe.hpp"
+#include "components/messages/map_state.hpp"
 #include "tests/mapping/correction_test_util.hpp"
 #include "tests/mapping/synthetic_world.hpp"
 
@@ -45,7 +45,7 @@ class MirrorOfARealTimeRun : public ::testing::Test {
     exact.max_flipped_bits = 0;
     const test::SyntheticView view = test::make_view(world_, id, truth(id), 500 + static_cast<unsigned>(id), exact);
     auto made = frontend_.keyframe(mapper_.map(), view, T_wc);
-    const frontend::KeyframeMessage message(made.first, id, made.second, world_.camera, reference, tracked_version);
+    const messages::KeyframeMessage message(made.first, id, made.second, world_.camera, reference, tracked_version);
     mirror_.add_keyframe(message.get());
     return made;
   }
@@ -56,12 +56,12 @@ class MirrorOfARealTimeRun : public ::testing::Test {
     std::vector<msg::PointObservation> observations;
     const std::uint64_t version = mapper_.map().version;
     for (const auto& [id, kf] : mapper_.map().keyframes) {
-      mirror_.apply_keyframe_state(local_mapper::to_state_message(kf, version, covisible));
+      mirror_.apply_keyframe_state(messages::to_state_message(kf, version, covisible));
     }
     for (const auto& [id, point] : mapper_.map().points) {
-      mirror_.apply_point_state(local_mapper::to_state_message(point, version, observations));
+      mirror_.apply_point_state(messages::to_state_message(point, version, observations));
     }
-    mirror_.count_markers(frontend::MirrorVersion{version, version});
+    mirror_.count_markers(messages::MirrorVersion{version, version});
   }
 
   void map(std::pair<Keyframe, std::vector<MapPoint>> made, KeyframeId reference, std::uint64_t tracked_version) {
@@ -82,7 +82,7 @@ TEST_F(MirrorOfARealTimeRun, AKeyframeEntersTheCopyWithItsFirstMapperState) {
   EXPECT_EQ(mirror_.keyframes_awaiting_state(), 1u);
   // The viewer's mirror shows it at once, at the frontend's pose.
   MapMirror viewer_mirror(KeyframeAdmission::kWithSample);
-  const frontend::KeyframeMessage sample(second.first, 2, second.second, world_.camera, 1, mapper_.map().version);
+  const messages::KeyframeMessage sample(second.first, 2, second.second, world_.camera, 1, mapper_.map().version);
   viewer_mirror.add_keyframe(sample.get());
   ASSERT_NE(viewer_mirror.map().keyframe(2), nullptr);
   EXPECT_EQ(viewer_mirror.map().keyframe(2)->T_wc.matrix(), truth(2).matrix());

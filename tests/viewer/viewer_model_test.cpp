@@ -5,7 +5,6 @@
 
 #include <vector>
 
-#include "components/frontend/message_adapter.hpp"
 #include "runtime/sequence.hpp"
 #include "tools/viewer/viewer_model.hpp"
 

@@ -7,8 +7,10 @@
 #include <thread>
 
 #include "components/core/camera/stereo_rectifier.hpp"
-#include "components/frontend/message_adapter.hpp"
-#include "components/frontend/message_checks.hpp"
+#include "components/messages/camera.hpp"
+#include "components/messages/checks.hpp"
+#include "components/messages/map_state.hpp"
+#include "components/messages/pose.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/wire_enum.hpp"
@@ -164,13 +166,13 @@ Recorder::Recorder(const runtime::CommonArgs& args) : Component("recorder", args
 
 void Recorder::configure(const runtime::Config& config) {
   options_ = RecorderOptions::from(config, args().rest);
-  odometry_reader_.emplace(participant(), topics().odometry(), log(), stats(), frontend::sample_check<msg::Odometry>(),
-                           frontend::checked_options<msg::Odometry>(kHeldOdometry));
-  keyframe_reader_.emplace(participant(), topics().keyframes(), log(), stats(), frontend::sample_check<msg::Keyframe>(),
-                           frontend::checked_options<msg::Keyframe>(kHeldKeyframes));
+  odometry_reader_.emplace(participant(), topics().odometry(), log(), stats(), messages::sample_check<msg::Odometry>(),
+                           messages::checked_options<msg::Odometry>(kHeldOdometry));
+  keyframe_reader_.emplace(participant(), topics().keyframes(), log(), stats(), messages::sample_check<msg::Keyframe>(),
+                           messages::checked_options<msg::Keyframe>(kHeldKeyframes));
   keyframe_state_reader_.emplace(participant(), topics().keyframe_states(), log(), stats(),
-                                 frontend::sample_check<msg::KeyframeState>(),
-                                 frontend::checked_options<msg::KeyframeState>(frontend::kMapStateHeld));
+                                 messages::sample_check<msg::KeyframeState>(),
+                                 messages::checked_options<msg::KeyframeState>(messages::kMapStateHeld));
   status_reader_.emplace(participant(), topics().status());
   calibration_reader_.emplace(participant(), topics().calibration());
   waitset_ = std::make_unique<runtime::WaitSet>(participant());
@@ -231,7 +233,7 @@ void Recorder::take_calibration() {
   for (auto& received : calibration_reader_->take()) {
     if (!received.info.valid_data || T_frame_rect_) continue;
     try {
-      const StereoCalibration calibration = frontend::to_calibration(*received.sample);
+      const StereoCalibration calibration = messages::to_calibration(*received.sample);
       // The frontend's own rectification (the same calibration, the same computation), hence its
       // rectified camera exactly.
       const Pose3 T_B_rect = StereoRectifier(calibration).T_B_rect();
@@ -265,7 +267,7 @@ std::size_t Recorder::drain() {
     ++taken;
     if (!received.info.valid_data) continue;
     const msg::Keyframe& keyframe = *received.sample;
-    recorder_.add_keyframe(keyframe.id, keyframe.stamp_ns, keyframe.frame_seq, frontend::to_pose(keyframe.T_wc));
+    recorder_.add_keyframe(keyframe.id, keyframe.stamp_ns, keyframe.frame_seq, messages::to_pose(keyframe.T_wc));
     stats().count("keyframes");
   }
   for (auto& received : keyframe_state_reader_->take()) {
@@ -273,8 +275,8 @@ std::size_t Recorder::drain() {
     const msg::KeyframeState& state = *received.sample;
     // Invalid-data samples (disposes, no-writer notices) carry no state: the mapper culls keyframes
     // by flag and its writers keep their instances when it exits or restarts.
-    if (!received.info.valid_data || frontend::is_version_marker(state)) continue;
-    recorder_.update_keyframe(state.id, frontend::to_pose(state.T_wc), state.parent_id, state.culled);
+    if (!received.info.valid_data || messages::is_version_marker(state)) continue;
+    recorder_.update_keyframe(state.id, messages::to_pose(state.T_wc), state.parent_id, state.culled);
   }
   for (auto& received : odometry_reader_->take()) {
     ++taken;
@@ -286,8 +288,8 @@ std::size_t Recorder::drain() {
     frame.tracked = runtime::wire_value(odometry.state) == heslam_msg_TRACKING_OK;
     frame.state = state_name(odometry.state);
     frame.reference = odometry.reference_keyframe_id;
-    frame.T_ref_c = frontend::to_pose(odometry.T_ref_c);
-    frame.T_wc = frontend::to_pose(odometry.T_wc);
+    frame.T_ref_c = messages::to_pose(odometry.T_ref_c);
+    frame.T_wc = messages::to_pose(odometry.T_wc);
     recorder_.add_frame(frame);
     if (odometry.keyframe_created && frame.tracked && frame.reference != kNoId) {
       recorder_.add_keyframe_frame(frame.reference, frame.stamp_ns, frame.seq, frame.T_wc);

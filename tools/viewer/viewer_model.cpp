@@ -4,7 +4,8 @@
 #include <algorithm>
 #include <string>
 
-#include "components/frontend/message_adapter.hpp"
+#include "components/messages/camera.hpp"
+#include "components/messages/pose.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/wire_enum.hpp"
 
@@ -76,7 +77,7 @@ void ViewerModel::apply_correction(const msg::LoopCorrection& message, Clock::ti
 }
 
 void ViewerModel::set_calibration(const msg::StereoCalibration& message) {
-  rectifier_ = std::make_shared<const StereoRectifier>(frontend::to_calibration(message));
+  rectifier_ = std::make_shared<const StereoRectifier>(messages::to_calibration(message));
   changed_ = true;
 }
 
@@ -84,7 +85,7 @@ void ViewerModel::add_frame(const msg::StereoFrame& message) {
   FrameEntry entry;
   entry.seq = message.seq;
   entry.stamp_ns = message.stamp_ns;
-  entry.raw_left = frontend::to_grey_images(message).left.clone();  // the sample's buffer is reused
+  entry.raw_left = messages::to_grey_images(message).left.clone();  // the sample's buffer is reused
   if (last_seq_ && message.seq > *last_seq_ + 1) frames_.missed += message.seq - *last_seq_ - 1;
   if (!last_seq_ || message.seq > *last_seq_) last_seq_ = message.seq;
   ++frames_.received;
@@ -103,9 +104,9 @@ void ViewerModel::add_odometry(const msg::Odometry& message, Clock::time_point n
   if (entry.status == TrackingStatus::kTracking && was_lost_) relocalized_at_ = now, relocalized_ = true;
   if (entry.status != TrackingStatus::kNotInitialized) was_lost_ = entry.status == TrackingStatus::kLost;
   entry.stamp_ns = message.stamp_ns;
-  entry.T_wc = frontend::to_pose(message.T_wc);
+  entry.T_wc = messages::to_pose(message.T_wc);
   entry.reference = message.reference_keyframe_id;
-  entry.T_ref_c = frontend::to_pose(message.T_ref_c);
+  entry.T_ref_c = messages::to_pose(message.T_ref_c);
   entry.tracked_points = message.tracked_points;
   for (const msg::StageTime& stage : runtime::view(message.stage_times)) {
     if (std::string(stage.stage) == "total") entry.frame_time_ms = stage.ms;

@@ -11,7 +11,7 @@
 
 #include <opencv2/highgui.hpp>
 
-#include "components/frontend/message_checks.hpp"
+#include "components/messages/checks.hpp"
 #include "tools/viewer/frame_view_renderer.hpp"
 #include "tools/viewer/ground_truth_overlay.hpp"
 #include "tools/viewer/map_window.hpp"
@@ -155,7 +155,7 @@ std::size_t ViewerNode::take_all() {
       try {
         // The shared checks (finite numbers, sizes, ids): a NaN pose is never drawn.
         if (received.info.valid_data) {
-          if (auto problem = frontend::check(*received.sample)) throw std::runtime_error(*problem);
+          if (auto problem = messages::check(*received.sample)) throw std::runtime_error(*problem);
         }
         if (handle(received)) stats().count(counter);
       } catch (const std::exception& error) {

@@ -1,5 +1,5 @@
-// heslam-local-mapper's DDS-free parts: the IDL adapter (states out, corrections in) checked against
-// the frontend's mirror functions, which are what actually consumes these samples, and the options.
+// The local mapper's messages: keyframe and point states (and the version markers) written and
+// applied back to a mirror, as every map reader applies them; loop corrections decoded, bad ones refused.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,12 +8,12 @@
 #include <string>
 #include <vector>
 
-#include "components/frontend/message_adapter.hpp"
-#include "components/local_mapper/mapper_process_options.hpp"
-#include "components/local_mapper/message_adapter.hpp"
+#include "components/messages/loop_correction.hpp"
+#include "components/messages/map_state.hpp"
+#include "components/messages/pose.hpp"
 #include "runtime/sequence.hpp"
 
-namespace heslam::local_mapper {
+namespace heslam::messages {
 namespace {
 
 Pose3 pose(double angle_rad, const Eigen::Vector3d& t) {
@@ -41,7 +41,7 @@ Map mirror_with_keyframe(KeyframeId id) {
   return map;
 }
 
-TEST(MapperAdapter, KeyframeStateRoundTripsThroughTheFrontendMirror) {
+TEST(MapStateMessages, KeyframeStateRoundTripsThroughAMirror) {
   Keyframe keyframe;
   keyframe.id = 7;
   keyframe.T_wc = pose(0.3, {1.0, -2.0, 0.5});
@@ -53,7 +53,7 @@ TEST(MapperAdapter, KeyframeStateRoundTripsThroughTheFrontendMirror) {
   EXPECT_EQ(message.map_version, 42u);
 
   Map mirror = mirror_with_keyframe(7);
-  ASSERT_TRUE(frontend::apply_keyframe_state(mirror, message));
+  ASSERT_TRUE(apply_keyframe_state(mirror, message));
   const Keyframe& mirrored = mirror.keyframes.at(7);
   EXPECT_LT(pose_difference(mirrored.T_wc, keyframe.T_wc), 1e-12);
   EXPECT_EQ(mirrored.parent, 3u);
@@ -64,22 +64,22 @@ TEST(MapperAdapter, KeyframeStateRoundTripsThroughTheFrontendMirror) {
 
 // The markers that end every batch of states: id 0 on both topics, carrying the batch's map version;
 // a mirror holds version v completely once both topics' markers reached v.
-TEST(MapperAdapter, VersionMarkersEndABatchOnBothTopics) {
+TEST(MapStateMessages, VersionMarkersEndABatchOnBothTopics) {
   const msg::KeyframeState keyframe_marker = keyframe_version_marker(12);
   const msg::MapPointState point_marker = point_version_marker(11);
-  EXPECT_TRUE(frontend::is_version_marker(keyframe_marker));
-  EXPECT_TRUE(frontend::is_version_marker(point_marker));
+  EXPECT_TRUE(is_version_marker(keyframe_marker));
+  EXPECT_TRUE(is_version_marker(point_marker));
   EXPECT_EQ(keyframe_marker.map_version, 12u);
   EXPECT_EQ(keyframe_marker.correction_id, 0u);  // a keyframe's batch
   EXPECT_EQ(keyframe_version_marker(13, 7).correction_id, 7u);  // the batch that applied correction 7
-  frontend::MirrorVersion version;
+  MirrorVersion version;
   version.keyframe_states = keyframe_marker.map_version;
   EXPECT_EQ(version.complete(), 0u);  // no point marker yet
   version.point_states = point_marker.map_version;
   EXPECT_EQ(version.complete(), 11u);
 }
 
-TEST(MapperAdapter, PointStateRoundTripsAndMergeRedirectsObservations) {
+TEST(MapStateMessages, PointStateRoundTripsAndMergeRedirectsObservations) {
   MapPoint point;
   point.id = 100;
   point.p_w = {1.5, -0.25, 4.0};
@@ -91,7 +91,7 @@ TEST(MapperAdapter, PointStateRoundTripsAndMergeRedirectsObservations) {
   point.observations = {{7, 2}};
   std::vector<msg::PointObservation> buffer;
   Map mirror = mirror_with_keyframe(7);
-  frontend::apply_point_state(mirror, to_state_message(point, 9, buffer));
+  apply_point_state(mirror, to_state_message(point, 9, buffer));
   const MapPoint& mirrored = mirror.points.at(100);
   EXPECT_EQ(mirrored.p_w, point.p_w);
   EXPECT_EQ(mirrored.descriptor, point.descriptor);
@@ -106,25 +106,25 @@ TEST(MapperAdapter, PointStateRoundTripsAndMergeRedirectsObservations) {
   MapPoint into = point;
   into.id = 200;
   into.observations = {{7, 3}};
-  frontend::apply_point_state(mirror, to_state_message(into, 10, buffer));
-  frontend::apply_point_state(mirror, merged_state_message(100, 200, 10));
+  apply_point_state(mirror, to_state_message(into, 10, buffer));
+  apply_point_state(mirror, merged_state_message(100, 200, 10));
   EXPECT_EQ(mirror.points.count(100), 0u);
   EXPECT_EQ(mirror.keyframes.at(7).point_ids[2], 200u);
 }
 
-TEST(MapperAdapter, LoopCorrectionIsConvertedAndBadOnesAreRejectedWithTheirId) {
+TEST(MapStateMessages, LoopCorrectionIsConvertedAndBadOnesAreRejectedWithTheirId) {
   std::vector<msg::CorrectedKeyframePose> poses(2);
   poses[0].keyframe_id = 4;
-  poses[0].T_wc = frontend::to_message(pose(0.1, {1, 2, 3}));
+  poses[0].T_wc = to_message(pose(0.1, {1, 2, 3}));
   poses[1].keyframe_id = 9;
-  poses[1].T_wc = frontend::to_message(pose(-0.2, {0, 0, 1}));
+  poses[1].T_wc = to_message(pose(-0.2, {0, 0, 1}));
   std::vector<msg::PointMerge> merges{{11, 22}};
   msg::LoopCorrection message{};
   message.id = 5;
   message.map_version = 30;
   message.loop_keyframe_id = 9;
   message.matched_keyframe_id = 4;
-  message.T_matched_loop = frontend::to_message(pose(0.05, {0.1, 0, 0}));
+  message.T_matched_loop = to_message(pose(0.05, {0.1, 0, 0}));
   runtime::borrow(message.corrected_poses, poses);
   runtime::borrow(message.point_merges, merges);
   const LoopCorrection correction = to_loop_correction(message);
@@ -147,32 +147,5 @@ TEST(MapperAdapter, LoopCorrectionIsConvertedAndBadOnesAreRejectedWithTheirId) {
   }
 }
 
-TEST(MapperOptions, ConfigAndCommandLine) {
-  const runtime::Config config = runtime::Config::parse(
-      "bundle_adjustment: {threads: 2, second_pass_iterations: 4}\nsave_every_keyframes: 3\n"
-      "fusion: {enabled: false}\nmap_file: \"\"\nbatch_map_writes: false\n",
-      "mapper.yaml");
-  const MapperProcessOptions options = MapperProcessOptions::from_config(config, {"--map-file", "/tmp/a.map"});
-  EXPECT_EQ(options.mapper.bundle_adjustment.num_threads, 2);
-  EXPECT_EQ(options.mapper.bundle_adjustment.second_pass_iterations, 4);
-  EXPECT_EQ(options.mapper.bundle_adjustment.first_pass_iterations, 5);  // ORB-SLAM2 default kept
-  EXPECT_FALSE(options.mapper.enable_fusion);
-  EXPECT_EQ(options.save_every_keyframes, 3);
-  EXPECT_EQ(options.map_file, "/tmp/a.map");
-  EXPECT_TRUE(options.load_map.empty());
-  EXPECT_FALSE(options.batch_map_writes);
-  EXPECT_TRUE(MapperProcessOptions::from_config(runtime::Config::empty(), {}).batch_map_writes);  // the default
-
-  const runtime::Config bad = runtime::Config::parse("bundle_adjustment: {threads: 0}\n", "mapper.yaml");
-  try {
-    MapperProcessOptions::from_config(bad, {});
-    FAIL() << "expected a rejection";
-  } catch (const std::runtime_error& error) {
-    EXPECT_NE(std::string(error.what()).find("bundle_adjustment.threads"), std::string::npos) << error.what();
-  }
-  EXPECT_THROW(MapperProcessOptions::from_config(runtime::Config::empty(), {"--load-map"}), std::runtime_error);
-  EXPECT_THROW(MapperProcessOptions::from_config(runtime::Config::empty(), {"--bogus"}), std::runtime_error);
-}
-
 }  // namespace
-}  // namespace heslam::local_mapper
+}  // namespace heslam::messages

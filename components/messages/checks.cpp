@@ -1,5 +1,5 @@
 // Sample checks for every subscribed topic type (see the header).
-#include "components/frontend/message_checks.hpp"
+#include "components/messages/checks.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -9,7 +9,7 @@
 #include "runtime/sequence.hpp"
 #include "runtime/wire_enum.hpp"
 
-namespace heslam::frontend {
+namespace heslam::messages {
 namespace {
 
 // Farther than any recording reaches (KITTI's longest drive is ~5 km): a larger coordinate is a
@@ -232,4 +232,4 @@ const char* rejected_counter(const msg::KeyframeState*) { return "rejected_keyfr
 const char* rejected_counter(const msg::MapPointState*) { return "rejected_points"; }
 const char* rejected_counter(const msg::LoopCorrection*) { return "rejected_corrections"; }
 
-}  // namespace heslam::frontend
+}  // namespace heslam::messages

@@ -1,5 +1,6 @@
-// The ONE place where a loop closer converts its core LoopCorrection into the IDL sample. The message
-// borrows its sequences from buffers it owns, so it must outlive the write() that sends it.
+// Loop corrections on the wire (loop closer -> local mapper): a core LoopCorrection and back.
+// LoopCorrectionMessage borrows its sequences from buffers it owns, so it must outlive the write()
+// that sends it.
 #pragma once
 
 #include <vector>
@@ -7,7 +8,7 @@
 #include "components/core/mapping/loop_correction.hpp"
 #include "runtime/messages.hpp"
 
-namespace heslam::loop_closer {
+namespace heslam::messages {
 
 class LoopCorrectionMessage {
  public:
@@ -23,4 +24,7 @@ class LoopCorrectionMessage {
   msg::LoopCorrection message_{};
 };
 
-}  // namespace heslam::loop_closer
+// Throws std::runtime_error naming the correction when a pose is not finite or an id is 0.
+LoopCorrection to_loop_correction(const msg::LoopCorrection& message);
+
+}  // namespace heslam::messages

@@ -1,4 +1,5 @@
-// The frontend's IDL <-> core adapter: round trips with known values, and the mirror of map state.
+// IDL <-> core conversions (poses, camera input, odometry, keyframes): round trips with known values,
+// and map state applied to a mirror.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -6,10 +7,14 @@
 #include <cstring>
 #include <string>
 
-#include "components/frontend/message_adapter.hpp"
+#include "components/messages/camera.hpp"
+#include "components/messages/keyframe.hpp"
+#include "components/messages/map_state.hpp"
+#include "components/messages/odometry.hpp"
+#include "components/messages/pose.hpp"
 #include "runtime/sequence.hpp"
 
-namespace heslam::frontend {
+namespace heslam::messages {
 namespace {
 
 Pose3 test_pose() {
@@ -27,7 +32,7 @@ double max_abs_difference(const Pose3& a, const Pose3& b) {
   return worst;
 }
 
-TEST(MessageAdapter, PoseRoundTripKeepsTheTransform) {
+TEST(MessageConversion, PoseRoundTripKeepsTheTransform) {
   const Pose3 T = test_pose();
   const Pose3 back = to_pose(to_message(T));
   EXPECT_LT(max_abs_difference(back, T), 1e-15);
@@ -35,12 +40,12 @@ TEST(MessageAdapter, PoseRoundTripKeepsTheTransform) {
   EXPECT_DOUBLE_EQ(pose.position_m[2], 3.0);
 }
 
-TEST(MessageAdapter, ZeroQuaternionIsIdentityNotNan) {
+TEST(MessageConversion, ZeroQuaternionIsIdentityNotNan) {
   const msg::Pose zero{};
   EXPECT_TRUE(to_pose(zero).matrix().isIdentity());
 }
 
-TEST(MessageAdapter, CalibrationRoundTripIsExact) {
+TEST(MessageConversion, CalibrationRoundTripIsExact) {
   msg::StereoCalibration message{};
   message.left = {752, 480, 458.654, 457.296, 367.215, 248.375, heslam_msg_DISTORTION_RADIAL_TANGENTIAL, {}, {}};
   message.right = message.left;
@@ -67,7 +72,7 @@ TEST(MessageAdapter, CalibrationRoundTripIsExact) {
   EXPECT_FALSE(calibration.explicit_rectification.has_value());
 }
 
-TEST(MessageAdapter, CalibrationWithoutFocalLengthNamesTheSource) {
+TEST(MessageConversion, CalibrationWithoutFocalLengthNamesTheSource) {
   msg::StereoCalibration message{};
   std::string source = "bad.yaml";
   message.source = runtime::borrow(source);
@@ -80,7 +85,7 @@ TEST(MessageAdapter, CalibrationWithoutFocalLengthNamesTheSource) {
   }
 }
 
-TEST(MessageAdapter, FrameImagesAreWrappedAndSizesChecked) {
+TEST(MessageConversion, FrameImagesAreWrappedAndSizesChecked) {
   std::vector<std::uint8_t> left(4 * 3, 7), right(4 * 3, 9);
   msg::StereoFrame frame{};
   frame.width_px = 4;
@@ -117,7 +122,7 @@ std::string error_of(const msg::StereoFrame& frame) {
 }
 
 // Known bad frames: the line names the side at fault and prints the wire values as they are.
-TEST(MessageAdapter, BadFrameSizesNameTheFieldAndTheSide) {
+TEST(MessageConversion, BadFrameSizesNameTheFieldAndTheSide) {
   std::vector<std::uint8_t> full(4 * 3, 7), short_one(4 * 2, 9);
   msg::StereoFrame frame{};
   frame.seq = 12;
@@ -140,7 +145,7 @@ TEST(MessageAdapter, BadFrameSizesNameTheFieldAndTheSide) {
   EXPECT_EQ(error_of(frame), "stereo frame 12: width_px x height_px 100000x400000: expected 1..8192 px per side");
 }
 
-TEST(MessageAdapter, CalibrationWithAnImpossibleSizeNamesTheSourceNotOpenCv) {
+TEST(MessageConversion, CalibrationWithAnImpossibleSizeNamesTheSourceNotOpenCv) {
   msg::StereoCalibration message{};
   message.left = {100000, 100000, 458.654, 457.296, 367.215, 248.375, heslam_msg_DISTORTION_NONE, {}, {}};
   message.right = message.left;
@@ -154,7 +159,7 @@ TEST(MessageAdapter, CalibrationWithAnImpossibleSizeNamesTheSourceNotOpenCv) {
   }
 }
 
-TEST(MessageAdapter, OdometryOfALostFrameCarriesNoPose) {
+TEST(MessageConversion, OdometryOfALostFrameCarriesNoPose) {
   TrackResult result;
   result.state = TrackingState::kLost;
   result.T_wc = test_pose();
@@ -188,7 +193,7 @@ Keyframe make_keyframe(KeyframeId id, int keypoints) {
   return keyframe;
 }
 
-TEST(MessageAdapter, KeyframeRoundTripKeepsFeaturesPointsAndNewPoints) {
+TEST(MessageConversion, KeyframeRoundTripKeepsFeaturesPointsAndNewPoints) {
   const Keyframe keyframe = make_keyframe(make_id(kFrontendTag, 3), 6);
   MapPoint point;
   point.id = make_id(kFrontendTag, 104);
@@ -216,7 +221,7 @@ TEST(MessageAdapter, KeyframeRoundTripKeepsFeaturesPointsAndNewPoints) {
   EXPECT_EQ(decoded.new_points[0].observations.front(), std::make_pair(keyframe.id, 4));
 }
 
-TEST(MessageAdapter, MirrorAppliesKeyframeStateAndPointMerges) {
+TEST(MessageConversion, MirrorAppliesKeyframeStateAndPointMerges) {
   Map map;
   const Keyframe keyframe = make_keyframe(make_id(kFrontendTag, 1), 4);
   map.keyframes[keyframe.id] = keyframe;
@@ -270,4 +275,4 @@ TEST(MessageAdapter, MirrorAppliesKeyframeStateAndPointMerges) {
 }
 
 }  // namespace
-}  // namespace heslam::frontend
+}  // namespace heslam::messages

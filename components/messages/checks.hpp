@@ -13,7 +13,7 @@
 #include "runtime/checked_reader.hpp"
 #include "runtime/messages.hpp"
 
-namespace heslam::frontend {
+namespace heslam::messages {
 
 std::optional<std::string> check(const msg::Pose& pose, const char* field);
 std::optional<std::string> check(const msg::StereoFrame& frame);  // sizes and encoding
@@ -52,4 +52,4 @@ runtime::CheckedReaderOptions checked_options(std::size_t max_held = 64) {
 // take-over. It also bounds what a flooding second writer costs (~100 MB at worst).
 inline constexpr std::size_t kMapStateHeld = 200000;
 
-}  // namespace heslam::frontend
+}  // namespace heslam::messages

@@ -1,4 +1,4 @@
-// frontend::check (issue 16 section 3): what every subscriber refuses — NaN / infinite / absurd
+// messages::check: what every subscriber refuses — NaN / infinite / absurd
 // numbers, zero ids, inconsistent sizes, unknown enum values — and that what heslam itself writes
 // passes (the version markers, identity poses, the "no pose" all-zero pose).
 #include <cmath>
@@ -8,11 +8,11 @@
 
 #include <gtest/gtest.h>
 
-#include "components/frontend/message_checks.hpp"
+#include "components/messages/checks.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/wire_enum.hpp"
 
-namespace heslam::frontend {
+namespace heslam::messages {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -164,4 +164,4 @@ TEST(MessageChecks, FrameSizesMustMatch) {
 }
 
 }  // namespace
-}  // namespace heslam::frontend
+}  // namespace heslam::messages

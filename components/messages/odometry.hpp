@@ -1,0 +1,34 @@
+// The frontend's per-frame odometry sample: the tracking result, its state and the stage timings.
+// The message borrows its sequences from buffers it owns, so it must outlive the write() that sends it.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "components/core/tracking/tracker.hpp"
+#include "runtime/messages.hpp"
+
+namespace heslam::messages {
+
+struct StageTiming {
+  std::string stage;  // at most 31 characters (IDL string<31>); longer names are cut
+  double ms = 0.0;
+};
+
+class OdometryMessage {
+ public:
+  OdometryMessage(std::int64_t stamp_ns, std::uint64_t seq, const TrackResult& result, std::uint32_t keypoints,
+                  const std::vector<StageTiming>& timings);
+  OdometryMessage(const OdometryMessage&) = delete;
+  OdometryMessage& operator=(const OdometryMessage&) = delete;
+  const msg::Odometry& get() const { return message_; }
+
+ private:
+  std::vector<msg::StageTime> stage_times_;
+  msg::Odometry message_{};
+};
+
+heslam_msg_TrackingState to_message(TrackingState state);
+
+}  // namespace heslam::messages
