@@ -27,7 +27,7 @@
 #include "runtime/topics.hpp"
 #include "runtime/writer.hpp"
 #include "test_support.hpp"
-#include "tools/replay/dataset/stereo_dataset.hpp"
+#include "tools/dataset/stereo_dataset.hpp"
 #include "tools/replay/replay_messages.hpp"
 
 namespace heslam {

@@ -32,7 +32,7 @@
 #include "runtime/sequence.hpp"
 #include "runtime/topics.hpp"
 #include "runtime/writer.hpp"
-#include "tools/replay/dataset/stereo_dataset.hpp"
+#include "tools/dataset/stereo_dataset.hpp"
 #include "tools/replay/replay_messages.hpp"
 
 namespace {

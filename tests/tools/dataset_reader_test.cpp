@@ -1,5 +1,6 @@
 // heslam_dataset on tiny EuRoC and KITTI folders written by the test (known answers for every field
-// and every error line), plus the real EuRoC clip from the shared data when present.
+// and every error line), ground truth paired with frames by stamp, plus the real EuRoC clip from the
+// shared data when present.
 #include <cstdio>
 #include <fstream>
 #include <iterator>
@@ -13,8 +14,9 @@
 
 #include "test_support.hpp"
 #include "tiny_euroc_sensor.hpp"
-#include "tools/replay/dataset/stereo_dataset.hpp"
-#include "tools/replay/dataset/stereo_images.hpp"
+#include "tools/dataset/ground_truth.hpp"
+#include "tools/dataset/stereo_dataset.hpp"
+#include "tools/dataset/stereo_images.hpp"
 
 namespace heslam {
 namespace {
@@ -171,6 +173,44 @@ TEST_F(DatasetReader, EurocUnreadableCalibrationNamesTheFile) {
   make_euroc(kThreeRows, kThreeRows);
   fs::remove(root_ / "mav0" / "cam1" / "sensor.yaml");
   EXPECT_NE(open_error().find("sensor.yaml"), std::string::npos) << open_error();
+}
+
+TEST_F(DatasetReader, FrameListsWithoutCalibration) {
+  make_euroc(kThreeRows, kThreeRows);
+  fs::remove(root_ / "mav0" / "cam1" / "sensor.yaml");  // not read
+  DatasetOptions lists_only;
+  lists_only.load_calibration = false;
+  const StereoDataset dataset = open_dataset(root_, lists_only);
+  ASSERT_EQ(dataset.frames.size(), 3u);
+  EXPECT_EQ(dataset.frames[2].right, root_ / "mav0" / "cam1" / "data" / "300.png");
+  EXPECT_EQ(dataset.calibration.left.width_px, 0);
+  // A bad row is still one line naming the file and the line.
+  write_text(root_ / "mav0" / "cam1" / "data.csv", "#timestamp [ns],filename\n100,100.png\n12x34,200.png\n");
+  const std::string error = open_error(lists_only);
+  EXPECT_NE(error.find("cam1/data.csv line 3: expected '<timestamp ns>,<file name>', got '12x34,200.png'"),
+            std::string::npos)
+      << error;
+}
+
+TEST(GroundTruth, PosesAtStampsTakeTheNearestRowWithinTheGap) {
+  eval::Trajectory truth;
+  for (int k = 0; k < 3; ++k) {
+    Pose3 T = Pose3::Identity();
+    T.translation().x() = k;
+    truth.push_back(T, k, 1.0 + 0.01 * k);  // rows at 1.00 s, 1.01 s, 1.02 s
+  }
+  const std::vector<std::int64_t> stamps_ns{1'000'000'000, 1'004'000'000, 1'005'000'000, 1'016'000'000,
+                                            1'040'000'000, 900'000'000};
+  const std::vector<std::optional<Pose3>> poses = poses_at_stamps(truth, stamps_ns, 0.005);
+  ASSERT_EQ(poses.size(), stamps_ns.size());
+  ASSERT_TRUE(poses[0] && poses[1] && poses[2] && poses[3]);
+  EXPECT_EQ(poses[0]->translation().x(), 0.0);  // the row's own stamp
+  EXPECT_EQ(poses[1]->translation().x(), 0.0);  // 4 ms after row 0
+  EXPECT_EQ(poses[2]->translation().x(), 0.0);  // half way: the earlier row
+  EXPECT_EQ(poses[3]->translation().x(), 2.0);  // 4 ms before row 2
+  EXPECT_FALSE(poses[4]);                        // 20 ms after the last row
+  EXPECT_FALSE(poses[5]);                        // before the first
+  EXPECT_EQ(euroc_ground_truth_file("/d/mav0"), fs::path("/d/mav0/state_groundtruth_estimate0/data.csv"));
 }
 
 TEST_F(DatasetReader, EmptyFolderIsNotADataset) {

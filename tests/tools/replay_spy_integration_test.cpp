@@ -22,8 +22,8 @@
 #include "runtime/waitset.hpp"
 #include "runtime/writer.hpp"
 #include "test_support.hpp"
-#include "tools/replay/dataset/stereo_dataset.hpp"
-#include "tools/replay/dataset/stereo_images.hpp"
+#include "tools/dataset/stereo_dataset.hpp"
+#include "tools/dataset/stereo_images.hpp"
 
 namespace heslam {
 namespace {

@@ -9,8 +9,8 @@
 #include <filesystem>
 #include <vector>
 
+#include "tools/dataset/stereo_dataset.hpp"
 #include "tools/photometric/photometric_variant.hpp"
-#include "tools/replay/dataset/stereo_dataset.hpp"
 
 namespace heslam::photometric {
 

@@ -9,7 +9,7 @@
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/camera/stereo_calibration.hpp"
 #include "runtime/messages.hpp"
-#include "tools/replay/dataset/stereo_images.hpp"
+#include "tools/dataset/stereo_images.hpp"
 
 namespace heslam {
 

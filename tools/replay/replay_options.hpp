@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "tools/replay/dataset/stereo_dataset.hpp"
+#include "tools/dataset/stereo_dataset.hpp"
 
 namespace heslam {
 

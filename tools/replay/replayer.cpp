@@ -24,7 +24,7 @@
 #include "runtime/topics.hpp"
 #include "runtime/waitset.hpp"
 #include "runtime/writer.hpp"
-#include "tools/replay/dataset/stereo_images.hpp"
+#include "tools/dataset/stereo_images.hpp"
 #include "tools/replay/replay_controls.hpp"
 #include "tools/replay/replay_messages.hpp"
 #include "tools/replay/replay_pacer.hpp"

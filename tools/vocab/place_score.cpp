@@ -11,8 +11,9 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "components/core/place/image_descriptors.hpp"
+#include "tools/dataset/ground_truth.hpp"
+#include "tools/dataset/stereo_dataset.hpp"
 #include "tools/eval/trajectory_io.hpp"
-#include "tools/replay/dataset/stereo_dataset.hpp"
 
 namespace heslam::vocab {
 namespace {
@@ -38,21 +39,12 @@ std::vector<std::optional<Pose3>> ground_truth(const StereoDataset& dataset) {
     return poses;
   }
   const fs::path mav0 = fs::exists(dataset.root / "mav0") ? dataset.root / "mav0" : dataset.root;
-  const fs::path csv = mav0 / "state_groundtruth_estimate0" / "data.csv";
+  const fs::path csv = euroc_ground_truth_file(mav0);
   if (!fs::exists(csv)) throw std::runtime_error(csv.string() + ": no ground truth (score needs it)");
   const eval::Trajectory t = eval::read_trajectory(csv, {.format = eval::Format::euroc, .extrinsic_path = mav0 / "cam0" / "sensor.yaml"});
-  for (std::size_t i = 0; i < poses.size(); ++i) {
-    const double stamp_s = dataset.frames[i].stamp_ns * 1e-9;
-    const auto it = std::lower_bound(t.stamps_s.begin(), t.stamps_s.end(), stamp_s);
-    std::size_t best = t.size();
-    for (auto c : {it, it == t.stamps_s.begin() ? it : it - 1}) {
-      if (c == t.stamps_s.end()) continue;
-      const std::size_t k = static_cast<std::size_t>(c - t.stamps_s.begin());
-      if (best == t.size() || std::abs(t.stamps_s[k] - stamp_s) < std::abs(t.stamps_s[best] - stamp_s)) best = k;
-    }
-    if (best < t.size() && std::abs(t.stamps_s[best] - stamp_s) <= kMaxStampGapS) poses[i] = t.poses_wc[best];
-  }
-  return poses;
+  std::vector<std::int64_t> stamps_ns;
+  for (const StereoFrameFiles& frame : dataset.frames) stamps_ns.push_back(frame.stamp_ns);
+  return poses_at_stamps(t, stamps_ns, kMaxStampGapS);
 }
 
 double view_angle_deg(const Pose3& a, const Pose3& b) {

@@ -9,7 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "components/core/place/image_descriptors.hpp"
-#include "tools/replay/dataset/stereo_dataset.hpp"
+#include "tools/dataset/stereo_dataset.hpp"
 #include "tools/synth/preset.hpp"
 #include "tools/synth/sequence.hpp"
 

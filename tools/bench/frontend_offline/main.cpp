@@ -247,7 +247,6 @@ int run(int argc, char** argv) {
     dataset = kidnap_dir;
   }
   const auto sequence = heslam::bench::load_euroc_sequence(dataset);
-  if (sequence.frames.empty()) throw std::runtime_error(dataset + ": no stereo frames found in mav0/cam0, mav0/cam1");
   const auto result = heslam::bench::run_offline(sequence, options);
   if (!output.empty()) heslam::bench::write_tum_trajectory(output, result);
 

@@ -136,8 +136,7 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
     record.tracked_points = result.tracked_points;
     record.keyframe = result.new_keyframe.has_value();
     record.motion = result.motion;
-    const auto truth = sequence.T_WB_by_stamp.find(input.stamp_ns);
-    if (truth != sequence.T_WB_by_stamp.end()) record.T_wc_truth = truth->second * rectifier.T_B_rect();
+    if (input.T_WB_truth) record.T_wc_truth = *input.T_WB_truth * rectifier.T_B_rect();
     run.frames.push_back(record);
   }
   run.keyframes = static_cast<int>(tracker.local_map().keyframes.size());

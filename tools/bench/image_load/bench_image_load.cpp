@@ -13,8 +13,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "tools/replay/dataset/png_check.hpp"
-#include "tools/replay/dataset/stereo_images.hpp"
+#include "tools/dataset/png_check.hpp"
+#include "tools/dataset/stereo_images.hpp"
 
 namespace {
 

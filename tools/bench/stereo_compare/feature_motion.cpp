@@ -13,7 +13,7 @@
 #include "components/core/camera/stereo_calibration.hpp"
 #include "components/core/camera/stereo_rectifier.hpp"
 #include "tools/bench/stereo_compare/zncc_reference.hpp"
-#include "tools/eval/trajectory_io.hpp"
+#include "tools/dataset/ground_truth.hpp"
 
 namespace heslam::bench {
 namespace {
@@ -23,7 +23,6 @@ constexpr int kMaxHammingDistance = 50;     // ORB-SLAM2's TH_LOW
 constexpr double kRatio = 0.8;              // best < ratio x second best
 constexpr double kMaxResidualLevelPx = 3.0; // a farther match is a different point
 constexpr double kCloseDepthM = 3.0;
-constexpr double kMaxStampGapS = 1e-3;      // ground truth row of a frame
 
 struct SlopeGroup {
   double dot = 0.0, predicted2 = 0.0, along_sum = 0.0;
@@ -46,19 +45,17 @@ int hamming(const Descriptor& a, const Descriptor& b) {
   return distance;
 }
 
-// Body poses of the ground truth at each frame's stamp; throws when a frame has none.
+// Body poses of the ground truth at each frame's stamp (load_euroc_sequence read them); throws when a
+// frame has none.
 std::vector<Pose3> ground_truth_at_frames(const EurocSequence& sequence) {
-  const auto path = sequence.mav0_dir / "state_groundtruth_estimate0" / "data.csv";
-  const eval::Trajectory truth = eval::read_trajectory(path);
+  const std::filesystem::path path = euroc_ground_truth_file(sequence.mav0_dir);
+  if (!std::filesystem::exists(path)) throw std::runtime_error("cannot open " + path.string());
   std::vector<Pose3> poses;
-  std::size_t j = 0;
   for (const EurocFrame& frame : sequence.frames) {
-    const double stamp_s = static_cast<double>(frame.stamp_ns) * 1e-9;
-    while (j + 1 < truth.size() && truth.stamps_s[j] < stamp_s - kMaxStampGapS) ++j;
-    if (j >= truth.size() || std::abs(truth.stamps_s[j] - stamp_s) > kMaxStampGapS) {
+    if (!frame.T_WB_truth) {
       throw std::runtime_error(path.string() + ": no ground truth row at frame stamp " + std::to_string(frame.stamp_ns));
     }
-    poses.push_back(truth.poses_wc[j]);
+    poses.push_back(*frame.T_WB_truth);
   }
   return poses;
 }

@@ -6,15 +6,15 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "components/core/camera/stereo_calibration.hpp"
 #include "components/core/camera/stereo_rectifier.hpp"
 #include "components/core/feature/stereo_feature_pipeline.hpp"
+#include "tools/dataset/stereo_dataset.hpp"
 #include "tools/synth/preset.hpp"
 #include "tools/synth/sequence.hpp"
 #include "tools/synth/writers.hpp"
@@ -41,20 +41,15 @@ double mean(const std::vector<double>& v) {
 
 // Runs `frames` pairs of an EuRoC-layout folder (mav0/...) through rectification and the pipeline.
 Summary measure(const fs::path& mav0, const heslam::StereoFeaturePipelineOptions& options, int frames) {
-  const heslam::StereoCalibration calib = heslam::load_euroc_calibration(mav0);
-  const heslam::StereoRectifier rectifier(calib);
+  const heslam::StereoDataset dataset = heslam::open_dataset(mav0, {.format = heslam::DatasetFormat::kEuroc});
+  const heslam::StereoRectifier rectifier(dataset.calibration);
   heslam::StereoFeaturePipeline pipeline(rectifier.camera(), options);
-  std::ifstream csv(mav0 / "cam0" / "data.csv");
-  if (!csv) throw std::runtime_error((mav0 / "cam0" / "data.csv").string() + ": cannot be read");
   Summary s;
-  std::string line;
-  while (std::getline(csv, line) && static_cast<int>(s.keypoints.size()) < frames) {
-    if (line.empty() || line[0] == '#') continue;
-    std::string name = line.substr(line.find(',') + 1);
-    while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
-    const cv::Mat left = cv::imread((mav0 / "cam0" / "data" / name).string(), cv::IMREAD_GRAYSCALE);
-    const cv::Mat right = cv::imread((mav0 / "cam1" / "data" / name).string(), cv::IMREAD_GRAYSCALE);
-    if (left.empty() || right.empty()) throw std::runtime_error((mav0 / "cam0" / "data" / name).string() + ": missing pair");
+  for (const heslam::StereoFrameFiles& frame : dataset.frames) {
+    if (static_cast<int>(s.keypoints.size()) >= frames) break;
+    const cv::Mat left = cv::imread(frame.left.string(), cv::IMREAD_GRAYSCALE);
+    const cv::Mat right = cv::imread(frame.right.string(), cv::IMREAD_GRAYSCALE);
+    if (left.empty() || right.empty()) throw std::runtime_error(frame.left.string() + ": missing pair");
     cv::Mat left_rect, right_rect;
     rectifier.rectify(left, right, left_rect, right_rect);
     const heslam::StereoFeatures f = pipeline.process(left_rect, right_rect);

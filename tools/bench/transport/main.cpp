@@ -61,8 +61,8 @@
 #include "runtime/topic.hpp"
 #include "runtime/topics.hpp"
 #include "runtime/waitset.hpp"
-#include "tools/replay/dataset/stereo_dataset.hpp"
-#include "tools/replay/dataset/stereo_images.hpp"
+#include "tools/dataset/stereo_dataset.hpp"
+#include "tools/dataset/stereo_images.hpp"
 
 extern char** environ;
 

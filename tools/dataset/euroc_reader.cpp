@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "tools/replay/dataset/dataset_readers.hpp"
+#include "tools/dataset/dataset_readers.hpp"
 
 namespace heslam::dataset_detail {
 
@@ -81,7 +81,7 @@ StereoDataset read_euroc(const fs::path& mav0_dir, const DatasetOptions& options
   const std::vector<CsvRow> right = read_camera_csv(right_dir);
 
   StereoDataset dataset;
-  dataset.calibration = load_euroc_calibration(mav0_dir);
+  if (options.load_calibration) dataset.calibration = load_euroc_calibration(mav0_dir);
 
   // Merge walk over the two sorted lists; the earlier unpaired row is the one skipped.
   std::size_t l = 0;

@@ -1,10 +1,10 @@
 // Format detection, dispatch to the per-format readers, and time-window selection.
-#include "tools/replay/dataset/stereo_dataset.hpp"
+#include "tools/dataset/stereo_dataset.hpp"
 
 #include <cstdio>
 #include <stdexcept>
 
-#include "tools/replay/dataset/dataset_readers.hpp"
+#include "tools/dataset/dataset_readers.hpp"
 
 namespace heslam {
 

@@ -1,5 +1,5 @@
 // PNG chunk walk with CRC-32 (zlib's, the one PNG specifies), no decompression.
-#include "tools/replay/dataset/png_check.hpp"
+#include "tools/dataset/png_check.hpp"
 
 #include <algorithm>
 #include <array>

@@ -3,7 +3,7 @@
 
 #include <filesystem>
 
-#include "tools/replay/dataset/stereo_dataset.hpp"
+#include "tools/dataset/stereo_dataset.hpp"
 
 namespace heslam::dataset_detail {
 

@@ -1,5 +1,5 @@
 // Decodes a stereo pair's files as stored, and says which file is wrong when one is.
-#include "tools/replay/dataset/stereo_images.hpp"
+#include "tools/dataset/stereo_images.hpp"
 
 #include <fstream>
 #include <iterator>
@@ -8,7 +8,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "tools/replay/dataset/png_check.hpp"
+#include "tools/dataset/png_check.hpp"
 
 namespace heslam {
 

@@ -1,5 +1,6 @@
 // A stereo recording on disk (EuRoC ASL folder or KITTI odometry sequence) as a list of frame files
-// plus the rig's raw calibration. DDS-free: the replay publishes it, offline tests read it directly.
+// plus the rig's raw calibration. DDS-free: the replay publishes it; the offline benchmarks,
+// heslam-vocab, the photometric copies and tests read it directly.
 //
 //   StereoDataset dataset = open_dataset("/data/V1_01_easy", {});   // format auto-detected
 //   for (const StereoFrameFiles& frame : dataset.frames) {
@@ -32,6 +33,8 @@ struct DatasetOptions {
   std::int64_t max_stereo_offset_ns = 1'000'000;
   // true: a row without a partner in the other camera is an error instead of a skipped, counted row.
   bool strict = false;
+  // false: the frame lists only, the calibration left empty (for callers that load their own).
+  bool load_calibration = true;
 };
 
 // One stereo pair: where its two images are and when it was taken (the left camera's stamp).

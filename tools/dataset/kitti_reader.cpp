@@ -9,8 +9,8 @@
 
 #include <opencv2/core.hpp>
 
-#include "tools/replay/dataset/dataset_readers.hpp"
-#include "tools/replay/dataset/stereo_images.hpp"
+#include "tools/dataset/dataset_readers.hpp"
+#include "tools/dataset/stereo_images.hpp"
 
 namespace heslam::dataset_detail {
 
@@ -33,7 +33,7 @@ bool looks_like_kitti(const fs::path& path) {
   return fs::exists(path / "times.txt") && fs::is_directory(path / "image_0");
 }
 
-StereoDataset read_kitti(const fs::path& sequence_dir, const DatasetOptions& /*options*/) {
+StereoDataset read_kitti(const fs::path& sequence_dir, const DatasetOptions& options) {
   const fs::path times_txt = sequence_dir / "times.txt";
   std::ifstream in(times_txt);
   if (!in) throw std::runtime_error(times_txt.string() + ": cannot be opened (expected the KITTI frame times)");
@@ -61,6 +61,7 @@ StereoDataset read_kitti(const fs::path& sequence_dir, const DatasetOptions& /*o
                               image_path(sequence_dir / "image_1", index)});
   }
   if (dataset.frames.empty()) throw std::runtime_error(times_txt.string() + ": no frames listed (empty recording)");
+  if (!options.load_calibration) return dataset;
 
   // The first decodable left image gives the size calib.txt leaves out.
   cv::Mat first;

@@ -6,7 +6,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "tools/replay/dataset/stereo_dataset.hpp"
+#include "tools/dataset/stereo_dataset.hpp"
 
 namespace heslam {
 
