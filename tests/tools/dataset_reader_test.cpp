@@ -199,14 +199,14 @@ TEST(GroundTruth, PosesAtStampsTakeTheNearestRowWithinTheGap) {
     T.translation().x() = k;
     truth.push_back(T, k, 1.0 + 0.01 * k);  // rows at 1.00 s, 1.01 s, 1.02 s
   }
-  const std::vector<std::int64_t> stamps_ns{1'000'000'000, 1'004'000'000, 1'005'000'000, 1'016'000'000,
+  const std::vector<std::int64_t> stamps_ns{1'000'000'000, 1'004'000'000, 1'006'000'000, 1'016'000'000,
                                             1'040'000'000, 900'000'000};
   const std::vector<std::optional<Pose3>> poses = poses_at_stamps(truth, stamps_ns, 0.005);
   ASSERT_EQ(poses.size(), stamps_ns.size());
   ASSERT_TRUE(poses[0] && poses[1] && poses[2] && poses[3]);
   EXPECT_EQ(poses[0]->translation().x(), 0.0);  // the row's own stamp
   EXPECT_EQ(poses[1]->translation().x(), 0.0);  // 4 ms after row 0
-  EXPECT_EQ(poses[2]->translation().x(), 0.0);  // half way: the earlier row
+  EXPECT_EQ(poses[2]->translation().x(), 1.0);  // 4 ms before row 1
   EXPECT_EQ(poses[3]->translation().x(), 2.0);  // 4 ms before row 2
   EXPECT_FALSE(poses[4]);                        // 20 ms after the last row
   EXPECT_FALSE(poses[5]);                        // before the first
