@@ -287,5 +287,29 @@ TEST(FrameJournal, RoundTripsFramesExactlyAndSkipsATornLine) {
   EXPECT_FALSE(std::filesystem::exists(path));
 }
 
+// A recorder killed mid-write, restarted, and appending again: the frame appended after the torn line
+// is on a line of its own and comes back at the next open, not glued to the torn line and lost.
+TEST(FrameJournal, AFrameAppendedAfterATornLineSurvivesTheNextOpen) {
+  const std::filesystem::path path = std::filesystem::temp_directory_path() / "heslam_frame_journal_glued.journal";
+  std::filesystem::remove(path);
+  {
+    FrameJournal journal(path);
+    journal.open_for_run("run-a");
+    journal.append(tracked(1, 7, translation(0, 0, 0), translation(1, 0, 0)));
+  }
+  std::ofstream(path, std::ios::app) << "2 1100000000 1 OK 7 0.1 0.2";  // killed mid-write
+  {
+    FrameJournal journal(path);
+    EXPECT_EQ(journal.open_for_run("run-a").frames.size(), 1u);
+    journal.append(tracked(3, 7, translation(0, 0, 0), translation(3, 0, 0)));  // the restarted recorder
+  }
+  FrameJournal journal(path);
+  const FrameJournal::Opened opened = journal.open_for_run("run-a");
+  ASSERT_EQ(opened.frames.size(), 2u);
+  EXPECT_EQ(opened.frames[1].seq, 3u);
+  EXPECT_EQ(opened.frames[1].T_wc.translation().x(), 3.0);
+  journal.remove();
+}
+
 }  // namespace
 }  // namespace heslam::recorder
