@@ -134,6 +134,10 @@ void Frontend::resume_from_journal() {
   if (options_.journal_file.empty()) return;
   journal_.emplace(options_.journal_file);
   const OdometryJournal::Opened resumed = journal_->open_for_run(runtime::supervisor_run_id());
+  if (resumed.dropped_lines > 0) {
+    stats().count("journal_dropped_lines", resumed.dropped_lines);
+    log().warn(resumed.dropped_report);
+  }
   if (resumed.frames.empty()) return;
   last_seq_ = resumed.last_seq;
   for (const msg::Odometry& odometry : resumed.frames) {

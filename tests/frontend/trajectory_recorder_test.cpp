@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "runtime/run_journal.hpp"
 #include "tools/eval/trajectory_io.hpp"
 #include "tools/recorder/frame_journal.hpp"
 #include "tools/recorder/recorder.hpp"
@@ -308,6 +309,30 @@ TEST(FrameJournal, AFrameAppendedAfterATornLineSurvivesTheNextOpen) {
   ASSERT_EQ(opened.frames.size(), 2u);
   EXPECT_EQ(opened.frames[1].seq, 3u);
   EXPECT_EQ(opened.frames[1].T_wc.translation().x(), 3.0);
+  journal.remove();
+}
+
+// A phantom line (right format, but not what the recorder wrote) would become an extra pose and
+// frames lost that never existed: it is dropped and counted, and so is a line out of sequence.
+TEST(FrameJournal, APhantomLineIsDroppedAndCountedNotRecorded) {
+  const std::filesystem::path path = std::filesystem::temp_directory_path() / "heslam_frame_journal_phantom.journal";
+  std::filesystem::remove(path);
+  {
+    FrameJournal journal(path);
+    journal.open_for_run("run-a");
+    journal.append(tracked(1, 7, translation(0, 0, 0), translation(1, 0, 0)));
+    journal.append(tracked(2, 7, translation(0, 0, 0), translation(2, 0, 0)));
+  }
+  const std::string phantom = "142 8100000000 1 OK 7 0 0 0 0 0 0 1 5 0 0 0 0 0 1";
+  std::ofstream(path, std::ios::app) << phantom << " #3 0badf00d\n";                  // a wrong checksum
+  std::ofstream(path, std::ios::app) << runtime::RunJournal::line(2, phantom);        // a number used before
+  FrameJournal journal(path);
+  const FrameJournal::Opened opened = journal.open_for_run("run-a");
+  ASSERT_EQ(opened.frames.size(), 2u);
+  EXPECT_EQ(opened.frames[1].seq, 2u);
+  EXPECT_EQ(opened.dropped_lines, 2);
+  EXPECT_EQ(opened.dropped_report,
+            path.string() + ": 2 lines dropped, not resumed from (1 failing their checksum, 1 out of sequence)");
   journal.remove();
 }
 

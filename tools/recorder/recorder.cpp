@@ -188,6 +188,10 @@ void Recorder::configure(const runtime::Config& config) {
   journal_.emplace(sibling_path(options_.output, ".journal"));
   const FrameJournal::Opened resumed = journal_->open_for_run(runtime::supervisor_run_id());
   for (const RecordedFrame& frame : resumed.frames) recorder_.add_frame(frame);
+  if (resumed.dropped_lines > 0) {
+    stats().count("journal_dropped_lines", resumed.dropped_lines);
+    log().warn(resumed.dropped_report);
+  }
   if (!resumed.frames.empty() || resumed.torn_lines > 0) {
     stats().count("journal_frames", resumed.frames.size());
     log().info("resuming: ", resumed.frames.size(), " frames from ", journal_->path().string(),
