@@ -313,6 +313,12 @@ void read_payload(Reader& r, std::uint32_t format, MapSnapshot& out) {
 
 }  // namespace
 
+std::filesystem::path map_run_file_path(const std::filesystem::path& map_file) {
+  std::filesystem::path path = map_file;
+  path += ".run";
+  return path;
+}
+
 MapFileWriteStats save_map_file(const std::filesystem::path& path, const Map& map, const MapperState& state,
                                 bool sync) {
   MapFileWriteStats stats;

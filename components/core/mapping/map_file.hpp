@@ -30,6 +30,12 @@ struct MapFileWriteStats {
   double write_ms = 0.0;  // write + (optional) fsync + rename
 };
 
+// The run file a local mapper keeps beside its map file (runtime/run_journal.hpp): FILE.run, naming
+// the run that wrote FILE, then the ids of the loop corrections applied to it, one per record. A
+// restarted frontend reads its first line to know whether FILE is this run's.
+inline constexpr const char* kMapRunFileFormat = "heslam-mapper-run 2";
+std::filesystem::path map_run_file_path(const std::filesystem::path& map_file);
+
 // Throws std::runtime_error ("map file <path>: <what>") when the file cannot be written.
 // `sync` forces the data to disk before the rename (durable across power loss, slower).
 MapFileWriteStats save_map_file(const std::filesystem::path& path, const Map& map, const MapperState& state,
