@@ -231,6 +231,7 @@ TEST(RecorderFiles, FolderAsOutputIsAnErrorAndWritesAreAtomic) {
   EXPECT_EQ(eval::read_trajectory(options.output).size(), 2u);
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
   }
   std::filesystem::remove_all(dir);
 }

@@ -2,8 +2,8 @@
 // map save / load feature).
 //
 // Layout (little-endian): "HESLAMAP", u32 format version, u32 reserved, u64 payload bytes, payload,
-// u64 FNV-1a checksum of the payload. A snapshot is written to "<path>.tmp" and renamed over
-// <path>, so a process killed mid-write leaves the previous snapshot intact.
+// u64 FNV-1a checksum of the payload. A snapshot replaces <path> whole (runtime/atomic_file.hpp:
+// "<path>.tmp", renamed over it), so a process killed mid-write leaves the previous snapshot intact.
 #pragma once
 
 #include <cstdint>
