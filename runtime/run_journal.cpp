@@ -38,6 +38,13 @@ bool claimed_number(std::string_view line, std::uint64_t& number) {
   return error == std::errc() && end != rest.data();
 }
 
+// A record is one line: a newline in it would split it into two that fail their checksum.
+void check_record(const std::filesystem::path& path, std::string_view record) {
+  if (record.find('\n') != std::string_view::npos) {
+    throw std::invalid_argument(path.string() + ": a record must not contain a newline");
+  }
+}
+
 // The first line of a run file of run `run_id` and `format`, newline included.
 std::string header_line(const std::string& run_id, std::string_view format) {
   return run_id + " " + std::string(format) + "\n";
@@ -48,9 +55,8 @@ std::string header_line(const std::string& run_id, std::string_view format) {
 std::string RunJournal::Contents::dropped_report(const std::filesystem::path& path) const {
   if (dropped_lines() == 0) return "";
   return path.string() + ": " + std::to_string(dropped_lines()) + (dropped_lines() == 1 ? " line" : " lines") +
-         " dropped, not resumed from (" +
-         std::to_string(bad_checksum_lines) + " failing their checksum, " + std::to_string(out_of_sequence_lines) +
-         " out of sequence)";
+         " dropped, not resumed from (" + std::to_string(bad_checksum_lines) + " failing their checksum, " +
+         std::to_string(out_of_sequence_lines) + " out of sequence)";
 }
 
 bool RunJournal::written_by_run(const std::filesystem::path& path, const std::string& run_id, std::string_view format) {
@@ -132,9 +138,7 @@ void RunJournal::open_for_append() {
 }
 
 void RunJournal::append(std::string_view record) {
-  if (record.find('\n') != std::string_view::npos) {
-    throw std::invalid_argument(path_.string() + ": a record must not contain a newline");
-  }
+  check_record(path_, record);
   if (!file_) return;
   const std::string text = line(next_number_++, record);
   std::fwrite(text.data(), 1, text.size(), file_.get());
@@ -145,9 +149,7 @@ void RunJournal::replace(std::span<const std::string> records) {
   std::string text = header_;
   next_number_ = 1;
   for (const std::string& record : records) {
-    if (record.find('\n') != std::string::npos) {
-      throw std::invalid_argument(path_.string() + ": a record must not contain a newline");
-    }
+    check_record(path_, record);
     text += line(next_number_++, record);
   }
   file_.reset();  // the handle would keep appending to the replaced file

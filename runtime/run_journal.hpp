@@ -53,8 +53,8 @@ class RunJournal {
   // cannot be written.
   Contents open_for_run(const std::string& run_id);
 
-  // Appends one record (no newline in it) and flushes it to the kernel. A failed write is not
-  // reported here: it shows at the next open as a torn or missing line.
+  // Appends one record and flushes it to the kernel. A failed write is not reported here: it shows
+  // at the next open as a torn or missing line. A record with a newline throws std::invalid_argument.
   void append(std::string_view record);
 
   // Replaces the whole file at once by the open run's header and `records` (numbered from 1 again),
