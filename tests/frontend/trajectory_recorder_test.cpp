@@ -289,16 +289,23 @@ TEST(FrameJournal, RoundTripsFramesExactlyAndSkipsATornLine) {
   EXPECT_FALSE(std::filesystem::exists(path));
 }
 
+// A new journal of run "run-a" in the temporary folder holding tracked frames 1..count, frame n at
+// x = n; closed.
+std::filesystem::path journal_of_tracked_frames(const std::string& name, std::uint64_t count) {
+  const std::filesystem::path path = std::filesystem::temp_directory_path() / name;
+  std::filesystem::remove(path);
+  FrameJournal journal(path);
+  journal.open_for_run("run-a");
+  for (std::uint64_t seq = 1; seq <= count; ++seq) {
+    journal.append(tracked(seq, 7, translation(0, 0, 0), translation(static_cast<double>(seq), 0, 0)));
+  }
+  return path;
+}
+
 // A recorder killed mid-write, restarted, and appending again: the frame appended after the torn line
 // is on a line of its own and comes back at the next open, not glued to the torn line and lost.
 TEST(FrameJournal, AFrameAppendedAfterATornLineSurvivesTheNextOpen) {
-  const std::filesystem::path path = std::filesystem::temp_directory_path() / "heslam_frame_journal_glued.journal";
-  std::filesystem::remove(path);
-  {
-    FrameJournal journal(path);
-    journal.open_for_run("run-a");
-    journal.append(tracked(1, 7, translation(0, 0, 0), translation(1, 0, 0)));
-  }
+  const std::filesystem::path path = journal_of_tracked_frames("heslam_frame_journal_glued.journal", 1);
   std::ofstream(path, std::ios::app) << "2 1100000000 1 OK 7 0.1 0.2";  // killed mid-write
   {
     FrameJournal journal(path);
@@ -316,14 +323,7 @@ TEST(FrameJournal, AFrameAppendedAfterATornLineSurvivesTheNextOpen) {
 // A phantom line (right format, but not what the recorder wrote) would become an extra pose and
 // frames lost that never existed: it is dropped and counted, and so is a line out of sequence.
 TEST(FrameJournal, APhantomLineIsDroppedAndCountedNotRecorded) {
-  const std::filesystem::path path = std::filesystem::temp_directory_path() / "heslam_frame_journal_phantom.journal";
-  std::filesystem::remove(path);
-  {
-    FrameJournal journal(path);
-    journal.open_for_run("run-a");
-    journal.append(tracked(1, 7, translation(0, 0, 0), translation(1, 0, 0)));
-    journal.append(tracked(2, 7, translation(0, 0, 0), translation(2, 0, 0)));
-  }
+  const std::filesystem::path path = journal_of_tracked_frames("heslam_frame_journal_phantom.journal", 2);
   const std::string phantom = "142 8100000000 1 OK 7 0 0 0 0 0 0 1 5 0 0 0 0 0 1";
   std::ofstream(path, std::ios::app) << phantom << " #3 0badf00d\n";                  // a wrong checksum
   std::ofstream(path, std::ios::app) << runtime::RunJournal::line(2, phantom);        // a number used before
