@@ -19,6 +19,7 @@
 #include "components/messages/odometry.hpp"
 #include "components/messages/pose.hpp"
 #include "runtime/run_id.hpp"
+#include "runtime/run_journal.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/writer_identity.hpp"
 
@@ -141,6 +142,10 @@ void Frontend::resume_from_journal() {
   if (options_.journal_file.empty()) return;
   journal_.emplace(options_.journal_file);
   const OdometryJournal::Opened resumed = journal_->open_for_run(runtime::supervisor_run_id());
+  if (resumed.dropped_lines > 0) {
+    stats().count("journal_dropped_lines", resumed.dropped_lines);
+    log().warn(resumed.dropped_report);
+  }
   if (resumed.frames.empty()) return;
   last_seq_ = resumed.last_seq;
   for (const msg::Odometry& odometry : resumed.frames) {
@@ -238,12 +243,9 @@ void Frontend::take_calibration() {
 bool Frontend::mapper_map_file_of_this_run() const {
   std::error_code error_code;
   if (options_.mapper_map_file.empty() || !std::filesystem::exists(options_.mapper_map_file, error_code)) return false;
-  std::filesystem::path run_file = options_.mapper_map_file;
-  run_file += ".run";
-  std::ifstream in(run_file);
-  std::string run;
   // The mapper writes FILE.run (its supervisor's identity, which is ours) before its first map.
-  return std::getline(in, run) && run == runtime::supervisor_run_id();
+  return runtime::RunJournal::written_by_run(map_run_file_path(options_.mapper_map_file), runtime::supervisor_run_id(),
+                                             kMapRunFileFormat);
 }
 
 void Frontend::resume_in_mapper_map() {

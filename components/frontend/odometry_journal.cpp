@@ -1,18 +1,19 @@
-// OdometryJournal: one text line per frame, %.17g so poses round-trip exactly.
+// OdometryJournal: one record per frame, %.17g so poses round-trip exactly.
 #include "components/frontend/odometry_journal.hpp"
 
-#include <fstream>
+#include <algorithm>
+#include <map>
 #include <sstream>
-#include <stdexcept>
 
 namespace heslam::frontend {
 namespace {
 
-constexpr const char* kHeader = "heslam-frontend-journal 1";  // + the run id
+// What the records hold; a journal of another format is not resumed from.
+constexpr const char* kFormat = "heslam-frontend-journal 2";
 
-void write_pose(std::FILE* file, const msg::Pose& pose) {
-  for (const double value : pose.position_m) std::fprintf(file, " %.17g", value);
-  for (const double value : pose.orientation_xyzw) std::fprintf(file, " %.17g", value);
+void write_pose(std::ostringstream& record, const msg::Pose& pose) {
+  for (const double value : pose.position_m) record << ' ' << value;
+  for (const double value : pose.orientation_xyzw) record << ' ' << value;
 }
 
 bool read_pose(std::istringstream& in, msg::Pose& pose) {
@@ -25,16 +26,16 @@ bool read_pose(std::istringstream& in, msg::Pose& pose) {
   return true;
 }
 
-bool read_line(const std::string& line, msg::Odometry& odometry, bool& finished) {
-  std::istringstream fields(line);
+bool read_record(const std::string& record, msg::Odometry& odometry, bool& finished) {
+  std::istringstream fields(record);
   unsigned long long seq = 0, reference = 0;
   long long stamp_ns = 0;
   int state = 0, keyframe_created = 0, finished_flag = 0;
   unsigned keypoints = 0, tracked_points = 0;
-  std::string end;
+  std::string rest;
   if (!(fields >> seq >> stamp_ns >> state >> reference) || !read_pose(fields, odometry.T_wc) ||
-      !read_pose(fields, odometry.T_ref_c) || !(fields >> keypoints >> tracked_points >> keyframe_created >> finished_flag >> end) ||
-      end != ";") {
+      !read_pose(fields, odometry.T_ref_c) || !(fields >> keypoints >> tracked_points >> keyframe_created >> finished_flag) ||
+      fields >> rest) {
     return false;
   }
   // A state that is no TrackingState is a damaged line (casting it to the enum would be undefined).
@@ -54,63 +55,39 @@ bool read_line(const std::string& line, msg::Odometry& odometry, bool& finished)
 
 }  // namespace
 
+OdometryJournal::OdometryJournal(std::filesystem::path path) : journal_(std::move(path), kFormat) {}
+
 OdometryJournal::Opened OdometryJournal::open_for_run(const std::string& run_id) {
+  const runtime::RunJournal::Contents contents = journal_.open_for_run(run_id);
   Opened opened;
-  const std::string header = std::string(kHeader) + " " + run_id;
-  bool same_run = false;
-  bool ends_with_newline = true;
-  {
-    std::ifstream in(path_, std::ios::binary);
-    if (in.seekg(-1, std::ios::end)) ends_with_newline = in.get() == '\n';
-    in.clear();
-    in.seekg(0);
-    std::string line;
-    same_run = std::getline(in, line) && line == header;
-    std::map<std::uint64_t, msg::Odometry> by_seq;
-    while (same_run && std::getline(in, line)) {
-      msg::Odometry odometry{};
-      bool finished = false;
-      if (read_line(line, odometry, finished)) {
-        if (finished) opened.last_seq = std::max(opened.last_seq.value_or(0), odometry.seq);
-        by_seq[odometry.seq] = odometry;
-      } else {
-        ++opened.torn_lines;
-      }
+  opened.torn_lines = contents.torn_lines;
+  opened.dropped_lines = contents.dropped_lines();
+  opened.dropped_report = contents.dropped_report(journal_.path());
+  std::map<std::uint64_t, msg::Odometry> by_seq;
+  for (const std::string& record : contents.records) {
+    msg::Odometry odometry{};
+    bool finished = false;
+    if (!read_record(record, odometry, finished)) {
+      ++opened.torn_lines;
+      continue;
     }
-    for (const auto& [seq, odometry] : by_seq) opened.frames.push_back(odometry);
+    if (finished) opened.last_seq = std::max(opened.last_seq.value_or(0), odometry.seq);
+    by_seq[odometry.seq] = odometry;
   }
-  std::error_code ignored;  // an uncreatable folder fails the fopen below, with our message
-  if (path_.has_parent_path()) std::filesystem::create_directories(path_.parent_path(), ignored);
-  file_.reset(std::fopen(path_.c_str(), same_run ? "a" : "w"));
-  if (!file_) throw std::runtime_error(path_.string() + ": cannot open the frontend journal for writing");
-  if (!same_run) {
-    std::fprintf(file_.get(), "%s\n", header.c_str());
-  } else if (!ends_with_newline) {
-    std::fprintf(file_.get(), "\n");  // after a torn last line, so the next one is not glued to it
-  }
-  std::fflush(file_.get());
+  for (const auto& [seq, odometry] : by_seq) opened.frames.push_back(odometry);
   return opened;
 }
 
 void OdometryJournal::append(const msg::Odometry& odometry, bool finished) {
-  if (!file_) return;
-  std::FILE* file = file_.get();
-  std::fprintf(file, "%llu %lld %d %llu", static_cast<unsigned long long>(odometry.seq),
-               static_cast<long long>(odometry.stamp_ns), static_cast<int>(odometry.state),
-               static_cast<unsigned long long>(odometry.reference_keyframe_id));
-  write_pose(file, odometry.T_wc);
-  write_pose(file, odometry.T_ref_c);
-  // The terminator marks a complete line: a kill mid-write leaves a line without it, which the next
-  // open skips and counts.
-  std::fprintf(file, " %u %u %d %d ;\n", odometry.keypoints, odometry.tracked_points, odometry.keyframe_created ? 1 : 0,
-               finished ? 1 : 0);
-  std::fflush(file);
-}
-
-void OdometryJournal::remove() {
-  file_.reset();
-  std::error_code ignored;
-  std::filesystem::remove(path_, ignored);
+  std::ostringstream record;
+  record.precision(17);  // as %.17g: every double comes back bit for bit
+  record << odometry.seq << ' ' << odometry.stamp_ns << ' ' << static_cast<int>(odometry.state) << ' '
+         << odometry.reference_keyframe_id;
+  write_pose(record, odometry.T_wc);
+  write_pose(record, odometry.T_ref_c);
+  record << ' ' << odometry.keypoints << ' ' << odometry.tracked_points << ' ' << (odometry.keyframe_created ? 1 : 0)
+         << ' ' << (finished ? 1 : 0);
+  journal_.append(record.str());
 }
 
 }  // namespace heslam::frontend

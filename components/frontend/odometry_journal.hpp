@@ -2,18 +2,17 @@
 // to a file, so a frontend killed mid-run and restarted by the supervisor knows where it stopped
 // (frames at or below the last seq are acknowledged, not tracked again, even when the replay died too
 // and starts again at seq 0) and can publish its odometry again for a recorder that was down when it
-// first went out (the frontend's transient-local history died with the old process).
+// first went out (the frontend's transient-local history died with the old process). A run file
+// (runtime/run_journal.hpp) of one odometry record per line.
 #pragma once
 
-#include <cstdio>
 #include <filesystem>
-#include <map>
-#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "runtime/messages.hpp"
+#include "runtime/run_journal.hpp"
 
 namespace heslam::frontend {
 
@@ -24,10 +23,12 @@ class OdometryJournal {
     // are not kept); empty on a fresh run. Includes a frame published but not finished.
     std::vector<msg::Odometry> frames;
     std::optional<std::uint64_t> last_seq;  // the largest finished seq
-    int torn_lines = 0;                     // unreadable lines (a kill mid-write), skipped
+    int torn_lines = 0;                     // a torn last line (a kill mid-write) or a line that is no frame, skipped
+    int dropped_lines = 0;                  // failing their checksum or out of sequence, never resumed from
+    std::string dropped_report;             // one line naming the file and the dropped lines; empty when none
   };
 
-  explicit OdometryJournal(std::filesystem::path path) : path_(std::move(path)) {}
+  explicit OdometryJournal(std::filesystem::path path);
 
   // Reads the frames of run `run_id` if the file is that run's, then keeps the file open for
   // append; a file of another run (or none) is replaced by an empty journal. Throws
@@ -42,16 +43,12 @@ class OdometryJournal {
   void append(const msg::Odometry& odometry, bool finished);
 
   // Closes and deletes the journal (a frontend that stopped cleanly: the run is over).
-  void remove();
+  void remove() { journal_.remove(); }
 
-  const std::filesystem::path& path() const { return path_; }
+  const std::filesystem::path& path() const { return journal_.path(); }
 
  private:
-  struct Close {
-    void operator()(std::FILE* file) const { std::fclose(file); }
-  };
-  std::filesystem::path path_;
-  std::unique_ptr<std::FILE, Close> file_;
+  runtime::RunJournal journal_;
 };
 
 }  // namespace heslam::frontend

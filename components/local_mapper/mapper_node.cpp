@@ -2,8 +2,8 @@
 #include "components/local_mapper/mapper_node.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <ctime>
-#include <fstream>
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
@@ -15,6 +15,7 @@
 #include "components/messages/map_state.hpp"
 #include "components/local_mapper/write_batch.hpp"
 #include "runtime/run_id.hpp"
+#include "runtime/run_journal.hpp"
 #include "runtime/sequence.hpp"
 
 namespace heslam::local_mapper {
@@ -84,12 +85,6 @@ void MapperNode::configure(const runtime::Config& config) {
                                 : "; local BA always completes");
 }
 
-std::filesystem::path MapperNode::sidecar(const char* suffix) const {
-  std::filesystem::path path = options_.map_file;
-  path += suffix;
-  return path;
-}
-
 std::filesystem::path MapperNode::saved_map_path(const std::filesystem::path& requested) const {
   // Until 2026-11 a run's map was OUTPUT.txt.map (OUTPUT.csv.map for EuRoC csv output); it is now
   // OUTPUT.map beside OUTPUT.txt (docs/recorder.md, Output files). The old names are read for one
@@ -122,23 +117,25 @@ std::filesystem::path MapperNode::saved_map_path(const std::filesystem::path& re
 
 void MapperNode::load_initial_map() {
   bool resume = false;
+  std::vector<std::string> applied_corrections;
   if (!options_.map_file.empty()) {
-    const std::string current_run = runtime::supervisor_run_id();
-    std::ifstream in(sidecar(".run"));
-    std::string file_run;
-    std::getline(in, file_run);
-    resume = std::filesystem::exists(options_.map_file) && file_run == current_run;
-    if (!resume) {
+    run_file_.emplace(map_run_file_path(options_.map_file), kMapRunFileFormat);
+    const runtime::RunJournal::Contents contents = run_file_->open_for_run(runtime::supervisor_run_id());
+    if (contents.dropped_lines() > 0) {
+      stats().count("run_file_dropped_lines", contents.dropped_lines());
+      log().warn(contents.dropped_report(run_file_->path()));
+    }
+    resume = contents.same_run && std::filesystem::exists(options_.map_file);
+    if (resume) {
+      applied_corrections = contents.records;
+    } else {
       // A map file of an earlier run is replaced, not continued: remove it now so a restart of THIS
       // run before our first save starts from scratch too (and re-maps from the DDS keyframes).
       if (std::filesystem::exists(options_.map_file)) {
         log().info("map file ", options_.map_file.string(), " is from an earlier run; starting a new map");
       }
       std::filesystem::remove(options_.map_file);
-      std::filesystem::remove(sidecar(".corrections"));
-      std::ofstream run_file(sidecar(".run"), std::ios::trunc);
-      run_file << current_run << "\n";
-      if (!run_file) throw std::runtime_error("map file " + options_.map_file.string() + ": cannot write beside it");
+      if (contents.same_run) run_file_->replace({});  // the corrections applied were the removed map's
     }
   }
   if (resume) {
@@ -153,7 +150,7 @@ void MapperNode::load_initial_map() {
     }
   }
   if (resume) {
-    load_applied_corrections();
+    load_applied_corrections(applied_corrections);
     log().info("resuming from ", options_.map_file.string(), ": ", loaded_->map.keyframes.size(), " keyframes, ",
                loaded_->map.points.size(), " points, map version ", loaded_->map.version);
     // Published at once, not at the first keyframe: when the frontend died too (a power glitch, an
@@ -431,18 +428,24 @@ void MapperNode::acknowledge(KeyframeId id, std::uint64_t correction_id) {
   keyframe_done_writer_->write(done);
 }
 
-void MapperNode::load_applied_corrections() {
-  std::ifstream in(sidecar(".corrections"));
-  for (std::uint64_t id = 0; in >> id;) applied_corrections_.insert(id);
+void MapperNode::load_applied_corrections(const std::vector<std::string>& records) {
+  for (const std::string& record : records) {
+    std::uint64_t id = 0;
+    const auto [end, error] = std::from_chars(record.data(), record.data() + record.size(), id);
+    if (error == std::errc() && end == record.data() + record.size()) {
+      applied_corrections_.insert(id);
+    } else {
+      log().warn(run_file_->path().string(), ": '", record, "' is no correction id; skipped");
+    }
+  }
 }
 
 void MapperNode::remember_applied_correction(std::uint64_t id) {
   applied_corrections_.insert(id);
-  if (options_.map_file.empty()) return;
   // Appended after the map was saved: a kill between the two re-applies the correction once, which
   // moves keyframes to the poses it lists again (the same poses) and repeats no merge (merged points
   // are gone).
-  std::ofstream(sidecar(".corrections"), std::ios::app) << id << "\n";
+  if (run_file_) run_file_->append(std::to_string(id));
 }
 
 void MapperNode::log_summary() {

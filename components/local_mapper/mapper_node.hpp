@@ -24,6 +24,7 @@
 #include "components/local_mapper/mapper_process_options.hpp"
 #include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
+#include "runtime/run_journal.hpp"
 
 namespace heslam::local_mapper {
 
@@ -65,9 +66,7 @@ class MapperNode : public runtime::Component {
   void acknowledge(KeyframeId id, std::uint64_t correction_id = 0);
   void log_summary();
 
-  // options_.map_file + suffix: ".run" (the run that wrote it), ".corrections" (applied ids).
-  std::filesystem::path sidecar(const char* suffix) const;
-  void load_applied_corrections();
+  void load_applied_corrections(const std::vector<std::string>& records);
   void remember_applied_correction(std::uint64_t id);
 
   MapperProcessOptions options_;
@@ -85,7 +84,8 @@ class MapperNode : public runtime::Component {
   std::unique_ptr<LocalMapper> mapper_;
   std::map<KeyframeId, PendingKeyframe> pending_;          // taken, not yet processed; id order
   std::map<std::uint64_t, LoopCorrection> pending_corrections_;
-  std::set<std::uint64_t> applied_corrections_;            // ids; persisted beside the map file
+  std::set<std::uint64_t> applied_corrections_;            // ids; persisted in run_file_
+  std::optional<runtime::RunJournal> run_file_;            // map_run_file_path(options_.map_file)
   int unsaved_keyframes_ = 0;
   bool reader_wait_done_ = false;
   MapFileWriteStats last_save_;

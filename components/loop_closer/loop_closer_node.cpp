@@ -3,7 +3,6 @@
 
 #include <chrono>
 #include <ctime>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -12,6 +11,7 @@
 #include "components/messages/loop_correction.hpp"
 #include "components/messages/map_state.hpp"
 #include "runtime/run_id.hpp"
+#include "runtime/run_journal.hpp"
 #include "runtime/sequence.hpp"
 
 namespace heslam::loop_closer {
@@ -29,6 +29,8 @@ constexpr std::chrono::milliseconds kReaderWait{2000};
 constexpr int kClockShiftBits = 20;
 // Keyframes of a second writer kept in case it takes over (a restarted frontend; ~60 KB each).
 constexpr std::size_t kHeldKeyframes = 64;
+// What the state file holds; a file of another format is not resumed from.
+constexpr const char* kStateFileFormat = "heslam-loop-closer-state 2";
 
 std::uint64_t clock_counter_start() {
   timespec now{};
@@ -261,22 +263,32 @@ void LoopCloserNode::acknowledge(KeyframeId id) {
   keyframe_done_writer_->write(done);
 }
 
-// State file: "run <id>", "last <keyframe>", "counter <n>", then "loop <loop kf> <matched kf>" lines.
+// State file: a run file (runtime/run_journal.hpp) replaced whole after every keyframe, its records
+// "last <keyframe>", "counter <n>", then "loop <loop kf> <matched kf>" per loop closed.
 void LoopCloserNode::load_state() {
   if (options_.state_file.empty()) return;
-  std::ifstream in(options_.state_file);
-  std::string line;
-  std::string run;
+  state_file_.emplace(options_.state_file, kStateFileFormat);
+  const runtime::RunJournal::Contents contents = state_file_->open_for_run(runtime::supervisor_run_id());
+  if (contents.other_file_replaced) {
+    log().info("state file ", options_.state_file.string(), " is from an earlier run; starting afresh");
+  }
+  if (contents.dropped_lines() > 0) {
+    // A snapshot missing some of its lines is no state the loop closer was ever in.
+    stats().count("state_file_dropped_lines", contents.dropped_lines());
+    log().warn(contents.dropped_report(options_.state_file), "; starting afresh");
+  }
+  if (!contents.same_run || contents.dropped_lines() > 0) {
+    save_state();
+    return;
+  }
   KeyframeId last = kNoId;
   std::uint64_t counter = 0;
   std::vector<std::pair<KeyframeId, KeyframeId>> loops;
-  while (std::getline(in, line)) {
-    std::istringstream fields(line);
+  for (const std::string& record : contents.records) {
+    std::istringstream fields(record);
     std::string key;
     fields >> key;
-    if (key == "run") {
-      fields >> run;
-    } else if (key == "last") {
+    if (key == "last") {
       fields >> last;
     } else if (key == "counter") {
       fields >> counter;
@@ -287,30 +299,19 @@ void LoopCloserNode::load_state() {
       loops.emplace_back(a, b);
     }
   }
-  if (run.empty() || run != runtime::supervisor_run_id()) {
-    if (!run.empty()) log().info("state file ", options_.state_file.string(), " is from an earlier run; starting afresh");
-    save_state();
-    return;
-  }
   last_processed_ = last;
   correction_counter_ = std::max(correction_counter_, counter);
   restored_loops_ = std::move(loops);
   log().info("resuming: keyframes up to ", last_processed_, " processed, ", restored_loops_.size(), " loops closed");
 }
 
-void LoopCloserNode::save_state() const {
-  if (options_.state_file.empty()) return;
-  std::filesystem::path tmp = options_.state_file;
-  tmp += ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    out << "run " << runtime::supervisor_run_id() << "\nlast " << last_processed_ << "\ncounter " << correction_counter_ << "\n";
-    const auto& loops = closing_ ? closing_->loop_edges() : restored_loops_;
-    for (const auto& [a, b] : loops) out << "loop " << a << " " << b << "\n";
-    out.flush();
-    if (!out) throw std::runtime_error("state file " + tmp.string() + ": cannot write");
-  }
-  std::filesystem::rename(tmp, options_.state_file);
+void LoopCloserNode::save_state() {
+  if (!state_file_) return;
+  std::vector<std::string> records = {"last " + std::to_string(last_processed_),
+                                      "counter " + std::to_string(correction_counter_)};
+  const auto& loops = closing_ ? closing_->loop_edges() : restored_loops_;
+  for (const auto& [a, b] : loops) records.push_back("loop " + std::to_string(a) + " " + std::to_string(b));
+  state_file_->replace(records);
 }
 
 void LoopCloserNode::log_summary() {

@@ -21,6 +21,7 @@
 #include "components/loop_closer/map_mirror.hpp"
 #include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
+#include "runtime/run_journal.hpp"
 
 namespace heslam::loop_closer {
 
@@ -50,7 +51,7 @@ class LoopCloserNode : public runtime::Component {
   bool publish_and_wait(LoopCorrection correction);
   void acknowledge(KeyframeId id);
   void load_state();
-  void save_state() const;
+  void save_state();
   void log_summary();
 
   LoopCloserProcessOptions options_;
@@ -69,6 +70,7 @@ class LoopCloserNode : public runtime::Component {
   MapMirror mirror_{KeyframeAdmission::kWithMapperState};  // loop closing on mapped keyframes only
   std::map<KeyframeId, std::uint64_t> mapped_;                 // mapper acknowledged: keyframe -> map version
   std::map<std::uint64_t, std::uint64_t> corrections_applied_;  // correction id -> map version after it
+  std::optional<runtime::RunJournal> state_file_;  // with options_.state_file
   KeyframeId last_processed_ = kNoId;
   std::uint64_t correction_counter_ = 0;
   std::vector<std::pair<KeyframeId, KeyframeId>> restored_loops_;

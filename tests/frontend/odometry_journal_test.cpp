@@ -1,6 +1,6 @@
 // The frontend's journal (OdometryJournal): what a restarted frontend resumes from. Frames come back
 // exactly, a torn last line is skipped and the next append starts on a line of its own, a journal of
-// another run is replaced.
+// another run is replaced, a forged line (well formed, but not what the frontend wrote) is dropped.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -9,6 +9,7 @@
 #include <string>
 
 #include "components/frontend/odometry_journal.hpp"
+#include "runtime/run_journal.hpp"
 
 namespace heslam::frontend {
 namespace {
@@ -65,7 +66,7 @@ TEST(OdometryJournal, ResumesTheFramesOfItsRunExactlyAndSurvivesATornLine) {
     const OdometryJournal::Opened opened = journal.open_for_run("run-a");
     ASSERT_EQ(opened.frames.size(), 4u);  // the unfinished frame's odometry too (its keyframe) ...
     EXPECT_EQ(opened.frames[3].seq, 3u);
-    EXPECT_EQ(opened.torn_lines, 1);
+    EXPECT_EQ(opened.torn_lines, 0);  // cut off by the open before
     EXPECT_EQ(opened.last_seq, 2u);  // ... but it is tracked again
   }
   {
@@ -97,12 +98,57 @@ TEST(OdometryJournal, ALineWithAnUnknownStateIsSkipped) {
   ASSERT_EQ(content.substr(last, 2), "1 ");
   ASSERT_EQ(content[state_at], '1');  // TRACKING_OK
   content[state_at] = '7';
+  // With its checksum made right again: the line passes the journal, and the state is what fails.
+  std::string record = content.substr(last, content.rfind(" #") - last);
+  content = content.substr(0, last) + runtime::RunJournal::line(2, record);
   std::ofstream(path, std::ios::trunc) << content;
   OdometryJournal journal(path);
   const OdometryJournal::Opened opened = journal.open_for_run("run-a");
   ASSERT_EQ(opened.frames.size(), 1u);
   EXPECT_EQ(opened.frames[0].seq, 0u);
   EXPECT_EQ(opened.torn_lines, 1);
+  journal.remove();
+}
+
+// A well-formed line that is not what the frontend wrote (a pose metres off, a frame it never
+// finished) is never resumed from: it would be acknowledged without tracking. The frames after it
+// are dropped too (what they record followed the frame it replaced); each drop is counted.
+TEST(OdometryJournal, AForgedLineIsDroppedAndCountedNotResumedFrom) {
+  const std::filesystem::path path = std::filesystem::temp_directory_path() / "heslam_odometry_journal_forged.frontend";
+  std::filesystem::remove(path);
+  {
+    OdometryJournal journal(path);
+    journal.open_for_run("run-a");
+    for (std::uint64_t seq = 0; seq < 3; ++seq) journal.append(odometry(seq, heslam_msg_TRACKING_OK, 1.0), true);
+  }
+  std::stringstream text;
+  text << std::ifstream(path).rdbuf();
+  std::string content = text.str();
+  std::size_t x_at = content.find("\n1 ") + 1;  // seq 1's line
+  for (int field = 0; field < 4; ++field) x_at = content.find(' ', x_at) + 1;  // seq stamp state reference
+  ASSERT_EQ(content.substr(x_at, 2), "1 ");  // T_wc's x
+  content.replace(x_at, 1, "9.7");           // right format, wrong checksum
+  std::ofstream(path, std::ios::trunc) << content;
+  {
+    OdometryJournal journal(path);
+    const OdometryJournal::Opened opened = journal.open_for_run("run-a");
+    ASSERT_EQ(opened.frames.size(), 1u);
+    EXPECT_EQ(opened.frames[0].T_wc.position_m[0], 1.0);
+    EXPECT_EQ(opened.last_seq, 0u);  // frames 1 and 2 are tracked again
+    EXPECT_EQ(opened.dropped_lines, 2);
+    EXPECT_EQ(opened.torn_lines, 0);
+    EXPECT_EQ(opened.dropped_report,
+              path.string() + ": 2 lines dropped, not resumed from (1 failing their checksum, 1 out of sequence)");
+    journal.append(odometry(1, heslam_msg_TRACKING_OK, 1.0), true);
+  }
+  // A line with a right checksum but a number already used (a line copied, or another writer).
+  std::ofstream(path, std::ios::app) << runtime::RunJournal::line(2, "5 1250000000 1 72057594037927936 8.7 0 0 0 0 0 1 "
+                                                                     "0 0 0 0 0 0 1 1200 305 0 1");
+  OdometryJournal journal(path);
+  const OdometryJournal::Opened opened = journal.open_for_run("run-a");
+  ASSERT_EQ(opened.frames.size(), 2u);
+  EXPECT_EQ(opened.last_seq, 1u);
+  EXPECT_EQ(opened.dropped_lines, 1);
   journal.remove();
 }
 

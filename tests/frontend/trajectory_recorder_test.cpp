@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "runtime/run_journal.hpp"
 #include "tools/eval/trajectory_io.hpp"
 #include "tools/recorder/frame_journal.hpp"
 #include "tools/recorder/recorder.hpp"
@@ -230,6 +231,7 @@ TEST(RecorderFiles, FolderAsOutputIsAnErrorAndWritesAreAtomic) {
   EXPECT_EQ(eval::read_trajectory(options.output).size(), 2u);
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
   }
   std::filesystem::remove_all(dir);
 }
@@ -285,6 +287,54 @@ TEST(FrameJournal, RoundTripsFramesExactlyAndSkipsATornLine) {
   EXPECT_TRUE(journal.open_for_run("run-a").frames.empty());  // ... and gone for good
   journal.remove();
   EXPECT_FALSE(std::filesystem::exists(path));
+}
+
+// A new journal of run "run-a" in the temporary folder holding tracked frames 1..count, frame n at
+// x = n; closed.
+std::filesystem::path journal_of_tracked_frames(const std::string& name, std::uint64_t count) {
+  const std::filesystem::path path = std::filesystem::temp_directory_path() / name;
+  std::filesystem::remove(path);
+  FrameJournal journal(path);
+  journal.open_for_run("run-a");
+  for (std::uint64_t seq = 1; seq <= count; ++seq) {
+    journal.append(tracked(seq, 7, translation(0, 0, 0), translation(static_cast<double>(seq), 0, 0)));
+  }
+  return path;
+}
+
+// A recorder killed mid-write, restarted, and appending again: the frame appended after the torn line
+// is on a line of its own and comes back at the next open, not glued to the torn line and lost.
+TEST(FrameJournal, AFrameAppendedAfterATornLineSurvivesTheNextOpen) {
+  const std::filesystem::path path = journal_of_tracked_frames("heslam_frame_journal_glued.journal", 1);
+  std::ofstream(path, std::ios::app) << "2 1100000000 1 OK 7 0.1 0.2";  // killed mid-write
+  {
+    FrameJournal journal(path);
+    EXPECT_EQ(journal.open_for_run("run-a").frames.size(), 1u);
+    journal.append(tracked(3, 7, translation(0, 0, 0), translation(3, 0, 0)));  // the restarted recorder
+  }
+  FrameJournal journal(path);
+  const FrameJournal::Opened opened = journal.open_for_run("run-a");
+  ASSERT_EQ(opened.frames.size(), 2u);
+  EXPECT_EQ(opened.frames[1].seq, 3u);
+  EXPECT_EQ(opened.frames[1].T_wc.translation().x(), 3.0);
+  journal.remove();
+}
+
+// A phantom line (right format, but not what the recorder wrote) would become an extra pose and
+// frames lost that never existed: it is dropped and counted, and so is a line out of sequence.
+TEST(FrameJournal, APhantomLineIsDroppedAndCountedNotRecorded) {
+  const std::filesystem::path path = journal_of_tracked_frames("heslam_frame_journal_phantom.journal", 2);
+  const std::string phantom = "142 8100000000 1 OK 7 0 0 0 0 0 0 1 5 0 0 0 0 0 1";
+  std::ofstream(path, std::ios::app) << phantom << " #3 0badf00d\n";                  // a wrong checksum
+  std::ofstream(path, std::ios::app) << runtime::RunJournal::line(2, phantom);        // a number used before
+  FrameJournal journal(path);
+  const FrameJournal::Opened opened = journal.open_for_run("run-a");
+  ASSERT_EQ(opened.frames.size(), 2u);
+  EXPECT_EQ(opened.frames[1].seq, 2u);
+  EXPECT_EQ(opened.dropped_lines, 2);
+  EXPECT_EQ(opened.dropped_report,
+            path.string() + ": 2 lines dropped, not resumed from (1 failing their checksum, 1 out of sequence)");
+  journal.remove();
 }
 
 }  // namespace

@@ -288,6 +288,40 @@ TEST(LocalMapperProcess, MapFileOfAnEarlierRunIsReplacedNotResumed) {
   EXPECT_EQ(run.rfind(std::to_string(getpid()) + ":", 0), 0u) << run;  // the test process is the parent
 }
 
+// FILE.run is a run file (runtime/run_journal.hpp): a forged line in it (right format, wrong checksum)
+// is dropped and counted in one line naming the file, never taken for an applied correction.
+TEST(LocalMapperProcess, AForgedRunFileLineIsDroppedAndCounted) {
+  const test::ScratchDir dir("forged_run_file");
+  const fs::path map = dir.path() / "run.map";
+  const fs::path run_file = dir.path() / "run.map.run";
+  const auto start_mapper = [&] {
+    return std::make_unique<test::ChildProcess>(
+        test::bin_dir() / "heslam-local-mapper",
+        std::vector<std::string>{"--domain", std::to_string(test_domain()), "--map-file", map.string()}, dir.path(),
+        "mapper");
+  };
+  {
+    auto mapper = start_mapper();
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (!fs::exists(run_file) && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    mapper->signal(SIGTERM);
+    ASSERT_EQ(mapper->wait(kStopTimeout).value_or(-1), 0) << mapper->err();
+  }
+  std::ofstream(run_file, std::ios::app) << "17 #1 0badf00d\n";  // a correction id, as if applied
+  auto mapper = start_mapper();
+  const std::string expected = run_file.string() + ": 1 line dropped, not resumed from (1 failing their checksum, 0 out of sequence)";
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while ((mapper->out() + mapper->err()).find(expected) == std::string::npos && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  mapper->signal(SIGTERM);
+  EXPECT_EQ(mapper->wait(kStopTimeout).value_or(-1), 0) << mapper->err();
+  const std::string log = mapper->out() + mapper->err();
+  EXPECT_NE(log.find(expected), std::string::npos) << log;
+}
+
 // Real time, as a live camera runs: replay at the recording's rate (20 Hz) without acknowledgements,
 // the frontend never waits for the mapper, the mapper's BA may stop for a new keyframe. Timing
 // decides what each process sees, so the bounds are loose: a frame the frontend could not keep up

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <regex>
 #include <string>
 #include <thread>
@@ -219,6 +220,43 @@ TEST(LoopCloserEndToEnd, StartedByHandMidRunPicksUpTheMapFromDds) {
   // replays to a late reader (here: all of them).
   EXPECT_GE(processed_keyframes, 1);
   EXPECT_LE(processed_keyframes, keyframes);
+}
+
+// The state file is a run file (runtime/run_journal.hpp): a forged line in it (right format, wrong
+// checksum) is dropped and counted in one line naming the file, and the state it was slipped into is
+// not resumed from (a snapshot missing a line is no state the loop closer was ever in).
+TEST(LoopCloserProcess, AForgedStateFileLineIsDroppedAndCounted) {
+  const test::ScratchDir dir("forged_state");
+  const fs::path state = dir.path() / "run.loop";
+  const auto start_loop_closer = [&] {
+    return std::make_unique<test::ChildProcess>(
+        test::bin_dir() / "heslam-loop-closer-proximity",
+        std::vector<std::string>{"--domain", std::to_string(test_domain()), "--state-file", state.string()},
+        dir.path(), "loop_closer");
+  };
+  {
+    auto loop_closer = start_loop_closer();
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (!fs::exists(state) && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    loop_closer->signal(SIGTERM);
+    ASSERT_EQ(loop_closer->wait(test::kStopTimeout).value_or(-1), 0) << loop_closer->err();
+  }
+  std::ofstream(state, std::ios::app) << "loop 3 9 #3 0badf00d\n";  // a loop never closed
+  auto loop_closer = start_loop_closer();
+  const std::string expected =
+      state.string() + ": 1 line dropped, not resumed from (1 failing their checksum, 0 out of sequence); starting afresh";
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while ((loop_closer->out() + loop_closer->err()).find(expected) == std::string::npos &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  loop_closer->signal(SIGTERM);
+  EXPECT_EQ(loop_closer->wait(test::kStopTimeout).value_or(-1), 0) << loop_closer->err();
+  const std::string log = loop_closer->out() + loop_closer->err();
+  EXPECT_NE(log.find(expected), std::string::npos) << log;
+  EXPECT_EQ(log.find("loops closed"), std::string::npos) << log;  // no "resuming: ... loops closed"
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "components/messages/checks.hpp"
 #include "components/messages/map_state.hpp"
 #include "components/messages/pose.hpp"
+#include "runtime/atomic_file.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/wire_enum.hpp"
@@ -104,10 +105,13 @@ RecorderOptions RecorderOptions::from(const runtime::Config& config, const std::
 
 namespace {
 
-// Writes `path` through write(temporary) and a rename: the file is always either the previous
-// complete version or the new one.
+// Not fsynced: the outputs are written again as frames arrive, and the journal holds the frames.
+constexpr bool kSyncOutputs = false;
+
+// Writes `path` through write(temporary) and a rename (runtime/atomic_file.hpp): the file is always
+// either the previous complete version or the new one.
 template <typename Write>
-void replace_file(const std::filesystem::path& path, const std::string& what, Write&& write) {
+void write_output(const std::filesystem::path& path, const std::string& what, Write&& write) {
   if (std::filesystem::is_directory(path)) {
     throw std::runtime_error(path.string() + ": is a folder; expected the file name of the " + what);
   }
@@ -117,30 +121,23 @@ void replace_file(const std::filesystem::path& path, const std::string& what, Wr
     throw std::runtime_error(path.parent_path().string() + ": cannot create the folder of the " + what + " (" +
                              error.message() + ")");
   }
-  const std::filesystem::path partial = path.parent_path() / ("." + path.filename().string() + ".partial");
   try {
-    write(partial);
-  } catch (const std::exception& failure) {
-    std::filesystem::remove(partial, error);
-    throw std::runtime_error(path.string() + ": cannot write the " + what + " (" + failure.what() + ")");
-  }
-  std::filesystem::rename(partial, path, error);
-  if (error) {
-    std::filesystem::remove(partial, error);
-    throw std::runtime_error(path.string() + ": cannot write the " + what + " (" + error.message() + ")");
+    runtime::replace_file(path, write, kSyncOutputs);
+  } catch (const std::runtime_error& failure) {
+    throw std::runtime_error("cannot write the " + what + ": " + failure.what());
   }
 }
 
 }  // namespace
 
 void write_recording(const RecordedTrajectories& recording, const RecorderOptions& options) {
-  replace_file(options.output, "trajectory", [&](const std::filesystem::path& path) {
+  write_output(options.output, "trajectory", [&](const std::filesystem::path& path) {
     eval::write_trajectory(path, recording.frames, options.format);
   });
-  replace_file(options.keyframe_output, "keyframe trajectory", [&](const std::filesystem::path& path) {
+  write_output(options.keyframe_output, "keyframe trajectory", [&](const std::filesystem::path& path) {
     eval::write_trajectory(path, recording.keyframes, options.format);
   });
-  replace_file(options.lost_output, "list of untracked frames", [&](const std::filesystem::path& path) {
+  write_output(options.lost_output, "list of untracked frames", [&](const std::filesystem::path& path) {
     std::ofstream lost(path);
     lost << "# frames without a pose (not tracked; never interpolated): seq stamp_ns state\n";
     for (const LostFrame& frame : recording.lost) lost << frame.seq << " " << frame.stamp_ns << " " << frame.state << "\n";
@@ -190,6 +187,10 @@ void Recorder::configure(const runtime::Config& config) {
   journal_.emplace(sibling_path(options_.output, ".journal"));
   const FrameJournal::Opened resumed = journal_->open_for_run(runtime::supervisor_run_id());
   for (const RecordedFrame& frame : resumed.frames) recorder_.add_frame(frame);
+  if (resumed.dropped_lines > 0) {
+    stats().count("journal_dropped_lines", resumed.dropped_lines);
+    log().warn(resumed.dropped_report);
+  }
   if (!resumed.frames.empty() || resumed.torn_lines > 0) {
     stats().count("journal_frames", resumed.frames.size());
     log().info("resuming: ", resumed.frames.size(), " frames from ", journal_->path().string(),

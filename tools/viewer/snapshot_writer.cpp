@@ -1,19 +1,26 @@
 // PNG snapshots and the stats file of the viewer (see snapshot_writer.hpp).
 #include "tools/viewer/snapshot_writer.hpp"
 
-#include <fstream>
+#include <sstream>
 #include <stdexcept>
+#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
+
+#include "runtime/atomic_file.hpp"
 
 namespace heslam::viewer {
 namespace {
 
+// Pictures are replaced whole (a reader never sees half of one) but not fsynced: they are written
+// again and again while the viewer runs, and losing the last one to a power cut costs nothing.
+constexpr bool kSyncWrites = false;
+
 void write_png(const std::filesystem::path& file, const cv::Mat& image) {
   if (image.empty()) return;
-  const std::filesystem::path temp = file.string() + ".tmp.png";
-  if (!cv::imwrite(temp.string(), image)) throw std::runtime_error("cannot write " + file.string());
-  std::filesystem::rename(temp, file);  // a reader never sees half a picture
+  std::vector<unsigned char> png;
+  if (!cv::imencode(".png", image, png)) throw std::runtime_error("cannot write " + file.string() + ": PNG encoding failed");
+  runtime::replace_file_contents(file, {reinterpret_cast<const char*>(png.data()), png.size()}, kSyncWrites);
 }
 
 }  // namespace
@@ -33,14 +40,9 @@ void SnapshotWriter::write(const std::string& label, const cv::Mat& top_view, co
 }
 
 void SnapshotWriter::write_stats(const std::map<std::string, std::string>& stats) const {
-  const std::filesystem::path file = dir_ / "viewer_stats.txt";
-  const std::filesystem::path temp = file.string() + ".tmp";
-  {
-    std::ofstream out(temp);
-    for (const auto& [key, value] : stats) out << key << "=" << value << "\n";
-    if (!out) throw std::runtime_error("cannot write " + file.string());
-  }
-  std::filesystem::rename(temp, file);
+  std::ostringstream text;
+  for (const auto& [key, value] : stats) text << key << "=" << value << "\n";
+  runtime::replace_file_contents(dir_ / "viewer_stats.txt", text.view(), kSyncWrites);
 }
 
 }  // namespace heslam::viewer

@@ -1,9 +1,6 @@
 // Binary snapshot writer and validating reader of the map file.
 #include "components/core/mapping/map_file.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <chrono>
 #include <cstring>
 #include <fstream>
@@ -11,6 +8,8 @@
 #include <string>
 #include <type_traits>
 #include <vector>
+
+#include "runtime/atomic_file.hpp"
 
 namespace heslam {
 namespace {
@@ -313,6 +312,12 @@ void read_payload(Reader& r, std::uint32_t format, MapSnapshot& out) {
 
 }  // namespace
 
+std::filesystem::path map_run_file_path(const std::filesystem::path& map_file) {
+  std::filesystem::path path = map_file;
+  path += ".run";
+  return path;
+}
+
 MapFileWriteStats save_map_file(const std::filesystem::path& path, const Map& map, const MapperState& state,
                                 bool sync) {
   MapFileWriteStats stats;
@@ -334,29 +339,11 @@ MapFileWriteStats save_map_file(const std::filesystem::path& path, const Map& ma
   stats.bytes = file.buffer.size();
 
   start = std::chrono::steady_clock::now();
-  const std::filesystem::path tmp = path.string() + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw std::runtime_error("map file " + path.string() + ": cannot create " + tmp.string() + ": " + std::strerror(errno));
-  std::size_t written = 0;
-  while (written < file.buffer.size()) {
-    const ssize_t n = ::write(fd, file.buffer.data() + written, file.buffer.size() - written);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const std::string reason = std::strerror(errno);
-      ::close(fd);
-      throw std::runtime_error("map file " + path.string() + ": write failed: " + reason);
-    }
-    written += static_cast<std::size_t>(n);
+  try {
+    runtime::replace_file_contents(path, {reinterpret_cast<const char*>(file.buffer.data()), file.buffer.size()}, sync);
+  } catch (const std::runtime_error& error) {
+    throw std::runtime_error(std::string("map file ") + error.what());
   }
-  if (sync && ::fsync(fd) != 0) {
-    const std::string reason = std::strerror(errno);
-    ::close(fd);
-    throw std::runtime_error("map file " + path.string() + ": fsync failed: " + reason);
-  }
-  ::close(fd);
-  std::error_code error;
-  std::filesystem::rename(tmp, path, error);
-  if (error) throw std::runtime_error("map file " + path.string() + ": rename failed: " + error.message());
   stats.write_ms = elapsed_ms(start);
   return stats;
 }

@@ -2,8 +2,8 @@
 // map save / load feature).
 //
 // Layout (little-endian): "HESLAMAP", u32 format version, u32 reserved, u64 payload bytes, payload,
-// u64 FNV-1a checksum of the payload. A snapshot is written to "<path>.tmp" and renamed over
-// <path>, so a process killed mid-write leaves the previous snapshot intact.
+// u64 FNV-1a checksum of the payload. A snapshot replaces <path> whole (runtime/atomic_file.hpp:
+// "<path>.tmp", renamed over it), so a process killed mid-write leaves the previous snapshot intact.
 #pragma once
 
 #include <cstdint>
@@ -29,6 +29,12 @@ struct MapFileWriteStats {
   double serialize_ms = 0.0;
   double write_ms = 0.0;  // write + (optional) fsync + rename
 };
+
+// The run file a local mapper keeps beside its map file (runtime/run_journal.hpp): FILE.run, naming
+// the run that wrote FILE, then the ids of the loop corrections applied to it, one per record. A
+// restarted frontend reads its first line to know whether FILE is this run's.
+inline constexpr const char* kMapRunFileFormat = "heslam-mapper-run 2";
+std::filesystem::path map_run_file_path(const std::filesystem::path& map_file);
 
 // Throws std::runtime_error ("map file <path>: <what>") when the file cannot be written.
 // `sync` forces the data to disk before the rename (durable across power loss, slower).

@@ -19,6 +19,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "runtime/atomic_file.hpp"
+
 namespace heslam {
 namespace {
 
@@ -38,8 +40,9 @@ constexpr int kMaxTextBranching = 1 << 16;
 constexpr int kMaxTextLevels = 255;
 constexpr int kMaxScoring = static_cast<int>(BowScoring::kDotProduct);
 constexpr int kMaxWeighting = static_cast<int>(BowWeighting::kBinary);
-// Text output is assembled in chunks of this size before each write.
-constexpr std::size_t kTextWriteChunkBytes = 1 << 20;
+// A node's line in the text format is about this long (32 descriptor bytes of up to 4 characters):
+// reserved up front so the text is assembled without repeated growth.
+constexpr std::size_t kTextBytesPerNode = 160;
 
 [[noreturn]] void fail(const fs::path& path, const std::string& what) {
   throw std::runtime_error("vocabulary " + path.string() + ": " + what);
@@ -96,21 +99,14 @@ class MappedFile {
   std::size_t size_ = 0;
 };
 
-// Writes through "<path>.tmp" and renames, so a reader never sees half a file.
-template <typename WriteBody>
-void write_atomically(const fs::path& path, WriteBody&& write_body) {
-  fs::path tmp = path;
-  tmp += ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) fail(path, "cannot create " + tmp.string());
-    write_body(out);
-    out.flush();
-    if (!out) fail(path, "write failed (disk full?)");
+// Both writers replace the file whole (runtime/atomic_file.hpp: "<path>.tmp", renamed over it), so a
+// reader never sees half a file.
+void write_atomically(const fs::path& path, std::string_view bytes) {
+  try {
+    runtime::replace_file_contents(path, bytes);
+  } catch (const std::runtime_error& error) {
+    throw std::runtime_error(std::string("vocabulary ") + error.what());
   }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) fail(path, "cannot rename " + tmp.string() + ": " + ec.message());
 }
 
 // --- text ------------------------------------------------------------------------------------
@@ -329,35 +325,29 @@ Vocabulary load_vocabulary_text(const fs::path& path) {
 
 void save_vocabulary_text(const fs::path& path, const Vocabulary& vocabulary) {
   const std::vector<Vocabulary::NodeRecord> nodes = vocabulary.node_records();
-  write_atomically(path, [&](std::ofstream& out) {
-    // DBoW2's header spelling, two spaces before the scoring included.
-    out << vocabulary.branching() << ' ' << vocabulary.levels() << "  " << static_cast<int>(vocabulary.scoring()) << ' '
-        << static_cast<int>(vocabulary.weighting()) << '\n';
-    std::string buffer;
-    buffer.reserve(kTextWriteChunkBytes + 256);
-    char number[32];
-    auto append = [&](auto value) {
-      // Shortest form that reads back to the same value (floats round-trip exactly).
-      const auto [end, ec] = std::to_chars(number, number + sizeof(number), value);
-      buffer.append(number, end);
-    };
-    for (const Vocabulary::NodeRecord& node : nodes) {
-      append(node.parent);
-      buffer += node.is_leaf ? " 1" : " 0";
-      for (const std::uint8_t byte : node.descriptor) {
-        buffer += ' ';
-        append(static_cast<unsigned>(byte));
-      }
-      buffer += ' ';
-      append(node.weight);
-      buffer += '\n';
-      if (buffer.size() >= kTextWriteChunkBytes) {
-        out.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-        buffer.clear();
-      }
+  // DBoW2's header spelling, two spaces before the scoring included.
+  std::string text = std::to_string(vocabulary.branching()) + ' ' + std::to_string(vocabulary.levels()) + "  " +
+                     std::to_string(static_cast<int>(vocabulary.scoring())) + ' ' +
+                     std::to_string(static_cast<int>(vocabulary.weighting())) + '\n';
+  text.reserve(text.size() + nodes.size() * kTextBytesPerNode);
+  char number[32];
+  auto append = [&](auto value) {
+    // Shortest form that reads back to the same value (floats round-trip exactly).
+    const auto [end, ec] = std::to_chars(number, number + sizeof(number), value);
+    text.append(number, end);
+  };
+  for (const Vocabulary::NodeRecord& node : nodes) {
+    append(node.parent);
+    text += node.is_leaf ? " 1" : " 0";
+    for (const std::uint8_t byte : node.descriptor) {
+      text += ' ';
+      append(static_cast<unsigned>(byte));
     }
-    out.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-  });
+    text += ' ';
+    append(node.weight);
+    text += '\n';
+  }
+  write_atomically(path, text);
 }
 
 Vocabulary load_vocabulary_binary(const fs::path& path) {
@@ -425,7 +415,7 @@ void save_vocabulary_binary(const fs::path& path, const Vocabulary& vocabulary) 
   for (const auto& node : nodes) data.insert(data.end(), node.descriptor.begin(), node.descriptor.end());
   for (const auto& node : nodes) put(data, node.weight);
   put(data, vocabulary_checksum(data));
-  write_atomically(path, [&](std::ofstream& out) { out.write(data.data(), static_cast<std::streamsize>(data.size())); });
+  write_atomically(path, std::string_view(data.data(), data.size()));
 }
 
 }  // namespace heslam
