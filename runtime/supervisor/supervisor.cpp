@@ -112,26 +112,81 @@ Supervisor::Supervisor(Pipeline pipeline, SupervisorOptions options)
 
 Supervisor::~Supervisor() = default;
 
-std::vector<std::string> Supervisor::child_args(const Managed& component) const {
-  std::vector<std::string> args = component.spec.args;
-  if (component.spec.common_args) {
-    args.insert(args.end(), {"--domain", std::to_string(pipeline_.domain_id), "--namespace", pipeline_.ns, "--name",
-                             component.spec.name, "--log-level", std::string(runtime::to_string(options_.log_level))});
-    if (!component.spec.config.empty()) args.insert(args.end(), {"--config", component.spec.config.string()});
-    if (!pipeline_.dds_config.empty()) args.insert(args.end(), {"--dds-config", pipeline_.dds_config});
-    if (pipeline_.image_transport == runtime::ImageTransport::kShm) {
-      args.insert(args.end(), {"--image-transport", "shm", "--image-domain", std::to_string(pipeline_.image_domain_id)});
+namespace {
+
+// A component's arguments: its own, then the common flags (unless common_args: false).
+std::vector<std::string> component_args(const Pipeline& pipeline, const ComponentSpec& spec, runtime::LogLevel level) {
+  std::vector<std::string> args = spec.args;
+  if (spec.common_args) {
+    args.insert(args.end(), {"--domain", std::to_string(pipeline.domain_id), "--namespace", pipeline.ns, "--name",
+                             spec.name, "--log-level", std::string(runtime::to_string(level))});
+    if (!spec.config.empty()) args.insert(args.end(), {"--config", spec.config.string()});
+    if (!pipeline.dds_config.empty()) args.insert(args.end(), {"--dds-config", pipeline.dds_config});
+    if (pipeline.image_transport == runtime::ImageTransport::kShm) {
+      args.insert(args.end(), {"--image-transport", "shm", "--image-domain", std::to_string(pipeline.image_domain_id)});
     }
   }
   return args;
+}
+
+// A program's --check opens its inputs (the replay its dataset) and nothing else: this bounds a
+// program that ignores the flag and would run.
+constexpr auto kProgramCheckTimeout = 30s;
+
+}  // namespace
+
+std::vector<std::string> check_programs(const Pipeline& pipeline, const std::filesystem::path& self_executable) {
+  std::vector<std::string> problems;
+  const std::string source = pipeline.file.filename().string();
+  for (const ComponentSpec& spec : pipeline.components) {
+    // heslam's own programs take the common flags, --check among them; others are not asked.
+    if (spec.remote || !spec.common_args || !spec.executable.filename().string().starts_with("heslam-")) continue;
+    std::vector<std::string> args = component_args(pipeline, spec, runtime::LogLevel::kError);
+    args.push_back("--check");
+    ChildProcess child = ChildProcess::spawn(self_executable, spec.executable, args, spec.env);
+    std::vector<std::string> lines;
+    int wait_status = 0;
+    bool exited = false;
+    const auto deadline = std::chrono::steady_clock::now() + kProgramCheckTimeout;
+    while (!exited && std::chrono::steady_clock::now() < deadline) {
+      child.read_lines(lines);
+      exited = waitpid(child.pid(), &wait_status, WNOHANG) == child.pid();
+      if (!exited) std::this_thread::sleep_for(kPumpPeriod);
+    }
+    child.read_lines(lines);  // the rest: the program has ended
+    if (!exited) {
+      child.signal_group(SIGKILL);
+      waitpid(child.pid(), &wait_status, 0);
+      problems.push_back(source + ": component '" + spec.name + "': " + spec.executable.filename().string() +
+                         " --check did not finish within " + std::to_string(kProgramCheckTimeout.count()) + " s");
+      continue;
+    }
+    if (WIFEXITED(wait_status) && WEXITSTATUS(wait_status) == 0) continue;
+    std::string reason = describe_exit(wait_status);
+    for (auto it = lines.rbegin(); it != lines.rend(); ++it) {
+      if (it->find_first_not_of(" \t\r") != std::string::npos) {
+        reason = *it;
+        break;
+      }
+    }
+    problems.push_back(source + ": component '" + spec.name + "': " + reason);
+  }
+  return problems;
+}
+
+std::vector<std::string> Supervisor::child_args(const Managed& component) const {
+  return component_args(pipeline_, component.spec, options_.log_level);
 }
 
 void Supervisor::start(Managed& component) {
   if (!component.log_file.is_open()) {
     component.log_file.open(options_.log_dir / (component.spec.name + ".log"), std::ios::app);
   }
+  std::map<std::string, std::string> env = component.spec.env;
+  // Every writer of a run on one host is ours: the components refuse another run's samples.
+  if (!pipeline_.split()) env[runtime::kRunOnOneHostVariable] = "1";
   component.process =
-      ChildProcess::spawn(options_.self_executable, component.spec.executable, child_args(component), component.spec.env,
+      ChildProcess::spawn(options_.self_executable, component.spec.executable, child_args(component), env,
                           component.spec.nice);
   component.phase = Phase::kRunning;
   component.started_at = Clock::now();

@@ -26,6 +26,11 @@ struct SupervisorOptions {
   RunProgress::Mode progress = RunProgress::Mode::kOff;
 };
 
+// --check: runs each heslam program of the pipeline (on this host) with its arguments and --check,
+// which checks them (and its config, its inputs) as its start would; one problem per program that
+// refuses them: "FILE: component 'NAME': its one-line error".
+std::vector<std::string> check_programs(const Pipeline& pipeline, const std::filesystem::path& self_executable);
+
 class Supervisor {
  public:
   Supervisor(Pipeline pipeline, SupervisorOptions options);

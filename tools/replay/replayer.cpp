@@ -105,6 +105,16 @@ class ProgressLine {
   Clock::time_point last_draw_{};
 };
 
+// The dataset as the options select it (format, --strict, the time window).
+StereoDataset open_replay_dataset(const ReplayOptions& options) {
+  DatasetOptions dataset_options;
+  dataset_options.format = options.format;
+  dataset_options.strict = options.strict;
+  StereoDataset dataset = open_dataset(options.dataset, dataset_options);
+  select_time_window(dataset, options.start_offset_s, options.duration_s);
+  return dataset;
+}
+
 class Replay {
  public:
   Replay(const runtime::CommonArgs& common, const ReplayOptions& options)
@@ -188,14 +198,7 @@ class Replay {
   }
 
  private:
-  static StereoDataset open(const ReplayOptions& options) {
-    DatasetOptions dataset_options;
-    dataset_options.format = options.format;
-    dataset_options.strict = options.strict;
-    StereoDataset dataset = open_dataset(options.dataset, dataset_options);
-    select_time_window(dataset, options.start_offset_s, options.duration_s);
-    return dataset;
-  }
+  static StereoDataset open(const ReplayOptions& options) { return open_replay_dataset(options); }
 
   void announce() {
     for (std::size_t i = 0; i < dataset_.warnings.size() && i < kMaxListedWarnings; ++i) {
@@ -485,6 +488,12 @@ class Replay {
 };
 
 }  // namespace
+
+int check_replay(const ReplayOptions& options) {
+  const StereoDataset dataset = open_replay_dataset(options);
+  const StereoRectifier rectifier(dataset.calibration);
+  return 0;
+}
 
 int run_replay(const runtime::CommonArgs& common, const ReplayOptions& options) {
   Replay replay(common, options);
