@@ -14,6 +14,7 @@
 #include "components/core/mapping/map_file.hpp"
 #include "components/core/place/vocabulary_setting.hpp"
 #include "components/frontend/message_checks.hpp"
+#include "runtime/run_counters.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/writer_identity.hpp"
@@ -131,6 +132,7 @@ void Frontend::configure(const runtime::Config& config) {
 }
 
 void Frontend::resume_from_journal() {
+  stats().count(runtime::kOdometryFrames, 0);  // reported even when no frame arrives
   if (options_.journal_file.empty()) return;
   journal_.emplace(options_.journal_file);
   const OdometryJournal::Opened resumed = journal_->open_for_run(runtime::supervisor_run_id());
@@ -148,6 +150,7 @@ void Frontend::resume_from_journal() {
   // with it) still gets every frame. A live recorder takes them again by seq, unchanged.
   for (const msg::Odometry& odometry : resumed.frames) odometry_writer_->write(odometry);
   stats().count("journal_frames", resumed.frames.size());
+  stats().count(runtime::kOdometryFrames, resumed.frames.size());
   log().info("resuming after frame ", last_seq_ ? std::to_string(*last_seq_) : std::string("none"), ": ",
              resumed.frames.size(), " frames from ",
              journal_->path().string(),
@@ -366,6 +369,7 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
   }
   const OdometryMessage odometry(frame.stamp_ns, frame.seq, result, output.keypoints, output.timings);
   if (odometry_writer_->write(odometry.get()) == runtime::WriteResult::kTimeout) stats().count("odometry_timeouts");
+  stats().count(runtime::kOdometryFrames);
   if (journal_ && result.new_keyframe) journal_->append(odometry.get(), /*finished=*/false);
   log().debug("frame ", frame.seq, ": ", to_string(result.state), " (", to_string(result.method), "), ",
               result.tracked_points, " points, ", output.keypoints, " keypoints (", output.stereo_keypoints, " stereo), ",

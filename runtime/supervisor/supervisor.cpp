@@ -16,10 +16,14 @@
 
 #include "runtime/participant.hpp"
 #include "runtime/reader.hpp"
+#include "runtime/run_counters.hpp"
+#include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/shutdown.hpp"
 #include "runtime/stats.hpp"
 #include "runtime/status.hpp"
+#include "runtime/supervisor/domain_check.hpp"
+#include "runtime/supervisor/run_verdict.hpp"
 #include "runtime/topics.hpp"
 #include "runtime/wire_enum.hpp"
 
@@ -68,7 +72,15 @@ struct StatusSeen {
   std::string message;
   std::uint64_t frames_published = 0;  // the replay's counters, for the progress line
   std::uint64_t frames_total = 0;
+  // All of them, for the verdict on a process that could not report its own as it ended.
+  std::map<std::string, std::uint64_t> counters;
 };
+
+// Before anything starts: how long to listen for another run's writers on the domain (discovery
+// over loopback takes milliseconds; a loaded machine, a few hundred), and how long to wait for the
+// writers of a run that was killed here to go (their 2 s DDS lease, config/cyclonedds.xml).
+constexpr auto kDomainListen = 1000ms;
+constexpr auto kKilledRunLinger = 3000ms;
 
 }  // namespace
 
@@ -253,11 +265,13 @@ void Supervisor::read_status() {
     seen.pid = status.pid;
     seen.state = status.state;
     seen.message = runtime::to_string(status.message);
+    seen.counters.clear();
     for (std::uint32_t i = 0; i < status.counters._length; ++i) {
       const msg::Counter& counter = status.counters._buffer[i];
       const std::string name = runtime::to_string(counter.name);
-      if (name == "frames_published") seen.frames_published = counter.value;
-      if (name == "frames_total") seen.frames_total = counter.value;
+      if (name == runtime::kFramesPublished) seen.frames_published = counter.value;
+      if (name == runtime::kFramesTotal) seen.frames_total = counter.value;
+      seen.counters[name] = counter.value;
     }
   }
   follow_remote_hosts();
@@ -412,7 +426,12 @@ void Supervisor::on_exit(Managed& component, int wait_status) {
   const bool startup_error = WIFEXITED(wait_status) && !success && component.process.said_starting() &&
                              !component.process.said_running();
   if (startup_error) {
-    const std::string reason = name + " failed at start-up (" + how + ")" + why;
+    // A restart that cannot start fails mid-run, not at the run's start-up.
+    const std::string reason =
+        component.restarts == 0
+            ? name + " failed at start-up (" + how + ")" + why
+            : name + " failed mid-run: restart " + std::to_string(component.restarts) + " failed at its start-up (" +
+                  how + ")" + why;
     log_.error(reason, component.spec.restart == RestartPolicy::kNever
                            ? ""
                            : "; not restarted: a restart cannot fix a start-up error");
@@ -510,9 +529,24 @@ void Supervisor::stop(Managed& component) {
   if (component.phase != Phase::kRunning) return;
   component.stopping = true;
   component.process.signal_group(SIGTERM);
-  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                           std::chrono::duration<double>(pipeline_.stop_timeout_s));
-  while (component.phase == Phase::kRunning && Clock::now() < deadline) pump(kPumpPeriod);
+  const auto stop_timeout = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(pipeline_.stop_timeout_s));
+  const auto deadline = Clock::now() + stop_timeout;
+  // A stopped process (SIGSTOP, a debugger, Ctrl-Z) holds SIGTERM: half-way to the timeout it is
+  // resumed, so it still does its shutdown work (the recorder's files, the mapper's map) instead of
+  // being killed, and the run's verdict is made of what it really wrote.
+  const auto resume_at = Clock::now() + stop_timeout / 2;
+  bool resume_checked = false;
+  while (component.phase == Phase::kRunning && Clock::now() < deadline) {
+    pump(kPumpPeriod);
+    if (!resume_checked && component.phase == Phase::kRunning && Clock::now() >= resume_at) {
+      resume_checked = true;
+      if (component.process.stopped()) {
+        log_.warn(component.spec.name, " is stopped (SIGSTOP or a debugger); resuming it (SIGCONT) so that it stops");
+        component.process.signal_group(SIGCONT);
+      }
+    }
+  }
   if (component.phase == Phase::kRunning) {
     log_.warn(component.spec.name, " did not stop within ", pipeline_.stop_timeout_s, " s; sending SIGKILL");
     component.killed_at_stop = true;
@@ -583,6 +617,8 @@ int Supervisor::run() {
   stop_all();
   roudi_.reset();  // after every component that used its shared memory
   read_status();  // the last results
+  watch_other_runs();
+  judge();
   clear_progress();
   if (failed_) {
     log_.error(outcome());
@@ -597,12 +633,34 @@ void Supervisor::fail(const std::string& reason) {
   failed_ = true;
 }
 
-std::string Supervisor::outcome() const {
-  if (failed_) return "pipeline failed: " + failure_;
-  std::string results;
+void Supervisor::judge() {
+  std::vector<ProgramReport> reports;
   for (const auto& component : components_) {
-    if (!component->result.empty()) results += (results.empty() ? "" : "; ") + component->result;
+    component->process.read_notifications();
+    ProgramReport report;
+    report.name = component->spec.name;
+    report.result = component->result;
+    if (const auto& result = component->process.result()) {
+      // Its own last word, through the pipe: never older than what it wrote (a status sample may
+      // not arrive before the process is gone).
+      report.counters = result->counters;
+      if (!result->text.empty() && result->text != component->last_reported_failure) report.result = result->text;
+    } else if (const auto seen = dds_->seen.find(component->spec.name); seen != dds_->seen.end()) {
+      report.counters = seen->second.counters;
+    }
+    reports.push_back(std::move(report));
   }
+  const RunVerdict verdict = judge_run(reports);
+  results_ = verdict.results;
+  if (verdict.failure) {
+    log_.error(*verdict.failure);
+    fail(*verdict.failure + (results_.empty() ? "" : ": " + results_));
+  }
+}
+
+std::string Supervisor::outcome() const {
+  if (failed_) return "pipeline failed: " + failure_ + other_runs_note();
+  const std::string results = results_ + other_runs_note();
   const char* signal_name = sigabbrev_np(runtime::shutdown_signal());
   const std::string text = remote_ended_                   ? "pipeline finished (ended by another host)"
                            : !runtime::shutdown_requested() ? "pipeline finished"

@@ -9,6 +9,7 @@
 #include "components/core/camera/stereo_rectifier.hpp"
 #include "components/frontend/message_adapter.hpp"
 #include "components/frontend/message_checks.hpp"
+#include "runtime/run_counters.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/wire_enum.hpp"
@@ -316,6 +317,10 @@ void Recorder::on_shutdown() {
   }
   const RecordedTrajectories recording = recorder_.build();
   const FrameAccount account = write_files();
+  // Once, final: what the supervisor holds against the frontend's and the replay's counts.
+  stats().count(runtime::kFramesRecorded, account.with_pose + account.untracked);
+  stats().count(runtime::kFramesWithPose, account.with_pose);
+  stats().count(runtime::kFramesAccounted, account.published);
   if (!T_frame_rect_) {
     log().warn("no camera calibration on ", topics().calibration().name, ": poses written in the rectified left camera "
                "frame (the files' header says so), not the ", eval::pose_frame_name(options_.frame), " frame");

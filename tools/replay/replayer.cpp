@@ -448,8 +448,8 @@ class Replay {
     progress_.finish();
     log_.flush_throttled();
     dds_wait_for_acks(frame_writer_.handle(), std::chrono::nanoseconds(kFinalAckTimeout).count());
-    status_.set_state(runtime::ComponentState::kShuttingDown);
     const bool stopped_early = runtime::shutdown_requested() || quit_;
+    status_.set_state(runtime::ComponentState::kShuttingDown, format_result(counts_, options_.loop, stopped_early));
     log_.info(format_summary(counts_), stopped_early ? " (stopped early)" : "");
     // An empty result is never a success: every pair of the sequence was unreadable.
     if (counts_.published == 0 && counts_.skipped_images > 0 && !stopped_early) {
