@@ -401,6 +401,11 @@ void Frontend::mirror_map_state() {
   if (!options_.mapper_enabled) return;
   for (auto& received : keyframe_done_reader_->take()) {
     if (!received.info.valid_data) continue;
+    // Another run's mapper on the domain must not acknowledge our keyframes.
+    if (!runtime::writer_of_this_run(keyframe_done_reader_->handle(), received.info.publication_handle)) {
+      stats().count(runtime::kOtherRunWriters);
+      continue;
+    }
     // The mapper's acknowledgement of a loop correction: the mirror acts on it when it applies the
     // correction's batch (whose version marker says the same, unless a newer marker replaced it).
     if (received.sample->correction_id != 0) {

@@ -12,6 +12,7 @@
 #include "components/loop_closer/message_adapter.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
+#include "runtime/writer_identity.hpp"
 
 namespace heslam::loop_closer {
 namespace {
@@ -134,6 +135,8 @@ std::size_t LoopCloserNode::take_all() {
   for (auto& received : keyframe_done_reader_->take()) {
     ++taken;
     if (!received.info.valid_data) continue;
+    // Another run's mapper on the domain must not acknowledge our corrections.
+    if (!runtime::writer_of_this_run(keyframe_done_reader_->handle(), received.info.publication_handle)) continue;
     const msg::KeyframeDone& done = *received.sample;
     if (runtime::to_string(done.component) == name()) continue;  // our own acknowledgements
     if (done.correction_id != 0) {

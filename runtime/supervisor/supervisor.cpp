@@ -93,7 +93,10 @@ struct Supervisor::Dds {
         topics(pipeline.ns),
         status_reader(participant, topics.status()),
         status(participant, topics, supervisor_status_name(pipeline), stats),
-        status_name(supervisor_status_name(pipeline)) {}
+        status_name(supervisor_status_name(pipeline)) {
+    // A run over several hosts has one supervisor per host, each a run of its own: not watched.
+    if (!pipeline.split()) watch.emplace(participant.handle(), pipeline.ns, runtime::own_run_id());
+  }
   runtime::Participant participant;
   runtime::Topics topics;
   runtime::Reader<msg::ComponentStatus> status_reader;
@@ -101,6 +104,7 @@ struct Supervisor::Dds {
   runtime::StatusPublisher status;
   std::map<std::string, StatusSeen> seen;
   std::string status_name;  // ours: remote supervisors are the other "supervisor@..." names
+  std::optional<OtherRunWatch> watch;  // other runs' writers on the domain (single-host runs)
 };
 
 Supervisor::Supervisor(Pipeline pipeline, SupervisorOptions options)
@@ -294,6 +298,16 @@ void Supervisor::read_status() {
       log_.error(component->spec.name, " reports failure: ", seen.message);
     }
   }
+}
+
+void Supervisor::watch_other_runs() {
+  if (!dds_->watch || !dds_->watch->poll()) return;
+  const std::string others = dds_->watch->describe();
+  if (others == other_runs_) return;
+  other_runs_ = others;
+  clear_progress();
+  log_.warn("another heslam run appeared on domain ", pipeline_.domain_id, ": ", others,
+            "; this run's components refuse its samples (counted as other_run_writers)");
 }
 
 void Supervisor::follow_remote_hosts() {
@@ -497,6 +511,7 @@ void Supervisor::pump(std::chrono::milliseconds timeout) {
   for (auto& component : components_) component->process.read_notifications();
   reap();
   read_status();
+  watch_other_runs();
   report_progress();
   for (auto& component : components_) {
     if (component->phase == Phase::kRestartPending && Clock::now() >= component->restart_at && !end_requested_ &&
@@ -569,6 +584,17 @@ int Supervisor::run() {
   log_.info("pipeline '", pipeline_.name, "' on domain ", pipeline_.domain_id, ", namespace '", pipeline_.ns,
             "'; logs in ", options_.log_dir.string());
   dds_->status.set_state(runtime::ComponentState::kRunning);
+  if (dds_->watch) {
+    if (const std::optional<std::string> other = other_run_alive(*dds_->watch, kDomainListen, kKilledRunLinger)) {
+      // Both runs would read each other's frames, acknowledgements and results: refused.
+      fail("domain " + std::to_string(pipeline_.domain_id) + ", namespace '" + pipeline_.ns +
+           "' is in use by another heslam run: " + *other +
+           "; stop it, or choose another domain (--domain N, or --domain auto for a free one)");
+      log_.error(outcome());
+      return 1;
+    }
+    dds_->watch->forget();
+  }
   bool started_all = true;
   if (pipeline_.image_transport == runtime::ImageTransport::kShm) {
     log_.info("stereo images over shared memory on domain ", pipeline_.image_domain_id, ", every other topic on ",
@@ -667,6 +693,12 @@ std::string Supervisor::outcome() const {
                            : signal_name != nullptr       ? std::string("pipeline stopped by SIG") + signal_name
                                                           : "pipeline stopped";
   return results.empty() ? text : text + ": " + results;
+}
+
+std::string Supervisor::other_runs_note() const {
+  if (other_runs_.empty()) return "";
+  return std::string(results_.empty() && !failed_ ? "" : "; ") + "another heslam run appeared on the domain (" +
+         other_runs_ + "), its samples were refused: this run's results are its own";
 }
 
 }  // namespace heslam::supervisor

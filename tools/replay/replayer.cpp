@@ -24,6 +24,7 @@
 #include "runtime/topics.hpp"
 #include "runtime/waitset.hpp"
 #include "runtime/writer.hpp"
+#include "runtime/writer_identity.hpp"
 #include "tools/replay/dataset/stereo_images.hpp"
 #include "tools/replay/replay_controls.hpp"
 #include "tools/replay/replay_messages.hpp"
@@ -412,7 +413,11 @@ class Replay {
     std::sort(readers.begin(), readers.end());
     for (;;) {
       for (auto& received : acks_->take()) {
-        if (received.info.valid_data && received.sample->seq == seq) return true;
+        // Another run's frontend on the domain acknowledges its own frames, not ours.
+        if (!received.info.valid_data || !runtime::writer_of_this_run(acks_->handle(), received.info.publication_handle)) {
+          continue;
+        }
+        if (received.sample->seq == seq) return true;
       }
       std::vector<dds_instance_handle_t> now_matched = frame_writer_.matched_reader_handles();
       std::sort(now_matched.begin(), now_matched.end());
