@@ -233,7 +233,9 @@ TEST_F(PipelineOutcome, LastLineSaysWhatTheRunProduced) {
   EXPECT_EQ(poses + static_cast<std::size_t>(lost), static_cast<std::size_t>(kFrames));
   EXPECT_EQ(last_line(supervisor->err()), "[supervisor] info: pipeline finished: tracked " + std::to_string(poses) + "/" +
                                               std::to_string(kFrames) + " frames, " + std::to_string(lost) +
-                                              " lost, trajectory " + (dir.path() / "run.txt").string());
+                                              " lost, trajectory " + (dir.path() / "run.txt").string() + "; " +
+                                              std::to_string(kFrames) + " of " + std::to_string(kFrames) +
+                                              " frames published");
 }
 
 // --check runs the replay's own check of its arguments and of the dataset: what a run would refuse,

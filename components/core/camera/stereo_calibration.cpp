@@ -41,11 +41,14 @@ cv::FileStorage open_yaml(const std::filesystem::path& file, bool add_header_if_
   }
 }
 
+// "nan", "inf" or "-inf" (std::to_string prints a nan's sign bit, "-nan").
+std::string non_finite_text(double value) { return std::isnan(value) ? "nan" : value > 0 ? "inf" : "-inf"; }
+
 double read_number(const cv::FileNode& node, const std::filesystem::path& file, const std::string& field) {
   if (node.empty() || node.isNone()) fail(file, field, "missing (expected a number)");
   if (!node.isReal() && !node.isInt()) fail(file, field, "expected a number");
   const double value = static_cast<double>(node);
-  if (!std::isfinite(value)) fail(file, field, "expected a finite number, got " + std::to_string(value));
+  if (!std::isfinite(value)) fail(file, field, "expected a finite number, got " + non_finite_text(value));
   return value;
 }
 
@@ -78,7 +81,7 @@ std::vector<double> read_sequence(const cv::FileNode& node, const std::filesyste
     if (!item.isReal() && !item.isInt()) fail(file, field, "expected only numbers in the list");
     const double value = static_cast<double>(item);
     if (!std::isfinite(value)) {
-      fail(file, field, "expected finite numbers, item " + std::to_string(values.size()) + " is " + std::to_string(value));
+      fail(file, field, "expected finite numbers, item " + std::to_string(values.size()) + " is " + non_finite_text(value));
     }
     values.push_back(value);
   }
