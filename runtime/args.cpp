@@ -71,7 +71,9 @@ CommonArgs parse_common_args(int argc, const char* const* argv, std::string_view
     } else if (flag == "--log-level") {
       const std::string text = value();
       const auto level = parse_log_level(text);
-      if (!level) throw std::runtime_error("--log-level: expected debug, info, warn, error or off, got '" + quote_value(text) + "'");
+      if (!level) {
+        throw std::runtime_error("--log-level: expected debug, info, warn, error or off, got '" + quote_value(text) + "'");
+      }
       args.log_level = *level;
     } else if (flag == "--dds-config") {
       args.dds_config = value();

@@ -82,7 +82,9 @@ int run(int argc, char** argv) {
     } else if (arg == "--arg") {
       const std::string pair = value_of(argc, argv, i, arg);
       const auto eq = pair.find('=');
-      if (eq == std::string::npos || eq == 0) throw std::runtime_error("--arg: expected key=value, got '" + runtime::quote_value(pair) + "'");
+      if (eq == std::string::npos || eq == 0) {
+        throw std::runtime_error("--arg: expected key=value, got '" + runtime::quote_value(pair) + "'");
+      }
       overrides.args[pair.substr(0, eq)] = pair.substr(eq + 1);
     } else if (arg == "--domain") {
       const std::string text = value_of(argc, argv, i, arg);
@@ -128,7 +130,10 @@ int run(int argc, char** argv) {
     } else if (arg == "--log-level") {
       const std::string text = value_of(argc, argv, i, arg);
       const auto level = runtime::parse_log_level(text);
-      if (!level) throw std::runtime_error("--log-level: expected debug, info, warn, error or off, got '" + runtime::quote_value(text) + "'");
+      if (!level) {
+        throw std::runtime_error("--log-level: expected debug, info, warn, error or off, got '" +
+                                 runtime::quote_value(text) + "'");
+      }
       log_level = *level;
     } else if (!arg.empty() && arg[0] == '-') {
       throw std::runtime_error("unknown option '" + runtime::quote_value(arg) + "' (see --help)");
@@ -181,7 +186,8 @@ int run(int argc, char** argv) {
                                "); stop it, or choose another domain (--domain N, or --domain auto for a free one)");
     }
   } else if (domain_auto) {
-    throw std::runtime_error("--domain auto: a run over several hosts needs the same domain on every host; give it with --domain N");
+    throw std::runtime_error(
+        "--domain auto: a run over several hosts needs the same domain on every host; give it with --domain N");
   }
   runtime::install_shutdown_handlers();
   signal(SIGPIPE, SIG_IGN);  // a closed terminal must not kill the supervisor before it stops its children

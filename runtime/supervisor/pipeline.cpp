@@ -93,7 +93,8 @@ void load_network_profile(const Config& config, Pipeline& pipeline, std::vector<
     profile = substitute("dds_profile", config.get_string("dds_profile", "loopback"));
     if (profile.empty()) profile = "loopback";
     if (profile != "loopback" && profile != "network") {
-      throw std::runtime_error(source + ": field 'dds_profile': expected loopback or network, got '" + runtime::quote_value(profile) + "'");
+      throw std::runtime_error(source + ": field 'dds_profile': expected loopback or network, got '" +
+                               runtime::quote_value(profile) + "'");
     }
   });
   runtime::DdsNetworkProfile network;
@@ -339,7 +340,10 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
     std::string text = substitute("image_transport", config->get_string("image_transport", "udp"));
     if (overrides.image_transport) text = *overrides.image_transport;
     const auto transport = runtime::parse_image_transport(text);
-    if (!transport) throw std::runtime_error(source + ": field 'image_transport': expected udp or shm, got '" + runtime::quote_value(text) + "'");
+    if (!transport) {
+      throw std::runtime_error(source + ": field 'image_transport': expected udp or shm, got '" +
+                               runtime::quote_value(text) + "'");
+    }
     pipeline.image_transport = *transport;
     // Read even for udp: every field of the file is consumed (unknown ones are an error).
     const std::string domain_text = substitute("image_domain", config->get_scalar("image_domain", ""));
@@ -429,8 +433,8 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       }
       const auto [it, inserted] = first_index.emplace(spec.name, static_cast<int>(i));
       if (!inserted) {
-        throw std::runtime_error(source + ": " + where + ": duplicate name '" + runtime::quote_value(spec.name) + "' (also components[" +
-                                 std::to_string(it->second) + "])");
+        throw std::runtime_error(source + ": " + where + ": duplicate name '" + runtime::quote_value(spec.name) +
+                                 "' (also components[" + std::to_string(it->second) + "])");
       }
     });
     const std::string label = spec.name.empty() ? where : "component '" + runtime::quote_value(spec.name) + "'";
@@ -509,7 +513,8 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       if (pipeline.security_dir.empty() || disabled) return;
       if (!valid_name(spec.identity)) {
         throw std::runtime_error(source + ": " + label +
-                                 ": field 'identity': expected letters, digits, '_' or '-', got '" + runtime::quote_value(spec.identity) + "'");
+                                 ": field 'identity': expected letters, digits, '_' or '-', got '" +
+                                 runtime::quote_value(spec.identity) + "'");
       }
       const std::filesystem::path identity_dir = pipeline.security_dir / "identities" / spec.identity;
       try {
