@@ -41,10 +41,17 @@ bool run_on_one_host() {
   return value != nullptr && std::string_view(value) == "1";
 }
 
-void adopt_own_run_id() { g_own_run_adopted = true; }
+void adopt_own_run_id() {
+  g_own_run_adopted = true;
+  unsetenv(kJoinRunVariable);
+}
 
 const std::string& process_run_id() {
-  static const std::string run_id = g_own_run_adopted ? own_run_id() : supervisor_run_id();
+  static const std::string run_id = [] {
+    if (g_own_run_adopted) return own_run_id();
+    const char* joined = std::getenv(kJoinRunVariable);
+    return joined != nullptr && *joined != '\0' ? std::string(joined) : supervisor_run_id();
+  }();
   return run_id;
 }
 

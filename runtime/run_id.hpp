@@ -14,7 +14,7 @@ namespace heslam::runtime {
 // the same supervisor gets the same id; another run, or the same command run again, another one.
 std::string supervisor_run_id();
 
-// supervisor_run_id() of this process, read once (what its writers advertise).
+// What this process's writers advertise, read once: supervisor_run_id() (runtime/run_self.hpp).
 const std::string& process_run_id();
 
 // Set (to "1") by heslam-supervisor for the components of a run that runs entirely on this host:

@@ -140,7 +140,8 @@ int run(int argc, char** argv) {
     } else if (pipeline_file.empty()) {
       pipeline_file = arg;
     } else {
-      throw std::runtime_error("unexpected argument '" + runtime::quote_value(arg) + "': one pipeline file per supervisor");
+      throw std::runtime_error("unexpected argument '" + runtime::quote_value(arg) +
+                               "': one pipeline file per supervisor");
     }
   }
   if (pipeline_file.empty()) throw std::runtime_error(std::string("missing PIPELINE.yaml\n") + kUsage);
@@ -149,7 +150,9 @@ int run(int argc, char** argv) {
   auto loaded = supervisor::load_pipeline(pipeline_file, overrides, self.parent_path());
   if (loaded.problems.empty() && check) {
     // What each heslam program of the pipeline would refuse at its start (its own flags and fields).
-    for (std::string& problem : supervisor::check_programs(loaded.pipeline, self)) loaded.problems.push_back(std::move(problem));
+    for (std::string& problem : supervisor::check_programs(loaded.pipeline, self)) {
+      loaded.problems.push_back(std::move(problem));
+    }
   }
   if (!loaded.problems.empty()) {
     for (const std::string& problem : loaded.problems) std::cerr << "heslam-supervisor: " << problem << "\n";

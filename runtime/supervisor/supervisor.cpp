@@ -582,7 +582,7 @@ void Supervisor::stop_all() {
 
 int Supervisor::run() {
   log_.info("pipeline '", pipeline_.name, "' on domain ", pipeline_.domain_id, ", namespace '", pipeline_.ns,
-            "'; logs in ", options_.log_dir.string());
+            "', run ", runtime::process_run_id(), "; logs in ", options_.log_dir.string());
   dds_->status.set_state(runtime::ComponentState::kRunning);
   if (dds_->watch) {
     if (const std::optional<std::string> other = other_run_alive(*dds_->watch, kDomainListen, kKilledRunLinger)) {
