@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "runtime/participant.hpp"
+#include "runtime/quote_value.hpp"
 #include "runtime/topics.hpp"
 
 namespace heslam::runtime {
@@ -18,7 +19,7 @@ int parse_domain(const std::string& flag, const std::string& text) {
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
   if (error != std::errc{} || end != text.data() + text.size() || value < 0 || value > kMaxDomainId) {
     throw std::runtime_error(flag + ": expected an integer in [0, " + std::to_string(kMaxDomainId) + "], got '" +
-                             text + "'");
+                             quote_value(text) + "'");
   }
   return value;
 }
@@ -70,19 +71,23 @@ CommonArgs parse_common_args(int argc, const char* const* argv, std::string_view
     } else if (flag == "--log-level") {
       const std::string text = value();
       const auto level = parse_log_level(text);
-      if (!level) throw std::runtime_error("--log-level: expected debug, info, warn, error or off, got '" + text + "'");
+      if (!level) {
+        throw std::runtime_error("--log-level: expected debug, info, warn, error or off, got '" + quote_value(text) + "'");
+      }
       args.log_level = *level;
     } else if (flag == "--dds-config") {
       args.dds_config = value();
     } else if (flag == "--image-transport") {
       const std::string text = value();
       const auto transport = parse_image_transport(text);
-      if (!transport) throw std::runtime_error("--image-transport: expected udp or shm, got '" + text + "'");
+      if (!transport) throw std::runtime_error("--image-transport: expected udp or shm, got '" + quote_value(text) + "'");
       args.image_transport = *transport;
     } else if (flag == "--image-domain") {
       args.image_domain_id = parse_domain(flag, value());
     } else if (arg == "-h" || arg == "--help") {
       args.help = true;
+    } else if (arg == "--check") {
+      args.check = true;
     } else {
       args.rest.push_back(arg);
     }
@@ -106,6 +111,8 @@ std::string common_args_usage() {
          "                      else the built-in loopback config/cyclonedds.xml)\n"
          "  --image-transport T udp (default) or shm: the stereo images over iceoryx shared memory on\n"
          "                      --image-domain N (replay, frontend, viewer; needs iox-roudi; docs/topics.md)\n"
+         "  --check             check the arguments and the config file, start nothing (exit code 0: a\n"
+         "                      run would accept them; heslam-supervisor --check runs this for each program)\n"
          "  -h, --help          this help\n";
 }
 

@@ -1,6 +1,6 @@
 // The command-line flags every component and tool shares (the pipeline file sets them):
 //   --domain N  --namespace NAME  --name NAME  --config FILE  --log-level LEVEL  --dds-config XML|file://…
-//   --image-transport udp|shm  --image-domain N
+//   --image-transport udp|shm  --image-domain N  --check
 // parse_common_args() takes these out and leaves every other argument, in order, for the tool.
 #pragma once
 
@@ -27,6 +27,7 @@ struct CommonArgs {
   ImageTransport image_transport = ImageTransport::kUdp;
   int image_domain_id = -1;
   bool help = false;                  // -h / --help seen
+  bool check = false;                 // --check: validate the arguments and the config, start nothing
   std::vector<std::string> rest;      // everything else, in order (argv[0] excluded)
 };
 

@@ -5,7 +5,8 @@
 // - Validation: an optional check (the component's, e.g. messages::check) returns what is wrong with
 //   a sample; such a sample is dropped, counted under `rejected_counter` and reported by a
 //   rate-limited warning naming the topic (Logger::warn_throttled).
-// - One writer: the first writer whose sample arrives owns the stream. Every sample of another
+// - One writer: the first writer whose sample arrives owns the stream (in a run on one host, the
+//   first writer of this process's run: runtime/run_id.hpp, run_on_one_host()). Every sample of another
 //   writer is counted (`second_writer_samples`) and the writer is announced once with one line
 //   naming the topic, both GUIDs and both runs.
 // - Who may take over: only a writer of the owner's run (the run id every Writer carries in its user
@@ -141,7 +142,20 @@ class CheckedReader {
     if (!received.info.valid_data && !received.info.disposed) return true;
     const dds_instance_handle_t writer = received.info.publication_handle;
     if (!owner_) {
-      if (received.info.valid_data) own(writer);
+      if (!received.info.valid_data) return true;
+      if (run_on_one_host() && run_of(writer) != process_run_id()) {
+        // Another run on the domain that wrote before this run's own writer: never the owner.
+        stats_.count(kSecondWriterSamples);
+        if (announced_.insert(writer).second) {
+          stats_.count(kSecondWriters);
+          stats_.count(kOtherRunWriters);
+          log_.warn("topic '", name(), "': a writer of another run (", describe_writer(handle(), writer), ", run ",
+                    run_of(writer).value_or("unknown: it left"), "; this run is ", process_run_id(),
+                    "): its samples are dropped and counted as ", kSecondWriterSamples);
+        }
+        return false;
+      }
+      own(writer);
       return true;
     }
     if (writer == *owner_) return true;

@@ -114,7 +114,8 @@ class Component {
   std::vector<std::unique_ptr<SubscriptionBase>> subscriptions_;
 };
 
-// Parses the common flags (prints usage for --help), constructs C(args), executes it. Any exception
+// Parses the common flags (prints usage for --help), constructs C(args), executes it; with --check
+// only loads the config and calls C::check(args, config) when C has one. Any exception
 // becomes "<program>: <what>" on stderr and exit code 1.
 template <typename C>
 int component_main(int argc, char** argv, std::string_view default_name) {
@@ -123,6 +124,13 @@ int component_main(int argc, char** argv, std::string_view default_name) {
     const CommonArgs args = parse_common_args(argc, argv, default_name);
     if (args.help) {
       std::cout << "usage: " << args.program << " [options]\n" << common_args_usage();
+      return 0;
+    }
+    if (args.check) {
+      // What a run would refuse at start-up, without DDS or files written: the config file's syntax
+      // and, for a component that has one, its own check of its flags and fields.
+      const Config config = args.config_file.empty() ? Config::empty() : Config::load(args.config_file);
+      if constexpr (requires { C::check(args, config); }) C::check(args, config);
       return 0;
     }
     C component(args);

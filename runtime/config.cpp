@@ -8,6 +8,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "runtime/quote_value.hpp"
+
 namespace heslam::runtime {
 namespace {
 
@@ -24,7 +26,7 @@ std::string describe(const cv::FileNode& node) {
   }
   if (node.isString()) {
     std::string quoted = "'";  // built by appending: GCC 12 -Wrestrict misfires on "'" + std::string&&
-    quoted += static_cast<std::string>(node);
+    quoted += quote_value(static_cast<std::string>(node));  // a field's value in an error line: short
     quoted += "'";
     return quoted;
   }

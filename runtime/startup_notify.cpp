@@ -1,9 +1,10 @@
-// The child side of the start-up handshake (see startup_notify.hpp).
+// The child side of the handshake with heslam-supervisor (see startup_notify.hpp).
 #include "runtime/startup_notify.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <mutex>
 #include <string>
@@ -49,6 +50,23 @@ void notify_supervisor_running() {
   if (fd < 0 || g_running_sent) return;
   write_line(fd, kNotifyRunning);
   g_running_sent = true;
+}
+
+void notify_supervisor_result(const std::map<std::string, std::uint64_t>& counters, const std::string& result) {
+  std::lock_guard lock(g_mutex);
+  const int fd = notify_fd_locked();
+  if (fd < 0) return;
+  // Never blocks (the pipe holds 64 KB; these lines are a few KB): a stopped supervisor must not
+  // hold up a program's exit.
+  fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK);
+  for (const auto& [name, value] : counters) {
+    // Counter names are identifiers; one with a space or newline could not be read back.
+    if (name.find_first_of(" \n") != std::string::npos) continue;
+    write_line(fd, (std::string(kNotifyCounter) + " " + name + " " + std::to_string(value)).c_str());
+  }
+  std::string line = result.substr(0, kMaxResultBytes);
+  std::replace(line.begin(), line.end(), '\n', ' ');
+  write_line(fd, (std::string(kNotifyResult) + " " + line).c_str());
   ::close(fd);
   g_fd = -1;
 }

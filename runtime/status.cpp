@@ -64,6 +64,8 @@ StatusPublisher::~StatusPublisher() {
   }
   wake_.notify_all();
   thread_.join();
+  // The end of the program: its final counters and result, for the supervisor's verdict.
+  notify_supervisor_result(stats_.counters(), message_);
   try {
     msg::ComponentStatus key{};
     key.name = borrow(name_);

@@ -52,4 +52,10 @@ std::optional<std::string> writer_run_id(dds_entity_t reader, dds_instance_handl
   return run_id;
 }
 
+bool writer_of_this_run(dds_entity_t reader, dds_instance_handle_t publication) {
+  if (!run_on_one_host()) return true;
+  const std::optional<std::string> run = writer_run_id(reader, publication);
+  return run && *run == process_run_id();
+}
+
 }  // namespace heslam::runtime

@@ -23,4 +23,9 @@ std::string describe_writer(dds_entity_t reader, dds_instance_handle_t publicati
 // is no longer matched (nothing can be known about it then).
 std::optional<std::string> writer_run_id(dds_entity_t reader, dds_instance_handle_t publication);
 
+// Whether a sample of `publication` may be used by a reader of a topic with several legitimate
+// writers (lockstep/frame_done, lockstep/keyframe_done): always, unless this run is on one host
+// (run_on_one_host()) and the writer is of another run or left before it could be asked.
+bool writer_of_this_run(dds_entity_t reader, dds_instance_handle_t publication);
+
 }  // namespace heslam::runtime

@@ -18,6 +18,7 @@
 #include "components/messages/keyframe.hpp"
 #include "components/messages/odometry.hpp"
 #include "components/messages/pose.hpp"
+#include "runtime/run_counters.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/run_journal.hpp"
 #include "runtime/sequence.hpp"
@@ -139,6 +140,7 @@ void Frontend::configure(const runtime::Config& config) {
 }
 
 void Frontend::resume_from_journal() {
+  stats().count(runtime::kOdometryFrames, 0);  // reported even when no frame arrives
   if (options_.journal_file.empty()) return;
   journal_.emplace(options_.journal_file);
   const OdometryJournal::Opened resumed = journal_->open_for_run(runtime::supervisor_run_id());
@@ -161,6 +163,7 @@ void Frontend::resume_from_journal() {
   // with it) still gets every frame. A live recorder takes them again by seq, unchanged.
   for (const msg::Odometry& odometry : resumed.frames) odometry_writer_->write(odometry);
   stats().count("journal_frames", resumed.frames.size());
+  stats().count(runtime::kOdometryFrames, resumed.frames.size());
   log().info("resuming after frame ", last_seq_ ? std::to_string(*last_seq_) : std::string("none"), ": ",
              resumed.frames.size(), " frames from ",
              journal_->path().string(),
@@ -376,6 +379,7 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
   }
   const messages::OdometryMessage odometry(frame.stamp_ns, frame.seq, result, output.keypoints, output.timings);
   if (odometry_writer_->write(odometry.get()) == runtime::WriteResult::kTimeout) stats().count("odometry_timeouts");
+  stats().count(runtime::kOdometryFrames);
   if (journal_ && result.new_keyframe) journal_->append(odometry.get(), /*finished=*/false);
   log().debug("frame ", frame.seq, ": ", to_string(result.state), " (", to_string(result.method), "), ",
               result.tracked_points, " points, ", output.keypoints, " keypoints (", output.stereo_keypoints, " stereo), ",
@@ -407,6 +411,11 @@ void Frontend::mirror_map_state() {
   if (!options_.mapper_enabled) return;
   for (auto& received : keyframe_done_reader_->take()) {
     if (!received.info.valid_data) continue;
+    // Another run's mapper on the domain must not acknowledge our keyframes.
+    if (!runtime::writer_of_this_run(keyframe_done_reader_->handle(), received.info.publication_handle)) {
+      stats().count(runtime::kOtherRunWriters);
+      continue;
+    }
     // The mapper's acknowledgement of a loop correction: the mirror acts on it when it applies the
     // correction's batch (whose version marker says the same, unless a newer marker replaced it).
     if (received.sample->correction_id != 0) {

@@ -13,6 +13,7 @@
 #include "runtime/run_id.hpp"
 #include "runtime/run_journal.hpp"
 #include "runtime/sequence.hpp"
+#include "runtime/writer_identity.hpp"
 
 namespace heslam::loop_closer {
 namespace {
@@ -137,6 +138,8 @@ std::size_t LoopCloserNode::take_all() {
   for (auto& received : keyframe_done_reader_->take()) {
     ++taken;
     if (!received.info.valid_data) continue;
+    // Another run's mapper on the domain must not acknowledge our corrections.
+    if (!runtime::writer_of_this_run(keyframe_done_reader_->handle(), received.info.publication_handle)) continue;
     const msg::KeyframeDone& done = *received.sample;
     if (runtime::to_string(done.component) == name()) continue;  // our own acknowledgements
     if (done.correction_id != 0) {

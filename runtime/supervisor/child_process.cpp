@@ -8,8 +8,11 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <charconv>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <stdexcept>
 #include <utility>
 
@@ -122,6 +125,8 @@ ChildProcess& ChildProcess::operator=(ChildProcess&& other) noexcept {
     said_running_ = std::exchange(other.said_running_, false);
     partial_ = std::move(other.partial_);
     notify_partial_ = std::move(other.notify_partial_);
+    pending_result_ = std::exchange(other.pending_result_, Result{});
+    result_ = std::exchange(other.result_, std::nullopt);
   }
   return *this;
 }
@@ -140,7 +145,7 @@ void ChildProcess::read_notifications() {
     if (n < 0 && errno == EINTR) continue;
     if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return;
     if (n <= 0) {
-      close_fd(notify_fd_);  // the program closed it (after "running") or ended
+      close_fd(notify_fd_);  // the program closed it (after its result) or ended
       return;
     }
     notify_partial_.append(buffer, static_cast<std::size_t>(n));
@@ -149,7 +154,35 @@ void ChildProcess::read_notifications() {
       notify_partial_.erase(0, newline + 1);
       if (line == runtime::kNotifyStarting) said_starting_ = true;
       if (line == runtime::kNotifyRunning) said_starting_ = said_running_ = true;
+      read_result_line(line);
     }
+  }
+}
+
+bool ChildProcess::stopped() const {
+  if (pid_ <= 0) return false;
+  std::ifstream stat("/proc/" + std::to_string(pid_) + "/stat");
+  const std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+  // The state follows the ')' closing the command name (proc(5)): T stopped, t tracing stop.
+  const std::size_t close = text.rfind(')');
+  return close != std::string::npos && close + 2 < text.size() && (text[close + 2] == 'T' || text[close + 2] == 't');
+}
+
+void ChildProcess::read_result_line(const std::string& line) {
+  const std::string counter_prefix = std::string(runtime::kNotifyCounter) + " ";
+  const std::string result_prefix = std::string(runtime::kNotifyResult) + " ";
+  if (line.starts_with(counter_prefix)) {
+    const std::size_t space = line.rfind(' ');
+    if (space <= counter_prefix.size()) return;
+    const std::string value = line.substr(space + 1);
+    std::uint64_t number = 0;
+    const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), number);
+    if (error != std::errc{} || end != value.data() + value.size()) return;
+    pending_result_.counters[line.substr(counter_prefix.size(), space - counter_prefix.size())] = number;
+  } else if (line.starts_with(result_prefix)) {
+    pending_result_.text = line.substr(result_prefix.size());
+    result_ = std::move(pending_result_);
+    pending_result_ = Result{};
   }
 }
 

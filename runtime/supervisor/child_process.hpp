@@ -2,13 +2,16 @@
 //
 // Spawned through the supervisor's own binary in "--exec-child" mode, which sets PR_SET_PDEATHSIG
 // before exec'ing the program, so even a program that knows nothing of heslam dies with the
-// supervisor (kill -9 included). A second pipe, as file descriptor 3, carries the start-up handshake.
+// supervisor (kill -9 included). A second pipe, as file descriptor 3, carries the start-up handshake
+// and the program's final result.
 #pragma once
 
 #include <sys/types.h>
 
 #include <filesystem>
+#include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,16 +41,28 @@ class ChildProcess {
   void read_notifications();
   bool said_starting() const { return said_starting_; }  // a heslam program: it speaks the handshake
   bool said_running() const { return said_running_; }    // configured itself successfully
+  // What a heslam program said as it ended (runtime/startup_notify.hpp): its final counters and its
+  // one-line result. Unset for a program killed before it could say it, or not heslam's.
+  struct Result {
+    std::map<std::string, std::uint64_t> counters;
+    std::string text;
+  };
+  const std::optional<Result>& result() const { return result_; }
 
   // Reads what is available (non-blocking) and returns complete lines; at end of stream also the
   // unterminated rest. Returns false once the stream is closed.
   bool read_lines(std::vector<std::string>& lines);
   void close_output();
 
+  // Whether the program is stopped (SIGSTOP, SIGTSTP, a tracer), from /proc/PID/stat.
+  bool stopped() const;
+
   // Signals the whole process group (the program and anything it started).
   void signal_group(int signal_number) const;
 
  private:
+  void read_result_line(const std::string& line);
+
   pid_t pid_ = 0;
   int output_fd_ = -1;
   int notify_fd_ = -1;
@@ -55,6 +70,8 @@ class ChildProcess {
   bool said_running_ = false;
   std::string partial_;
   std::string notify_partial_;
+  Result pending_result_;  // counters read so far; complete with the "result" line
+  std::optional<Result> result_;
 };
 
 // The --exec-child mode of heslam-supervisor: never returns (exec or _exit(127)).

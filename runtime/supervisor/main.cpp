@@ -1,4 +1,4 @@
-// heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]
+// heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N|auto] [--namespace NAME]
 //                   [--log-dir DIR] [--log-level LEVEL] [--host NAME | --only a,b] [--no-progress]
 //                   [--security DIR] [--image-transport udp|shm] [--image-domain N]
 #include <signal.h>
@@ -10,8 +10,11 @@
 
 #include "runtime/log.hpp"
 #include "runtime/participant.hpp"
+#include "runtime/quote_value.hpp"
+#include "runtime/run_self.hpp"
 #include "runtime/shutdown.hpp"
 #include "runtime/supervisor/child_process.hpp"
+#include "runtime/supervisor/domain_check.hpp"
 #include "runtime/supervisor/pipeline.hpp"
 #include "runtime/supervisor/supervisor.hpp"
 
@@ -20,10 +23,13 @@ namespace {
 using namespace heslam;
 
 constexpr const char* kUsage =
-    "usage: heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N] [--namespace NAME]\n"
+    "usage: heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N|auto] [--namespace NAME]\n"
     "                         [--log-dir DIR] [--log-level debug|info|warn|error] [--host NAME | --only a,b]\n"
     "                         [--no-progress] [--security DIR] [--image-transport udp|shm] [--image-domain N]\n"
-    "  --check      validate the pipeline file and every file it references; start nothing\n"
+    "  --check      validate the pipeline file, every file it references and each heslam program's\n"
+    "               arguments and config (the program's own --check); start nothing\n"
+    "  --domain N   DDS domain 0-232 (overrides the file's); auto: the first domain no other heslam run\n"
+    "               uses (the file's, then 1, 2, ...). A domain in use by another run is refused\n"
     "  --arg k=v    value for $(arg k) in the pipeline file (overrides its 'args' default)\n"
     "  --log-dir    per-component logs (default: $HESLAM_LOG_DIR or ~/.heslam/log, + /<pipeline>-<time>)\n"
     "  --host NAME  run only the components of the file's hosts.NAME group; the others run on other hosts\n"
@@ -61,6 +67,7 @@ int run(int argc, char** argv) {
   supervisor::PipelineOverrides overrides;
   bool check = false;
   bool progress = true;
+  bool domain_auto = false;
   std::filesystem::path log_dir;
   runtime::LogLevel log_level = runtime::LogLevel::kInfo;
   for (int i = 1; i < argc; ++i) {
@@ -75,10 +82,16 @@ int run(int argc, char** argv) {
     } else if (arg == "--arg") {
       const std::string pair = value_of(argc, argv, i, arg);
       const auto eq = pair.find('=');
-      if (eq == std::string::npos || eq == 0) throw std::runtime_error("--arg: expected key=value, got '" + pair + "'");
+      if (eq == std::string::npos || eq == 0) {
+        throw std::runtime_error("--arg: expected key=value, got '" + runtime::quote_value(pair) + "'");
+      }
       overrides.args[pair.substr(0, eq)] = pair.substr(eq + 1);
     } else if (arg == "--domain") {
       const std::string text = value_of(argc, argv, i, arg);
+      if (text == "auto") {
+        domain_auto = true;
+        continue;
+      }
       try {
         std::size_t used = 0;
         const int domain = std::stoi(text, &used);
@@ -86,7 +99,7 @@ int run(int argc, char** argv) {
         overrides.domain_id = domain;
       } catch (const std::logic_error&) {
         throw std::runtime_error("--domain: expected an integer in [0, " + std::to_string(runtime::kMaxDomainId) +
-                                 "], got '" + text + "'");
+                                 "] or auto, got '" + runtime::quote_value(text) + "'");
       }
     } else if (arg == "--namespace") {
       overrides.ns = value_of(argc, argv, i, arg);
@@ -110,27 +123,37 @@ int run(int argc, char** argv) {
         overrides.image_domain_id = domain;
       } catch (const std::logic_error&) {
         throw std::runtime_error("--image-domain: expected an integer in [0, " + std::to_string(runtime::kMaxDomainId) +
-                                 "], got '" + text + "'");
+                                 "], got '" + runtime::quote_value(text) + "'");
       }
     } else if (arg == "--log-dir") {
       log_dir = value_of(argc, argv, i, arg);
     } else if (arg == "--log-level") {
       const std::string text = value_of(argc, argv, i, arg);
       const auto level = runtime::parse_log_level(text);
-      if (!level) throw std::runtime_error("--log-level: expected debug, info, warn, error or off, got '" + text + "'");
+      if (!level) {
+        throw std::runtime_error("--log-level: expected debug, info, warn, error or off, got '" +
+                                 runtime::quote_value(text) + "'");
+      }
       log_level = *level;
     } else if (!arg.empty() && arg[0] == '-') {
-      throw std::runtime_error("unknown option '" + arg + "' (see --help)");
+      throw std::runtime_error("unknown option '" + runtime::quote_value(arg) + "' (see --help)");
     } else if (pipeline_file.empty()) {
       pipeline_file = arg;
     } else {
-      throw std::runtime_error("unexpected argument '" + arg + "': one pipeline file per supervisor");
+      throw std::runtime_error("unexpected argument '" + runtime::quote_value(arg) +
+                               "': one pipeline file per supervisor");
     }
   }
   if (pipeline_file.empty()) throw std::runtime_error(std::string("missing PIPELINE.yaml\n") + kUsage);
 
   const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe");
-  const auto loaded = supervisor::load_pipeline(pipeline_file, overrides, self.parent_path());
+  auto loaded = supervisor::load_pipeline(pipeline_file, overrides, self.parent_path());
+  if (loaded.problems.empty() && check) {
+    // What each heslam program of the pipeline would refuse at its start (its own flags and fields).
+    for (std::string& problem : supervisor::check_programs(loaded.pipeline, self)) {
+      loaded.problems.push_back(std::move(problem));
+    }
+  }
   if (!loaded.problems.empty()) {
     for (const std::string& problem : loaded.problems) std::cerr << "heslam-supervisor: " << problem << "\n";
     return 1;
@@ -147,6 +170,27 @@ int run(int argc, char** argv) {
     }
     std::cout << "\n";
     return 0;
+  }
+  std::optional<supervisor::DomainClaim> claim;
+  if (!loaded.pipeline.split()) {
+    // One run per domain and namespace on this host; --domain auto takes the first free one.
+    std::string holder;
+    if (domain_auto) {
+      const int domain = supervisor::free_domain(loaded.pipeline, claim);
+      if (domain != loaded.pipeline.domain_id) {
+        overrides.domain_id = domain;
+        loaded = supervisor::load_pipeline(pipeline_file, overrides, self.parent_path());
+        if (!loaded.problems.empty()) throw std::runtime_error(loaded.problems.front());
+      }
+    } else if (!(claim = supervisor::DomainClaim::try_claim(loaded.pipeline.domain_id, loaded.pipeline.ns, &holder))) {
+      throw std::runtime_error("domain " + std::to_string(loaded.pipeline.domain_id) + ", namespace '" +
+                               loaded.pipeline.ns + "' is in use by another heslam run on this host (supervisor pid " +
+                               (holder.empty() ? "unknown" : holder) +
+                               "); stop it, or choose another domain (--domain N, or --domain auto for a free one)");
+    }
+  } else if (domain_auto) {
+    throw std::runtime_error(
+        "--domain auto: a run over several hosts needs the same domain on every host; give it with --domain N");
   }
   runtime::install_shutdown_handlers();
   signal(SIGPIPE, SIG_IGN);  // a closed terminal must not kill the supervisor before it stops its children
@@ -177,6 +221,7 @@ int run(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   if (argc >= 2 && std::string(argv[1]) == "--exec-child") heslam::supervisor::exec_child(argc, argv);
+  heslam::runtime::adopt_own_run_id();
   try {
     return run(argc, argv);
   } catch (const std::exception& error) {

@@ -14,6 +14,7 @@
 
 #include "runtime/config.hpp"
 #include "runtime/participant.hpp"
+#include "runtime/quote_value.hpp"
 #include "runtime/security.hpp"
 #include "runtime/topics.hpp"
 
@@ -24,6 +25,16 @@ using runtime::Config;
 
 // The largest niceness Linux has (19) above a supervisor at 0; lowering it (negative) needs privileges.
 constexpr int kMaxNiceIncrement = 19;
+
+// The pipeline's name becomes part of the log folder's name: a file name of this many characters at most.
+constexpr std::size_t kMaxPipelineName = 64;
+// Arguments referring to each other deeper than this are a mistake, not a configuration.
+constexpr int kMaxArgDepth = 16;
+
+const std::regex& arg_pattern() {
+  static const std::regex pattern(R"(\$\((arg|stem)\s+([A-Za-z0-9_\-]+)\s*\))");
+  return pattern;
+}
 
 // A component name becomes a file name and a DDS key: keep it simple.
 bool valid_name(const std::string& name) {
@@ -82,7 +93,8 @@ void load_network_profile(const Config& config, Pipeline& pipeline, std::vector<
     profile = substitute("dds_profile", config.get_string("dds_profile", "loopback"));
     if (profile.empty()) profile = "loopback";
     if (profile != "loopback" && profile != "network") {
-      throw std::runtime_error(source + ": field 'dds_profile': expected loopback or network, got '" + profile + "'");
+      throw std::runtime_error(source + ": field 'dds_profile': expected loopback or network, got '" +
+                               runtime::quote_value(profile) + "'");
     }
   });
   runtime::DdsNetworkProfile network;
@@ -95,7 +107,7 @@ void load_network_profile(const Config& config, Pipeline& pipeline, std::vector<
         network.lease_s > runtime::kMaxLeaseS) {
       std::ostringstream expected;
       expected << "expected seconds in [" << runtime::kMinLeaseS << ", " << runtime::kMaxLeaseS << "]";
-      throw std::runtime_error(source + ": field 'dds_lease_s': " + expected.str() + ", got '" + text + "'");
+      throw std::runtime_error(source + ": field 'dds_lease_s': " + expected.str() + ", got '" + runtime::quote_value(text) + "'");
     }
   });
   if (profile != "network") return;
@@ -135,7 +147,7 @@ void select_local_components(Pipeline& pipeline, const PipelineOverrides& overri
     if (known.count(name) != 0) return true;
     std::string names;
     for (const auto& each : known) names += (names.empty() ? "" : ", ") + each;
-    problems.push_back(source + ": " + where + ": no component '" + name + "' (components: " + names + ")");
+    problems.push_back(source + ": " + where + ": no component '" + runtime::quote_value(name) + "' (components: " + names + ")");
     return false;
   };
   // Every enabled component in exactly one group, so the hosts together run the whole pipeline.
@@ -181,9 +193,53 @@ void select_local_components(Pipeline& pipeline, const PipelineOverrides& overri
 
 }  // namespace
 
+std::map<std::string, std::string> resolve_args(const std::map<std::string, std::string>& args, const std::string& source,
+                                                std::vector<std::string>& problems) {
+  std::map<std::string, std::string> resolved;
+  std::set<std::string> failed;
+  std::vector<std::string> chain;  // the arguments being resolved, outermost first
+  std::function<bool(const std::string&)> resolve = [&](const std::string& key) {
+    if (resolved.count(key) != 0) return true;
+    if (failed.count(key) != 0) return false;
+    const auto on_chain = std::find(chain.begin(), chain.end(), key);
+    if (on_chain != chain.end() || static_cast<int>(chain.size()) >= kMaxArgDepth) {
+      std::string path;
+      for (auto it = on_chain == chain.end() ? chain.begin() : on_chain; it != chain.end(); ++it) path += *it + " -> ";
+      problems.push_back(source + ": argument '" + chain.front() + "': " +
+                         (on_chain != chain.end() ? "the arguments refer to each other in a cycle (" + path + key + ")"
+                                                  : "refers to arguments more than " + std::to_string(kMaxArgDepth) +
+                                                        " deep (" + path + key + ")"));
+      for (const std::string& each : chain) failed.insert(each);
+      return false;
+    }
+    chain.push_back(key);
+    bool ok = true;
+    const std::string& text = args.at(key);
+    for (auto it = std::sregex_iterator(text.begin(), text.end(), arg_pattern()); it != std::sregex_iterator(); ++it) {
+      const std::string name = (*it)[2].str();
+      if (args.count(name) != 0 && !resolve(name)) ok = false;
+    }
+    chain.pop_back();
+    if (!ok) {
+      failed.insert(key);
+      return false;
+    }
+    std::vector<std::string> unknown;
+    resolved[key] = substitute_args(text, resolved, unknown);
+    for (const std::string& name : unknown) {
+      problems.push_back(source + ": argument '" + key + "': unknown $(arg " + name + ")");
+    }
+    return true;
+  };
+  for (const auto& [key, value] : args) {
+    if (!resolve(key)) resolved[key] = "";
+  }
+  return resolved;
+}
+
 std::string substitute_args(const std::string& text, const std::map<std::string, std::string>& args,
                             std::vector<std::string>& unknown) {
-  static const std::regex pattern(R"(\$\((arg|stem)\s+([A-Za-z0-9_\-]+)\s*\))");
+  const std::regex& pattern = arg_pattern();
   std::string out;
   auto begin = std::sregex_iterator(text.begin(), text.end(), pattern);
   std::size_t last = 0;
@@ -227,6 +283,7 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
     }
     args[key] = value;
   }
+  args = resolve_args(args, source, problems);
   const auto substitute = [&](const std::string& field, const std::string& text) {
     std::vector<std::string> unknown;
     std::string out = substitute_args(text, args, unknown);
@@ -238,14 +295,27 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
   };
   const std::filesystem::path folder = pipeline.file.parent_path();
 
-  collect(problems, [&] { pipeline.name = config->get_string("name", file.stem().string()); });
+  collect(problems, [&] {
+    pipeline.name = config->get_string("name", file.stem().string());
+    // It names the log folder: letters, digits, '_', '-', '.', never a path or an unprintable byte.
+    const bool valid = !pipeline.name.empty() && pipeline.name.size() <= kMaxPipelineName &&
+                       pipeline.name.front() != '.' &&
+                       std::all_of(pipeline.name.begin(), pipeline.name.end(), [](char c) {
+                         return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
+                       });
+    if (!valid) {
+      throw std::runtime_error(source + ": field 'name': expected 1-" + std::to_string(kMaxPipelineName) +
+                               " letters, digits, '_', '-' or '.' (it names the log folder), got '" +
+                               runtime::quote_value(pipeline.name) + "'");
+    }
+  });
   collect(problems, [&] {
     const std::string text = substitute("domain", config->get_scalar("domain", "0"));
     int domain = -1;
     std::istringstream parse(text);
     if (!(parse >> domain) || !parse.eof() || domain < 0 || domain > runtime::kMaxDomainId) {
       throw std::runtime_error(source + ": field 'domain': expected an integer in [0, " +
-                               std::to_string(runtime::kMaxDomainId) + "], got '" + text + "'");
+                               std::to_string(runtime::kMaxDomainId) + "], got '" + runtime::quote_value(text) + "'");
     }
     pipeline.domain_id = domain;
   });
@@ -270,7 +340,10 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
     std::string text = substitute("image_transport", config->get_string("image_transport", "udp"));
     if (overrides.image_transport) text = *overrides.image_transport;
     const auto transport = runtime::parse_image_transport(text);
-    if (!transport) throw std::runtime_error(source + ": field 'image_transport': expected udp or shm, got '" + text + "'");
+    if (!transport) {
+      throw std::runtime_error(source + ": field 'image_transport': expected udp or shm, got '" +
+                               runtime::quote_value(text) + "'");
+    }
     pipeline.image_transport = *transport;
     // Read even for udp: every field of the file is consumed (unknown ones are an error).
     const std::string domain_text = substitute("image_domain", config->get_scalar("image_domain", ""));
@@ -360,11 +433,11 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       }
       const auto [it, inserted] = first_index.emplace(spec.name, static_cast<int>(i));
       if (!inserted) {
-        throw std::runtime_error(source + ": " + where + ": duplicate name '" + spec.name + "' (also components[" +
-                                 std::to_string(it->second) + "])");
+        throw std::runtime_error(source + ": " + where + ": duplicate name '" + runtime::quote_value(spec.name) +
+                                 "' (also components[" + std::to_string(it->second) + "])");
       }
     });
-    const std::string label = spec.name.empty() ? where : "component '" + spec.name + "'";
+    const std::string label = spec.name.empty() ? where : "component '" + runtime::quote_value(spec.name) + "'";
     bool disabled = false;
     collect(problems, [&] {
       const std::string text = substitute(where + ".executable", section.get_string("executable", ""));
@@ -375,7 +448,7 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       }
       const auto resolved = resolve_executable(text, folder, bin_dir);
       if (!resolved) {
-        throw std::runtime_error(source + ": " + label + ": executable '" + text + "' not found (looked in " +
+        throw std::runtime_error(source + ": " + label + ": executable '" + runtime::quote_value(text) + "' not found (looked in " +
                                  (bin_dir.empty() ? std::string() : bin_dir.string() + " and ") + "$PATH)");
       }
       spec.executable = *resolved;
@@ -440,7 +513,8 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       if (pipeline.security_dir.empty() || disabled) return;
       if (!valid_name(spec.identity)) {
         throw std::runtime_error(source + ": " + label +
-                                 ": field 'identity': expected letters, digits, '_' or '-', got '" + spec.identity + "'");
+                                 ": field 'identity': expected letters, digits, '_' or '-', got '" +
+                                 runtime::quote_value(spec.identity) + "'");
       }
       const std::filesystem::path identity_dir = pipeline.security_dir / "identities" / spec.identity;
       try {

@@ -106,6 +106,12 @@ struct LoadResult {
 LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverrides& overrides,
                          const std::filesystem::path& bin_dir);
 
+// The arguments with the $(arg NAME) / $(stem NAME) in their values replaced by the other
+// arguments' (an argument may default to another's); a cycle, or a chain deeper than 16, is one
+// problem naming the arguments involved.
+std::map<std::string, std::string> resolve_args(const std::map<std::string, std::string>& args, const std::string& source,
+                                                std::vector<std::string>& problems);
+
 // Replaces every $(arg NAME), and $(stem NAME) by the value without its extension (a/run.txt ->
 // a/run: the outputs of a run are named OUTPUT stem + .map, .loop, ...); unknown names are reported
 // in unknown.

@@ -16,10 +16,14 @@
 
 #include "runtime/participant.hpp"
 #include "runtime/reader.hpp"
+#include "runtime/run_counters.hpp"
+#include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/shutdown.hpp"
 #include "runtime/stats.hpp"
 #include "runtime/status.hpp"
+#include "runtime/supervisor/domain_check.hpp"
+#include "runtime/supervisor/run_verdict.hpp"
 #include "runtime/topics.hpp"
 #include "runtime/wire_enum.hpp"
 
@@ -68,7 +72,15 @@ struct StatusSeen {
   std::string message;
   std::uint64_t frames_published = 0;  // the replay's counters, for the progress line
   std::uint64_t frames_total = 0;
+  // All of them, for the verdict on a process that could not report its own as it ended.
+  std::map<std::string, std::uint64_t> counters;
 };
+
+// Before anything starts: how long to listen for another run's writers on the domain (discovery
+// over loopback takes milliseconds; a loaded machine, a few hundred), and how long to wait for the
+// writers of a run that was killed here to go (their 2 s DDS lease, config/cyclonedds.xml).
+constexpr auto kDomainListen = 1000ms;
+constexpr auto kKilledRunLinger = 3000ms;
 
 }  // namespace
 
@@ -81,7 +93,10 @@ struct Supervisor::Dds {
         topics(pipeline.ns),
         status_reader(participant, topics.status()),
         status(participant, topics, supervisor_status_name(pipeline), stats),
-        status_name(supervisor_status_name(pipeline)) {}
+        status_name(supervisor_status_name(pipeline)) {
+    // A run over several hosts has one supervisor per host, each a run of its own: not watched.
+    if (!pipeline.split()) watch.emplace(participant.handle(), pipeline.ns, runtime::own_run_id());
+  }
   runtime::Participant participant;
   runtime::Topics topics;
   runtime::Reader<msg::ComponentStatus> status_reader;
@@ -89,6 +104,7 @@ struct Supervisor::Dds {
   runtime::StatusPublisher status;
   std::map<std::string, StatusSeen> seen;
   std::string status_name;  // ours: remote supervisors are the other "supervisor@..." names
+  std::optional<OtherRunWatch> watch;  // other runs' writers on the domain (single-host runs)
 };
 
 Supervisor::Supervisor(Pipeline pipeline, SupervisorOptions options)
@@ -112,26 +128,81 @@ Supervisor::Supervisor(Pipeline pipeline, SupervisorOptions options)
 
 Supervisor::~Supervisor() = default;
 
-std::vector<std::string> Supervisor::child_args(const Managed& component) const {
-  std::vector<std::string> args = component.spec.args;
-  if (component.spec.common_args) {
-    args.insert(args.end(), {"--domain", std::to_string(pipeline_.domain_id), "--namespace", pipeline_.ns, "--name",
-                             component.spec.name, "--log-level", std::string(runtime::to_string(options_.log_level))});
-    if (!component.spec.config.empty()) args.insert(args.end(), {"--config", component.spec.config.string()});
-    if (!pipeline_.dds_config.empty()) args.insert(args.end(), {"--dds-config", pipeline_.dds_config});
-    if (pipeline_.image_transport == runtime::ImageTransport::kShm) {
-      args.insert(args.end(), {"--image-transport", "shm", "--image-domain", std::to_string(pipeline_.image_domain_id)});
+namespace {
+
+// A component's arguments: its own, then the common flags (unless common_args: false).
+std::vector<std::string> component_args(const Pipeline& pipeline, const ComponentSpec& spec, runtime::LogLevel level) {
+  std::vector<std::string> args = spec.args;
+  if (spec.common_args) {
+    args.insert(args.end(), {"--domain", std::to_string(pipeline.domain_id), "--namespace", pipeline.ns, "--name",
+                             spec.name, "--log-level", std::string(runtime::to_string(level))});
+    if (!spec.config.empty()) args.insert(args.end(), {"--config", spec.config.string()});
+    if (!pipeline.dds_config.empty()) args.insert(args.end(), {"--dds-config", pipeline.dds_config});
+    if (pipeline.image_transport == runtime::ImageTransport::kShm) {
+      args.insert(args.end(), {"--image-transport", "shm", "--image-domain", std::to_string(pipeline.image_domain_id)});
     }
   }
   return args;
+}
+
+// A program's --check opens its inputs (the replay its dataset) and nothing else: this bounds a
+// program that ignores the flag and would run.
+constexpr auto kProgramCheckTimeout = 30s;
+
+}  // namespace
+
+std::vector<std::string> check_programs(const Pipeline& pipeline, const std::filesystem::path& self_executable) {
+  std::vector<std::string> problems;
+  const std::string source = pipeline.file.filename().string();
+  for (const ComponentSpec& spec : pipeline.components) {
+    // heslam's own programs take the common flags, --check among them; others are not asked.
+    if (spec.remote || !spec.common_args || !spec.executable.filename().string().starts_with("heslam-")) continue;
+    std::vector<std::string> args = component_args(pipeline, spec, runtime::LogLevel::kError);
+    args.push_back("--check");
+    ChildProcess child = ChildProcess::spawn(self_executable, spec.executable, args, spec.env);
+    std::vector<std::string> lines;
+    int wait_status = 0;
+    bool exited = false;
+    const auto deadline = std::chrono::steady_clock::now() + kProgramCheckTimeout;
+    while (!exited && std::chrono::steady_clock::now() < deadline) {
+      child.read_lines(lines);
+      exited = waitpid(child.pid(), &wait_status, WNOHANG) == child.pid();
+      if (!exited) std::this_thread::sleep_for(kPumpPeriod);
+    }
+    child.read_lines(lines);  // the rest: the program has ended
+    if (!exited) {
+      child.signal_group(SIGKILL);
+      waitpid(child.pid(), &wait_status, 0);
+      problems.push_back(source + ": component '" + spec.name + "': " + spec.executable.filename().string() +
+                         " --check did not finish within " + std::to_string(kProgramCheckTimeout.count()) + " s");
+      continue;
+    }
+    if (WIFEXITED(wait_status) && WEXITSTATUS(wait_status) == 0) continue;
+    std::string reason = describe_exit(wait_status);
+    for (auto it = lines.rbegin(); it != lines.rend(); ++it) {
+      if (it->find_first_not_of(" \t\r") != std::string::npos) {
+        reason = *it;
+        break;
+      }
+    }
+    problems.push_back(source + ": component '" + spec.name + "': " + reason);
+  }
+  return problems;
+}
+
+std::vector<std::string> Supervisor::child_args(const Managed& component) const {
+  return component_args(pipeline_, component.spec, options_.log_level);
 }
 
 void Supervisor::start(Managed& component) {
   if (!component.log_file.is_open()) {
     component.log_file.open(options_.log_dir / (component.spec.name + ".log"), std::ios::app);
   }
+  std::map<std::string, std::string> env = component.spec.env;
+  // Every writer of a run on one host is ours: the components refuse another run's samples.
+  if (!pipeline_.split()) env[runtime::kRunOnOneHostVariable] = "1";
   component.process =
-      ChildProcess::spawn(options_.self_executable, component.spec.executable, child_args(component), component.spec.env,
+      ChildProcess::spawn(options_.self_executable, component.spec.executable, child_args(component), env,
                           component.spec.nice);
   component.phase = Phase::kRunning;
   component.started_at = Clock::now();
@@ -198,11 +269,13 @@ void Supervisor::read_status() {
     seen.pid = status.pid;
     seen.state = status.state;
     seen.message = runtime::to_string(status.message);
+    seen.counters.clear();
     for (std::uint32_t i = 0; i < status.counters._length; ++i) {
       const msg::Counter& counter = status.counters._buffer[i];
       const std::string name = runtime::to_string(counter.name);
-      if (name == "frames_published") seen.frames_published = counter.value;
-      if (name == "frames_total") seen.frames_total = counter.value;
+      if (name == runtime::kFramesPublished) seen.frames_published = counter.value;
+      if (name == runtime::kFramesTotal) seen.frames_total = counter.value;
+      seen.counters[name] = counter.value;
     }
   }
   follow_remote_hosts();
@@ -225,6 +298,16 @@ void Supervisor::read_status() {
       log_.error(component->spec.name, " reports failure: ", seen.message);
     }
   }
+}
+
+void Supervisor::watch_other_runs() {
+  if (!dds_->watch || !dds_->watch->poll()) return;
+  const std::string others = dds_->watch->describe();
+  if (others == other_runs_) return;
+  other_runs_ = others;
+  clear_progress();
+  log_.warn("another heslam run appeared on domain ", pipeline_.domain_id, ": ", others,
+            "; this run's components refuse its samples (counted as other_run_writers)");
 }
 
 void Supervisor::follow_remote_hosts() {
@@ -357,7 +440,12 @@ void Supervisor::on_exit(Managed& component, int wait_status) {
   const bool startup_error = WIFEXITED(wait_status) && !success && component.process.said_starting() &&
                              !component.process.said_running();
   if (startup_error) {
-    const std::string reason = name + " failed at start-up (" + how + ")" + why;
+    // A restart that cannot start fails mid-run, not at the run's start-up.
+    const std::string reason =
+        component.restarts == 0
+            ? name + " failed at start-up (" + how + ")" + why
+            : name + " failed mid-run: restart " + std::to_string(component.restarts) + " failed at its start-up (" +
+                  how + ")" + why;
     log_.error(reason, component.spec.restart == RestartPolicy::kNever
                            ? ""
                            : "; not restarted: a restart cannot fix a start-up error");
@@ -423,6 +511,7 @@ void Supervisor::pump(std::chrono::milliseconds timeout) {
   for (auto& component : components_) component->process.read_notifications();
   reap();
   read_status();
+  watch_other_runs();
   report_progress();
   for (auto& component : components_) {
     if (component->phase == Phase::kRestartPending && Clock::now() >= component->restart_at && !end_requested_ &&
@@ -455,9 +544,24 @@ void Supervisor::stop(Managed& component) {
   if (component.phase != Phase::kRunning) return;
   component.stopping = true;
   component.process.signal_group(SIGTERM);
-  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                           std::chrono::duration<double>(pipeline_.stop_timeout_s));
-  while (component.phase == Phase::kRunning && Clock::now() < deadline) pump(kPumpPeriod);
+  const auto stop_timeout = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(pipeline_.stop_timeout_s));
+  const auto deadline = Clock::now() + stop_timeout;
+  // A stopped process (SIGSTOP, a debugger, Ctrl-Z) holds SIGTERM: half-way to the timeout it is
+  // resumed, so it still does its shutdown work (the recorder's files, the mapper's map) instead of
+  // being killed, and the run's verdict is made of what it really wrote.
+  const auto resume_at = Clock::now() + stop_timeout / 2;
+  bool resume_checked = false;
+  while (component.phase == Phase::kRunning && Clock::now() < deadline) {
+    pump(kPumpPeriod);
+    if (!resume_checked && component.phase == Phase::kRunning && Clock::now() >= resume_at) {
+      resume_checked = true;
+      if (component.process.stopped()) {
+        log_.warn(component.spec.name, " is stopped (SIGSTOP or a debugger); resuming it (SIGCONT) so that it stops");
+        component.process.signal_group(SIGCONT);
+      }
+    }
+  }
   if (component.phase == Phase::kRunning) {
     log_.warn(component.spec.name, " did not stop within ", pipeline_.stop_timeout_s, " s; sending SIGKILL");
     component.killed_at_stop = true;
@@ -478,8 +582,19 @@ void Supervisor::stop_all() {
 
 int Supervisor::run() {
   log_.info("pipeline '", pipeline_.name, "' on domain ", pipeline_.domain_id, ", namespace '", pipeline_.ns,
-            "'; logs in ", options_.log_dir.string());
+            "', run ", runtime::process_run_id(), "; logs in ", options_.log_dir.string());
   dds_->status.set_state(runtime::ComponentState::kRunning);
+  if (dds_->watch) {
+    if (const std::optional<std::string> other = other_run_alive(*dds_->watch, kDomainListen, kKilledRunLinger)) {
+      // Both runs would read each other's frames, acknowledgements and results: refused.
+      fail("domain " + std::to_string(pipeline_.domain_id) + ", namespace '" + pipeline_.ns +
+           "' is in use by another heslam run: " + *other +
+           "; stop it, or choose another domain (--domain N, or --domain auto for a free one)");
+      log_.error(outcome());
+      return 1;
+    }
+    dds_->watch->forget();
+  }
   bool started_all = true;
   if (pipeline_.image_transport == runtime::ImageTransport::kShm) {
     log_.info("stereo images over shared memory on domain ", pipeline_.image_domain_id, ", every other topic on ",
@@ -528,6 +643,8 @@ int Supervisor::run() {
   stop_all();
   roudi_.reset();  // after every component that used its shared memory
   read_status();  // the last results
+  watch_other_runs();
+  judge();
   clear_progress();
   if (failed_) {
     log_.error(outcome());
@@ -542,18 +659,46 @@ void Supervisor::fail(const std::string& reason) {
   failed_ = true;
 }
 
-std::string Supervisor::outcome() const {
-  if (failed_) return "pipeline failed: " + failure_;
-  std::string results;
+void Supervisor::judge() {
+  std::vector<ProgramReport> reports;
   for (const auto& component : components_) {
-    if (!component->result.empty()) results += (results.empty() ? "" : "; ") + component->result;
+    component->process.read_notifications();
+    ProgramReport report;
+    report.name = component->spec.name;
+    report.result = component->result;
+    if (const auto& result = component->process.result()) {
+      // Its own last word, through the pipe: never older than what it wrote (a status sample may
+      // not arrive before the process is gone).
+      report.counters = result->counters;
+      if (!result->text.empty() && result->text != component->last_reported_failure) report.result = result->text;
+    } else if (const auto seen = dds_->seen.find(component->spec.name); seen != dds_->seen.end()) {
+      report.counters = seen->second.counters;
+    }
+    reports.push_back(std::move(report));
   }
+  const RunVerdict verdict = judge_run(reports);
+  results_ = verdict.results;
+  if (verdict.failure) {
+    log_.error(*verdict.failure);
+    fail(*verdict.failure + (results_.empty() ? "" : ": " + results_));
+  }
+}
+
+std::string Supervisor::outcome() const {
+  if (failed_) return "pipeline failed: " + failure_ + other_runs_note();
+  const std::string results = results_ + other_runs_note();
   const char* signal_name = sigabbrev_np(runtime::shutdown_signal());
   const std::string text = remote_ended_                   ? "pipeline finished (ended by another host)"
                            : !runtime::shutdown_requested() ? "pipeline finished"
                            : signal_name != nullptr       ? std::string("pipeline stopped by SIG") + signal_name
                                                           : "pipeline stopped";
   return results.empty() ? text : text + ": " + results;
+}
+
+std::string Supervisor::other_runs_note() const {
+  if (other_runs_.empty()) return "";
+  return std::string(results_.empty() && !failed_ ? "" : "; ") + "another heslam run appeared on the domain (" +
+         other_runs_ + "), its samples were refused: this run's results are its own";
 }
 
 }  // namespace heslam::supervisor

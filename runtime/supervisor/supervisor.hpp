@@ -26,6 +26,11 @@ struct SupervisorOptions {
   RunProgress::Mode progress = RunProgress::Mode::kOff;
 };
 
+// --check: runs each heslam program of the pipeline (on this host) with its arguments and --check,
+// which checks them (and its config, its inputs) as its start would; one problem per program that
+// refuses them: "FILE: component 'NAME': its one-line error".
+std::vector<std::string> check_programs(const Pipeline& pipeline, const std::filesystem::path& self_executable);
+
 class Supervisor {
  public:
   Supervisor(Pipeline pipeline, SupervisorOptions options);
@@ -83,6 +88,12 @@ class Supervisor {
   void fail(const std::string& reason);
   // The last line: what the run produced, or why it failed.
   std::string outcome() const;
+  // Mid-run: notes another run's writers appearing on the domain (single-host runs).
+  void watch_other_runs();
+  // At the end: the verdict from what the programs reported (run_verdict.hpp); fails the run when an
+  // output lacks what was produced.
+  void judge();
+  std::string other_runs_note() const;
 
   Pipeline pipeline_;
   SupervisorOptions options_;
@@ -97,6 +108,8 @@ class Supervisor {
   std::string failure_;  // the first reason the run failed
   bool end_requested_ = false;
   bool remote_ended_ = false;  // another host's supervisor ended the run
+  std::string results_;        // the programs' results, from judge()
+  std::string other_runs_;     // other runs seen on the domain mid-run (OtherRunWatch::describe)
   RunProgress progress_;
   bool progress_drawn_ = false;  // a live line is on the terminal
   // The first status with frames published: fps is measured from there.

@@ -3,6 +3,7 @@
 // is its own process (ctest) and uses its own DDS domain; children are stopped and reaped on every
 // path (ChildProcess kills on destruction; the supervisor's children die with it).
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include <unistd.h>
 
@@ -241,12 +242,29 @@ TEST(FrontendProcess, BadConfigFieldExitsWithOneLine) {
   EXPECT_NE(err.find("frontend.yaml"), std::string::npos) << err;
 }
 
+// --check runs the replay's own check, which opens the dataset: each pipeline gets one of its layout
+// (MH01 for EuRoC and the synthetic pipelines, which read the EuRoC layout; a three-frame KITTI
+// sequence written here for KITTI).
 TEST(FrontendProcess, ShippedPipelinesPassTheSupervisorCheck) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const test::ScratchDir dir("check");
+  const fs::path kitti = dir.path() / "kitti_sequence";
+  fs::create_directories(kitti / "image_0");
+  fs::create_directories(kitti / "image_1");
+  std::ofstream(kitti / "times.txt") << "0.0\n0.1\n0.2\n";
+  std::ofstream(kitti / "calib.txt") << "P0: 50.0 0.0 32.0 0.0 0.0 50.0 24.0 0.0 0.0 0.0 1.0 0.0\n"
+                                        "P1: 50.0 0.0 32.0 -27.0 0.0 50.0 24.0 0.0 0.0 0.0 1.0 0.0\n"
+                                        "P2: 50.0 0.0 32.0 0.0 0.0 50.0 24.0 0.0 0.0 0.0 1.0 0.0\n"
+                                        "P3: 50.0 0.0 32.0 0.0 0.0 50.0 24.0 0.0 0.0 0.0 1.0 0.0\n";
+  for (const char* name : {"000000.png", "000001.png", "000002.png"}) {
+    for (const char* side : {"image_0", "image_1"}) cv::imwrite((kitti / side / name).string(), cv::Mat(48, 64, CV_8UC1, 128));
+  }
+  const fs::path euroc = test::shared_dataset("euroc_mh01_handheld");
   int checked = 0;
   for (const auto& entry : fs::directory_iterator(test::source_dir() / "config/pipelines")) {
     const std::string pipeline = entry.path().stem().string();
-    std::vector<std::string> args{entry.path().string(), "--check", "--arg", "dataset=/tmp"};
+    const fs::path dataset = pipeline.rfind("kitti", 0) == 0 ? kitti : euroc;
+    std::vector<std::string> args{entry.path().string(), "--check", "--arg", "dataset=" + dataset.string()};
     // replay_spy writes no trajectory; the localize pipeline refuses to start without a saved map
     if (pipeline != "replay_spy") args.insert(args.end(), {"--arg", "output=/tmp/x.txt"});
     if (pipeline == "euroc_localize") args.insert(args.end(), {"--arg", "map=/tmp/x.map"});

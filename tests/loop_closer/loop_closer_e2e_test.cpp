@@ -9,6 +9,7 @@
 #include <signal.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -191,8 +192,16 @@ TEST(LoopCloserEndToEnd, StartedByHandMidRunPicksUpTheMapFromDds) {
   const pid_t replay = test::child_pid(supervisor->pid(), "heslam-replay");
   ASSERT_GT(replay, 0) << "no replay process under the supervisor";
   kill(replay, SIGUSR1);
+  // It joins the run (HESLAM_RUN_ID, printed by the supervisor): the run's components take its
+  // corrections and acknowledgements as their own run's (a process of another run they refuse).
+  static const std::regex run_line(R"(on domain \d+, namespace '[^']*', run ([0-9]+:[0-9]+);)");
+  std::smatch run_match;
+  const std::string supervisor_err = supervisor->err();
+  ASSERT_TRUE(std::regex_search(supervisor_err, run_match, run_line)) << supervisor_err;
+  setenv("HESLAM_RUN_ID", run_match[1].str().c_str(), 1);
   test::ChildProcess loop_closer(test::bin_dir() / "heslam-loop-closer", {"--domain", std::to_string(domain)},
                                  dir.path(), "loop_closer_by_hand");
+  unsetenv("HESLAM_RUN_ID");
   for (const auto joined_by = std::chrono::steady_clock::now() + std::chrono::seconds(60);
        loop_closer.out().find("detector ") == std::string::npos && loop_closer.err().find("detector ") == std::string::npos &&
        !loop_closer.wait(std::chrono::milliseconds(0)) && std::chrono::steady_clock::now() < joined_by;) {
@@ -200,6 +209,7 @@ TEST(LoopCloserEndToEnd, StartedByHandMidRunPicksUpTheMapFromDds) {
   }
   kill(replay, SIGUSR2);
   ASSERT_EQ(test::finish(*supervisor), 0) << supervisor->out() << supervisor->err();
+  EXPECT_EQ(supervisor->err().find("another heslam run appeared"), std::string::npos) << supervisor->err();
   std::this_thread::sleep_for(std::chrono::seconds(1));  // the last acknowledgements reach it
   loop_closer.signal(SIGTERM);
   ASSERT_EQ(loop_closer.wait(test::kStopTimeout).value_or(-1), 0) << loop_closer.err();

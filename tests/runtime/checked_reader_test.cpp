@@ -7,6 +7,7 @@
 // explicitly (Qos::run_identity), all of this process's writers being of one run otherwise.
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <memory>
 #include <optional>
 #include <string>
@@ -199,6 +200,35 @@ TEST_F(CheckedReaderTest, WritersAdvertiseTheirRun) {
   EXPECT_EQ(counter(kOtherRunWriters), 1u);
   EXPECT_EQ(writer_run_id(reader.handle(), reader.owner()), process_run_id());
   EXPECT_EQ(writer_run_id(reader.handle(), 0), std::nullopt);  // not a matched writer
+}
+
+// A run on one host (heslam-supervisor sets HESLAM_RUN_ON_ONE_HOST): a writer of another run never
+// owns the stream, even when it writes before the run's own writer (another run on the domain, a
+// restarted reader that hears it first). Before: the first writer owned it whatever its run, so a
+// second run's recorder recorded the first run's trajectory.
+TEST_F(CheckedReaderTest, InARunOnOneHostAWriterOfAnotherRunNeverOwnsEvenWhenItWritesFirst) {
+  ASSERT_EQ(setenv(kRunOnOneHostVariable, "1", 1), 0);
+  struct Unset {
+    ~Unset() { unsetenv(kRunOnOneHostVariable); }
+  } unset;
+  Participant reading = make_participant();
+  Participant other_participant = make_participant();
+  Participant own_participant = make_participant();
+  CheckedReader<msg::Odometry> reader(reading, topics.odometry(), log, stats, finite_pose, options());
+  Writer<msg::Odometry> other = writer_of_run(other_participant, kOtherRun);
+  Writer<msg::Odometry> own(own_participant, topics.odometry());
+  ASSERT_TRUE(other.wait_for_readers(1, kDeadline));
+  ASSERT_TRUE(own.wait_for_readers(1, kDeadline));
+  other.write(odometry(0, 9.0));
+  EXPECT_TRUE(take_until_counted(reader, kSecondWriterSamples, 1).empty());
+  own.write(odometry(0, 1.0));
+  own.write(odometry(1, 1.0));
+  EXPECT_EQ(take_seqs(reader, 2), (std::vector<std::uint64_t>{0, 1}));
+  other.write(odometry(2, 9.0));
+  EXPECT_TRUE(take_until_counted(reader, kSecondWriterSamples, 2).empty());
+  EXPECT_EQ(writer_run_id(reader.handle(), reader.owner()), process_run_id());
+  EXPECT_EQ(counter(kOtherRunWriters), 1u);
+  EXPECT_EQ(counter(kTakeOvers), 0u);
 }
 
 // The end of a run: the owner is deleted (its process exits cleanly) while a writer of another run is

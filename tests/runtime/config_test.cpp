@@ -53,6 +53,13 @@ TEST(Config, WrongTypeNamesFileFieldAndValue) {
             "frontend.yaml: field 'scale': expected an integer in [1, 16], got 2.5");
 }
 
+// A field's bad value is quoted short: a 1 MB string is 80 characters and its size, never a 1 MB line.
+TEST(Config, AHugeBadValueIsQuotedShort) {
+  const Config config = Config::parse("mode: " + std::string(1 << 20, 'x') + "\n", "f.yaml");
+  EXPECT_EQ(error_of([&] { config.get_choice("mode", "global", {"global", "clahe"}); }),
+            "f.yaml: field 'mode': expected one of global clahe, got '" + std::string(80, 'x') + "... (1048576 bytes)'");
+}
+
 TEST(Config, OutOfRangeIsAnError) {
   const Config config = Config::parse("levels: 40\nscale: -1\n", "f.yaml");
   EXPECT_EQ(error_of([&] { config.get_int("levels", 8, 1, 16); }),

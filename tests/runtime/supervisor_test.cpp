@@ -1,6 +1,7 @@
 // heslam-supervisor end to end: real processes (heslam-test-talker) on the test's own DDS domain.
 // Every wait is bounded; every process started is killed in TearDown whatever happened.
 #include <fcntl.h>
+#include <sys/file.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -71,14 +72,19 @@ class SupervisorTest : public ::testing::Test {
            "components:\n" + components;
   }
 
-  pid_t spawn_supervisor(std::vector<std::string> args) {
-    args.insert(args.begin(), (bin_dir() / "heslam-supervisor").string());
+  pid_t spawn_supervisor(std::vector<std::string> args, const std::string& output_name = "supervisor.out") {
+    return spawn(bin_dir() / "heslam-supervisor", std::move(args), output_name);
+  }
+
+  // `program` with `args`, its stdout and stderr into dir_/output_name.
+  pid_t spawn(const std::filesystem::path& program, std::vector<std::string> args, const std::string& output_name) {
+    args.insert(args.begin(), program.string());
     std::vector<char*> argv;
     for (auto& arg : args) argv.push_back(arg.data());
     argv.push_back(nullptr);
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
-    const std::string out = (dir_ / "supervisor.out").string();
+    const std::string out = (dir_ / output_name).string();
     posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
     pid_t pid = 0;
@@ -92,17 +98,32 @@ class SupervisorTest : public ::testing::Test {
     supervisor_pid_ = spawn_supervisor({(dir_ / "pipeline.yaml").string(), "--log-dir", (dir_ / "logs").string()});
   }
 
-  std::string output() const {
-    std::ifstream in(dir_ / "supervisor.out");
+  std::string output(const std::string& name = "supervisor.out") const {
+    std::ifstream in(dir_ / name);
     return std::string((std::istreambuf_iterator<char>(in)), {});
   }
 
+  // Waits for the exit of another supervisor than the test's main one; its exit code or -1.
+  static int wait_exit_of(pid_t pid, std::chrono::milliseconds bound) {
+    const auto deadline = Clock::now() + bound;
+    while (Clock::now() < deadline) {
+      int status = 0;
+      if (waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+      std::this_thread::sleep_for(10ms);
+    }
+    kill(pid, SIGKILL);
+    waitpid(pid, nullptr, 0);
+    return -1;
+  }
+
+
   // Polls the supervisor's output for a regex until bound.
-  bool wait_for_output(const std::string& pattern, std::chrono::milliseconds bound) const {
+  bool wait_for_output(const std::string& pattern, std::chrono::milliseconds bound,
+                       const std::string& name = "supervisor.out") const {
     const std::regex re(pattern);
     const auto deadline = Clock::now() + bound;
     while (Clock::now() < deadline) {
-      if (std::regex_search(output(), re)) return true;
+      if (std::regex_search(output(name), re)) return true;
       std::this_thread::sleep_for(10ms);
     }
     return false;
@@ -322,6 +343,114 @@ TEST_F(SupervisorTest, FailureAfterStartupIsStillRestarted) {
   EXPECT_EQ(output().find("failed at start-up"), std::string::npos) << output();
 }
 
+// A component stopped with SIGSTOP (a debugger, Ctrl-Z, a stalled machine) still stops cleanly:
+// the supervisor resumes it half-way to the stop timeout. Before: SIGTERM stayed pending until the
+// timeout, then SIGKILL, and a finished run ended with exit code 1 ("did not stop within 3 s").
+TEST_F(SupervisorTest, StoppedComponentIsResumedAndStopsCleanly) {
+  start(pipeline(kTalker));
+  ASSERT_TRUE(wait_for_output("talker is ready", kStartupBound)) << output();
+  const std::vector<pid_t> pids = started_pids("talker");
+  ASSERT_EQ(pids.size(), 1u);
+  ASSERT_EQ(kill(pids.front(), SIGSTOP), 0);
+  kill(supervisor_pid_, SIGTERM);
+  EXPECT_EQ(wait_exit(kExitBound), 0) << output();
+  EXPECT_NE(output().find("talker is stopped (SIGSTOP or a debugger); resuming it (SIGCONT) so that it stops"),
+            std::string::npos) << output();
+  EXPECT_NE(output().find("talker stopped"), std::string::npos) << output();
+  EXPECT_EQ(output().find("did not stop"), std::string::npos) << output();
+}
+
+// A restarted component that fails at its own start-up fails the run mid-run, and the last line
+// says so. Before: "talker failed at start-up", as if the run had never started.
+TEST_F(SupervisorTest, RestartFailingAtItsStartUpIsAMidRunFailure) {
+  write("talker.yaml", "exit_after_s: 1\nexit_code: 1\n");
+  start(pipeline(std::string(kTalker) + "    config: talker.yaml\n    restart: on-failure\n    max_restarts: 10\n"
+                 "    restart_backoff_s: 0.3\n    restart_backoff_max_s: 0.3\n"));
+  ASSERT_TRUE(wait_for_output("talker is ready", kStartupBound)) << output();
+  write("talker.yaml", "exit_code: 300\n");  // what the next restart reads: a start-up error
+  EXPECT_EQ(wait_exit(kExitBound), 1) << output();
+  // Which restart it is depends on how fast the machine made the first one ready.
+  EXPECT_TRUE(std::regex_search(last_line(output()),
+                                std::regex(R"(^\[supervisor\] error: pipeline failed: talker failed mid-run: restart \d+ )"
+                                           R"(failed at its start-up \(exit code 1\): heslam-test-talker: )")))
+      << output();
+  EXPECT_GE(started_pids("talker").size(), 2u) << output();
+}
+
+// One run per domain: a second supervisor of the same domain and namespace is refused with one line
+// naming the run it found, before it starts anything; --domain auto picks a free domain instead.
+// Before: both ran, each reading the other's samples.
+TEST_F(SupervisorTest, SecondRunOnTheSameDomainIsRefusedAndDomainAutoPicksAFreeOne) {
+  start(pipeline(kTalker));
+  ASSERT_TRUE(wait_for_output("talker is ready", kStartupBound)) << output();
+  const pid_t second = spawn_supervisor({(dir_ / "pipeline.yaml").string(), "--log-dir", (dir_ / "logs2").string()},
+                                        "second.out");
+  EXPECT_EQ(wait_exit_of(second, kExitBound), 1) << output("second.out");
+  const std::string refused = output("second.out");
+  EXPECT_NE(refused.find("domain " + std::to_string(test_domain_id()) + ", namespace 't" + std::to_string(getpid()) +
+                         "' is in use by another heslam run on this host (supervisor pid " +
+                         std::to_string(supervisor_pid_) + ")"), std::string::npos) << refused;
+  EXPECT_EQ(refused.find("started talker"), std::string::npos) << refused;
+
+  const pid_t automatic = spawn_supervisor({(dir_ / "pipeline.yaml").string(), "--domain", "auto", "--log-dir",
+                                            (dir_ / "logs3").string()}, "auto.out");
+  ASSERT_TRUE(wait_for_output("talker is ready", kStartupBound, "auto.out")) << output("auto.out");
+  const std::string text = output("auto.out");
+  std::smatch match;
+  ASSERT_TRUE(std::regex_search(text, match, std::regex("pipeline 'test' on domain ([0-9]+)"))) << text;
+  EXPECT_NE(std::stoi(match[1].str()), test_domain_id()) << text;
+  kill(automatic, SIGTERM);
+  EXPECT_EQ(wait_exit_of(automatic, kExitBound), 0) << output("auto.out");
+  kill(supervisor_pid_, SIGTERM);
+  EXPECT_EQ(wait_exit(kExitBound), 0) << output();
+}
+
+// Another run's writer on the domain (here a talker started by hand: another run id) that appears
+// mid-run is reported, and the run's last line says its results are its own; a supervisor started
+// while it is alive is refused (the DDS check: no supervisor of this host holds the domain).
+TEST_F(SupervisorTest, AnotherRunAppearingMidRunIsReportedAndRefusesNewRuns) {
+  start(pipeline(kTalker));
+  ASSERT_TRUE(wait_for_output("talker is ready", kStartupBound)) << output();
+  const pid_t stray = spawn(bin_dir() / "heslam-test-talker",
+                            {"--domain", std::to_string(test_domain_id()), "--namespace", "t" + std::to_string(getpid()),
+                             "--name", "stray"},
+                            "stray.out");
+  ASSERT_GT(stray, 0);
+  EXPECT_TRUE(wait_for_output("another heslam run appeared on domain", kStartupBound)) << output();
+  kill(supervisor_pid_, SIGTERM);
+  EXPECT_EQ(wait_exit(kExitBound), 0) << output();
+  EXPECT_NE(last_line(output()).find("another heslam run appeared on the domain (run " + std::to_string(getpid()) + ":"),
+            std::string::npos) << output();
+
+  const pid_t second = spawn_supervisor({(dir_ / "pipeline.yaml").string(), "--log-dir", (dir_ / "logs2").string()},
+                                        "second.out");
+  EXPECT_EQ(wait_exit_of(second, kExitBound), 1) << output("second.out");
+  EXPECT_NE(output("second.out").find("is in use by another heslam run: run " + std::to_string(getpid()) + ":"),
+            std::string::npos) << output("second.out");
+  EXPECT_EQ(output("second.out").find("started talker"), std::string::npos) << output("second.out");
+  kill(stray, SIGKILL);
+  waitpid(stray, nullptr, 0);
+}
+
+// The test suite reserves its domains: not only against other test processes (their locks) but also
+// against a pipeline started by hand on this host (its supervisor's claim). Before: a test took a
+// domain a hand-started run was using and failed on that run's samples (Recovery.SoakRandomKills on
+// a loaded CI machine).
+TEST(TestDomains, ADomainAHeslamRunHoldsIsNotReserved) {
+  const int wanted = 100 + static_cast<int>(getpid() % 100);
+  const auto claims = std::filesystem::temp_directory_path() / "heslam-domains";
+  std::filesystem::create_directories(claims);
+  const auto claim_file = claims / (std::to_string(wanted) + "-handrun" + std::to_string(getpid()) + ".lock");
+  const int fd = ::open(claim_file.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0666);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(flock(fd, LOCK_EX | LOCK_NB), 0);  // what a running supervisor holds
+  EXPECT_TRUE(supervisor_on_domain(wanted));
+  EXPECT_NE(reserve_test_domain(wanted - 1), wanted);  // `wanted` is the first id it would try
+  close(fd);
+  std::filesystem::remove(claim_file);
+  EXPECT_FALSE(supervisor_on_domain(wanted));
+}
+
 TEST_F(SupervisorTest, OnExitShutdownEndsTheRunCleanly) {
   write("short.yaml", "exit_after_s: 0.3\n");
   start(pipeline("  - name: service\n    executable: heslam-test-talker\n"
@@ -484,6 +613,50 @@ TEST_F(SupervisorCheck, RejectsUnknownFieldsAndBadValues) {
   EXPECT_EQ(text, "heslam-supervisor: " + file() +
                       ": field 'components[0].restart': expected one of never on-failure always, got 'sometimes'\n"
                       "heslam-supervisor: " + file() + ": unknown field 'components[0].restrat' (no such option)\n");
+}
+
+// The pipeline's name names the log folder: a huge or unprintable one is refused by --check with a
+// short line. Before: a 10 MB name passed --check and the run printed one 10 MB error line; a
+// non-UTF-8 byte went raw into a folder name.
+TEST_F(SupervisorCheck, RejectsAHugeOrUnprintablePipelineNameWithAShortLine) {
+  const std::string huge(10 * 1024 * 1024, 'n');
+  std::string text = pipeline(kTalker);
+  text.replace(text.find("name: test"), 10, "name: " + huge);
+  auto [code, out] = check(text);
+  EXPECT_EQ(code, 1);
+  EXPECT_LT(out.size(), 400u) << out.substr(0, 400);
+  EXPECT_NE(out.find("field 'name': expected 1-64 letters, digits, '_', '-' or '.' (it names the log folder), got 'nnn"),
+            std::string::npos) << out.substr(0, 400);
+  EXPECT_NE(out.find("... (10485760 bytes)"), std::string::npos) << out.substr(0, 400);
+
+  text = pipeline(kTalker);
+  text.replace(text.find("name: test"), 10, std::string("name: te\xFF") + "st");
+  std::tie(code, out) = check(text);
+  EXPECT_EQ(code, 1) << out;
+  EXPECT_NE(out.find("field 'name'"), std::string::npos) << out;
+  EXPECT_NE(out.find("got 'te\\xFFst'"), std::string::npos) << out;
+  EXPECT_EQ(out.find('\xFF'), std::string::npos) << out;
+}
+
+// Arguments may default to each other, resolved in order; a cycle is one line naming it. Before:
+// --check passed and the run failed later with an unrelated error.
+TEST_F(SupervisorCheck, ArgumentsReferringToEachOtherAreResolvedAndACycleIsRefused) {
+  auto [code, out] = check(pipeline(std::string(kTalker) + "    args: [\"--log-level\", \"$(arg level)\"]\n",
+                                    "args:\n  level: \"$(arg default_level)\"\n  default_level: warn\n"));
+  EXPECT_EQ(code, 0) << out;
+  std::tie(code, out) = check(pipeline(std::string(kTalker) + "    args: [\"$(arg a)\"]\n",
+                                       "args:\n  a: \"x$(arg b)\"\n  b: \"$(arg a)\"\n"));
+  EXPECT_EQ(code, 1);
+  EXPECT_EQ(out, "heslam-supervisor: " + file() + ": argument 'a': the arguments refer to each other in a cycle (a -> b -> a)\n");
+}
+
+// --check runs each heslam program's own check of its arguments: what a run would refuse, --check
+// refuses, with the program's one line. Before: exit code 0, and the run failed.
+TEST_F(SupervisorCheck, RunsEachProgramsOwnCheckOfItsArguments) {
+  const auto [code, out] = check(pipeline(std::string(kTalker) + "    args: [\"--log-level\", \"loud\"]\n"));
+  EXPECT_EQ(code, 1);
+  EXPECT_EQ(out, "heslam-supervisor: pipeline.yaml: component 'talker': heslam-test-talker: --log-level: expected debug, "
+                 "info, warn, error or off, got 'loud'\n");
 }
 
 }  // namespace

@@ -77,9 +77,11 @@ TEST(SecurePipeline, CheckNamesTheFolderAndAMissingIdentity) {
   const test::ScratchDir dir("secure_check");
   const fs::path security = test::make_security_folder(dir.path() / "sec", dir.path());
   const fs::path pipeline = test::source_dir() / "config/pipelines/synth.yaml";
-  // --check only needs the dataset folder to exist.
+  // --check opens the dataset as the replay would (its own --check): a real one.
+  fs::path dataset;
+  ASSERT_EQ(test::cached_synth("room", kFrames, dataset), "");
   test::ChildProcess check(test::bin_dir() / "heslam-supervisor",
-                           {pipeline.string(), "--check", "--arg", "dataset=" + dir.path().string(), "--arg",
+                           {pipeline.string(), "--check", "--arg", "dataset=" + dataset.string(), "--arg",
                             "security=" + security.string()},
                            dir.path(), "check_ok");
   ASSERT_EQ(check.wait(std::chrono::seconds(60)), 0) << check.err();
@@ -87,7 +89,7 @@ TEST(SecurePipeline, CheckNamesTheFolderAndAMissingIdentity) {
 
   fs::remove_all(security / "identities/recorder");
   test::ChildProcess missing(test::bin_dir() / "heslam-supervisor",
-                             {pipeline.string(), "--check", "--arg", "dataset=" + dir.path().string(), "--security",
+                             {pipeline.string(), "--check", "--arg", "dataset=" + dataset.string(), "--security",
                               security.string()},
                              dir.path(), "check_missing");
   ASSERT_EQ(missing.wait(std::chrono::seconds(60)), 1) << missing.out();

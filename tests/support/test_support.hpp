@@ -54,26 +54,56 @@ class ScratchDir {
   std::filesystem::path path_;
 };
 
-// A DDS domain id (1..230) that no other test process on this machine holds. ctest runs tests in
-// parallel and a pid-derived id alone can collide; a lock per id, held until this process exits,
-// makes the choice exclusive. The same id is returned for every call within one process.
+// Whether a heslam-supervisor of this host runs on `domain_id` (in any namespace): it holds a
+// claim file under $TMPDIR/heslam-domains for its life (runtime/supervisor/domain_check.hpp).
+inline bool supervisor_on_domain(int domain_id) {
+  std::error_code error;
+  const std::string prefix = std::to_string(domain_id) + "-";
+  for (const auto& entry :
+       std::filesystem::directory_iterator(std::filesystem::temp_directory_path() / "heslam-domains", error)) {
+    if (entry.path().filename().string().rfind(prefix, 0) != 0) continue;
+    const int fd = ::open(entry.path().c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) continue;
+    const bool held = ::flock(fd, LOCK_SH | LOCK_NB) != 0;
+    ::close(fd);
+    if (held) return true;
+  }
+  return false;
+}
+
+// A DDS domain id in 1..230, tried from `first` on, reserved for this process: a lock on it and on
+// the next id (a pipeline's image domain with image_transport shm) under $TMPDIR/heslam-test-domains,
+// held until the process exits, and no supervisor of this host on either (a pipeline started by
+// hand without those locks). Throws when every id is taken.
+inline int reserve_test_domain(int first) {
+  constexpr int kFirstDomain = 1;
+  constexpr int kDomainCount = 230;  // Cyclone allows up to 232; 0 is left to interactive runs
+  const std::filesystem::path lock_dir = std::filesystem::temp_directory_path() / "heslam-test-domains";
+  std::filesystem::create_directories(lock_dir);
+  const auto lock = [&](int id) {
+    const auto lock_file = lock_dir / (std::to_string(id) + ".lock");
+    const int fd = ::open(lock_file.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0666);
+    if (fd >= 0 && ::flock(fd, LOCK_EX | LOCK_NB) == 0) return fd;  // fd stays open: the lock lives with us
+    if (fd >= 0) ::close(fd);
+    return -1;
+  };
+  for (int i = 0; i < kDomainCount; ++i) {
+    const int id = kFirstDomain + (first + i) % kDomainCount;
+    const int fd = lock(id);
+    if (fd < 0) continue;
+    const int image_fd = lock(id + 1);
+    if (image_fd >= 0 && !supervisor_on_domain(id) && !supervisor_on_domain(id + 1)) return id;
+    ::close(fd);
+    if (image_fd >= 0) ::close(image_fd);
+  }
+  throw std::runtime_error("no free DDS test domain in 1..230 (all locked under " + lock_dir.string() +
+                           " or used by a heslam run)");
+}
+
+// This process's test domain (reserve_test_domain from a pid-derived id: ctest runs tests in
+// parallel); the same id for every call within one process.
 inline int exclusive_domain_id() {
-  static const int domain_id = [] {
-    constexpr int kFirstDomain = 1;
-    constexpr int kDomainCount = 230;  // Cyclone allows up to 232; 0 is left to interactive runs
-    const std::filesystem::path lock_dir = std::filesystem::temp_directory_path() / "heslam-test-domains";
-    std::filesystem::create_directories(lock_dir);
-    const int start = static_cast<int>(getpid() % kDomainCount);
-    for (int i = 0; i < kDomainCount; ++i) {
-      const int id = kFirstDomain + (start + i) % kDomainCount;
-      const auto lock_file = lock_dir / (std::to_string(id) + ".lock");
-      const int fd = ::open(lock_file.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0666);
-      if (fd < 0) continue;
-      if (::flock(fd, LOCK_EX | LOCK_NB) == 0) return id;  // fd stays open: the lock lives with us
-      ::close(fd);
-    }
-    throw std::runtime_error("no free DDS test domain in 1..230 (all locked under " + lock_dir.string() + ")");
-  }();
+  static const int domain_id = reserve_test_domain(static_cast<int>(getpid() % 230));
   return domain_id;
 }
 

@@ -8,6 +8,7 @@
 #include <signal.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +16,9 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <tuple>
+#include <utility>
+#include <vector>
 
 #include "pipeline_runs.hpp"
 #include "runtime/participant.hpp"
@@ -229,7 +233,124 @@ TEST_F(PipelineOutcome, LastLineSaysWhatTheRunProduced) {
   EXPECT_EQ(poses + static_cast<std::size_t>(lost), static_cast<std::size_t>(kFrames));
   EXPECT_EQ(last_line(supervisor->err()), "[supervisor] info: pipeline finished: tracked " + std::to_string(poses) + "/" +
                                               std::to_string(kFrames) + " frames, " + std::to_string(lost) +
-                                              " lost, trajectory " + (dir.path() / "run.txt").string());
+                                              " lost, trajectory " + (dir.path() / "run.txt").string() + "; " +
+                                              std::to_string(kFrames) + " of " + std::to_string(kFrames) +
+                                              " frames published");
+}
+
+// --check runs the replay's own check of its arguments and of the dataset: what a run would refuse,
+// --check refuses, and a run fails at start-up with the same line, without a restart. Before: a
+// huge --ack-timeout passed --check and timed out at once, printed with 309 digits and retried; a
+// nan distortion coefficient was reported as "right camera: expected it to the right of the left
+// camera".
+TEST_F(PipelineOutcome, CheckRefusesWhatTheReplayWouldRefuse) {
+  const test::ScratchDir dir("outcome_check");
+  const std::string pipeline = (test::source_dir() / "config/pipelines/synth_odometry.yaml").string();
+  const auto check = [&](const fs::path& dataset, const std::vector<std::string>& more) {
+    std::vector<std::string> args{pipeline, "--check", "--arg", "dataset=" + dataset.string()};
+    args.insert(args.end(), more.begin(), more.end());
+    test::ChildProcess run(test::bin_dir() / "heslam-supervisor", args, dir.path(), "check");
+    const int code = run.wait(60s).value_or(-1);
+    return std::pair(code, run.err());
+  };
+  auto [code, err] = check(dataset_, {});
+  EXPECT_EQ(code, 0) << err;
+  std::tie(code, err) = check(dataset_, {"--arg", "ack_timeout_s=1e308"});
+  EXPECT_EQ(code, 1);
+  EXPECT_EQ(err, "heslam-supervisor: synth_odometry.yaml: component 'replay': heslam-replay: --ack-timeout: expected a "
+                 "number in [0.001, 86400], got '1e308'\n");
+  auto run = test::start_pipeline("synth_odometry", dataset_, dir.path(), "huge", test_domain(), {"ack_timeout_s=1e308"});
+  EXPECT_EQ(test::finish(*run), 1) << run->err();
+  EXPECT_EQ(run->err().find("restarting"), std::string::npos) << run->err();
+  EXPECT_NE(last_line(run->err()).find("replay failed at start-up (exit code 1): heslam-replay: --ack-timeout: expected a "
+                                       "number in [0.001, 86400], got '1e308'"), std::string::npos) << run->err();
+
+  // A copy of the dataset whose right camera has a nan distortion coefficient.
+  const fs::path bad = dir.path() / "nan_distortion";
+  for (const char* camera : {"cam0", "cam1"}) {
+    fs::create_directories(bad / "mav0" / camera);
+    for (const char* entry : {"data", "data.csv"}) fs::create_symlink(dataset_ / "mav0" / camera / entry, bad / "mav0" / camera / entry);
+  }
+  fs::copy_file(dataset_ / "mav0/cam0/sensor.yaml", bad / "mav0/cam0/sensor.yaml");
+  std::ifstream right_in(dataset_ / "mav0/cam1/sensor.yaml");
+  std::ofstream right_out(bad / "mav0/cam1/sensor.yaml");
+  bool replaced = false;
+  for (std::string line; std::getline(right_in, line);) {
+    if (line.rfind("distortion_coefficients:", 0) == 0) {
+      line = "distortion_coefficients: [.nan, 0.0, 0.0, 0.0]";
+      replaced = true;
+    }
+    right_out << line << "\n";
+  }
+  right_out.close();
+  ASSERT_TRUE(replaced) << "no distortion_coefficients line in the synthetic sensor.yaml";
+  std::tie(code, err) = check(bad, {});
+  EXPECT_EQ(code, 1) << err;
+  EXPECT_NE(err.find("distortion_coefficients"), std::string::npos) << err;
+  EXPECT_EQ(err.find("to the right of the left camera"), std::string::npos) << err;
+}
+
+// A pair the replay skips (a missing image) is on the run's last line. Before: "tracked 39/39
+// frames", as if the recording had 39.
+TEST_F(PipelineOutcome, ASkippedPairIsOnTheLastLine) {
+  const test::ScratchDir dir("outcome_skipped");
+  const fs::path copy = dir.path() / "one_missing";
+  for (const char* camera : {"cam0", "cam1"}) {
+    fs::create_directories(copy / "mav0" / camera / "data");
+    for (const char* entry : {"data.csv", "sensor.yaml"}) {
+      fs::create_symlink(dataset_ / "mav0" / camera / entry, copy / "mav0" / camera / entry);
+    }
+    for (const fs::directory_entry& image : fs::directory_iterator(dataset_ / "mav0" / camera / "data")) {
+      fs::create_symlink(image.path(), copy / "mav0" / camera / "data" / image.path().filename());
+    }
+  }
+  std::vector<fs::path> left;
+  for (const fs::directory_entry& image : fs::directory_iterator(copy / "mav0/cam0/data")) left.push_back(image.path());
+  std::sort(left.begin(), left.end());
+  ASSERT_EQ(left.size(), static_cast<std::size_t>(kFrames));
+  fs::remove(left[kFrames / 2]);  // one pair in the middle of the run
+  auto supervisor = test::start_pipeline("synth_odometry", copy, dir.path(), "run", test_domain());
+  ASSERT_EQ(test::finish(*supervisor), 0) << supervisor->err();
+  const std::string last = last_line(supervisor->err());
+  EXPECT_NE(last.find("; 39 of 40 frames published, 1 skipped (a missing or corrupt image)"), std::string::npos) << last;
+  EXPECT_EQ(last.rfind("[supervisor] info: pipeline finished: tracked ", 0), 0u) << last;
+}
+
+// Lockstep MH01: the recorder stopped (SIGSTOP) from its 40th pose until the frontend has exited
+// (its odometry history gone with it), then resumed. Whatever it could still get, the run's verdict
+// is made against what the frontend produced: a complete output ends with exit code 0 and "tracked
+// N/160", an incomplete one fails and says how many frames are missing. Before: exit code 0 with
+// "tracked 40/40 frames, 0 lost" and 40 of 160 poses written (the issue's probe; also 97/99, 100/100).
+TEST(PipelineOutcomeLockstep, RecorderStalledUntilTheFrontendExitedIsJudgedAgainstWhatWasProduced) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
+  const test::ScratchDir dir("outcome_stalled_to_the_end");
+  auto supervisor = test::start_pipeline("euroc", dataset, dir.path(), "stall", test_domain(), {"loop_closer=none"});
+  const fs::path trajectory = dir.path() / "stall.txt";
+  ASSERT_TRUE(wait_until([&] { return poses_in(trajectory) >= 40 || supervisor->wait(0ms).has_value(); }));
+  const pid_t recorder = test::child_pid(supervisor->pid(), kRecorderComm);
+  ASSERT_GT(recorder, 0) << supervisor->err();
+  ASSERT_EQ(kill(recorder, SIGSTOP), 0);
+  ASSERT_TRUE(wait_until([&] {
+    return supervisor->err().find("frontend stopped") != std::string::npos || supervisor->wait(0ms).has_value();
+  })) << supervisor->err();
+  kill(recorder, SIGCONT);
+  const int code = test::finish(*supervisor);
+  const std::size_t poses = poses_in(trajectory);
+  const std::size_t lost = static_cast<std::size_t>(test::lost_entries(dir.path() / "stall.lost.txt"));
+  const std::string last = last_line(supervisor->err());
+  std::printf("[ figures  ] MH01 lockstep, recorder stopped from pose 40 to the frontend's exit: %zu poses, %zu "
+              "untracked of 160; exit code %d\n", poses, lost, code);
+  if (poses + lost == 160) {
+    EXPECT_EQ(code, 0) << supervisor->err();
+    EXPECT_NE(last.find("pipeline finished: tracked " + std::to_string(poses) + "/160 frames"), std::string::npos)
+        << last;
+  } else {
+    EXPECT_EQ(code, 1) << supervisor->err();
+    EXPECT_NE(last.find("pipeline failed: recorder: " + std::to_string(160 - poses - lost) +
+                        " of the 160 frames the frontend produced odometry for are missing from its output"),
+              std::string::npos) << last;
+  }
 }
 
 // Real time (MH01 at 20 Hz): the recorder stopped (SIGSTOP) for 5 s, longer than the 2 s DDS

@@ -97,14 +97,44 @@ TEST(ReplayOptions, ParsesEveryOption) {
 
 TEST(ReplayOptions, EachBadOptionHasItsMessage) {
   EXPECT_EQ(option_error({}), "missing DATASET argument (see --help)");
-  EXPECT_EQ(option_error({"d", "--rate", "fast"}), "--rate: expected a number >= 0, got 'fast'");
+  EXPECT_EQ(option_error({"d", "--rate", "fast"}), "--rate: expected a number in [0, 100], got 'fast'");
   EXPECT_EQ(option_error({"d", "--rate"}), "--rate: missing value");
-  EXPECT_EQ(option_error({"d", "--preload", "-1"}), "--preload: expected a number >= 0, got '-1'");
+  EXPECT_EQ(option_error({"d", "--preload", "-1"}), "--preload: expected a number in [0, 1e+06], got '-1'");
   EXPECT_EQ(option_error({"d", "--format", "bag"}), "--format: unknown format 'bag' (expected euroc, kitti or auto)");
   EXPECT_EQ(option_error({"d", "--lockstep", "--rate", "1"}),
             "--rate and --lockstep exclude each other (lockstep is paced by the consumer)");
   EXPECT_EQ(option_error({"d", "--bogus"}), "--bogus: unknown option (see --help)");
-  EXPECT_EQ(option_error({"d", "e"}), "e: unexpected second dataset argument (see --help)");
+  EXPECT_EQ(option_error({"d", "e"}), "'e': unexpected second dataset argument (the first is 'd'; see --help)");
+}
+
+// Every number has a range: a huge value is refused, not turned into an overflowing duration.
+// Before: --ack-timeout 1e308 timed out at once (printed with 309 digits) and --rate 1e308 ran.
+TEST(ReplayOptions, EveryNumberHasARangeAndABadValueIsQuotedShort) {
+  EXPECT_EQ(option_error({"d", "--ack-timeout", "1e308", "--lockstep"}),
+            "--ack-timeout: expected a number in [0.001, 86400], got '1e308'");
+  EXPECT_EQ(option_error({"d", "--rate", "1e308"}), "--rate: expected a number in [0, 100], got '1e308'");
+  EXPECT_EQ(option_error({"d", "--wait", "1e9"}), "--wait: expected a number in [0, 86400], got '1e9'");
+  EXPECT_EQ(option_error({"d", "--duration", "inf"}), "--duration: expected a number in [0, 1e+06], got 'inf'");
+  const std::string huge(100000, '9');
+  const std::string error = option_error({"d", "--start-offset", huge.c_str()});
+  EXPECT_EQ(error, "--start-offset: expected a number in [0, 1e+06], got '" + std::string(80, '9') + "... (100000 bytes)'");
+}
+
+// The replay's result on the run's last line: what it published of the recording, and what it skipped.
+TEST(ReplayProgress, ResultSaysWhatWasPublishedAndSkipped) {
+  ReplayCounts counts;
+  counts.total = 160;
+  counts.published = 160;
+  EXPECT_EQ(format_result(counts, false, false), "160 of 160 frames published");
+  counts.published = 159;
+  counts.skipped_images = 1;
+  EXPECT_EQ(format_result(counts, false, false), "159 of 160 frames published, 1 skipped (a missing or corrupt image)");
+  counts.published = 40;
+  counts.skipped_images = 0;
+  EXPECT_EQ(format_result(counts, false, true), "40 of 160 frames published (stopped early)");
+  counts.published = 480;
+  counts.pass = 3;
+  EXPECT_EQ(format_result(counts, true, false), "published 480 frames over 3 passes");
 }
 
 }  // namespace

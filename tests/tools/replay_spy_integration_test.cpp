@@ -227,7 +227,7 @@ TEST_F(ReplaySpy, BadDatasetAndBadOptionsAreOneClearLine) {
   EXPECT_NE(empty->err().find("layout found"), std::string::npos) << empty->err();
   auto bad_rate = start("replay", {log_dir_.string(), "--rate", "x"}, "bad_rate");
   EXPECT_EQ(run(*bad_rate), 1);
-  EXPECT_EQ(bad_rate->err(), "heslam-replay: --rate: expected a number >= 0, got 'x'\n");
+  EXPECT_EQ(bad_rate->err(), "heslam-replay: --rate: expected a number in [0, 100], got 'x'\n");
   auto bad_topic = start("spy", {"echo", "camera/mono"}, "bad_topic");
   EXPECT_EQ(run(*bad_topic), 1);
   EXPECT_NE(bad_topic->err().find("heslam-spy: topic 'camera/mono': not a heslam topic"), std::string::npos)

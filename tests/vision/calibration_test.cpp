@@ -1,6 +1,7 @@
 // Calibration loaders and rectification: every format gives the same rectified model for the same rig
 // (EuRoC's VI-Sensor), and each malformed file gives one clear line naming the file and the field.
 #include <fstream>
+#include <limits>
 #include <string>
 #include <thread>
 
@@ -311,6 +312,25 @@ TEST(Calibration, ImpossibleResolutionIsRefusedBeforeOpenCv) {
   calibration.source = "huge rig";
   EXPECT_EQ(error_of([&] { StereoRectifier rectifier(calibration); }),
             "huge rig: left camera: image size 100000x100000: expected 1..8192 px per side");
+}
+
+// A nan anywhere is named where it is, not reported by a later check it throws off. Before: a nan
+// distortion coefficient came out as "right camera: expected it to the right of the left camera".
+TEST(Calibration, ANanIsNamedWhereItIs) {
+  const std::string text = replace(kEurocCam1, "[-0.28368365,", "[.nan,");
+  ASSERT_NE(text, kEurocCam1);
+  const std::string error = error_of([&] { load_euroc_calibration(write_euroc("nan", kEurocCam0, text)); });
+  expect_one_line_naming(error, "cam1/sensor.yaml", "distortion_coefficients: expected finite numbers, item 0 is nan");
+  // The same from a message (the frontend's calibration topic): the rectifier names the field.
+  StereoCalibration calibration = load_euroc_calibration(write_euroc("ok_nan", kEurocCam0, kEurocCam1));
+  calibration.right.distortion[1] = std::numeric_limits<double>::quiet_NaN();
+  calibration.source = "topic rig";
+  EXPECT_EQ(error_of([&] { StereoRectifier rectifier(calibration); }),
+            "topic rig: right camera distortion coefficient 1: expected finite numbers, got a nan or inf");
+  calibration.right.distortion[1] = 0.0;
+  calibration.left.T_BS.translation().x() = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(error_of([&] { StereoRectifier rectifier(calibration); }),
+            "topic rig: left camera T_BS: expected finite numbers, got a nan or inf");
 }
 
 TEST(Calibration, MalformedKittiAndOrbSlamFilesGiveOneClearLine) {

@@ -12,6 +12,7 @@
 #include "components/messages/map_state.hpp"
 #include "components/messages/pose.hpp"
 #include "runtime/atomic_file.hpp"
+#include "runtime/run_counters.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/wire_enum.hpp"
@@ -319,6 +320,10 @@ void Recorder::on_shutdown() {
   }
   const RecordedTrajectories recording = recorder_.build();
   const FrameAccount account = write_files();
+  // Once, final: what the supervisor holds against the frontend's and the replay's counts.
+  stats().count(runtime::kFramesRecorded, account.with_pose + account.untracked);
+  stats().count(runtime::kFramesWithPose, account.with_pose);
+  stats().count(runtime::kFramesAccounted, account.published);
   if (!T_frame_rect_) {
     log().warn("no camera calibration on ", topics().calibration().name, ": poses written in the rectified left camera "
                "frame (the files' header says so), not the ", eval::pose_frame_name(options_.frame), " frame");

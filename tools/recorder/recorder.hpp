@@ -57,6 +57,8 @@ std::string summary_line(const FrameAccount& account, const std::filesystem::pat
 class Recorder : public runtime::Component {
  public:
   explicit Recorder(const runtime::CommonArgs& args);
+  // --check (heslam-supervisor --check): the flags and fields a run would refuse.
+  static void check(const runtime::CommonArgs& args, const runtime::Config& config) { RecorderOptions::from(config, args.rest); }
 
  private:
   void configure(const runtime::Config& config) override;

@@ -14,7 +14,10 @@ int main(int argc, char** argv) {
       std::cout << heslam::replay_usage() << heslam::runtime::common_args_usage();
       return 0;
     }
-    return heslam::run_replay(common, heslam::parse_replay_options(common.rest));
+    const heslam::ReplayOptions options = heslam::parse_replay_options(common.rest);
+    // --check: the options and the dataset (its calibration included), as a run would open them.
+    if (common.check) return heslam::check_replay(options);
+    return heslam::run_replay(common, options);
   } catch (const std::exception& error) {
     std::cerr << "heslam-replay: " << error.what() << "\n";
     return 1;

@@ -47,4 +47,15 @@ std::string format_summary(const ReplayCounts& counts) {
   return text;
 }
 
+std::string format_result(const ReplayCounts& counts, bool loop, bool stopped_early) {
+  std::string text = loop ? "published " + std::to_string(counts.published) + " frames over " +
+                                std::to_string(counts.pass) + (counts.pass == 1 ? " pass" : " passes")
+                          : std::to_string(counts.published) + " of " + std::to_string(counts.total) + " frames published";
+  if (counts.skipped_images > 0) {
+    text += ", " + std::to_string(counts.skipped_images) + " skipped (a missing or corrupt image)";
+  }
+  if (stopped_early) text += " (stopped early)";
+  return text;
+}
+
 }  // namespace heslam

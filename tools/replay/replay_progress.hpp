@@ -24,4 +24,9 @@ std::string format_progress_line(const ReplayCounts& counts);
 // e.g. "published 95 frames in 4.75 s (20.0 fps); skipped 0 images; 4 unpaired rows".
 std::string format_summary(const ReplayCounts& counts);
 
+// The replay's one-line result for the run's verdict: "160 of 160 frames published", "159 of 160
+// frames published, 1 skipped (a missing or corrupt image)", "published 480 frames over 3 passes";
+// "(stopped early)" when it did not reach the end.
+std::string format_result(const ReplayCounts& counts, bool loop, bool stopped_early);
+
 }  // namespace heslam

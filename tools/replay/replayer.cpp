@@ -25,6 +25,7 @@
 #include "runtime/waitset.hpp"
 #include "runtime/writer.hpp"
 #include "tools/dataset/stereo_images.hpp"
+#include "runtime/writer_identity.hpp"
 #include "tools/replay/replay_controls.hpp"
 #include "tools/replay/replay_messages.hpp"
 #include "tools/replay/replay_pacer.hpp"
@@ -104,6 +105,16 @@ class ProgressLine {
   bool drawn_ = false;
   Clock::time_point last_draw_{};
 };
+
+// The dataset as the options select it (format, --strict, the time window).
+StereoDataset open_replay_dataset(const ReplayOptions& options) {
+  DatasetOptions dataset_options;
+  dataset_options.format = options.format;
+  dataset_options.strict = options.strict;
+  StereoDataset dataset = open_dataset(options.dataset, dataset_options);
+  select_time_window(dataset, options.start_offset_s, options.duration_s);
+  return dataset;
+}
 
 class Replay {
  public:
@@ -188,14 +199,7 @@ class Replay {
   }
 
  private:
-  static StereoDataset open(const ReplayOptions& options) {
-    DatasetOptions dataset_options;
-    dataset_options.format = options.format;
-    dataset_options.strict = options.strict;
-    StereoDataset dataset = open_dataset(options.dataset, dataset_options);
-    select_time_window(dataset, options.start_offset_s, options.duration_s);
-    return dataset;
-  }
+  static StereoDataset open(const ReplayOptions& options) { return open_replay_dataset(options); }
 
   void announce() {
     for (std::size_t i = 0; i < dataset_.warnings.size() && i < kMaxListedWarnings; ++i) {
@@ -409,7 +413,11 @@ class Replay {
     std::sort(readers.begin(), readers.end());
     for (;;) {
       for (auto& received : acks_->take()) {
-        if (received.info.valid_data && received.sample->seq == seq) return true;
+        // Another run's frontend on the domain acknowledges its own frames, not ours.
+        if (!received.info.valid_data || !runtime::writer_of_this_run(acks_->handle(), received.info.publication_handle)) {
+          continue;
+        }
+        if (received.sample->seq == seq) return true;
       }
       std::vector<dds_instance_handle_t> now_matched = frame_writer_.matched_reader_handles();
       std::sort(now_matched.begin(), now_matched.end());
@@ -445,8 +453,8 @@ class Replay {
     progress_.finish();
     log_.flush_throttled();
     dds_wait_for_acks(frame_writer_.handle(), std::chrono::nanoseconds(kFinalAckTimeout).count());
-    status_.set_state(runtime::ComponentState::kShuttingDown);
     const bool stopped_early = runtime::shutdown_requested() || quit_;
+    status_.set_state(runtime::ComponentState::kShuttingDown, format_result(counts_, options_.loop, stopped_early));
     log_.info(format_summary(counts_), stopped_early ? " (stopped early)" : "");
     // An empty result is never a success: every pair of the sequence was unreadable.
     if (counts_.published == 0 && counts_.skipped_images > 0 && !stopped_early) {
@@ -485,6 +493,12 @@ class Replay {
 };
 
 }  // namespace
+
+int check_replay(const ReplayOptions& options) {
+  const StereoDataset dataset = open_replay_dataset(options);
+  const StereoRectifier rectifier(dataset.calibration);
+  return 0;
+}
 
 int run_replay(const runtime::CommonArgs& common, const ReplayOptions& options) {
   Replay replay(common, options);

@@ -12,4 +12,8 @@ namespace heslam {
 // (dataset, calibration, --strict image error, lockstep consumer missing or silent).
 int run_replay(const runtime::CommonArgs& common, const ReplayOptions& options);
 
+// --check: opens the dataset and rectifies its calibration as run_replay would, without DDS; 0, or
+// throws with the line a run would fail with.
+int check_replay(const ReplayOptions& options);
+
 }  // namespace heslam

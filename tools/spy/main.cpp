@@ -14,7 +14,9 @@ int main(int argc, char** argv) {
       std::cout << heslam::spy_usage() << heslam::runtime::common_args_usage();
       return 0;
     }
-    return heslam::run_spy(common, heslam::parse_spy_options(common.rest));
+    const heslam::SpyOptions options = heslam::parse_spy_options(common.rest);
+    if (common.check) return 0;
+    return heslam::run_spy(common, options);
   } catch (const std::exception& error) {
     std::cerr << "heslam-spy: " << error.what() << "\n";
     return 1;

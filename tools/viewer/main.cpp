@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
       std::cout << viewer::ViewerOptions::usage() << "Common options:\n" << runtime::common_args_usage();
       return 0;
     }
+    if (args.check) return 0;  // its options are read as it starts; the common flags are checked
     viewer::ViewerNode node(args);
     return node.execute();
   } catch (const std::exception& error) {

@@ -2,6 +2,7 @@
 #include "components/core/camera/stereo_calibration.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -40,10 +41,15 @@ cv::FileStorage open_yaml(const std::filesystem::path& file, bool add_header_if_
   }
 }
 
+// "nan", "inf" or "-inf" (std::to_string prints a nan's sign bit, "-nan").
+std::string non_finite_text(double value) { return std::isnan(value) ? "nan" : value > 0 ? "inf" : "-inf"; }
+
 double read_number(const cv::FileNode& node, const std::filesystem::path& file, const std::string& field) {
   if (node.empty() || node.isNone()) fail(file, field, "missing (expected a number)");
   if (!node.isReal() && !node.isInt()) fail(file, field, "expected a number");
-  return static_cast<double>(node);
+  const double value = static_cast<double>(node);
+  if (!std::isfinite(value)) fail(file, field, "expected a finite number, got " + non_finite_text(value));
+  return value;
 }
 
 // An image width or height: a whole number of pixels in 1..kMaxImageSidePx (checked before the
@@ -73,7 +79,11 @@ std::vector<double> read_sequence(const cv::FileNode& node, const std::filesyste
   std::vector<double> values;
   for (const cv::FileNode& item : node) {
     if (!item.isReal() && !item.isInt()) fail(file, field, "expected only numbers in the list");
-    values.push_back(static_cast<double>(item));
+    const double value = static_cast<double>(item);
+    if (!std::isfinite(value)) {
+      fail(file, field, "expected finite numbers, item " + std::to_string(values.size()) + " is " + non_finite_text(value));
+    }
+    values.push_back(value);
   }
   bool size_ok = false;
   for (std::size_t n : allowed_sizes) size_ok = size_ok || values.size() == n;
@@ -97,6 +107,7 @@ cv::Mat read_matrix(const cv::FileNode& node, const std::filesystem::path& file,
   }
   cv::Mat out;
   m.reshape(1, rows).convertTo(out, CV_64F);
+  if (!cv::checkRange(out)) fail(file, field, "expected finite numbers (the matrix holds a nan or inf)");
   return out;
 }
 

@@ -2,6 +2,7 @@
 #include "components/core/camera/stereo_rectifier.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -49,11 +50,38 @@ void check_image(const cv::Mat& image, cv::Size expected, const char* which) {
   }
 }
 
+// Every number of the calibration is finite, or one line naming the camera and the field.
+void check_finite(const StereoCalibration& calibration) {
+  const auto check = [&](const std::string& field, bool finite) {
+    if (!finite) throw std::runtime_error(calibration.source + ": " + field + ": expected finite numbers, got a nan or inf");
+  };
+  for (const auto& [camera, which] : {std::pair{&calibration.left, "left"}, std::pair{&calibration.right, "right"}}) {
+    const std::string name = std::string(which) + " camera";
+    check(name + " fx_px", std::isfinite(camera->fx_px));
+    check(name + " fy_px", std::isfinite(camera->fy_px));
+    check(name + " cx_px", std::isfinite(camera->cx_px));
+    check(name + " cy_px", std::isfinite(camera->cy_px));
+    for (std::size_t i = 0; i < camera->distortion.size(); ++i) {
+      check(name + " distortion coefficient " + std::to_string(i), std::isfinite(camera->distortion[i]));
+    }
+    check(name + " T_BS", camera->T_BS.matrix().allFinite());
+  }
+  if (const auto& e = calibration.explicit_rectification) {
+    check("rectification R_left", e->R_left.allFinite());
+    check("rectification R_right", e->R_right.allFinite());
+    check("rectification P_left", e->P_left.allFinite());
+    check("rectification P_right", e->P_right.allFinite());
+  }
+}
+
 }  // namespace
 
 StereoRectifier::StereoRectifier(const StereoCalibration& calibration) {
   const CameraModel& left = calibration.left;
   const CameraModel& right = calibration.right;
+  // First: a nan anywhere turns every later check (the baseline's sign among them) into a wrong
+  // message. A calibration from the topic has not been through the file readers' checks.
+  check_finite(calibration);
   if (left.width_px <= 0 || left.height_px <= 0 || !(left.fx_px > 0.0) || !(left.fy_px > 0.0)) {
     throw std::runtime_error(calibration.source + ": left camera: expected positive size and focal lengths");
   }

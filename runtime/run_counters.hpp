@@ -1,0 +1,21 @@
+// Names of the counters a run's verdict is made of (heslam-supervisor, runtime/supervisor/run_verdict.hpp):
+// each program counts its part in its Stats, and reports the final values to the supervisor as it ends.
+#pragma once
+
+namespace heslam::runtime {
+
+// The source (heslam-replay): frames written on camera/stereo, frames per pass of the recording,
+// pairs it skipped (a missing or corrupt image).
+inline constexpr const char* kFramesPublished = "frames_published";
+inline constexpr const char* kFramesTotal = "frames_total";
+inline constexpr const char* kImagesSkipped = "images_skipped";
+// The frontend: frames it published odometry for, those of its journal included (the same frames
+// again after a restart count once).
+inline constexpr const char* kOdometryFrames = "odometry_frames";
+// The recorder, counted once at its end: frames in its outputs (a pose, or in the lost list), of
+// them with a pose, and the frames its summary accounts for ("tracked N/M": M).
+inline constexpr const char* kFramesRecorded = "frames_recorded";
+inline constexpr const char* kFramesWithPose = "frames_with_pose";
+inline constexpr const char* kFramesAccounted = "frames_accounted";
+
+}  // namespace heslam::runtime

@@ -1,0 +1,61 @@
+// judge_run: the counters of the source, the frontend and the recorder held against each other.
+#include "runtime/supervisor/run_verdict.hpp"
+
+#include <algorithm>
+
+#include "runtime/run_counters.hpp"
+
+namespace heslam::supervisor {
+namespace {
+
+// The largest value of `counter` among the reports, nothing when none has it.
+std::optional<std::uint64_t> largest(const std::vector<ProgramReport>& reports, const char* counter) {
+  std::optional<std::uint64_t> value;
+  for (const ProgramReport& report : reports) {
+    const auto it = report.counters.find(counter);
+    if (it != report.counters.end()) value = std::max(value.value_or(0), it->second);
+  }
+  return value;
+}
+
+std::optional<std::uint64_t> counter_of(const ProgramReport& report, const char* counter) {
+  const auto it = report.counters.find(counter);
+  return it == report.counters.end() ? std::nullopt : std::optional(it->second);
+}
+
+// "tracked N/M frames, K lost, REST" with M = published, K = published - N; other text unchanged.
+std::string restate_tracked(const std::string& result, std::uint64_t with_pose, std::uint64_t published) {
+  constexpr std::string_view kTracked = "tracked ";
+  constexpr std::string_view kLost = " lost";
+  const std::size_t lost = result.find(kLost);
+  if (!result.starts_with(kTracked) || lost == std::string::npos) return result;
+  return std::string(kTracked) + std::to_string(with_pose) + "/" + std::to_string(published) + " frames, " +
+         std::to_string(published - std::min(published, with_pose)) + std::string(kLost) + result.substr(lost + kLost.size());
+}
+
+}  // namespace
+
+RunVerdict judge_run(const std::vector<ProgramReport>& reports) {
+  RunVerdict verdict;
+  const std::optional<std::uint64_t> published = largest(reports, runtime::kFramesPublished);
+  const std::optional<std::uint64_t> produced = largest(reports, runtime::kOdometryFrames);
+  for (const ProgramReport& report : reports) {
+    std::string result = report.result;
+    const std::optional<std::uint64_t> recorded = counter_of(report, runtime::kFramesRecorded);
+    if (recorded && produced && *recorded < *produced && !verdict.failure) {
+      verdict.failure = report.name + ": " + std::to_string(*produced - *recorded) + " of the " +
+                        std::to_string(*produced) + " frames the frontend produced odometry for are missing from " +
+                        "its output (it recorded " + std::to_string(*recorded) +
+                        "; it was stalled or cut off while they were published)";
+    }
+    const std::optional<std::uint64_t> accounted = counter_of(report, runtime::kFramesAccounted);
+    const std::optional<std::uint64_t> with_pose = counter_of(report, runtime::kFramesWithPose);
+    if (accounted && with_pose && published && *accounted < *published) {
+      result = restate_tracked(result, *with_pose, *published);
+    }
+    if (!result.empty()) verdict.results += (verdict.results.empty() ? "" : "; ") + result;
+  }
+  return verdict;
+}
+
+}  // namespace heslam::supervisor
