@@ -18,6 +18,7 @@
 
 #include "runtime/participant.hpp"
 #include "runtime/run_id.hpp"
+#include "runtime/topics.hpp"
 
 namespace heslam::supervisor {
 namespace {
@@ -125,6 +126,9 @@ bool OtherRunWatch::poll() {
       if (!infos[i].valid_data) continue;
       if (std::memcmp(endpoint.participant_key.v, own_participant_.v, sizeof own_participant_.v) == 0) continue;
       if (endpoint.topic_name == nullptr || !std::string(endpoint.topic_name).starts_with(prefix_)) continue;
+      // Every heslam process reports on the status topic, observers too (a viewer or a loop closer
+      // started by hand before the run): only a writer of the pipeline's data makes another run.
+      if (std::string_view(endpoint.topic_name).substr(prefix_.size()) == runtime::topic_names::kStatus) continue;
       const std::optional<std::string> run = run_of(endpoint);
       if (run && *run == own_run_) continue;
       std::set<std::string>& topics = runs_[run.value_or("unknown (a writer that is not heslam's)")];

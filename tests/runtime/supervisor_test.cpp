@@ -405,15 +405,17 @@ TEST_F(SupervisorTest, SecondRunOnTheSameDomainIsRefusedAndDomainAutoPicksAFreeO
   EXPECT_EQ(wait_exit(kExitBound), 0) << output();
 }
 
-// Another run's writer on the domain (here a talker started by hand: another run id) that appears
+// Another run's writer on the domain (here a talker started by hand with a data writer: another run
+// id; a status-only observer such as a viewer does not count) that appears
 // mid-run is reported, and the run's last line says its results are its own; a supervisor started
 // while it is alive is refused (the DDS check: no supervisor of this host holds the domain).
 TEST_F(SupervisorTest, AnotherRunAppearingMidRunIsReportedAndRefusesNewRuns) {
   start(pipeline(kTalker));
   ASSERT_TRUE(wait_for_output("talker is ready", kStartupBound)) << output();
+  std::ofstream(dir_ / "stray.yaml") << "%YAML:1.0\n---\ndata_writer: true\n";
   const pid_t stray = spawn(bin_dir() / "heslam-test-talker",
                             {"--domain", std::to_string(test_domain_id()), "--namespace", "t" + std::to_string(getpid()),
-                             "--name", "stray"},
+                             "--name", "stray", "--config", (dir_ / "stray.yaml").string()},
                             "stray.out");
   ASSERT_GT(stray, 0);
   EXPECT_TRUE(wait_for_output("another heslam run appeared on domain", kStartupBound)) << output();

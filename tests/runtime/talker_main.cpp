@@ -1,11 +1,15 @@
 // heslam-test-talker: the smallest real component, for supervisor tests. Publishes its status and a
 // "ticks" counter; optionally exits after a while with a chosen code, or ignores SIGTERM (to test
-// the supervisor's SIGKILL escalation).
+// the supervisor's SIGKILL escalation), or holds an odometry writer (`data_writer: true`: what makes
+// it a run's writer to the supervisor's domain check, which ignores status-only observers).
 #include <signal.h>
 
 #include <chrono>
+#include <optional>
 
 #include "runtime/component.hpp"
+#include "runtime/messages.hpp"
+#include "runtime/writer.hpp"
 
 namespace heslam::test {
 
@@ -18,6 +22,7 @@ class Talker : public runtime::Component {
     exit_after_s_ = config.get_double("exit_after_s", 0.0, 0.0, 3600.0);  // 0: run until told to stop
     exit_code_ = config.get_int("exit_code", 0, 0, 255);
     if (config.get_bool("ignore_sigterm", false)) signal(SIGTERM, SIG_IGN);
+    if (config.get_bool("data_writer", false)) odometry_writer_.emplace(participant(), topics().odometry());
   }
 
   void run() override {
@@ -36,6 +41,7 @@ class Talker : public runtime::Component {
   static constexpr int kTickMs = 50;
   double exit_after_s_ = 0;
   int exit_code_ = 0;
+  std::optional<runtime::Writer<msg::Odometry>> odometry_writer_;
 };
 
 }  // namespace heslam::test
