@@ -164,6 +164,9 @@ void Frontend::resume_from_journal() {
   for (const msg::Odometry& odometry : resumed.frames) odometry_writer_->write(odometry);
   stats().count("journal_frames", resumed.frames.size());
   stats().count(runtime::kOdometryFrames, resumed.frames.size());
+  for (const msg::Odometry& odometry : resumed.frames) {
+    if (!last_seq_ || odometry.seq > *last_seq_) resumed_unfinished_seqs_.insert(odometry.seq);
+  }
   log().info("resuming after frame ", last_seq_ ? std::to_string(*last_seq_) : std::string("none"), ": ",
              resumed.frames.size(), " frames from ",
              journal_->path().string(),
@@ -379,7 +382,7 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
   }
   const messages::OdometryMessage odometry(frame.stamp_ns, frame.seq, result, output.keypoints, output.timings);
   if (odometry_writer_->write(odometry.get()) == runtime::WriteResult::kTimeout) stats().count("odometry_timeouts");
-  stats().count(runtime::kOdometryFrames);
+  if (resumed_unfinished_seqs_.erase(frame.seq) == 0) stats().count(runtime::kOdometryFrames);
   if (journal_ && result.new_keyframe) journal_->append(odometry.get(), /*finished=*/false);
   log().debug("frame ", frame.seq, ": ", to_string(result.state), " (", to_string(result.method), "), ",
               result.tracked_points, " points, ", output.keypoints, " keypoints (", output.stereo_keypoints, " stereo), ",

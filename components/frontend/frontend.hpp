@@ -81,6 +81,9 @@ class Frontend : public runtime::Component {
   // Seq of the last frame processed: a jump counts the frames in between as missed (a real-time
   // publisher outran us and the image reader kept only the newest), so a drop is never silent.
   std::optional<std::uint64_t> last_seq_;
+  // Frames of the journal published but not finished (a keyframe's frame, killed while waiting for
+  // the mapper): tracked again after the restart, they count once in odometry_frames.
+  std::set<std::uint64_t> resumed_unfinished_seqs_;
   // KeyframeDone seen, not yet waited for: keyframe -> components that acknowledged it.
   std::map<KeyframeId, std::set<std::string>> keyframes_done_;
   std::uint64_t acknowledged_map_version_ = 0;  // the largest map version an awaited ack reported
