@@ -33,10 +33,10 @@ constexpr int kCorridorFrames = 960;
 // The bar for a closed loop: ATE after closing at most 0.2 % of the path length.
 constexpr double kMaxAteOfPath = 0.002;
 constexpr const char* kLoopCloserComm = "heslam-loop-clo";
-// ATE of the same lockstep run without a loop closer (--arg loop_closer=none), measured 2026-11-25
-// (docs/benchmarks.md, "Loop closing end to end"): closing the loop must at least halve it. Not
-// re-run here, to keep the suite short; the benchmark command re-measures it.
-constexpr double kCorridorOdometryAteM = 0.0299;
+// ATE of the same lockstep run without a loop closer (--arg loop_closer=none): closing the loop
+// must at least halve it. The odometry drift test (tests/local_mapper/odometry_drift_e2e_test.cpp)
+// re-measures it on every run of the suite and holds it at or below this figure.
+constexpr double kCorridorOdometryAteM = 0.040657;
 
 int test_domain() { return test::exclusive_domain_id(); }
 

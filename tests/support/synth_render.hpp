@@ -22,10 +22,11 @@ namespace heslam::test {
 // 2 loaded cores), it is no performance assertion.
 inline std::string render_synth(const std::string& preset, int frames, const std::filesystem::path& out,
                                 const std::filesystem::path& log_dir,
-                                std::chrono::seconds timeout = std::chrono::seconds(300)) {
+                                std::chrono::seconds timeout = std::chrono::seconds(300),
+                                const std::string& format = "euroc") {
   ChildProcess synth(bin_dir() / "heslam-synth",
-                     {"--preset", preset, "--frames", std::to_string(frames), "--threads", "2", "--no-events", "--out",
-                      out.string()},
+                     {"--preset", preset, "--frames", std::to_string(frames), "--threads", "2", "--no-events",
+                      "--format", format, "--out", out.string()},
                      log_dir, "synth_" + preset);
   const int code = synth.wait(timeout).value_or(-1);
   return code == 0 ? std::string{} : "heslam-synth exited " + std::to_string(code) + ": " + synth.err();
@@ -34,12 +35,14 @@ inline std::string render_synth(const std::string& preset, int frames, const std
 // The same rendering, done once per build for every test process that asks for it: the sequence is
 // kept under build/test-data/PRESET_FRAMES and reused while the heslam-synth binary is unchanged
 // (its size and modification time are the key). Concurrent callers wait on a lock file. Sets
-// `dataset` to the folder; returns as render_synth.
-inline std::string cached_synth(const std::string& preset, int frames, std::filesystem::path& dataset) {
+// `dataset` to the folder; returns as render_synth. `format` kitti: the KITTI layout
+// (build/test-data/PRESET_FRAMES_kitti).
+inline std::string cached_synth(const std::string& preset, int frames, std::filesystem::path& dataset,
+                                const std::string& format = "euroc") {
   namespace fs = std::filesystem;
   const fs::path root = bin_dir().parent_path() / "test-data";
   fs::create_directories(root);
-  const std::string name = preset + "_" + std::to_string(frames);
+  const std::string name = preset + "_" + std::to_string(frames) + (format == "euroc" ? "" : "_" + format);
   dataset = root / name;
   const fs::path renderer = bin_dir() / "heslam-synth";
   std::error_code error;
@@ -55,7 +58,7 @@ inline std::string cached_synth(const std::string& preset, int frames, std::file
   if (done != key) {
     fs::remove(marker, error);
     fs::remove_all(dataset, error);
-    result = render_synth(preset, frames, dataset, root);
+    result = render_synth(preset, frames, dataset, root, std::chrono::seconds(300), format);
     if (result.empty()) std::ofstream(marker) << key << "\n";
   }
   ::close(fd);  // releases the lock
