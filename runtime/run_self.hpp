@@ -8,9 +8,25 @@
 //   components take its samples as their own run's instead of refusing them.
 #pragma once
 
+#include <cstdint>
+#include <cstdlib>
+
 namespace heslam::runtime {
 
 inline constexpr const char* kJoinRunVariable = "HESLAM_RUN_ID";
+
+// How many times the supervisor restarted this component before starting this process (0: its
+// first start, or not started by a supervisor). A process that allocates ids for the run's map
+// starts each restart in an id range of its own, so ids never collide with an earlier incarnation's
+// whatever files it lost.
+inline constexpr const char* kRestartVariable = "HESLAM_RESTART";
+inline std::uint64_t restart_number() {
+  const char* text = std::getenv(kRestartVariable);
+  if (text == nullptr || *text == '\0') return 0;
+  char* end = nullptr;
+  const unsigned long long value = std::strtoull(text, &end, 10);
+  return end != nullptr && *end == '\0' ? value : 0;
+}
 
 // heslam-supervisor, before any Writer exists (process_run_id() is fixed by its first use); also
 // drops HESLAM_RUN_ID from its environment, so that its components never inherit another run's.

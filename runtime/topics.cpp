@@ -19,6 +19,7 @@ constexpr std::array kAllTopics{
     TopicEntry{topic_names::kKeyframes, "Keyframe", QosRole::kKeyframes},
     TopicEntry{topic_names::kKeyframeStates, "KeyframeState", QosRole::kMapState},
     TopicEntry{topic_names::kMapPoints, "MapPointState", QosRole::kMapState},
+    TopicEntry{topic_names::kMapperKeyframes, "Keyframe", QosRole::kKeyframes},
     TopicEntry{topic_names::kLoopCorrections, "LoopCorrection", QosRole::kCorrections},
     TopicEntry{topic_names::kFrameDone, "FrameDone", QosRole::kLockstep},
     TopicEntry{topic_names::kKeyframeDone, "KeyframeDone", QosRole::kLockstep},

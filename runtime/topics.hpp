@@ -28,6 +28,7 @@ inline constexpr std::string_view kOdometry = "odometry";
 inline constexpr std::string_view kKeyframes = "map/keyframes";
 inline constexpr std::string_view kKeyframeStates = "map/keyframe_states";
 inline constexpr std::string_view kMapPoints = "map/points";
+inline constexpr std::string_view kMapperKeyframes = "map/mapper_keyframes";
 inline constexpr std::string_view kLoopCorrections = "loop/corrections";
 inline constexpr std::string_view kFrameDone = "lockstep/frame_done";
 inline constexpr std::string_view kKeyframeDone = "lockstep/keyframe_done";
@@ -53,6 +54,12 @@ class Topics {
     return {full_name(topic_names::kKeyframeStates), QosRole::kMapState};
   }
   TopicSpec<msg::MapPointState> map_points() const { return {full_name(topic_names::kMapPoints), QosRole::kMapState}; }
+  // Every keyframe of the local mapper's map with its features (the state topics carry none): a
+  // frontend restarted without a readable map file of the run (or on another host) rebuilds its map
+  // from it.
+  TopicSpec<msg::Keyframe> mapper_keyframes() const {
+    return {full_name(topic_names::kMapperKeyframes), QosRole::kKeyframes};
+  }
   TopicSpec<msg::LoopCorrection> loop_corrections() const {
     return {full_name(topic_names::kLoopCorrections), QosRole::kCorrections};
   }

@@ -7,7 +7,30 @@
 
 namespace heslam::frontend {
 
+namespace {
+
+void note_id(std::map<std::uint8_t, std::uint64_t>& largest, std::uint64_t id) {
+  if (id == kNoId) return;
+  std::uint64_t& counter = largest[creator_of(id)];
+  counter = std::max(counter, counter_of(id));
+}
+
+std::uint64_t largest_of(const std::map<std::uint8_t, std::uint64_t>& largest, std::uint8_t tag) {
+  const auto it = largest.find(tag);
+  return it == largest.end() ? 0 : it->second;
+}
+
+}  // namespace
+
+std::uint64_t BatchedMirror::largest_keyframe_counter(std::uint8_t tag) const {
+  return largest_of(largest_keyframe_counter_, tag);
+}
+std::uint64_t BatchedMirror::largest_point_counter(std::uint8_t tag) const {
+  return largest_of(largest_point_counter_, tag);
+}
+
 void BatchedMirror::add(const msg::KeyframeState& state) {
+  note_id(largest_keyframe_counter_, state.id);
   if (messages::is_version_marker(state)) {
     markers_.keyframe_states = std::max(markers_.keyframe_states, state.map_version);
     if (state.correction_id != 0) correction_versions_.insert(state.map_version);
@@ -21,6 +44,7 @@ void BatchedMirror::add(const msg::KeyframeState& state) {
 }
 
 void BatchedMirror::add(const msg::MapPointState& state) {
+  note_id(largest_point_counter_, state.id);
   if (messages::is_version_marker(state)) {
     markers_.point_states = std::max(markers_.point_states, state.map_version);
     return;
@@ -29,6 +53,7 @@ void BatchedMirror::add(const msg::MapPointState& state) {
   copy.sample = state;
   const auto observations = runtime::view(state.observations);
   copy.observations.assign(observations.begin(), observations.end());
+  for (const msg::PointObservation& observation : observations) note_id(largest_keyframe_counter_, observation.keyframe_id);
   copy.sample.observations = {};
   copy.disposed_after = false;
 }

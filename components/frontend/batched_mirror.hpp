@@ -58,6 +58,10 @@ class BatchedMirror {
   // The mapper's map version this mirror holds completely (all of it applied).
   const messages::MirrorVersion& version() const { return version_; }
   std::size_t waiting() const { return keyframe_states_.size() + point_states_.size(); }
+  // The largest counter of a keyframe / point id with creator `tag` the states named (ids.hpp), 0
+  // if none: a restarted frontend's ids continue above its predecessor's.
+  std::uint64_t largest_keyframe_counter(std::uint8_t tag) const;
+  std::uint64_t largest_point_counter(std::uint8_t tag) const;
 
  private:
   struct KeyframeStateCopy {
@@ -85,6 +89,8 @@ class BatchedMirror {
   std::map<PointId, PointStateCopy> point_states_;
   std::set<PointId> pending_disposes_;               // disposes of points with no state waiting
   std::map<KeyframeId, InFlight> in_flight_;         // own keyframes without a mapper state yet
+  std::map<std::uint8_t, std::uint64_t> largest_keyframe_counter_;  // by creator tag, over every id seen
+  std::map<std::uint8_t, std::uint64_t> largest_point_counter_;
 };
 
 }  // namespace heslam::frontend

@@ -16,6 +16,7 @@
 #include "components/messages/camera.hpp"
 #include "components/messages/checks.hpp"
 #include "components/messages/keyframe.hpp"
+#include "runtime/run_self.hpp"
 #include "components/messages/odometry.hpp"
 #include "components/messages/pose.hpp"
 #include "runtime/run_counters.hpp"
@@ -36,6 +37,9 @@ constexpr std::chrono::milliseconds kNoCalibrationPoll{5};
 // for the rest of it (one burst on loopback; a late state is applied with the next frame anyway).
 constexpr std::chrono::milliseconds kMapHistoryWait{2000};
 constexpr std::chrono::milliseconds kMapHistorySettle{100};
+// A restarted frontend's ids start at restart << this (runtime::restart_number()): 2^40 ids per
+// process, which no run exhausts, above every earlier process's.
+constexpr int kRestartIdShift = 40;
 // The publisher's rectified model and ours agree to this (both come from the same calibration; a
 // larger difference means mismatched builds or a different rectification).
 constexpr double kCameraTolerance = 1e-6;
@@ -258,19 +262,41 @@ void Frontend::resume_in_mapper_map() {
   // A restarted frontend: the mapper's map must be in the tracker before the first frame, or that
   // frame would start a second map.
   Tracker& tracker = processor_->tracker();
+  // Ids of a restart start in a range of their own, whatever the files below still hold.
+  if (const std::uint64_t restart = runtime::restart_number(); restart > 0) {
+    tracker.skip_ids_through(restart << kRestartIdShift, restart << kRestartIdShift);
+  }
   // The mapper's map file of this run exists at our start only after a restart, or when the mapper
   // started from a saved map (--load-map); on a fresh run it writes it after the first keyframe,
   // and the frontend starts before. It holds every keyframe the mapper acknowledged (saved before
   // each KeyframeDone), with features, which the state topics do not carry. It is loaded whether or
   // not the mapper runs now: killed together with us it is restarting, and its states (newer poses,
   // culls, merges) are applied as they arrive.
-  if (!mapper_map_file_of_this_run()) return;
-  try {
-    tracker.local_map() = load_map_file(options_.mapper_map_file).map;
-  } catch (const std::exception& error) {
-    stats().count("unreadable_mapper_map_files");
-    log().warn(error.what(), "; starting a new map");
+  bool loaded = false;
+  if (mapper_map_file_of_this_run()) {
+    try {
+      tracker.local_map() = load_map_file(options_.mapper_map_file).map;
+      loaded = true;
+    } catch (const std::exception& error) {
+      stats().count("unreadable_mapper_map_files");
+      log().warn(error.what(), "; rebuilding the map from the local mapper's keyframes on DDS");
+    }
   }
+  // Without a usable file (unreadable, or on another host than the mapper), a restarted frontend
+  // takes the mapper's live map from DDS: starting a new map would put a second map's keyframes
+  // into the mapper's.
+  const bool restarted = runtime::restart_number() > 0 || last_seq_.has_value();
+  if (!loaded && restarted) {
+    tracker.local_map() = mapper_keyframes_from_dds();
+    if (!tracker.local_map().keyframes.empty()) {
+      stats().count("maps_from_dds");
+      log().info("took ", tracker.local_map().keyframes.size(), " keyframes of the local mapper's map from DDS");
+    } else {
+      log().warn("restarted, but no map of this run's local mapper is readable (no file, nothing on ",
+                 topics().mapper_keyframes().name, "); starting a new map");
+    }
+  }
+  if (!mapper_map_file_of_this_run() && !restarted) return;
   // States the mapper published already (it runs: only we were restarted) arrive shortly after the
   // readers match; wait briefly so the first frame is relocalized with the newest poses.
   if (keyframe_state_reader_->wait_for_writers(1, kMapHistoryWait)) {
@@ -288,6 +314,39 @@ void Frontend::resume_in_mapper_map() {
                journal_last_pose_ ? "tracking on from the last journaled pose" : "relocalizing",
                " instead of starting a new map");
   }
+}
+
+Map Frontend::mapper_keyframes_from_dds() {
+  Map map;
+  // Created now and dropped after: transient-local history brings every keyframe the mapper holds,
+  // which a reader kept all run long would hold twice over.
+  runtime::CheckedReader<msg::Keyframe> reader(participant(), topics().mapper_keyframes(), log(), stats(),
+                                               messages::sample_check<msg::Keyframe>(),
+                                               messages::checked_options<msg::Keyframe>(messages::kMapStateHeld));
+  if (!reader.wait_for_writers(1, kMapHistoryWait)) return map;
+  // The history arrives after matching: taken until nothing new came for a settle period.
+  const auto deadline = std::chrono::steady_clock::now() + kMapHistoryWait;
+  auto quiet_since = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() < deadline) {
+    bool any = false;
+    for (auto& received : reader.take()) {
+      if (!received.info.valid_data) continue;
+      any = true;
+      try {
+        messages::DecodedKeyframe decoded = messages::to_keyframe(*received.sample);
+        const KeyframeId id = decoded.keyframe.id;
+        map.keyframes[id] = std::move(decoded.keyframe);
+      } catch (const std::exception& error) {
+        stats().count("bad_mapper_keyframes");
+        log().warn_throttled("bad_mapper_keyframes", error.what());
+      }
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (any) quiet_since = now;
+    if (!map.keyframes.empty() && now - quiet_since >= kMapHistorySettle) break;
+    std::this_thread::sleep_for(kNoCalibrationPoll);
+  }
+  return map;
 }
 
 void Frontend::take_frames() {
@@ -459,6 +518,10 @@ void Frontend::mirror_map_state() {
     }
   }
   const BatchedMirror::Applied applied = mirror_.apply(*map);
+  // Ids of ours the mapper holds that this process did not make (its predecessor's): never again.
+  Tracker& tracker = processor_->tracker();
+  const std::uint8_t tag = tracker.options().id_tag;
+  tracker.skip_ids_through(mirror_.largest_keyframe_counter(tag), mirror_.largest_point_counter(tag));
   if (applied.unknown_keyframe_states > 0) {
     stats().count("unknown_keyframe_states", static_cast<std::uint64_t>(applied.unknown_keyframe_states));
   }

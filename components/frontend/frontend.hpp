@@ -48,6 +48,10 @@ class Frontend : public runtime::Component {
   // With a mapper: mirror its stored map into a new processor's tracker and, when it holds
   // keyframes (this frontend was restarted), relocalize in it instead of starting a new map.
   void resume_in_mapper_map();
+  // The mapper's keyframes with their features from DDS (topics().mapper_keyframes()): for a
+  // restarted frontend without a readable map file of the run. Empty when no mapper publishes them
+  // within kMapHistoryWait.
+  Map mapper_keyframes_from_dds();
   // Lockstep with a mapper (and a loop closer): waits for the KeyframeDone(id) of each, mirroring
   // state meanwhile, until the mirror holds the map version they acknowledged. False on timeout or
   // shutdown.

@@ -11,6 +11,7 @@
 
 #include "components/messages/camera.hpp"
 #include "components/messages/checks.hpp"
+#include "components/messages/keyframe.hpp"
 #include "components/messages/loop_correction.hpp"
 #include "components/messages/map_state.hpp"
 #include "components/local_mapper/write_batch.hpp"
@@ -70,6 +71,7 @@ void MapperNode::configure(const runtime::Config& config) {
     point_state_writer_.emplace(participant(), topics().map_points(),
                                 runtime::Qos(runtime::QosRole::kMapState).keep_instances_on_writer_exit());
   }
+  mapper_keyframe_writer_.emplace(participant(), topics().mapper_keyframes());
   keyframe_done_writer_.emplace(participant(), topics().keyframe_done());
   if (options_.real_time) {
     // Taken-but-queued keyframes count too: with a backlog, finishing this BA only delays them.
@@ -264,6 +266,13 @@ void MapperNode::start_mapper(const PendingKeyframe& first) {
   }
   log().info("camera fx ", first.camera.fx_px, " px, baseline ", first.camera.baseline_m, " m; ",
              mapper_->map().keyframes.size(), " keyframes in the map");
+  for (const auto& [id, keyframe] : mapper_->map().keyframes) publish_keyframe(keyframe);
+}
+
+void MapperNode::publish_keyframe(const Keyframe& keyframe) {
+  const messages::KeyframeMessage message(keyframe, /*frame_seq=*/0, /*new_points=*/{}, mapper_->camera(), kNoId,
+                                          mapper_->map().version);
+  mapper_keyframe_writer_->write(message.get());
 }
 
 void MapperNode::process_keyframe(PendingKeyframe keyframe) {
@@ -305,6 +314,7 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
   }
   record(changes);
   if (++unsaved_keyframes_ >= options_.save_every_keyframes) save();
+  if (const Keyframe* inserted = mapper_->map().keyframe(id)) publish_keyframe(*inserted);
   publish(changes);
   acknowledge(id);
   if (changes.counts.late_keyframes_moved > 0) {

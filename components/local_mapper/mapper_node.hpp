@@ -60,6 +60,9 @@ class MapperNode : public runtime::Component {
   // `correction_id`: the changes are that loop correction's (marked on the version marker).
   void publish(const MapChanges& changes, std::uint64_t correction_id = 0);
   void publish_all(const Map& map);
+  // The keyframe with its features on the mapper keyframes topic, for a frontend that rebuilds the
+  // map from DDS (needs the camera, so only once the mapper runs).
+  void publish_keyframe(const Keyframe& keyframe);
   // Ends a batch of states: the version markers of both state topics (messages::MirrorVersion).
   void write_version_markers(std::uint64_t map_version, std::uint64_t correction_id = 0);
   // KeyframeDone for a mapped keyframe, or (correction_id != 0) for an applied correction.
@@ -78,6 +81,8 @@ class MapperNode : public runtime::Component {
   std::optional<runtime::Writer<msg::KeyframeState>> keyframe_state_writer_;
   std::optional<runtime::Writer<msg::MapPointState>> point_state_writer_;
   std::optional<runtime::Writer<msg::KeyframeDone>> keyframe_done_writer_;
+  // Every keyframe of the map with its features, once (topics().mapper_keyframes()).
+  std::optional<runtime::Writer<msg::Keyframe>> mapper_keyframe_writer_;
 
   // A loaded map waits here for the first keyframe (which brings the camera the mapper needs).
   std::optional<MapSnapshot> loaded_;

@@ -18,6 +18,7 @@
 #include "runtime/reader.hpp"
 #include "runtime/run_counters.hpp"
 #include "runtime/run_id.hpp"
+#include "runtime/run_self.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/shutdown.hpp"
 #include "runtime/stats.hpp"
@@ -201,6 +202,7 @@ void Supervisor::start(Managed& component) {
   std::map<std::string, std::string> env = component.spec.env;
   // Every writer of a run on one host is ours: the components refuse another run's samples.
   if (!pipeline_.split()) env[runtime::kRunOnOneHostVariable] = "1";
+  env[runtime::kRestartVariable] = std::to_string(component.restarts);
   component.process =
       ChildProcess::spawn(options_.self_executable, component.spec.executable, child_args(component), env,
                           component.spec.nice);

@@ -151,5 +151,22 @@ TEST(FrontendBatchedMirror, CorrectionBatchMovesOwnKeyframesInFlightWithTheirRef
   EXPECT_GT(difference(map.keyframes.at(4).T_wc, between.keyframes.at(4).T_wc), 0.1);
 }
 
+// A restarted frontend learns its predecessor's ids from the mapper's states, also of keyframes
+// its own map does not hold (states it cannot apply), so it never makes them again.
+TEST(FrontendBatchedMirror, LargestCounterOfEachCreatorOverEveryIdTheStatesName) {
+  BatchedMirror mirror;
+  EXPECT_EQ(mirror.largest_keyframe_counter(kFrontendTag), 0u);
+  mirror.add(keyframe_state(make_id(kFrontendTag, 41), 1, Pose3::Identity()));
+  msg::MapPointState point = point_state(make_id(kMapperTag, 7), 1, Eigen::Vector3d::Zero(), make_id(kFrontendTag, 41));
+  const std::vector<msg::PointObservation> observations{{make_id(kFrontendTag, 57), 3}};
+  runtime::borrow(point.observations, observations);
+  mirror.add(point);
+  mirror.add(point_state(make_id(kFrontendTag, 50), 1, Eigen::Vector3d::Zero(), make_id(kFrontendTag, 41)));
+  EXPECT_EQ(mirror.largest_keyframe_counter(kFrontendTag), 57u);
+  EXPECT_EQ(mirror.largest_point_counter(kFrontendTag), 50u);
+  EXPECT_EQ(mirror.largest_point_counter(kMapperTag), 7u);
+  EXPECT_EQ(mirror.largest_keyframe_counter(kMapperTag), 0u);
+}
+
 }  // namespace
 }  // namespace heslam::frontend

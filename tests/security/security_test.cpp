@@ -117,6 +117,7 @@ TEST(SecurityInit, GrantsEachTopicOnlyToTheComponentsThatNeedIt) {
       {"camera/stereo", {"replay"}},           {"camera/calibration", {"replay"}},
       {"odometry", {"frontend"}},              {"map/keyframes", {"frontend"}},
       {"map/keyframe_states", {"local_mapper"}}, {"map/points", {"local_mapper"}},
+      {"map/mapper_keyframes", {"local_mapper"}},
       {"loop/corrections", {"loop_closer"}},   {"lockstep/frame_done", {"frontend"}},
       {"lockstep/keyframe_done", {"local_mapper", "loop_closer"}}};
   for (const runtime::TopicEntry& topic : runtime::all_topics()) {

@@ -245,5 +245,27 @@ TEST(TrackerSynthetic, ResumeInMapFromTheLastFramePoseTracksTheNextFrameDirectly
   EXPECT_LT((r.T_wc.translation() - truth_in_first_camera(next).translation()).norm(), 0.02);
 }
 
+// A frontend restarted with nothing to resume from (its map file and its predecessor's map lost):
+// it starts a new map, but in an id range of its own (skip_ids_through, restart n -> n << 40), so
+// its first keyframe and points never reuse an id the earlier process published.
+TEST(TrackerSynthetic, IdsSkippedPastARestartRangeNeverRepeatTheFirstProcesssIds) {
+  const PinholeStereo camera = test::synthetic_camera();
+  const auto points = test::make_points(4000, 31);
+  Tracker first(camera, TrackerOptions{});
+  Tracker restarted(camera, TrackerOptions{});
+  constexpr std::uint64_t kRestartRange = std::uint64_t{1} << 40;
+  restarted.skip_ids_through(kRestartRange, kRestartRange);
+  restarted.skip_ids_through(5, 5);  // never lowers them
+  const TrackResult a = first.track(0, 0, test::make_frame(points, camera, test::trajectory_pose(0), 500));
+  const TrackResult b = restarted.track(0, 0, test::make_frame(points, camera, test::trajectory_pose(0), 500));
+  ASSERT_TRUE(a.new_keyframe && b.new_keyframe);
+  EXPECT_EQ(counter_of(a.new_keyframe->id), 1u);
+  EXPECT_EQ(counter_of(b.new_keyframe->id), kRestartRange + 1);
+  for (const auto& [id, point] : restarted.local_map().points) {
+    EXPECT_GT(counter_of(id), kRestartRange);
+    EXPECT_EQ(first.local_map().points.count(id), 0u);
+  }
+}
+
 }  // namespace
 }  // namespace heslam

@@ -174,6 +174,11 @@ void Tracker::follow_reference_keyframe() {
   last_frame_.T_wc = reference->T_wc * last_T_ref_c_;
 }
 
+void Tracker::skip_ids_through(std::uint64_t keyframe_counter, std::uint64_t point_counter) {
+  keyframe_counter_ = std::max(keyframe_counter_, keyframe_counter);  // pre-incremented: the next is + 1
+  point_counter_ = std::max(point_counter_, point_counter + 1);       // the next point's counter itself
+}
+
 bool Tracker::resume_in_map(const std::optional<LastFramePose>& last) {
   if (state_ != TrackingState::kNotInitialized || map_.keyframes.empty()) return false;
   const auto counter_of = [](std::uint64_t id) -> std::uint64_t { return id & ((std::uint64_t{1} << 56) - 1); };
@@ -185,8 +190,7 @@ bool Tracker::resume_in_map(const std::optional<LastFramePose>& last) {
   for (const auto& [id, point] : map_.points) {
     if (creator_of(id) == options_.id_tag) points = std::max(points, counter_of(id));
   }
-  keyframe_counter_ = keyframes + kResumeIdGap;
-  point_counter_ = points + kResumeIdGap;
+  skip_ids_through(keyframes + kResumeIdGap, points + kResumeIdGap);
   reference_kf_ = map_.keyframes.rbegin()->first;
   state_ = TrackingState::kLost;  // the next frame goes to relocalization
   if (last) {

@@ -104,6 +104,11 @@ class Tracker {
   // relocalization is then the fallback, for the frame after it. A reference the map does not hold
   // (its keyframe died with the old process) is replaced by the map's newest keyframe.
   bool resume_in_map(const std::optional<LastFramePose>& last = std::nullopt);
+  // Keyframe / point ids this tracker makes from now on have counters above these (never lowers
+  // them): a restarted frontend starts in a range of its own (runtime::restart_number()), and one
+  // that sees its own tag on an id in the mapper's states skips past it, so no id an earlier process
+  // published is made again, whatever files were lost.
+  void skip_ids_through(std::uint64_t keyframe_counter, std::uint64_t point_counter);
 
   // Brings the keyframe database up to the map's keyframes (new ones transformed once, culled ones
   // dropped). The tracker does it itself after each keyframe it creates, before a relocalization and
