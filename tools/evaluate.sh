@@ -132,23 +132,23 @@ mkdir -p "$out" || die "$out: cannot create the results folder"
 out=$(cd "$out" && pwd)
 echo "evaluate.sh: ${#sequences[@]} sequence(s); lockstep x $runs$([[ $realtime -eq 1 ]] && echo ", real time x 1 at rate $rate"); results in $out"
 
-# ---- frontend configs with the HE mode ----
-frontend_config() {  # $1 kitti|euroc, $2 lockstep|realtime -> path
-  local base=$root/config/frontend/${1}_mapper$([[ $2 == realtime ]] && echo _realtime).yaml
+# ---- settings files with the HE mode ----
+settings_file() {  # $1 kitti|euroc -> path of the settings file to run with
+  local base=$root/config/camera/$([[ $1 == kitti ]] && echo KITTI00-02 || echo EuRoC).yaml
   if [[ -z $he ]]; then echo "$base"; return; fi
-  if grep -q '^he:' "$base"; then echo "evaluate.sh: $base already sets he: cannot add --he $he to it" >&2; return 1; fi
-  local copy=$out/configs/$(basename "${base%.yaml}")_he-$he.yaml
-  mkdir -p "$out/configs"
-  { cat "$base"; printf '# added by tools/evaluate.sh --he %s\nhe:\n  mode: %s\n' "$he" "$he"; } > "$copy"
+  local copy=$out/settings/$(basename "${base%.yaml}")_he-$he.yaml
+  mkdir -p "$out/settings"
+  sed "s/^HE.mode:.*/HE.mode: \"$he\"  # set by tools\/evaluate.sh --he/" "$base" > "$copy"
+  grep -q "^HE.mode: \"$he\"" "$copy" || { echo "evaluate.sh: $base has no HE.mode line to set" >&2; return 1; }
   echo "$copy"
 }
 
 # ---- one run: prints nothing, leaves DIR/trajectory.txt and DIR/logs ----
 run_pipeline() {  # $1 kind, $2 mode (lockstep|realtime), $3 dataset, $4 run dir
-  local pipeline=$root/config/pipelines/$1$([[ $2 == realtime ]] && echo _realtime).yaml config
-  config=$(frontend_config "$1" "$2") || return 1
+  local pipeline=$root/config/pipelines/$1$([[ $2 == realtime ]] && echo _realtime).yaml settings
+  settings=$(settings_file "$1") || return 1
   local args=(--arg "dataset=$3" --arg "output=$4/trajectory.txt" --arg "loop_closer=$loop_closer"
-              --arg "frontend_config=$config")
+              --arg "settings=$settings")
   [[ $2 == realtime ]] && args+=(--arg "rate=$rate")
   mkdir -p "$4"
   if ! "$bin/heslam-supervisor" "$pipeline" --domain "$domain" --log-dir "$4/logs" "${args[@]}" \

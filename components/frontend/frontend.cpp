@@ -13,15 +13,16 @@
 
 #include "components/core/mapping/map_file.hpp"
 #include "components/core/place/vocabulary_setting.hpp"
+#include "components/core/tracking/settings_file.hpp"
 #include "components/messages/camera.hpp"
 #include "components/messages/checks.hpp"
 #include "components/messages/keyframe.hpp"
-#include "runtime/run_self.hpp"
 #include "components/messages/odometry.hpp"
 #include "components/messages/pose.hpp"
 #include "runtime/run_counters.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/run_journal.hpp"
+#include "runtime/run_self.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/writer_identity.hpp"
 
@@ -123,6 +124,14 @@ void Frontend::configure(const runtime::Config& config) {
   keyframe_writer_.emplace(participant(), topics().keyframes());
   frame_done_writer_.emplace(participant(), topics().frame_done());
   resume_from_journal();
+  log().info("settings ", options_.settings_file.empty() ? std::string("(built-in defaults)") : options_.settings_file.string(),
+             ": ", describe_settings(options_.features, options_.tracker));
+  if (!options_.settings_unused_keys.empty()) {
+    std::string keys;
+    for (const std::string& key : options_.settings_unused_keys) keys += (keys.empty() ? "" : ", ") + key;
+    log().warn("settings ", options_.settings_file.string(), ": not used by heslam: ", keys,
+               " (docs/configuration.md, Settings file)");
+  }
   log().info("HE ", to_string(options_.features.he.mode), ", ", options_.features.orb.features, " ORB features, ",
              options_.mapper_enabled ? "mirroring the local mapper's map" : "no local mapper (own map)",
              options_.wait_for_mapper ? ", lockstep waits for the mapper" : "",
@@ -241,12 +250,28 @@ void Frontend::take_calibration() {
       calibration_writer_ = received.info.publication_handle;
       if (options_.mapper_enabled) resume_in_mapper_map();
       const PinholeStereo& camera = processor_->camera();
+      warn_if_settings_disagree(camera);
       log().info("calibration '", calibration.source, "': rectified ", camera.width_px, "x", camera.height_px,
                  ", fx ", camera.fx_px, " px, baseline ", camera.baseline_m, " m");
     } catch (const std::exception& error) {
       stats().count("bad_calibrations");
       log().error(error.what());
     }
+  }
+}
+
+void Frontend::warn_if_settings_disagree(const PinholeStereo& camera) {
+  // The calibration comes with the data; a settings file written for another camera is named.
+  constexpr double kTolerance = 0.01;
+  const auto differs = [&](double settings, double calibration) {
+    return settings > 0.0 && std::abs(settings - calibration) > kTolerance * calibration;
+  };
+  const double bf = camera.fx_px * camera.baseline_m;
+  if (differs(options_.settings_camera_fx, camera.fx_px) || differs(options_.settings_camera_bf, bf)) {
+    stats().count("settings_calibration_mismatches");
+    log().warn("settings ", options_.settings_file.string(), ": Camera.fx ", options_.settings_camera_fx,
+               " / Camera.bf ", options_.settings_camera_bf, " differ from the data's rectified calibration (fx ",
+               camera.fx_px, " px, bf ", bf, "): the data's calibration is used (docs/configuration.md)");
   }
 }
 

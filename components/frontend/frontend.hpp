@@ -35,6 +35,8 @@ class Frontend : public runtime::Component {
   // The mapper's map file, if this run's mapper wrote it (FILE.run): a restarted frontend resumes
   // in it whether or not the mapper is running right now.
   bool mapper_map_file_of_this_run() const;
+  // One warning when the settings file's Camera.fx / Camera.bf are not the data's calibration.
+  void warn_if_settings_disagree(const PinholeStereo& camera);
   void take_calibration();
   // At the end of the run: frames still queued (real time, the replay ended while we were busy)
   // are not tracked but counted as missed, so every published frame is processed or missed.

@@ -1,6 +1,8 @@
-// Options of heslam-frontend, read from its YAML config (config/frontend/*.yaml). Every field is
-// optional; a missing field keeps the core library's default (docs/frontend.md lists them all), so
-// the frontend with no config runs exactly the chain the offline harness runs.
+// Options of heslam-frontend: the process's wiring from its YAML config (config/frontend/*.yaml:
+// mapper, lockstep, vocabulary, journal), the vision and tracking tunables from the settings file it
+// names (an ORB-SLAM2 settings file, config/camera/*.yaml, read by components/core/tracking/
+// settings_file.hpp as the offline harness and the benchmarks read it). Every field is optional; a
+// missing one keeps the core library's default (docs/configuration.md, Settings file).
 #pragma once
 
 #include <chrono>
@@ -18,8 +20,15 @@
 namespace heslam::frontend {
 
 struct FrontendOptions {
-  StereoFeaturePipelineOptions features;  // he.*, orb.*, stereo.*, pipeline.parallel
-  TrackerOptions tracker;                 // tracker.*
+  StereoFeaturePipelineOptions features;  // the settings file's HE.*, ORBextractor.*, Stereo.*, Pipeline.*
+  TrackerOptions tracker;                 // its Camera.fps, ThDepth, Tracker.*
+  // settings.file / --settings FILE (wins): the ORB-SLAM2 settings file. Empty: the core defaults
+  // (those of config/camera/EuRoC.yaml). With a local mapper, Tracker.referenceNearClipWeight
+  // defaults to 0 (docs/configuration.md).
+  std::filesystem::path settings_file;
+  std::vector<std::string> settings_unused_keys;  // keys of it nothing reads (warned at start)
+  double settings_camera_fx = 0.0;  // its Camera.fx / Camera.bf, compared with the data's calibration
+  double settings_camera_bf = 0.0;
   // vocabulary.file: the ORB vocabulary of the tracker's keyframe database (a lost frame is
   // relocalized anywhere in the map). Empty: the build's default vocabulary; "none": no vocabulary
   // (warned; relocalization against the newest keyframes only). Loaded by from_config: a missing or
@@ -59,8 +68,8 @@ struct FrontendOptions {
   int max_pending_frames = 8;
 
   // Throws std::runtime_error (one line: file, field, expectation) on a bad field.
-  // `rest`: the command line's own arguments (--mapper-map-file FILE, --journal FILE, --loop-closer EXECUTABLE, --localize),
-  // which win over the config.
+  // `rest`: the command line's own arguments (--settings FILE, --mapper-map-file FILE, --journal FILE,
+  // --loop-closer EXECUTABLE, --localize), which win over the config.
   static FrontendOptions from_config(const runtime::Config& config, const std::vector<std::string>& rest = {});
 };
 

@@ -232,14 +232,29 @@ TEST(FrontendEndToEnd, SyntheticRoomAteWithinOnePercentOfPathLength) {
 TEST(FrontendProcess, BadConfigFieldExitsWithOneLine) {
   const test::ScratchDir dir("badconfig");
   const fs::path config = dir.path() / "frontend.yaml";
-  std::ofstream(config) << "orb:\n  levels: 40\n";
+  std::ofstream(config) << "lockstep:\n  mapper_timeout_s: -4\n";
   test::ChildProcess frontend(test::bin_dir() / "heslam-frontend",
                               {"--domain", std::to_string(test_domain()), "--config", config.string()}, dir.path(),
                               "frontend");
   EXPECT_EQ(frontend.wait(std::chrono::seconds(30)).value_or(-1), 1);
   const std::string err = frontend.err();
-  EXPECT_NE(err.find("field 'orb.levels'"), std::string::npos) << err;
+  EXPECT_NE(err.find("field 'lockstep.mapper_timeout_s'"), std::string::npos) << err;
   EXPECT_NE(err.find("frontend.yaml"), std::string::npos) << err;
+}
+
+// The settings file (an ORB-SLAM2 settings file) is checked as strictly: a bad value ends the process
+// with one line naming the file and the key.
+TEST(FrontendProcess, BadSettingsKeyExitsWithOneLine) {
+  const test::ScratchDir dir("badsettings");
+  const fs::path settings = dir.path() / "MyCamera.yaml";
+  std::ofstream(settings) << "%YAML:1.0\nORBextractor.nLevels: 40\n";
+  test::ChildProcess frontend(test::bin_dir() / "heslam-frontend",
+                              {"--domain", std::to_string(test_domain()), "--settings", settings.string()}, dir.path(),
+                              "frontend");
+  EXPECT_EQ(frontend.wait(std::chrono::seconds(30)).value_or(-1), 1);
+  const std::string err = frontend.err();
+  EXPECT_NE(err.find("ORBextractor.nLevels"), std::string::npos) << err;
+  EXPECT_NE(err.find("MyCamera.yaml"), std::string::npos) << err;
 }
 
 // --check runs the replay's own check, which opens the dataset: each pipeline gets one of its layout

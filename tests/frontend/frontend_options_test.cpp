@@ -5,7 +5,12 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <string>
+#include <utility>
+#include <vector>
 
+#include "components/core/tracking/settings_file.hpp"
 #include "components/frontend/frontend_options.hpp"
 #include "runtime/config.hpp"
 
@@ -28,47 +33,133 @@ TEST(FrontendOptions, EmptyConfigKeepsTheCoreDefaults) {
   EXPECT_FALSE(options.wait_for_mapper);
 }
 
-TEST(FrontendOptions, FieldsReachTheCoreOptions) {
-  const auto config = runtime::Config::parse(
-      "he:\n  mode: clahe\n  stereo: separate\n  match_shift_from: 10\n  match_shift_full: 30\n"
-      "orb:\n  features: 2000\nstereo:\n  clip_masked_sad: true\n  cost: census\n"
-      "tracker:\n  max_frames_between_keyframes: 10\n  reference_near_clip_weight: 0.25\n"
-      "lockstep:\n  wait_for_mapper: true\n  mapper_timeout_s: 2.5\n",
-      "test.yaml");
-  const FrontendOptions options = FrontendOptions::from_config(config);
-  config.reject_unknown();
+// A settings file of `text` in a scratch folder, removed with it.
+class SettingsScratch {
+ public:
+  SettingsScratch()
+      : dir_(std::filesystem::temp_directory_path() / ("heslam_settings_" + std::to_string(getpid()) + "_" +
+                                                       std::to_string(counter_++))) {
+    std::filesystem::create_directories(dir_);
+  }
+  ~SettingsScratch() { std::filesystem::remove_all(dir_); }
+  std::filesystem::path write(const std::string& text) const {
+    const std::filesystem::path file = dir_ / "settings.yaml";
+    std::ofstream(file) << "%YAML:1.0\n" << text;
+    return file;
+  }
+
+ private:
+  static inline int counter_ = 0;
+  std::filesystem::path dir_;
+};
+
+FrontendOptions with_settings(const std::filesystem::path& file, const std::string& config_yaml = "") {
+  return FrontendOptions::from_config(runtime::Config::parse(config_yaml, "frontend.yaml"), {"--settings", file.string()});
+}
+
+std::string reported(const FrontendOptions& options) { return describe_settings(options.features, options.tracker); }
+
+TEST(FrontendOptions, SettingsFileReachesTheCoreOptions) {
+  const SettingsScratch scratch;
+  const FrontendOptions options = with_settings(
+      scratch.write("HE.mode: \"clahe\"\nHE.stereo: \"separate\"\nHE.matchShiftFrom: 10.0\nHE.matchShiftFull: 30.0\n"
+                    "ORBextractor.nFeatures: 2000\nStereo.clipMaskedSad: 1\nStereo.cost: \"census\"\n"
+                    "Camera.fps: 10.0\nThDepth: 40.0\nTracker.referenceNearClipWeight: 0.25\n"),
+      "lockstep:\n  wait_for_mapper: true\n  mapper_timeout_s: 2.5\n");
   EXPECT_EQ(options.features.he.mode, HeMode::kClahe);
   EXPECT_EQ(options.features.he.stereo, StereoPhotometry::kSeparate);
   EXPECT_EQ(options.features.he.match_shift_from, 10.0);
   EXPECT_EQ(options.features.he.match_shift_full, 30.0);
   EXPECT_EQ(options.features.orb.features, 2000);
-  EXPECT_EQ(options.tracker.max_frames_between_keyframes, 10);
+  EXPECT_EQ(options.tracker.max_frames_between_keyframes, 10);  // ORB-SLAM2: mMaxFrames = fps
+  EXPECT_EQ(options.tracker.close_depth_baselines, 40.0);       // ORB-SLAM2: ThDepth
   EXPECT_TRUE(options.features.stereo.clip_masked_sad);
   EXPECT_EQ(options.features.stereo.cost, StereoMatcherOptions::MatchCost::kCensus);
   EXPECT_EQ(options.tracker.reference_near_clip_weight, 0.25);
+  EXPECT_TRUE(options.settings_unused_keys.empty());
   EXPECT_TRUE(options.mapper_enabled);  // waiting for a mapper implies one
   EXPECT_TRUE(options.wait_for_mapper);
   EXPECT_FALSE(options.tracker.maintain_map);  // the mapper owns the map
   EXPECT_EQ(options.mapper_timeout.count(), 2500);
 }
 
-// The error of reading `yaml` as frontend.yaml: one line naming the file and the field.
-void expect_error_naming_field(const std::string& yaml, const std::string& field) {
+// Issue 33: a user's edit of the settings file is never ignored. Each documented key, changed from
+// the value config/camera/EuRoC.yaml gives it, changes the settings the frontend reports at start.
+TEST(FrontendOptions, EachDocumentedSettingsKeyChangesWhatTheFrontendReports) {
+  const std::filesystem::path euroc = std::filesystem::path(HESLAM_SOURCE_DIR) / "config/camera/EuRoC.yaml";
+  std::ifstream in(euroc);
+  const std::string base((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string baseline = reported(with_settings(euroc));
+  const std::pair<const char*, const char*> changes[] = {
+      {"HE.mode", "\"global\""},          {"HE.stereo", "\"shared\""},         {"HE.globalClipLimit", "3.0"},
+      {"HE.clipLimit", "4.0"},            {"HE.tilesX", "4"},                  {"HE.tilesY", "4"},
+      {"ORBextractor.nFeatures", "1500"}, {"ORBextractor.scaleFactor", "1.3"}, {"ORBextractor.nLevels", "6"},
+      {"ORBextractor.iniThFAST", "25"},   {"ORBextractor.minThFAST", "5"},     {"ORBextractor.cellSize", "40.0"},
+      {"Stereo.maxDistance", "80"},       {"Stereo.rowBand", "3.0"},           {"Stereo.sadHalfWindow", "4"},
+      {"Stereo.sadSearch", "6"},          {"Stereo.minDepthBaselines", "2.0"}, {"Pipeline.parallel", "0"},
+      {"Pipeline.rightFeaturesFactor", "1.5"}, {"Pipeline.leftOnlyFeatures", "0.5"},
+      {"ThDepth", "40.0"},                {"Camera.fps", "30.0"},              {"Tracker.referenceRatioStereo", "0.8"},
+      {"Tracker.referenceNearClipWeight", "0.5"}};
+  for (const auto& [key, value] : changes) {
+    // The key's line replaced, or appended when the file does not set it.
+    std::string text = base;
+    const std::string prefix = std::string("\n") + key + ":";
+    const std::size_t at = text.find(prefix);
+    if (at == std::string::npos) {
+      text += std::string(key) + ": " + value + "\n";
+    } else {
+      const std::size_t end = text.find('\n', at + 1);
+      text.replace(at + 1, end - at - 1, std::string(key) + ": " + value);
+    }
+    const SettingsScratch scratch;
+    const std::filesystem::path file = scratch.write(text.substr(text.find('\n') + 1));  // without its %YAML line
+    const FrontendOptions options = with_settings(file);
+    EXPECT_NE(reported(options), baseline) << key << ": " << value;
+    EXPECT_TRUE(options.settings_unused_keys.empty()) << key;
+  }
+}
+
+// A key nothing reads (a typo, ORB-SLAM2's viewer) is named; the config's old sections are an error
+// that says where the option went.
+TEST(FrontendOptions, UnusedSettingsKeysAreNamedAndOldConfigSectionsRefused) {
+  const SettingsScratch scratch;
+  const FrontendOptions options =
+      with_settings(scratch.write("ORBextractor.nFeature: 900\nViewer.PointSize: 2\nCamera.fx: 400.0\n"));
+  EXPECT_EQ(options.settings_unused_keys, (std::vector<std::string>{"ORBextractor.nFeature", "Viewer.PointSize"}));
+  EXPECT_EQ(options.settings_camera_fx, 400.0);  // a calibration key: compared with the data's, not unused
+  for (const char* section : {"he:\n  mode: clahe\n", "orb:\n  features: 900\n", "tracker:\n  ransac_seed: 3\n"}) {
+    try {
+      FrontendOptions::from_config(runtime::Config::parse(section, "frontend.yaml"));
+      ADD_FAILURE() << "expected an error for " << section;
+    } catch (const std::runtime_error& error) {
+      const std::string what = error.what();
+      EXPECT_NE(what.find("settings file"), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  }
+}
+
+// The error of reading `text` as the settings file: one line naming the file and the key.
+void expect_error_naming_key(const std::string& text, const std::string& key) {
+  const SettingsScratch scratch;
+  const std::filesystem::path file = scratch.write(text);
   try {
-    FrontendOptions::from_config(runtime::Config::parse(yaml, "frontend.yaml"));
-    FAIL() << "expected an error for " << field;
+    with_settings(file);
+    FAIL() << "expected an error for " << key;
   } catch (const std::runtime_error& error) {
     const std::string what = error.what();
-    EXPECT_NE(what.find("frontend.yaml"), std::string::npos) << what;
-    EXPECT_NE(what.find(field), std::string::npos) << what;
+    EXPECT_NE(what.find(file.string()), std::string::npos) << what;
+    EXPECT_NE(what.find(key), std::string::npos) << what;
     EXPECT_EQ(what.find('\n'), std::string::npos) << what;
   }
 }
 
-TEST(FrontendOptions, BadFieldIsOneLineNamingFileAndField) {
-  expect_error_naming_field("orb:\n  levels: 40\n", "orb.levels");
-  expect_error_naming_field("stereo:\n  cost: ssd\n", "stereo.cost");
-  const auto typo = runtime::Config::parse("orb:\n  levle: 4\n", "frontend.yaml");
+TEST(FrontendOptions, BadSettingIsOneLineNamingFileAndKey) {
+  expect_error_naming_key("ORBextractor.nLevels: 40\n", "ORBextractor.nLevels");
+  expect_error_naming_key("Stereo.cost: \"ssd\"\n", "Stereo.cost");
+  expect_error_naming_key("Camera.fps: -5.0\n", "Camera.fps");
+  expect_error_naming_key("Tracker.referenceRatioStereo: 2.0\n", "Tracker.referenceRatioStereo");
+  const auto typo = runtime::Config::parse("lockstep:\n  wait_for_mapr: true\n", "frontend.yaml");
   FrontendOptions::from_config(typo);
   EXPECT_THROW(typo.reject_unknown(), std::runtime_error);
 }
@@ -103,8 +194,8 @@ TEST(FrontendOptions, VocabularyFileDefaultNoneAndBadFiles) {
   std::filesystem::remove_all(scratch);
 }
 
-// The EuRoC and synth configs must not pin values that the core's defaults have since changed:
-// they give exactly the options of no config (the offline harness's chain).
+// The EuRoC and synth settings files must not pin values that the core's defaults have since
+// changed: they give exactly the options of no settings (the offline harness's chain).
 TEST(FrontendOptions, EurocAndSynthConfigsAreTheCoreDefaults) {
   const FrontendOptions defaults = FrontendOptions::from_config(runtime::Config::empty());
   for (const char* name : {"euroc", "synth"}) {

@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <optional>
 #include <regex>
@@ -494,9 +495,12 @@ TEST(LocalMapperEndToEnd, SavedMapLocalizesALaterRunStartingFarFromItsNewestKeyf
 
   const fs::path no_vocabulary = dir.path() / "frontend_no_vocabulary.yaml";
   {
+    // A copy elsewhere: its settings file named by absolute path (settings.file is relative to the config).
     std::ifstream shipped(test::source_dir() / "config/frontend/euroc_mapper.yaml");
-    std::ofstream config(no_vocabulary);
-    config << shipped.rdbuf() << "vocabulary:\n  file: none\n";
+    std::string text((std::istreambuf_iterator<char>(shipped)), std::istreambuf_iterator<char>());
+    const std::string relative = "file: ../camera/";
+    text.replace(text.find(relative), relative.size(), "file: " + (test::source_dir() / "config/camera/").string());
+    std::ofstream(no_vocabulary) << text << "vocabulary:\n  file: none\n";
   }
   auto newest_only = start_pipeline("euroc_localize", revisit_dataset, dir.path(), "newest_only", test_domain(),
                                     {map, "frontend_config=" + no_vocabulary.string()});

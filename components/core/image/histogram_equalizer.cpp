@@ -237,9 +237,15 @@ HistogramEqualizerOptions HistogramEqualizerOptions::from_yaml(const cv::FileNod
   yaml_option::read(root, "HE.matchShiftFrom", source, o.match_shift_from);
   yaml_option::read(root, "HE.matchShiftFull", source, o.match_shift_full);
   yaml_option::read(root, "HE.matchGainFrom", source, o.match_gain_from);
-  if (!(o.match_gain_from > 1.0)) yaml_option::fail(source, "HE.matchGainFrom", "a factor > 1");
-  if (!(o.match_shift_from >= 0.0)) yaml_option::fail(source, "HE.matchShiftFrom", "a number >= 0");
-  if (!(o.match_shift_full > o.match_shift_from)) yaml_option::fail(source, "HE.matchShiftFull", "a number > HE.matchShiftFrom");
+  if (!(o.match_gain_from > 1.0) || o.match_gain_from > 1000.0) {
+    yaml_option::fail(source, "HE.matchGainFrom", "a factor in (1, 1000]");
+  }
+  if (!(o.match_shift_from >= 0.0) || o.match_shift_from > 255.0) {
+    yaml_option::fail(source, "HE.matchShiftFrom", "a number in [0, 255]");
+  }
+  if (!(o.match_shift_full > o.match_shift_from) || o.match_shift_full > 255.0) {
+    yaml_option::fail(source, "HE.matchShiftFull", "a number in (HE.matchShiftFrom, 255]");
+  }
   if (!(o.saturation_excess > 0.0) || o.saturation_excess > 1.0) yaml_option::fail(source, "HE.saturationExcess", "a number in (0, 1]");
   yaml_option::read(root, "HE.clipLimit", source, o.clahe_clip_limit);
   yaml_option::read(root, "HE.globalClipLimit", source, o.global_clip_limit);
@@ -247,10 +253,18 @@ HistogramEqualizerOptions HistogramEqualizerOptions::from_yaml(const cv::FileNod
   yaml_option::read(root, "HE.tilesY", source, o.clahe_tiles_y);
   yaml_option::read(root, "HE.adaptiveOnBelow", source, o.adaptive_on_below);
   yaml_option::read(root, "HE.adaptiveOffAbove", source, o.adaptive_off_above);
-  if (!(o.clahe_clip_limit > 0.0)) yaml_option::fail(source, "HE.clipLimit", "a positive number");
-  if (!(o.global_clip_limit > 0.0)) yaml_option::fail(source, "HE.globalClipLimit", "a positive number");
-  if (o.clahe_tiles_x < 1) yaml_option::fail(source, "HE.tilesX", "an integer >= 1");
-  if (o.clahe_tiles_y < 1) yaml_option::fail(source, "HE.tilesY", "an integer >= 1");
+  if (!(o.clahe_clip_limit > 0.0) || o.clahe_clip_limit > 1000.0) yaml_option::fail(source, "HE.clipLimit", "a number in (0, 1000]");
+  if (!(o.global_clip_limit > 0.0) || o.global_clip_limit > 1000.0) {
+    yaml_option::fail(source, "HE.globalClipLimit", "a number in (0, 1000]");
+  }
+  if (o.clahe_tiles_x < 1 || o.clahe_tiles_x > 64) yaml_option::fail(source, "HE.tilesX", "an integer in [1, 64]");
+  if (o.clahe_tiles_y < 1 || o.clahe_tiles_y > 64) yaml_option::fail(source, "HE.tilesY", "an integer in [1, 64]");
+  if (!(o.adaptive_on_below >= 0.0) || o.adaptive_on_below > 255.0) {
+    yaml_option::fail(source, "HE.adaptiveOnBelow", "a grey-level contrast in [0, 255]");
+  }
+  if (!(o.adaptive_off_above >= 0.0) || o.adaptive_off_above > 255.0) {
+    yaml_option::fail(source, "HE.adaptiveOffAbove", "a grey-level contrast in [0, 255]");
+  }
   if (o.adaptive_off_above < o.adaptive_on_below) {
     yaml_option::fail(source, "HE.adaptiveOffAbove", "a value >= HE.adaptiveOnBelow (hysteresis)");
   }

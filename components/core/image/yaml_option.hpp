@@ -4,6 +4,7 @@
 #pragma once
 
 #include <initializer_list>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -16,7 +17,30 @@ namespace heslam::yaml_option {
   throw std::runtime_error(source + ": " + key + ": expected " + expected);
 }
 
+// Every key the readers below looked up on this thread while a KeyLog lives: what a settings file
+// holds beyond them is a key no reader knows (a typo, or another program's), which the caller names.
+class KeyLog {
+ public:
+  KeyLog() : previous_(active()) { active() = this; }
+  ~KeyLog() { active() = previous_; }
+  KeyLog(const KeyLog&) = delete;
+  KeyLog& operator=(const KeyLog&) = delete;
+  const std::set<std::string>& keys() const { return keys_; }
+  static void note(const std::string& key) {
+    if (active() != nullptr) active()->keys_.insert(key);
+  }
+
+ private:
+  static KeyLog*& active() {
+    static thread_local KeyLog* log = nullptr;
+    return log;
+  }
+  KeyLog* previous_;
+  std::set<std::string> keys_;
+};
+
 inline bool present(const cv::FileNode& root, const std::string& key) {
+  KeyLog::note(key);
   const cv::FileNode node = root[key];
   return !node.empty() && !node.isNone();
 }

@@ -199,15 +199,19 @@ StereoMatcherOptions StereoMatcherOptions::from_yaml(const cv::FileNode& root, c
                             {"census", Options::MatchCost::kCensus}},
                            o.cost);
   if (o.max_distance < 0 || o.max_distance > 256) yaml_option::fail(source, "Stereo.maxDistance", "an integer in [0, 256]");
-  if (!(o.row_band_px > 0.f)) yaml_option::fail(source, "Stereo.rowBand", "a positive number");
+  if (!(o.row_band_px > 0.f) || o.row_band_px > 1000.f) yaml_option::fail(source, "Stereo.rowBand", "a number in (0, 1000]");
   if (o.sad_half_window_px < 1 || o.sad_half_window_px > kOrbBorderPx / 2) {
     yaml_option::fail(source, "Stereo.sadHalfWindow", "an integer in [1, 9]");
   }
   if (o.sad_search_px < 2 || o.sad_search_px > kOrbBorderPx / 2) {
     yaml_option::fail(source, "Stereo.sadSearch", "an integer in [2, 9]");
   }
-  if (!(o.min_depth_baselines > 0.f)) yaml_option::fail(source, "Stereo.minDepthBaselines", "a positive number");
-  if (!(o.sad_outlier_factor > 0.f)) yaml_option::fail(source, "Stereo.sadOutlierFactor", "a positive number");
+  if (!(o.min_depth_baselines > 0.f) || o.min_depth_baselines > 1000.f) {
+    yaml_option::fail(source, "Stereo.minDepthBaselines", "a number in (0, 1000]");
+  }
+  if (!(o.sad_outlier_factor > 0.f) || o.sad_outlier_factor > 1000.f) {
+    yaml_option::fail(source, "Stereo.sadOutlierFactor", "a number in (0, 1000]");
+  }
   return o;
 }
 

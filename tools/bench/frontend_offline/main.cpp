@@ -26,6 +26,7 @@
 
 #include "tools/bench/bench_util.hpp"
 #include "components/core/place/vocabulary_setting.hpp"
+#include "components/core/tracking/settings_file.hpp"
 #include "tools/bench/frontend_offline/kidnapped_copy.hpp"
 #include "tools/bench/frontend_offline/offline_run.hpp"
 
@@ -213,8 +214,11 @@ int run(int argc, char** argv) {
     }
   }
   if (!settings.empty()) {
-    options.pipeline = heslam::StereoFeaturePipelineOptions::load(settings);
-    heslam::bench::apply_orbslam2_tracker_settings(settings, options.tracker);
+    // The frontend's reader: the same keys mean the same options here (docs/configuration.md).
+    heslam::SettingsFile file = heslam::load_settings_file(settings, options.tracker);
+    options.pipeline = file.pipeline;
+    options.tracker = file.tracker;
+    for (const std::string& key : file.unused_keys) std::fprintf(stderr, "%s: %s: not used by heslam\n", settings.c_str(), key.c_str());
   }
   if (near_clip_sigma >= 0.0) options.tracker.near_clip_disparity_sigma_factor = near_clip_sigma;
   if (pin_threads) options.pipeline.pin_threads = *pin_threads;

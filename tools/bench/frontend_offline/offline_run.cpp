@@ -50,22 +50,6 @@ int OfflineRun::tracked_frames() const {
   return n;
 }
 
-void apply_orbslam2_tracker_settings(const std::filesystem::path& settings_yaml, TrackerOptions& tracker) {
-  cv::FileStorage fs(settings_yaml.string(), cv::FileStorage::READ);
-  if (!fs.isOpened()) throw std::runtime_error(settings_yaml.string() + ": cannot open file");
-  auto read_positive = [&](const char* key, double& value) {
-    const cv::FileNode node = fs[key];
-    if (node.empty()) return false;
-    if (!node.isReal() && !node.isInt()) throw std::runtime_error(settings_yaml.string() + ": " + key + ": expected a number");
-    value = static_cast<double>(node);
-    if (!(value > 0.0)) throw std::runtime_error(settings_yaml.string() + ": " + key + ": expected a positive number");
-    return true;
-  };
-  double fps = 0.0;
-  if (read_positive("Camera.fps", fps)) tracker.max_frames_between_keyframes = std::max(1, static_cast<int>(std::lround(fps)));
-  read_positive("ThDepth", tracker.close_depth_baselines);
-}
-
 OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& options) {
   StereoCalibration calibration = load_euroc_calibration(sequence.mav0_dir);
   if (options.k1_offset != 0.0) apply_k1_offset(calibration, options.k1_offset);

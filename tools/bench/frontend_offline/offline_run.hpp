@@ -100,11 +100,6 @@ struct OfflineRun {
   int tracked_frames() const;
 };
 
-// The tracker values an ORB-SLAM2 settings file carries, as ORB-SLAM2's Tracking reads them:
-// Camera.fps -> at most that many frames between keyframes, ThDepth -> close_depth_baselines. Absent
-// keys keep `tracker`'s values; throws std::runtime_error naming the file and key on a bad value.
-void apply_orbslam2_tracker_settings(const std::filesystem::path& settings_yaml, TrackerOptions& tracker);
-
 // Throws std::runtime_error (one line naming the file) on unreadable calibration or images.
 OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& options);
 

@@ -1,0 +1,83 @@
+// An ORB-SLAM2 settings file -> the vision pipeline's and the tracker's options (settings_file.hpp).
+#include "components/core/tracking/settings_file.hpp"
+
+#include <algorithm>
+#include <array>
+#include <sstream>
+#include <stdexcept>
+#include <string_view>
+
+#include "components/core/image/yaml_option.hpp"
+#include "components/core/tracking/tracker_settings.hpp"
+
+namespace heslam {
+namespace {
+
+// The calibration's keys (ORB-SLAM2's stereo settings; stereo_calibration.hpp reads them).
+constexpr std::array<std::string_view, 13> kCameraKeys{"Camera.fx", "Camera.fy", "Camera.cx", "Camera.cy",
+                                                       "Camera.k1", "Camera.k2", "Camera.p1", "Camera.p2",
+                                                       "Camera.k3", "Camera.width", "Camera.height", "Camera.bf",
+                                                       "Camera.fps"};
+constexpr std::array<std::string_view, 6> kRectificationKeys{"height", "width", "D", "K", "R", "P"};
+
+bool calibration_key(const std::string& key) {
+  if (std::find(kCameraKeys.begin(), kCameraKeys.end(), key) != kCameraKeys.end()) return true;
+  for (const std::string_view side : {"LEFT.", "RIGHT."}) {
+    if (key.rfind(side, 0) != 0) continue;
+    const std::string_view field = std::string_view(key).substr(side.size());
+    if (std::find(kRectificationKeys.begin(), kRectificationKeys.end(), field) != kRectificationKeys.end()) return true;
+  }
+  return false;
+}
+
+double number_or_zero(const cv::FileNode& root, const char* key) {
+  const cv::FileNode node = root[key];
+  return node.isReal() || node.isInt() ? static_cast<double>(node) : 0.0;
+}
+
+}  // namespace
+
+SettingsFile load_settings_file(const std::filesystem::path& path, const TrackerOptions& tracker_defaults) {
+  cv::FileStorage fs;
+  try {
+    fs.open(path.string(), cv::FileStorage::READ);
+  } catch (const cv::Exception& error) {
+    throw std::runtime_error(path.string() + ": not a valid settings file (" + error.msg + ")");
+  }
+  if (!fs.isOpened()) throw std::runtime_error(path.string() + ": cannot open the settings file");
+  const cv::FileNode root = fs.root();
+  const std::string source = path.string();
+  SettingsFile settings;
+  settings.path = path;
+  settings.tracker = tracker_defaults;
+  {
+    const yaml_option::KeyLog read;
+    settings.pipeline = StereoFeaturePipelineOptions::from_yaml(root, source);
+    read_tracker_settings(root, source, settings.tracker);
+    for (const std::string& key : root.keys()) {
+      if (read.keys().count(key) == 0 && !calibration_key(key)) settings.unused_keys.push_back(key);
+    }
+  }
+  settings.camera_fx = number_or_zero(root, "Camera.fx");
+  settings.camera_bf = number_or_zero(root, "Camera.bf");
+  return settings;
+}
+
+std::string describe_settings(const StereoFeaturePipelineOptions& p, const TrackerOptions& t) {
+  std::ostringstream line;
+  line << "HE " << to_string(p.he.mode) << " (stereo " << to_string(p.he.stereo) << ", clip " << p.he.global_clip_limit
+       << ", CLAHE " << p.he.clahe_clip_limit << " on " << p.he.clahe_tiles_x << "x" << p.he.clahe_tiles_y << ")"
+       << "; ORB " << p.orb.features << " features, scale " << p.orb.scale_factor << " x " << p.orb.levels
+       << " levels, FAST " << p.orb.fast_threshold_initial << "/" << p.orb.fast_threshold_min << ", cell "
+       << p.orb.cell_size_px << " px"
+       << "; stereo max distance " << p.stereo.max_distance << ", row band " << p.stereo.row_band_px << ", SAD window "
+       << p.stereo.sad_half_window_px << "/" << p.stereo.sad_search_px << ", min depth " << p.stereo.min_depth_baselines
+       << " baselines; pipeline " << (p.parallel ? "parallel" : "serial") << ", right features x"
+       << p.right_features_factor << ", left-only features " << p.left_only_features
+       << "; tracker ThDepth " << t.close_depth_baselines << " baselines, keyframe at least every "
+       << t.max_frames_between_keyframes << " frames, reference ratio " << t.reference_ratio_stereo
+       << " (near-clip weight " << t.reference_near_clip_weight << ")";
+  return line.str();
+}
+
+}  // namespace heslam
