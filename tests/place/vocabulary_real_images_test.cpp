@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -16,6 +17,9 @@
 #include "components/core/place/image_descriptors.hpp"
 #include "components/core/place/vocabulary_io.hpp"
 #include "test_support.hpp"
+#include "tools/dataset/ground_truth.hpp"
+#include "tools/dataset/stereo_dataset.hpp"
+#include "tools/eval/trajectory_io.hpp"
 
 namespace heslam {
 namespace {
@@ -28,24 +32,20 @@ struct ClipFrame {
   Eigen::Quaterniond orientation;
 };
 
-// cam0/data.csv rows paired with the ground-truth rows (one per frame, same order and stamps).
-std::vector<ClipFrame> read_clip(const fs::path& mav0) {
+// The clip's left images with their ground-truth body poses (the project's dataset and ground-truth
+// readers, tools/dataset), frames without a ground-truth pose within 1 ms left out.
+std::vector<ClipFrame> read_clip(const fs::path& clip) {
+  DatasetOptions options;
+  options.load_calibration = false;
+  const StereoDataset dataset = open_dataset(clip, options);
+  std::vector<std::int64_t> stamps;
+  for (const StereoFrameFiles& frame : dataset.frames) stamps.push_back(frame.stamp_ns);
+  const std::vector<std::optional<Pose3>> poses =
+      poses_at_stamps(eval::read_trajectory(euroc_ground_truth_file(clip / "mav0")), stamps, /*max_gap_s=*/0.001);
   std::vector<ClipFrame> frames;
-  std::ifstream images(mav0 / "cam0/data.csv");
-  std::ifstream truth(mav0 / "state_groundtruth_estimate0/data.csv");
-  std::string image_line, truth_line;
-  while (std::getline(images, image_line)) {
-    if (image_line.empty() || image_line[0] == '#') continue;
-    do {
-      if (!std::getline(truth, truth_line)) return frames;
-    } while (truth_line.empty() || truth_line[0] == '#');
-    std::replace(truth_line.begin(), truth_line.end(), ',', ' ');
-    std::istringstream values(truth_line);
-    double stamp, x, y, z, qw, qx, qy, qz;
-    values >> stamp >> x >> y >> z >> qw >> qx >> qy >> qz;
-    const std::string file = image_line.substr(image_line.find(',') + 1);
-    frames.push_back({mav0 / "cam0/data" / file.substr(0, file.find_last_not_of(" \r") + 1), {x, y, z},
-                      Eigen::Quaterniond(qw, qx, qy, qz).normalized()});
+  for (std::size_t i = 0; i < dataset.frames.size(); ++i) {
+    if (!poses[i]) continue;
+    frames.push_back({dataset.frames[i].left, poses[i]->translation(), Eigen::Quaterniond(poses[i]->linear())});
   }
   return frames;
 }
@@ -57,7 +57,7 @@ TEST(VocabularyRealImages, NeighbourFrameScoresHigherThanADistantView) {
     GTEST_SKIP() << "default vocabulary " << default_vocabulary_path().string() << " not built (tools/train-vocabulary.sh)";
   }
   const Vocabulary vocabulary = load_vocabulary(default_vocabulary_path());
-  const std::vector<ClipFrame> frames = read_clip(clip / "mav0");
+  const std::vector<ClipFrame> frames = read_clip(clip);
   ASSERT_GE(frames.size(), 100u);
 
   // The two frames whose body orientations differ most (27 degrees: the clip shakes back and forth

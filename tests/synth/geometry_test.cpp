@@ -3,6 +3,7 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -11,6 +12,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "synth_test_util.hpp"
+#include "tools/dataset/ground_truth.hpp"
+#include "tools/eval/trajectory_io.hpp"
 #include "tools/synth/camera_rays.hpp"
 #include "tools/synth/sequence.hpp"
 #include "tools/synth/writers.hpp"
@@ -141,36 +144,6 @@ TEST(SynthGeometry, UndistortInvertsDistort) {
   }
 }
 
-// Reads a EuRoC ground-truth row for a stamp: body pose p (x y z), q (w x y z).
-Pose3 read_gt_pose(const std::filesystem::path& csv, std::int64_t stamp_ns) {
-  std::ifstream in(csv);
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::stringstream ss(line);
-    std::string cell;
-    std::vector<double> v;
-    std::getline(ss, cell, ',');
-    if (std::stoll(cell) != stamp_ns) continue;
-    while (std::getline(ss, cell, ',')) v.push_back(std::stod(cell));
-    Pose3 T = Pose3::Identity();
-    T.linear() = Eigen::Quaterniond(v[3], v[4], v[5], v[6]).normalized().toRotationMatrix();
-    T.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
-    return T;
-  }
-  throw std::runtime_error("stamp not in ground truth");
-}
-
-Pose3 read_T_BS(const std::filesystem::path& sensor_yaml) {
-  cv::FileStorage fs(sensor_yaml.string(), cv::FileStorage::READ);
-  std::vector<double> data;
-  fs["T_BS"]["data"] >> data;
-  Pose3 T = Pose3::Identity();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) T.matrix()(r, c) = data[static_cast<std::size_t>(r * 4 + c)];
-  return T;
-}
-
 TEST(SynthGeometry, EurocGroundTruthFilesReprojectMarkerCornersOntoTheImages) {
   // Through the files only: ground truth csv + sensor.yaml (T_BS, intrinsics, distortion) + PNGs.
   const auto dir = std::filesystem::temp_directory_path() / "heslam_synth_gt_test";
@@ -179,6 +152,8 @@ TEST(SynthGeometry, EurocGroundTruthFilesReprojectMarkerCornersOntoTheImages) {
   preset.photometry.noise = false;
   SequenceRenderer renderer(preset, {.seed = 11, .frames = 3});
   write_sequence(renderer, OutputFormat::kEuroc, dir);
+  // The project's own readers of these files (heslam_eval, tools/dataset), as every tool uses them.
+  const eval::Trajectory truth = eval::read_trajectory(euroc_ground_truth_file(dir / "mav0"));
   int checked = 0;
   double max_err = 0;
   for (int cam = 0; cam < 2; ++cam) {
@@ -188,12 +163,14 @@ TEST(SynthGeometry, EurocGroundTruthFilesReprojectMarkerCornersOntoTheImages) {
     fs["intrinsics"] >> intr;
     fs["distortion_coefficients"] >> dist;
     const cv::Mat K = (cv::Mat_<double>(3, 3) << intr[0], 0, intr[2], 0, intr[1], intr[3], 0, 0, 1);
-    const Pose3 T_BS = read_T_BS(cam_dir / "sensor.yaml");
+    const Pose3 T_BS = eval::read_euroc_extrinsic(cam_dir / "sensor.yaml");
     for (int i = 0; i < 3; ++i) {
       const std::int64_t stamp = renderer.stamp_ns(i);
       const cv::Mat image = cv::imread((cam_dir / "data" / (std::to_string(stamp) + ".png")).string(), cv::IMREAD_GRAYSCALE);
       ASSERT_FALSE(image.empty());
-      const Pose3 T_cw = (read_gt_pose(dir / "mav0" / "state_groundtruth_estimate0" / "data.csv", stamp) * T_BS).inverse();
+      const std::optional<Pose3> T_wb = poses_at_stamps(truth, {stamp}, /*max_gap_s=*/0.0).front();
+      ASSERT_TRUE(T_wb.has_value()) << "stamp " << stamp << " not in the ground truth";
+      const Pose3 T_cw = (*T_wb * T_BS).inverse();
       for (const MarkerCorner& m : renderer.scene().marker_corners) {
         const Eigen::Vector3d p = T_cw * m.p_w;
         if (p.z() < 0.5 || std::abs(p.x() / p.z()) > 0.6 || std::abs(p.y() / p.z()) > 0.4) continue;

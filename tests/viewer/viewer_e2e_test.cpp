@@ -23,6 +23,7 @@
 
 #include "pipeline_runs.hpp"
 #include "test_support.hpp"
+#include "tools/dataset/stereo_dataset.hpp"
 #include "tools/viewer/colours.hpp"
 
 namespace heslam {
@@ -62,19 +63,13 @@ int data_rows(const fs::path& file) {
   return rows;
 }
 
-// The dataset's left image of frame `seq` (the replay publishes cam0/data.csv rows in order).
+// The dataset's left image of frame `seq` (the replay publishes the frames in this order).
 cv::Mat dataset_left(const fs::path& dataset, int seq) {
-  std::ifstream csv(dataset / "mav0/cam0/data.csv");
-  int row = 0;
-  for (std::string line; std::getline(csv, line);) {
-    if (line.empty() || line[0] == '#') continue;
-    if (row++ == seq) {
-      std::string name = line.substr(line.find(',') + 1);
-      while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
-      return cv::imread((dataset / "mav0/cam0/data" / name).string(), cv::IMREAD_GRAYSCALE);
-    }
-  }
-  return {};
+  DatasetOptions options;
+  options.load_calibration = false;
+  const StereoDataset frames = open_dataset(dataset, options);
+  if (seq < 0 || static_cast<std::size_t>(seq) >= frames.frames.size()) return {};
+  return cv::imread(frames.frames[static_cast<std::size_t>(seq)].left.string(), cv::IMREAD_GRAYSCALE);
 }
 
 int pixels_of(const cv::Mat& image, const cv::Scalar& bgr) {
