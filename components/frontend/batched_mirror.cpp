@@ -62,7 +62,7 @@ BatchedMirror::Applied BatchedMirror::apply(Map& map) {
   const std::uint64_t complete = version_.complete();
 
   for (const PointId id : pending_disposes_) {
-    if (MapPoint* point = map.point(id)) point->culled = true;
+    messages::cull_point(map, id);
   }
   pending_disposes_.clear();
 
@@ -101,7 +101,7 @@ BatchedMirror::Applied BatchedMirror::apply(Map& map) {
     messages::apply_point_state(map, copy.sample);
     ++applied.point_states;
     if (copy.disposed_after) {
-      if (MapPoint* point = map.point(it->first)) point->culled = true;
+      messages::cull_point(map, it->first);
     }
     it = point_states_.erase(it);
   }
