@@ -16,7 +16,7 @@ int count_reference_points(const Keyframe& reference, const Map& map, int min_ob
   int count = 0;
   for (PointId id : reference.point_ids) {
     const MapPoint* point = map.point(id);
-    if (point != nullptr && !point->culled && static_cast<int>(point->observations.size()) >= min_observations) ++count;
+    if (point != nullptr && !point->culled && observation_weight(map, *point) >= min_observations) ++count;
   }
   return count;
 }
@@ -26,7 +26,7 @@ int count_reference_points_near_clip(const Keyframe& reference, const Map& map, 
   for (std::size_t i = 0; i < reference.point_ids.size(); ++i) {
     if (!reference.features.stereo_near_clip(i)) continue;
     const MapPoint* point = map.point(reference.point_ids[i]);
-    if (point != nullptr && !point->culled && static_cast<int>(point->observations.size()) >= min_observations) ++count;
+    if (point != nullptr && !point->culled && observation_weight(map, *point) >= min_observations) ++count;
   }
   return count;
 }

@@ -27,7 +27,8 @@ struct KeyframeDecision {
   int untracked_close = 0;  // close stereo features that would become new points
 };
 
-// Minimum observations for a reference point to count (ORB-SLAM2: 3, or 2 while the map is tiny).
+// Minimum observation_weight (map.hpp: a stereo observation counts 2) for a reference point to count,
+// as ORB-SLAM2's KeyFrame::TrackedMapPoints: 3, or 2 while the map is tiny.
 int reference_min_observations(int keyframes_in_map);
 int count_reference_points(const Keyframe& reference, const Map& map, int min_observations);
 // Of count_reference_points' points, those whose keyframe feature is near a clip edge.
