@@ -87,7 +87,7 @@ BatchedMirror::Applied BatchedMirror::apply(Map& map) {
   const std::uint64_t complete = version_.complete();
 
   for (const PointId id : pending_disposes_) {
-    if (MapPoint* point = map.point(id)) point->culled = true;
+    messages::cull_point(map, id);
   }
   pending_disposes_.clear();
 
@@ -116,19 +116,37 @@ BatchedMirror::Applied BatchedMirror::apply(Map& map) {
     in_flight_.erase(it->first);  // the mapper holds it: its states keep it up to date from now on
     it = keyframe_states_.erase(it);
   }
-  for (auto it = point_states_.begin(); it != point_states_.end();) {
-    PointStateCopy& copy = it->second;
-    if (copy.sample.map_version > complete) {
-      ++it;
-      continue;
+  // Merges after every other point state, as the mapper publishes them, each into the end of its
+  // chain (a target merged in this batch too is gone by then): a keyframe slot then ends where the
+  // mapper's does whatever the ids' order, and the applied map no longer depends on it.
+  std::map<PointId, PointId> merged_into;
+  for (const auto& [id, copy] : point_states_) {
+    if (copy.sample.map_version <= complete && copy.sample.merged_into != kNoId) merged_into.emplace(id, copy.sample.merged_into);
+  }
+  const auto final_target = [&](PointId into) {
+    for (std::size_t hops = 0; hops < merged_into.size(); ++hops) {
+      const auto next = merged_into.find(into);
+      if (next == merged_into.end() || next->second == into) break;
+      into = next->second;
     }
-    runtime::borrow(copy.sample.observations, copy.observations);
-    messages::apply_point_state(map, copy.sample);
-    ++applied.point_states;
-    if (copy.disposed_after) {
-      if (MapPoint* point = map.point(it->first)) point->culled = true;
+    return into;
+  };
+  for (const bool merges : {false, true}) {
+    for (auto it = point_states_.begin(); it != point_states_.end();) {
+      PointStateCopy& copy = it->second;
+      if (copy.sample.map_version > complete || (copy.sample.merged_into != kNoId) != merges) {
+        ++it;
+        continue;
+      }
+      if (merges) copy.sample.merged_into = final_target(copy.sample.merged_into);
+      runtime::borrow(copy.sample.observations, copy.observations);
+      messages::apply_point_state(map, copy.sample);
+      ++applied.point_states;
+      if (copy.disposed_after) {
+        messages::cull_point(map, it->first);
+      }
+      it = point_states_.erase(it);
     }
-    it = point_states_.erase(it);
   }
   if (applied.correction) move_keyframes_in_flight(map, old_T_wc, newest_correction, applied);
   return applied;

@@ -12,23 +12,34 @@ namespace {
 
 constexpr std::size_t kDescriptorBytes = sizeof(Descriptor);
 
-// Removes the point from every keyframe that observes it; with a replacement (a merge) the keyframe
-// sees the replacement instead, and the replacement gets the observation.
+bool observes_keyframe(const MapPoint& point, KeyframeId keyframe_id) {
+  return std::any_of(point.observations.begin(), point.observations.end(),
+                     [&](const auto& observation) { return observation.first == keyframe_id; });
+}
+
+// The keyframe slot an observation names, or null when the keyframe is unknown here or the index is
+// out of its range.
+PointId* slot_of(Map& map, KeyframeId keyframe_id, int keypoint_index) {
+  Keyframe* keyframe = map.keyframe(keyframe_id);
+  if (keyframe == nullptr || keypoint_index < 0 || static_cast<std::size_t>(keypoint_index) >= keyframe->point_ids.size()) {
+    return nullptr;
+  }
+  return &keyframe->point_ids[static_cast<std::size_t>(keypoint_index)];
+}
+
+// Removes the point from every keyframe that observes it. With a replacement (a merge) a keyframe
+// sees the replacement instead, unless the replacement already observes that keyframe: then the
+// slot is emptied, as the mapper's replace_point does, so a keyframe never sees one point twice.
 void replace_in_keyframes(Map& map, const MapPoint& point, MapPoint* replacement) {
   for (const auto& [keyframe_id, keypoint_index] : point.observations) {
-    Keyframe* keyframe = map.keyframe(keyframe_id);
-    if (keyframe == nullptr || keypoint_index < 0 ||
-        static_cast<std::size_t>(keypoint_index) >= keyframe->point_ids.size() ||
-        keyframe->point_ids[keypoint_index] != point.id) {
+    PointId* slot = slot_of(map, keyframe_id, keypoint_index);
+    if (slot == nullptr || *slot != point.id) continue;
+    if (replacement == nullptr || observes_keyframe(*replacement, keyframe_id)) {
+      *slot = kNoId;
       continue;
     }
-    keyframe->point_ids[keypoint_index] = replacement != nullptr ? replacement->id : kNoId;
-    if (replacement == nullptr) continue;
-    const std::pair<KeyframeId, int> observation{keyframe_id, keypoint_index};
-    auto& observations = replacement->observations;
-    if (std::find(observations.begin(), observations.end(), observation) == observations.end()) {
-      observations.push_back(observation);
-    }
+    *slot = replacement->id;
+    replacement->observations.emplace_back(keyframe_id, keypoint_index);
   }
 }
 
@@ -131,8 +142,20 @@ void apply_point_state(Map& map, const msg::MapPointState& state) {
   point.reference_kf = state.reference_keyframe_id;
   point.culled = state.culled;  // the tracker's searches skip culled points
   point.merged_into = kNoId;
+  // The state's observations are the whole truth: a keyframe slot the mapper took from this point
+  // (a BA outlier, a fusion) is emptied here too, unless another point's state claimed it already.
+  // Without this, the mirror's keyframes kept stale associations, and which ones depended on the
+  // order the states were applied in.
+  const auto observations = runtime::view(state.observations);
+  for (const auto& [keyframe_id, keypoint_index] : point.observations) {
+    const bool kept = std::any_of(observations.begin(), observations.end(), [&](const msg::PointObservation& o) {
+      return o.keyframe_id == keyframe_id && static_cast<int>(o.keypoint_index) == keypoint_index;
+    });
+    PointId* slot = slot_of(map, keyframe_id, keypoint_index);
+    if (!kept && slot != nullptr && *slot == state.id) *slot = kNoId;
+  }
   point.observations.clear();
-  for (const msg::PointObservation& observation : runtime::view(state.observations)) {
+  for (const msg::PointObservation& observation : observations) {
     point.observations.emplace_back(observation.keyframe_id, static_cast<int>(observation.keypoint_index));
     // The mapper may add observations (fusion, triangulation matches): the keyframe sees the point.
     Keyframe* keyframe = map.keyframe(observation.keyframe_id);
@@ -148,6 +171,13 @@ void erase_point(Map& map, PointId id, PointId replacement) {
   MapPoint* into = replacement != id ? map.point(replacement) : nullptr;
   replace_in_keyframes(map, it->second, into);
   map.points.erase(it);
+}
+
+void cull_point(Map& map, PointId id) {
+  MapPoint* point = map.point(id);
+  if (point == nullptr) return;
+  replace_in_keyframes(map, *point, nullptr);
+  point->culled = true;
 }
 
 }  // namespace heslam::messages

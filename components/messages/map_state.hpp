@@ -40,10 +40,15 @@ bool is_version_marker(const msg::MapPointState& state);
 // map.version is left alone: only the markers advance it.
 bool apply_keyframe_state(Map& map, const msg::KeyframeState& state);
 // Creates or updates the point (a culled one stays, flagged); a merged point is removed and the
-// observing keyframes' point ids are pointed at the point it merged into.
+// observing keyframes' point ids are pointed at the point it merged into. The keyframes' point ids
+// follow the state's observations exactly (slots it no longer names are emptied), so a batch of
+// states leaves the same map whatever order it is applied in.
 void apply_point_state(Map& map, const msg::MapPointState& state);
 // Removes a point; the keyframes observing it see `replacement` instead (kNoId: nothing).
 void erase_point(Map& map, PointId id, PointId replacement = kNoId);
+// A point the mapper removed (its dispose), kept flagged culled for frames that still name it: the
+// keyframes no longer see it, as in the mapper's map. A later state of it revives it.
+void cull_point(Map& map, PointId id);
 
 // --- writing (the local mapper) ---
 // State of a keyframe the map holds (a culled keyframe is published with culled = true, not

@@ -110,6 +110,29 @@ TEST(FrontendBatchedMirror, DisposeAfterAWaitingStateCullsThePoint) {
   EXPECT_FALSE(map.points.at(103).culled);
 }
 
+TEST(FrontendBatchedMirror, MergeChainOfABatchEndsAtItsLastTarget) {
+  Map map = make_map();
+  BatchedMirror mirror;
+  // 103 merged into 102, which then merged into 101: keyframes 2 and 3 see 101, whatever order
+  // the two merges are applied in.
+  msg::MapPointState first = point_state(103, 3, Eigen::Vector3d::Zero(), 3);
+  first.culled = true;
+  first.merged_into = 102;
+  msg::MapPointState second = point_state(102, 3, Eigen::Vector3d::Zero(), 2);
+  second.culled = true;
+  second.merged_into = 101;
+  mirror.add(first);
+  mirror.add(second);
+  mirror.add(keyframe_marker(3));
+  mirror.add(point_marker(3));
+  mirror.apply(map);
+  EXPECT_EQ(map.point(102), nullptr);
+  EXPECT_EQ(map.point(103), nullptr);
+  EXPECT_EQ(map.keyframes.at(2).point_ids[0], 101u);
+  EXPECT_EQ(map.keyframes.at(3).point_ids[0], 101u);
+  EXPECT_EQ(map.points.at(101).observations.size(), 3u);
+}
+
 TEST(FrontendBatchedMirror, CorrectionBatchMovesOwnKeyframesInFlightWithTheirReference) {
   Map map = make_map();
   const Map before = map;

@@ -248,13 +248,15 @@ TEST(MessageConversion, MirrorAppliesKeyframeStateAndPointMerges) {
   state.id = 999;
   EXPECT_FALSE(apply_keyframe_state(map, state));
 
-  // Point a merged into b: a disappears, the keyframe's keypoint 0 now sees b.
+  // Point a merged into b: a disappears. b already sees the keyframe (keypoint 2), so keypoint 0 sees
+  // nothing, as in the mapper (replace_point): a keyframe never sees one point twice.
   msg::MapPointState merged{};
   merged.id = a;
   merged.merged_into = b;
   apply_point_state(map, merged);
   EXPECT_EQ(map.point(a), nullptr);
-  EXPECT_EQ(map.keyframes[keyframe.id].point_ids[0], b);
+  EXPECT_EQ(map.keyframes[keyframe.id].point_ids[0], kNoId);
+  EXPECT_EQ(map.keyframes[keyframe.id].point_ids[2], b);
 
   // A point the mapper triangulated appears with its observation.
   msg::MapPointState created{};

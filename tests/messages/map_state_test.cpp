@@ -102,14 +102,35 @@ TEST(MapStateMessages, PointStateRoundTripsAndMergeRedirectsObservations) {
   EXPECT_EQ(mirrored.observations, point.observations);
   EXPECT_EQ(mirror.keyframes.at(7).point_ids[2], 100u);  // the keyframe now sees the point
 
-  // Point 100 merges into 200: the mirror drops it and the keyframe's keypoint follows the merge.
+  // Point 100 merges into 200, which keyframe 7 already sees at keypoint 3: the mirror drops 100 and
+  // empties keypoint 2, as the mapper does (a keyframe never sees one point twice).
   MapPoint into = point;
   into.id = 200;
   into.observations = {{7, 3}};
   apply_point_state(mirror, to_state_message(into, 10, buffer));
   apply_point_state(mirror, merged_state_message(100, 200, 10));
   EXPECT_EQ(mirror.points.count(100), 0u);
-  EXPECT_EQ(mirror.keyframes.at(7).point_ids[2], 200u);
+  EXPECT_EQ(mirror.keyframes.at(7).point_ids[2], kNoId);
+  EXPECT_EQ(mirror.keyframes.at(7).point_ids[3], 200u);
+
+  // Point 300 merges into 400, which keyframe 7 does not see yet: keypoint 1 follows the merge.
+  MapPoint source = point;
+  source.id = 300;
+  source.observations = {{7, 1}};
+  MapPoint target = point;
+  target.id = 400;
+  target.observations = {};
+  apply_point_state(mirror, to_state_message(source, 11, buffer));
+  apply_point_state(mirror, to_state_message(target, 11, buffer));
+  apply_point_state(mirror, merged_state_message(300, 400, 11));
+  EXPECT_EQ(mirror.keyframes.at(7).point_ids[1], 400u);
+  const std::vector<std::pair<KeyframeId, int>> redirected{{7, 1}};
+  EXPECT_EQ(mirror.points.at(400).observations, redirected);
+
+  // A state that no longer names an observation empties that keypoint (a BA outlier in the mapper).
+  target.observations = {};
+  apply_point_state(mirror, to_state_message(target, 12, buffer));
+  EXPECT_EQ(mirror.keyframes.at(7).point_ids[1], kNoId);
 }
 
 TEST(MapStateMessages, LoopCorrectionIsConvertedAndBadOnesAreRejectedWithTheirId) {

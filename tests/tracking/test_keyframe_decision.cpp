@@ -140,5 +140,30 @@ TEST(KeyframeDecision, NoKeyframeRightAfterRelocalizationInABigMap) {
   EXPECT_FALSE(decide_keyframe(frame, camera, input, TrackerOptions{}).insert);
 }
 
+// A keyframe seeing three points: one observed in stereo by two keyframes (weight 4), one by two
+// keyframes of which the other saw it without depth (weight 3), one in stereo by this keyframe only
+// (weight 2). ORB-SLAM2's TrackedMapPoints(3) counts the first two; counting keyframes, none.
+TEST(KeyframeDecision, ReferencePointsCountedByObservationWeightWithAMapper) {
+  const PinholeStereo camera = test::synthetic_camera();
+  const Frame stereo_frame = make_counted_frame(camera, 0, 3);
+  Map map;
+  Keyframe& reference = map.keyframes[1];
+  reference.id = 1;
+  reference.features = stereo_frame.features;
+  reference.point_ids = {101, 102, 103};
+  Keyframe& other = map.keyframes[2];
+  other.id = 2;
+  other.features = stereo_frame.features;
+  other.features.depth_m[1] = -1.f;  // keypoint 1 of the other keyframe has no stereo match
+  other.point_ids = {101, 102, kNoId};
+  for (const PointId id : {101, 102, 103}) map.points[id].id = id;
+  map.points[101].observations = {{1, 0}, {2, 0}};
+  map.points[102].observations = {{1, 1}, {2, 1}};
+  map.points[103].observations = {{1, 2}};
+  EXPECT_EQ(count_reference_points(reference, map, 3, ObservationCount::weighted), 2);
+  EXPECT_EQ(count_reference_points(reference, map, 3, ObservationCount::keyframes), 0);
+  EXPECT_EQ(count_reference_points(reference, map, 2, ObservationCount::keyframes), 2);
+}
+
 }  // namespace
 }  // namespace heslam

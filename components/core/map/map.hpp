@@ -75,4 +75,17 @@ struct Map {
   }
 };
 
+// A point's observations counted as ORB-SLAM2's MapPoint::Observations(): 2 for a keypoint with stereo
+// depth, 1 otherwise. Its thresholds (point culling, the reference keyframe's tracked points) are in
+// these units.
+inline int observation_weight(const Map& map, const MapPoint& point) {
+  int weight = 0;
+  for (const auto& [kf_id, index] : point.observations) {
+    const Keyframe* kf = map.keyframe(kf_id);
+    if (kf == nullptr) continue;
+    weight += kf->features.has_stereo(static_cast<std::size_t>(index)) ? 2 : 1;
+  }
+  return weight;
+}
+
 }  // namespace heslam

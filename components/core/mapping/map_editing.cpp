@@ -71,16 +71,6 @@ void replace_point(Map& map, PointId from, PointId into) {
   map.points.erase(from);
 }
 
-int observation_weight(const Map& map, const MapPoint& point) {
-  int weight = 0;
-  for (const auto& [kf_id, index] : point.observations) {
-    const Keyframe* kf = map.keyframe(kf_id);
-    if (kf == nullptr) continue;
-    weight += kf->features.has_stereo(static_cast<std::size_t>(index)) ? 2 : 1;
-  }
-  return weight;
-}
-
 void cull_keyframe(Map& map, KeyframeId kf_id, MapChanges& changes) {
   std::set<KeyframeId>& changed_keyframes = changes.changed_keyframes;
   Keyframe* kf = map.keyframe(kf_id);

@@ -32,7 +32,4 @@ void replace_point(Map& map, PointId from, PointId into);
 // changed keyframe (neighbours, reparented children, itself) and changed / removed point in `changes`.
 void cull_keyframe(Map& map, KeyframeId kf_id, MapChanges& changes);
 
-// Observations counted as ORB-SLAM2 does: 2 for a keypoint with stereo depth, 1 otherwise.
-int observation_weight(const Map& map, const MapPoint& point);
-
 }  // namespace heslam

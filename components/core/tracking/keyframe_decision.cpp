@@ -8,25 +8,31 @@ namespace {
 constexpr float kWeakTrackingRatio = 0.25f;
 constexpr int kTinyMapKeyframes = 2;
 
+// A reference point's observations in the given unit.
+int observations(const Map& map, const MapPoint& point, ObservationCount unit) {
+  return unit == ObservationCount::weighted ? observation_weight(map, point) : static_cast<int>(point.observations.size());
+}
+
 }  // namespace
 
 int reference_min_observations(int keyframes_in_map) { return keyframes_in_map <= kTinyMapKeyframes ? 2 : 3; }
 
-int count_reference_points(const Keyframe& reference, const Map& map, int min_observations) {
+int count_reference_points(const Keyframe& reference, const Map& map, int min_observations, ObservationCount unit) {
   int count = 0;
   for (PointId id : reference.point_ids) {
     const MapPoint* point = map.point(id);
-    if (point != nullptr && !point->culled && static_cast<int>(point->observations.size()) >= min_observations) ++count;
+    if (point != nullptr && !point->culled && observations(map, *point, unit) >= min_observations) ++count;
   }
   return count;
 }
 
-int count_reference_points_near_clip(const Keyframe& reference, const Map& map, int min_observations) {
+int count_reference_points_near_clip(const Keyframe& reference, const Map& map, int min_observations,
+                                     ObservationCount unit) {
   int count = 0;
   for (std::size_t i = 0; i < reference.point_ids.size(); ++i) {
     if (!reference.features.stereo_near_clip(i)) continue;
     const MapPoint* point = map.point(reference.point_ids[i]);
-    if (point != nullptr && !point->culled && static_cast<int>(point->observations.size()) >= min_observations) ++count;
+    if (point != nullptr && !point->culled && observations(map, *point, unit) >= min_observations) ++count;
   }
   return count;
 }

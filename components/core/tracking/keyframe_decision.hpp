@@ -27,11 +27,25 @@ struct KeyframeDecision {
   int untracked_close = 0;  // close stereo features that would become new points
 };
 
+// How a reference keyframe's point is counted against reference_min_observations.
+enum class ObservationCount {
+  // A local mapper's map (mirrored): observation_weight (map.hpp, a stereo observation counts 2), as
+  // ORB-SLAM2's KeyFrame::TrackedMapPoints, whose threshold presumes its mapper (points of weight 3 or
+  // less culled, triangulation and fusion adding observations). Counting keyframes there instead left
+  // out points seen in stereo by two keyframes: too few keyframes, more drift at the corridor's turns
+  // (docs/benchmarks.md, issue 40).
+  weighted,
+  // The tracker's own map (no mapper): observing keyframes. No culling or triangulation feeds it, and
+  // the weighted count inserted more keyframes for a worse MH01 (4.14 against 3.79 mm).
+  keyframes,
+};
+
 // Minimum observations for a reference point to count (ORB-SLAM2: 3, or 2 while the map is tiny).
 int reference_min_observations(int keyframes_in_map);
-int count_reference_points(const Keyframe& reference, const Map& map, int min_observations);
+int count_reference_points(const Keyframe& reference, const Map& map, int min_observations, ObservationCount unit);
 // Of count_reference_points' points, those whose keyframe feature is near a clip edge.
-int count_reference_points_near_clip(const Keyframe& reference, const Map& map, int min_observations);
+int count_reference_points_near_clip(const Keyframe& reference, const Map& map, int min_observations,
+                                     ObservationCount unit);
 // The frame's matched map points whose feature is near a clip edge.
 int count_tracked_near_clip(const Frame& frame);
 

@@ -310,9 +310,10 @@ void Tracker::maybe_insert_keyframe(Frame& frame, int inliers, TrackResult& resu
   input.tracked_inliers = inliers;
   input.keyframes_in_map = static_cast<int>(map_.keyframes.size());
   const int min_observations = reference_min_observations(input.keyframes_in_map);
-  input.reference_tracked_points = count_reference_points(*reference, map_, min_observations);
+  const ObservationCount unit = options_.maintain_map ? ObservationCount::keyframes : ObservationCount::weighted;
+  input.reference_tracked_points = count_reference_points(*reference, map_, min_observations, unit);
   if (options_.reference_near_clip_weight != 1.0) {
-    input.reference_points_near_clip = count_reference_points_near_clip(*reference, map_, min_observations);
+    input.reference_points_near_clip = count_reference_points_near_clip(*reference, map_, min_observations, unit);
     input.tracked_inliers_near_clip = count_tracked_near_clip(frame);
   }
   input.mapper_idle = mapper_idle_ || options_.assume_mapper_idle;
