@@ -83,7 +83,7 @@ TEST(FrontendOptions, SettingsFileReachesTheCoreOptions) {
   EXPECT_EQ(options.mapper_timeout.count(), 2500);
 }
 
-// Issue 33: a user's edit of the settings file is never ignored. Each documented key, changed from
+// A user's edit of the settings file is never ignored. Each documented key, changed from
 // the value config/camera/EuRoC.yaml gives it, changes the settings the frontend reports at start.
 TEST(FrontendOptions, EachDocumentedSettingsKeyChangesWhatTheFrontendReports) {
   const std::filesystem::path euroc = std::filesystem::path(HESLAM_SOURCE_DIR) / "config/camera/EuRoC.yaml";

@@ -1,7 +1,7 @@
 // The open-loop drift of the full system without a loop closer (frontend + local mapper, lockstep,
-// --arg loop_closer=none), measured on every run of the suite instead of kept as a constant (issue
-// 40: a third more drift went unseen for a week because the loop closer test compared against a
-// number written down once). Lockstep is bit-deterministic, so each figure is one exact number for a
+// --arg loop_closer=none), measured on every run of the suite instead of kept as a constant (a third
+// more drift once went unseen for a week because a test compared against a number written down
+// once). Lockstep is bit-deterministic, so each figure is one exact number for a
 // given build; the bounds sit 10 % above today's figures (docs/benchmarks.md, "Open-loop drift"):
 // a change that moves them further is a regression to explain or to fix, a change that improves
 // them should lower the bound with the new figure.

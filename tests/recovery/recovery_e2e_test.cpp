@@ -196,7 +196,7 @@ TEST(Recovery, MapperAndFrontendKilledTogetherKeepTheMapAndLoseNoFrame) {
               kClipFrames, frontend_first.ate_m * 1e3, undisturbed_m * 1e3);
 }
 
-// Issue 38 item 2: the frontend killed while the mapper's map file is unusable (corrupted on disk;
+// The frontend killed while the mapper's map file is unusable (corrupted on disk;
 // the same holds for a frontend on another host than the mapper, which has no file at all). Before:
 // the restarted frontend started a new map, reused keyframe id fe:1, the mapper refused it ("id
 // already in the map") and the run lost 59-88 frames with poses 255-400 mm off, rc 0. Now it takes

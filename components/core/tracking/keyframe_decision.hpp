@@ -33,7 +33,7 @@ enum class ObservationCount {
   // ORB-SLAM2's KeyFrame::TrackedMapPoints, whose threshold presumes its mapper (points of weight 3 or
   // less culled, triangulation and fusion adding observations). Counting keyframes there instead left
   // out points seen in stereo by two keyframes: too few keyframes, more drift at the corridor's turns
-  // (docs/benchmarks.md, issue 40).
+  // (docs/benchmarks.md, Open-loop drift).
   weighted,
   // The tracker's own map (no mapper): observing keyframes. No culling or triangulation feeds it, and
   // the weighted count inserted more keyframes for a worse MH01 (4.14 against 3.79 mm).
