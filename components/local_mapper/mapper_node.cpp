@@ -87,36 +87,6 @@ void MapperNode::configure(const runtime::Config& config) {
                                 : "; local BA always completes");
 }
 
-std::filesystem::path MapperNode::saved_map_path(const std::filesystem::path& requested) const {
-  // Until 2026-11 a run's map was OUTPUT.txt.map (OUTPUT.csv.map for EuRoC csv output); it is now
-  // OUTPUT.map beside OUTPUT.txt (docs/recorder.md, Output files). The old names are read for one
-  // release, with a line saying so.
-  constexpr const char* kOldSuffixes[] = {".txt.map", ".csv.map"};
-  const std::string name = requested.filename().string();
-  for (const char* suffix : kOldSuffixes) {
-    if (name.ends_with(suffix)) {
-      log().warn("deprecated: ", requested.string(), " is named as before 2026-11 (OUTPUT.txt.map); runs now write "
-                 "the map beside OUTPUT as its stem + .map (mh01.txt -> mh01.map). The old name is read for one more "
-                 "release");
-      return requested;
-    }
-  }
-  std::error_code error;
-  if (std::filesystem::exists(requested, error) || requested.extension() != ".map") return requested;
-  for (const char* suffix : kOldSuffixes) {
-    std::filesystem::path old = requested;
-    old.replace_extension();
-    old += suffix;
-    if (std::filesystem::exists(old, error)) {
-      log().warn("deprecated: ", requested.string(), " does not exist; loading ", old.string(),
-                 ", its name before 2026-11 (runs now write mh01.map beside mh01.txt, not mh01.txt.map). The old "
-                 "name is read for one more release");
-      return old;
-    }
-  }
-  return requested;
-}
-
 void MapperNode::load_initial_map() {
   bool resume = false;
   std::vector<std::string> applied_corrections;
@@ -160,7 +130,6 @@ void MapperNode::load_initial_map() {
     // for these states to do so. The file is this run's (FILE.run), so there is nothing to confirm.
     publish_all(loaded_->map);
   } else if (!options_.load_map.empty()) {
-    options_.load_map = saved_map_path(options_.load_map);
     loaded_ = load_map_file(options_.load_map);
     log().info("loaded ", options_.load_map.string(), ": ", loaded_->map.keyframes.size(), " keyframes, ",
                loaded_->map.points.size(), " points, map version ", loaded_->map.version);

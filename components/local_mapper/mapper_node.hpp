@@ -43,9 +43,6 @@ class MapperNode : public runtime::Component {
   bool accepts_positional_args() const override { return true; }
 
   void load_initial_map();
-  // The saved map to load for `requested`: itself, or its name before 2026-11 (OUTPUT.txt.map) when
-  // only that exists; either old name is loaded with a deprecation line.
-  std::filesystem::path saved_map_path(const std::filesystem::path& requested) const;
   // --save-map: the final map into `path`. Throws (the process then exits 1) when there is none.
   void save_map_to(const std::filesystem::path& path);
   void take_keyframes();

@@ -402,23 +402,16 @@ TEST(LocalMapperEndToEnd, SavedMapIsLoadedAndALaterRunLocalizesInIt) {
   EXPECT_LT(ape.translation_m.max, 0.01);
 
   // A map of another place (issue 19): the V1_01 clip (the Vicon room, same camera rig) in the machine
-  // hall's map never relocalizes; the frontend says so and the run fails. The map is asked for by its
-  // new name (OLD.map) while only its name before 2026-11 (OLD.txt.map) exists: loaded, with a
-  // deprecation line.
+  // hall's map never relocalizes; the frontend says so and the run fails.
   const fs::path other_place = test::shared_dataset("euroc_v101_head");
   if (other_place.empty()) {
     std::printf("[ skipped  ] the map-of-another-place part: shared data 'euroc_v101_head' not found\n");
     return;
   }
-  fs::copy_file(saved, dir.path() / "old.txt.map");
   auto elsewhere = start_pipeline("euroc_localize", other_place, dir.path(), "elsewhere", test_domain(),
-                                  {"map=" + (dir.path() / "old.map").string()});
+                                  {"map=" + saved.string()});
   EXPECT_EQ(finish(*elsewhere), 1) << elsewhere->out() << elsewhere->err();
   const std::string elsewhere_output = elsewhere->out() + elsewhere->err();
-  EXPECT_NE(elsewhere_output.find("deprecated: " + (dir.path() / "old.map").string() + " does not exist; loading " +
-                                  (dir.path() / "old.txt.map").string()),
-            std::string::npos)
-      << elsewhere_output;
   EXPECT_NE(elsewhere_output.find("never relocalized in the saved map"), std::string::npos) << elsewhere_output;
   EXPECT_EQ(elsewhere_output.find("relocalized in the saved map at frame"), std::string::npos) << elsewhere_output;
   EXPECT_EQ(test::lost_entries(dir.path() / "elsewhere.lost.txt"), 95) << elsewhere_output;
