@@ -63,7 +63,7 @@ TEST(FrontendOptions, SettingsFileReachesTheCoreOptions) {
   const SettingsScratch scratch;
   const FrontendOptions options = with_settings(
       scratch.write("HE.mode: \"clahe\"\nHE.stereo: \"separate\"\nHE.matchShiftFrom: 10.0\nHE.matchShiftFull: 30.0\n"
-                    "ORBextractor.nFeatures: 2000\nStereo.clipMaskedSad: 1\nStereo.cost: \"census\"\n"
+                    "ORBextractor.nFeatures: 2000\nStereo.clipMaskedSad: 1\n"
                     "Camera.fps: 10.0\nThDepth: 40.0\nTracker.referenceNearClipWeight: 0.25\n"),
       "lockstep:\n  wait_for_mapper: true\n  mapper_timeout_s: 2.5\n");
   EXPECT_EQ(options.features.he.mode, HeMode::kClahe);
@@ -74,7 +74,6 @@ TEST(FrontendOptions, SettingsFileReachesTheCoreOptions) {
   EXPECT_EQ(options.tracker.max_frames_between_keyframes, 10);  // ORB-SLAM2: mMaxFrames = fps
   EXPECT_EQ(options.tracker.close_depth_baselines, 40.0);       // ORB-SLAM2: ThDepth
   EXPECT_TRUE(options.features.stereo.clip_masked_sad);
-  EXPECT_EQ(options.features.stereo.cost, StereoMatcherOptions::MatchCost::kCensus);
   EXPECT_EQ(options.tracker.reference_near_clip_weight, 0.25);
   EXPECT_TRUE(options.settings_unused_keys.empty());
   EXPECT_TRUE(options.mapper_enabled);  // waiting for a mapper implies one
@@ -156,7 +155,7 @@ void expect_error_naming_key(const std::string& text, const std::string& key) {
 
 TEST(FrontendOptions, BadSettingIsOneLineNamingFileAndKey) {
   expect_error_naming_key("ORBextractor.nLevels: 40\n", "ORBextractor.nLevels");
-  expect_error_naming_key("Stereo.cost: \"ssd\"\n", "Stereo.cost");
+  expect_error_naming_key("Stereo.subpixelFit: \"spline\"\n", "Stereo.subpixelFit");
   expect_error_naming_key("Camera.fps: -5.0\n", "Camera.fps");
   expect_error_naming_key("Tracker.referenceRatioStereo: 2.0\n", "Tracker.referenceRatioStereo");
   const auto typo = runtime::Config::parse("lockstep:\n  wait_for_mapr: true\n", "frontend.yaml");

@@ -110,68 +110,6 @@ int window_sad(const std::uint8_t* left_center, int left_step, const std::uint8_
   return normalized_sad(left_center, left_step, right_center, right_step, half_window, normalization);
 }
 
-// Fixed-point scale of the ZNCC cost: cost = (1 - zncc) x scale, in [0, 2 x scale].
-constexpr double kZnccScale = 1 << 14;
-// Census neighbourhood radius: 5x5, 24 comparisons per pixel (fits 32 bits).
-constexpr int kCensusRadius = 2;
-
-// Sums of one patch for ZNCC.
-struct PatchMoments {
-  std::int64_t sum = 0;
-  std::int64_t sum2 = 0;
-};
-
-PatchMoments patch_moments(const std::uint8_t* center, int step, int half_window) {
-  PatchMoments m;
-  for (int dv = -half_window; dv <= half_window; ++dv) {
-    for (int du = -half_window; du <= half_window; ++du) {
-      const int value = center[dv * step + du];
-      m.sum += value;
-      m.sum2 += value * value;
-    }
-  }
-  return m;
-}
-
-// (1 - ZNCC) x kZnccScale; a flat patch on either side (no texture to correlate: e.g. saturated)
-// gets the worst cost.
-int zncc_cost(const std::uint8_t* left_center, int left_step, const PatchMoments& left, const std::uint8_t* right_center,
-              int right_step, int half_window) {
-  const std::int64_t n = (2 * half_window + 1) * (2 * half_window + 1);
-  std::int64_t sum_r = 0;
-  std::int64_t sum_rr = 0;
-  std::int64_t sum_lr = 0;
-  for (int dv = -half_window; dv <= half_window; ++dv) {
-    const std::uint8_t* l = left_center + dv * left_step;
-    const std::uint8_t* r = right_center + dv * right_step;
-    for (int du = -half_window; du <= half_window; ++du) {
-      const int value = r[du];
-      sum_r += value;
-      sum_rr += value * value;
-      sum_lr += l[du] * value;
-    }
-  }
-  const std::int64_t var_l = n * left.sum2 - left.sum * left.sum;
-  const std::int64_t var_r = n * sum_rr - sum_r * sum_r;
-  if (var_l <= 0 || var_r <= 0) return static_cast<int>(2 * kZnccScale);
-  const double covariance = static_cast<double>(n * sum_lr - left.sum * sum_r);
-  const double zncc = covariance / std::sqrt(static_cast<double>(var_l) * static_cast<double>(var_r));
-  return static_cast<int>(std::lround((1.0 - zncc) * kZnccScale));
-}
-
-// 5x5 census transform of one pixel: bit k set when neighbour k is darker than the centre.
-std::uint32_t census(const std::uint8_t* center, int step) {
-  std::uint32_t bits = 0;
-  const int c = center[0];
-  for (int dv = -kCensusRadius; dv <= kCensusRadius; ++dv) {
-    for (int du = -kCensusRadius; du <= kCensusRadius; ++du) {
-      if (dv == 0 && du == 0) continue;
-      bits = (bits << 1) | (center[dv * step + du] < c ? 1u : 0u);
-    }
-  }
-  return bits;
-}
-
 }  // namespace
 
 StereoMatcherOptions StereoMatcherOptions::from_yaml(const cv::FileNode& root, const std::string& source) {
@@ -194,10 +132,6 @@ StereoMatcherOptions StereoMatcherOptions::from_yaml(const cv::FileNode& root, c
                            {{"parabola", Options::SubpixelFit::kParabola},
                             {"equiangular", Options::SubpixelFit::kEquiangular}},
                            o.subpixel_fit);
-  yaml_option::read_choice(root, "Stereo.cost", source,
-                           {{"sad", Options::MatchCost::kSad}, {"zncc", Options::MatchCost::kZncc},
-                            {"census", Options::MatchCost::kCensus}},
-                           o.cost);
   if (o.max_distance < 0 || o.max_distance > 256) yaml_option::fail(source, "Stereo.maxDistance", "an integer in [0, 256]");
   if (!(o.row_band_px > 0.f) || o.row_band_px > 1000.f) yaml_option::fail(source, "Stereo.rowBand", "a number in (0, 1000]");
   if (o.sad_half_window_px < 1 || o.sad_half_window_px > kOrbBorderPx / 2) {
@@ -254,12 +188,7 @@ void StereoMatcher::match_range(const OrbFeatures& left, const OrbFeatures& righ
   const int w = options_.sad_half_window_px;
   const int L = options_.sad_search_px;
   std::vector<int> sads(static_cast<std::size_t>(2 * L + 1));
-  const int census_margin = options_.cost == StereoMatcherOptions::MatchCost::kCensus ? kCensusRadius : 0;
-  const int window = 2 * w + 1;
-  std::vector<std::uint32_t> census_l(static_cast<std::size_t>(window * window));
-  std::vector<std::uint32_t> census_r(static_cast<std::size_t>(window * (window + 2 * L)));
-  const bool masked = options_.clip_masked_sad && options_.cost == StereoMatcherOptions::MatchCost::kSad &&
-                      clip_levels_.any();
+  const bool masked = options_.clip_masked_sad && clip_levels_.any();
   ClipMaskedSad masked_sad(w, L);
 
   for (std::size_t i = begin; i < end; ++i) {
@@ -302,7 +231,7 @@ void StereoMatcher::match_range(const OrbFeatures& left, const OrbFeatures& righ
     const int vl = static_cast<int>(std::lround(kl.v_px * inv_scale));
     const int ur0 = static_cast<int>(std::lround(right.keypoints[static_cast<std::size_t>(best_right)].u_px * inv_scale));
     // The level images have kOrbBorderPx readable pixels around them.
-    const int reach = w + census_margin + (masked ? 1 : 0);  // the clip mask looks at 4-neighbours
+    const int reach = w + (masked ? 1 : 0);  // the clip mask looks at 4-neighbours
     if (ur0 - L - reach < -kOrbBorderPx || ur0 + L + reach >= image_r.cols + kOrbBorderPx) continue;
     if (vl - reach < -kOrbBorderPx || vl + reach >= image_l.rows + kOrbBorderPx) continue;
     if (ul - reach < -kOrbBorderPx || ul + reach >= image_l.cols + kOrbBorderPx) continue;
@@ -310,42 +239,10 @@ void StereoMatcher::match_range(const OrbFeatures& left, const OrbFeatures& righ
     const auto step_r = static_cast<int>(image_r.step1());
     const std::uint8_t* center_l = image_l.ptr<std::uint8_t>(0) + vl * step_l + ul;
     const std::uint8_t* row_r = image_r.ptr<std::uint8_t>(0) + vl * step_r;
-    PatchMoments moments_l;
-    if (options_.cost == StereoMatcherOptions::MatchCost::kZncc) moments_l = patch_moments(center_l, step_l, w);
-    if (options_.cost == StereoMatcherOptions::MatchCost::kCensus) {
-      for (int dv = -w; dv <= w; ++dv) {
-        for (int du = -w; du <= w; ++du) {
-          census_l[static_cast<std::size_t>((dv + w) * window + du + w)] = census(center_l + dv * step_l + du, step_l);
-        }
-        const int span = window + 2 * L;
-        for (int du = 0; du < span; ++du) {
-          census_r[static_cast<std::size_t>((dv + w) * span + du)] =
-              census(row_r + dv * step_r + ur0 - L - w + du, step_r);
-        }
-      }
-    }
     int best_sad = std::numeric_limits<int>::max();
     int best_shift = 0;
     for (int shift = -L; shift <= L; ++shift) {
-      int sad = 0;
-      switch (options_.cost) {
-        case StereoMatcherOptions::MatchCost::kSad:
-          sad = window_sad(center_l, step_l, row_r + ur0 + shift, step_r, w, options_.sad_normalization);
-          break;
-        case StereoMatcherOptions::MatchCost::kZncc:
-          sad = zncc_cost(center_l, step_l, moments_l, row_r + ur0 + shift, step_r, w);
-          break;
-        case StereoMatcherOptions::MatchCost::kCensus: {
-          const int span = window + 2 * L;
-          for (int row = 0; row < window; ++row) {
-            for (int col = 0; col < window; ++col) {
-              sad += std::popcount(census_l[static_cast<std::size_t>(row * window + col)] ^
-                                   census_r[static_cast<std::size_t>(row * span + col + shift + L)]);
-            }
-          }
-          break;
-        }
-      }
+      const int sad = window_sad(center_l, step_l, row_r + ur0 + shift, step_r, w, options_.sad_normalization);
       sads[static_cast<std::size_t>(shift + L)] = sad;
       if (sad < best_sad) {
         best_sad = sad;
@@ -403,7 +300,7 @@ void StereoMatcher::match_range(const OrbFeatures& left, const OrbFeatures& righ
     u_right_px[i] = u_right;
     depth_m[i] = bf / disparity;
     int outlier_score = best_sad;
-    if (options_.relative_sad_outliers && options_.cost == StereoMatcherOptions::MatchCost::kSad) {
+    if (options_.relative_sad_outliers) {
       // SAD relative to the left patch's own variation (sum of |L - mean L|): SAD grows with the
       // patch contrast, so absolute SAD would reject well-matched high-contrast patches first.
       const int n = (2 * w + 1) * (2 * w + 1);

@@ -34,17 +34,11 @@ struct StereoMatcherOptions {
   // (ORB-SLAM2; noisier: one pixel's noise shifts the whole patch), or nothing. Measured on the
   // synthetic plane (level 0): median disparity error 0.026 px (mean) vs 0.134 px (centre).
   enum class SadNormalization { kCenter, kMean, kNone } sad_normalization = SadNormalization::kMean;
-  // The refinement's matching cost: SAD (with sad_normalization), zero-mean normalized cross
-  // correlation (1 - ZNCC: invariant to gain and offset of either image; outliers judged by it
-  // directly), or census (5x5 census transform, Hamming distance summed over the window: invariant
-  // to any monotonic change). SAD stays the default: behind the tone-matched HE (HE.stereo: matched)
-  // neither of the others tracked MH01 better, exposed equally or apart (docs/vision.md).
-  enum class MatchCost { kSad, kZncc, kCensus } cost = MatchCost::kSad;
   // Subpixel fit through the SAD minimum and its neighbours: equiangular lines (exact for a
   // V-shaped cost, which SAD is near its minimum) or a parabola (ORB-SLAM2; biased towards whole
   // pixels for SAD: 0.042 px median error vs 0.026 px with mean normalization).
   enum class SubpixelFit { kParabola, kEquiangular } subpixel_fit = SubpixelFit::kEquiangular;
-  // With cost sad and clip levels set (set_clip_levels: pairs exposed apart), a window that contains
+  // With clip levels set (set_clip_levels: pairs exposed apart), a window that contains
   // clipped pixels is compared over its unclipped pixels only (clip_masked_sad.hpp).
   bool clip_masked_sad = false;
 
