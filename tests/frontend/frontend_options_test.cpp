@@ -63,7 +63,7 @@ TEST(FrontendOptions, SettingsFileReachesTheCoreOptions) {
   const SettingsScratch scratch;
   const FrontendOptions options = with_settings(
       scratch.write("HE.mode: \"clahe\"\nHE.stereo: \"separate\"\nHE.matchShiftFrom: 10.0\nHE.matchShiftFull: 30.0\n"
-                    "ORBextractor.nFeatures: 2000\nStereo.clipMaskedSad: 1\n"
+                    "ORBextractor.nFeatures: 2000\n"
                     "Camera.fps: 10.0\nThDepth: 40.0\nTracker.referenceNearClipWeight: 0.25\n"),
       "lockstep:\n  wait_for_mapper: true\n  mapper_timeout_s: 2.5\n");
   EXPECT_EQ(options.features.he.mode, HeMode::kClahe);
@@ -73,7 +73,6 @@ TEST(FrontendOptions, SettingsFileReachesTheCoreOptions) {
   EXPECT_EQ(options.features.orb.features, 2000);
   EXPECT_EQ(options.tracker.max_frames_between_keyframes, 10);  // ORB-SLAM2: mMaxFrames = fps
   EXPECT_EQ(options.tracker.close_depth_baselines, 40.0);       // ORB-SLAM2: ThDepth
-  EXPECT_TRUE(options.features.stereo.clip_masked_sad);
   EXPECT_EQ(options.tracker.reference_near_clip_weight, 0.25);
   EXPECT_TRUE(options.settings_unused_keys.empty());
   EXPECT_TRUE(options.mapper_enabled);  // waiting for a mapper implies one

@@ -256,7 +256,6 @@ TEST(StereoFeaturePipeline, ShippedSettingsGiveTheDocumentedOptions) {
   EXPECT_EQ(euroc.stereo.max_distance, 100);
   EXPECT_EQ(euroc.right_features_factor, 2.f);
   EXPECT_EQ(euroc.left_only_features, 1.f);
-  EXPECT_FALSE(euroc.stereo.clip_masked_sad);
   EXPECT_EQ(euroc.clip_edge.radius_px, 6);
   EXPECT_EQ(euroc.clip_edge.min_clipped_fraction, 0.01);
   for (const char* name : {"KITTI00-02.yaml", "KITTI03.yaml", "KITTI04-12.yaml"}) {

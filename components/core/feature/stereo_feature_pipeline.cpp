@@ -237,12 +237,6 @@ StereoFeatures StereoFeaturePipeline::process_from(const ImageSource& left_sourc
   out.depth_m.assign(n, kNoStereo);
   // Cameras exposed apart: the matched HE applied a tone curve (see the header's clip_edge).
   const bool exposed_apart = options_.he.stereo == StereoPhotometry::kMatched && equalizer_.last_exposed_apart();
-  ClipLevels clip_levels;
-  if (exposed_apart && options_.stereo.clip_masked_sad) {
-    clip_levels.left_top = clipped_top_level(left_he_, options_.clip_edge.min_clipped_fraction);
-    clip_levels.right_top = clipped_top_level(right_he_, options_.clip_edge.min_clipped_fraction);
-  }
-  stereo_matcher_.set_clip_levels(clip_levels);
   stereo_matcher_.prepare_rows(right_, right_rows_);
   sad_left_half_.clear();
   sad_right_half_.clear();

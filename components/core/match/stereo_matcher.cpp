@@ -121,7 +121,6 @@ StereoMatcherOptions StereoMatcherOptions::from_yaml(const cv::FileNode& root, c
   yaml_option::read(root, "Stereo.minDepthBaselines", source, o.min_depth_baselines);
   yaml_option::read(root, "Stereo.sadOutlierFactor", source, o.sad_outlier_factor);
   yaml_option::read(root, "Stereo.relativeSadOutliers", source, o.relative_sad_outliers);
-  yaml_option::read(root, "Stereo.clipMaskedSad", source, o.clip_masked_sad);
   using Options = StereoMatcherOptions;
   yaml_option::read_choice(root, "Stereo.sadNormalization", source,
                            {{"center", Options::SadNormalization::kCenter},
@@ -188,8 +187,6 @@ void StereoMatcher::match_range(const OrbFeatures& left, const OrbFeatures& righ
   const int w = options_.sad_half_window_px;
   const int L = options_.sad_search_px;
   std::vector<int> sads(static_cast<std::size_t>(2 * L + 1));
-  const bool masked = options_.clip_masked_sad && clip_levels_.any();
-  ClipMaskedSad masked_sad(w, L);
 
   for (std::size_t i = begin; i < end; ++i) {
     const Keypoint& kl = left.keypoints[i];
@@ -231,7 +228,7 @@ void StereoMatcher::match_range(const OrbFeatures& left, const OrbFeatures& righ
     const int vl = static_cast<int>(std::lround(kl.v_px * inv_scale));
     const int ur0 = static_cast<int>(std::lround(right.keypoints[static_cast<std::size_t>(best_right)].u_px * inv_scale));
     // The level images have kOrbBorderPx readable pixels around them.
-    const int reach = w + (masked ? 1 : 0);  // the clip mask looks at 4-neighbours
+    const int reach = w;
     if (ur0 - L - reach < -kOrbBorderPx || ur0 + L + reach >= image_r.cols + kOrbBorderPx) continue;
     if (vl - reach < -kOrbBorderPx || vl + reach >= image_l.rows + kOrbBorderPx) continue;
     if (ul - reach < -kOrbBorderPx || ul + reach >= image_l.cols + kOrbBorderPx) continue;
@@ -247,15 +244,6 @@ void StereoMatcher::match_range(const OrbFeatures& left, const OrbFeatures& righ
       if (sad < best_sad) {
         best_sad = sad;
         best_shift = shift;
-      }
-    }
-    if (masked && masked_sad.compute(center_l, step_l, row_r, ur0, step_r, clip_levels_, sads)) {
-      best_sad = std::numeric_limits<int>::max();
-      for (int shift = -L; shift <= L; ++shift) {
-        if (sads[static_cast<std::size_t>(shift + L)] < best_sad) {
-          best_sad = sads[static_cast<std::size_t>(shift + L)];
-          best_shift = shift;
-        }
       }
     }
     if (best_shift == -L || best_shift == L) {  // minimum at the edge: no fit possible

@@ -13,7 +13,6 @@
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/feature/features.hpp"
 #include "components/core/feature/orb_extractor.hpp"
-#include "components/core/match/clip_masked_sad.hpp"
 
 namespace heslam {
 
@@ -38,12 +37,9 @@ struct StereoMatcherOptions {
   // V-shaped cost, which SAD is near its minimum) or a parabola (ORB-SLAM2; biased towards whole
   // pixels for SAD: 0.042 px median error vs 0.026 px with mean normalization).
   enum class SubpixelFit { kParabola, kEquiangular } subpixel_fit = SubpixelFit::kEquiangular;
-  // With clip levels set (set_clip_levels: pairs exposed apart), a window that contains
-  // clipped pixels is compared over its unclipped pixels only (clip_masked_sad.hpp).
-  bool clip_masked_sad = false;
 
   // Reads Stereo.maxDistance, .rowBand, .sadHalfWindow, .sadSearch, .minDepthBaselines,
-  // .sadOutlierFactor, .relativeSadOutliers, .sadNormalization, .subpixelFit, .cost, .clipMaskedSad.
+  // .sadOutlierFactor, .relativeSadOutliers, .sadNormalization, .subpixelFit.
   static StereoMatcherOptions from_yaml(const cv::FileNode& root, const std::string& source);
 };
 
@@ -78,15 +74,11 @@ class StereoMatcher {
                        std::vector<float>& depth_m, StereoMatchStats* stats = nullptr) const;
 
   const StereoMatcherOptions& options() const { return options_; }
-  // The clip levels of the pair about to be matched (ClipLevels{} = none: the default); used only
-  // with options().clip_masked_sad.
-  void set_clip_levels(const ClipLevels& levels) { clip_levels_ = levels; }
 
  private:
   PinholeStereo camera_;
   ScalePyramid pyramid_;
   StereoMatcherOptions options_;
-  ClipLevels clip_levels_;
 };
 
 }  // namespace heslam
