@@ -36,9 +36,8 @@ void set_edge(Keyframe& keyframe, KeyframeId other, int weight) {
 
 // Without a local mapper nothing refines a point after its creation; each new stereo observation
 // is an independent measurement of it, so the position becomes their inverse-variance weighted mean
-// (stereo depth variance grows with depth^4 at fixed disparity noise). A match near a clip edge has
-// near_clip_sigma_factor times the disparity sigma (0: it does not count at all).
-void fuse_stereo_positions(MapPoint& point, const Map& map, const PinholeStereo& camera, double near_clip_sigma_factor) {
+// (stereo depth variance grows with depth^4 at fixed disparity noise).
+void fuse_stereo_positions(MapPoint& point, const Map& map, const PinholeStereo& camera) {
   Eigen::Vector3d weighted_sum = Eigen::Vector3d::Zero();
   double weight_sum = 0.0;
   for (const auto& [kf_id, index] : point.observations) {
@@ -48,11 +47,7 @@ void fuse_stereo_positions(MapPoint& point, const Map& map, const PinholeStereo&
     if (!kf->features.has_stereo(i)) continue;
     const Keypoint& kp = kf->features.keypoints[i];
     const double depth_m = kf->features.depth_m[i];
-    double weight = kf->features.pyramid.inv_sigma2[static_cast<std::size_t>(kp.octave)] / std::pow(depth_m, 4);
-    if (kf->features.stereo_near_clip(i)) {
-      if (!(near_clip_sigma_factor > 0.0)) continue;
-      weight /= near_clip_sigma_factor * near_clip_sigma_factor;
-    }
+    const double weight = kf->features.pyramid.inv_sigma2[static_cast<std::size_t>(kp.octave)] / std::pow(depth_m, 4);
     weighted_sum += weight * (kf->T_wc * camera.unproject(kp.u_px, kp.v_px, depth_m));
     weight_sum += weight;
   }
@@ -61,7 +56,7 @@ void fuse_stereo_positions(MapPoint& point, const Map& map, const PinholeStereo&
 
 // Mean viewing direction over all observing keyframes, and the representative descriptor: the one with
 // the least median distance to the others (ORB-SLAM2 ComputeDistinctiveDescriptors).
-void refresh_point(MapPoint& point, const Map& map, const PinholeStereo* camera, double near_clip_sigma_factor) {
+void refresh_point(MapPoint& point, const Map& map, const PinholeStereo* camera) {
   Eigen::Vector3d normal_sum = Eigen::Vector3d::Zero();
   std::vector<const Descriptor*> descriptors;
   for (const auto& [kf_id, index] : point.observations) {
@@ -71,7 +66,7 @@ void refresh_point(MapPoint& point, const Map& map, const PinholeStereo* camera,
     descriptors.push_back(&kf->features.descriptors[static_cast<std::size_t>(index)]);
   }
   if (normal_sum.norm() > 0.0) point.normal = normal_sum.normalized();
-  if (camera != nullptr) fuse_stereo_positions(point, map, *camera, near_clip_sigma_factor);
+  if (camera != nullptr) fuse_stereo_positions(point, map, *camera);
   if (descriptors.size() < 3) return;  // with two, either is as representative as the other
   const std::size_t n = descriptors.size();
   int best_median = std::numeric_limits<int>::max();
@@ -224,8 +219,7 @@ void insert_keyframe(Map& map, const KeyframeCandidate& candidate, const Pinhole
     if (!observed) {
       for (const auto& observation : point->observations) ++shared[observation.first];
       point->observations.emplace_back(kf.id, static_cast<int>(i));
-      refresh_point(*point, map, options.fuse_stereo_observations ? &camera : nullptr,
-                    options.near_clip_disparity_sigma_factor);
+      refresh_point(*point, map, options.fuse_stereo_observations ? &camera : nullptr);
     }
   }
   KeyframeId best = kNoId;

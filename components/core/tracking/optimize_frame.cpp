@@ -5,20 +5,13 @@ namespace heslam {
 namespace {
 
 // Keypoint i of the frame observing `point`.
-PoseObservation make_observation(const Frame& frame, std::size_t i, const MapPoint& point, double near_clip_sigma_factor) {
+PoseObservation make_observation(const Frame& frame, std::size_t i, const MapPoint& point) {
   const Keypoint& kp = frame.features.keypoints[i];
   PoseObservation obs;
   obs.p_w = point.p_w;
   obs.u_px = kp.u_px;
   obs.v_px = kp.v_px;
   obs.u_right_px = frame.features.has_stereo(i) ? frame.features.u_right_px[i] : -1.0;
-  if (obs.stereo() && frame.features.stereo_near_clip(i)) {
-    if (near_clip_sigma_factor > 0.0) {
-      obs.disparity_sigma_scale = near_clip_sigma_factor;
-    } else {
-      obs.u_right_px = -1.0;  // monocular
-    }
-  }
   obs.inv_sigma2 = frame.features.pyramid.inv_sigma2[static_cast<std::size_t>(kp.octave)];
   return obs;
 }
@@ -26,14 +19,14 @@ PoseObservation make_observation(const Frame& frame, std::size_t i, const MapPoi
 }  // namespace
 
 std::vector<PoseObservation> frame_observations(const Frame& frame, const Map& map,
-                                                std::vector<std::size_t>* keypoint_of, double near_clip_sigma_factor) {
+                                                std::vector<std::size_t>* keypoint_of) {
   std::vector<PoseObservation> observations;
   if (keypoint_of != nullptr) keypoint_of->clear();
   for (std::size_t i = 0; i < frame.size(); ++i) {
     if (frame.point_ids[i] == kNoId || frame.outlier[i]) continue;
     const MapPoint* point = map.point(frame.point_ids[i]);
     if (point == nullptr) continue;
-    observations.push_back(make_observation(frame, i, *point, near_clip_sigma_factor));
+    observations.push_back(make_observation(frame, i, *point));
     if (keypoint_of != nullptr) keypoint_of->push_back(i);
   }
   return observations;
@@ -54,7 +47,7 @@ int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camer
       frame.point_ids[i] = kNoId;
       continue;
     }
-    observations.push_back(make_observation(frame, i, *point, options.near_clip_disparity_sigma_factor));
+    observations.push_back(make_observation(frame, i, *point));
     keypoint_of.push_back(i);
   }
   if (observations.empty()) return 0;

@@ -20,11 +20,8 @@ int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camer
                         PairWorker* worker = nullptr);
 
 // The frame's matched keypoints that are not flagged as outliers and whose map point exists, as BA
-// observations; keypoint_of, when given, receives each observation's keypoint index. Stereo matches
-// near a clip edge get near_clip_sigma_factor as their disparity sigma scale, or become monocular
-// when it is 0 (TrackerOptions::near_clip_disparity_sigma_factor).
+// observations; keypoint_of, when given, receives each observation's keypoint index.
 std::vector<PoseObservation> frame_observations(const Frame& frame, const Map& map,
-                                                std::vector<std::size_t>* keypoint_of = nullptr,
-                                                double near_clip_sigma_factor = 1.0);
+                                                std::vector<std::size_t>* keypoint_of = nullptr);
 
 }  // namespace heslam

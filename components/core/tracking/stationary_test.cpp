@@ -73,8 +73,7 @@ StationaryTestResult test_stationary(const Frame& frame, const Map& map, const P
                                      const TrackerOptions& options, const Pose3& T_wc_last) {
   StationaryTestResult result{FrameMotion::kMoving, frame.T_wc};
   if (!(options.stationary_test_chi2 > 0.0)) return result;
-  const std::vector<PoseObservation> observations =
-      frame_observations(frame, map, nullptr, options.near_clip_disparity_sigma_factor);
+  const std::vector<PoseObservation> observations = frame_observations(frame, map);
   const auto chi2_at = [&](const Pose3& T_wc) {
     const Pose3 T_cw = T_wc.inverse();
     double sum = 0.0;

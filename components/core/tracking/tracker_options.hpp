@@ -51,11 +51,6 @@ struct TrackerOptions {
   int pose_optimization_rounds = 4;      // outlier reclassification rounds
   int pose_optimization_iterations = 10;  // Levenberg-Marquardt iterations per round
   double disparity_sigma_ratio = 0.5;     // disparity sigma / keypoint sigma in motion-only BA (motion_only_ba.hpp)
-  // Stereo matches near a clip edge of a pair exposed apart (StereoFeatures::near_clip): their
-  // disparity sigma is this many times the others' in motion-only BA and in the tracker-alone point
-  // fusion; 0 uses them as monocular observations (their depth still seeds map points); 1 ignores
-  // the mark. See docs/vision.md for the measurement.
-  double near_clip_disparity_sigma_factor = 1.0;
   // --- stationary test (stationary_test.hpp; not in ORB-SLAM2) ---
   // A frame whose observations cannot tell its optimized pose from the last pose keeps the last pose
   // (chi2 increase below this; chi-square 6 dof, 16.81 = 99 %), so a still camera is estimated still.

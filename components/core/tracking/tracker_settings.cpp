@@ -66,7 +66,6 @@ void read_tracker_settings(const cv::FileNode& root, const std::string& source, 
   read_int(root, source, "Tracker.poseOptimizationRounds", t.pose_optimization_rounds, 1, 100);
   read_int(root, source, "Tracker.poseOptimizationIterations", t.pose_optimization_iterations, 1, 1000);
   read_number(root, source, "Tracker.disparitySigmaRatio", t.disparity_sigma_ratio, 0.01, 100.0);
-  read_number(root, source, "Tracker.nearClipDisparitySigmaFactor", t.near_clip_disparity_sigma_factor, 0.0, 1000.0);
   read_number(root, source, "Tracker.stationaryTestChi2", t.stationary_test_chi2, 0.0, 1e6);
   read_number(root, source, "Tracker.rotationOnlyTestChi2", t.rotation_only_test_chi2, 0.0, 1e6);
   read_int(root, source, "Tracker.minFramesBetweenKeyframes", t.min_frames_between_keyframes);

@@ -9,7 +9,7 @@
 //                                [--drop-stereo-right-above LEVEL] [--k1-offset DK]
 //                                [--first-frame K] [--frames N] [--period-ms P]
 //                                [--tracking-worker on|off] [--pin-threads on|off]
-//                                [--stationary-chi2 X] [--rotation-chi2 X] [--near-clip-sigma X]
+//                                [--stationary-chi2 X] [--rotation-chi2 X]
 //                                [--close-untracked-near-clip-weight W]
 //                                [--kidnap DIR [--kidnap-plan B,R,S[,N]]] [--vocabulary FILE|none]
 #include <algorithm>
@@ -53,7 +53,6 @@ constexpr const char* kUsage =
     "       [--period-ms P]   (start a frame every P ms, idle in between, as a camera: 50 for EuRoC's 20 Hz)\n"
     "       [--tracking-worker on|off]   (the tracker's BA passes in halves on a second thread; default off)\n"
     "       [--pin-threads on|off]       (the pipeline's two threads on two CPUs, Pipeline.pinThreads; default on)\n"
-    "       [--near-clip-sigma X]   (tracker.near_clip_disparity_sigma_factor: 0 monocular, 1 as any stereo match)\n"
     "       [--close-untracked-near-clip-weight W]   (tracker.close_untracked_near_clip_weight, 0-1; default 0.9)\n"
     "       [--reference-near-clip-weight W]   (tracker.reference_near_clip_weight, 0-1; default 1)\n"
     "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n"
@@ -140,7 +139,6 @@ int run(int argc, char** argv) {
   heslam::bench::KidnapPlan kidnap_plan;
   bool kidnap_plan_given = false;
   std::string vocabulary;
-  double near_clip_sigma = -1.0;  // < 0: the tracker's default
   for (int i = 2; i < argc; ++i) {
     const std::string arg = argv[i];
     if (i + 1 >= argc) throw std::runtime_error(arg + ": missing value\n" + kUsage);
@@ -192,9 +190,6 @@ int run(int argc, char** argv) {
     } else if (arg == "--kidnap-plan") {
       kidnap_plan = parse_kidnap_plan(arg, value);
       kidnap_plan_given = true;
-    } else if (arg == "--near-clip-sigma") {
-      near_clip_sigma = parse_number<double>(arg, value);
-      if (!(near_clip_sigma >= 0.0)) throw std::runtime_error(arg + ": expected a number >= 0, got '" + value + "'");
     } else if (arg == "--close-untracked-near-clip-weight") {
       options.tracker.close_untracked_near_clip_weight = parse_number<double>(arg, value);
       const double weight = options.tracker.close_untracked_near_clip_weight;
@@ -220,7 +215,6 @@ int run(int argc, char** argv) {
     options.tracker = file.tracker;
     for (const std::string& key : file.unused_keys) std::fprintf(stderr, "%s: %s: not used by heslam\n", settings.c_str(), key.c_str());
   }
-  if (near_clip_sigma >= 0.0) options.tracker.near_clip_disparity_sigma_factor = near_clip_sigma;
   if (pin_threads) options.pipeline.pin_threads = *pin_threads;
   if (!he_mode.empty()) {
     try {
