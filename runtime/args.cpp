@@ -67,7 +67,7 @@ CommonArgs parse_common_args(int argc, const char* const* argv, std::string_view
       args.name = value();
       if (args.name.empty()) throw std::runtime_error("--name: expected a non-empty name");
     } else if (flag == "--config") {
-      args.config_file = value();
+      args.config_files.push_back(value());
     } else if (flag == "--log-level") {
       const std::string text = value();
       const auto level = parse_log_level(text);
@@ -105,7 +105,8 @@ std::string common_args_usage() {
          "  --domain N          DDS domain id, 0-232 (default: $HESLAM_DOMAIN or 0)\n"
          "  --namespace NAME    topic namespace (default: heslam)\n"
          "  --name NAME         instance name in status and logs (default: the program's)\n"
-         "  --config FILE       YAML options (default: every option at its documented default)\n"
+         "  --config FILE       YAML options (default: every option at its documented default); given\n"
+         "                      again, the later file overlays the earlier one field by field\n"
          "  --log-level LEVEL   debug, info, warn, error or off (default: info)\n"
          "  --dds-config XML    Cyclone configuration, XML or file://PATH (default: $CYCLONEDDS_URI,\n"
          "                      else the built-in loopback config/cyclonedds.xml)\n"
