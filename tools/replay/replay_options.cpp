@@ -38,6 +38,8 @@ const char* replay_usage() {
          "  Publishes an EuRoC ASL folder or a KITTI odometry sequence on camera/stereo and\n"
          "  camera/calibration.\n"
          "  --format euroc|kitti|auto   dataset layout (default auto)\n"
+         "  --camera FILE               the calibration from this ORB-SLAM2/ORB-SLAM3 stereo settings file\n"
+         "                              instead of the dataset's (empty: the dataset's)\n"
          "  --rate R                    speed, 1 = real time (default), 0 = as fast as possible (0-100)\n"
          "  --lockstep                  publish frame n+1 only after the consumer's FrameDone for frame n\n"
          "  --ack-timeout S             lockstep: give up after S s without a consumer/FrameDone (10;\n"
@@ -65,6 +67,8 @@ ReplayOptions parse_replay_options(const std::vector<std::string>& args) {
     };
     if (arg == "--format") {
       options.format = parse_dataset_format(value());
+    } else if (arg == "--camera") {
+      options.camera_file = value();
     } else if (arg == "--rate") {
       options.rate = parse_double(arg, value(), 0.0, kMaxRate);
       rate_given = true;
