@@ -18,8 +18,9 @@ struct ProgramReport {
 };
 
 struct RunVerdict {
-  // Why the outputs are incomplete (a frame the frontend produced odometry for is missing from the
-  // recorder's outputs), else nothing.
+  // Why the run cannot be trusted: a program saw two live writers claim one role (a forged
+  // participant, runtime/role_binding.hpp), or the outputs are incomplete (a frame the frontend
+  // produced odometry for is missing from the recorder's outputs); else nothing.
   std::optional<std::string> failure;
   // The programs' results joined by "; ", the recorder's "tracked N/M" restated against what the
   // source published when the recorder had a smaller count (it missed the source's last status).
