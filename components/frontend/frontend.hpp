@@ -10,6 +10,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "components/frontend/batched_mirror.hpp"
 #include "components/frontend/frame_processor.hpp"
@@ -60,6 +61,15 @@ class Frontend : public runtime::Component {
   // shutdown.
   bool wait_for_keyframe_done(KeyframeId id);
   bool keyframe_acknowledged(KeyframeId id) const;
+  // One KeyframeDone as taken: who wrote it, the role it claims (runtime/role_binding.hpp), its fields.
+  struct HeldKeyframeDone {
+    dds_instance_handle_t writer;
+    std::string role;
+    std::string component;
+    std::uint64_t keyframe_id;
+    std::uint64_t map_version;
+    std::uint64_t correction_id;
+  };
   // An acknowledgement of a writer that holds its role: what it says is acted upon.
   void use_keyframe_done(const HeldKeyframeDone& done);
   void acknowledge(const msg::StereoFrame& frame, const FrameOutput* output);
@@ -77,14 +87,6 @@ class Frontend : public runtime::Component {
   std::optional<runtime::RoleBinding> keyframe_done_roles_;
   // KeyframeDone of a writer that claimed a role while its first writer was still matched (a
   // restarted mapper within the killed one's lease): used once it takes the role over.
-  struct HeldKeyframeDone {
-    dds_instance_handle_t writer;
-    std::string role;
-    std::string component;
-    std::uint64_t keyframe_id;
-    std::uint64_t map_version;
-    std::uint64_t correction_id;
-  };
   std::vector<HeldKeyframeDone> held_keyframe_done_;
   std::optional<runtime::Writer<msg::Odometry>> odometry_writer_;
   std::optional<runtime::Writer<msg::Keyframe>> keyframe_writer_;

@@ -314,7 +314,7 @@ void Supervisor::read_status() {
   }
 }
 
-bool Supervisor::status_from_child(Managed& component, dds_entity_t reader, dds_instance_handle_t writer) {
+bool Supervisor::status_from_child(Managed& component, std::int32_t reader, std::uint64_t writer) {
   const std::optional<std::string> participant = runtime::writer_participant(reader, writer);
   // Gone already (a process that ended right after its last status): nothing can be checked, and its
   // result comes through its pipe anyway.

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -10,8 +11,6 @@
 #include <set>
 #include <string>
 #include <vector>
-
-#include <dds/dds.h>
 
 #include "runtime/log.hpp"
 #include "runtime/supervisor/child_process.hpp"
@@ -85,7 +84,8 @@ class Supervisor {
   // Whether a status sample claiming `component`'s name was written by a process this supervisor
   // started as it (its participant, announced on its pipe). Another one is refused: counted, named
   // once, and the run fails when it carries this run's id (a forger that copied it).
-  bool status_from_child(Managed& component, dds_entity_t reader, dds_instance_handle_t writer);
+  // (`reader`, `writer`: the DDS reader's entity and the sample's publication handle.)
+  bool status_from_child(Managed& component, std::int32_t reader, std::uint64_t writer);
   // Shows the run's progress from the latest statuses (live redraw or a plain line per 10 %).
   void report_progress();
   // Before any other output: wipes a live progress line so the output starts on a clean line.
@@ -120,7 +120,7 @@ class Supervisor {
   bool remote_ended_ = false;  // another host's supervisor ended the run
   std::string results_;        // the programs' results, from judge()
   std::string other_runs_;     // other runs seen on the domain mid-run (OtherRunWatch::describe)
-  std::set<dds_instance_handle_t> refused_status_writers_;  // named once each
+  std::set<std::uint64_t> refused_status_writers_;  // publication handles, named once each
   std::uint64_t refused_status_samples_ = 0;
   RunProgress progress_;
   bool progress_drawn_ = false;  // a live line is on the terminal

@@ -141,6 +141,32 @@ TEST_F(CheckedReaderTest, ASecondWriterIsIgnoredWhileTheFirstIsAlive) {
   EXPECT_EQ(counter("second_writers"), 1u);
 }
 
+// Issue 38 item 5: both writers are of this run (a forger that copied the run id) and both write:
+// the owner wrote again while the second was alive, a conflict the run fails on (counted per topic).
+TEST_F(CheckedReaderTest, TwoLiveWritersOfTheSameRunAreAConflict) {
+  Participant reading = make_participant();
+  Participant first_participant = make_participant();
+  Participant second_participant = make_participant();
+  CheckedReader<msg::Odometry> reader(reading, topics.odometry(), log, stats, finite_pose, options());
+  Writer<msg::Odometry> first(first_participant, topics.odometry());
+  Writer<msg::Odometry> second(second_participant, topics.odometry());
+  ASSERT_TRUE(first.wait_for_readers(1, kDeadline));
+  ASSERT_TRUE(second.wait_for_readers(1, kDeadline));
+  first.write(odometry(0, 1.0));
+  ASSERT_EQ(take_seqs(reader, 1), (std::vector<std::uint64_t>{0}));
+  second.write(odometry(1, 100.0));
+  EXPECT_TRUE(take_until_counted(reader, kSecondWriterSamples, 1).empty());
+  EXPECT_EQ(counter(kWriterConflicts), 0u);  // held: could still be a restart
+  first.write(odometry(1, 1.0));
+  EXPECT_EQ(take_seqs(reader, 1), (std::vector<std::uint64_t>{1}));
+  EXPECT_EQ(counter(kWriterConflicts), 1u);
+  EXPECT_EQ(counter(std::string(kWriterConflictsOn) + topics.odometry().name), 1u);
+  second.write(odometry(2, 100.0));  // refused from now on, never held for a take-over
+  first.write(odometry(2, 1.0));
+  EXPECT_EQ(take_seqs(reader, 1), (std::vector<std::uint64_t>{2}));
+  EXPECT_EQ(counter(kWriterConflicts), 1u);
+}
+
 TEST_F(CheckedReaderTest, ASecondWriterTakesOverWhenTheFirstLeaves) {
   Participant reading = make_participant();
   Participant second_participant = make_participant();
@@ -300,6 +326,7 @@ TEST_F(CheckedReaderTest, OnlyAWriterOfTheOwnersRunTakesOverWhenTheOwnerCrashes)
   EXPECT_EQ(counter(kOtherRunWriters), 1u);
   EXPECT_EQ(counter(kSecondWriters), 2u);        // the stray, and the restart while the owner lived
   EXPECT_EQ(counter(kSecondWriterSamples), 5u);  // 3 of the stray, 2 held of the restart
+  EXPECT_EQ(counter(kWriterConflicts), 0u);      // a restart is no conflict: its predecessor is dead
 }
 
 }  // namespace
