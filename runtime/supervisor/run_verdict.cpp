@@ -56,6 +56,7 @@ std::optional<std::string> writer_conflicts(const std::vector<ProgramReport>& re
 RunVerdict judge_run(const std::vector<ProgramReport>& reports) {
   RunVerdict verdict;
   verdict.failure = writer_conflicts(reports);
+  verdict.writer_conflict = verdict.failure.has_value();
   const std::optional<std::uint64_t> published = largest(reports, runtime::kFramesPublished);
   const std::optional<std::uint64_t> produced = largest(reports, runtime::kOdometryFrames);
   for (const ProgramReport& report : reports) {

@@ -722,7 +722,10 @@ void Supervisor::judge() {
   results_ = verdict.results;
   if (verdict.failure) {
     log_.error(*verdict.failure);
-    fail(*verdict.failure + (results_.empty() ? "" : ": " + results_));
+    const std::string reason = *verdict.failure + (results_.empty() ? "" : ": " + results_);
+    // Two live writers of one role: nothing else the run says can be trusted, so it comes first.
+    if (verdict.writer_conflict && failed_) failure_ = reason + "; also: " + failure_;
+    fail(reason);
   }
 }
 

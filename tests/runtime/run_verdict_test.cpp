@@ -40,6 +40,7 @@ TEST(RunVerdict, TwoLiveWritersOfOneRoleFailTheRunNamingTheTopic) {
   EXPECT_EQ(*verdict.failure,
             "recorder: two live writers claimed one role on heslam/odometry (1 conflict: a forged participant or a "
             "second copy of a component; its log names both writers)");
+  EXPECT_TRUE(verdict.writer_conflict);
   EXPECT_FALSE(judge_run({recorder(160, 160, 160), frontend(160), replay(160, 160, 0)}).failure);
 }
 

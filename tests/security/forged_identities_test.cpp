@@ -80,7 +80,7 @@ TEST(SecurityForgery, PlainForgedOdometryWithTheRunIdFailsTheRunLoudly) {
   EXPECT_EQ(run.exit_code, 1) << run.err;
   EXPECT_NE(run.summary.find("pipeline failed: recorder: two live writers claimed one role on heslam/odometry"),
             std::string::npos)
-      << run.summary;
+      << run.err;
 }
 
 // A forged "recorder" status (its pid and the run id copied) never reaches the last line: refused,
@@ -92,7 +92,7 @@ TEST(SecurityForgery, PlainForgedRecorderStatusIsRefusedAndNamed) {
   EXPECT_NE(run.summary.find("pipeline failed: forged status of 'recorder' from a process this supervisor did not "
                              "start"),
             std::string::npos)
-      << run.summary;
+      << run.err;
 }
 
 // FrameDone forged in step with the frames: the replay sees two live writers pace it; the run fails.
@@ -100,7 +100,7 @@ TEST(SecurityForgery, PlainForgedFrameDoneFailsTheRunLoudly) {
   const ForgedRun run = run_with_forger("forge-frame-done", "frame_done");
   EXPECT_EQ(run.exit_code, 1) << run.err;
   EXPECT_NE(run.summary.find("two live writers claimed one role on heslam/lockstep/frame_done"), std::string::npos)
-      << run.summary;
+      << run.err;
 }
 
 // KeyframeDone of "local_mapper" with map_version 999999 for each keyframe: the frontend sees two
@@ -109,7 +109,7 @@ TEST(SecurityForgery, PlainForgedKeyframeDoneFailsTheRunLoudlyWithoutWaiting) {
   const ForgedRun run = run_with_forger("forge-keyframe-done", "keyframe_done");
   EXPECT_EQ(run.exit_code, 1) << run.err;
   EXPECT_NE(run.summary.find("two live writers claimed one role on heslam/lockstep/keyframe_done"), std::string::npos)
-      << run.summary;
+      << run.err;
   EXPECT_EQ(run.err.find("no KeyframeDone from the mapper"), std::string::npos) << run.err;
 }
 
