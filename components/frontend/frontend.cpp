@@ -48,9 +48,8 @@ constexpr double kCameraTolerance = 1e-6;
 // frame, then waits for its acknowledgement); the image topic keeps 4 as well.
 constexpr std::size_t kHeldFrames = 4;
 constexpr std::size_t kHeldCalibrations = 4;
-// KeyframeDone: the role of every component that is not an awaited loop closer, and how many
-// acknowledgements of a restarted one are kept while the killed one still counts as matched.
-constexpr const char* kMapperRole = "mapper";
+// KeyframeDone: how many acknowledgements of a restarted component are kept while the killed one
+// still counts as matched.
 constexpr std::size_t kMaxHeldKeyframeDone = 64;
 // Counters of samples refused from the topics' writers or from other participants (log_rejections).
 constexpr const char* kRejectionCounters[] = {"rejected_calibrations", "refused_calibrations", "rejected_keyframe_states",
@@ -508,12 +507,10 @@ void Frontend::mirror_map_state() {
       stats().count(runtime::kOtherRunWriters);
       continue;
     }
-    // Each loop closer is a role of its own; every other name is the mapper's.
+    // Each component name is a role of its own (the mapper, each loop closer, awaited or not).
     const std::string component = received.sample->component == nullptr ? "" : received.sample->component;
-    const bool loop_closer =
-        std::find(options_.loop_closers.begin(), options_.loop_closers.end(), component) != options_.loop_closers.end();
-    HeldKeyframeDone done{received.info.publication_handle, loop_closer ? component : std::string(kMapperRole), component,
-                          received.sample->keyframe_id, received.sample->map_version, received.sample->correction_id};
+    HeldKeyframeDone done{received.info.publication_handle, component, component, received.sample->keyframe_id,
+                          received.sample->map_version, received.sample->correction_id};
     switch (keyframe_done_roles_->claim(keyframe_done_reader_->handle(), done.role, done.writer, done.keyframe_id)) {
       case runtime::RoleBinding::Claim::kAccepted: use_keyframe_done(done); break;
       case runtime::RoleBinding::Claim::kHeld:
