@@ -21,6 +21,11 @@
 //   never replaced by a stray that is still alive, whatever the order in which processes exit.
 //   Held samples of writers that left too are dropped at a take-over.
 //
+// - Two live writers: when the owner writes again while a writer of its run that was held back is
+//   still matched, both are alive at once (a restarted publisher's predecessor never writes again):
+//   counted as runtime::kWriterConflicts, one error line, the claimant refused; the run fails
+//   (issue 38 item 5: a participant that copied the run id).
+//
 // Invalid-data notices without a dispose (a writer unregistered / left) carry no data and pass.
 #pragma once
 
@@ -37,6 +42,7 @@
 
 #include "runtime/log.hpp"
 #include "runtime/reader.hpp"
+#include "runtime/run_counters.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/stats.hpp"
 #include "runtime/writer_identity.hpp"
@@ -158,7 +164,14 @@ class CheckedReader {
       own(writer);
       return true;
     }
-    if (writer == *owner_) return true;
+    if (writer == *owner_) {
+      if (received.info.valid_data) judge_claimants();
+      return true;
+    }
+    if (refused_.count(writer) != 0) {
+      stats_.count(kSecondWriterSamples);
+      return false;
+    }
     if (!of_owners_run(writer)) {
       stats_.count(kSecondWriterSamples);
       if (announced_.insert(writer).second) {
@@ -180,6 +193,7 @@ class CheckedReader {
       }
       return true;
     }
+    if (owner_alive && received.info.valid_data) claimants_.insert(writer);
     if (owner_alive && received.info.valid_data && announced_.insert(writer).second) {
       stats_.count(kSecondWriters);
       log_.warn("topic '", name(), "': a second writer (", describe_writer(handle(), writer),
@@ -191,6 +205,25 @@ class CheckedReader {
     if (held_.size() >= options_.max_held) held_.pop_front();
     held_.push_back(std::move(received));
     return false;
+  }
+
+  // The owner wrote again: a writer of its run that wrote since (held back) and is still matched is
+  // alive too, so both claim the stream at once (a restarted publisher's predecessor is dead and never
+  // writes again): a conflict, the run fails (runtime/run_counters.hpp). The claimant is refused from
+  // now on; which of the two is a forger (one that copied the run id) cannot be known here.
+  void judge_claimants() {
+    for (const dds_instance_handle_t claimant : claimants_) {
+      if (!writer_matched(handle(), claimant)) continue;
+      refused_.insert(claimant);
+      std::erase_if(held_, [&](const Received<T>& held) { return held.info.publication_handle == claimant; });
+      stats_.count(kWriterConflicts);
+      stats_.count(std::string(kWriterConflictsOn) + name());
+      log_.error("topic '", name(), "': two live writers of run ", owner_run_, " at once: ",
+                 describe_writer(handle(), *owner_), " (first) and ", describe_writer(handle(), claimant),
+                 " (refused); a forged participant that copied the run id, or a second copy of the component "
+                 "(counted as ", kWriterConflicts, "; the run fails)");
+    }
+    claimants_.clear();
   }
 
   // `writer` owns the stream from its first sample on; its run decides who may succeed it. When it
@@ -241,6 +274,7 @@ class CheckedReader {
     }
     held_ = std::move(others);
     announced_.erase(writer);
+    claimants_.erase(writer);
     stats_.count(kTakeOvers);
     // Counted above as second_writer_samples; these are used after all.
     log_.info("topic '", name(), "': the first writer left; ", describe_writer(handle(), writer),
@@ -259,6 +293,8 @@ class CheckedReader {
   std::deque<Received<T>> held_;      // samples of other writers, arrival order
   std::deque<Received<T>> released_;  // held samples of a writer that took over, not yet taken
   std::set<dds_instance_handle_t> announced_;
+  std::set<dds_instance_handle_t> claimants_;  // of the owner's run, held while the owner was matched
+  std::set<dds_instance_handle_t> refused_;    // claimants found alive with the owner: conflicts
 };
 
 }  // namespace heslam::runtime

@@ -9,6 +9,8 @@
 #include <utility>
 
 #include "runtime/security.hpp"
+#include "runtime/startup_notify.hpp"
+#include "runtime/writer_identity.hpp"
 
 namespace heslam::runtime {
 namespace {
@@ -72,6 +74,9 @@ Participant::Participant(const ParticipantOptions& options) : domain_id_(options
                              "by this folder's CA, or expired)";
   handle_ = check_dds(dds_create_participant(static_cast<dds_domainid_t>(options.domain_id), nullptr, nullptr),
                       "DDS domain " + std::to_string(options.domain_id) + ": cannot create participant" + secure_hint);
+  // Told to heslam-supervisor, which trusts its components' status only from their participants.
+  dds_guid_t guid;
+  if (dds_get_guid(handle_, &guid) == DDS_RETCODE_OK) notify_supervisor_participant(guid_prefix_hex(guid.v));
 }
 
 Participant::~Participant() {

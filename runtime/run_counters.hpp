@@ -17,5 +17,10 @@ inline constexpr const char* kOdometryFrames = "odometry_frames";
 inline constexpr const char* kFramesRecorded = "frames_recorded";
 inline constexpr const char* kFramesWithPose = "frames_with_pose";
 inline constexpr const char* kFramesAccounted = "frames_accounted";
+// Any program: two live writers claimed one role at once (runtime/role_binding.hpp, CheckedReader):
+// a forged participant that copies the run id, or a second copy of a component. Counted in total
+// and per topic (kWriterConflictsOn + topic name); the run fails and its last line names the topic.
+inline constexpr const char* kWriterConflicts = "writer_conflicts";
+inline constexpr const char* kWriterConflictsOn = "writer_conflicts@";
 
 }  // namespace heslam::runtime

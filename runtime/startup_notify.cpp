@@ -52,6 +52,12 @@ void notify_supervisor_running() {
   g_running_sent = true;
 }
 
+void notify_supervisor_participant(const std::string& guid_prefix) {
+  std::lock_guard lock(g_mutex);
+  const int fd = notify_fd_locked();
+  if (fd >= 0) write_line(fd, (std::string(kNotifyParticipant) + " " + guid_prefix).c_str());
+}
+
 void notify_supervisor_result(const std::map<std::string, std::uint64_t>& counters, const std::string& result) {
   std::lock_guard lock(g_mutex);
   const int fd = notify_fd_locked();

@@ -25,6 +25,13 @@ void notify_supervisor_starting();
 // Writes "running" (first call only). Called by StatusPublisher on RUNNING.
 void notify_supervisor_running();
 
+// "participant PREFIX" for each DDS participant the program creates (PREFIX: the 24 hex digits of its
+// GUID prefix, Participant's constructor). heslam-supervisor trusts status samples of its components
+// only from participants its own children named on their pipes (issue 38 item 5: a process that
+// copies a component's name, pid and run id is not one it started).
+void notify_supervisor_participant(const std::string& guid_prefix);
+inline constexpr const char* kNotifyParticipant = "participant";
+
 // The program's result, once, as it ends: its counters ("counter NAME VALUE" lines) and its one-line
 // result ("result TEXT", at most kMaxResultBytes). The supervisor's verdict uses these rather than
 // the status topic, whose last sample may not arrive before the process is gone, and closes the

@@ -39,6 +39,23 @@ std::string describe_writer(dds_entity_t reader, dds_instance_handle_t publicati
   return text;
 }
 
+std::string guid_prefix_hex(const unsigned char* guid) {
+  constexpr int kPrefixBytes = 12;
+  std::string text;
+  char hex[3];
+  for (int i = 0; i < kPrefixBytes; ++i) {
+    std::snprintf(hex, sizeof hex, "%02x", guid[i]);
+    text += hex;
+  }
+  return text;
+}
+
+std::optional<std::string> writer_participant(dds_entity_t reader, dds_instance_handle_t publication) {
+  const Endpoint endpoint = matched_endpoint(reader, publication);
+  if (!endpoint) return std::nullopt;
+  return guid_prefix_hex(endpoint->participant_key.v);
+}
+
 std::optional<std::string> writer_run_id(dds_entity_t reader, dds_instance_handle_t publication) {
   const Endpoint endpoint = matched_endpoint(reader, publication);
   if (!endpoint) return std::nullopt;

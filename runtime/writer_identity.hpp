@@ -23,6 +23,13 @@ std::string describe_writer(dds_entity_t reader, dds_instance_handle_t publicati
 // is no longer matched (nothing can be known about it then).
 std::optional<std::string> writer_run_id(dds_entity_t reader, dds_instance_handle_t publication);
 
+// The 24 hex digits of a GUID's participant prefix (its first 12 bytes: host, process, instance).
+std::string guid_prefix_hex(const unsigned char* guid);
+
+// The GUID prefix (guid_prefix_hex) of the participant of a matched writer: the process that wrote
+// a sample; nothing when the writer is no longer matched.
+std::optional<std::string> writer_participant(dds_entity_t reader, dds_instance_handle_t publication);
+
 // Whether a sample of `publication` may be used by a reader of a topic with several legitimate
 // writers (lockstep/frame_done, lockstep/keyframe_done): always, unless this run is on one host
 // (run_on_one_host()) and the writer is of another run or left before it could be asked.

@@ -48,6 +48,9 @@ constexpr double kCameraTolerance = 1e-6;
 // frame, then waits for its acknowledgement); the image topic keeps 4 as well.
 constexpr std::size_t kHeldFrames = 4;
 constexpr std::size_t kHeldCalibrations = 4;
+// KeyframeDone: how many acknowledgements of a restarted component are kept while the killed one
+// still counts as matched.
+constexpr std::size_t kMaxHeldKeyframeDone = 64;
 // Counters of samples refused from the topics' writers or from other participants (log_rejections).
 constexpr const char* kRejectionCounters[] = {"rejected_calibrations", "refused_calibrations", "rejected_keyframe_states",
                                              "rejected_points", runtime::kSecondWriterSamples, runtime::kSecondWriters,
@@ -116,6 +119,7 @@ void Frontend::configure(const runtime::Config& config) {
                                 messages::sample_check<msg::MapPointState>(),
                                 messages::checked_options<msg::MapPointState>(messages::kMapStateHeld));
     keyframe_done_reader_.emplace(participant(), topics().keyframe_done());
+    keyframe_done_roles_.emplace(log(), stats(), keyframe_done_reader_->name());
     waitset_->attach(*keyframe_state_reader_);
     waitset_->attach(*point_state_reader_);
     waitset_->attach(*keyframe_done_reader_);
@@ -503,19 +507,29 @@ void Frontend::mirror_map_state() {
       stats().count(runtime::kOtherRunWriters);
       continue;
     }
-    // The mapper's acknowledgement of a loop correction: the mirror acts on it when it applies the
-    // correction's batch (whose version marker says the same, unless a newer marker replaced it).
-    if (received.sample->correction_id != 0) {
-      if (processor_ && !mirror_.correction_acknowledged(received.sample->map_version)) {
-        // Applied already as an ordinary batch: our keyframes in flight were not moved (the mapper
-        // still moves them, and their states bring them here), the last frame can still follow.
-        processor_->tracker().follow_reference_keyframe();
-        stats().count("corrections_seen_late");
-      }
+    // Each component name is a role of its own (the mapper, each loop closer, awaited or not).
+    const std::string component = received.sample->component == nullptr ? "" : received.sample->component;
+    HeldKeyframeDone done{received.info.publication_handle, component, component, received.sample->keyframe_id,
+                          received.sample->map_version, received.sample->correction_id};
+    switch (keyframe_done_roles_->claim(keyframe_done_reader_->handle(), done.role, done.writer, done.keyframe_id)) {
+      case runtime::RoleBinding::Claim::kAccepted: use_keyframe_done(done); break;
+      case runtime::RoleBinding::Claim::kHeld:
+        held_keyframe_done_.push_back(std::move(done));
+        if (held_keyframe_done_.size() > kMaxHeldKeyframeDone) held_keyframe_done_.erase(held_keyframe_done_.begin());
+        break;
+      case runtime::RoleBinding::Claim::kRefused: break;
+    }
+  }
+  for (auto held = held_keyframe_done_.begin(); held != held_keyframe_done_.end();) {
+    const runtime::RoleBinding::Claim claim =
+        keyframe_done_roles_->claim(keyframe_done_reader_->handle(), held->role, held->writer, held->keyframe_id,
+                                    /*again=*/true);
+    if (claim == runtime::RoleBinding::Claim::kHeld) {
+      ++held;
       continue;
     }
-    keyframes_done_[received.sample->keyframe_id].insert(received.sample->component == nullptr ? "" : received.sample->component);
-    acknowledged_map_version_ = std::max(acknowledged_map_version_, received.sample->map_version);
+    if (claim == runtime::RoleBinding::Claim::kAccepted) use_keyframe_done(*held);
+    held = held_keyframe_done_.erase(held);
   }
   // Without a processor there is no map to mirror into yet: the states stay in their readers
   // (keep-last per keyframe / point), so a restarted frontend still gets the whole map.
@@ -563,6 +577,22 @@ void Frontend::mirror_map_state() {
   }
 }
 
+void Frontend::use_keyframe_done(const HeldKeyframeDone& done) {
+  // The mapper's acknowledgement of a loop correction: the mirror acts on it when it applies the
+  // correction's batch (whose version marker says the same, unless a newer marker replaced it).
+  if (done.correction_id != 0) {
+    if (processor_ && !mirror_.correction_acknowledged(done.map_version)) {
+      // Applied already as an ordinary batch: our keyframes in flight were not moved (the mapper
+      // still moves them, and their states bring them here), the last frame can still follow.
+      processor_->tracker().follow_reference_keyframe();
+      stats().count("corrections_seen_late");
+    }
+    return;
+  }
+  keyframes_done_[done.keyframe_id].insert(done.component);
+  acknowledged_map_version_ = std::max(acknowledged_map_version_, done.map_version);
+}
+
 bool Frontend::wait_for_keyframe_done(KeyframeId id) {
   const auto deadline = std::chrono::steady_clock::now() + options_.mapper_timeout;
   for (;;) {
@@ -571,11 +601,23 @@ bool Frontend::wait_for_keyframe_done(KeyframeId id) {
     // acknowledgement may overtake the corrected states it waited for: wait for the map version too.
     if (keyframe_acknowledged(id) && mirror_.version().complete() >= acknowledged_map_version_) {
       keyframes_done_.erase(id);
+      keyframe_done_roles_->done(id);
       mirror_map_state();
       return true;
     }
+    // Two live writers acknowledged as one component (a forger, runtime/role_binding.hpp): the run
+    // fails, and no acknowledgement (nor the map version it names) can be trusted to wait for.
+    if (keyframe_done_roles_->conflicts() > 0) {
+      keyframes_done_.erase(id);
+      keyframe_done_roles_->done(id);
+      stats().count("keyframes_not_awaited_after_conflict");
+      return true;
+    }
     const auto now = std::chrono::steady_clock::now();
-    if (now >= deadline || shutdown_requested()) return false;
+    if (now >= deadline || shutdown_requested()) {
+      keyframe_done_roles_->done(id);
+      return false;
+    }
     if (waitset_->wait(std::min<std::chrono::nanoseconds>(kWaitPeriod, deadline - now)) == runtime::Wake::kShutdown) {
       return false;
     }

@@ -10,6 +10,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "components/frontend/batched_mirror.hpp"
 #include "components/frontend/frame_processor.hpp"
@@ -17,6 +18,7 @@
 #include "runtime/checked_reader.hpp"
 #include "components/frontend/odometry_journal.hpp"
 #include "runtime/component.hpp"
+#include "runtime/role_binding.hpp"
 
 namespace heslam::frontend {
 
@@ -59,6 +61,17 @@ class Frontend : public runtime::Component {
   // shutdown.
   bool wait_for_keyframe_done(KeyframeId id);
   bool keyframe_acknowledged(KeyframeId id) const;
+  // One KeyframeDone as taken: who wrote it, the role it claims (runtime/role_binding.hpp), its fields.
+  struct HeldKeyframeDone {
+    dds_instance_handle_t writer;
+    std::string role;
+    std::string component;
+    std::uint64_t keyframe_id;
+    std::uint64_t map_version;
+    std::uint64_t correction_id;
+  };
+  // An acknowledgement of a writer that holds its role: what it says is acted upon.
+  void use_keyframe_done(const HeldKeyframeDone& done);
   void acknowledge(const msg::StereoFrame& frame, const FrameOutput* output);
 
   FrontendOptions options_;
@@ -69,6 +82,12 @@ class Frontend : public runtime::Component {
   std::optional<runtime::CheckedReader<msg::KeyframeState>> keyframe_state_reader_;
   std::optional<runtime::CheckedReader<msg::MapPointState>> point_state_reader_;
   std::optional<runtime::Reader<msg::KeyframeDone>> keyframe_done_reader_;
+  // Who may acknowledge keyframes: the first writer of each component name's KeyframeDone (the
+  // mapper's, each loop closer's); a second live one is a conflict (runtime/role_binding.hpp, issue 38 item 5).
+  std::optional<runtime::RoleBinding> keyframe_done_roles_;
+  // KeyframeDone of a writer that claimed a role while its first writer was still matched (a
+  // restarted mapper within the killed one's lease): used once it takes the role over.
+  std::vector<HeldKeyframeDone> held_keyframe_done_;
   std::optional<runtime::Writer<msg::Odometry>> odometry_writer_;
   std::optional<runtime::Writer<msg::Keyframe>> keyframe_writer_;
   std::optional<runtime::Writer<msg::FrameDone>> frame_done_writer_;

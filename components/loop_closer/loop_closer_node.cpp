@@ -1,6 +1,8 @@
 // A loop closer process's DDS side (see loop_closer_node.hpp).
 #include "components/loop_closer/loop_closer_node.hpp"
 
+#include <cstddef>
+#include <iterator>
 #include <chrono>
 #include <ctime>
 #include <sstream>
@@ -21,6 +23,8 @@ namespace {
 // Wait granularity of the main loop: shutdown is also signalled through the waitset, this only
 // bounds how long a missed wake-up could delay it.
 constexpr std::chrono::milliseconds kWaitPeriod{200};
+// KeyframeDone of a second writer of a role kept while its predecessor still counts as matched.
+constexpr std::ptrdiff_t kMaxHeldKeyframeDone = 64;
 // While a real-time global BA runs: how often to look whether it finished (nothing wakes the waitset).
 constexpr std::chrono::milliseconds kGlobalBaPoll{20};
 // Before the first KeyframeDone: how long to wait for the lockstep reader (the frontend) to match.
@@ -56,6 +60,7 @@ void LoopCloserNode::configure(const runtime::Config& config) {
   point_state_reader_.emplace(participant(), topics().map_points(), log(), stats(), nullptr,
                               messages::checked_options<msg::MapPointState>(messages::kMapStateHeld));
   keyframe_done_reader_.emplace(participant(), topics().keyframe_done());
+  keyframe_done_roles_.emplace(log(), stats(), keyframe_done_reader_->name());
   waitset_->attach(*keyframe_reader_);
   waitset_->attach(*keyframe_state_reader_);
   waitset_->attach(*point_state_reader_);
@@ -141,13 +146,31 @@ std::size_t LoopCloserNode::take_all() {
     // Another run's mapper on the domain must not acknowledge our corrections.
     if (!runtime::writer_of_this_run(keyframe_done_reader_->handle(), received.info.publication_handle)) continue;
     const msg::KeyframeDone& done = *received.sample;
-    if (runtime::to_string(done.component) == name()) continue;  // our own acknowledgements
+    const std::string component = runtime::to_string(done.component);
+    if (component == name()) continue;  // our own acknowledgements
+    held_keyframe_done_.push_back(
+        {received.info.publication_handle, component, done.keyframe_id, done.map_version, done.correction_id});
+  }
+  // Each taken one is asked about once as new; those held are asked again until their writer takes
+  // its role over (its predecessor left) or is refused.
+  std::vector<HeldKeyframeDone> still_held;
+  for (const HeldKeyframeDone& done : held_keyframe_done_) {
+    const runtime::RoleBinding::Claim claim = keyframe_done_roles_->claim(
+        keyframe_done_reader_->handle(), done.component, done.writer, done.keyframe_id, done.held);
+    if (claim == runtime::RoleBinding::Claim::kHeld) {
+      still_held.push_back(done);
+      still_held.back().held = true;
+      continue;
+    }
+    if (claim != runtime::RoleBinding::Claim::kAccepted) continue;
     if (done.correction_id != 0) {
       corrections_applied_[done.correction_id] = done.map_version;
     } else {
       mapped_[done.keyframe_id] = done.map_version;
     }
   }
+  if (std::ssize(still_held) > kMaxHeldKeyframeDone) still_held.erase(still_held.begin(), still_held.end() - kMaxHeldKeyframeDone);
+  held_keyframe_done_ = std::move(still_held);
   return taken;
 }
 
@@ -163,6 +186,7 @@ void LoopCloserNode::process_ready_keyframes() {
     }
     if (mirror_.map().keyframe(id) == nullptr || mirror_.map().version < version) return;  // in flight
     mapped_.erase(mapped_.begin());
+    keyframe_done_roles_->done(id);
     process_keyframe(id);
     last_processed_ = id;
     save_state();

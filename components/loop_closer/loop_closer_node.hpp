@@ -14,6 +14,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "components/core/loop/loop_closing.hpp"
 #include "components/loop_closer/background_global_ba.hpp"
@@ -21,6 +22,7 @@
 #include "components/loop_closer/map_mirror.hpp"
 #include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
+#include "runtime/role_binding.hpp"
 #include "runtime/run_journal.hpp"
 
 namespace heslam::loop_closer {
@@ -61,6 +63,19 @@ class LoopCloserNode : public runtime::Component {
   std::optional<runtime::CheckedReader<msg::KeyframeState>> keyframe_state_reader_;
   std::optional<runtime::CheckedReader<msg::MapPointState>> point_state_reader_;
   std::optional<runtime::Reader<msg::KeyframeDone>> keyframe_done_reader_;
+  // Who may acknowledge as each component (the first writer of its name); a second live one is a
+  // conflict the run fails on (runtime/role_binding.hpp, issue 38 item 5). Acknowledgements of a
+  // second writer wait here until its predecessor is gone (a restarted mapper).
+  std::optional<runtime::RoleBinding> keyframe_done_roles_;
+  struct HeldKeyframeDone {
+    dds_instance_handle_t writer;
+    std::string component;
+    std::uint64_t keyframe_id;
+    std::uint64_t map_version;
+    std::uint64_t correction_id;
+    bool held = false;  // asked about before (runtime::RoleBinding::claim's `again`)
+  };
+  std::vector<HeldKeyframeDone> held_keyframe_done_;
   std::optional<runtime::Writer<msg::LoopCorrection>> correction_writer_;
   std::optional<runtime::Writer<msg::KeyframeDone>> keyframe_done_writer_;
 

@@ -127,6 +127,7 @@ ChildProcess& ChildProcess::operator=(ChildProcess&& other) noexcept {
     notify_partial_ = std::move(other.notify_partial_);
     pending_result_ = std::exchange(other.pending_result_, Result{});
     result_ = std::exchange(other.result_, std::nullopt);
+    participants_ = std::exchange(other.participants_, {});
   }
   return *this;
 }
@@ -154,6 +155,8 @@ void ChildProcess::read_notifications() {
       notify_partial_.erase(0, newline + 1);
       if (line == runtime::kNotifyStarting) said_starting_ = true;
       if (line == runtime::kNotifyRunning) said_starting_ = said_running_ = true;
+      const std::string participant_prefix = std::string(runtime::kNotifyParticipant) + " ";
+      if (line.starts_with(participant_prefix)) participants_.insert(line.substr(participant_prefix.size()));
       read_result_line(line);
     }
   }

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,8 @@ class ChildProcess {
     std::string text;
   };
   const std::optional<Result>& result() const { return result_; }
+  // The GUID prefixes of the DDS participants the program said it created ("participant" lines).
+  const std::set<std::string>& participants() const { return participants_; }
 
   // Reads what is available (non-blocking) and returns complete lines; at end of stream also the
   // unterminated rest. Returns false once the stream is closed.
@@ -72,6 +75,7 @@ class ChildProcess {
   std::string notify_partial_;
   Result pending_result_;  // counters read so far; complete with the "result" line
   std::optional<Result> result_;
+  std::set<std::string> participants_;
 };
 
 // The --exec-child mode of heslam-supervisor: never returns (exec or _exit(127)).

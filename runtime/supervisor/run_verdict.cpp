@@ -33,10 +33,30 @@ std::string restate_tracked(const std::string& result, std::uint64_t with_pose, 
          std::to_string(published - std::min(published, with_pose)) + std::string(kLost) + result.substr(lost + kLost.size());
 }
 
+// "NAME: two live writers claimed one role on TOPIC[, TOPIC] (N times)..." for the first program that
+// counted writer conflicts (runtime/run_counters.hpp), nothing when none did.
+std::optional<std::string> writer_conflicts(const std::vector<ProgramReport>& reports) {
+  for (const ProgramReport& report : reports) {
+    const std::optional<std::uint64_t> conflicts = counter_of(report, runtime::kWriterConflicts);
+    if (!conflicts || *conflicts == 0) continue;
+    std::string topics;
+    for (const auto& [name, value] : report.counters) {
+      if (value == 0 || !name.starts_with(runtime::kWriterConflictsOn)) continue;
+      topics += (topics.empty() ? "" : ", ") + name.substr(std::string_view(runtime::kWriterConflictsOn).size());
+    }
+    return report.name + ": two live writers claimed one role" + (topics.empty() ? "" : " on " + topics) + " (" +
+           std::to_string(*conflicts) + (*conflicts == 1 ? " conflict" : " conflicts") +
+           ": a forged participant or a second copy of a component; its log names both writers)";
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 RunVerdict judge_run(const std::vector<ProgramReport>& reports) {
   RunVerdict verdict;
+  verdict.failure = writer_conflicts(reports);
+  verdict.writer_conflict = verdict.failure.has_value();
   const std::optional<std::uint64_t> published = largest(reports, runtime::kFramesPublished);
   const std::optional<std::uint64_t> produced = largest(reports, runtime::kOdometryFrames);
   for (const ProgramReport& report : reports) {

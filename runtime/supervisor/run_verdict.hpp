@@ -18,9 +18,13 @@ struct ProgramReport {
 };
 
 struct RunVerdict {
-  // Why the outputs are incomplete (a frame the frontend produced odometry for is missing from the
-  // recorder's outputs), else nothing.
+  // Why the run cannot be trusted: a program saw two live writers claim one role (a forged
+  // participant, runtime/role_binding.hpp), or the outputs are incomplete (a frame the frontend
+  // produced odometry for is missing from the recorder's outputs); else nothing.
   std::optional<std::string> failure;
+  // Whether `failure` is a writer conflict: the run's results cannot be trusted at all, so the last
+  // line names it before anything else that went wrong (a forger may also stall a reader's end).
+  bool writer_conflict = false;
   // The programs' results joined by "; ", the recorder's "tracked N/M" restated against what the
   // source published when the recorder had a smaller count (it missed the source's last status).
   std::string results;

@@ -27,6 +27,7 @@
 #include "runtime/supervisor/run_verdict.hpp"
 #include "runtime/topics.hpp"
 #include "runtime/wire_enum.hpp"
+#include "runtime/writer_identity.hpp"
 
 namespace heslam::supervisor {
 namespace {
@@ -203,6 +204,9 @@ void Supervisor::start(Managed& component) {
   // Every writer of a run on one host is ours: the components refuse another run's samples.
   if (!pipeline_.split()) env[runtime::kRunOnOneHostVariable] = "1";
   env[runtime::kRestartVariable] = std::to_string(component.restarts);
+  // The last words of the process before a restart are still its own.
+  component.process.read_notifications();
+  component.participants.insert(component.process.participants().begin(), component.process.participants().end());
   component.process =
       ChildProcess::spawn(options_.self_executable, component.spec.executable, child_args(component), env,
                           component.spec.nice);
@@ -267,7 +271,15 @@ void Supervisor::read_status() {
                                        heslam_msg_STATE_SHUTTING_DOWN, heslam_msg_STATE_FAILED)) {
       continue;
     }
-    StatusSeen& seen = dds_->seen[runtime::to_string(status.name)];
+    const std::string name = runtime::to_string(status.name);
+    const auto claimed = std::find_if(components_.begin(), components_.end(), [&](const auto& component) {
+      return !component->spec.remote && component->spec.name == name;
+    });
+    if (claimed != components_.end() &&
+        !status_from_child(**claimed, dds_->status_reader.handle(), received.info.publication_handle)) {
+      continue;
+    }
+    StatusSeen& seen = dds_->seen[name];
     seen.pid = status.pid;
     seen.state = status.state;
     seen.message = runtime::to_string(status.message);
@@ -300,6 +312,34 @@ void Supervisor::read_status() {
       log_.error(component->spec.name, " reports failure: ", seen.message);
     }
   }
+}
+
+bool Supervisor::status_from_child(Managed& component, std::int32_t reader, std::uint64_t writer) {
+  const std::optional<std::string> participant = runtime::writer_participant(reader, writer);
+  // Gone already (a process that ended right after its last status): nothing can be checked, and its
+  // result comes through its pipe anyway.
+  if (!participant) return false;
+  if (!component.participants.contains(*participant)) {
+    component.process.read_notifications();  // its line precedes any status it wrote
+    component.participants.insert(component.process.participants().begin(), component.process.participants().end());
+  }
+  if (component.participants.contains(*participant)) return true;
+  ++refused_status_samples_;
+  if (!refused_status_writers_.insert(writer).second) return false;
+  const std::string run = runtime::writer_run_id(reader, writer).value_or("");
+  const std::string who = "a status sample named '" + component.spec.name + "' from " +
+                          runtime::describe_writer(reader, writer) + ", a process this supervisor did not start";
+  if (run == runtime::process_run_id()) {
+    clear_progress();
+    log_.error(who, ", with this run's id ", run,
+               ": a forged participant; refused (only the processes it started speak for its components)");
+    fail("forged status of '" + component.spec.name + "' from a process this supervisor did not start (" +
+         runtime::describe_writer(reader, writer) + ", run id copied): refused");
+  } else {
+    clear_progress();
+    log_.warn(who, " (run ", run.empty() ? std::string("none") : run, "): refused");
+  }
+  return false;
 }
 
 void Supervisor::watch_other_runs() {
@@ -682,7 +722,10 @@ void Supervisor::judge() {
   results_ = verdict.results;
   if (verdict.failure) {
     log_.error(*verdict.failure);
-    fail(*verdict.failure + (results_.empty() ? "" : ": " + results_));
+    const std::string reason = *verdict.failure + (results_.empty() ? "" : ": " + results_);
+    // Two live writers of one role: nothing else the run says can be trusted, so it comes first.
+    if (verdict.writer_conflict && failed_) failure_ = reason + "; also: " + failure_;
+    fail(reason);
   }
 }
 

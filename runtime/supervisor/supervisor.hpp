@@ -3,10 +3,12 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -61,6 +63,9 @@ class Supervisor {
     std::string last_reported_failure;
     std::string last_line;  // of its output: a failing heslam program's one-line reason
     std::string result;     // the one-line result in its latest status (the recorder's "tracked N/M ...")
+    // GUID prefixes of the DDS participants its processes (this one and those before a restart)
+    // named on their pipes: its status is taken only from these (issue 38 item 5).
+    std::set<std::string> participants;
   };
 
   struct Dds;  // participant, status reader and writer (pimpl: keeps DDS out of this header)
@@ -76,6 +81,11 @@ class Supervisor {
   void reap();
   void on_exit(Managed& component, int wait_status);
   void read_status();
+  // Whether a status sample claiming `component`'s name was written by a process this supervisor
+  // started as it (its participant, announced on its pipe). Another one is refused: counted, named
+  // once, and the run fails when it carries this run's id (a forger that copied it).
+  // (`reader`, `writer`: the DDS reader's entity and the sample's publication handle.)
+  bool status_from_child(Managed& component, std::int32_t reader, std::uint64_t writer);
   // Shows the run's progress from the latest statuses (live redraw or a plain line per 10 %).
   void report_progress();
   // Before any other output: wipes a live progress line so the output starts on a clean line.
@@ -110,6 +120,8 @@ class Supervisor {
   bool remote_ended_ = false;  // another host's supervisor ended the run
   std::string results_;        // the programs' results, from judge()
   std::string other_runs_;     // other runs seen on the domain mid-run (OtherRunWatch::describe)
+  std::set<std::uint64_t> refused_status_writers_;  // publication handles, named once each
+  std::uint64_t refused_status_samples_ = 0;
   RunProgress progress_;
   bool progress_drawn_ = false;  // a live line is on the terminal
   // The first status with frames published: fps is measured from there.

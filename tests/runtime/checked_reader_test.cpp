@@ -18,6 +18,7 @@
 
 #include "runtime/checked_reader.hpp"
 #include "runtime/participant.hpp"
+#include "runtime/role_binding.hpp"
 #include "runtime/topics.hpp"
 #include "runtime/writer.hpp"
 #include "runtime/writer_identity.hpp"
@@ -139,6 +140,32 @@ TEST_F(CheckedReaderTest, ASecondWriterIsIgnoredWhileTheFirstIsAlive) {
   EXPECT_EQ(take_seqs(reader, 1), (std::vector<std::uint64_t>{1}));
   EXPECT_EQ(counter(kSecondWriterSamples), 2u);
   EXPECT_EQ(counter("second_writers"), 1u);
+}
+
+// Issue 38 item 5: both writers are of this run (a forger that copied the run id) and both write:
+// the owner wrote again while the second was alive, a conflict the run fails on (counted per topic).
+TEST_F(CheckedReaderTest, TwoLiveWritersOfTheSameRunAreAConflict) {
+  Participant reading = make_participant();
+  Participant first_participant = make_participant();
+  Participant second_participant = make_participant();
+  CheckedReader<msg::Odometry> reader(reading, topics.odometry(), log, stats, finite_pose, options());
+  Writer<msg::Odometry> first(first_participant, topics.odometry());
+  Writer<msg::Odometry> second(second_participant, topics.odometry());
+  ASSERT_TRUE(first.wait_for_readers(1, kDeadline));
+  ASSERT_TRUE(second.wait_for_readers(1, kDeadline));
+  first.write(odometry(0, 1.0));
+  ASSERT_EQ(take_seqs(reader, 1), (std::vector<std::uint64_t>{0}));
+  second.write(odometry(1, 100.0));
+  EXPECT_TRUE(take_until_counted(reader, kSecondWriterSamples, 1).empty());
+  EXPECT_EQ(counter(kWriterConflicts), 0u);  // held: could still be a restart
+  first.write(odometry(1, 1.0));
+  EXPECT_EQ(take_seqs(reader, 1), (std::vector<std::uint64_t>{1}));
+  EXPECT_EQ(counter(kWriterConflicts), 1u);
+  EXPECT_EQ(counter(std::string(kWriterConflictsOn) + topics.odometry().name), 1u);
+  second.write(odometry(2, 100.0));  // refused from now on, never held for a take-over
+  first.write(odometry(2, 1.0));
+  EXPECT_EQ(take_seqs(reader, 1), (std::vector<std::uint64_t>{2}));
+  EXPECT_EQ(counter(kWriterConflicts), 1u);
 }
 
 TEST_F(CheckedReaderTest, ASecondWriterTakesOverWhenTheFirstLeaves) {
@@ -300,6 +327,98 @@ TEST_F(CheckedReaderTest, OnlyAWriterOfTheOwnersRunTakesOverWhenTheOwnerCrashes)
   EXPECT_EQ(counter(kOtherRunWriters), 1u);
   EXPECT_EQ(counter(kSecondWriters), 2u);        // the stray, and the restart while the owner lived
   EXPECT_EQ(counter(kSecondWriterSamples), 5u);  // 3 of the stray, 2 held of the restart
+  EXPECT_EQ(counter(kWriterConflicts), 0u);      // a restart is no conflict: its predecessor is dead
+}
+
+// RoleBinding (runtime/role_binding.hpp), the acknowledgements' guard: the writer handle of the next
+// FrameDone that `reader` takes (0 when none arrived in time).
+dds_instance_handle_t next_writer(Reader<msg::FrameDone>& reader) {
+  const auto deadline = std::chrono::steady_clock::now() + kDeadline;
+  while (std::chrono::steady_clock::now() < deadline) {
+    for (auto& received : reader.take()) {
+      if (received.info.valid_data) return received.info.publication_handle;
+    }
+    std::this_thread::sleep_for(5ms);
+  }
+  return 0;
+}
+
+msg::FrameDone frame_done(std::uint64_t seq) {
+  msg::FrameDone done{};
+  done.seq = seq;
+  return done;
+}
+
+// A forger acknowledged frame 1 first; the real consumer acknowledges it too while the forger lives
+// and frame 1 is still awaited: a conflict at once, the second refused.
+TEST_F(CheckedReaderTest, RoleBindingTwoLiveAcknowledgersOfOneSubjectAreAConflict) {
+  Participant reading = make_participant();
+  Participant first_participant = make_participant();
+  Participant second_participant = make_participant();
+  Reader<msg::FrameDone> reader(reading, topics.frame_done());
+  Writer<msg::FrameDone> first(first_participant, topics.frame_done());
+  Writer<msg::FrameDone> second(second_participant, topics.frame_done());
+  ASSERT_TRUE(first.wait_for_readers(1, kDeadline));
+  ASSERT_TRUE(second.wait_for_readers(1, kDeadline));
+  RoleBinding roles(log, stats, topics.frame_done().name);
+  first.write(frame_done(1));
+  const dds_instance_handle_t first_handle = next_writer(reader);
+  ASSERT_NE(first_handle, 0u);
+  EXPECT_EQ(roles.claim(reader.handle(), "consumer", first_handle, 1), RoleBinding::Claim::kAccepted);
+  second.write(frame_done(1));
+  const dds_instance_handle_t second_handle = next_writer(reader);
+  ASSERT_NE(second_handle, 0u);
+  EXPECT_EQ(roles.claim(reader.handle(), "consumer", second_handle, 1), RoleBinding::Claim::kRefused);
+  EXPECT_EQ(roles.conflicts(), 1u);
+  EXPECT_EQ(counter(kWriterConflicts), 1u);
+  EXPECT_EQ(counter(std::string(kWriterConflictsOn) + topics.frame_done().name), 1u);
+  EXPECT_EQ(roles.claim(reader.handle(), "consumer", second_handle, 2), RoleBinding::Claim::kRefused);
+}
+
+// A restarted consumer acknowledges while its predecessor still counts as matched: held, then it
+// takes the role over once the predecessor is gone, without a conflict; the first writing again
+// while a held one lives is a conflict.
+TEST_F(CheckedReaderTest, RoleBindingARestartTakesOverAndALiveFirstWriterMakesAConflict) {
+  Participant reading = make_participant();
+  Participant second_participant = make_participant();
+  Reader<msg::FrameDone> reader(reading, topics.frame_done());
+  Writer<msg::FrameDone> second(second_participant, topics.frame_done());
+  RoleBinding roles(log, stats, topics.frame_done().name);
+  dds_instance_handle_t second_handle = 0;
+  {
+    Participant first_participant = make_participant();
+    Writer<msg::FrameDone> first(first_participant, topics.frame_done());
+    ASSERT_TRUE(first.wait_for_readers(1, kDeadline));
+    ASSERT_TRUE(second.wait_for_readers(1, kDeadline));
+    first.write(frame_done(1));
+    const dds_instance_handle_t first_handle = next_writer(reader);
+    ASSERT_EQ(roles.claim(reader.handle(), "consumer", first_handle, 1), RoleBinding::Claim::kAccepted);
+    roles.done(1);
+    second.write(frame_done(2));
+    second_handle = next_writer(reader);
+    EXPECT_EQ(roles.claim(reader.handle(), "consumer", second_handle, 2), RoleBinding::Claim::kHeld);
+  }  // the first leaves (a clean exit; a killed one is unmatched once its lease expires)
+  const auto deadline = std::chrono::steady_clock::now() + kDeadline;
+  RoleBinding::Claim claim = RoleBinding::Claim::kHeld;
+  while (claim == RoleBinding::Claim::kHeld && std::chrono::steady_clock::now() < deadline) {
+    claim = roles.claim(reader.handle(), "consumer", second_handle, 2, /*again=*/true);
+    std::this_thread::sleep_for(5ms);
+  }
+  EXPECT_EQ(claim, RoleBinding::Claim::kAccepted);
+  EXPECT_EQ(roles.conflicts(), 0u);
+  EXPECT_EQ(counter("role_take_overs"), 1u);
+
+  // Now the second owns the role; a third writer held while it lives, then the owner writes again.
+  Participant third_participant = make_participant();
+  Writer<msg::FrameDone> third(third_participant, topics.frame_done());
+  ASSERT_TRUE(third.wait_for_readers(1, kDeadline));
+  third.write(frame_done(3));
+  const dds_instance_handle_t third_handle = next_writer(reader);
+  EXPECT_EQ(roles.claim(reader.handle(), "consumer", third_handle, 3), RoleBinding::Claim::kHeld);
+  EXPECT_EQ(roles.conflicts(), 0u);
+  EXPECT_EQ(roles.claim(reader.handle(), "consumer", second_handle, 3), RoleBinding::Claim::kAccepted);
+  EXPECT_EQ(roles.conflicts(), 1u);
+  EXPECT_EQ(roles.claim(reader.handle(), "consumer", third_handle, 4), RoleBinding::Claim::kRefused);
 }
 
 }  // namespace

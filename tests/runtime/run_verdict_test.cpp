@@ -29,6 +29,21 @@ ProgramReport replay(std::uint64_t published, std::uint64_t total, std::uint64_t
               (skipped > 0 ? ", " + std::to_string(skipped) + " skipped (a missing or corrupt image)" : "")};
 }
 
+// Issue 38 item 5: a forger that copied the run id published odometry next to the frontend; the
+// recorder counted the conflict. Before, the run ended with exit code 0 and "tracked 160/160 frames".
+TEST(RunVerdict, TwoLiveWritersOfOneRoleFailTheRunNamingTheTopic) {
+  ProgramReport seen = recorder(160, 160, 160);
+  seen.counters[runtime::kWriterConflicts] = 1;
+  seen.counters[std::string(runtime::kWriterConflictsOn) + "heslam/odometry"] = 1;
+  const RunVerdict verdict = judge_run({seen, frontend(160), replay(160, 160, 0)});
+  ASSERT_TRUE(verdict.failure);
+  EXPECT_EQ(*verdict.failure,
+            "recorder: two live writers claimed one role on heslam/odometry (1 conflict: a forged participant or a "
+            "second copy of a component; its log names both writers)");
+  EXPECT_TRUE(verdict.writer_conflict);
+  EXPECT_FALSE(judge_run({recorder(160, 160, 160), frontend(160), replay(160, 160, 0)}).failure);
+}
+
 // A recorder stalled until the frontend had gone: 40 frames recorded, 160 produced. Before, the run
 // ended with exit code 0 and "tracked 40/40 frames, 0 lost".
 TEST(RunVerdict, FramesTheFrontendProducedButTheOutputLacksFailTheRun) {

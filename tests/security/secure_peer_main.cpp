@@ -6,13 +6,30 @@
 // different calibration, NaN poses in Odometry, Keyframe and KeyframeState, 100 m corrections), or
 // reads stereo frames and counts those carrying the pattern.
 //
+// Or it forges the identity of one of a run's components (issue 38 item 5), with the run id of the
+// supervisor --run-of PID copied into its writers' user data (as /proc shows it to anyone):
+//   forge-odometry       the frontend's Odometry, a pose 100 m away for each frame it sees (and one
+//                        every period while it sees none)
+//   forge-status         ComponentStatus named --name (recorder) with --pid (the real one's), RUNNING,
+//                        result "tracked 40/40 frames, 0 lost, trajectory /forged/path.txt"
+//   forge-frame-done     FrameDone of "frontend" for each frame it sees, at once (and a counting one
+//                        every period while it sees none)
+//   forge-keyframe-done  KeyframeDone of "local_mapper" with map_version 999999 for each keyframe it
+//                        sees (and one for the frontend's next keyframe id every period while none)
+//
 //   heslam-test-secure-peer --domain N [--namespace NS] [--identity DIR] MODE [--seconds S]
-//   MODE: publish-stereo | publish-correction | publish-hostile | read-stereo
+//                           [--run-of PID] [--pid N] [--name NAME]
+//   MODE: publish-stereo | publish-correction | publish-hostile | read-stereo | forge-*
 //
 // Last line: "peer MODE: refused: <reason>" (its writer or reader was not allowed; exit 3), or
 // "peer MODE: wrote N" / "peer MODE: received N, M with the pattern" (exit 0). Bad argument: exit 2.
 #include <chrono>
+#include <cstdlib>
+#include <fstream>
 #include <iostream>
+#include <iterator>
+#include <optional>
+#include <sstream>
 #include <limits>
 #include <string>
 #include <thread>
@@ -20,6 +37,7 @@
 
 #include "runtime/participant.hpp"
 #include "runtime/reader.hpp"
+#include "runtime/run_self.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/topics.hpp"
 #include "runtime/waitset.hpp"
@@ -42,7 +60,13 @@ struct PeerArgs {
   std::string identity;
   std::string mode;
   double seconds = 3.0;
+  int run_of = 0;                // forge-*: copy the run id of this process (a heslam-supervisor)
+  int pid = 0;                   // forge-status: the pid claimed
+  std::string name = "recorder";  // forge-status: the component claimed
 };
+
+// The forged map version (issue 38 item 5).
+constexpr uint64_t kForgedMapVersion = 999'999;
 
 PeerArgs parse(int argc, char** argv) {
   PeerArgs args;
@@ -60,6 +84,12 @@ PeerArgs parse(int argc, char** argv) {
       args.identity = value();
     } else if (arg == "--seconds") {
       args.seconds = std::stod(value());
+    } else if (arg == "--run-of") {
+      args.run_of = std::stoi(value());
+    } else if (arg == "--pid") {
+      args.pid = std::stoi(value());
+    } else if (arg == "--name") {
+      args.name = value();
     } else if (args.mode.empty() && arg.rfind("--", 0) != 0) {
       args.mode = arg;
     } else {
@@ -67,9 +97,11 @@ PeerArgs parse(int argc, char** argv) {
     }
   }
   if (args.mode != "publish-stereo" && args.mode != "publish-correction" && args.mode != "publish-hostile" &&
-      args.mode != "read-stereo") {
+      args.mode != "read-stereo" && args.mode != "forge-odometry" && args.mode != "forge-status" &&
+      args.mode != "forge-frame-done" && args.mode != "forge-keyframe-done") {
     throw std::runtime_error(
-        "MODE: expected publish-stereo, publish-correction, publish-hostile or read-stereo, got '" + args.mode + "'");
+        "MODE: expected publish-stereo, publish-correction, publish-hostile, read-stereo or forge-*, got '" + args.mode +
+        "'");
   }
   return args;
 }
@@ -183,6 +215,101 @@ int publish_hostile(runtime::Participant& participant, const runtime::Topics& to
   return 0;
 }
 
+// "<pid>:<start time>" of `pid` (runtime/run_id.hpp): what its children's writers advertise.
+std::string run_id_of(int pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  const std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+  const std::size_t close = text.rfind(')');
+  if (close == std::string::npos) throw std::runtime_error("--run-of " + std::to_string(pid) + ": no such process");
+  std::istringstream fields(text.substr(close + 1));
+  std::string field;
+  for (int index = 3; index <= 22 && fields >> field; ++index) {}  // field 22: start time (proc(5))
+  return std::to_string(pid) + ":" + field;
+}
+
+// Forges one component's samples (see the file comment) until --seconds pass.
+int forge(runtime::Participant& participant, const runtime::Topics& topics, const PeerArgs& args) {
+  runtime::Reader<msg::StereoFrame> frames(participant, topics.stereo());
+  runtime::Reader<msg::Keyframe> keyframes(participant, topics.keyframes());
+  std::optional<runtime::Writer<msg::Odometry>> odometry;
+  std::optional<runtime::Writer<msg::ComponentStatus>> status;
+  std::optional<runtime::Writer<msg::FrameDone>> frame_done;
+  std::optional<runtime::Writer<msg::KeyframeDone>> keyframe_done;
+  if (args.mode == "forge-odometry") odometry.emplace(participant, topics.odometry());
+  if (args.mode == "forge-status") status.emplace(participant, topics.status());
+  if (args.mode == "forge-frame-done") frame_done.emplace(participant, topics.frame_done());
+  if (args.mode == "forge-keyframe-done") keyframe_done.emplace(participant, topics.keyframe_done());
+  static char frontend[] = "frontend";
+  static char mapper[] = "local_mapper";
+  static char executable[] = "heslam-recorder";
+  static char result[] = "tracked 40/40 frames, 0 lost, trajectory /forged/path.txt";
+  std::string name = args.name;
+  uint64_t written = 0, blind = 0;
+  const auto write_odometry = [&](uint64_t seq, int64_t stamp_ns) {
+    msg::Odometry pose{};
+    pose.seq = seq;
+    pose.stamp_ns = stamp_ns;
+    pose.state = heslam_msg_TRACKING_OK;
+    pose.T_wc.position_m[0] = 100.0;
+    pose.T_wc.orientation_xyzw[3] = 1.0;
+    pose.T_ref_c = pose.T_wc;
+    odometry->write(pose);
+    ++written;
+  };
+  const auto write_frame_done = [&](uint64_t seq, int64_t stamp_ns) {
+    msg::FrameDone done{};
+    done.seq = seq;
+    done.stamp_ns = stamp_ns;
+    done.component = frontend;
+    frame_done->write(done);
+    ++written;
+  };
+  const auto write_keyframe_done = [&](uint64_t id) {
+    msg::KeyframeDone done{};
+    done.keyframe_id = id;
+    done.component = mapper;
+    done.map_version = kForgedMapVersion;
+    keyframe_done->write(done);
+    ++written;
+  };
+  for_duration(args.seconds, [&] {
+    bool saw = false;
+    for (auto& frame : frames.take()) {
+      if (!frame.info.valid_data) continue;
+      saw = true;
+      if (odometry) write_odometry(frame.sample->seq, frame.sample->stamp_ns);
+      if (frame_done) write_frame_done(frame.sample->seq, frame.sample->stamp_ns);
+    }
+    for (auto& keyframe : keyframes.take()) {
+      if (!keyframe.info.valid_data || !keyframe_done) continue;
+      saw = true;
+      write_keyframe_done(keyframe.sample->id);
+    }
+    if (status) {
+      msg::ComponentStatus sample{};
+      sample.name = name.data();
+      sample.pid = args.pid;
+      sample.executable = executable;
+      sample.state = heslam_msg_STATE_RUNNING;
+      sample.message = result;
+      sample.stamp_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                            std::chrono::system_clock::now().time_since_epoch())
+                            .count();
+      status->write(sample);
+      ++written;
+    }
+    if (!saw) {  // blind, as a forger that cannot read (secure mode) would still try
+      if (odometry) write_odometry(blind, static_cast<int64_t>(blind) * 50'000'000);
+      if (frame_done) write_frame_done(blind, static_cast<int64_t>(blind) * 50'000'000);
+      if (keyframe_done) write_keyframe_done((uint64_t{1} << 56) | (blind + 1));
+      ++blind;
+    }
+    std::this_thread::sleep_for(kPublishPeriod);
+  });
+  std::cout << "peer " << args.mode << ": wrote " << written << std::endl;
+  return 0;
+}
+
 int read_stereo(runtime::Participant& participant, const runtime::Topics& topics, const PeerArgs& args) {
   runtime::Reader<msg::StereoFrame> reader(participant, topics.stereo());
   runtime::WaitSet waitset(participant);
@@ -214,12 +341,15 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
+    // A copied run id: what every Writer of this process then advertises (runtime/run_self.hpp).
+    if (args.run_of > 0) setenv(runtime::kJoinRunVariable, test::run_id_of(args.run_of).c_str(), 1);
     runtime::Participant participant(runtime::ParticipantOptions{args.domain_id, "", args.identity});
     const runtime::Topics topics(args.ns);
     try {
       if (args.mode == "publish-stereo") return test::publish_stereo(participant, topics, args);
       if (args.mode == "publish-correction") return test::publish_correction(participant, topics, args);
       if (args.mode == "publish-hostile") return test::publish_hostile(participant, topics, args);
+      if (args.mode.rfind("forge-", 0) == 0) return test::forge(participant, topics, args);
       return test::read_stereo(participant, topics, args);
     } catch (const std::runtime_error& error) {
       std::cout << "peer " << args.mode << ": refused: " << error.what() << std::endl;

@@ -33,6 +33,9 @@ constexpr std::chrono::milliseconds kHeldSamplesWait{2500};
 // spaced by this many times the duration of the last one: at most 1/21 (~5%) of a core however long
 // the run, while a short run's files follow about every frame.
 constexpr int kRewriteSpacingFactor = 20;
+// At shutdown, the drain ends after this long even if samples keep arriving (a writer that never
+// stops, e.g. a forger, issue 38 item 5): within the supervisor's 5 s stop timeout, after kHeldSamplesWait.
+constexpr std::chrono::milliseconds kMaxShutdownDrain{3500};
 // The replay's count of published frames, on its status.
 constexpr const char* kFramesPublishedCounter = "frames_published";
 // Samples of a second writer kept in case it takes over (a restarted frontend within the 2 s lease
@@ -308,11 +311,18 @@ void Recorder::on_shutdown() {
            keyframe_state_reader_->holds_samples();
   };
   const auto held_deadline = std::chrono::steady_clock::now() + kHeldSamplesWait;
+  const auto drain_deadline = std::chrono::steady_clock::now() + kMaxShutdownDrain;
   auto quiet_since = std::chrono::steady_clock::now();
-  while (std::chrono::steady_clock::now() - quiet_since < kDrainQuietPeriod ||
-         (holding() && std::chrono::steady_clock::now() < held_deadline)) {
+  while ((std::chrono::steady_clock::now() - quiet_since < kDrainQuietPeriod ||
+          (holding() && std::chrono::steady_clock::now() < held_deadline)) &&
+         std::chrono::steady_clock::now() < drain_deadline) {
     if (drain() > 0) quiet_since = std::chrono::steady_clock::now();
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  if (std::chrono::steady_clock::now() - quiet_since < kDrainQuietPeriod) {
+    stats().count("unfinished_drains");
+    log().warn("samples kept arriving for ", kMaxShutdownDrain.count(),
+               " ms after the run ended (a writer that does not stop); recording what arrived until then");
   }
   if (holding()) {
     log().warn("samples of a restarted frontend or mapper were still held back after ", kHeldSamplesWait.count(),

@@ -19,6 +19,7 @@
 #include "runtime/image_transport.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/reader.hpp"
+#include "runtime/role_binding.hpp"
 #include "runtime/shutdown.hpp"
 #include "runtime/status.hpp"
 #include "runtime/topics.hpp"
@@ -43,6 +44,11 @@ constexpr std::chrono::milliseconds kControlPollPeriod{20};
 constexpr std::chrono::milliseconds kProgressPeriod{100};
 // At the end, reliable frames still in flight get this long to be acknowledged by readers.
 constexpr std::chrono::seconds kFinalAckTimeout{2};
+// Lockstep: the role every FrameDone writer claims (one consumer paces the replay), and how many
+// acknowledgements of a second writer are kept while the first one is still matched (a restarted
+// consumer acknowledges one frame, the one it got again).
+constexpr const char* kConsumerRole = "frame consumer";
+constexpr std::size_t kMaxHeldAcks = 64;
 // Unpaired-row warnings printed one by one before summarising the rest.
 constexpr std::size_t kMaxListedWarnings = 5;
 // --loop keeps decoded pairs in memory up to this size (the EuRoC clip: 69 MB), so later passes
@@ -415,10 +421,36 @@ class Replay {
     for (;;) {
       for (auto& received : acks_->take()) {
         // Another run's frontend on the domain acknowledges its own frames, not ours.
-        if (!received.info.valid_data || !runtime::writer_of_this_run(acks_->handle(), received.info.publication_handle)) {
+        const dds_instance_handle_t writer = received.info.publication_handle;
+        if (!received.info.valid_data || !runtime::writer_of_this_run(acks_->handle(), writer)) continue;
+        // One consumer paces the replay, whatever name it claims: a second live writer of FrameDone
+        // (a forger acknowledging the frames in step) is a conflict (runtime/role_binding.hpp).
+        const runtime::RoleBinding::Claim claim = consumer_.claim(acks_->handle(), kConsumerRole, writer, received.sample->seq);
+        if (claim == runtime::RoleBinding::Claim::kHeld && received.sample->seq >= seq) {
+          held_acks_.push_back({writer, received.sample->seq});
+          if (held_acks_.size() > kMaxHeldAcks) held_acks_.erase(held_acks_.begin());
+        }
+        if (claim == runtime::RoleBinding::Claim::kAccepted && received.sample->seq == seq) {
+          consumer_.done(seq);
+          return true;
+        }
+      }
+      // Acknowledgements of a writer that claimed the consumer's role while the first one was still
+      // matched: a restarted consumer's take over once the killed one's lease expired.
+      for (auto held = held_acks_.begin(); held != held_acks_.end();) {
+        const runtime::RoleBinding::Claim claim =
+            held->seq < seq ? runtime::RoleBinding::Claim::kRefused
+                            : consumer_.claim(acks_->handle(), kConsumerRole, held->writer, held->seq, /*again=*/true);
+        if (claim == runtime::RoleBinding::Claim::kHeld) {
+          ++held;
           continue;
         }
-        if (received.sample->seq == seq) return true;
+        const bool done = claim == runtime::RoleBinding::Claim::kAccepted && held->seq == seq;
+        held = held_acks_.erase(held);
+        if (done) {
+          consumer_.done(seq);
+          return true;
+        }
       }
       std::vector<dds_instance_handle_t> now_matched = frame_writer_.matched_reader_handles();
       std::sort(now_matched.begin(), now_matched.end());
@@ -479,6 +511,12 @@ class Replay {
   std::optional<runtime::Reader<msg::FrameDone>> acks_;
   std::optional<runtime::WaitSet> ack_waitset_;
   runtime::Stats stats_;
+  runtime::RoleBinding consumer_{log_, stats_, topics_.frame_done().name};
+  struct HeldAck {
+    dds_instance_handle_t writer;
+    std::uint64_t seq;
+  };
+  std::vector<HeldAck> held_acks_;
   runtime::StatusPublisher status_;
   ProgressLine progress_;
   ReplayPacer pacer_;
