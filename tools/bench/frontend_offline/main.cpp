@@ -8,7 +8,7 @@
 //                                [--stereo-gain L,R[/L,R...]] [--disparity-noise SIGMA]
 //                                [--drop-stereo-right-above LEVEL] [--k1-offset DK]
 //                                [--first-frame K] [--frames N] [--period-ms P]
-//                                [--tracking-worker on|off] [--pin-threads on|off]
+//                                [--pin-threads on|off]
 //                                [--stationary-chi2 X] [--rotation-chi2 X]
 //                                [--close-untracked-near-clip-weight W]
 //                                [--kidnap DIR [--kidnap-plan B,R,S[,N]]] [--vocabulary FILE|none]
@@ -51,7 +51,6 @@ constexpr const char* kUsage =
     "                           depends on the lens model at the image's edges)\n"
     "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
     "       [--period-ms P]   (start a frame every P ms, idle in between, as a camera: 50 for EuRoC's 20 Hz)\n"
-    "       [--tracking-worker on|off]   (the tracker's BA passes in halves on a second thread; default off)\n"
     "       [--pin-threads on|off]       (the pipeline's two threads on two CPUs, Pipeline.pinThreads; default on)\n"
     "       [--close-untracked-near-clip-weight W]   (tracker.close_untracked_near_clip_weight, 0-1; default 0.9)\n"
     "       [--reference-near-clip-weight W]   (tracker.reference_near_clip_weight, 0-1; default 1)\n"
@@ -178,9 +177,6 @@ int run(int argc, char** argv) {
     } else if (arg == "--pin-threads") {
       if (value != "on" && value != "off") throw std::runtime_error("--pin-threads: expected on or off, got '" + value + "'");
       pin_threads = value == "on";
-    } else if (arg == "--tracking-worker") {
-      if (value != "on" && value != "off") throw std::runtime_error("--tracking-worker: expected on or off, got '" + value + "'");
-      options.tracking_worker = value == "on";
     } else if (arg == "--stationary-chi2") {
       options.tracker.stationary_test_chi2 = parse_number<double>(arg, value);
     } else if (arg == "--vocabulary") {
@@ -301,11 +297,6 @@ int run(int argc, char** argv) {
                 "threads %s\n",
                 static_cast<double>(result.hand_offs) / frames, static_cast<double>(result.sleeping_hand_offs) / frames,
                 result.threads_pinned ? "pinned to two CPUs" : "not pinned");
-    if (options.tracking_worker) {
-      std::printf("hand-offs to the tracker's worker: %.1f per frame, %.1f of them to a sleeping thread\n",
-                  static_cast<double>(result.tracking_hand_offs) / frames,
-                  static_cast<double>(result.tracking_sleeping_hand_offs) / frames);
-    }
   }
   if (std::getenv("HESLAM_FRONTEND_OFFLINE_PER_FRAME") != nullptr) {
     for (std::size_t k = 0; k < result.frames.size(); ++k) {
