@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "runtime/flags.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/reader.hpp"
 #include "runtime/sequence.hpp"
@@ -46,26 +47,17 @@ struct PeerArgs {
 
 PeerArgs parse(int argc, char** argv) {
   PeerArgs args;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error(arg + ": missing value");
-      return argv[++i];
-    };
-    if (arg == "--domain") {
-      args.domain_id = std::stoi(value());
-    } else if (arg == "--namespace") {
-      args.ns = value();
-    } else if (arg == "--identity") {
-      args.identity = value();
-    } else if (arg == "--seconds") {
-      args.seconds = std::stod(value());
-    } else if (args.mode.empty() && arg.rfind("--", 0) != 0) {
-      args.mode = arg;
-    } else {
-      throw std::runtime_error("unexpected argument '" + arg + "'");
-    }
-  }
+  runtime::Flags flags("heslam-test-secure-peer MODE [options]");
+  flags.integer("--domain", "N", &args.domain_id, 0, runtime::kMaxDomainId, "DDS domain")
+      .text("--namespace", "NAME", &args.ns, "topic namespace")
+      .text("--identity", "DIR", &args.identity, "the DDS Security identity")
+      .number("--seconds", "S", &args.seconds, 0.0, 86400.0, "how long to run")
+      .positional("MODE", "publish-stereo, publish-correction, publish-hostile or read-stereo",
+                  [&args](const std::string& arg) {
+                    if (!args.mode.empty()) throw std::runtime_error("unexpected argument '" + arg + "'");
+                    args.mode = arg;
+                  });
+  flags.parse(argc, argv);
   if (args.mode != "publish-stereo" && args.mode != "publish-correction" && args.mode != "publish-hostile" &&
       args.mode != "read-stereo") {
     throw std::runtime_error(
