@@ -50,7 +50,10 @@ Flags common_flags(CommonArgs& args) {
                 args.ns = value;
               })
       .non_empty_text("--name", "NAME", &args.name, "instance name in status and logs (default: the program's)")
-      .path("--config", "FILE", &args.config_file, "YAML options (default: every option at its documented default)")
+      .custom("--config", "FILE",
+              "YAML options (default: every option at its documented default); given\n"
+              "again, the later file overlays the earlier one field by field",
+              [&args](const std::string& value) { args.config_files.emplace_back(value); })
       .custom("--log-level", "LEVEL", "debug, info, warn, error or off (default: info)",
               [&args](const std::string& value) {
                 const auto level = parse_log_level(value);

@@ -19,7 +19,9 @@ struct CommonArgs {
   std::string ns = "heslam";          // topic namespace
   std::string name;                   // instance name (status key, log prefix); default: the program's
   std::string program;                // the executable's name for error lines, see program_name()
-  std::filesystem::path config_file;  // empty: every option at its documented default
+  // --config, in order: each file overlays the ones before it field by field (the pipeline passes its
+  // shipped file, then a user's); none: every option at its documented default.
+  std::vector<std::filesystem::path> config_files;
   LogLevel log_level = LogLevel::kInfo;
   std::string dds_config;             // empty: see ParticipantOptions::dds_config
   // The stereo image topic: UDP on domain_id, or iceoryx shared memory on image_domain_id (required

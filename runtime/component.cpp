@@ -25,7 +25,7 @@ int Component::execute() {
     if (!args_.rest.empty() && !accepts_positional_args()) {
       throw std::runtime_error("unexpected argument '" + args_.rest.front() + "' (see --help)");
     }
-    const Config config = args_.config_file.empty() ? Config::empty() : Config::load(args_.config_file);
+    const Config config = Config::load(args_.config_files);
     configure(config);
     config.reject_unknown();
     status_->set_state(ComponentState::kRunning);

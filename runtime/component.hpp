@@ -129,7 +129,7 @@ int component_main(int argc, char** argv, std::string_view default_name) {
     if (args.check) {
       // What a run would refuse at start-up, without DDS or files written: the config file's syntax
       // and, for a component that has one, its own check of its flags and fields.
-      const Config config = args.config_file.empty() ? Config::empty() : Config::load(args.config_file);
+      const Config config = Config::load(args.config_files);
       if constexpr (requires { C::check(args, config); }) C::check(args, config);
       return 0;
     }

@@ -2,6 +2,7 @@
 #include "runtime/config.hpp"
 
 #include <fstream>
+#include <utility>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -106,11 +107,11 @@ struct Config::State {
   std::string prefix;          // key prefix in messages: "" or "components[2]."
   std::string source;
   std::filesystem::path folder;
+  std::shared_ptr<const State> base;  // the layer this one overlays (a field absent here is looked up there)
   mutable std::set<std::string> used;
 
-  // The node of key, or an empty node when absent. Marks the key used.
-  cv::FileNode find(std::string_view key) const {
-    used.insert(std::string(key));
+  // The node of key in this layer alone, or an empty node.
+  cv::FileNode find_here(std::string_view key) const {
     if (root.empty()) return {};
     cv::FileNode node = root;
     for (const std::string& part : split_key(key)) {
@@ -119,6 +120,18 @@ struct Config::State {
       if (node.empty()) return {};
     }
     return node;
+  }
+
+  // The node of key in the topmost layer that has it, with that layer (messages and relative paths
+  // name the file the value came from); this layer and an empty node when no layer has it. Marks the
+  // key used in every layer.
+  std::pair<cv::FileNode, const State*> find(std::string_view key) const {
+    for (const State* layer = this; layer != nullptr; layer = layer->base.get()) layer->used.insert(std::string(key));
+    for (const State* layer = this; layer != nullptr; layer = layer->base.get()) {
+      cv::FileNode node = layer->find_here(key);
+      if (!node.empty()) return {node, layer};
+    }
+    return {cv::FileNode(), this};
   }
 
   [[noreturn]] void fail(std::string_view key, const std::string& expected, const cv::FileNode& node) const {
@@ -159,37 +172,54 @@ Config Config::load(const std::filesystem::path& file) {
   return config;
 }
 
+Config Config::load(const std::vector<std::filesystem::path>& files) {
+  if (files.empty()) return empty();
+  Config config = load(files.front());
+  for (std::size_t i = 1; i < files.size(); ++i) config = load(files[i]).over(config);
+  return config;
+}
+
+Config Config::over(const Config& base) const {
+  if (state_->base != nullptr) throw std::logic_error("Config::over: " + state_->source + " already overlays a config");
+  auto state = std::make_shared<State>(*state_);
+  state->used.clear();
+  state->base = base.state_;
+  return Config(state);
+}
+
 Config Config::empty(const std::string& source) {
   auto state = std::make_shared<State>();
   state->source = source;
   return Config(state);
 }
 
-bool Config::has(std::string_view key) const { return !state_->find(key).empty(); }
+bool Config::has(std::string_view key) const { return !state_->find(key).first.empty(); }
+
+bool Config::is_list(std::string_view key) const { return state_->find(key).first.isSeq(); }
 
 int Config::get_int(std::string_view key, int default_value, int min, int max) const {
-  const cv::FileNode node = state_->find(key);
+  const auto [node, layer] = state_->find(key);
   if (node.empty()) return default_value;
   const std::string expected = "an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "]";
-  if (!node.isInt()) state_->fail(key, expected, node);
+  if (!node.isInt()) layer->fail(key, expected, node);
   const int value = static_cast<int>(node);
-  if (value < min || value > max) state_->fail(key, expected, node);
+  if (value < min || value > max) layer->fail(key, expected, node);
   return value;
 }
 
 double Config::get_double(std::string_view key, double default_value, double min, double max) const {
-  const cv::FileNode node = state_->find(key);
+  const auto [node, layer] = state_->find(key);
   if (node.empty()) return default_value;
   std::ostringstream expected;
   expected << "a number in [" << min << ", " << max << "]";
-  if (!node.isInt() && !node.isReal()) state_->fail(key, expected.str(), node);
+  if (!node.isInt() && !node.isReal()) layer->fail(key, expected.str(), node);
   const double value = static_cast<double>(node);
-  if (!(value >= min && value <= max)) state_->fail(key, expected.str(), node);
+  if (!(value >= min && value <= max)) layer->fail(key, expected.str(), node);
   return value;
 }
 
 bool Config::get_bool(std::string_view key, bool default_value) const {
-  const cv::FileNode node = state_->find(key);
+  const auto [node, layer] = state_->find(key);
   if (node.empty()) return default_value;
   if (node.isInt()) {
     const int value = static_cast<int>(node);
@@ -199,48 +229,48 @@ bool Config::get_bool(std::string_view key, bool default_value) const {
     if (value == "true" || value == "yes" || value == "on") return true;
     if (value == "false" || value == "no" || value == "off") return false;
   }
-  state_->fail(key, "true or false", node);
+  layer->fail(key, "true or false", node);
 }
 
 std::string Config::get_string(std::string_view key, const std::string& default_value) const {
-  const cv::FileNode node = state_->find(key);
+  const auto [node, layer] = state_->find(key);
   if (node.empty()) return default_value;
-  if (!node.isString()) state_->fail(key, "a string", node);
+  if (!node.isString()) layer->fail(key, "a string", node);
   return node;
 }
 
 std::string Config::get_choice(std::string_view key, const std::string& default_value,
                                std::initializer_list<std::string_view> choices) const {
-  const cv::FileNode node = state_->find(key);
+  const auto [node, layer] = state_->find(key);
   std::string expected = "one of";
   for (std::string_view choice : choices) {
     expected += ' ';
     expected += choice;
   }
   if (node.empty()) return default_value;
-  if (!node.isString()) state_->fail(key, expected, node);
+  if (!node.isString()) layer->fail(key, expected, node);
   const std::string value = node;
   for (std::string_view choice : choices) {
     if (value == choice) return value;
   }
-  state_->fail(key, expected, node);
+  layer->fail(key, expected, node);
 }
 
 std::filesystem::path Config::get_path(std::string_view key, const std::filesystem::path& default_value) const {
-  const cv::FileNode node = state_->find(key);
+  const auto [node, layer] = state_->find(key);
   if (node.empty()) return default_value;
-  if (!node.isString()) state_->fail(key, "a path", node);
+  if (!node.isString()) layer->fail(key, "a path", node);
   const std::filesystem::path path = static_cast<std::string>(node);
-  return path.is_relative() && !state_->folder.empty() ? state_->folder / path : path;
+  return path.is_relative() && !layer->folder.empty() ? layer->folder / path : path;
 }
 
 std::vector<double> Config::get_doubles(std::string_view key, const std::vector<double>& default_value) const {
-  const cv::FileNode node = state_->find(key);
+  const auto [node, layer] = state_->find(key);
   if (node.empty()) return default_value;
-  if (!node.isSeq()) state_->fail(key, "a list of numbers", node);
+  if (!node.isSeq()) layer->fail(key, "a list of numbers", node);
   std::vector<double> values;
   for (const cv::FileNode& item : node) {
-    if (!item.isInt() && !item.isReal()) state_->fail(key, "a list of numbers", item);
+    if (!item.isInt() && !item.isReal()) layer->fail(key, "a list of numbers", item);
     values.push_back(static_cast<double>(item));
   }
   return values;
@@ -248,9 +278,9 @@ std::vector<double> Config::get_doubles(std::string_view key, const std::vector<
 
 std::vector<std::string> Config::get_strings(std::string_view key,
                                              const std::vector<std::string>& default_value) const {
-  const cv::FileNode node = state_->find(key);
+  const auto [node, layer] = state_->find(key);
   if (node.empty()) return default_value;
-  if (!node.isSeq()) state_->fail(key, "a list of strings", node);
+  if (!node.isSeq()) layer->fail(key, "a list of strings", node);
   std::vector<std::string> values;
   for (const cv::FileNode& item : node) {
     if (item.isString()) {
@@ -258,52 +288,52 @@ std::vector<std::string> Config::get_strings(std::string_view key,
     } else if (item.isInt() || item.isReal()) {
       values.push_back(describe(item));  // numbers are fine as strings (arguments like "5")
     } else {
-      state_->fail(key, "a list of strings", item);
+      layer->fail(key, "a list of strings", item);
     }
   }
   return values;
 }
 
 std::string Config::get_scalar(std::string_view key, const std::string& default_value) const {
-  const cv::FileNode node = state_->find(key);
+  const auto [node, layer] = state_->find(key);
   if (node.empty()) return default_value;
   if (node.isString()) return node;
   if (node.isInt() || node.isReal()) return describe(node);
-  state_->fail(key, "a single value", node);
+  layer->fail(key, "a single value", node);
 }
 
 std::map<std::string, std::string> Config::get_string_map(std::string_view key) const {
-  const cv::FileNode node = state_->find(key);
+  const auto [node, layer] = state_->find(key);
   std::map<std::string, std::string> values;
   if (node.empty()) return values;
-  if (!node.isMap()) state_->fail(key, "a map of names to values", node);
+  if (!node.isMap()) layer->fail(key, "a map of names to values", node);
   for (const cv::FileNode& item : node) {
     if (item.isString()) {
       values[item.name()] = static_cast<std::string>(item);
     } else if (item.isInt() || item.isReal()) {
       values[item.name()] = describe(item);
     } else {
-      state_->fail(std::string(key) + "." + item.name(), "a string", item);
+      layer->fail(std::string(key) + "." + item.name(), "a string", item);
     }
   }
   return values;
 }
 
 std::vector<Config> Config::get_sections(std::string_view key) const {
-  const cv::FileNode node = state_->find(key);
+  const auto [node, layer] = state_->find(key);
   std::vector<Config> sections;
   if (node.empty()) return sections;
-  if (!node.isSeq()) state_->fail(key, "a list of maps", node);
+  if (!node.isSeq()) layer->fail(key, "a list of maps", node);
   int index = 0;
   for (const cv::FileNode& item : node) {
     const std::string item_key = std::string(key) + "[" + std::to_string(index++) + "]";
-    if (!item.isMap()) state_->fail(item_key, "a map of fields", item);
+    if (!item.isMap()) layer->fail(item_key, "a map of fields", item);
     auto state = std::make_shared<State>();
-    state->storage = state_->storage;
+    state->storage = layer->storage;
     state->root = item;
-    state->prefix = state_->prefix + item_key + ".";
-    state->source = state_->source;
-    state->folder = state_->folder;
+    state->prefix = layer->prefix + item_key + ".";
+    state->source = layer->source;
+    state->folder = layer->folder;
     check_duplicates(item, state->prefix, state->source);
     sections.push_back(Config(state));
   }
@@ -311,21 +341,22 @@ std::vector<Config> Config::get_sections(std::string_view key) const {
 }
 
 void Config::reject_unknown() const {
-  if (state_->root.empty()) return;
-  // Depth-first over the map: a field is known when it or one of its parents was asked for.
-  std::vector<std::pair<cv::FileNode, std::string>> stack{{state_->root, ""}};
-  while (!stack.empty()) {
-    auto [map, prefix] = stack.back();
-    stack.pop_back();
-    if (!map.isMap()) continue;
-    for (const cv::FileNode& child : map) {
-      const std::string key = prefix + child.name();
-      if (state_->used.count(key) != 0) continue;
-      if (child.isMap()) {
-        stack.emplace_back(child, key + ".");
-      } else {
-        throw std::runtime_error(state_->source + ": unknown field '" + state_->prefix + key +
-                                 "' (no such option)");
+  for (const State* layer = state_.get(); layer != nullptr; layer = layer->base.get()) {
+    if (layer->root.empty()) continue;
+    // Depth-first over the map: a field is known when it or one of its parents was asked for.
+    std::vector<std::pair<cv::FileNode, std::string>> stack{{layer->root, ""}};
+    while (!stack.empty()) {
+      auto [map, prefix] = stack.back();
+      stack.pop_back();
+      if (!map.isMap()) continue;
+      for (const cv::FileNode& child : map) {
+        const std::string key = prefix + child.name();
+        if (layer->used.count(key) != 0) continue;
+        if (child.isMap()) {
+          stack.emplace_back(child, key + ".");
+        } else {
+          throw std::runtime_error(layer->source + ": unknown field '" + layer->prefix + key + "' (no such option)");
+        }
       }
     }
   }

@@ -3,7 +3,8 @@
 // Every getter takes the documented default, used when the field is absent. A present field of the
 // wrong type or out of range throws std::runtime_error with one line naming file, field and what
 // was expected:  "frontend.yaml: field 'orb.levels': expected an integer in [1, 16], got 40".
-// Keys use dots for nested maps ("orb.levels"). reject_unknown() turns typos into errors.
+// Keys use dots for nested maps ("orb.levels"). reject_unknown() turns typos into errors. Several
+// files can be layered (a user's file over the shipped one): see load(files).
 #pragma once
 
 #include <climits>
@@ -22,12 +23,19 @@ class Config {
  public:
   // Throws "<file>: cannot open" / "<file>: not a YAML map: <reason>".
   static Config load(const std::filesystem::path& file);
+  // Layers: each file overlays the ones before it field by field (a nested field absent from a later
+  // file keeps the earlier file's value). Messages and relative paths name the file a value came from;
+  // reject_unknown() checks every file. No files: empty().
+  static Config load(const std::vector<std::filesystem::path>& files);
+  // This config laid over base: a field absent here is base's. (This one must not overlay another.)
+  Config over(const Config& base) const;
   // Parses YAML text; source names it in messages.
   static Config parse(const std::string& yaml_text, const std::string& source);
   // No fields: every getter returns its default.
   static Config empty(const std::string& source = "<defaults>");
 
   bool has(std::string_view key) const;
+  bool is_list(std::string_view key) const;  // present and a YAML sequence
 
   int get_int(std::string_view key, int default_value, int min = INT_MIN, int max = INT_MAX) const;
   double get_double(std::string_view key, double default_value,

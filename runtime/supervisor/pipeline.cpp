@@ -457,15 +457,26 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       for (const std::string& arg : section.get_strings("args", {})) spec.args.push_back(substitute(where + ".args", arg));
     });
     collect(problems, [&] {
-      const std::string text = substitute(where + ".config", section.get_string("config", ""));
-      if (text.empty() || disabled) return;  // a disabled component's config may name its executable
-      std::filesystem::path path = text;
-      if (path.is_relative()) path = folder / path;
-      if (!std::filesystem::is_regular_file(path)) {
-        throw std::runtime_error(source + ": " + label + ": config " + path.string() + " does not exist");
+      const std::vector<std::string> entries = section.is_list("config") ? section.get_strings("config", {})
+                                                                          : std::vector{section.get_string("config", "")};
+      if (disabled) return;  // a disabled component's config may name its executable
+      for (const std::string& entry : entries) {
+        const std::string text = substitute(where + ".config", entry);
+        if (text.empty()) continue;
+        // A relative path names a file beside the pipeline (the shipped configs) or, failing that, one
+        // in the current directory (a user's --arg file).
+        std::filesystem::path path = text;
+        if (path.is_relative() && !std::filesystem::is_regular_file(folder / path) &&
+            std::filesystem::is_regular_file(path)) {
+          path = std::filesystem::absolute(path);
+        }
+        if (path.is_relative()) path = folder / path;
+        if (!std::filesystem::is_regular_file(path)) {
+          throw std::runtime_error(source + ": " + label + ": config " + path.string() + " does not exist");
+        }
+        spec.configs.push_back(std::filesystem::absolute(path));
       }
-      Config::load(path);  // its own syntax errors, named by its file
-      spec.config = std::filesystem::absolute(path);
+      Config::load(spec.configs);  // their own syntax errors, named by their files
     });
     collect(problems, [&] {
       for (const std::string& input : section.get_strings("inputs", {})) {

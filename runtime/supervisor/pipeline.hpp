@@ -19,7 +19,9 @@ struct ComponentSpec {
   std::string name;                       // unique in the pipeline; also its --name and log file
   std::filesystem::path executable;       // resolved absolute path
   std::vector<std::string> args;          // after $(arg) substitution
-  std::filesystem::path config;           // empty: none
+  // --config files in order, each overlaying the ones before (field `config`: a file, or a list such
+  // as [shipped.yaml, $(arg user_config)], empty entries skipped); empty: none.
+  std::vector<std::filesystem::path> configs;
   // Files or folders it reads (e.g. the dataset): each must exist, checked by --check and before
   // anything starts, so a wrong path is one line and exit 1 instead of a failing, restarting process.
   std::vector<std::filesystem::path> inputs;

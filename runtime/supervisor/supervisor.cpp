@@ -137,7 +137,7 @@ std::vector<std::string> component_args(const Pipeline& pipeline, const Componen
   if (spec.common_args) {
     args.insert(args.end(), {"--domain", std::to_string(pipeline.domain_id), "--namespace", pipeline.ns, "--name",
                              spec.name, "--log-level", std::string(runtime::to_string(level))});
-    if (!spec.config.empty()) args.insert(args.end(), {"--config", spec.config.string()});
+    for (const std::filesystem::path& config : spec.configs) args.insert(args.end(), {"--config", config.string()});
     if (!pipeline.dds_config.empty()) args.insert(args.end(), {"--dds-config", pipeline.dds_config});
     if (pipeline.image_transport == runtime::ImageTransport::kShm) {
       args.insert(args.end(), {"--image-transport", "shm", "--image-domain", std::to_string(pipeline.image_domain_id)});

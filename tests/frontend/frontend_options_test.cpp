@@ -162,6 +162,25 @@ TEST(FrontendOptions, BadSettingIsOneLineNamingFileAndKey) {
   EXPECT_THROW(typo.reject_unknown(), std::runtime_error);
 }
 
+// An ORB-SLAM3 settings file (File.version "1.0") is read with ORB-SLAM3's meaning: its ORBextractor.*
+// and Stereo.ThDepth reach the frontend, Camera1.* / Stereo.b are the calibration keys compared with the
+// data's, and a typo is named as in an ORB-SLAM2 file.
+TEST(FrontendOptions, OrbSlam3SettingsFileIsHonoured) {
+  const SettingsScratch scratch;
+  const FrontendOptions options = with_settings(scratch.write(
+      "File.version: \"1.0\"\nCamera.type: \"PinHole\"\nCamera1.fx: 400.0\nCamera1.fy: 400.0\nCamera1.cx: 376.0\n"
+      "Camera1.cy: 240.0\nCamera.width: 752\nCamera.height: 480\nCamera.fps: 10\nCamera.RGB: 1\nStereo.b: 0.1\n"
+      "Stereo.ThDepth: 60.0\nORBextractor.nFeatures: 1300\nORBextractor.nFeaturess: 1400\nViewer.KeyFrameSize: 0.05\n"));
+  EXPECT_EQ(options.features.orb.features, 1300);
+  EXPECT_EQ(options.tracker.close_depth_baselines, 60.0);
+  EXPECT_EQ(options.tracker.max_frames_between_keyframes, 10);
+  EXPECT_EQ(options.settings_unused_keys, (std::vector<std::string>{"ORBextractor.nFeaturess", "Viewer.KeyFrameSize"}));
+  EXPECT_DOUBLE_EQ(options.settings_camera_fx, 400.0);
+  EXPECT_NEAR(options.settings_camera_bf, 40.0, 1e-9);
+  expect_error_naming_key("File.version: \"1.0\"\nCamera.type: \"KannalaBrandt8\"\n", "Camera.type");
+  expect_error_naming_key("ThDepth: 40.0\nStereo.ThDepth: 60.0\n", "Stereo.ThDepth");
+}
+
 // vocabulary.file: empty = the build's default vocabulary, none = no vocabulary, a missing or
 // malformed file one line naming it.
 TEST(FrontendOptions, VocabularyFileDefaultNoneAndBadFiles) {

@@ -47,7 +47,7 @@ TEST(CommonArgs, ParsesBothSpellings) {
   EXPECT_EQ(args.domain_id, 7);
   EXPECT_EQ(args.ns, "robot1");
   EXPECT_EQ(args.name, "fe");
-  EXPECT_EQ(args.config_file, "c.yaml");
+  EXPECT_EQ(args.config_files, std::vector<std::filesystem::path>{"c.yaml"});
   EXPECT_EQ(args.log_level, LogLevel::kDebug);
   EXPECT_EQ(args.rest, (std::vector<std::string>{"x"}));
 }

@@ -175,6 +175,33 @@ TEST_F(DatasetReader, EurocUnreadableCalibrationNamesTheFile) {
   EXPECT_NE(open_error().find("sensor.yaml"), std::string::npos) << open_error();
 }
 
+// --camera FILE of the replay: the calibration is a settings file's instead of the dataset's, for both
+// layouts; a bad file is the loader's one line naming it.
+TEST_F(DatasetReader, CalibrationFromASettingsFileReplacesTheDatasets) {
+  const fs::path settings = root_ / "rig.yaml";
+  write_text(settings,
+             "%YAML:1.0\nFile.version: \"1.0\"\nCamera.type: \"PinHole\"\nCamera1.fx: 50.0\nCamera1.fy: 50.0\n"
+             "Camera1.cx: 20.0\nCamera1.cy: 15.0\nCamera.width: " + std::to_string(kWidth) + "\nCamera.height: " +
+                 std::to_string(kHeight) + "\nStereo.b: 0.3\n");
+  make_euroc(kThreeRows, kThreeRows);
+  DatasetOptions options;
+  options.calibration_file = settings;
+  const StereoDataset euroc = open_dataset(root_, options);
+  EXPECT_EQ(euroc.calibration.source, settings.string());
+  EXPECT_TRUE(euroc.calibration.input_rectified);
+  EXPECT_NEAR(euroc.calibration.T_rl().translation().norm(), 0.3, 1e-12);
+  EXPECT_EQ(euroc.frames.size(), 3u);
+
+  fs::remove_all(root_ / "mav0");
+  make_kitti("0.0\n0.1\n0.2\n");
+  const StereoDataset kitti = open_dataset(root_, options);
+  EXPECT_EQ(kitti.calibration.source, settings.string());
+  EXPECT_NEAR(kitti.calibration.left.fx_px, 50.0, 1e-12);
+
+  options.calibration_file = root_ / "missing.yaml";
+  EXPECT_NE(open_error(options).find("missing.yaml"), std::string::npos) << open_error(options);
+}
+
 TEST_F(DatasetReader, FrameListsWithoutCalibration) {
   make_euroc(kThreeRows, kThreeRows);
   fs::remove(root_ / "mav0" / "cam1" / "sensor.yaml");  // not read

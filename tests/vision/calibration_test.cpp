@@ -208,6 +208,63 @@ TEST(Calibration, SameRigGivesSameModelInEveryFormat) {
   expect_same_model(StereoRectifier(rectified).camera(), m, 1e-9);
 }
 
+// ORB-SLAM3's settings format (File.version "1.0") for the same rig: a raw pair (Camera1/Camera2 with
+// Stereo.T_c1_c2, IMU.T_b_c1 placing it on the body) and a rectified one (Stereo.b) give the same model
+// as the EuRoC files; what heslam cannot honour is refused in one line naming the key.
+TEST(Calibration, OrbSlam3SettingsGiveTheSameModelOrOneClearLine) {
+  const StereoCalibration euroc = load_euroc_calibration(write_euroc("orbslam3", kEurocCam0, kEurocCam1));
+  const PinholeStereo m = StereoRectifier(euroc).camera();
+  const fs::path dir = scratch_dir("orbslam3");
+  auto camera = [](const std::string& name, const CameraModel& c) {
+    char text[512];
+    std::snprintf(text, sizeof text,
+                  "%s.fx: %.17g\n%s.fy: %.17g\n%s.cx: %.17g\n%s.cy: %.17g\n%s.k1: %.17g\n%s.k2: %.17g\n"
+                  "%s.p1: %.17g\n%s.p2: %.17g\n",
+                  name.c_str(), c.fx_px, name.c_str(), c.fy_px, name.c_str(), c.cx_px, name.c_str(), c.cy_px,
+                  name.c_str(), c.distortion[0], name.c_str(), c.distortion[1], name.c_str(), c.distortion[2],
+                  name.c_str(), c.distortion[3]);
+    return std::string(text);
+  };
+  const std::string header = "%YAML:1.0\nFile.version: \"1.0\"\nCamera.type: \"PinHole\"\n"
+                             "Camera.width: 752\nCamera.height: 480\nCamera.fps: 20\nStereo.ThDepth: 60.0\n";
+  const Eigen::Matrix4d T_c1_c2 = (euroc.left.T_BS.inverse() * euroc.right.T_BS).matrix();
+  const std::string raw = header + camera("Camera1", euroc.left) + camera("Camera2", euroc.right) +
+                          matrix_yaml("Stereo.T_c1_c2", T_c1_c2) + matrix_yaml("IMU.T_b_c1", euroc.left.T_BS.matrix());
+  write(dir / "raw.yaml", raw);
+  const StereoCalibration from_raw = load_orbslam_settings(dir / "raw.yaml");
+  EXPECT_FALSE(from_raw.input_rectified);
+  EXPECT_DOUBLE_EQ(from_raw.rate_hz, 20.0);
+  expect_same_model(StereoRectifier(from_raw).camera(), m, 1e-6);
+  EXPECT_LT((from_raw.left.T_BS.matrix() - euroc.left.T_BS.matrix()).norm(), 1e-9);
+  EXPECT_LT((from_raw.right.T_BS.matrix() - euroc.right.T_BS.matrix()).norm(), 1e-9);
+
+  char rectified_camera[256];
+  std::snprintf(rectified_camera, sizeof rectified_camera,
+                "Camera1.fx: %.17g\nCamera1.fy: %.17g\nCamera1.cx: %.17g\nCamera1.cy: %.17g\nStereo.b: %.17g\n",
+                m.fx_px, m.fy_px, m.cx_px, m.cy_px, m.baseline_m);
+  write(dir / "rectified.yaml", header + rectified_camera);
+  const StereoCalibration from_rectified = load_orbslam_settings(dir / "rectified.yaml");
+  EXPECT_TRUE(from_rectified.input_rectified);
+  expect_same_model(StereoRectifier(from_rectified).camera(), m, 1e-9);
+
+  const std::string fisheye = replace(raw, "\"PinHole\"", "\"KannalaBrandt8\"");
+  write(dir / "fisheye.yaml", fisheye);
+  expect_one_line_naming(error_of([&] { load_orbslam_settings(dir / "fisheye.yaml"); }), "fisheye.yaml", "Camera.type");
+  write(dir / "resized.yaml", raw + "Camera.newWidth: 600\n");
+  expect_one_line_naming(error_of([&] { load_orbslam_settings(dir / "resized.yaml"); }), "resized.yaml",
+                         "Camera.newWidth");
+  write(dir / "version.yaml", replace(raw, "\"1.0\"", "\"2.0\""));
+  expect_one_line_naming(error_of([&] { load_orbslam_settings(dir / "version.yaml"); }), "version.yaml", "File.version");
+  // The shipped ORB-SLAM3-format EuRoC file is this rig.
+  const StereoCalibration shipped = load_orbslam_settings(test::source_dir() / "config/camera/EuRoC_ORB-SLAM3.yaml");
+  expect_same_model(StereoRectifier(shipped).camera(), m, 1e-6);
+  EXPECT_LT((shipped.left.T_BS.matrix() - euroc.left.T_BS.matrix()).norm(), 1e-9);
+
+  write(dir / "no_extrinsic.yaml", header + camera("Camera1", euroc.left) + camera("Camera2", euroc.right));
+  expect_one_line_naming(error_of([&] { load_orbslam_settings(dir / "no_extrinsic.yaml"); }), "no_extrinsic.yaml",
+                         "Stereo.T_c1_c2");
+}
+
 TEST(Calibration, ShippedKittiSettingsLoad) {
   for (const char* name : {"KITTI00-02.yaml", "KITTI03.yaml", "KITTI04-12.yaml"}) {
     const StereoCalibration calibration = load_orbslam_settings(test::source_dir() / "config" / "camera" / name);

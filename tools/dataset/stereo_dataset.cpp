@@ -50,17 +50,22 @@ StereoDataset open_dataset(const fs::path& path, const DatasetOptions& options) 
   if (format == DatasetFormat::kAuto) format = detect_dataset_format(path);
   if (!fs::is_directory(path)) throw std::runtime_error(path.string() + ": not a folder");
   StereoDataset dataset;
+  DatasetOptions own = options;
+  if (!options.calibration_file.empty()) own.load_calibration = false;
   if (format == DatasetFormat::kEuroc) {
     fs::path mav0 = dataset_detail::find_euroc_mav0(path);
     if (mav0.empty()) {
       throw std::runtime_error(path.string() + ": not an EuRoC folder (expected mav0/cam0/data.csv)");
     }
-    dataset = dataset_detail::read_euroc(mav0, options);
+    dataset = dataset_detail::read_euroc(mav0, own);
   } else {
     if (!dataset_detail::looks_like_kitti(path)) {
       throw std::runtime_error(path.string() + ": not a KITTI sequence (expected times.txt and image_0/)");
     }
-    dataset = dataset_detail::read_kitti(path, options);
+    dataset = dataset_detail::read_kitti(path, own);
+  }
+  if (!options.calibration_file.empty() && options.load_calibration) {
+    dataset.calibration = load_orbslam_settings(options.calibration_file);
   }
   dataset.format = format;
   dataset.root = path;

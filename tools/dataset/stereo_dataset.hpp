@@ -35,6 +35,9 @@ struct DatasetOptions {
   bool strict = false;
   // false: the frame lists only, the calibration left empty (for callers that load their own).
   bool load_calibration = true;
+  // Not empty: the calibration is this ORB-SLAM2 / ORB-SLAM3 stereo settings file's instead of the
+  // dataset's own (sensor.yaml / calib.txt), e.g. a user's recalibration of the rig.
+  std::filesystem::path calibration_file{};
 };
 
 // One stereo pair: where its two images are and when it was taken (the left camera's stamp).

@@ -23,6 +23,9 @@ runtime::Flags replay_flags(ReplayOptions& options) {
                        "  camera/calibration.");
   flags.custom("--format", "euroc|kitti|auto", "dataset layout (default auto)",
                [&options](const std::string& value) { options.format = parse_dataset_format(value); })
+      .path("--camera", "FILE", &options.camera_file,
+            "the calibration from this ORB-SLAM2/ORB-SLAM3 stereo settings file\n"
+            "instead of the dataset's (empty: the dataset's)")
       .number("--rate", "R", &options.rate, 0.0, kMaxRate,
               "speed, 1 = real time (default), 0 = as fast as possible (0-100)")
       .toggle("--lockstep", &options.lockstep, "publish frame n+1 only after the consumer's FrameDone for frame n")

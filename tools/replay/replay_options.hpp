@@ -14,6 +14,9 @@ namespace heslam {
 struct ReplayOptions {
   std::filesystem::path dataset;
   DatasetFormat format = DatasetFormat::kAuto;
+  // --camera FILE: the calibration from this ORB-SLAM2 / ORB-SLAM3 settings file instead of the
+  // dataset's (empty: the dataset's sensor.yaml / calib.txt).
+  std::filesystem::path camera_file;
   double rate = 1.0;                  // --rate: 1 = real time, 0 = as fast as the transport allows
   bool lockstep = false;              // --lockstep: frame n+1 after FrameDone(n)
   bool loop = false;
@@ -27,7 +30,7 @@ struct ReplayOptions {
   bool keyboard = true;               // --no-keyboard: do not read the TTY (space = pause)
   // --preload MB: decode the pairs before frame 0 while they fit in MB megabytes (0 = off), so that
   // PNG decoding does not compete with the consumers for the cores during the run, as with a live
-  // camera whose driver hands over decoded images (benchmarks of the whole system, issue 17).
+  // camera whose driver hands over decoded images (the whole-system benchmarks).
   double preload_mb = 0.0;
 };
 

@@ -111,6 +111,7 @@ StereoDataset open_replay_dataset(const ReplayOptions& options) {
   DatasetOptions dataset_options;
   dataset_options.format = options.format;
   dataset_options.strict = options.strict;
+  dataset_options.calibration_file = options.camera_file;
   StereoDataset dataset = open_dataset(options.dataset, dataset_options);
   select_time_window(dataset, options.start_offset_s, options.duration_s);
   return dataset;

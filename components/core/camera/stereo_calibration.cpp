@@ -1,7 +1,8 @@
-// Loaders for EuRoC sensor.yaml pairs, KITTI calib.txt and ORB-SLAM2 stereo settings.
+// Loaders for EuRoC sensor.yaml pairs, KITTI calib.txt and ORB-SLAM2 / ORB-SLAM3 stereo settings.
 #include "components/core/camera/stereo_calibration.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -226,9 +227,95 @@ StereoCalibration load_kitti_calibration(const std::filesystem::path& calib_txt,
   return calibration;
 }
 
+namespace {
+
+// ORB-SLAM3's settings format (File.version "1.0"): Camera1.* / Camera2.* with Stereo.T_c1_c2 for a raw
+// pair, Camera1.* with Stereo.b for a rectified one; IMU.T_b_c1 (when given) places the rig on the body.
+StereoCalibration load_orbslam3_settings(const cv::FileStorage& fs, const std::filesystem::path& file) {
+  const std::string type = fs["Camera.type"].isString() ? static_cast<std::string>(fs["Camera.type"]) : "";
+  if (type != "PinHole") {
+    fail(file, "Camera.type", "expected \"PinHole\" (heslam rectifies pinhole radial-tangential cameras; got '" +
+                                  type.substr(0, 40) + "')");
+  }
+  for (const char* key : {"Camera.newWidth", "Camera.newHeight"}) {
+    if (!fs[key].empty()) fail(file, key, "not supported: give the calibration of the images as they are published");
+  }
+  StereoCalibration calibration;
+  calibration.source = file.string();
+  if (!fs["Camera.fps"].empty()) calibration.rate_hz = read_positive(fs["Camera.fps"], file, "Camera.fps");
+  const int width_px = read_image_side(read_number(fs["Camera.width"], file, "Camera.width"), file, "Camera.width");
+  const int height_px = read_image_side(read_number(fs["Camera.height"], file, "Camera.height"), file, "Camera.height");
+
+  const auto read_camera = [&](const std::string& name) {
+    CameraModel camera;
+    camera.width_px = width_px;
+    camera.height_px = height_px;
+    camera.fx_px = read_positive(fs[name + ".fx"], file, name + ".fx");
+    camera.fy_px = read_positive(fs[name + ".fy"], file, name + ".fy");
+    camera.cx_px = read_number(fs[name + ".cx"], file, name + ".cx");
+    camera.cy_px = read_number(fs[name + ".cy"], file, name + ".cy");
+    // Radial-tangential k1 k2 p1 p2 [k3] when any of them is given (then the first four are required).
+    const std::array<std::string, 4> required{name + ".k1", name + ".k2", name + ".p1", name + ".p2"};
+    if (std::none_of(required.begin(), required.end(), [&](const std::string& key) { return !fs[key].empty(); })) {
+      return camera;
+    }
+    for (const std::string& key : required) camera.distortion.push_back(read_number(fs[key], file, key));
+    if (!fs[name + ".k3"].empty()) camera.distortion.push_back(read_number(fs[name + ".k3"], file, name + ".k3"));
+    camera.distortion_model = DistortionModel::kRadialTangential;
+    return camera;
+  };
+  const auto read_pose = [&](const char* key) {
+    const cv::Mat m = read_matrix(fs[key], file, key, 4, 4);
+    Eigen::Matrix4d T;
+    for (int r = 0; r < 4; ++r) {
+      for (int c = 0; c < 4; ++c) T(r, c) = m.at<double>(r, c);
+    }
+    check_rotation(T.topLeftCorner<3, 3>(), file, key);
+    Pose3 pose = Pose3::Identity();
+    pose.matrix() = T;
+    pose.makeAffine();
+    return pose;
+  };
+  const Pose3 T_b_c1 = fs["IMU.T_b_c1"].empty() ? Pose3::Identity() : read_pose("IMU.T_b_c1");
+
+  calibration.left = read_camera("Camera1");
+  calibration.left.T_BS = T_b_c1;
+  if (fs["Camera2.fx"].empty()) {
+    // Rectified pair (ORB-SLAM3's KITTI files): Camera1 is the rectified model, Stereo.b the baseline.
+    if (calibration.left.distortion_model != DistortionModel::kNone &&
+        std::any_of(calibration.left.distortion.begin(), calibration.left.distortion.end(),
+                    [](double k) { return k != 0.0; })) {
+      fail(file, "Camera1.k1", "expected no distortion for a rectified pair (give Camera2.* and Stereo.T_c1_c2 for raw images)");
+    }
+    calibration.left.distortion.clear();
+    calibration.left.distortion_model = DistortionModel::kNone;
+    calibration.input_rectified = true;
+    const double baseline_m = read_positive(fs["Stereo.b"], file, "Stereo.b");
+    calibration.right = calibration.left;
+    Pose3 T_c1_c2 = Pose3::Identity();
+    T_c1_c2.translation() = Eigen::Vector3d(baseline_m, 0.0, 0.0);
+    calibration.right.T_BS = T_b_c1 * T_c1_c2;
+    return calibration;
+  }
+  calibration.right = read_camera("Camera2");
+  const Pose3 T_c1_c2 = read_pose("Stereo.T_c1_c2");  // camera 2 -> camera 1
+  if (!(T_c1_c2.translation().x() > 0.0)) {
+    fail(file, "Stereo.T_c1_c2", "expected camera 2 to the right of camera 1 (a positive x translation)");
+  }
+  calibration.right.T_BS = T_b_c1 * T_c1_c2;
+  return calibration;
+}
+
+}  // namespace
+
 StereoCalibration load_orbslam_settings(const std::filesystem::path& settings_yaml) {
   const std::filesystem::path& file = settings_yaml;
   cv::FileStorage fs = open_yaml(file, /*add_header_if_missing=*/true);
+  if (!fs["File.version"].empty()) {
+    const std::string version = fs["File.version"].isString() ? static_cast<std::string>(fs["File.version"]) : "";
+    if (version != "1.0") fail(file, "File.version", "expected \"1.0\" (ORB-SLAM3's format) or no such key (ORB-SLAM2's)");
+    return load_orbslam3_settings(fs, file);
+  }
   StereoCalibration calibration;
   calibration.source = file.string();
   if (!fs["Camera.fps"].empty()) calibration.rate_hz = read_positive(fs["Camera.fps"], file, "Camera.fps");

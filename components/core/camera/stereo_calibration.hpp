@@ -61,6 +61,9 @@ StereoCalibration load_kitti_calibration(const std::filesystem::path& calib_txt,
 
 // ORB-SLAM2 stereo settings: Camera.fx/fy/cx/cy/width/height/bf (+ Camera.fps), and optionally
 // LEFT.K/D/R/P, RIGHT.K/D/R/P (+ LEFT.width/height) for raw images that must be rectified.
+// ORB-SLAM3 stereo settings (File.version "1.0", Camera.type "PinHole"): Camera1.fx/fy/cx/cy[/k1 k2 p1
+// p2 [k3]], Camera.width/height (+ Camera.fps), and either Camera2.* + Stereo.T_c1_c2 (raw pair, camera
+// 2 -> camera 1) or Stereo.b (rectified pair); IMU.T_b_c1, when present, is the left camera's T_BS.
 StereoCalibration load_orbslam_settings(const std::filesystem::path& settings_yaml);
 
 }  // namespace heslam

@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "components/core/camera/stereo_calibration.hpp"
+#include "components/core/camera/stereo_rectifier.hpp"
 #include "components/core/image/yaml_option.hpp"
 #include "components/core/tracking/tracker_settings.hpp"
 
@@ -20,8 +22,20 @@ constexpr std::array<std::string_view, 13> kCameraKeys{"Camera.fx", "Camera.fy",
                                                        "Camera.fps"};
 constexpr std::array<std::string_view, 6> kRectificationKeys{"height", "width", "D", "K", "R", "P"};
 
+// ORB-SLAM3's (File.version "1.0"): the format and rig keys; Camera1.* / Camera2.* hold the intrinsics.
+constexpr std::array<std::string_view, 6> kOrbSlam3RigKeys{"File.version", "Camera.type", "Stereo.T_c1_c2",
+                                                           "Stereo.b", "IMU.T_b_c1", "Camera.RGB"};
+
 bool calibration_key(const std::string& key) {
   if (std::find(kCameraKeys.begin(), kCameraKeys.end(), key) != kCameraKeys.end()) return true;
+  if (std::find(kOrbSlam3RigKeys.begin(), kOrbSlam3RigKeys.end(), key) != kOrbSlam3RigKeys.end()) return true;
+  for (const std::string_view camera : {"Camera1.", "Camera2."}) {
+    if (key.rfind(camera, 0) != 0) continue;
+    const std::string_view field = std::string_view(key).substr(camera.size());
+    for (const std::string_view known : {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"}) {
+      if (field == known) return true;
+    }
+  }
   for (const std::string_view side : {"LEFT.", "RIGHT."}) {
     if (key.rfind(side, 0) != 0) continue;
     const std::string_view field = std::string_view(key).substr(side.size());
@@ -57,6 +71,15 @@ SettingsFile load_settings_file(const std::filesystem::path& path, const Tracker
     for (const std::string& key : root.keys()) {
       if (read.keys().count(key) == 0 && !calibration_key(key)) settings.unused_keys.push_back(key);
     }
+  }
+  if (!root["File.version"].empty()) {
+    // ORB-SLAM3's format: its calibration loader refuses what heslam cannot honour (a fisheye model, a
+    // resize), in one line naming the key; the fx and bf to compare with the data come from its keys.
+    // Compared as the rectified model, as the data's is (Camera1.fx of a raw pair is not).
+    const PinholeStereo rectified = StereoRectifier(load_orbslam_settings(path)).camera();
+    settings.camera_fx = rectified.fx_px;
+    settings.camera_bf = rectified.bf();
+    return settings;
   }
   settings.camera_fx = number_or_zero(root, "Camera.fx");
   settings.camera_bf = number_or_zero(root, "Camera.bf");

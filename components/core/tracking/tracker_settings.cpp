@@ -42,6 +42,11 @@ void read_tracker_settings(const cv::FileNode& root, const std::string& source, 
     t.max_frames_between_keyframes = std::max(1, static_cast<int>(std::lround(fps)));
   }
   read_number(root, source, "ThDepth", t.close_depth_baselines, 1.0, 1000.0);
+  // ORB-SLAM3 names the same threshold Stereo.ThDepth.
+  if (yaml_option::present(root, "Stereo.ThDepth") && yaml_option::present(root, "ThDepth")) {
+    yaml_option::fail(source, "Stereo.ThDepth", "one of ThDepth (ORB-SLAM2) and Stereo.ThDepth (ORB-SLAM3), not both");
+  }
+  read_number(root, source, "Stereo.ThDepth", t.close_depth_baselines, 1.0, 1000.0);
 
   read_int(root, source, "Tracker.minFeaturesToInitialize", t.min_features_to_initialize);
   read_int(root, source, "Tracker.minStereoPointsToInitialize", t.min_stereo_points_to_initialize);

@@ -1,0 +1,30 @@
+// The IMU of an EuRoC ASL recording: mav0/imu0/data.csv (`#timestamp [ns], w_RS_S x y z [rad/s],
+// a_RS_S x y z [m/s^2]`) and imu0/sensor.yaml (T_BS, rate_hz and the Kalibr noise model). DDS-free:
+// the replay publishes it, tests and benchmarks read it directly.
+#pragma once
+
+#include <filesystem>
+#include <vector>
+
+#include "components/core/geometry/pose.hpp"
+#include "components/core/imu/preintegration.hpp"
+
+namespace heslam {
+
+struct ImuRecording {
+  std::vector<ImuSample> samples;  // strictly increasing stamps
+  ImuNoise noise;
+  double rate_hz = 0.0;
+  Pose3 T_BS = Pose3::Identity();  // IMU (sensor) -> body; EuRoC: the identity, the IMU is the body
+  std::filesystem::path source;    // the data.csv read
+};
+
+// True when the dataset folder (or its mav0/) has an imu0/data.csv.
+bool has_euroc_imu(const std::filesystem::path& dataset);
+
+// Reads imu0 of the dataset folder (or its mav0/). Throws std::runtime_error with one line naming the
+// file, the line or field, and what was expected (a malformed row, stamps that do not increase, a
+// missing noise figure, a non-finite value).
+ImuRecording read_euroc_imu(const std::filesystem::path& dataset);
+
+}  // namespace heslam
