@@ -3,10 +3,10 @@
 
 #include <algorithm>
 #include <charconv>
-#include <optional>
 #include <cstdlib>
 #include <stdexcept>
 
+#include "runtime/flags.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/quote_value.hpp"
 #include "runtime/topics.hpp"
@@ -36,6 +36,53 @@ std::string program_name(const char* argv0, std::string_view default_name) {
   return program;
 }
 
+namespace {
+
+// The common flags, declared once for the parser and the usage.
+Flags common_flags(CommonArgs& args) {
+  Flags flags("[options]");
+  const std::string domain_range = "0-" + std::to_string(kMaxDomainId);
+  flags.integer("--domain", "N", &args.domain_id, 0, kMaxDomainId,
+                "DDS domain id, " + domain_range + " (default: $HESLAM_DOMAIN or 0)")
+      .custom("--namespace", "NAME", "topic namespace (default: heslam)",
+              [&args](const std::string& value) {
+                Topics check(value);  // throws the namespace message
+                args.ns = value;
+              })
+      .non_empty_text("--name", "NAME", &args.name, "instance name in status and logs (default: the program's)")
+      .custom("--config", "FILE",
+              "YAML options (default: every option at its documented default); given\n"
+              "again, the later file overlays the earlier one field by field",
+              [&args](const std::string& value) { args.config_files.emplace_back(value); })
+      .custom("--log-level", "LEVEL", "debug, info, warn, error or off (default: info)",
+              [&args](const std::string& value) {
+                const auto level = parse_log_level(value);
+                if (!level) throw_bad_flag_value("--log-level", "debug, info, warn, error or off", value);
+                args.log_level = *level;
+              })
+      .text("--dds-config", "XML", &args.dds_config,
+            "Cyclone configuration, XML or file://PATH (default: $CYCLONEDDS_URI,\n"
+            "else the built-in loopback config/cyclonedds.xml)")
+      .custom("--image-transport", "T",
+              "udp (default) or shm: the stereo images over iceoryx shared memory on\n"
+              "--image-domain N (replay, frontend, viewer; needs iox-roudi; docs/topics.md)",
+              [&args](const std::string& value) {
+                const auto transport = parse_image_transport(value);
+                if (!transport) throw_bad_flag_value("--image-transport", "udp or shm", value);
+                args.image_transport = *transport;
+              })
+      .integer("--image-domain", "N", &args.image_domain_id, 0, kMaxDomainId,
+               "the DDS domain of the shm image topic, " + domain_range)
+      .toggle("--check", &args.check,
+              "check the arguments and the config file, start nothing (exit code 0: a\n"
+              "run would accept them; heslam-supervisor --check runs this for each program)")
+      .toggle("--help", &args.help, "this help")
+      .alias("-h");
+  return flags;
+}
+
+}  // namespace
+
 CommonArgs parse_common_args(int argc, const char* const* argv, std::string_view default_name) {
   CommonArgs args;
   args.name = std::string(default_name);
@@ -43,55 +90,7 @@ CommonArgs parse_common_args(int argc, const char* const* argv, std::string_view
   if (const char* env = std::getenv("HESLAM_DOMAIN"); env != nullptr && *env != '\0') {
     args.domain_id = parse_domain("$HESLAM_DOMAIN", env);
   }
-  for (int i = 1; i < argc; ++i) {
-    std::string arg = argv[i];
-    std::string flag = arg;
-    std::optional<std::string> inline_value;
-    if (arg.rfind("--", 0) == 0) {
-      if (const auto eq = arg.find('='); eq != std::string::npos) {
-        flag = arg.substr(0, eq);
-        inline_value = arg.substr(eq + 1);
-      }
-    }
-    const auto value = [&]() -> std::string {
-      if (inline_value) return *inline_value;
-      if (i + 1 >= argc) throw std::runtime_error(flag + ": missing value");
-      return argv[++i];
-    };
-    if (flag == "--domain") {
-      args.domain_id = parse_domain(flag, value());
-    } else if (flag == "--namespace") {
-      args.ns = value();
-      Topics check(args.ns);  // throws the namespace message
-    } else if (flag == "--name") {
-      args.name = value();
-      if (args.name.empty()) throw std::runtime_error("--name: expected a non-empty name");
-    } else if (flag == "--config") {
-      args.config_files.push_back(value());
-    } else if (flag == "--log-level") {
-      const std::string text = value();
-      const auto level = parse_log_level(text);
-      if (!level) {
-        throw std::runtime_error("--log-level: expected debug, info, warn, error or off, got '" + quote_value(text) + "'");
-      }
-      args.log_level = *level;
-    } else if (flag == "--dds-config") {
-      args.dds_config = value();
-    } else if (flag == "--image-transport") {
-      const std::string text = value();
-      const auto transport = parse_image_transport(text);
-      if (!transport) throw std::runtime_error("--image-transport: expected udp or shm, got '" + quote_value(text) + "'");
-      args.image_transport = *transport;
-    } else if (flag == "--image-domain") {
-      args.image_domain_id = parse_domain(flag, value());
-    } else if (arg == "-h" || arg == "--help") {
-      args.help = true;
-    } else if (arg == "--check") {
-      args.check = true;
-    } else {
-      args.rest.push_back(arg);
-    }
-  }
+  args.rest = common_flags(args).parse(argc, argv, Flags::Unknown::kKeep);
   if (args.image_transport == ImageTransport::kShm &&
       (args.image_domain_id < 0 || args.image_domain_id == args.domain_id)) {
     throw std::runtime_error("--image-transport shm: needs --image-domain N, a domain other than --domain (" +
@@ -101,20 +100,8 @@ CommonArgs parse_common_args(int argc, const char* const* argv, std::string_view
 }
 
 std::string common_args_usage() {
-  return "common options:\n"
-         "  --domain N          DDS domain id, 0-232 (default: $HESLAM_DOMAIN or 0)\n"
-         "  --namespace NAME    topic namespace (default: heslam)\n"
-         "  --name NAME         instance name in status and logs (default: the program's)\n"
-         "  --config FILE       YAML options (default: every option at its documented default); given\n"
-         "                      again, the later file overlays the earlier one field by field\n"
-         "  --log-level LEVEL   debug, info, warn, error or off (default: info)\n"
-         "  --dds-config XML    Cyclone configuration, XML or file://PATH (default: $CYCLONEDDS_URI,\n"
-         "                      else the built-in loopback config/cyclonedds.xml)\n"
-         "  --image-transport T udp (default) or shm: the stereo images over iceoryx shared memory on\n"
-         "                      --image-domain N (replay, frontend, viewer; needs iox-roudi; docs/topics.md)\n"
-         "  --check             check the arguments and the config file, start nothing (exit code 0: a\n"
-         "                      run would accept them; heslam-supervisor --check runs this for each program)\n"
-         "  -h, --help          this help\n";
+  CommonArgs unused;
+  return "common options:\n" + common_flags(unused).flag_lines();
 }
 
 }  // namespace heslam::runtime

@@ -6,6 +6,7 @@
 
 #include "components/core/place/vocabulary_setting.hpp"
 #include "components/core/tracking/settings_file.hpp"
+#include "runtime/flags.hpp"
 
 namespace heslam::frontend {
 namespace {
@@ -51,23 +52,16 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
   options.settings_file = config.get_path("settings.file", "");
   std::string loop_closer = config.get_string("lockstep.loop_closer", "none");
   const std::string loop_closer_name = config.get_string("lockstep.loop_closer_name", "loop_closer");
-  for (std::size_t i = 0; i < rest.size(); ++i) {
-    if (rest[i] == "--settings" && i + 1 < rest.size()) {
-      if (!rest[i + 1].empty()) options.settings_file = rest[i + 1];  // empty: the config's
-      ++i;
-    } else if (rest[i] == "--mapper-map-file" && i + 1 < rest.size()) {
-      options.mapper_map_file = rest[++i];
-    } else if (rest[i] == "--journal" && i + 1 < rest.size()) {
-      options.journal_file = rest[++i];
-    } else if (rest[i] == "--loop-closer" && i + 1 < rest.size()) {
-      loop_closer = rest[++i];
-    } else if (rest[i] == "--localize") {
-      options.localize = true;
-    } else {
-      throw std::runtime_error("unknown argument '" + rest[i] +
-                               "' (expected --settings FILE, --mapper-map-file FILE, --journal FILE, --loop-closer EXECUTABLE|none or --localize)");
-    }
-  }
+  runtime::Flags flags("heslam-frontend [options]");
+  flags.custom("--settings", "FILE", "ORB-SLAM2 settings file (empty: the config's settings.file)",
+               [&options](const std::string& value) {
+                 if (!value.empty()) options.settings_file = value;
+               })
+      .path("--mapper-map-file", "FILE", &options.mapper_map_file, "the local mapper's map file (mapper.map_file)")
+      .path("--journal", "FILE", &options.journal_file, "the odometry journal (journal.file)")
+      .text("--loop-closer", "EXECUTABLE|none", &loop_closer, "the loop closer of a lockstep run (lockstep.loop_closer)")
+      .toggle("--localize", &options.localize, "track against the saved map of --mapper-map-file");
+  flags.parse(rest);
   if (options.localize && (options.mapper_map_file.empty() || !options.mapper_enabled)) {
     throw std::runtime_error("--localize: needs the local mapper (mapper.enabled) and its map file (--mapper-map-file FILE)");
   }

@@ -3,6 +3,8 @@
 
 #include <stdexcept>
 
+#include "runtime/flags.hpp"
+
 namespace heslam::local_mapper {
 namespace {
 
@@ -13,11 +15,6 @@ constexpr int kMaxThreads = 64;
 constexpr int kMaxSharedPoints = 1000;
 constexpr int kMaxSaveEvery = 1000000;
 constexpr double kMaxReaderWaitS = 60.0;
-
-std::filesystem::path command_line_path(const std::vector<std::string>& rest, std::size_t& i) {
-  if (i + 1 >= rest.size()) throw std::runtime_error("argument '" + rest[i] + "': expected a file after it");
-  return rest[++i];
-}
 
 }  // namespace
 
@@ -55,19 +52,14 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
   m.keyframe_culling.redundant_ratio =
       config.get_double("keyframe_culling.redundant_ratio", m.keyframe_culling.redundant_ratio, 0.0, 1.0);
 
-  for (std::size_t i = 0; i < rest.size(); ++i) {
-    if (rest[i] == "--map-file") {
-      o.map_file = command_line_path(rest, i);
-    } else if (rest[i] == "--load-map") {
-      o.load_map = command_line_path(rest, i);
-      o.load_map_given_empty = o.load_map.empty();
-    } else if (rest[i] == "--save-map") {
-      o.save_map = command_line_path(rest, i);  // "" (a pipeline's unset save_map): none
-    } else {
-      throw std::runtime_error("unknown argument '" + rest[i] +
-                               "' (expected --map-file FILE, --load-map FILE, --save-map FILE)");
-    }
-  }
+  runtime::Flags flags("heslam-local-mapper [options]");
+  flags.path("--map-file", "FILE", &o.map_file, "the map file the mapper publishes from")
+      .custom("--load-map", "FILE", "start from this saved map", [&o](const std::string& value) {
+        o.load_map = value;
+        o.load_map_given_empty = o.load_map.empty();
+      })
+      .path("--save-map", "FILE", &o.save_map, "save the map here at the end (\"\": none)");
+  flags.parse(rest);
   if (o.load_map_given_empty) {
     throw std::runtime_error("--load-map: no saved map given (an empty file name; a localize pipeline needs "
                              "--arg map=FILE, the map an earlier run saved)");

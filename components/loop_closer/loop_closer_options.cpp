@@ -4,6 +4,8 @@
 #include <climits>
 #include <stdexcept>
 
+#include "runtime/flags.hpp"
+
 namespace heslam::loop_closer {
 namespace {
 
@@ -37,17 +39,11 @@ LoopCloserProcessOptions LoopCloserProcessOptions::from_config(const runtime::Co
   o.mapper_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));
   if (!config.get_string("state_file", "").empty()) o.state_file = config.get_path("state_file", {});
   if (!config.get_string("vocabulary.file", "").empty()) o.vocabulary = config.get_path("vocabulary.file", {});
-  for (std::size_t i = 0; i < rest.size(); ++i) {
-    if (rest[i] == "--state-file" && i + 1 < rest.size()) {
-      o.state_file = rest[++i];
-    } else if (rest[i] == "--vocabulary" && i + 1 < rest.size()) {
-      o.vocabulary = rest[++i];
-    } else if (rest[i] == "--real-time") {
-      o.real_time = true;
-    } else {
-      throw std::runtime_error("unknown argument '" + rest[i] + "' (expected --state-file FILE, --vocabulary FILE or --real-time)");
-    }
-  }
+  runtime::Flags flags("heslam-loop-closer [options]");
+  flags.path("--state-file", "FILE", &o.state_file, "where the loop closer keeps its state (state_file)")
+      .path("--vocabulary", "FILE", &o.vocabulary, "the BoW vocabulary (vocabulary.file)")
+      .toggle("--real-time", &o.real_time, "do not wait for the mapper (real_time)");
+  flags.parse(rest);
   return o;
 }
 

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iostream>
 
+#include "runtime/flags.hpp"
 #include "runtime/log.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/quote_value.hpp"
@@ -21,24 +22,6 @@
 namespace {
 
 using namespace heslam;
-
-constexpr const char* kUsage =
-    "usage: heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N|auto] [--namespace NAME]\n"
-    "                         [--log-dir DIR] [--log-level debug|info|warn|error] [--host NAME | --only a,b]\n"
-    "                         [--no-progress] [--security DIR] [--image-transport udp|shm] [--image-domain N]\n"
-    "  --check      validate the pipeline file, every file it references and each heslam program's\n"
-    "               arguments and config (the program's own --check); start nothing\n"
-    "  --domain N   DDS domain 0-232 (overrides the file's); auto: the first domain no other heslam run\n"
-    "               uses (the file's, then 1, 2, ...). A domain in use by another run is refused\n"
-    "  --arg k=v    value for $(arg k) in the pipeline file (overrides its 'args' default)\n"
-    "  --log-dir    per-component logs (default: $HESLAM_LOG_DIR or ~/.heslam/log, + /<pipeline>-<time>)\n"
-    "  --host NAME  run only the components of the file's hosts.NAME group; the others run on other hosts\n"
-    "  --only a,b   run only these components; the others run on other hosts (docs/deployment.md)\n"
-    "  --no-progress  no run progress (default: a line redrawn on a terminal, else a line per 10 %)\n"
-    "  --security   DDS Security: run every process with its identity from DIR (heslam-security init DIR;\n"
-    "               overrides the file's 'security'; docs/security.md)\n"
-    "  --image-transport  shm: the stereo images over iceoryx shared memory on --image-domain (default:\n"
-    "               domain + 1); the supervisor uses a running iox-roudi or starts one (docs/topics.md)\n";
 
 std::filesystem::path default_log_dir(const std::string& pipeline_name) {
   std::filesystem::path base;
@@ -57,94 +40,112 @@ std::filesystem::path default_log_dir(const std::string& pipeline_name) {
   return base / (pipeline_name + "-" + stamp + "-" + std::to_string(getpid()));
 }
 
-std::string value_of(int argc, char** argv, int& i, const std::string& flag) {
-  if (i + 1 >= argc) throw std::runtime_error(flag + ": missing value");
-  return argv[++i];
-}
-
-int run(int argc, char** argv) {
+// The supervisor's command line, declared once for the parser and the usage.
+struct Arguments {
   std::filesystem::path pipeline_file;
   supervisor::PipelineOverrides overrides;
   bool check = false;
   bool progress = true;
   bool domain_auto = false;
+  bool help = false;
   std::filesystem::path log_dir;
   runtime::LogLevel log_level = runtime::LogLevel::kInfo;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "-h" || arg == "--help") {
-      std::cout << kUsage;
-      return 0;
-    } else if (arg == "--check") {
-      check = true;
-    } else if (arg == "--no-progress") {
-      progress = false;
-    } else if (arg == "--arg") {
-      const std::string pair = value_of(argc, argv, i, arg);
-      const auto eq = pair.find('=');
-      if (eq == std::string::npos || eq == 0) {
-        throw std::runtime_error("--arg: expected key=value, got '" + runtime::quote_value(pair) + "'");
-      }
-      overrides.args[pair.substr(0, eq)] = pair.substr(eq + 1);
-    } else if (arg == "--domain") {
-      const std::string text = value_of(argc, argv, i, arg);
-      if (text == "auto") {
-        domain_auto = true;
-        continue;
-      }
-      try {
-        std::size_t used = 0;
-        const int domain = std::stoi(text, &used);
-        if (used != text.size() || domain < 0 || domain > runtime::kMaxDomainId) throw std::out_of_range(text);
-        overrides.domain_id = domain;
-      } catch (const std::logic_error&) {
-        throw std::runtime_error("--domain: expected an integer in [0, " + std::to_string(runtime::kMaxDomainId) +
-                                 "] or auto, got '" + runtime::quote_value(text) + "'");
-      }
-    } else if (arg == "--namespace") {
-      overrides.ns = value_of(argc, argv, i, arg);
-    } else if (arg == "--host") {
-      overrides.host = value_of(argc, argv, i, arg);
-      if (overrides.host.empty()) throw std::runtime_error("--host: expected a host group name");
-    } else if (arg == "--only") {
-      const std::string text = value_of(argc, argv, i, arg);
-      overrides.only = runtime::split_list(text);
-      if (overrides.only.empty()) throw std::runtime_error("--only: expected component names, e.g. --only frontend,replay");
-    } else if (arg == "--security") {
-      overrides.security_dir = value_of(argc, argv, i, arg);
-    } else if (arg == "--image-transport") {
-      overrides.image_transport = value_of(argc, argv, i, arg);
-    } else if (arg == "--image-domain") {
-      const std::string text = value_of(argc, argv, i, arg);
-      try {
-        std::size_t used = 0;
-        const int domain = std::stoi(text, &used);
-        if (used != text.size() || domain < 0 || domain > runtime::kMaxDomainId) throw std::out_of_range(text);
-        overrides.image_domain_id = domain;
-      } catch (const std::logic_error&) {
-        throw std::runtime_error("--image-domain: expected an integer in [0, " + std::to_string(runtime::kMaxDomainId) +
-                                 "], got '" + runtime::quote_value(text) + "'");
-      }
-    } else if (arg == "--log-dir") {
-      log_dir = value_of(argc, argv, i, arg);
-    } else if (arg == "--log-level") {
-      const std::string text = value_of(argc, argv, i, arg);
-      const auto level = runtime::parse_log_level(text);
-      if (!level) {
-        throw std::runtime_error("--log-level: expected debug, info, warn, error or off, got '" +
-                                 runtime::quote_value(text) + "'");
-      }
-      log_level = *level;
-    } else if (!arg.empty() && arg[0] == '-') {
-      throw std::runtime_error("unknown option '" + runtime::quote_value(arg) + "' (see --help)");
-    } else if (pipeline_file.empty()) {
-      pipeline_file = arg;
-    } else {
-      throw std::runtime_error("unexpected argument '" + runtime::quote_value(arg) +
-                               "': one pipeline file per supervisor");
-    }
+};
+
+runtime::Flags supervisor_flags(Arguments& a) {
+  const std::string domain_range = "[0, " + std::to_string(runtime::kMaxDomainId) + "]";
+  runtime::Flags flags(
+      "heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N|auto] [--namespace NAME]\n"
+      "                         [--log-dir DIR] [--log-level debug|info|warn|error] [--host NAME | --only a,b]\n"
+      "                         [--no-progress] [--security DIR] [--image-transport udp|shm] [--image-domain N]");
+  flags.toggle("--check", &a.check,
+               "validate the pipeline file, every file it references and each heslam program's\n"
+               "arguments and config (the program's own --check); start nothing")
+      .custom("--domain", "N|auto",
+              "DDS domain 0-232 (overrides the file's); auto: the first domain no other heslam run\n"
+              "uses (the file's, then 1, 2, ...). A domain in use by another run is refused",
+              [&a, domain_range](const std::string& value) {
+                if (value == "auto") {
+                  a.domain_auto = true;
+                  return;
+                }
+                std::int64_t domain = -1;
+                if (!runtime::parse_whole_integer(value, domain) || domain < 0 || domain > runtime::kMaxDomainId) {
+                  runtime::throw_bad_flag_value("--domain", "an integer in " + domain_range + " or auto", value);
+                }
+                a.overrides.domain_id = static_cast<int>(domain);
+              })
+      .custom("--arg", "k=v", "value for $(arg k) in the pipeline file (overrides its 'args' default)",
+              [&a](const std::string& pair) {
+                const auto eq = pair.find('=');
+                if (eq == std::string::npos || eq == 0) runtime::throw_bad_flag_value("--arg", "key=value", pair);
+                a.overrides.args[pair.substr(0, eq)] = pair.substr(eq + 1);
+              })
+      .custom("--namespace", "NAME", "topic namespace (overrides the file's)",
+              [&a](const std::string& value) { a.overrides.ns = value; })
+      .path("--log-dir", "DIR", &a.log_dir,
+            "per-component logs (default: $HESLAM_LOG_DIR or ~/.heslam/log, + /<pipeline>-<time>)")
+      .custom("--log-level", "LEVEL", "debug, info, warn, error or off (default: info)",
+              [&a](const std::string& value) {
+                const auto level = runtime::parse_log_level(value);
+                if (!level) runtime::throw_bad_flag_value("--log-level", "debug, info, warn, error or off", value);
+                a.log_level = *level;
+              })
+      .custom("--host", "NAME", "run only the components of the file's hosts.NAME group; the others run on other hosts",
+              [&a](const std::string& value) {
+                if (value.empty()) throw std::runtime_error("--host: expected a host group name");
+                a.overrides.host = value;
+              })
+      .custom("--only", "a,b", "run only these components; the others run on other hosts (docs/deployment.md)",
+              [&a](const std::string& value) {
+                a.overrides.only = runtime::split_list(value);
+                if (a.overrides.only.empty()) {
+                  throw std::runtime_error("--only: expected component names, e.g. --only frontend,replay");
+                }
+              })
+      .toggle("--no-progress", &a.progress, "no run progress (default: a line redrawn on a terminal, else a line per 10 %)",
+              false)
+      .custom("--security", "DIR",
+              "DDS Security: run every process with its identity from DIR (heslam-security init DIR;\n"
+              "overrides the file's 'security'; docs/security.md)",
+              [&a](const std::string& value) { a.overrides.security_dir = value; })
+      .custom("--image-transport", "udp|shm",
+              "shm: the stereo images over iceoryx shared memory on --image-domain (default:\n"
+              "domain + 1); the supervisor uses a running iox-roudi or starts one (docs/topics.md)",
+              [&a](const std::string& value) { a.overrides.image_transport = value; })
+      .custom("--image-domain", "N", "the DDS domain of the shm image topic (0-232)",
+              [&a, domain_range](const std::string& value) {
+                std::int64_t domain = -1;
+                if (!runtime::parse_whole_integer(value, domain) || domain < 0 || domain > runtime::kMaxDomainId) {
+                  runtime::throw_bad_flag_value("--image-domain", "an integer in " + domain_range, value);
+                }
+                a.overrides.image_domain_id = static_cast<int>(domain);
+              })
+      .toggle("--help", &a.help, "this help")
+      .alias("-h")
+      .positional("PIPELINE.yaml", "", [&a](const std::string& arg) {
+        if (!a.pipeline_file.empty()) {
+          throw std::runtime_error("unexpected argument '" + runtime::quote_value(arg) +
+                                   "': one pipeline file per supervisor");
+        }
+        a.pipeline_file = arg;
+      });
+  return flags;
+}
+
+int run(int argc, char** argv) {
+  Arguments arguments;
+  runtime::Flags flags = supervisor_flags(arguments);
+  flags.parse(argc, argv);
+  if (arguments.help) {
+    std::cout << flags.usage();
+    return 0;
   }
-  if (pipeline_file.empty()) throw std::runtime_error(std::string("missing PIPELINE.yaml\n") + kUsage);
+  const std::filesystem::path& pipeline_file = arguments.pipeline_file;
+  supervisor::PipelineOverrides& overrides = arguments.overrides;
+  const bool check = arguments.check;
+  const bool domain_auto = arguments.domain_auto;
+  if (pipeline_file.empty()) throw std::runtime_error("missing PIPELINE.yaml\n" + flags.usage());
 
   const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe");
   auto loaded = supervisor::load_pipeline(pipeline_file, overrides, self.parent_path());
@@ -196,9 +197,9 @@ int run(int argc, char** argv) {
   signal(SIGPIPE, SIG_IGN);  // a closed terminal must not kill the supervisor before it stops its children
   supervisor::SupervisorOptions options;
   options.self_executable = self;
-  options.log_dir = log_dir.empty() ? default_log_dir(loaded.pipeline.name) : log_dir;
-  options.log_level = log_level;
-  options.progress = !progress                 ? supervisor::RunProgress::Mode::kOff
+  options.log_dir = arguments.log_dir.empty() ? default_log_dir(loaded.pipeline.name) : arguments.log_dir;
+  options.log_level = arguments.log_level;
+  options.progress = !arguments.progress                 ? supervisor::RunProgress::Mode::kOff
                      : isatty(STDERR_FILENO) ? supervisor::RunProgress::Mode::kLive
                                              : supervisor::RunProgress::Mode::kPlain;
   

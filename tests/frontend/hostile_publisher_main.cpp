@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "components/core/camera/stereo_rectifier.hpp"
+#include "runtime/flags.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/topics.hpp"
@@ -84,13 +85,11 @@ int run(int argc, char** argv) {
   int domain = -1;
   std::string dataset_path;
   double seconds = 5.0;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i];
-    if (flag == "--domain") domain = std::atoi(argv[i + 1]);
-    else if (flag == "--dataset") dataset_path = argv[i + 1];
-    else if (flag == "--seconds") seconds = std::atof(argv[i + 1]);
-    else throw std::runtime_error("unknown option " + flag);
-  }
+  runtime::Flags flags("heslam-test-hostile --domain N --dataset DIR [--seconds S]");
+  flags.integer("--domain", "N", &domain, 0, runtime::kMaxDomainId, "DDS domain")
+      .text("--dataset", "DIR", &dataset_path, "the dataset whose calibration sizes the frames")
+      .number("--seconds", "S", &seconds, 0.0, 86400.0, "how long to publish");
+  flags.parse(argc, argv);
   if (domain < 0 || dataset_path.empty()) throw std::runtime_error("usage: --domain N --dataset DIR [--seconds S]");
   const StereoDataset dataset = open_dataset(dataset_path);
   const runtime::Topics topics;

@@ -35,6 +35,7 @@
 #include <thread>
 #include <vector>
 
+#include "runtime/flags.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/reader.hpp"
 #include "runtime/run_self.hpp"
@@ -65,37 +66,26 @@ struct PeerArgs {
   std::string name = "recorder";  // forge-status: the component claimed
 };
 
-// The forged map version (issue 38 item 5).
+// The forged map version.
 constexpr uint64_t kForgedMapVersion = 999'999;
 
 PeerArgs parse(int argc, char** argv) {
   PeerArgs args;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error(arg + ": missing value");
-      return argv[++i];
-    };
-    if (arg == "--domain") {
-      args.domain_id = std::stoi(value());
-    } else if (arg == "--namespace") {
-      args.ns = value();
-    } else if (arg == "--identity") {
-      args.identity = value();
-    } else if (arg == "--seconds") {
-      args.seconds = std::stod(value());
-    } else if (arg == "--run-of") {
-      args.run_of = std::stoi(value());
-    } else if (arg == "--pid") {
-      args.pid = std::stoi(value());
-    } else if (arg == "--name") {
-      args.name = value();
-    } else if (args.mode.empty() && arg.rfind("--", 0) != 0) {
-      args.mode = arg;
-    } else {
-      throw std::runtime_error("unexpected argument '" + arg + "'");
-    }
-  }
+  runtime::Flags flags("heslam-test-secure-peer MODE [options]");
+  flags.integer("--domain", "N", &args.domain_id, 0, runtime::kMaxDomainId, "DDS domain")
+      .text("--namespace", "NAME", &args.ns, "topic namespace")
+      .text("--identity", "DIR", &args.identity, "the DDS Security identity")
+      .number("--seconds", "S", &args.seconds, 0.0, 86400.0, "how long to run")
+      .integer("--run-of", "PID", &args.run_of, 0, std::numeric_limits<int>::max(),
+               "forge-*: copy the run id of this process (a heslam-supervisor)")
+      .integer("--pid", "PID", &args.pid, 0, std::numeric_limits<int>::max(), "forge-status: the pid claimed")
+      .text("--name", "NAME", &args.name, "forge-status: the component claimed")
+      .positional("MODE", "publish-stereo, publish-correction, publish-hostile, read-stereo or forge-*",
+                  [&args](const std::string& arg) {
+                    if (!args.mode.empty()) throw std::runtime_error("unexpected argument '" + arg + "'");
+                    args.mode = arg;
+                  });
+  flags.parse(argc, argv);
   if (args.mode != "publish-stereo" && args.mode != "publish-correction" && args.mode != "publish-hostile" &&
       args.mode != "read-stereo" && args.mode != "forge-odometry" && args.mode != "forge-status" &&
       args.mode != "forge-frame-done" && args.mode != "forge-keyframe-done") {

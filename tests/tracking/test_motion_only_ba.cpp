@@ -104,33 +104,6 @@ TEST(MotionOnlyBa, DisparityErrorIsWhitenedByItsOwnSigma) {
   EXPECT_THROW(optimize_pose(camera, problem.observations, T_cw, bad), std::invalid_argument);
 }
 
-// With a worker each pass runs in two halves on two threads; every sum stays on the caller in a
-// fixed order, so pose and outlier flags are the same bit for bit as on one thread, with and without
-// the Huber kernel, for a problem large enough to be split and one too small to be.
-TEST(MotionOnlyBa, PairWorkerGivesBitIdenticalResults) {
-  const PinholeStereo camera = test::synthetic_camera();
-  Pose3 T_cw = Pose3::Identity();
-  T_cw.linear() = Eigen::AngleAxisd(0.2, Eigen::Vector3d(1.0, 0.3, -0.2).normalized()).toRotationMatrix();
-  T_cw.translation() = Eigen::Vector3d(0.1, 0.3, -0.5);
-  Pose3 guess = T_cw;
-  guess.translation() += Eigen::Vector3d(0.04, 0.03, -0.05);
-  PairWorker worker;
-  for (const int count : {500, 30}) {
-    const Problem problem = make_problem(camera, T_cw, count, 0.2, 11);
-    for (const int robust_rounds : {2, 0}) {
-      MotionOnlyBaOptions options;
-      options.robust_rounds = robust_rounds;
-      const std::uint64_t runs_before = worker.runs();
-      const MotionOnlyBaResult serial = optimize_pose(camera, problem.observations, guess, options);
-      const MotionOnlyBaResult parallel = optimize_pose(camera, problem.observations, guess, options, &worker);
-      EXPECT_EQ(serial.T_cw.matrix(), parallel.T_cw.matrix()) << count << " observations";
-      EXPECT_EQ(serial.outlier, parallel.outlier) << count << " observations";
-      EXPECT_EQ(serial.inliers, parallel.inliers) << count << " observations";
-      EXPECT_EQ(worker.runs() > runs_before, count == 500) << "split only when large enough";
-    }
-  }
-}
-
 TEST(MotionOnlyBa, EmptyInputLeavesGuess) {
   const Pose3 guess = Pose3(Eigen::Translation3d(1, 2, 3));
   const MotionOnlyBaResult result = optimize_pose(test::synthetic_camera(), {}, guess);

@@ -19,10 +19,9 @@ struct TrackerRun {
 };
 
 TrackerRun run_tracker(const std::vector<test::SyntheticPoint>& points, int frames,
-                       const TrackerOptions& options = TrackerOptions{}, PairWorker* worker = nullptr) {
+                       const TrackerOptions& options = TrackerOptions{}) {
   const PinholeStereo camera = test::synthetic_camera();
   Tracker tracker(camera, options);
-  tracker.set_pair_worker(worker);
   TrackerRun run;
   for (int k = 0; k < frames; ++k) {
     StereoFeatures f = test::make_frame(points, camera, test::trajectory_pose(k), 1000 + static_cast<std::uint64_t>(k));
@@ -74,22 +73,6 @@ TEST(TrackerSynthetic, TwoRunsAreBitIdentical) {
     EXPECT_EQ(a.results[k].tracked_points, b.results[k].tracked_points) << "frame " << k;
   }
   EXPECT_EQ(a.keyframes, b.keyframes);
-}
-
-// The motion-only BAs' passes in halves on a second thread: the same poses, inliers and keyframes
-// bit for bit as on one thread.
-TEST(TrackerSynthetic, PairWorkerGivesBitIdenticalResults) {
-  const auto points = test::make_points(3000, 29);
-  const TrackerRun serial = run_tracker(points, 60);
-  PairWorker worker(Tracker::pair_worker_options());
-  const TrackerRun parallel = run_tracker(points, 60, TrackerOptions{}, &worker);
-  EXPECT_GT(worker.runs(), 60u);  // the passes were split (several per frame)
-  ASSERT_EQ(serial.results.size(), parallel.results.size());
-  for (std::size_t k = 0; k < serial.results.size(); ++k) {
-    EXPECT_EQ(serial.results[k].T_wc.matrix(), parallel.results[k].T_wc.matrix()) << "frame " << k;
-    EXPECT_EQ(serial.results[k].tracked_points, parallel.results[k].tracked_points) << "frame " << k;
-  }
-  EXPECT_EQ(serial.keyframes, parallel.keyframes);
 }
 
 // Inside the frontend the mapper owns observations and covisibility; until its state arrives the

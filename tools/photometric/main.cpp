@@ -8,23 +8,48 @@
 // heslam-frontend-offline gives the tracker with the same options (same noise seeds per frame).
 #include <cstdio>
 #include <exception>
+#include <stdexcept>
 #include <string>
 
+#include "runtime/flags.hpp"
+#include "runtime/quote_value.hpp"
 #include "tools/photometric/dataset_copy.hpp"
 
 namespace {
 
-void print_usage(std::FILE* out) {
-  std::fprintf(out,
-               "usage: heslam-photometric IN OUT [--stereo-gain L,R[/L,R...]] [--variant none|dark|low_contrast]\n"
-               "                          [--format auto|euroc|kitti]\n"
-               "  IN   an EuRoC (mav0/cam0/data.csv) or KITTI (times.txt, image_0/) stereo folder\n"
-               "  OUT  the copy to write (must not exist or be empty, not inside IN)\n"
-               "  --stereo-gain L,R   left image x L, right x R, rounded and saturated to 8 bit (cameras\n"
-               "                      exposed apart); L,R/L,R/...: the sequence split into equal blocks\n"
-               "  --variant V         dark (x0.1 plus noise) or low_contrast (x0.12 around mid grey), applied\n"
-               "                      before the gains\n"
-               "At least one of --stereo-gain and --variant is required.\n");
+// The command line, declared once for the parser and the usage.
+heslam::runtime::Flags photometric_flags(std::string& input, std::string& output,
+                                         heslam::photometric::DatasetCopyOptions& options, bool& help) {
+  using namespace heslam;
+  runtime::Flags flags("heslam-photometric IN OUT [--stereo-gain L,R[/L,R...]] [--variant none|dark|low_contrast]\n"
+                       "                          [--format auto|euroc|kitti]",
+                       "  IN   an EuRoC (mav0/cam0/data.csv) or KITTI (times.txt, image_0/) stereo folder\n"
+                       "  OUT  the copy to write (must not exist or be empty, not inside IN)");
+  flags.custom("--stereo-gain", "L,R",
+               "left image x L, right x R, rounded and saturated to 8 bit (cameras\n"
+               "exposed apart); L,R/L,R/...: the sequence split into equal blocks",
+               [&options](const std::string& value) {
+                 options.stereo_gain = photometric::parse_stereo_gain_schedule(value);
+               })
+      .custom("--variant", "V",
+              "dark (x0.1 plus noise) or low_contrast (x0.12 around mid grey), applied\n"
+              "before the gains",
+              [&options](const std::string& value) { options.variant = photometric::parse_photometric_variant(value); })
+      .custom("--format", "auto|euroc|kitti", "the input's layout (default auto)",
+              [&options](const std::string& value) { options.format = parse_dataset_format(value); })
+      .toggle("--help", &help, "this help")
+      .alias("-h")
+      .note("At least one of --stereo-gain and --variant is required.")
+      .positional("IN OUT", "", [&input, &output](const std::string& arg) {
+        if (input.empty()) {
+          input = arg;
+        } else if (output.empty()) {
+          output = arg;
+        } else {
+          throw std::runtime_error("unexpected argument '" + runtime::quote_value(arg) + "' (expected IN OUT and options)");
+        }
+      });
+  return flags;
 }
 
 }  // namespace
@@ -34,40 +59,21 @@ int main(int argc, char** argv) {
   std::string input;
   std::string output;
   photometric::DatasetCopyOptions options;
-  bool transform_given = false;
+  bool help = false;
+  runtime::Flags flags = photometric_flags(input, output, options, help);
   try {
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      if (arg == "-h" || arg == "--help") {
-        print_usage(stdout);
-        return 0;
-      }
-      if (arg.rfind("--", 0) == 0) {
-        if (i + 1 >= argc) throw std::runtime_error(arg + ": expected a value");
-        const std::string value = argv[++i];
-        if (arg == "--stereo-gain") {
-          options.stereo_gain = photometric::parse_stereo_gain_schedule(value);
-        } else if (arg == "--variant") {
-          options.variant = photometric::parse_photometric_variant(value);
-        } else if (arg == "--format") {
-          options.format = parse_dataset_format(value);
-        } else {
-          throw std::runtime_error("unknown option '" + arg + "'");
-        }
-        if (arg != "--format") transform_given = true;
-      } else if (input.empty()) {
-        input = arg;
-      } else if (output.empty()) {
-        output = arg;
-      } else {
-        throw std::runtime_error("unexpected argument '" + arg + "' (expected IN OUT and options)");
-      }
+    flags.parse(argc, argv);
+    if (help) {
+      std::fputs(flags.usage().c_str(), stdout);
+      return 0;
     }
     if (input.empty() || output.empty()) throw std::runtime_error("expected the input and output folders");
-    if (!transform_given) throw std::runtime_error("nothing to do: give --stereo-gain and/or --variant");
+    if (!flags.given("--stereo-gain") && !flags.given("--variant")) {
+      throw std::runtime_error("nothing to do: give --stereo-gain and/or --variant");
+    }
   } catch (const std::exception& error) {
     std::fprintf(stderr, "heslam-photometric: %s\n", error.what());
-    print_usage(stderr);
+    std::fputs(flags.usage().c_str(), stderr);
     return 2;
   }
   try {

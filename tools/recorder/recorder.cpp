@@ -12,6 +12,7 @@
 #include "components/messages/map_state.hpp"
 #include "components/messages/pose.hpp"
 #include "runtime/atomic_file.hpp"
+#include "runtime/flags.hpp"
 #include "runtime/run_counters.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
@@ -59,13 +60,13 @@ const char* state_name(const heslam_msg_TrackingState& field) {
 
 eval::Format parse_format_or_throw(const std::string& text, const std::string& where) {
   const std::optional<eval::Format> format = eval::parse_format(text);
-  if (!format) throw std::runtime_error(where + ": expected tum, kitti or euroc, got '" + text + "'");
+  if (!format) runtime::throw_bad_flag_value(where, "tum, kitti or euroc", text);
   return *format;
 }
 
 eval::PoseFrame parse_frame_or_throw(const std::string& text, const std::string& where) {
   const std::optional<eval::PoseFrame> frame = eval::parse_pose_frame(text);
-  if (!frame) throw std::runtime_error(where + ": expected body, cam0 or rectified, got '" + text + "'");
+  if (!frame) runtime::throw_bad_flag_value(where, "body, cam0 or rectified", text);
   return *frame;
 }
 
@@ -85,21 +86,18 @@ RecorderOptions RecorderOptions::from(const runtime::Config& config, const std::
     options.frame = parse_frame_or_throw(config.get_choice("frame", "body", {"body", "cam0", "rectified"}), "frame");
     options.frame_given = true;
   }
-  for (std::size_t i = 0; i < flags.size(); ++i) {
-    const std::string& flag = flags[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= flags.size()) throw std::runtime_error(flag + ": expected a value");
-      return flags[++i];
-    };
-    if (flag == "--output") options.output = value();
-    else if (flag == "--format") options.format = parse_format_or_throw(value(), "--format");
-    else if (flag == "--frame") {
-      options.frame = parse_frame_or_throw(value(), "--frame");
-      options.frame_given = true;
-    } else if (flag == "--keyframes") options.keyframe_output = value();
-    else if (flag == "--lost") options.lost_output = value();
-    else throw std::runtime_error("unexpected argument '" + flag + "' (see --help)");
-  }
+  runtime::Flags parser("heslam-recorder [options]");
+  parser.path("--output", "FILE", &options.output, "the trajectory file (the config's output)")
+      .custom("--format", "tum|kitti|euroc", "its format (the config's format)",
+              [&options](const std::string& value) { options.format = parse_format_or_throw(value, "--format"); })
+      .custom("--frame", "body|cam0|rectified", "the frame of the poses written (the config's frame)",
+              [&options](const std::string& value) {
+                options.frame = parse_frame_or_throw(value, "--frame");
+                options.frame_given = true;
+              })
+      .path("--keyframes", "FILE", &options.keyframe_output, "the keyframe trajectory (the config's keyframe_output)")
+      .path("--lost", "FILE", &options.lost_output, "the stamps of lost frames (the config's lost_output)");
+  parser.parse(flags);
   if (options.output.empty()) throw std::runtime_error("--output: expected a file name");
   const std::string extension = options.format == eval::Format::euroc ? ".csv" : ".txt";
   if (options.keyframe_output.empty()) options.keyframe_output = sibling_path(options.output, ".keyframes" + extension);

@@ -37,6 +37,6 @@ struct ReplayOptions {
 // args: what parse_common_args left. Throws std::runtime_error naming the option and what was expected.
 ReplayOptions parse_replay_options(const std::vector<std::string>& args);
 
-const char* replay_usage();
+std::string replay_usage();
 
 }  // namespace heslam

@@ -1,78 +1,51 @@
 // Parsing heslam-spy's command line (one clear line per bad option).
 #include "tools/spy/spy_options.hpp"
 
-#include <charconv>
-#include <cmath>
+#include <limits>
 #include <stdexcept>
+
+#include "runtime/flags.hpp"
 
 namespace heslam {
 
 namespace {
 
-double parse_seconds(const std::string& option, const std::string& text) {
-  double value = 0.0;
-  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (error != std::errc{} || end != text.data() + text.size() || !std::isfinite(value) || value < 0.0) {
-    throw std::runtime_error(option + ": expected seconds >= 0, got '" + text + "'");
-  }
-  return value;
-}
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
-std::size_t parse_count(const std::string& option, const std::string& text, std::size_t min_value) {
-  std::size_t value = 0;
-  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (error != std::errc{} || end != text.data() + text.size() || value < min_value) {
-    throw std::runtime_error(option + ": expected an integer >= " + std::to_string(min_value) + ", got '" + text + "'");
-  }
-  return value;
+runtime::Flags spy_flags(SpyOptions& options, std::vector<std::string>& positional) {
+  runtime::Flags flags("heslam-spy list | echo TOPIC | hz TOPIC | bw TOPIC | info TOPIC [options]",
+                       "  list          topics seen on the domain: type, writer and reader counts\n"
+                       "  echo TOPIC    print samples (images summarised: size, stamp, mean intensity)\n"
+                       "  hz TOPIC      rate with min/max/std of the period\n"
+                       "  bw TOPIC      bytes per second and message sizes\n"
+                       "  info TOPIC    QoS of every writer and reader, and incompatible pairs\n"
+                       "  TOPIC is relative to the namespace (camera/stereo) or full (heslam/camera/stereo).");
+  flags.toggle("--once", &options.once, "echo one sample / print one report, then exit")
+      .integer("--count", "N", &options.count, std::size_t{1}, std::numeric_limits<std::size_t>::max(),
+               "exit after N samples")
+      .integer("--window", "N", &options.window, std::size_t{2}, std::numeric_limits<std::size_t>::max(),
+               "hz/bw: statistics over the last N samples (100)")
+      .toggle("--full", &options.full, "echo: every element, including image bytes")
+      .number("--wait", "S", &options.wait_s, 0.0, kInfinity, "list/info: listen to discovery for S seconds (1)")
+      .number("--timeout", "S", &options.timeout_s, 0.0, kInfinity,
+              "echo/hz/bw: exit 1 when no sample arrives for S seconds (0 = wait forever)")
+      .note("Spy readers are best effort, keep-last 1: tapping never slows the pipeline.")
+      .positional("COMMAND", "", [&positional](const std::string& arg) { positional.push_back(arg); });
+  return flags;
 }
 
 }  // namespace
 
-const char* spy_usage() {
-  return "usage: heslam-spy list | echo TOPIC | hz TOPIC | bw TOPIC | info TOPIC [options]\n"
-         "  list          topics seen on the domain: type, writer and reader counts\n"
-         "  echo TOPIC    print samples (images summarised: size, stamp, mean intensity)\n"
-         "  hz TOPIC      rate with min/max/std of the period\n"
-         "  bw TOPIC      bytes per second and message sizes\n"
-         "  info TOPIC    QoS of every writer and reader, and incompatible pairs\n"
-         "  TOPIC is relative to the namespace (camera/stereo) or full (heslam/camera/stereo).\n"
-         "  --once        echo one sample / print one report, then exit\n"
-         "  --count N     exit after N samples\n"
-         "  --window N    hz/bw: statistics over the last N samples (100)\n"
-         "  --full        echo: every element, including image bytes\n"
-         "  --wait S      list/info: listen to discovery for S seconds (1)\n"
-         "  --timeout S   echo/hz/bw: exit 1 when no sample arrives for S seconds (0 = wait forever)\n"
-         "  Spy readers are best effort, keep-last 1: tapping never slows the pipeline.\n";
+std::string spy_usage() {
+  SpyOptions unused;
+  std::vector<std::string> unused_positional;
+  return spy_flags(unused, unused_positional).usage();
 }
 
 SpyOptions parse_spy_options(const std::vector<std::string>& args) {
   SpyOptions options;
   std::vector<std::string> positional;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& arg = args[i];
-    auto value = [&]() -> const std::string& {
-      if (i + 1 >= args.size()) throw std::runtime_error(arg + ": missing value");
-      return args[++i];
-    };
-    if (arg == "--once") {
-      options.once = true;
-    } else if (arg == "--count") {
-      options.count = parse_count(arg, value(), 1);
-    } else if (arg == "--window") {
-      options.window = parse_count(arg, value(), 2);
-    } else if (arg == "--full") {
-      options.full = true;
-    } else if (arg == "--wait") {
-      options.wait_s = parse_seconds(arg, value());
-    } else if (arg == "--timeout") {
-      options.timeout_s = parse_seconds(arg, value());
-    } else if (!arg.empty() && arg.front() == '-') {
-      throw std::runtime_error(arg + ": unknown option (see --help)");
-    } else {
-      positional.push_back(arg);
-    }
-  }
+  spy_flags(options, positional).parse(args);
   if (positional.empty()) throw std::runtime_error("missing command: list, echo, hz, bw or info (see --help)");
   const std::string& command = positional[0];
   if (command == "list") {

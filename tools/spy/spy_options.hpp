@@ -23,6 +23,6 @@ struct SpyOptions {
 // Throws std::runtime_error naming the option and what was expected.
 SpyOptions parse_spy_options(const std::vector<std::string>& args);
 
-const char* spy_usage();
+std::string spy_usage();
 
 }  // namespace heslam

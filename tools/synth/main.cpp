@@ -3,11 +3,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
 #include <unistd.h>
 
+#include "runtime/flags.hpp"
 #include "tools/synth/preset.hpp"
 #include "tools/synth/progress_report.hpp"
 #include "tools/synth/sequence.hpp"
@@ -15,19 +17,41 @@
 
 namespace {
 
-constexpr const char* kUsage =
-    "usage: heslam-synth --preset NAME|FILE.yaml --out DIR [--seed N] [--frames N] [--format euroc|kitti]\n"
-    "                    [--threads 1|2] [--no-events] [--quiet]\n"
-    "  progress on stderr: a live line on a terminal, a line per 10 % otherwise, none with --quiet\n"
-    "       heslam-synth --list\n";
+// The command line, declared once for the parser and the usage.
+struct Arguments {
+  std::string preset_name;
+  std::string out_dir;
+  heslam::synth::OutputFormat format = heslam::synth::OutputFormat::kEuroc;
+  bool quiet = false;
+  bool list = false;
+  bool help = false;
+  heslam::synth::RenderOptions options;
+};
 
-std::uint64_t parse_u64(const std::string& flag, const std::string& value) {
-  char* end = nullptr;
-  const unsigned long long v = std::strtoull(value.c_str(), &end, 10);
-  if (value.empty() || *end != '\0' || value[0] == '-') {
-    throw std::runtime_error(flag + " expects a non-negative integer, got '" + value + "'");
-  }
-  return v;
+heslam::runtime::Flags synth_flags(Arguments& a) {
+  using heslam::synth::OutputFormat;
+  heslam::runtime::Flags flags(
+      "heslam-synth --preset NAME|FILE.yaml --out DIR [--seed N] [--frames N] [--format euroc|kitti]\n"
+      "                    [--threads 1|2] [--no-events] [--quiet]\n"
+      "       heslam-synth --list",
+      "  progress on stderr: a live line on a terminal, a line per 10 % otherwise, none with --quiet");
+  flags.text("--preset", "NAME|FILE.yaml", &a.preset_name, "a built-in preset (--list) or a preset file")
+      .text("--out", "DIR", &a.out_dir, "where the sequence is written")
+      .integer("--seed", "N", &a.options.seed, std::uint64_t{0}, std::numeric_limits<std::uint64_t>::max(),
+               "trajectory jitter, oscillation phases and sensor noise (1)")
+      .integer("--frames", "N", &a.options.frames, 0, std::numeric_limits<int>::max(),
+               "frames to render (default: the preset's)")
+      .choice("--format", &a.format, {{"euroc", OutputFormat::kEuroc}, {"kitti", OutputFormat::kKitti}},
+              "output layout (default euroc)")
+      .integer("--threads", "1|2", &a.options.threads, 1, 2,
+               "left and right images rendered concurrently (the same bytes)")
+      .toggle("--no-events", &a.options.events, "none of the preset's events", false)
+      .toggle("--quiet", &a.quiet, "no progress and no summary line")
+      .alias("-q")
+      .toggle("--list", &a.list, "the built-in presets, one a line")
+      .toggle("--help", &a.help, "this help")
+      .alias("-h");
+  return flags;
 }
 
 }  // namespace
@@ -35,36 +59,24 @@ std::uint64_t parse_u64(const std::string& flag, const std::string& value) {
 int main(int argc, char** argv) {
   using namespace heslam::synth;
   try {
-    std::string preset_name, out_dir, format = "euroc";
-    bool quiet = false;
-    RenderOptions options;
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw std::runtime_error(arg + " needs a value");
-        return argv[++i];
-      };
-      if (arg == "--preset") preset_name = value();
-      else if (arg == "--out") out_dir = value();
-      else if (arg == "--seed") options.seed = parse_u64(arg, value());
-      else if (arg == "--frames") options.frames = static_cast<int>(parse_u64(arg, value()));
-      else if (arg == "--format") format = value();
-      else if (arg == "--threads") options.threads = static_cast<int>(parse_u64(arg, value()));
-      else if (arg == "--no-events") options.events = false;
-      else if (arg == "--quiet" || arg == "-q") quiet = true;
-      else if (arg == "--list") {
-        for (const auto& n : known_presets()) std::cout << n << "\n";
-        return 0;
-      } else if (arg == "--help" || arg == "-h") {
-        std::cout << kUsage;
-        return 0;
-      } else {
-        throw std::runtime_error("unknown argument '" + arg + "'\n" + kUsage);
-      }
+    Arguments arguments;
+    heslam::runtime::Flags flags = synth_flags(arguments);
+    flags.parse(argc, argv);
+    if (arguments.help) {
+      std::cout << flags.usage();
+      return 0;
     }
-    if (preset_name.empty() || out_dir.empty()) throw std::runtime_error(std::string("--preset and --out are required\n") + kUsage);
-    if (format != "euroc" && format != "kitti") throw std::runtime_error("--format is '" + format + "', expected euroc or kitti");
-    const OutputFormat fmt = format == "euroc" ? OutputFormat::kEuroc : OutputFormat::kKitti;
+    if (arguments.list) {
+      for (const auto& n : known_presets()) std::cout << n << "\n";
+      return 0;
+    }
+    const std::string& preset_name = arguments.preset_name;
+    const std::string& out_dir = arguments.out_dir;
+    const bool quiet = arguments.quiet;
+    RenderOptions& options = arguments.options;
+    const OutputFormat fmt = arguments.format;
+    const std::string format = fmt == OutputFormat::kEuroc ? "euroc" : "kitti";
+    if (preset_name.empty() || out_dir.empty()) throw std::runtime_error("--preset and --out are required\n" + flags.usage());
     // KITTI images are rectified by definition: render ideal pinhole images for it.
     if (fmt == OutputFormat::kKitti) options.apply_distortion = false;
 

@@ -13,7 +13,7 @@ int main(int argc, char** argv) {
     runtime::install_shutdown_handlers();
     const runtime::CommonArgs args = runtime::parse_common_args(argc, argv, "viewer");
     if (args.help) {
-      std::cout << viewer::ViewerOptions::usage() << "Common options:\n" << runtime::common_args_usage();
+      std::cout << viewer::ViewerOptions::usage() << runtime::common_args_usage();
       return 0;
     }
     if (args.check) return 0;  // its options are read as it starts; the common flags are checked

@@ -3,6 +3,8 @@
 
 #include <stdexcept>
 
+#include "runtime/flags.hpp"
+
 namespace heslam::viewer {
 namespace {
 
@@ -12,62 +14,54 @@ constexpr double kMaxSnapshotPeriodS = 86400.0;
 constexpr int kMaxRecentKeyframes = 100000;
 constexpr int kMaxCovisibilityWeight = 100000;
 
-double to_double(const std::string& flag, const std::string& text, double low, double high) {
-  try {
-    std::size_t used = 0;
-    const double value = std::stod(text, &used);
-    if (used == text.size() && value >= low && value <= high) return value;
-  } catch (const std::exception&) {
-  }
-  throw std::runtime_error(flag + ": expected a number in [" + std::to_string(low) + ", " + std::to_string(high) +
-                           "], got '" + text + "'");
-}
-
-int to_int(const std::string& flag, const std::string& text, int low, int high) {
-  const double value = to_double(flag, text, low, high);
-  if (value != static_cast<int>(value)) throw std::runtime_error(flag + ": expected an integer, got '" + text + "'");
-  return static_cast<int>(value);
+// The options, declared once for the parser and the usage.
+runtime::Flags viewer_flags(ViewerOptions& o) {
+  runtime::Flags flags(
+      "heslam-viewer [options] [common options]",
+      "Shows the map being built (3D) and the current frame (2D) of a running pipeline; joins at any time.");
+  flags.toggle("--headless", &o.headless,
+               "no window: render off-screen, write PNG snapshots to --out\n(also when $DISPLAY is unset)")
+      .path("--out", "DIR", &o.out_dir,
+            "snapshots (map_*.png top view, frame_*.png, map_final.png,\n"
+            "frame_final.png) and viewer_stats.txt at the end")
+      .number("--snapshot-every", "S", &o.snapshot_every_s, 0.0, kMaxSnapshotPeriodS,
+              "also write snapshots every S seconds (default 0: only at the end)")
+      .path("--record", "FILE.mp4", &o.record_file,
+            "record the 2D view (VideoWriter mp4v; PNG sequence if no codec)")
+      .path("--gt", "FILE", &o.gt_file, "ground truth drawn over the map (TUM, EuRoC csv, KITTI), aligned SE(3)")
+      .path("--gt-extrinsic", "sensor.yaml", &o.gt_extrinsic, "EuRoC T_BS: body ground truth -> camera poses")
+      .number("--rate", "HZ", &o.draw_rate_hz, 0.1, kMaxRateHz,
+              "drawing rate (default 20); faster frames are dropped and counted")
+      .integer("--recent-keyframes", "N", &o.recent_keyframes, 0, kMaxRecentKeyframes,
+               "points of the N newest keyframes are 'recent' (default 5)")
+      .integer("--covisibility-min-weight", "W", &o.covisibility_min_weight, 0, kMaxCovisibilityWeight,
+               "covisibility edges with >= W shared points (default 100)")
+      .custom("--he-mode", "MODE", "equalization shown: none global clipped clahe adaptive (default clipped)",
+              [&o](const std::string& mode) {
+                try {
+                  o.he_mode = parse_he_mode(mode);
+                } catch (const std::exception&) {
+                  runtime::throw_bad_flag_value("--he-mode", "none, global, clipped, clahe or adaptive", mode);
+                }
+              })
+      .note("Keys (3D window or 2D window):")
+      .note("p  map points       u  culled points      k  keyframe frustums")
+      .note("c  covisibility     t  spanning tree      g  ground truth     j  trajectory")
+      .note("f  follow camera / free camera (mouse)    s  write a snapshot now (needs --out)")
+      .note("q  close the viewer (the pipeline goes on)")
+      .note("Colours: points black = map, red = recent, magenta = merged by a loop closure, grey = culled;\n"
+            "keyframes blue, current camera green, covisibility green lines, spanning tree orange,\n"
+            "ground truth purple. 2D view: raw left | rectified + equalized left with features\n"
+            "(green = map point match, blue = stereo only) on keyframes, local map points projected at the\n"
+            "tracked pose on other frames (green crosses).");
+  return flags;
 }
 
 }  // namespace
 
 ViewerOptions ViewerOptions::parse(const std::vector<std::string>& rest) {
   ViewerOptions o;
-  for (std::size_t i = 0; i < rest.size(); ++i) {
-    const std::string& flag = rest[i];
-    auto value = [&]() -> const std::string& {
-      if (i + 1 >= rest.size()) throw std::runtime_error(flag + ": missing value");
-      return rest[++i];
-    };
-    if (flag == "--headless") {
-      o.headless = true;
-    } else if (flag == "--snapshot-every") {
-      o.snapshot_every_s = to_double(flag, value(), 0.0, kMaxSnapshotPeriodS);
-    } else if (flag == "--out") {
-      o.out_dir = value();
-    } else if (flag == "--gt") {
-      o.gt_file = value();
-    } else if (flag == "--gt-extrinsic") {
-      o.gt_extrinsic = value();
-    } else if (flag == "--record") {
-      o.record_file = value();
-    } else if (flag == "--rate") {
-      o.draw_rate_hz = to_double(flag, value(), 0.1, kMaxRateHz);
-    } else if (flag == "--recent-keyframes") {
-      o.recent_keyframes = to_int(flag, value(), 0, kMaxRecentKeyframes);
-    } else if (flag == "--covisibility-min-weight") {
-      o.covisibility_min_weight = to_int(flag, value(), 0, kMaxCovisibilityWeight);
-    } else if (flag == "--he-mode") {
-      const std::string& mode = value();
-      try {
-        o.he_mode = parse_he_mode(mode);
-      } catch (const std::exception&) {
-        throw std::runtime_error("--he-mode: expected none, global, clipped, clahe or adaptive, got '" + mode + "'");
-      }
-    } else {
-      throw std::runtime_error("unknown argument '" + flag + "' (see heslam-viewer --help)");
-    }
-  }
+  viewer_flags(o).parse(rest);
   if (o.headless && o.out_dir.empty()) throw std::runtime_error("--headless needs --out DIR (where the snapshots go)");
   if (o.snapshot_every_s > 0.0 && o.out_dir.empty()) throw std::runtime_error("--snapshot-every needs --out DIR");
   if (!o.gt_extrinsic.empty() && o.gt_file.empty()) throw std::runtime_error("--gt-extrinsic needs --gt FILE");
@@ -75,30 +69,8 @@ ViewerOptions ViewerOptions::parse(const std::vector<std::string>& rest) {
 }
 
 std::string ViewerOptions::usage() {
-  return "usage: heslam-viewer [options] [common options]\n"
-         "Shows the map being built (3D) and the current frame (2D) of a running pipeline; joins at any time.\n"
-         "  --headless                  no window: render off-screen, write PNG snapshots to --out\n"
-         "                              (also when $DISPLAY is unset)\n"
-         "  --out DIR                   snapshots (map_*.png top view, frame_*.png, map_final.png,\n"
-         "                              frame_final.png) and viewer_stats.txt at the end\n"
-         "  --snapshot-every S          also write snapshots every S seconds (default 0: only at the end)\n"
-         "  --record FILE.mp4           record the 2D view (VideoWriter mp4v; PNG sequence if no codec)\n"
-         "  --gt FILE                   ground truth drawn over the map (TUM, EuRoC csv, KITTI), aligned SE(3)\n"
-         "  --gt-extrinsic sensor.yaml  EuRoC T_BS: body ground truth -> camera poses\n"
-         "  --rate HZ                   drawing rate (default 20); faster frames are dropped and counted\n"
-         "  --recent-keyframes N        points of the N newest keyframes are 'recent' (default 5)\n"
-         "  --covisibility-min-weight W covisibility edges with >= W shared points (default 100)\n"
-         "  --he-mode MODE              equalization shown: none global clipped clahe adaptive (default clipped)\n"
-         "Keys (3D window or 2D window):\n"
-         "  p  map points       u  culled points      k  keyframe frustums\n"
-         "  c  covisibility     t  spanning tree      g  ground truth     j  trajectory\n"
-         "  f  follow camera / free camera (mouse)    s  write a snapshot now (needs --out)\n"
-         "  q  close the viewer (the pipeline goes on)\n"
-         "Colours: points black = map, red = recent, magenta = merged by a loop closure, grey = culled;\n"
-         "keyframes blue, current camera green, covisibility green lines, spanning tree orange,\n"
-         "ground truth purple. 2D view: raw left | rectified + equalized left with features\n"
-         "(green = map point match, blue = stereo only) on keyframes, local map points projected at the\n"
-         "tracked pose on other frames (green crosses).\n";
+  ViewerOptions unused;
+  return viewer_flags(unused).usage();
 }
 
 }  // namespace heslam::viewer

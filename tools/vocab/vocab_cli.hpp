@@ -51,7 +51,7 @@ struct Cli {
   std::vector<std::filesystem::path> files;  // convert: IN OUT; info: FILE
 };
 
-const char* usage();
+std::string usage();
 
 // Throws std::runtime_error with one line naming the flag and what it expected.
 Cli parse_cli(int argc, char** argv);

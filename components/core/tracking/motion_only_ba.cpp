@@ -8,9 +8,7 @@
 // One pass over the observations per trial pose: it projects every point, sums the robust cost the
 // step is judged by, and writes each residual row's Jacobian into columns (NormalEquations); an
 // accepted step's normal equations then come from those columns as 27 dot products (the 21 entries
-// of the symmetric H's upper triangle and the 6 of g), no second projection at the same pose. The
-// pass over observation ranges can run on two threads (optimize_pose's worker): every row has its
-// fixed slot and the sums run on one thread in a fixed order, so the result does not depend on it.
+// of the symmetric H's upper triangle and the 6 of g), no second projection at the same pose.
 #include "components/core/tracking/motion_only_ba.hpp"
 
 #include <algorithm>
@@ -43,9 +41,6 @@ constexpr double kMaxLambda = 1e16;
 // LM scales its damping by the diagonal of J^T J clamped to this range (Ceres' min / max_lm_diagonal).
 constexpr double kMinDiagonal = 1e-6;
 constexpr double kMaxDiagonal = 1e32;
-// A pass over fewer observations than this stays on one thread: the hand-off to the other thread
-// (~1 us while it polls) would cost more than the half of the pass it takes.
-constexpr std::size_t kMinObservationsToSplit = 64;
 
 using Matrix6 = Eigen::Matrix<double, 6, 6>;
 using Vector6 = Eigen::Matrix<double, 6, 1>;
@@ -183,28 +178,20 @@ double total_cost(const NormalEquations& ne) {
   return 0.5 * cost;
 }
 
-// The pass at one pose over all active observations: on two threads (two fixed halves) when a
-// worker is given and there are enough observations to pay for the hand-off.
+// The pass at one pose over all active observations.
 void evaluate(const PinholeStereo& camera, const std::vector<Active>& active, const Eigen::Matrix3d& R,
-              const Eigen::Vector3d& t, bool robust, PairWorker* worker, NormalEquations& ne) {
-  const std::size_t n = active.size();
-  if (worker == nullptr || n < kMinObservationsToSplit) {
-    fill(camera, active, 0, n, R, t, robust, ne);
-    return;
-  }
-  const std::size_t half = n / 2;
-  worker->run([&] { fill(camera, active, half, n, R, t, robust, ne); },
-              [&] { fill(camera, active, 0, half, R, t, robust, ne); }, PairWorker::Then::kMoreSoon);
+              const Eigen::Vector3d& t, bool robust, NormalEquations& ne) {
+  fill(camera, active, 0, active.size(), R, t, robust, ne);
 }
 
 // One round: at most `iterations` LM steps on the active observations; updates R and t. `current`
 // holds the pass at (R, t); `trial` receives a step's.
 void solve_round(const PinholeStereo& camera, const std::vector<Active>& active, Eigen::Matrix3d& R,
-                 Eigen::Vector3d& t, bool robust, int iterations, PairWorker* worker,
+                 Eigen::Vector3d& t, bool robust, int iterations,
                  NormalEquations& current, NormalEquations& trial) {
   double lambda = kInitialLambda;
   double lambda_factor = 2.0;  // grows while steps are rejected in a row (Ceres' decrease factor)
-  evaluate(camera, active, R, t, robust, worker, current);
+  evaluate(camera, active, R, t, robust, current);
   double cost = total_cost(current);
   Matrix6 H;
   Vector6 g;
@@ -226,7 +213,7 @@ void solve_round(const PinholeStereo& camera, const std::vector<Active>& active,
       const Eigen::Vector3d axis = angle > 0.0 ? Eigen::Vector3d(step.head<3>() / angle) : Eigen::Vector3d::UnitX();
       const Eigen::Matrix3d R_new = Eigen::AngleAxisd(angle, axis).toRotationMatrix() * R;
       const Eigen::Vector3d t_new = t + step.tail<3>();
-      evaluate(camera, active, R_new, t_new, robust, worker, trial);
+      evaluate(camera, active, R_new, t_new, robust, trial);
       const double new_cost = total_cost(trial);
       // Gain ratio: actual over predicted decrease of the (Gauss-Newton model of the) cost.
       const double predicted = -(step.dot(g) + 0.5 * step.dot(H * step));
@@ -267,7 +254,7 @@ double observation_chi2(const PinholeStereo& camera, const PoseObservation& obs,
 }
 
 MotionOnlyBaResult optimize_pose(const PinholeStereo& camera, const std::vector<PoseObservation>& observations,
-                                 const Pose3& T_cw_guess, const MotionOnlyBaOptions& options, PairWorker* worker) {
+                                 const Pose3& T_cw_guess, const MotionOnlyBaOptions& options) {
   MotionOnlyBaResult result;
   result.T_cw = T_cw_guess;
   if (!(options.disparity_sigma_ratio > 0.0)) {
@@ -303,7 +290,7 @@ MotionOnlyBaResult optimize_pose(const PinholeStereo& camera, const std::vector<
     if (edges == 0) break;
     current.rows = trial.rows = rows;
     current.observations = trial.observations = active.size();
-    solve_round(camera, active, R, t, robust, options.iterations_per_round, worker, current, trial);
+    solve_round(camera, active, R, t, robust, options.iterations_per_round, current, trial);
 
     // Reclassify every observation (outliers may come back), as ORB-SLAM2 does.
     Pose3 T_cw = Pose3::Identity();

@@ -12,7 +12,6 @@
 #include <Eigen/Core>
 
 #include "components/core/camera/pinhole_stereo.hpp"
-#include "components/core/feature/pair_worker.hpp"
 #include "components/core/geometry/pose.hpp"
 
 namespace heslam {
@@ -48,11 +47,8 @@ struct MotionOnlyBaResult {
 };
 
 // Starts from T_cw_guess; returns the refined pose and the outlier flags of the last classification.
-// With a worker, each pass over the observations is split in two halves, one on the worker's thread;
-// the result is the same bit for bit as without (every sum runs on the caller in a fixed order).
 MotionOnlyBaResult optimize_pose(const PinholeStereo& camera, const std::vector<PoseObservation>& observations,
-                                 const Pose3& T_cw_guess, const MotionOnlyBaOptions& options = {},
-                                 PairWorker* worker = nullptr);
+                                 const Pose3& T_cw_guess, const MotionOnlyBaOptions& options = {});
 
 // Squared whitened residual of one observation at pose T_cw (the chi-square the rounds classify by);
 // infinite when the point is behind the camera.

@@ -32,8 +32,7 @@ std::vector<PoseObservation> frame_observations(const Frame& frame, const Map& m
   return observations;
 }
 
-int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camera, const TrackerOptions& options,
-                        PairWorker* worker) {
+int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camera, const TrackerOptions& options) {
   // Matches of points the map no longer holds are dropped; the outlier flags are cleared, so every
   // other match becomes an observation (what frame_observations would give now, with one map lookup
   // per match instead of two).
@@ -55,7 +54,7 @@ int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camer
   ba.rounds = options.pose_optimization_rounds;
   ba.iterations_per_round = options.pose_optimization_iterations;
   ba.disparity_sigma_ratio = options.disparity_sigma_ratio;
-  const MotionOnlyBaResult result = optimize_pose(camera, observations, frame.T_cw(), ba, worker);
+  const MotionOnlyBaResult result = optimize_pose(camera, observations, frame.T_cw(), ba);
   frame.T_wc = result.T_cw.inverse();
   for (std::size_t k = 0; k < keypoint_of.size(); ++k) frame.outlier[keypoint_of[k]] = result.outlier[k];
   return result.inliers;

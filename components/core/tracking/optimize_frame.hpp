@@ -15,9 +15,7 @@
 namespace heslam {
 
 // Returns the number of inlier matches; frame.T_wc is updated only when there were observations.
-// `worker` (may be null): the second thread for the BA's passes (optimize_pose), same result.
-int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camera, const TrackerOptions& options,
-                        PairWorker* worker = nullptr);
+int optimize_frame_pose(Frame& frame, const Map& map, const PinholeStereo& camera, const TrackerOptions& options);
 
 // The frame's matched keypoints that are not flagged as outliers and whose map point exists, as BA
 // observations; keypoint_of, when given, receives each observation's keypoint index.

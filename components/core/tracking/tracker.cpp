@@ -253,7 +253,7 @@ bool Tracker::track_motion_model(Frame& frame) {
     frame.clear_matches();
     return false;
   }
-  optimize_frame_pose(frame, map_, camera_, options_, worker_);
+  optimize_frame_pose(frame, map_, camera_, options_);
   return frame.discard_outliers() >= options_.min_pose_inliers;
 }
 
@@ -272,7 +272,7 @@ bool Tracker::track_reference_keyframe(Frame& frame) {
     frame.clear_matches();
     return false;
   }
-  optimize_frame_pose(frame, map_, camera_, options_, worker_);
+  optimize_frame_pose(frame, map_, camera_, options_);
   return frame.discard_outliers() >= options_.min_pose_inliers;
 }
 
@@ -285,7 +285,7 @@ bool Tracker::track_local_map(Frame& frame, int& inliers) {
   const bool recently_relocalized = frames_since_relocalization_ < kFramesWithoutMotionModelAfterRelocalization;
   const float radius = recently_relocalized ? options_.local_search_radius_relocalized_px : options_.local_search_radius_px;
   search_local_points(frame, local.points, map_, camera_, radius, options_);
-  optimize_frame_pose(frame, map_, camera_, options_, worker_);
+  optimize_frame_pose(frame, map_, camera_, options_);
   inliers = 0;
   for (std::size_t i = 0; i < frame.size(); ++i) {
     if (frame.point_ids[i] == kNoId || frame.outlier[i]) continue;

@@ -10,7 +10,6 @@
 // against the newest keyframes only.
 #pragma once
 
-#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -18,7 +17,6 @@
 
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/feature/features.hpp"
-#include "components/core/feature/pair_worker.hpp"
 #include "components/core/geometry/pose.hpp"
 #include "components/core/map/map.hpp"
 #include "components/core/place/keyframe_database.hpp"
@@ -82,15 +80,6 @@ class Tracker {
   // state is unchanged then, so the caller can skip the frame and count it.
   TrackResult track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatures features);
 
-  // A second thread for the frame's motion-only BAs (each pass over the observations in two halves,
-  // optimize_pose); null (the default): all on the calling thread. The poses, matches and map are
-  // the same bit for bit either way. The worker must outlive its use here; the tracker does not own it.
-  void set_pair_worker(PairWorker* worker) { worker_ = worker; }
-  // The worker options for a tracker's own PairWorker: between two BA passes the caller does only a
-  // 6x6 solve and a few dot products (microseconds), so the worker polls briefly; a longer poll
-  // would only burn the other core at the end of every frame's tracking.
-  static PairWorkerOptions pair_worker_options() { return PairWorkerOptions{std::chrono::microseconds{50}}; }
-
   // Whether the local mapper can take a keyframe now (real-time mode); lockstep keeps it true.
   void set_mapper_idle(bool idle) { mapper_idle_ = idle; }
 
@@ -151,7 +140,6 @@ class Tracker {
   int frames_since_keyframe_ = 0;
   int frames_since_relocalization_ = 1 << 30;
   bool mapper_idle_ = true;
-  PairWorker* worker_ = nullptr;  // not owned; null: serial
 };
 
 }  // namespace heslam

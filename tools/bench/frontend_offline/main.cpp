@@ -1,27 +1,17 @@
 // heslam-frontend-offline: runs rectification, HE, ORB, stereo matching and tracking over an EuRoC
 // folder in one thread (no DDS), writes the TUM trajectory of the rectified left camera, prints the
 // per-stage time breakdown (median / p90) and, when the folder has ground truth, the SE(3) ATE.
-//
-// usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]
-//                                [--he none|global|clipped|clahe|adaptive] [--he-stereo shared|matched|separate]
-//                                [--variant none|dark|low_contrast]
-//                                [--stereo-gain L,R[/L,R...]] [--disparity-noise SIGMA]
-//                                [--drop-stereo-right-above LEVEL] [--k1-offset DK]
-//                                [--first-frame K] [--frames N] [--period-ms P]
-//                                [--tracking-worker on|off] [--pin-threads on|off]
-//                                [--stationary-chi2 X] [--rotation-chi2 X]
-//                                [--close-untracked-near-clip-weight W]
-//                                [--kidnap DIR [--kidnap-plan B,R,S[,N]]] [--vocabulary FILE|none]
+// `heslam-frontend-offline --help` lists the flags.
 #include <algorithm>
-#include <charconv>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
-#include <system_error>
 #include <vector>
 
 #include "tools/bench/bench_util.hpp"
@@ -29,37 +19,14 @@
 #include "components/core/tracking/settings_file.hpp"
 #include "tools/bench/frontend_offline/kidnapped_copy.hpp"
 #include "tools/bench/frontend_offline/offline_run.hpp"
+#include "runtime/flags.hpp"
+#include "runtime/quote_value.hpp"
 
 namespace {
 
 using heslam::bench::percentile;
 
 using heslam::bench::FrameRecord;
-
-constexpr const char* kUsage =
-    "usage: heslam-frontend-offline DATASET [--output FILE.tum] [--settings SETTINGS.yaml]\n"
-    "       (ORB-SLAM2 settings: HE.*, ORBextractor.*, Stereo.*, and Camera.fps / ThDepth for the tracker)\n"
-    "       [--he none|global|clipped|clahe|adaptive] [--he-stereo shared|matched|separate]\n"
-    "       [--variant none|dark|low_contrast]\n"
-    "       [--stereo-gain L,R[/L,R...]]   (left image x L, right x R, saturated to 8 bit: cameras exposed\n"
-    "                                       differently; several: the run split into equal blocks)\n"
-    "       [--disparity-noise SIGMA]   (Gaussian noise of SIGMA px added to every stereo disparity, seeded per\n"
-    "                                    frame: what stereo noise alone costs the trajectory)\n"
-    "       [--drop-stereo-right-above LEVEL]   (no stereo match where the right pixel matched is above LEVEL,\n"
-    "                                            0-254: the stereo set of a brighter right camera, no pixel changed)\n"
-    "       [--k1-offset DK]   (DK added to both cameras' k1 before rectification: how much the trajectory\n"
-    "                           depends on the lens model at the image's edges)\n"
-    "       [--first-frame K] [--frames N]   (start at frame K of the sequence; at most N frames)\n"
-    "       [--period-ms P]   (start a frame every P ms, idle in between, as a camera: 50 for EuRoC's 20 Hz)\n"
-    "       [--tracking-worker on|off]   (the tracker's BA passes in halves on a second thread; default off)\n"
-    "       [--pin-threads on|off]       (the pipeline's two threads on two CPUs, Pipeline.pinThreads; default on)\n"
-    "       [--close-untracked-near-clip-weight W]   (tracker.close_untracked_near_clip_weight, 0-1; default 0.9)\n"
-    "       [--reference-near-clip-weight W]   (tracker.reference_near_clip_weight, 0-1; default 1)\n"
-    "       [--stationary-chi2 X] [--rotation-chi2 X]   (tracker.stationary_test_chi2 / rotation_only_test_chi2; 0: off)\n"
-    "       [--kidnap DIR]   (run on a kidnapped-camera copy written to DIR: frames 60-79 black, 80-159 = 0-79)\n"
-    "       [--kidnap-plan B,R,S[,N]]   (the copy's plan: frames B..R-1 black, from R on the source's frames\n"
-    "                                    S.. (N of them; default: to the source's end); B = R: a teleport)\n"
-    "       [--vocabulary FILE|none]   (keyframe database for relocalization; default: the build's vocabulary)\n";
 
 void print_stage(const char* name, const std::vector<FrameRecord>& frames, double FrameRecord::*field) {
   std::vector<double> values;
@@ -96,118 +63,120 @@ void print_relocalization_summary(const heslam::bench::OfflineRun& run) {
               percentile(relocalized_cpu_ms, 0.5));
 }
 
-// A whole-string number for `flag`, or a one-line error naming it.
-template <typename T>
-T parse_number(const std::string& flag, const std::string& value) {
-  T number{};
-  const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), number);
-  if (error != std::errc{} || end != value.data() + value.size()) {
-    throw std::runtime_error(flag + ": expected a number, got '" + value + "'");
-  }
-  return number;
-}
-
 // "B,R,S" or "B,R,S,N" (KidnapPlan's black_first, replay_first, replay_source, replay_frames).
 heslam::bench::KidnapPlan parse_kidnap_plan(const std::string& flag, const std::string& value) {
   std::vector<int> numbers;
   std::size_t begin = 0;
   while (begin <= value.size()) {
     const std::size_t comma = std::min(value.find(',', begin), value.size());
-    numbers.push_back(parse_number<int>(flag, value.substr(begin, comma - begin)));
+    std::int64_t number = 0;
+    if (!heslam::runtime::parse_whole_integer(value.substr(begin, comma - begin), number) || number < INT_MIN ||
+        number > INT_MAX) {
+      heslam::runtime::throw_bad_flag_value(flag, "B,R,S or B,R,S,N (integers)", value);
+    }
+    numbers.push_back(static_cast<int>(number));
     begin = comma + 1;
   }
-  if (numbers.size() != 3 && numbers.size() != 4) {
-    throw std::runtime_error(flag + ": expected B,R,S or B,R,S,N, got '" + value + "'");
-  }
+  if (numbers.size() != 3 && numbers.size() != 4) heslam::runtime::throw_bad_flag_value(flag, "B,R,S or B,R,S,N", value);
   return heslam::bench::KidnapPlan{numbers[0], numbers[1], numbers[2], numbers.size() == 4 ? numbers[3] : -1};
 }
 
-int run(int argc, char** argv) {
-  std::optional<bool> pin_threads;  // --pin-threads: overrides the settings' Pipeline.pinThreads
-  if (argc < 2) throw std::runtime_error(std::string("missing DATASET\n") + kUsage);
-  std::string dataset = argv[1];
-  if (dataset == "--help" || dataset == "-h") {
-    std::fputs(kUsage, stdout);
-    return 0;
-  }
+// The command line, declared once for the parser and the usage.
+struct Arguments {
+  std::string dataset;
   std::string output;
   std::string settings;
   heslam::bench::OfflineRunOptions options;
   std::string he_mode;
   std::string he_stereo;
+  std::optional<bool> pin_threads;  // --pin-threads: overrides the settings' Pipeline.pinThreads
   std::string kidnap_dir;
   heslam::bench::KidnapPlan kidnap_plan;
-  bool kidnap_plan_given = false;
   std::string vocabulary;
-  for (int i = 2; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (i + 1 >= argc) throw std::runtime_error(arg + ": missing value\n" + kUsage);
-    const std::string value = argv[++i];
-    if (arg == "--output") {
-      output = value;
-    } else if (arg == "--settings") {
-      settings = value;
-    } else if (arg == "--he") {
-      he_mode = value;
-    } else if (arg == "--he-stereo") {
-      he_stereo = value;
-    } else if (arg == "--variant") {
-      options.variant = heslam::bench::parse_photometric_variant(value);
-    } else if (arg == "--stereo-gain") {
-      options.stereo_gain = heslam::bench::parse_stereo_gain_schedule(value);
-    } else if (arg == "--disparity-noise") {
-      options.disparity_noise_px = parse_number<double>(arg, value);
-      if (!(options.disparity_noise_px >= 0.0)) {
-        throw std::runtime_error("--disparity-noise: expected a sigma in pixels >= 0, got '" + value + "'");
-      }
-    } else if (arg == "--drop-stereo-right-above") {
-      options.drop_stereo_right_above = parse_number<int>(arg, value);
-      if (options.drop_stereo_right_above < 0 || options.drop_stereo_right_above > 254) {
-        throw std::runtime_error("--drop-stereo-right-above: expected a grey level in 0..254, got '" + value + "'");
-      }
-    } else if (arg == "--k1-offset") {
-      options.k1_offset = parse_number<double>(arg, value);
-      if (!std::isfinite(options.k1_offset)) throw std::runtime_error("--k1-offset: expected a number, got '" + value + "'");
-    } else if (arg == "--first-frame") {
-      options.first_frame = parse_number<int>(arg, value);
-    } else if (arg == "--frames") {
-      options.max_frames = parse_number<int>(arg, value);
-    } else if (arg == "--period-ms") {
-      options.period_ms = parse_number<double>(arg, value);
-      if (!(options.period_ms >= 0.0)) throw std::runtime_error("--period-ms: expected a number >= 0, got '" + value + "'");
-    } else if (arg == "--pin-threads") {
-      if (value != "on" && value != "off") throw std::runtime_error("--pin-threads: expected on or off, got '" + value + "'");
-      pin_threads = value == "on";
-    } else if (arg == "--tracking-worker") {
-      if (value != "on" && value != "off") throw std::runtime_error("--tracking-worker: expected on or off, got '" + value + "'");
-      options.tracking_worker = value == "on";
-    } else if (arg == "--stationary-chi2") {
-      options.tracker.stationary_test_chi2 = parse_number<double>(arg, value);
-    } else if (arg == "--vocabulary") {
-      vocabulary = value;
-    } else if (arg == "--kidnap") {
-      kidnap_dir = value;
-    } else if (arg == "--kidnap-plan") {
-      kidnap_plan = parse_kidnap_plan(arg, value);
-      kidnap_plan_given = true;
-    } else if (arg == "--close-untracked-near-clip-weight") {
-      options.tracker.close_untracked_near_clip_weight = parse_number<double>(arg, value);
-      const double weight = options.tracker.close_untracked_near_clip_weight;
-      if (!(weight >= 0.0 && weight <= 1.0)) {
-        throw std::runtime_error(arg + ": expected a number in [0, 1], got '" + value + "'");
-      }
-    } else if (arg == "--reference-near-clip-weight") {
-      options.tracker.reference_near_clip_weight = parse_number<double>(arg, value);
-      const double weight = options.tracker.reference_near_clip_weight;
-      if (!(weight >= 0.0 && weight <= 1.0)) {
-        throw std::runtime_error(arg + ": expected a number in [0, 1], got '" + value + "'");
-      }
-    } else if (arg == "--rotation-chi2") {
-      options.tracker.rotation_only_test_chi2 = parse_number<double>(arg, value);
-    } else {
-      throw std::runtime_error("unknown option " + arg + "\n" + kUsage);
-    }
+  bool help = false;
+};
+
+heslam::runtime::Flags offline_flags(Arguments& a) {
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  heslam::runtime::Flags flags("heslam-frontend-offline DATASET [options]");
+  flags.text("--output", "FILE.tum", &a.output, "the trajectory of the rectified left camera")
+      .text("--settings", "SETTINGS.yaml", &a.settings,
+            "ORB-SLAM2 settings: HE.*, ORBextractor.*, Stereo.*, and Camera.fps / ThDepth for the tracker")
+      .text("--he", "none|global|clipped|clahe|adaptive", &a.he_mode, "the histogram equalization")
+      .text("--he-stereo", "shared|matched|separate", &a.he_stereo, "how the two images are equalized")
+      .custom("--variant", "none|dark|low_contrast", "a photometric variant of the images",
+              [&a](const std::string& value) { a.options.variant = heslam::bench::parse_photometric_variant(value); })
+      .custom("--stereo-gain", "L,R[/L,R...]",
+              "left image x L, right x R, saturated to 8 bit: cameras exposed\n"
+              "differently; several: the run split into equal blocks",
+              [&a](const std::string& value) {
+                a.options.stereo_gain = heslam::bench::parse_stereo_gain_schedule(value);
+              })
+      .number("--disparity-noise", "SIGMA", &a.options.disparity_noise_px, 0.0, kInfinity,
+              "Gaussian noise of SIGMA px added to every stereo disparity, seeded per\n"
+              "frame: what stereo noise alone costs the trajectory")
+      .integer("--drop-stereo-right-above", "LEVEL", &a.options.drop_stereo_right_above, 0, 254,
+               "no stereo match where the right pixel matched is above LEVEL,\n"
+               "0-254: the stereo set of a brighter right camera, no pixel changed")
+      .number("--k1-offset", "DK", &a.options.k1_offset,
+              "DK added to both cameras' k1 before rectification: how much the trajectory\n"
+              "depends on the lens model at the image's edges")
+      .integer("--first-frame", "K", &a.options.first_frame, "start at frame K of the sequence")
+      .integer("--frames", "N", &a.options.max_frames, "at most N frames")
+      .number("--period-ms", "P", &a.options.period_ms, 0.0, kInfinity,
+              "start a frame every P ms, idle in between, as a camera: 50 for EuRoC's 20 Hz")
+      .custom("--pin-threads", "on|off", "the pipeline's two threads on two CPUs, Pipeline.pinThreads; default on",
+              [&a](const std::string& value) {
+                if (value != "on" && value != "off") heslam::runtime::throw_bad_flag_value("--pin-threads", "on or off", value);
+                a.pin_threads = value == "on";
+              })
+      .number("--close-untracked-near-clip-weight", "W", &a.options.tracker.close_untracked_near_clip_weight, 0.0, 1.0,
+              "tracker.close_untracked_near_clip_weight, 0-1; default 0.9")
+      .number("--reference-near-clip-weight", "W", &a.options.tracker.reference_near_clip_weight, 0.0, 1.0,
+              "tracker.reference_near_clip_weight, 0-1; default 1")
+      .number("--stationary-chi2", "X", &a.options.tracker.stationary_test_chi2,
+              "tracker.stationary_test_chi2; 0: off")
+      .number("--rotation-chi2", "X", &a.options.tracker.rotation_only_test_chi2,
+              "tracker.rotation_only_test_chi2; 0: off")
+      .text("--kidnap", "DIR", &a.kidnap_dir,
+            "run on a kidnapped-camera copy written to DIR: frames 60-79 black, 80-159 = 0-79")
+      .custom("--kidnap-plan", "B,R,S[,N]",
+              "the copy's plan: frames B..R-1 black, from R on the source's frames\n"
+              "S.. (N of them; default: to the source's end); B = R: a teleport",
+              [&a](const std::string& value) { a.kidnap_plan = parse_kidnap_plan("--kidnap-plan", value); })
+      .text("--vocabulary", "FILE|none", &a.vocabulary,
+            "keyframe database for relocalization; default: the build's vocabulary")
+      .toggle("--help", &a.help, "this help")
+      .alias("-h")
+      .positional("DATASET", "", [&a](const std::string& arg) {
+        if (!a.dataset.empty()) {
+          throw std::runtime_error("'" + heslam::runtime::quote_value(arg) + "': unexpected second DATASET (see --help)");
+        }
+        a.dataset = arg;
+      });
+  return flags;
+}
+
+int run(int argc, char** argv) {
+  Arguments arguments;
+  heslam::runtime::Flags flags = offline_flags(arguments);
+  flags.parse(argc, argv);
+  if (arguments.help) {
+    std::fputs(flags.usage().c_str(), stdout);
+    return 0;
   }
+  if (arguments.dataset.empty()) throw std::runtime_error("missing DATASET\n" + flags.usage());
+  std::string dataset = arguments.dataset;
+  const std::string& output = arguments.output;
+  const std::string& settings = arguments.settings;
+  heslam::bench::OfflineRunOptions& options = arguments.options;
+  const std::string& he_mode = arguments.he_mode;
+  const std::string& he_stereo = arguments.he_stereo;
+  const std::optional<bool>& pin_threads = arguments.pin_threads;
+  const std::string& kidnap_dir = arguments.kidnap_dir;
+  const heslam::bench::KidnapPlan& kidnap_plan = arguments.kidnap_plan;
+  const bool kidnap_plan_given = flags.given("--kidnap-plan");
+  const std::string& vocabulary = arguments.vocabulary;
   if (!settings.empty()) {
     // The frontend's reader: the same keys mean the same options here (docs/configuration.md).
     heslam::SettingsFile file = heslam::load_settings_file(settings, options.tracker);
@@ -301,11 +270,6 @@ int run(int argc, char** argv) {
                 "threads %s\n",
                 static_cast<double>(result.hand_offs) / frames, static_cast<double>(result.sleeping_hand_offs) / frames,
                 result.threads_pinned ? "pinned to two CPUs" : "not pinned");
-    if (options.tracking_worker) {
-      std::printf("hand-offs to the tracker's worker: %.1f per frame, %.1f of them to a sleeping thread\n",
-                  static_cast<double>(result.tracking_hand_offs) / frames,
-                  static_cast<double>(result.tracking_sleeping_hand_offs) / frames);
-    }
   }
   if (std::getenv("HESLAM_FRONTEND_OFFLINE_PER_FRAME") != nullptr) {
     for (std::size_t k = 0; k < result.frames.size(); ++k) {

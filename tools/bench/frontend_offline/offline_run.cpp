@@ -58,9 +58,6 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
   run.camera = rectifier.camera();
   StereoFeaturePipeline pipeline(run.camera, options.pipeline);
   Tracker tracker(run.camera, options.tracker, options.vocabulary);
-  std::unique_ptr<PairWorker> tracking_worker;
-  if (options.tracking_worker) tracking_worker = std::make_unique<PairWorker>(Tracker::pair_worker_options());
-  tracker.set_pair_worker(tracking_worker.get());
 
   const std::size_t first = std::min(sequence.frames.size(), static_cast<std::size_t>(std::max(options.first_frame, 0)));
   const std::size_t available = sequence.frames.size() - first;
@@ -128,10 +125,6 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
   run.hand_offs = pipeline.hand_offs();
   run.sleeping_hand_offs = pipeline.sleeping_hand_offs();
   run.threads_pinned = pipeline.threads_pinned();
-  if (tracking_worker) {
-    run.tracking_hand_offs = tracking_worker->runs();
-    run.tracking_sleeping_hand_offs = tracking_worker->sleeping_hand_offs();
-  }
   return run;
 }
 

@@ -40,10 +40,6 @@ struct OfflineRunOptions {
   // > 0: each frame starts this long after the previous one (a camera's period; the decoding of the
   // next pair inside it), the cores idle in between as in a real-time run. 0: back to back.
   double period_ms = 0.0;
-  // The tracker's motion-only BA passes in halves on a second thread of their own (Tracker::
-  // set_pair_worker; the same poses bit for bit). Off by default, as in the frontend: on the loaded
-  // 2-core VM the ~20 hand-offs per frame cost more than the halves save (docs/benchmarks.md, track5).
-  bool tracking_worker = false;
   // > 0: Gaussian noise of this sigma (level-0 pixels) added to every stereo disparity, seeded by the
   // frame's index (repeatable). A diagnostic: how much trajectory scale does stereo noise alone cost?
   // (Cameras exposed apart, docs/benchmarks.md tenth session.)
@@ -94,8 +90,6 @@ struct OfflineRun {
   std::uint64_t hand_offs = 0;
   std::uint64_t sleeping_hand_offs = 0;
   bool threads_pinned = false;  // the pipeline's two threads on two CPUs (Pipeline.pinThreads)
-  std::uint64_t tracking_hand_offs = 0;  // to the tracker's worker (its BA passes in halves)
-  std::uint64_t tracking_sleeping_hand_offs = 0;
 
   int tracked_frames() const;
 };

@@ -1,13 +1,7 @@
 // heslam-bench-lens-refit: does a saved map's own geometry ask for a different lens model at the
 // image's edges? Re-fits the map with a residual radial term (lens_refit.hpp) and prints the estimate,
 // its standard deviation and what it does to the keyframe path's length (the trajectory's scale).
-//
-// usage: heslam-bench-lens-refit MAP EUROC_DATASET [--window FIRST,LAST] [--profile K,K,...]
-//   MAP            a mapper map file (a pipeline run's STEM.map, or --save-map's output)
-//   EUROC_DATASET  the EuRoC folder the run used (its mav0/cam*/sensor.yaml give the rectified camera)
-//   --window F,L   only the keyframes of stamp rank [F, L) x count (fractions), e.g. 0,0.5
-//   --profile ...  also the cost and path length with k held at each value
-// Exit code 0 on success, 1 when the map or calibration cannot be read, 2 on a usage error.
+// `heslam-bench-lens-refit --help` lists the arguments. Exit code 0 on success, 1 when the map or calibration cannot be read, 2 on a usage error.
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -18,12 +12,10 @@
 #include "components/core/camera/stereo_calibration.hpp"
 #include "components/core/camera/stereo_rectifier.hpp"
 #include "components/core/mapping/map_file.hpp"
+#include "runtime/flags.hpp"
 #include "tools/bench/lens_refit/lens_refit.hpp"
 
 namespace {
-
-constexpr const char* kUsage =
-    "usage: heslam-bench-lens-refit MAP EUROC_DATASET [--window FIRST,LAST] [--profile K,K,...]";
 
 bool parse_numbers(const std::string& text, std::vector<double>& numbers) {
   std::stringstream stream(text);
@@ -47,30 +39,39 @@ int main(int argc, char** argv) {
   std::vector<std::string> positional;
   bench::LensRefitOptions options;
   std::vector<double> profile;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if ((arg == "--window" || arg == "--profile") && i + 1 < argc) {
-      std::vector<double> values;
-      if (!parse_numbers(argv[++i], values) || (arg == "--window" && values.size() != 2)) {
-        std::fprintf(stderr, "heslam-bench-lens-refit: %s '%s': expected %s\n", arg.c_str(), argv[i],
-                     arg == "--window" ? "two fractions FIRST,LAST" : "comma-separated numbers");
-        return 2;
-      }
-      if (arg == "--window") {
-        options.first_fraction = values[0];
-        options.last_fraction = values[1];
-      } else {
-        profile = values;
-      }
-    } else if (arg.starts_with("--")) {
-      std::fprintf(stderr, "heslam-bench-lens-refit: unknown option '%s'\n%s\n", arg.c_str(), kUsage);
-      return 2;
-    } else {
-      positional.push_back(arg);
-    }
+  bool help = false;
+  runtime::Flags flags("heslam-bench-lens-refit MAP EUROC_DATASET [--window FIRST,LAST] [--profile K,K,...]",
+                       "  MAP            a mapper map file (a pipeline run's STEM.map, or --save-map's output)\n"
+                       "  EUROC_DATASET  the EuRoC folder the run used (its mav0/cam*/sensor.yaml give the rectified camera)");
+  flags.custom("--window", "F,L", "only the keyframes of stamp rank [F, L) x count (fractions), e.g. 0,0.5",
+               [&options](const std::string& value) {
+                 std::vector<double> values;
+                 if (!parse_numbers(value, values) || values.size() != 2) {
+                   runtime::throw_bad_flag_value("--window", "two fractions FIRST,LAST", value);
+                 }
+                 options.first_fraction = values[0];
+                 options.last_fraction = values[1];
+               })
+      .custom("--profile", "K,K,...", "also the cost and path length with k held at each value",
+              [&profile](const std::string& value) {
+                profile.clear();
+                if (!parse_numbers(value, profile)) runtime::throw_bad_flag_value("--profile", "comma-separated numbers", value);
+              })
+      .toggle("--help", &help, "this help")
+      .alias("-h")
+      .positional("MAP EUROC_DATASET", "", [&positional](const std::string& arg) { positional.push_back(arg); });
+  try {
+    flags.parse(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "heslam-bench-lens-refit: %s\n", error.what());
+    return 2;
+  }
+  if (help) {
+    std::fputs(flags.usage().c_str(), stdout);
+    return 0;
   }
   if (positional.size() != 2) {
-    std::fprintf(stderr, "%s\n", kUsage);
+    std::fprintf(stderr, "%s", flags.usage().c_str());
     return 2;
   }
   try {

@@ -4,14 +4,15 @@
 // consecutive keyframes; covisibility and spanning tree as the mapper keeps them) and prints median /
 // p90 of each step of the loop closer (BoW detection, SE(3) RANSAC, essential graph, pose graph, whole
 // correction, global BA) and of the mapper applying the correction. Reports numbers; asserts nothing.
-//
-// usage: heslam-bench-loop [--keyframes 100,1000,5000] [--repeats R] [--queries Q] [--ba-max-points P]
-//                          [--vocabulary FILE] [--dataset DIR|none]
+// `heslam-bench-loop --help` lists the flags.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
+#include <iostream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -34,6 +35,7 @@
 #include "components/core/place/image_descriptors.hpp"
 #include "components/core/place/vocabulary_setting.hpp"
 #include "tests/loop/loop_world.hpp"
+#include "runtime/flags.hpp"
 #include "tools/bench/bench_util.hpp"
 #include "tools/bench/frontend_offline/euroc_sequence.hpp"
 
@@ -41,9 +43,6 @@ namespace {
 
 using namespace heslam;
 
-constexpr const char* kUsage =
-    "usage: heslam-bench-loop [--keyframes 100,1000,5000] [--repeats R] [--queries Q] [--ba-max-points P]\n"
-    "                         [--vocabulary FILE] [--dataset DIR|none]";
 // The test loop world's geometry (36 keyframes on a 2 m circle, 2500 points on a 6 m ring), kept
 // per keyframe and per metre of wall when the circle grows.
 constexpr int kRevisitKeyframes = 4;                              // the last ones revisit the first
@@ -68,26 +67,24 @@ struct Args {
 
 Args parse(int argc, char** argv) {
   Args args;
-  heslam::bench::for_each_flag(argc, argv, kUsage, [&](const std::string& flag, const std::string& value) {
-    if (flag == "--keyframes") {
-      args.keyframes.clear();
-      std::stringstream list(value);
-      for (std::string item; std::getline(list, item, ',');) args.keyframes.push_back(std::stoi(item));
-    } else if (flag == "--repeats") {
-      args.repeats = std::stoi(value);
-    } else if (flag == "--queries") {
-      args.queries = std::stoi(value);
-    } else if (flag == "--ba-max-points") {
-      args.ba_max_points = std::stoi(value);
-    } else if (flag == "--vocabulary") {
-      args.vocabulary = value;
-    } else if (flag == "--dataset") {
-      args.dataset = value;
-    } else {
-      return false;
-    }
-    return true;
-  });
+  bool help = false;
+  runtime::Flags flags("heslam-bench-loop [options]");
+  flags.integer_list("--keyframes", "N,N,...", &args.keyframes, 2 * kRevisitKeyframes + 10, 1000000,
+                     "the loop sizes (100,1000,5000)")
+      .integer("--repeats", "R", &args.repeats, 1, std::numeric_limits<int>::max(), "runs per size (3)")
+      .integer("--queries", "Q", &args.queries, 1, std::numeric_limits<int>::max(),
+               "BoW detection: the last Q keyframes are queried (20)")
+      .integer("--ba-max-points", "P", &args.ba_max_points, 100, std::numeric_limits<int>::max(),
+               "global BA: beyond this, every k-th point only (40000)")
+      .text("--vocabulary", "FILE", &args.vocabulary, "the vocabulary (default: the build's)")
+      .text("--dataset", "DIR|none", &args.dataset, "descriptors for the world's points (MH01)")
+      .toggle("--help", &help, "this help")
+      .alias("-h");
+  flags.parse(argc, argv);
+  if (help) {
+    std::cout << flags.usage();
+    std::exit(0);
+  }
   for (const int n : args.keyframes) {
     if (n < 2 * kRevisitKeyframes + 10) throw std::runtime_error("--keyframes: each size must be >= 18");
   }

@@ -2,9 +2,7 @@
 // with ground truth: perfect data association, jittered keyframe poses, noisy keypoints) and prints
 // per-stage times (median / p90), map growth, keyframe accuracy before / after mapping and the cost
 // of writing the map file.
-//
-// usage: heslam-bench-mapping [--keyframes N] [--points N] [--pose-jitter-m M] [--map-file PATH]
-//                             [--disable triangulation|fusion|ba|kf-culling]...
+// `heslam-bench-mapping --help` lists the flags.
 #include <algorithm>
 #include <cstdlib>
 #include <ctime>
@@ -15,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/flags.hpp"
 #include "tools/bench/bench_util.hpp"
 #include "components/core/mapping/local_mapper.hpp"
 #include "tests/mapping/synthetic_world.hpp"
@@ -23,9 +22,6 @@ namespace {
 
 using heslam::bench::percentile;
 
-constexpr const char* kUsage =
-    "usage: heslam-bench-mapping [--keyframes N] [--points N] [--pose-jitter-m M] [--map-file PATH]\n"
-    "       [--disable triangulation|fusion|ba|kf-culling]...\n";
 constexpr double kYawStepRad = 0.06;  // ~3.4 deg between keyframes: ORB-SLAM2-like keyframe density
 constexpr int kSaveEvery = 10;        // keyframes between map snapshots
 
@@ -39,32 +35,33 @@ struct Args {
 
 Args parse(int argc, char** argv) {
   Args args;
-  heslam::bench::for_each_flag(argc, argv, kUsage, [&](const std::string& flag, const std::string& value) {
-    if (flag == "--keyframes") {
-      args.keyframes = std::stoi(value);
-    } else if (flag == "--points") {
-      args.points = std::stoi(value);
-    } else if (flag == "--pose-jitter-m") {
-      args.pose_jitter_m = std::stod(value);
-    } else if (flag == "--map-file") {
-      args.map_file = value;
-    } else if (flag == "--disable") {
-      if (value == "triangulation") {
-        args.options.enable_triangulation = false;
-      } else if (value == "fusion") {
-        args.options.enable_fusion = false;
-      } else if (value == "ba") {
-        args.options.enable_bundle_adjustment = false;
-      } else if (value == "kf-culling") {
-        args.options.enable_keyframe_culling = false;
-      } else {
-        throw std::runtime_error("unknown stage '" + value + "' after --disable\n" + kUsage);
-      }
-    } else {
-      return false;
-    }
-    return true;
-  });
+  bool help = false;
+  heslam::runtime::Flags flags("heslam-bench-mapping [options]");
+  flags.integer("--keyframes", "N", &args.keyframes, "keyframes of the synthetic room (120; >= 2)")
+      .integer("--points", "N", &args.points, "map points of the room (6000; >= 100)")
+      .number("--pose-jitter-m", "M", &args.pose_jitter_m, "keyframe pose jitter in metres (0.01)")
+      .path("--map-file", "PATH", &args.map_file, "where the map snapshots are written")
+      .custom("--disable", "triangulation|fusion|ba|kf-culling", "a stage to leave out (repeatable)",
+              [&args](const std::string& value) {
+                if (value == "triangulation") {
+                  args.options.enable_triangulation = false;
+                } else if (value == "fusion") {
+                  args.options.enable_fusion = false;
+                } else if (value == "ba") {
+                  args.options.enable_bundle_adjustment = false;
+                } else if (value == "kf-culling") {
+                  args.options.enable_keyframe_culling = false;
+                } else {
+                  heslam::runtime::throw_bad_flag_value("--disable", "triangulation, fusion, ba or kf-culling", value);
+                }
+              })
+      .toggle("--help", &help, "this help")
+      .alias("-h");
+  flags.parse(argc, argv);
+  if (help) {
+    std::cout << flags.usage();
+    std::exit(0);
+  }
   if (args.keyframes < 2 || args.points < 100) throw std::runtime_error("need --keyframes >= 2 and --points >= 100");
   return args;
 }

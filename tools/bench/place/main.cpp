@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -20,6 +21,7 @@
 #include "components/core/place/default_vocabulary.hpp"
 #include "components/core/place/image_descriptors.hpp"
 #include "components/core/place/vocabulary_io.hpp"
+#include "runtime/flags.hpp"
 
 namespace {
 
@@ -27,11 +29,6 @@ using namespace heslam;
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-constexpr const char* kUsage =
-    "usage: heslam-bench-place [--scratch DIR] [--vocabulary FILE] [--image PNG] [--repeats N] [--skip-text-1m]\n"
-    "  --scratch     where the synthetic trees are written (default /tmp/heslam-bench-place)\n"
-    "  --vocabulary  a trained vocabulary to time as well (default: the build's default vocabulary)\n"
-    "  --image       grey image whose ORB descriptors are transformed (default: an EuRoC MH01 frame)\n";
 
 // ORB-SLAM2's feature-vector level for SearchByBoW.
 constexpr int kLevelsUp = 4;
@@ -100,23 +97,19 @@ int main(int argc, char** argv) {
     fs::path image_path = fs::path(HESLAM_SHARED_DATA) / "euroc_mh01_handheld/mav0/cam0/data/1403636586763555584.png";
     int repeats = 5;
     bool text_1m = true;
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      auto value = [&] {
-        if (i + 1 >= argc) throw std::runtime_error(arg + " needs a value");
-        return std::string(argv[++i]);
-      };
-      if (arg == "--scratch") scratch = value();
-      else if (arg == "--vocabulary") trained = value();
-      else if (arg == "--image") image_path = value();
-      else if (arg == "--repeats") repeats = std::max(1, std::stoi(value()));
-      else if (arg == "--skip-text-1m") text_1m = false;
-      else if (arg == "--help" || arg == "-h") {
-        std::printf("%s", kUsage);
-        return 0;
-      } else {
-        throw std::runtime_error("unknown argument '" + arg + "'");
-      }
+    bool help = false;
+    runtime::Flags flags("heslam-bench-place [options]");
+    flags.path("--scratch", "DIR", &scratch, "where the synthetic trees are written (default /tmp/heslam-bench-place)")
+        .path("--vocabulary", "FILE", &trained, "a trained vocabulary to time as well (default: the build's default vocabulary)")
+        .path("--image", "PNG", &image_path, "grey image whose ORB descriptors are transformed (default: an EuRoC MH01 frame)")
+        .integer("--repeats", "N", &repeats, 1, std::numeric_limits<int>::max(), "timed repeats (5)")
+        .toggle("--skip-text-1m", &text_1m, "do not write and load the 1M-word tree as DBoW2 text", false)
+        .toggle("--help", &help, "this help")
+        .alias("-h");
+    flags.parse(argc, argv);
+    if (help) {
+      std::printf("%s", flags.usage().c_str());
+      return 0;
     }
     fs::create_directories(scratch);
     const cv::Mat image = cv::imread(image_path.string(), cv::IMREAD_GRAYSCALE);

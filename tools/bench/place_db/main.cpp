@@ -3,13 +3,12 @@
 // made from a real EuRoC clip's ORB descriptors (left images, the frontend's HE + ORB), replicated
 // with bit noise so that every keyframe is different; each is linked to its 5 neighbours by id on
 // either side (a covisibility chain, as along a trajectory).
-//
-// usage: heslam-bench-place-db [--vocabulary FILE] [--dataset DIR] [--sizes 100,1000,10000]
-//                              [--queries N] [--noise-bits B]
+// `heslam-bench-place-db --help` lists the flags.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -18,6 +17,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "runtime/flags.hpp"
 #include "tools/bench/bench_util.hpp"
 #include "components/core/place/image_descriptors.hpp"
 #include "components/core/place/keyframe_database.hpp"
@@ -49,26 +49,20 @@ int run(int argc, char** argv) {
   std::vector<int> sizes{100, 1000, 10000};
   int queries = 50;
   int noise_bits = 8;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (i + 1 >= argc) throw std::runtime_error(arg + ": missing value");
-    const std::string value = argv[++i];
-    if (arg == "--vocabulary") {
-      vocabulary_setting = value;
-    } else if (arg == "--dataset") {
-      dataset = value;
-    } else if (arg == "--sizes") {
-      sizes.clear();
-      std::stringstream list(value);
-      std::string item;
-      while (std::getline(list, item, ',')) sizes.push_back(std::stoi(item));
-    } else if (arg == "--queries") {
-      queries = std::stoi(value);
-    } else if (arg == "--noise-bits") {
-      noise_bits = std::stoi(value);
-    } else {
-      throw std::runtime_error("unknown option " + arg);
-    }
+  bool help = false;
+  runtime::Flags flags("heslam-bench-place-db [options]");
+  flags.text("--vocabulary", "FILE", &vocabulary_setting, "the vocabulary (default: the build's)")
+      .text("--dataset", "DIR", &dataset, "the EuRoC clip whose descriptors make the keyframes (MH01)")
+      .integer_list("--sizes", "N,N,...", &sizes, 1, std::numeric_limits<int>::max(),
+                    "database sizes in keyframes (100,1000,10000)")
+      .integer("--queries", "N", &queries, "queries per size (50)")
+      .integer("--noise-bits", "B", &noise_bits, "bits flipped per replicated descriptor (8)")
+      .toggle("--help", &help, "this help")
+      .alias("-h");
+  flags.parse(argc, argv);
+  if (help) {
+    std::fputs(flags.usage().c_str(), stdout);
+    return 0;
   }
   const auto vocabulary = load_vocabulary_setting(vocabulary_setting.empty() ? "" : vocabulary_setting);
   if (!vocabulary) throw std::runtime_error("--vocabulary none: this benchmark needs a vocabulary");

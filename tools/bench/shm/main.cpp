@@ -37,6 +37,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -46,6 +47,7 @@
 #include <dds/dds.h>
 #include <dds/ddsc/dds_loan_api.h>
 
+#include "runtime/flags.hpp"
 #include "runtime/messages.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/qos.hpp"
@@ -526,9 +528,6 @@ std::vector<std::string> split(const std::string& list) {
 }
 
 int run(int argc, char** argv) {
-  const std::string usage =
-      "usage: heslam-bench-shm [--frames N] [--domain D] [--cases a,b] [--roudi start|external] "
-      "[--roudi-config FILE] [--case-timeout-s S]";
   std::size_t frames = 300;
   int domain_id = 78;
   std::string cases =
@@ -538,21 +537,29 @@ int run(int argc, char** argv) {
   int case_timeout_s = 0;
   std::string role;
   std::string case_name;
-  bench::for_each_flag(argc, argv, usage, [&](const std::string& flag, const std::string& value) {
-    if (flag == "--frames") frames = std::stoul(value);
-    else if (flag == "--domain") domain_id = std::stoi(value);
-    else if (flag == "--cases") cases = value;
-    else if (flag == "--roudi") roudi = value;
-    else if (flag == "--roudi-config") roudi_config = value;
-    else if (flag == "--case-timeout-s") case_timeout_s = std::stoi(value);
-    else if (flag == "--role") role = value;
-    else if (flag == "--case") case_name = value;
-    else return false;
-    return true;
-  });
+  bool help = false;
+  runtime::Flags flags("heslam-bench-shm [options]");
+  flags.integer("--frames", "N", &frames, std::size_t{1}, std::numeric_limits<std::size_t>::max(),
+                "frames per case (300)")
+      .integer("--domain", "D", &domain_id, 0, runtime::kMaxDomainId, "DDS domain (78)")
+      .text("--cases", "a,b", &cases, "the cases to run (default: all)")
+      .choice("--roudi", &roudi, {{"start", std::string("start")}, {"external", std::string("external")}},
+              "start a RouDi for the shm cases, or use a running one (start)")
+      .path("--roudi-config", "FILE", &roudi_config, "the RouDi config (config/iceoryx/roudi.toml)")
+      .integer("--case-timeout-s", "S", &case_timeout_s, 0, std::numeric_limits<int>::max(),
+               "give a case up after S s (0: from the frame count)")
+      .choice("--role", &role, {{"pub", std::string("pub")}, {"sub", std::string("sub")}},
+              "internal: be a case's publisher or subscriber child")
+      .text("--case", "NAME", &case_name, "internal: the child's case")
+      .toggle("--help", &help, "this help")
+      .alias("-h");
+  flags.parse(argc, argv);
+  if (help) {
+    std::cout << flags.usage();
+    return 0;
+  }
   if (role == "pub") return run_publisher(case_name, domain_id, frames);
   if (role == "sub") return run_subscriber(case_name, domain_id, frames);
-  if (roudi != "start" && roudi != "external") throw std::runtime_error("--roudi: expected start or external\n" + usage);
 
   const std::vector<std::string> names = split(cases);
   for (const std::string& name : names) spec_of(name);  // unknown names fail before anything runs

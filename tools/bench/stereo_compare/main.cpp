@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -26,6 +27,7 @@
 #include "components/core/camera/stereo_calibration.hpp"
 #include "components/core/camera/stereo_rectifier.hpp"
 #include "components/core/feature/stereo_feature_pipeline.hpp"
+#include "runtime/flags.hpp"
 #include "tools/bench/bench_util.hpp"
 #include "tools/bench/frontend_offline/euroc_sequence.hpp"
 #include "tools/photometric/photometric_variant.hpp"
@@ -90,35 +92,42 @@ struct ReferenceGroup {
 heslam::photometric::StereoGain parse(const std::string& s) { return heslam::photometric::parse_stereo_gain(s); }
 
 int run(int argc, char** argv) {
-  if (argc < 3) {
-    throw std::runtime_error("usage: heslam-bench-stereo-compare DATASET L,R [--step N] [--he-stereo M] [--reference L,R] "
-                             "[--settings FILE] [--motion [--reference-depth]]");
-  }
-  const auto sequence = heslam::bench::load_euroc_sequence(argv[1]);
-  const auto gain = parse(argv[2]);
+  std::vector<std::string> positional;
   heslam::photometric::StereoGain reference;
   int step = 4;
   heslam::StereoFeaturePipelineOptions options;
   options.parallel = false;
   bool motion = false;
   bool reference_depth = false;
-  for (int i = 3; i < argc; i += 2) {
-    const std::string arg = argv[i];
-    if (arg == "--motion" || arg == "--reference-depth") {  // flags: no value
-      (arg == "--motion" ? motion : reference_depth) = true;
-      --i;
-      continue;
-    }
-    if (i + 1 >= argc) throw std::runtime_error(arg + ": expected a value");
-    if (arg == "--step") step = std::stoi(argv[i + 1]);
-    else if (arg == "--he-stereo") options.he.stereo = heslam::parse_stereo_photometry(argv[i + 1]);
-    else if (arg == "--reference") reference = parse(argv[i + 1]);
-    else if (arg == "--settings") {
-      options = heslam::StereoFeaturePipelineOptions::load(argv[i + 1]);
-      options.parallel = false;
-    }
-    else throw std::runtime_error("unknown option " + arg);
+  bool help = false;
+  heslam::runtime::Flags flags("heslam-bench-stereo-compare DATASET L,R [options]",
+                               "  DATASET an EuRoC folder; L,R the gains of the pair exposed apart");
+  flags.integer("--step", "N", &step, 1, std::numeric_limits<int>::max(), "every Nth frame (4)")
+      .custom("--he-stereo", "M", "shared, matched or separate equalization of the pair",
+              [&options](const std::string& value) { options.he.stereo = heslam::parse_stereo_photometry(value); })
+      .custom("--reference", "L,R", "the gains of the reference pair (default: equal exposure)",
+              [&reference](const std::string& value) { reference = parse(value); })
+      .custom("--settings", "FILE", "the pipeline's settings (replaces the options given before it)",
+              [&options](const std::string& value) {
+                options = heslam::StereoFeaturePipelineOptions::load(value);
+                options.parallel = false;
+              })
+      .toggle("--motion", &motion, "whether keypoints move between frames as the ground truth says")
+      .toggle("--reference-depth", &reference_depth, "--motion: with the reference pair's depth")
+      .toggle("--help", &help, "this help")
+      .alias("-h")
+      .positional("DATASET L,R", "", [&positional](const std::string& arg) {
+        if (positional.size() == 2) throw std::runtime_error("unexpected argument '" + arg + "' (see --help)");
+        positional.push_back(arg);
+      });
+  flags.parse(argc, argv);
+  if (help) {
+    std::fputs(flags.usage().c_str(), stdout);
+    return 0;
   }
+  if (positional.size() != 2) throw std::runtime_error("expected DATASET L,R\n" + flags.usage());
+  const auto sequence = heslam::bench::load_euroc_sequence(positional[0]);
+  const auto gain = parse(positional[1]);
   if (motion) {
     heslam::bench::FeatureMotionOptions motion_options;
     motion_options.pipeline = options;

@@ -43,6 +43,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -53,6 +54,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "runtime/args.hpp"
+#include "runtime/flags.hpp"
 #include "runtime/image_transport.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/qos.hpp"
@@ -282,8 +284,9 @@ Result measure_plain_c(const std::string& name, int width, int height, int domai
   if (reader < 0 || waitset < 0 || condition < 0 || dds_waitset_attach(waitset, condition, 0) < 0) {
     throw std::runtime_error(name + ": cannot create the plain C reader");
   }
-  std::vector<std::string> args{fs::canonical("/proc/self/exe").string(), "--plain-c-publisher", std::to_string(width),
-                                std::to_string(height), std::to_string(frames + kWarmupFrames), std::to_string(buffers),
+  std::vector<std::string> args{fs::canonical("/proc/self/exe").string(), "--plain-c-publisher",
+                                std::to_string(width) + "," + std::to_string(height) + "," +
+                                    std::to_string(frames + kWarmupFrames) + "," + std::to_string(buffers),
                                 "--domain", std::to_string(domain)};
   std::vector<char*> argv;
   for (std::string& arg : args) argv.push_back(arg.data());
@@ -369,31 +372,32 @@ int run(int argc, char** argv) {
   std::vector<std::string> replay_via;
   fs::path bin_dir = fs::canonical("/proc/self/exe").parent_path();
   fs::path euroc_dir = fs::path(HESLAM_SHARED_DATA) / "euroc_v101_head";
-  for (std::size_t i = 0; i < common.rest.size(); ++i) {
-    const std::string& arg = common.rest[i];
-    if (arg == "--plain-c-publisher" && i + 4 < common.rest.size()) {
-      return plain_c_publish(common.domain_id, std::stoi(common.rest[i + 1]), std::stoi(common.rest[i + 2]),
-                             std::stoul(common.rest[i + 3]), std::stoul(common.rest[i + 4]));
-    }
-    if (arg == "--replay-via" && i + 1 < common.rest.size()) {
-      std::istringstream words(common.rest[++i]);
-      for (std::string word; words >> word;) replay_via.push_back(word);
-    } else if (arg == "--no-plain-c") {
-      plain_c = false;
-    } else if (arg == "--frames" && i + 1 < common.rest.size()) {
-      frames = std::stoul(common.rest[++i]);
-    } else if (arg == "--bin" && i + 1 < common.rest.size()) {
-      bin_dir = common.rest[++i];
-    } else if (arg == "--ddsperf-seconds" && i + 1 < common.rest.size()) {
-      ddsperf_seconds = std::stoi(common.rest[++i]);
-    } else if (arg == "--euroc" && i + 1 < common.rest.size()) {
-      euroc_dir = common.rest[++i];
-    } else if (arg == "--take" && i + 1 < common.rest.size() &&
-               (common.rest[i + 1] == "reuse" || common.rest[i + 1] == "fresh")) {
-      reuse_buffers = common.rest[++i] == "reuse";
-    } else {
-      throw std::runtime_error(arg + ": unknown option (--frames N, --bin DIR, --euroc DIR, --ddsperf-seconds S, --take reuse|fresh, --no-plain-c, --replay-via CMD, --domain D)");
-    }
+  std::vector<int> plain_c_child;  // the hidden child mode: W,H,FRAMES,BUFFERS
+  runtime::Flags flags("heslam-bench-transport [options] [common options]");
+  flags.integer("--frames", "N", &frames, std::size_t{1}, std::numeric_limits<std::size_t>::max(),
+                "timed frames per row (200)")
+      .path("--bin", "DIR", &bin_dir, "where heslam-replay is (default: beside this executable)")
+      .path("--euroc", "DIR", &euroc_dir, "the EuRoC recording replayed (euroc_v101_head)")
+      .integer("--ddsperf-seconds", "S", &ddsperf_seconds, "length of the ddsperf reference run (10)")
+      .choice("--take", &reuse_buffers, {{"reuse", true}, {"fresh", false}},
+              "reuse: take_into one sample (default); fresh: a new sample per frame")
+      .toggle("--no-plain-c", &plain_c, "no plain C API reference rows", false)
+      .custom("--replay-via", "CMD", "run the replay through CMD (words split at spaces, e.g. 'taskset -c 1')",
+              [&replay_via](const std::string& value) {
+                std::istringstream words(value);
+                for (std::string word; words >> word;) replay_via.push_back(word);
+              })
+      .integer_list("--plain-c-publisher", "W,H,N,B", &plain_c_child, 1, std::numeric_limits<int>::max(),
+                    "internal: be the plain C publisher child (N pairs of W x H from B buffers)");
+  if (common.help) {
+    std::cout << flags.usage() << runtime::common_args_usage();
+    return 0;
+  }
+  flags.parse(common.rest);
+  if (flags.given("--plain-c-publisher")) {
+    if (plain_c_child.size() != 4) throw std::runtime_error("--plain-c-publisher: expected W,H,N,B");
+    return plain_c_publish(common.domain_id, plain_c_child[0], plain_c_child[1],
+                           static_cast<std::size_t>(plain_c_child[2]), static_cast<std::size_t>(plain_c_child[3]));
   }
   const StereoDataset euroc = open_dataset(euroc_dir);
   const fs::path kitti = make_kitti_sequence(euroc, euroc.frames.size());

@@ -38,6 +38,6 @@ struct CliOptions {
 // Throws std::runtime_error with a one-line message on bad arguments.
 CliOptions parse_cli(int argc, char** argv);
 
-const char* usage();
+std::string usage();
 
 }  // namespace heslam::eval::app
