@@ -24,7 +24,7 @@
 // - Two live writers: when the owner writes again while a writer of its run that was held back is
 //   still matched, both are alive at once (a restarted publisher's predecessor never writes again):
 //   counted as runtime::kWriterConflicts, one error line, the claimant refused; the run fails
-//   (issue 38 item 5: a participant that copied the run id).
+//   (a participant that copied the run id).
 //
 // Invalid-data notices without a dispose (a writer unregistered / left) carry no data and pass.
 #pragma once

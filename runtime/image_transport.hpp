@@ -2,7 +2,7 @@
 // Cyclone's iceoryx shared memory on a second domain that carries the images only (docs/topics.md,
 // "Image transport"). SHM is configured per Cyclone domain, and on an SHM domain the keyed
 // transient-local topics lose their late-joiner history and a string-keyed writer (ComponentStatus)
-// segfaults in dds_stream_write_key (docs/benchmarks.md, issue 17 §2), so only the images move.
+// segfaults in dds_stream_write_key (docs/benchmarks.md), so only the images move.
 #pragma once
 
 #include <optional>

@@ -1,5 +1,5 @@
 // RoleBinding: who may speak for a role on a topic several components write (lockstep/frame_done,
-// lockstep/keyframe_done), issue 38 item 5. Plain DDS cannot tell a forged participant from a real
+// lockstep/keyframe_done). Plain DDS cannot tell a forged participant from a real
 // one (a forger can copy the run id), but it can notice two live writers claiming one role:
 //
 // - The first writer whose sample claims a role is bound to it; its samples are accepted.

@@ -27,7 +27,7 @@ void notify_supervisor_running();
 
 // "participant PREFIX" for each DDS participant the program creates (PREFIX: the 24 hex digits of its
 // GUID prefix, Participant's constructor). heslam-supervisor trusts status samples of its components
-// only from participants its own children named on their pipes (issue 38 item 5: a process that
+// only from participants its own children named on their pipes (a process that
 // copies a component's name, pid and run id is not one it started).
 void notify_supervisor_participant(const std::string& guid_prefix);
 inline constexpr const char* kNotifyParticipant = "participant";

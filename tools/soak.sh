@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Fault-injection soak of the full system (issue 16): N lockstep runs of config/pipelines/euroc.yaml
+# Fault-injection soak of the full system: N lockstep runs of config/pipelines/euroc.yaml
 # on ../shared/data/euroc_mh01_handheld, each with several kill -9 of random components at seeded
 # moments (single, two within 0.5 s, all but the supervisor). Every run must end rc 0 with 160/160
 # poses and an ATE within 1.2x of an undisturbed run. It is the suite's

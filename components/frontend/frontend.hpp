@@ -83,7 +83,7 @@ class Frontend : public runtime::Component {
   std::optional<runtime::CheckedReader<msg::MapPointState>> point_state_reader_;
   std::optional<runtime::Reader<msg::KeyframeDone>> keyframe_done_reader_;
   // Who may acknowledge keyframes: the first writer of each component name's KeyframeDone (the
-  // mapper's, each loop closer's); a second live one is a conflict (runtime/role_binding.hpp, issue 38 item 5).
+  // mapper's, each loop closer's); a second live one is a conflict (runtime/role_binding.hpp).
   std::optional<runtime::RoleBinding> keyframe_done_roles_;
   // KeyframeDone of a writer that claimed a role while its first writer was still matched (a
   // restarted mapper within the killed one's lease): used once it takes the role over.

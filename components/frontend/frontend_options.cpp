@@ -71,7 +71,7 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
 
   // The settings file's options over the defaults; with a mapper, whose local BA refines the points a
   // near-clip match gave, the reference-ratio rule counts near-clip points fully (measured with the
-  // cameras exposed apart, docs/benchmarks.md, gain5) unless the file says otherwise.
+  // cameras exposed apart, docs/benchmarks.md at 5c1f792, gain5) unless the file says otherwise.
   TrackerOptions tracker_defaults;
   if (options.mapper_enabled) tracker_defaults.reference_near_clip_weight = 0.0;
   options.tracker = tracker_defaults;

@@ -64,7 +64,7 @@ class LoopCloserNode : public runtime::Component {
   std::optional<runtime::CheckedReader<msg::MapPointState>> point_state_reader_;
   std::optional<runtime::Reader<msg::KeyframeDone>> keyframe_done_reader_;
   // Who may acknowledge as each component (the first writer of its name); a second live one is a
-  // conflict the run fails on (runtime/role_binding.hpp, issue 38 item 5). Acknowledgements of a
+  // conflict the run fails on (runtime/role_binding.hpp). Acknowledgements of a
   // second writer wait here until its predecessor is gone (a restarted mapper).
   std::optional<runtime::RoleBinding> keyframe_done_roles_;
   struct HeldKeyframeDone {

@@ -64,7 +64,7 @@ class Supervisor {
     std::string last_line;  // of its output: a failing heslam program's one-line reason
     std::string result;     // the one-line result in its latest status (the recorder's "tracked N/M ...")
     // GUID prefixes of the DDS participants its processes (this one and those before a restart)
-    // named on their pipes: its status is taken only from these (issue 38 item 5).
+    // named on their pipes: its status is taken only from these.
     std::set<std::string> participants;
   };
 

@@ -194,7 +194,7 @@ TEST(EvalCli, JsonToStdoutIsTheDocumentAlone) {
       << table.out;
 }
 
-// Issue 19: the estimate's '# heslam frame:' header against the ground truth's frame (EuRoC csv:
+// The estimate's '# heslam frame:' header against the ground truth's frame (EuRoC csv:
 // body, cam0 with --extrinsic). Mixed frames are one line and exit 1 naming the fix; a rectified
 // estimate against camera poses is only warned about (positions compare, rotations carry the
 // rectifying rotation); a body estimate against body poses is what the recorder writes by default.

@@ -105,7 +105,7 @@ TEST(FrontendEndToEnd, EurocMh01TracksEveryFrameAndMatchesTheOfflineChain) {
   const eval::Trajectory estimate = eval::read_trajectory(run.trajectory);
   ASSERT_EQ(estimate.size(), 160u) << run.output;
   EXPECT_EQ(test::lost_entries(run.lost), 0);
-  // Issue 19: by default the poses are of the body frame (EuRoC's T_BS), as the ground truth, so
+  // By default the poses are of the body frame (EuRoC's T_BS), as the ground truth, so
   // rotation errors are real: compared as they are, no --extrinsic.
   ASSERT_EQ(estimate.frame, eval::PoseFrame::body) << "no '# heslam frame: body' header";
   const eval::Trajectory truth = ground_truth_for(dataset, estimate);
@@ -200,9 +200,10 @@ TEST(FrontendEndToEnd, EurocV101StillCameraStaysStill) {
               "ATE rmse %.2f mm\n",
               estimate.path_length_m() * 1e3, max_distance_m * 1e3, ape.translation_m.rmse * 1e3);
   // Target: path length < 5 mm (measured 2.9 mm for the rectified camera, 4.1 mm for the body frame
-  // written since issue 19: the body sits ~7 cm from the camera, so the rocking moves it more; 63 mm
-  // of per-frame jitter before the tracker's stationary test, tests/tracking/test_stationary.cpp). The vehicle rocks by 0.15 degrees in this
-  // clip: the test keeps the camera centre on those frames, so the rotation is not read as translation.
+  // the recorder writes: the body sits ~7 cm from the camera, so the rocking moves it more; 63 mm of
+  // per-frame jitter without the tracker's stationary test, tests/tracking/test_stationary.cpp). The
+  // vehicle rocks by 0.15 degrees in this clip: the test keeps the camera centre on those frames, so
+  // the rotation is not read as translation.
   EXPECT_LT(estimate.path_length_m(), 0.005);
   EXPECT_LT(max_distance_m, 0.005);
   EXPECT_LT(ape.translation_m.rmse, 0.002);

@@ -1,4 +1,4 @@
-// Issue 16 section 3: hostile or mistaken participants on the run's domain. A lockstep run of
+// Hostile or mistaken participants on the run's domain. A lockstep run of
 // config/pipelines/euroc.yaml (loop closer off) on MH01 is run twice: clean, and with
 // heslam-test-hostile (each hostile sample class from its own participant: a stray high-seq frame, a
 // malformed frame, a different calibration, NaN Keyframe / KeyframeState / MapPointState / Odometry /

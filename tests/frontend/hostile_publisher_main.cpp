@@ -1,4 +1,5 @@
-// heslam-test-hostile: a mistaken or hostile participant for the tests of issue 16 section 3. On
+// heslam-test-hostile: a mistaken or hostile participant for the hostile-participant tests
+// (docs/topics.md, "What subscribers refuse"). On
 // --domain N it publishes one sample of each hostile class, each class from its own participant
 // (its own GUID prefix, as another process would have), then stays alive --seconds S so its writers
 // remain matched (a live second writer, not a dead predecessor) and its reliable samples arrive:

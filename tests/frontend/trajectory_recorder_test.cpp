@@ -139,7 +139,7 @@ Pose3 rotation_about(const Eigen::Vector3d& axis, double angle_rad, const Eigen:
   return T;
 }
 
-// Issue 19: poses in the frame the ground truth is of. Known answer: a body moving along T_Wb(t)
+// Poses in the frame the ground truth is of. Known answer: a body moving along T_Wb(t)
 // in some world W carries a rectified camera at T_b_r; the tracker sees T_wr(t) = T_Wr(0)^-1 T_Wr(t)
 // (world: the camera at the first keyframe). In the body frame the recorder must write the body's
 // motion from its first pose, T_Wb(0)^-1 T_Wb(t); rectified leaves the poses untouched, bit for bit.
@@ -184,7 +184,7 @@ TEST(RecorderFrames, FrameOptionDefaultsToBodyAndRejectsOthers) {
   }
 }
 
-// Issue 16: the summary accounts for every published frame: with a pose, untracked, or never
+// The summary accounts for every published frame: with a pose, untracked, or never
 // received (missed by the frontend, or lost on the way) — listed exactly, by seq.
 TEST(RecorderSummary, AccountsForEveryPublishedFrame) {
   TrajectoryRecorder recorder;
@@ -207,7 +207,7 @@ TEST(RecorderSummary, AccountsForEveryPublishedFrame) {
   EXPECT_EQ(TrajectoryRecorder().account(0).published, 0u);
 }
 
-// Issue 16: an output that is a folder is an error naming the file (the recorder reports it at
+// An output that is a folder is an error naming the file (the recorder reports it at
 // start-up), and a write never leaves a half-written or temporary file behind.
 TEST(RecorderFiles, FolderAsOutputIsAnErrorAndWritesAreAtomic) {
   const auto dir = std::filesystem::temp_directory_path() / ("heslam_recorder_atomic_" + std::to_string(getpid()));

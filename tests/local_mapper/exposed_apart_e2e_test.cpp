@@ -1,8 +1,8 @@
 // The full system (replay -> frontend -> local mapper -> loop closer -> recorder, lockstep
-// config/pipelines/euroc.yaml with its shipped configs) on MH01 with the two cameras exposed apart
-// (issue 17 §1), as users run it: copies of the clip written by heslam-photometric's library with the
+// config/pipelines/euroc.yaml with its shipped configs) on MH01 with the two cameras exposed apart,
+// as users run it: copies of the clip written by heslam-photometric's library with the
 // left x L / right x R (clipped to 8 bit), against the equal-exposure run of the same build.
-// Measured (docs/benchmarks.md, cameras exposed apart, tenth pass): equal 3.831 mm / 15 keyframes;
+// Measured (docs/benchmarks.md at 5c1f792, cameras exposed apart tenth pass): equal 3.831 mm / 15 keyframes;
 // x0.35/x2 3.887 mm (1.01x) / 16; x1/x4 4.373 mm (1.14x) / 16 (before the left-only keypoints 4.965,
 // 1.30x). A single run is one draw from a spread (x1/x4 4.0-4.9 mm under 1-2 % gain changes), so the
 // ATE bound is 1.2x, a guard against regressions with room for the spread, and the keyframe bound the

@@ -92,7 +92,7 @@ TEST(LocalMapperEndToEnd, EurocMh01LockstepWithMapperNoWorseThanFrontendAlone) {
   std::printf("[ figures  ] euroc_mh01_handheld lockstep: frontend + local mapper ATE rmse %.3f mm, frontend alone "
               "%.3f mm; %d keyframes, %zu map points\n",
               mapper_ate_m * 1e3, alone_ate_m * 1e3, keyframes, map.map.points.size());
-  // Issue #7's target (3.5 mm, better than the frontend alone) is NOT reached. Since the frontend's
+  // The local mapper's target (3.5 mm, better than the frontend alone) is NOT reached. Since the frontend's
   // disparity residual and clipped HE the frontend alone measures 3.784 mm and the mapper run 3.808
   // mm; before them 4.03 and 3.89 mm. The mapper's local BA does not move the clip's error (it is not
   // in the keyframe poses; docs/local_mapper.md). This guards against the mapper making it worse.
@@ -367,14 +367,14 @@ TEST(LocalMapperEndToEnd, EurocMh01RealTimeTracksAtTheRecordedRate) {
   EXPECT_NE(output.find(tracked.str()), std::string::npos) << output;
 }
 
-// Map save / load (issue 7): the map file of one run is loaded by the next (euroc_localize: mapper
+// Map save / load: the map file of one run is loaded by the next (euroc_localize: mapper
 // --load-map, frontend resumes in it), which starts 3 s into the clip and must track in the saved
 // map's world frame: the same poses as the first run, without any alignment.
 TEST(LocalMapperEndToEnd, SavedMapIsLoadedAndALaterRunLocalizesInIt) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
   const test::ScratchDir dir("localize");
-  // Saved with the explicit verb (issue 19): --arg save_map=FILE writes the final map there too.
+  // Saved with the explicit verb: --arg save_map=FILE writes the final map there too.
   const fs::path saved = dir.path() / "maps/mh01.map";
   auto first = start_pipeline("euroc", dataset, dir.path(), "first", test_domain(),
                               {"loop_closer=none", "save_map=" + saved.string()});
@@ -401,7 +401,7 @@ TEST(LocalMapperEndToEnd, SavedMapIsLoadedAndALaterRunLocalizesInIt) {
   EXPECT_LT(ape.translation_m.rmse, 0.005);
   EXPECT_LT(ape.translation_m.max, 0.01);
 
-  // A map of another place (issue 19): the V1_01 clip (the Vicon room, same camera rig) in the machine
+  // A map of another place: the V1_01 clip (the Vicon room, same camera rig) in the machine
   // hall's map never relocalizes; the frontend says so and the run fails.
   const fs::path other_place = test::shared_dataset("euroc_v101_head");
   if (other_place.empty()) {
@@ -417,7 +417,7 @@ TEST(LocalMapperEndToEnd, SavedMapIsLoadedAndALaterRunLocalizesInIt) {
   EXPECT_EQ(test::lost_entries(dir.path() / "elsewhere.lost.txt"), 95) << elsewhere_output;
 }
 
-// euroc_localize without --arg map: before issue 19 the mapper got --load-map "" and the run mapped
+// euroc_localize without --arg map: once the mapper got --load-map "" and the run mapped
 // afresh, silently. Now the mapper refuses at start-up: one line, exit 1, no frame published.
 TEST(LocalMapperEndToEnd, LocalizeWithoutAMapRefusesToStart) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
@@ -431,7 +431,7 @@ TEST(LocalMapperEndToEnd, LocalizeWithoutAMapRefusesToStart) {
   EXPECT_FALSE(fs::exists(dir.path() / "nomap.map"));
 }
 
-// Map reuse anywhere in a saved map (issue 14): euroc_localize relocalizes a later run wherever it
+// Map reuse anywhere in a saved map: euroc_localize relocalizes a later run wherever it
 // starts in the loaded map, not only near the map's newest keyframes. MH01 has no such start: the
 // hand-held clip stays within ~30 cm and its saved map's 8 newest keyframes (of 15; frames 14-156)
 // see all of it; measured, euroc_localize with `vocabulary.file: none` relocalizes its first frame at
@@ -497,11 +497,11 @@ TEST(LocalMapperEndToEnd, SavedMapLocalizesALaterRunStartingFarFromItsNewestKeyf
   }
   auto newest_only = start_pipeline("euroc_localize", revisit_dataset, dir.path(), "newest_only", test_domain(),
                                     {map, "frontend_config=" + no_vocabulary.string()});
-  // Not one pose: the recorder writes its files and fails the run (issue 16: never rc 0).
+  // Not one pose: the recorder writes its files and fails the run (never rc 0).
   EXPECT_EQ(finish(*newest_only), 1) << newest_only->out() << newest_only->err();
   EXPECT_NE(newest_only->err().find("no frame has a pose: tracked 0/40 frames, 40 lost"), std::string::npos)
       << newest_only->err();
-  // ... and the frontend says why (issue 19): it never found itself in the saved map.
+  // ... and the frontend says why: it never found itself in the saved map.
   EXPECT_NE(newest_only->err().find("never relocalized in the saved map"), std::string::npos) << newest_only->err();
   const int lost_without = test::lost_entries(dir.path() / "newest_only.lost.txt");
   std::printf("[ figures  ] later run at frames %d-%d of a saved %d-frame corridor_loop map: relocalized at its "

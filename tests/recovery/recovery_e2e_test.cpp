@@ -1,4 +1,4 @@
-// Recovery from faults in combination (issue 16, section 1): the full system (config/pipelines/euroc.yaml:
+// Recovery from faults in combination: the full system (config/pipelines/euroc.yaml:
 // replay, frontend, local mapper, loop closer, recorder under heslam-supervisor, lockstep) on EuRoC
 // MH01 with components killed with SIGKILL mid-run, alone, two within half a second of each other
 // (a power glitch, an OOM kill), or all but the supervisor; every run must end with every frame
@@ -168,7 +168,7 @@ TEST(Recovery, FrontendKilledNearTheEndLosesNoFrame) {
               run.exit_code, run.poses, kClipFrames, run.ate_m * 1e3);
 }
 
-// Issue 16: the mapper and the frontend killed within half a second of each other, in either order.
+// The mapper and the frontend killed within half a second of each other, in either order.
 // Before the fix: mapper, then frontend 50 ms later: the restarted frontend waited for map states the
 // restarted mapper published only after a keyframe, started a new map, and the mapper dropped its own
 // map file as "from another run" (rc 0, 160 poses, ATE 142 mm); frontend, then mapper 300 ms later:

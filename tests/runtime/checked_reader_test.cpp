@@ -1,4 +1,4 @@
-// CheckedReader (issue 16 section 3): validation with a counted, rate-limited warning, the first
+// CheckedReader: validation with a counted, rate-limited warning, the first
 // writer owning the stream, a second writer's samples held and ignored while the first is alive, and
 // its take-over (held samples first, in order) once the first writer is gone — the restarted-publisher
 // case — only by a writer of the owner's run: a writer of another run never gets a sample through,
@@ -142,7 +142,7 @@ TEST_F(CheckedReaderTest, ASecondWriterIsIgnoredWhileTheFirstIsAlive) {
   EXPECT_EQ(counter("second_writers"), 1u);
 }
 
-// Issue 38 item 5: both writers are of this run (a forger that copied the run id) and both write:
+// Both writers are of this run (a forger that copied the run id) and both write:
 // the owner wrote again while the second was alive, a conflict the run fails on (counted per topic).
 TEST_F(CheckedReaderTest, TwoLiveWritersOfTheSameRunAreAConflict) {
   Participant reading = make_participant();

@@ -1,4 +1,4 @@
-// The image transport option (issue 17 §2): --image-transport/--image-domain on every program, the
+// The image transport option: --image-transport/--image-domain on every program, the
 // pipeline fields image_transport/image_domain/roudi_config, and one clear line for each mistake.
 // No RouDi needed: the SHM participant itself is exercised by heslam_shm_pipeline_test.
 #include <gtest/gtest.h>

@@ -29,7 +29,7 @@ ProgramReport replay(std::uint64_t published, std::uint64_t total, std::uint64_t
               (skipped > 0 ? ", " + std::to_string(skipped) + " skipped (a missing or corrupt image)" : "")};
 }
 
-// Issue 38 item 5: a forger that copied the run id published odometry next to the frontend; the
+// A forger that copied the run id published odometry next to the frontend; the
 // recorder counted the conflict. Before, the run ended with exit code 0 and "tracked 160/160 frames".
 TEST(RunVerdict, TwoLiveWritersOfOneRoleFailTheRunNamingTheTopic) {
   ProgramReport seen = recorder(160, 160, 160);

@@ -184,9 +184,9 @@ TEST_F(SupervisorTest, RestartsAComponentKilledWithSigkillAfterItsRestartDelay) 
   const pid_t first = started_pids("talker").at(0);
   ASSERT_EQ(kill(first, SIGKILL), 0);
   const auto killed_at = Clock::now();
-  // The restart requirement (issue 2) is a new talker within 1 s of the kill: the supervisor plans it
+  // The restart requirement is a new talker within 1 s of the kill: the supervisor plans it
   // 0.1 s after the death (asserted below). How long the kernel takes to report the death and start
-  // the new process on a loaded machine is speed (issue 16 section 5): printed, not asserted.
+  // the new process on a loaded machine is speed: printed, not asserted.
   bool restarted = false;
   while (Clock::now() - killed_at < kStartupBound && !restarted) {
     const auto pids = started_pids("talker");
@@ -283,7 +283,7 @@ TEST_F(SupervisorTest, NiceLowersTheComponentsPriority) {
 }
 
 // Killed at stop, a component did not finish its shutdown work (the recorder's final files, the
-// mapper's map): the run is not a success (issue 16).
+// mapper's map): the run is not a success.
 TEST_F(SupervisorTest, ComponentIgnoringSigtermIsKilledAndFailsTheRun) {
   write("stubborn.yaml", "ignore_sigterm: true\n");
   start(pipeline(std::string(kTalker) + "    config: stubborn.yaml\n"));
@@ -314,7 +314,7 @@ TEST_F(SupervisorTest, GivesUpAfterMaxRestarts) {
   EXPECT_EQ(started_pids("talker").size(), 3u);
 }
 
-// Issue 16: an error a restart cannot fix (a bad config, a missing input, an unwritable output) is
+// An error a restart cannot fix (a bad config, a missing input, an unwritable output) is
 // not retried: the component said "starting" on the handshake pipe but never "running". One try,
 // its one-line reason in the supervisor's last line, exit 1. (Before: 1 + max_restarts tries.)
 TEST_F(SupervisorTest, StartupErrorIsNotRestarted) {
@@ -525,7 +525,7 @@ class SupervisorCheck : public SupervisorTest {
   std::string file() const { return (dir_ / "pipeline.yaml").string(); }
 };
 
-// Issue 16: a missing input (the dataset) is caught by --check and before anything starts.
+// A missing input (the dataset) is caught by --check and before anything starts.
 TEST_F(SupervisorCheck, RejectsAMissingOrEmptyInput) {
   const std::string component = std::string(kTalker) + "    inputs: [\"$(arg dataset)\"]\n";
   const std::string text = pipeline(component, "args:\n  dataset: \"\"\n");

@@ -1,4 +1,4 @@
-// Issue 38 item 5, forged identities: a participant that copies the run's id (readable from /proc)
+// Forged identities: a participant that copies the run's id (readable from /proc)
 // and forges one component's samples on the full synthetic pipeline (replay, frontend, local mapper,
 // bag of words loop closer, recorder) in lockstep. Plain DDS cannot authenticate, but it notices:
 // two live writers claiming one role fail the run loudly (nonzero exit, the last line names the

@@ -1,12 +1,12 @@
 // heslam-test-secure-peer: a second DDS participant for the security tests (a process of its own,
 // since Cyclone configures a domain once per process). It runs as the identity folder given with
 // --identity (plain DDS without it) and either publishes stereo frames whose images are a known byte
-// pattern (an honest replay, or an intruder: seq far ahead, like issue 16's stray frame), hostile
-// loop corrections, or every hostile sample class of issue 16 section 3 at once (stray frames, a
+// pattern (an honest replay, or an intruder: seq far ahead, like the hostile tests' stray frame), hostile
+// loop corrections, or every hostile sample class at once (stray frames, a
 // different calibration, NaN poses in Odometry, Keyframe and KeyframeState, 100 m corrections), or
 // reads stereo frames and counts those carrying the pattern.
 //
-// Or it forges the identity of one of a run's components (issue 38 item 5), with the run id of the
+// Or it forges the identity of one of a run's components, with the run id of the
 // supervisor --run-of PID copied into its writers' user data (as /proc shows it to anyone):
 //   forge-odometry       the frontend's Odometry, a pose 100 m away for each frame it sees (and one
 //                        every period while it sees none)
@@ -52,7 +52,7 @@ using namespace std::chrono_literals;
 
 // 20 Hz like a camera.
 constexpr auto kPublishPeriod = 50ms;
-// An intruder's frames claim to be far ahead of any real replay (issue 16, section 3).
+// An intruder's frames claim to be far ahead of any real replay.
 constexpr uint64_t kHostileFirstSeq = 1'000'000;
 
 struct PeerArgs {
@@ -148,7 +148,7 @@ int publish_correction(runtime::Participant& participant, const runtime::Topics&
   return 0;
 }
 
-// Issue 16 section 3's hostile classes, each from its own writer, every period.
+// The hostile sample classes (docs/topics.md, "What subscribers refuse"), each from its own writer, every period.
 int publish_hostile(runtime::Participant& participant, const runtime::Topics& topics, const PeerArgs& args) {
   runtime::Writer<msg::StereoFrame> frames(participant, topics.stereo());
   runtime::Writer<msg::StereoCalibration> calibrations(participant, topics.calibration());

@@ -1,7 +1,7 @@
-// Issue 16, section 4, end to end: the full synthetic pipeline (replay, frontend, local mapper, bag
+// DDS Security end to end: the full synthetic pipeline (replay, frontend, local mapper, bag
 // of words loop closer, recorder, supervisor) in secure mode (--arg security=DIR) gives the plain
 // run's trajectory (lockstep: bit-identical input and processing), while a participant without
-// credentials publishes every hostile sample class of issue 16 section 3 on the same domain for the
+// credentials publishes every hostile sample class on the same domain for the
 // whole run: stereo frames far ahead of the replay (the stray frame that truncated plain runs), a
 // different calibration, NaN poses in Odometry, Keyframe and KeyframeState, 100 m loop corrections.
 #include <gtest/gtest.h>

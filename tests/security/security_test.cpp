@@ -1,4 +1,4 @@
-// Issue 16, section 4: DDS Security. The material heslam-security makes (grants per component), and
+// DDS Security. The material heslam-security makes (grants per component), and
 // real secure participants over loopback, each test on its own domain: an authorised reader gets
 // the images while a capture of the domain's UDP traffic finds no image bytes (and does find them in
 // plain mode, so the capture is known to work); a participant without credentials, or with an
@@ -201,7 +201,7 @@ TEST(SecureDds, ParticipantWithoutCredentialsSeesNoData) {
   EXPECT_EQ(peer->wait(0ms), std::nullopt) << "the publisher ended early: " << peer->err();
 }
 
-// Issue 16 section 3's stray frame (seq far ahead) and a 100 m loop correction, from a participant
+// The hostile tests' stray frame (seq far ahead) and a 100 m loop correction, from a participant
 // without credentials: a credentialed frontend / mapper receives neither.
 TEST(SecureDds, ParticipantWithoutCredentialsCannotInject) {
   const int domain = test::exclusive_domain_id();

@@ -98,7 +98,7 @@ double distance_to_quad(const Eigen::Vector3d& p, const Quad& q) {
   return (p - q.point(u, v)).norm();
 }
 
-// Issue #21: the street drive started in front of a facade that stood across the road and drove
+// The street drive started in front of a facade that stood across the road and drove
 // through it. At every frame of a driving preset the camera (on the car's centre line, half a car
 // width = 0.9 m from its side) stays 3 m from facades and 1.2 m from anything else (parked cars).
 TEST(SynthPresets, DrivesStayOnTheRoad) {

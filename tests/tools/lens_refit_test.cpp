@@ -1,4 +1,4 @@
-// heslam-bench-lens-refit's fit (issue 17 §1) on synthetic maps with a known residual radial term:
+// heslam-bench-lens-refit's fit on synthetic maps with a known residual radial term:
 // the keypoints of a stereo camera path through a cloud of points, projected with k = 0.01 or 0,
 // plus 0.3 px noise. The fit must find k and, with it, the true keyframe path length; the profile
 // must rise away from the truth. This is what makes a near-zero estimate on a real map mean "the map

@@ -1,4 +1,4 @@
-// Issue 16, section 2: the trajectory is never lost and a failure is never reported as success.
+// The trajectory is never lost and a failure is never reported as success.
 // Real processes under heslam-supervisor on config/pipelines/*.yaml (a 40-frame synthetic room,
 // rendered once; MH01 for the real-time stall): the recorder killed after the replay ended, the
 // supervisor killed with -9, a double Ctrl-C, a stalled recorder, an output that is a folder, a
@@ -107,7 +107,7 @@ class PipelineOutcome : public ::testing::Test {
 // Before: written only at the end, so a recorder killed after the replay ended left no trajectory
 // (only its journal). Now the file is rewritten (atomically) as frames arrive; the run fails.
 // The recorder is stopped (SIGSTOP) as soon as its files hold every frame, so it cannot finish its
-// shutdown however late this test gets the CPU on a loaded machine (issue 16 section 5: before, the
+// shutdown however late this test gets the CPU on a loaded machine (before, the
 // test had the recorder's 300 ms drain to notice "frontend stopped" and kill it), and killed once
 // the run is ending.
 TEST_F(PipelineOutcome, RecorderKilledAfterTheReplayEndedLeavesTheCompleteTrajectory) {

@@ -164,7 +164,7 @@ TEST_F(ReplaySpy, SpyHzMeasuresRealTimeReplayAtMost20Hz) {
   }
   ASSERT_FALSE(last_rate.empty()) << out;
   std::cout << "heslam-spy hz camera/stereo: " << last_rate << " Hz\n";
-  // Speed is not behaviour (issue 16, section 5): a loaded machine may publish slower than 20 Hz,
+  // Speed is not behaviour: a loaded machine may publish slower than 20 Hz,
   // but never faster than the recording; the measured 20 Hz is a printed figure, not an assertion.
   EXPECT_GT(std::stod(last_rate), 0.0) << out;
   EXPECT_LE(std::stod(last_rate), 21.0) << out;
@@ -322,7 +322,7 @@ TEST_F(ReplaySpy, StartPausedWaitsForSigusr2) {
   const runtime::Topics topics;
   // KEEP_ALL on our side; the replay's image writer keeps its newest 4 frames (KEEP_LAST, a slow
   // reader drops frames by design), so how many of the 10 frames published flat out reach a reader
-  // of a loaded machine is speed, not behaviour (issue 16 section 5).
+  // of a loaded machine is speed, not behaviour.
   runtime::Reader<msg::StereoFrame> frames(participant, topics.stereo(), runtime::Qos(runtime::QosRole::kImages).keep_all());
   auto replay = start("replay", {test::shared_dataset(kClip).string(), "--rate", "0", "--duration", "0.5",
                                  "--start-paused", "--no-progress", "--no-keyboard"},

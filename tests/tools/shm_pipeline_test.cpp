@@ -1,4 +1,4 @@
-// Issue 17 §2: the full synthetic pipeline (replay, frontend, local mapper, bag of words loop closer,
+// The full synthetic pipeline (replay, frontend, local mapper, bag of words loop closer,
 // recorder, supervisor) with the stereo images over iceoryx shared memory (--image-transport shm, on
 // a second domain) gives the UDP run's trajectory (lockstep: bit-identical input and processing), and
 // the replay's frame writer really uses shared memory (Cyclone falls back to UDP silently otherwise).

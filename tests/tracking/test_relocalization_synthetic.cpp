@@ -1,4 +1,4 @@
-// Relocalization in the old part of a map, "teleported camera" (issue 14): a synthetic corridor_loop
+// Relocalization in the old part of a map, "teleported camera": a synthetic corridor_loop
 // excerpt (exact ground truth) whose frames 0-429 are the walk's first 21.5 s and whose frames from
 // 430 on show the walk's frames 20-39 again, with no black frame between: between two shots the
 // camera is carried back to where it was 20.5 s earlier, on the other side of the ring. The motion

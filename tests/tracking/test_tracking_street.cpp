@@ -36,7 +36,7 @@ double heading_deg(const Pose3& T_wc) {
   return std::atan2(forward.y(), forward.x()) * 180.0 / 3.14159265358979323846;
 }
 
-// Issue #21: before the street layout fix the drive went through a facade at frame 21 and every
+// Before the street layout fix the drive went through a facade at frame 21 and every
 // later frame was lost.
 TEST(TrackingStreet, FirstCornerEveryFrameTrackedWithKittiDriftBelowOnePointFivePercent) {
   test::ScratchDir scratch("tracking_street");
@@ -57,7 +57,7 @@ TEST(TrackingStreet, FirstCornerEveryFrameTrackedWithKittiDriftBelowOnePointFive
               drift ? drift->rotation_error_deg_per_100m : -1.0);
   EXPECT_EQ(run.tracked_frames(), kFirstCornerFrames);
   ASSERT_TRUE(drift.has_value());
-  // Target of issue #21 (ORB-SLAM2 publishes 0.4-1.4 % on real KITTI 00-10 stereo).
+  // The target (ORB-SLAM2 publishes 0.4-1.4 % on real KITTI 00-10 stereo).
   EXPECT_LT(drift->translation_error_percent, 1.5);
 }
 

@@ -350,7 +350,7 @@ TEST(HistogramEqualizer, EurocPairsExposedApartKeepTheirStereoMatches) {
         EXPECT_GE(c.stereo, 0.85 * base.stereo) << name;
       }
       if (stereo == StereoPhotometry::kShared) {
-        EXPECT_LT(c.stereo, 0.7 * base.stereo) << name << ": the failure of issue 17";
+        EXPECT_LT(c.stereo, 0.7 * base.stereo) << name << ": the shared mapping's failure on cameras exposed apart";
       }
     }
   }

@@ -35,7 +35,7 @@ constexpr std::chrono::milliseconds kHeldSamplesWait{2500};
 // the run, while a short run's files follow about every frame.
 constexpr int kRewriteSpacingFactor = 20;
 // At shutdown, the drain ends after this long even if samples keep arriving (a writer that never
-// stops, e.g. a forger, issue 38 item 5): within the supervisor's 5 s stop timeout, after kHeldSamplesWait.
+// stops, e.g. a forger): within the supervisor's 5 s stop timeout, after kHeldSamplesWait.
 constexpr std::chrono::milliseconds kMaxShutdownDrain{3500};
 // The replay's count of published frames, on its status.
 constexpr const char* kFramesPublishedCounter = "frames_published";

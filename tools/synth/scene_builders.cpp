@@ -200,9 +200,9 @@ class CityBuilder {
   // Buildings on one side of the road from a to b: the left side (sign +1, a block's edge walked
   // counter-clockwise) or the right side (sign -1, the outer ring facing into the town). They stop
   // where the crossing streets begin, and each row fills the corner square at its start (the
-  // previous row stops short of it: no two facades share a plane). Before issue #21 both rows ran
-  // from -setback to past length + setback, so buildings stood across the crossing roads and the
-  // street drive started 8 m in front of a facade it then drove through.
+  // previous row stops short of it: no two facades share a plane). Rows from -setback to past
+  // length + setback would stand across the crossing roads, and the street drive would start 8 m in
+  // front of a facade it then drives through.
   void building_row(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double sign) {
     const Eigen::Vector2d dir = (b - a).normalized();
     const Eigen::Vector2d left(-dir.y(), dir.x());

@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 // Readable by cv::FileStorage and by standard YAML parsers (PyYAML rejects "%YAML:1.0").
 constexpr const char* kYamlHeader = "%YAML 1.0\n---\n";
 // ORB-SLAM2's shipped stereo settings ask 1200 ORB features of EuRoC's 752x480 images and 2000 of
-// KITTI's 1241x376 ones; wider images than this get the KITTI count (issue #21: the street preset's
+// KITTI's 1241x376 ones; wider images than this get the KITTI count (the street preset's
 // settings asked 1200 of a KITTI-sized image).
 constexpr int kOrbslam2KittiWidthPx = 1000;
 constexpr int kOrbslam2FeaturesEuroc = 1200;

@@ -12,7 +12,7 @@
 //
 // On the rectification of EuRoC pairs cv::remap spent about 36 instructions per pixel (26 M per pair,
 // more than the whole tracking), this about 10, in less than half the CPU time (callgrind and thread
-// CPU in docs/benchmarks.md "Frontend critical path, fourth pass"). Blocks of 8 output pixels whose
+// CPU in docs/benchmarks.md at 5c1f792, Frontend critical path fourth pass). Blocks of 8 output pixels whose
 // 2x2 neighbourhoods lie inside the image read them from one 16-byte window per half block (byte
 // shuffles) or, where the map jumps, with two AVX2 gathers, then a few multiply-adds; the rest (image
 // borders) use the scalar formula. Without AVX2, the scalar formula everywhere.

@@ -28,7 +28,7 @@ struct PairWorkerOptions {
   // caller on the first, the worker on the second (each thread pins itself, the caller at its first
   // run). Left to the scheduler on the 2-core VM, a worker woken after the camera's idle gap was
   // often placed on the caller's CPU and the frame's stages ran one after the other: the frontend
-  // paced at 20 Hz took 12.0 ms a frame against 7.4 ms pinned (docs/benchmarks.md, ninth session).
+  // paced at 20 Hz took 12.0 ms a frame against 7.4 ms pinned (docs/benchmarks.md at 5c1f792, ninth session).
   // Without two allowed CPUs, or when the kernel refuses, the threads stay unpinned (see pinned()).
   bool pin_to_two_cpus = true;
 };

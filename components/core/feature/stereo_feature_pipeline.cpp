@@ -40,7 +40,7 @@ HistogramEqualizerOptions left_alone_options(const HistogramEqualizerOptions& he
 // The left-only region keeps this far (level-0 pixels) from the clip contour, whose corners the
 // stereo keypoints already hold: FAST's circle (3) and a little more. MH01 x1/x4, 16 full-system runs
 // each: 0 / 1 / 2 / 5 / 10 px gave 4.34 / 4.36 / 4.28 / 4.34 / 4.49 mm, alike up to 5; on the
-// synthetic room 2 px was worse than 5 (docs/benchmarks.md, tenth pass).
+// synthetic room 2 px was worse than 5 (docs/benchmarks.md at 5c1f792, tenth pass).
 constexpr int kLeftOnlyContourMarginPx = 5;
 
 OrbOptions right_options(const StereoFeaturePipelineOptions& options) {
@@ -249,7 +249,7 @@ StereoFeatures StereoFeaturePipeline::process_from(const ImageSource& left_sourc
   };
   // Left-only keypoints (pairs exposed apart) need only the left image and its equalization: on a
   // pair that has them the second thread makes them while the caller does the whole stereo matching
-  // (the same output as one after the other; the time measured in docs/benchmarks.md, tenth pass).
+  // (the same output as one after the other; the time measured in docs/benchmarks.md at 5c1f792, tenth pass).
   const bool left_only = exposed_apart && options_.left_only_features > 0.f;
   if (left_only) prepare_left_only_region(*left_image);
   const bool left_only_wanted = left_only && left_only_wanted_ > 0;

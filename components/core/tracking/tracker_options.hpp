@@ -71,14 +71,14 @@ struct TrackerOptions {
   // unchanged. Such features are 80-93 % of a clipped pair's stereo points and keep the rule firing
   // (MH01 left x1 / right x4.1: 16 keyframes against 10 at equal exposure); 0.9 brings that to 14 and
   // changed no run for the worse (0.85-0.95 alike; 0.75 and below hurt x0.5/x1.5; 0: too few
-  // keyframes, frames lost). Equally exposed pairs carry no marks. docs/benchmarks.md, gain4.
+  // keyframes, frames lost). Equally exposed pairs carry no marks. docs/benchmarks.md at 5c1f792, gain4.
   double close_untracked_near_clip_weight = 0.9;
   float reference_ratio_stereo = 0.75f;
   // In the reference-ratio rule (tracked < reference_ratio_stereo x the reference keyframe's points),
   // points whose keyframe / frame feature is near a clip edge (StereoFeatures::near_clip, pairs exposed
   // apart only) count this much on both sides. Such points are found again less often than the others
   // (a clip contour slides with the view), so at 1 the rule fires every frame or two on heavily clipped
-  // pairs in the full system. Equally exposed pairs carry no marks. docs/benchmarks.md, gain5.
+  // pairs in the full system. Equally exposed pairs carry no marks. docs/benchmarks.md at 5c1f792, gain5.
   double reference_near_clip_weight = 1.0;
   float reference_ratio_single_keyframe = 0.4f;
   int min_keyframe_inliers = 15;

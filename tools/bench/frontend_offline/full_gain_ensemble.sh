@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # The full system (config/pipelines/euroc.yaml, lockstep, as shipped) on cameras exposed apart, as an
-# ensemble (issue 17 §1; gain_ensemble.sh is the tracker-alone version and says why an ensemble): for
+# ensemble (gain_ensemble.sh is the tracker-alone version and says why an ensemble): for
 # each gain pair L,R, four copies of DATASET made by heslam-photometric -- L,R; 1.02L,R; L,1.02R;
 # 0.98L,0.98R -- each run once; prints every run's ATE and keyframes, and the mean ATE per pair with
 # its excess over the first pair's mean.
 #   tools/bench/frontend_offline/full_gain_ensemble.sh DATASET OUT_DIR [L,R ...]   (default: 1,1 0.5,1.5 0.35,2 1,4)
 # K1_OFFSET=DK (environment): added to k1 of both cameras in the copies' sensor.yaml (the lens-model
-#   sensitivity of docs/benchmarks.md, "Cameras exposed apart, seventh pass", item 7).
+#   sensitivity of docs/benchmarks.md at 5c1f792, Cameras exposed apart seventh pass, item 7).
 # DOMAIN=N (environment, default 196): the DDS domain of the runs.
 # FRONTEND_CONFIG=FILE, MAPPER_CONFIG=FILE (environment): the pipeline's frontend_config / mapper_config
 #   (default: euroc.yaml's own), e.g. a copy of config/frontend/euroc_mapper.yaml with an option changed.

@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# Cameras exposed apart (issue 17 §1), measured on an ensemble instead of one run: a single run's ATE
+# Cameras exposed apart, measured on an ensemble instead of one run: a single run's ATE
 # on a 160-frame clip moves by +-8 % under a 2 % change of one camera's gain, which hides a systematic
 # effect of a few percent. For each gain pair L,R this runs the tracker alone (heslam-frontend-offline,
 # deterministic) four times -- at L,R, 1.02L,R, L,1.02R and 0.98L,0.98R -- and prints the mean SE(3)
 # ATE, the mean Sim(3) scale (the factor the estimate must be scaled by: > 1 = too short), and the runs.
 #   tools/bench/frontend_offline/gain_ensemble.sh DATASET OUT_DIR [L,R ...]   (default: 1,1 0.5,1.5 0.35,2 1,4)
 # EXTRA_ARGS (environment): more heslam-frontend-offline arguments for every run, e.g.
-#   EXTRA_ARGS="--drop-stereo-right-above 127" (docs/benchmarks.md, "Cameras exposed apart, seventh pass").
+#   EXTRA_ARGS="--drop-stereo-right-above 127" (docs/benchmarks.md at 5c1f792, Cameras exposed apart seventh pass).
 # Exits 1, naming the run, if a run fails or tracks fewer frames than the dataset has (the ATE of a
 # truncated trajectory is not comparable).
 set -euo pipefail

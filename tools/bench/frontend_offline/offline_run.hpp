@@ -42,7 +42,7 @@ struct OfflineRunOptions {
   double period_ms = 0.0;
   // > 0: Gaussian noise of this sigma (level-0 pixels) added to every stereo disparity, seeded by the
   // frame's index (repeatable). A diagnostic: how much trajectory scale does stereo noise alone cost?
-  // (Cameras exposed apart, docs/benchmarks.md tenth session.)
+  // (Cameras exposed apart, docs/benchmarks.md at 5c1f792, tenth session.)
   double disparity_noise_px = 0.0;
   // In 0..254: every stereo match whose right pixel (the rectified right image the pipeline matched
   // on, before HE) is brighter than this loses its stereo match. With equal exposure this is the set
@@ -52,7 +52,7 @@ struct OfflineRunOptions {
   int drop_stereo_right_above = -1;
   // Added to the first radial distortion coefficient (k1) of both cameras before rectification: a
   // diagnostic of how much the trajectory depends on the lens model at the image's edges
-  // (docs/benchmarks.md, "Cameras exposed apart, seventh pass"). 0: the calibration as read.
+  // (docs/benchmarks.md at 5c1f792, Cameras exposed apart seventh pass). 0: the calibration as read.
   double k1_offset = 0.0;
 };
 

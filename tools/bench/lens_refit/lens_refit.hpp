@@ -3,7 +3,7 @@
 //   observed = principal point + f x (1 + k r^2),  r^2 = x^2 + y^2 (normalized rectified coordinates),
 // the left keypoint at the point's bearing and the right one at its bearing from the right camera.
 // It asks whether the map's own multi-view geometry says the lens model is off at the image's edges,
-// without ground truth: issue 17 §1 traced the exposed-apart excess to peripheral stereo points and
+// without ground truth: the exposed-apart investigation traced the exposed-apart excess to peripheral stereo points and
 // EuRoC's k1 (docs/benchmarks.md, "Cameras exposed apart", seventh and eighth passes).
 //
 // A diagnostic, not part of the pipeline: Ceres with automatic derivatives, all keyframes in the

@@ -1,4 +1,4 @@
-// heslam-bench-loop: what closing a loop costs as the map grows (issue #15). For each size N it builds
+// heslam-bench-loop: what closing a loop costs as the map grows. For each size N it builds
 // a drifted synthetic loop of N stereo keyframes (tests/loop/loop_world.hpp scaled up: the test
 // world's keyframe spacing and point density on a longer circle, so every point is seen by ~20
 // consecutive keyframes; covisibility and spanning tree as the mapper keeps them) and prints median /

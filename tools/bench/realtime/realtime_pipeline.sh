@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The whole system in real time (issue 17): runs the real-time pipeline (replay at rate 1 + frontend +
+# The whole system in real time: runs the real-time pipeline (replay at rate 1 + frontend +
 # local mapper + loop closer + recorder) RUNS times over a dataset, and once in lockstep for reference,
 # and prints per run and as median / worst over the runs: frames missed by the frontend, its per-frame
 # time (stage "total", median / p90), the local BA per keyframe (median), the keyframes the frontend

@@ -1,6 +1,6 @@
 // heslam-bench-shm: one-way latency of the EuRoC-size stereo pair (752x480x2, 722 KB) over loopback
 // UDP with the project's tuned Cyclone XML vs Cyclone's shared-memory (iceoryx) path, and whether
-// keyed status-like types survive SHM (issue 17 §2; findings pitfall 10).
+// keyed status-like types survive SHM (findings pitfall 10).
 //
 // Every case runs in two child processes of this executable (a subscriber, then a publisher), so a
 // crash or a hang (participant creation hangs without iox-roudi) is recorded as a result instead of
