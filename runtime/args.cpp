@@ -42,8 +42,9 @@ namespace {
 Flags common_flags(CommonArgs& args) {
   Flags flags("[options]");
   const std::string domain_range = "0-" + std::to_string(kMaxDomainId);
-  flags.integer("--domain", "N", &args.domain_id, 0, kMaxDomainId,
-                "DDS domain id, " + domain_range + " (default: $HESLAM_DOMAIN or 0)")
+  flags
+      .integer("--domain", "N", &args.domain_id, 0, kMaxDomainId,
+               "DDS domain id, " + domain_range + " (default: $HESLAM_DOMAIN or 0)")
       .custom("--namespace", "NAME", "topic namespace (default: heslam)",
               [&args](const std::string& value) {
                 Topics check(value);  // throws the namespace message

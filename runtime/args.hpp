@@ -15,22 +15,22 @@
 namespace heslam::runtime {
 
 struct CommonArgs {
-  int domain_id = 0;                  // default: $HESLAM_DOMAIN when set, else 0
-  std::string ns = "heslam";          // topic namespace
-  std::string name;                   // instance name (status key, log prefix); default: the program's
-  std::string program;                // the executable's name for error lines, see program_name()
+  int domain_id = 0;          // default: $HESLAM_DOMAIN when set, else 0
+  std::string ns = "heslam";  // topic namespace
+  std::string name;           // instance name (status key, log prefix); default: the program's
+  std::string program;        // the executable's name for error lines, see program_name()
   // --config, in order: each file overlays the ones before it field by field (the pipeline passes its
   // shipped file, then a user's); none: every option at its documented default.
   std::vector<std::filesystem::path> config_files;
   LogLevel log_level = LogLevel::kInfo;
-  std::string dds_config;             // empty: see ParticipantOptions::dds_config
+  std::string dds_config;  // empty: see ParticipantOptions::dds_config
   // The stereo image topic: UDP on domain_id, or iceoryx shared memory on image_domain_id (required
   // then, and different from domain_id; runtime/image_transport.hpp).
   ImageTransport image_transport = ImageTransport::kUdp;
   int image_domain_id = -1;
-  bool help = false;                  // -h / --help seen
-  bool check = false;                 // --check: validate the arguments and the config, start nothing
-  std::vector<std::string> rest;      // everything else, in order (argv[0] excluded)
+  bool help = false;              // -h / --help seen
+  bool check = false;             // --check: validate the arguments and the config, start nothing
+  std::vector<std::string> rest;  // everything else, in order (argv[0] excluded)
 };
 
 // Accepts "--flag value" and "--flag=value". Throws std::runtime_error with one line for a bad value,

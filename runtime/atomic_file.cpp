@@ -45,8 +45,8 @@ std::filesystem::path replacement_temp_path(const std::filesystem::path& path) {
   return temp;
 }
 
-void replace_file(const std::filesystem::path& path, const std::function<void(const std::filesystem::path& temp)>& write,
-                  bool sync) {
+void replace_file(const std::filesystem::path& path,
+                  const std::function<void(const std::filesystem::path& temp)>& write, bool sync) {
   const std::filesystem::path temp = replacement_temp_path(path);
   try {
     write(temp);

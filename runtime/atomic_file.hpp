@@ -19,8 +19,8 @@ std::filesystem::path replacement_temp_path(const std::filesystem::path& path);
 // not only a kill (slower). Throws std::runtime_error naming `path` (and the reason) when `write`
 // throws, or the temporary file cannot be synced or renamed; the temporary file is removed then and
 // `path` keeps its previous contents.
-void replace_file(const std::filesystem::path& path, const std::function<void(const std::filesystem::path& temp)>& write,
-                  bool sync = true);
+void replace_file(const std::filesystem::path& path,
+                  const std::function<void(const std::filesystem::path& temp)>& write, bool sync = true);
 
 // replace_file with `bytes` as the new contents.
 void replace_file_contents(const std::filesystem::path& path, std::string_view bytes, bool sync = true);

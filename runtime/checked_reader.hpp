@@ -77,7 +77,11 @@ class CheckedReader {
  public:
   CheckedReader(const Participant& participant, const TopicSpec<T>& spec, const Logger& log, Stats& stats,
                 SampleCheck<T> check, CheckedReaderOptions options = {}, std::optional<Qos> qos = std::nullopt)
-      : reader_(participant, spec, qos), log_(log), stats_(stats), check_(std::move(check)), options_(std::move(options)) {}
+      : reader_(participant, spec, qos),
+        log_(log),
+        stats_(stats),
+        check_(std::move(check)),
+        options_(std::move(options)) {}
 
   // Up to max_samples admitted samples, oldest first (held samples of a writer that took over first).
   std::vector<Received<T>> take(std::size_t max_samples = kDefaultBatch) {
@@ -118,7 +122,9 @@ class CheckedReader {
   }
 
   int matched_writers() const { return reader_.matched_writers(); }
-  bool wait_for_writers(int count, std::chrono::milliseconds timeout) const { return reader_.wait_for_writers(count, timeout); }
+  bool wait_for_writers(int count, std::chrono::milliseconds timeout) const {
+    return reader_.wait_for_writers(count, timeout);
+  }
   uint64_t schema_mismatches() const { return reader_.schema_mismatches(); }
   const std::string& name() const { return reader_.name(); }
   dds_entity_t handle() const { return reader_.handle(); }
@@ -179,8 +185,9 @@ class CheckedReader {
         stats_.count(kOtherRunWriters);
         log_.warn("topic '", name(), "': a second writer (", describe_writer(handle(), writer), ", run ",
                   run_of(writer).value_or("unknown: it left"), ") of another run than the stream's writer (",
-                  describe_writer(handle(), *owner_), ", run ", owner_run_, "): its samples are dropped and counted as ",
-                  kSecondWriterSamples, "; it never takes the topic over (only a restarted publisher of the same run does)");
+                  describe_writer(handle(), *owner_), ", run ", owner_run_,
+                  "): its samples are dropped and counted as ", kSecondWriterSamples,
+                  "; it never takes the topic over (only a restarted publisher of the same run does)");
       }
       return false;
     }
@@ -218,10 +225,11 @@ class CheckedReader {
       std::erase_if(held_, [&](const Received<T>& held) { return held.info.publication_handle == claimant; });
       stats_.count(kWriterConflicts);
       stats_.count(std::string(kWriterConflictsOn) + name());
-      log_.error("topic '", name(), "': two live writers of run ", owner_run_, " at once: ",
-                 describe_writer(handle(), *owner_), " (first) and ", describe_writer(handle(), claimant),
+      log_.error("topic '", name(), "': two live writers of run ", owner_run_,
+                 " at once: ", describe_writer(handle(), *owner_), " (first) and ", describe_writer(handle(), claimant),
                  " (refused); a forged participant that copied the run id, or a second copy of the component "
-                 "(counted as ", kWriterConflicts, "; the run fails)");
+                 "(counted as ",
+                 kWriterConflicts, "; the run fails)");
     }
     claimants_.clear();
   }
@@ -261,7 +269,8 @@ class CheckedReader {
       if (it == alive.end()) it = alive.emplace(writer, writer_matched(handle(), writer)).first;
       return !it->second;
     });
-    const auto with_data = std::find_if(held_.begin(), held_.end(), [](const Received<T>& held) { return held.info.valid_data; });
+    const auto with_data =
+        std::find_if(held_.begin(), held_.end(), [](const Received<T>& held) { return held.info.valid_data; });
     if (with_data != held_.end()) take_over(with_data->info.publication_handle);
   }
 
@@ -277,9 +286,8 @@ class CheckedReader {
     claimants_.erase(writer);
     stats_.count(kTakeOvers);
     // Counted above as second_writer_samples; these are used after all.
-    log_.info("topic '", name(), "': the first writer left; ", describe_writer(handle(), writer),
-              " of the same run (", owner_run_, ") takes over (a restarted publisher), its ", released_.size(),
-              " held samples are used");
+    log_.info("topic '", name(), "': the first writer left; ", describe_writer(handle(), writer), " of the same run (",
+              owner_run_, ") takes over (a restarted publisher), its ", released_.size(), " held samples are used");
   }
 
   Reader<T> reader_;
@@ -290,8 +298,8 @@ class CheckedReader {
   std::optional<dds_instance_handle_t> owner_;
   std::string owner_run_;                              // the run of the owner (and its successors)
   std::map<dds_instance_handle_t, std::string> runs_;  // writers' runs, asked while they were matched
-  std::deque<Received<T>> held_;      // samples of other writers, arrival order
-  std::deque<Received<T>> released_;  // held samples of a writer that took over, not yet taken
+  std::deque<Received<T>> held_;                       // samples of other writers, arrival order
+  std::deque<Received<T>> released_;                   // held samples of a writer that took over, not yet taken
   std::set<dds_instance_handle_t> announced_;
   std::set<dds_instance_handle_t> claimants_;  // of the owner's run, held while the owner was matched
   std::set<dds_instance_handle_t> refused_;    // claimants found alive with the owner: conflicts

@@ -11,8 +11,8 @@
 //
 // Lifecycle: construct (participant, status "configuring") -> configure(config) (unknown fields are
 // errors) -> status "running" -> run() -> on_shutdown() -> status gone. Exceptions end the process
-// with one line "<program>: <what>" on stderr (the executable's name, e.g. heslam-local-mapper), status FAILED and exit code 1;
-// SIGINT/SIGTERM end run() cleanly (exit 0).
+// with one line "<program>: <what>" on stderr (the executable's name, e.g. heslam-local-mapper), status FAILED and exit
+// code 1; SIGINT/SIGTERM end run() cleanly (exit 0).
 #pragma once
 
 #include <chrono>

@@ -2,10 +2,10 @@
 #include "runtime/config.hpp"
 
 #include <fstream>
-#include <utility>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include <opencv2/core.hpp>
 
@@ -103,8 +103,8 @@ std::vector<std::string> split_key(std::string_view key) {
 
 struct Config::State {
   std::shared_ptr<cv::FileStorage> storage = std::make_shared<cv::FileStorage>();
-  cv::FileNode root;           // this Config's map (the file's root, or a list item)
-  std::string prefix;          // key prefix in messages: "" or "components[2]."
+  cv::FileNode root;   // this Config's map (the file's root, or a list item)
+  std::string prefix;  // key prefix in messages: "" or "components[2]."
   std::string source;
   std::filesystem::path folder;
   std::shared_ptr<const State> base;  // the layer this one overlays (a field absent here is looked up there)
@@ -135,8 +135,8 @@ struct Config::State {
   }
 
   [[noreturn]] void fail(std::string_view key, const std::string& expected, const cv::FileNode& node) const {
-    throw std::runtime_error(source + ": field '" + prefix + std::string(key) + "': expected " + expected +
-                             ", got " + describe(node));
+    throw std::runtime_error(source + ": field '" + prefix + std::string(key) + "': expected " + expected + ", got " +
+                             describe(node));
   }
 };
 

@@ -38,8 +38,7 @@ class Config {
   bool is_list(std::string_view key) const;  // present and a YAML sequence
 
   int get_int(std::string_view key, int default_value, int min = INT_MIN, int max = INT_MAX) const;
-  double get_double(std::string_view key, double default_value,
-                    double min = -std::numeric_limits<double>::infinity(),
+  double get_double(std::string_view key, double default_value, double min = -std::numeric_limits<double>::infinity(),
                     double max = std::numeric_limits<double>::infinity()) const;
   // true/false, yes/no, on/off or 1/0.
   bool get_bool(std::string_view key, bool default_value) const;

@@ -51,7 +51,8 @@ std::string network_dds_config(const DdsNetworkProfile& profile) {
     throw std::invalid_argument(text.str());
   }
   for (const std::string& peer : profile.peers) {
-    if (!safe_attribute(peer)) throw std::invalid_argument("peer: expected an address or host name, got '" + peer + "'");
+    if (!safe_attribute(peer))
+      throw std::invalid_argument("peer: expected an address or host name, got '" + peer + "'");
   }
   const bool unicast = !profile.peers.empty();
   const long lease_ms = static_cast<long>(profile.lease_s * 1000.0 + 0.5);

@@ -62,13 +62,13 @@ Flags::Spec* Flags::find(std::string_view name) {
 }
 
 Flags& Flags::toggle(std::string name, bool* target, std::string help, bool value_when_seen) {
-  return add(std::move(name), "", std::move(help), [target, value_when_seen](const std::string&) {
-    *target = value_when_seen;
-  });
+  return add(std::move(name), "", std::move(help),
+             [target, value_when_seen](const std::string&) { *target = value_when_seen; });
 }
 
 Flags& Flags::text(std::string name, std::string metavar, std::string* target, std::string help) {
-  return add(std::move(name), std::move(metavar), std::move(help), [target](const std::string& value) { *target = value; });
+  return add(std::move(name), std::move(metavar), std::move(help),
+             [target](const std::string& value) { *target = value; });
 }
 
 Flags& Flags::non_empty_text(std::string name, std::string metavar, std::string* target, std::string help) {
@@ -80,7 +80,8 @@ Flags& Flags::non_empty_text(std::string name, std::string metavar, std::string*
 }
 
 Flags& Flags::path(std::string name, std::string metavar, std::filesystem::path* target, std::string help) {
-  return add(std::move(name), std::move(metavar), std::move(help), [target](const std::string& value) { *target = value; });
+  return add(std::move(name), std::move(metavar), std::move(help),
+             [target](const std::string& value) { *target = value; });
 }
 
 Flags& Flags::number(std::string name, std::string metavar, double* target, double min_value, double max_value,
@@ -114,10 +115,10 @@ Flags& Flags::on_off(std::string name, bool* target, std::string help) {
 }
 
 Flags& Flags::integer_list(std::string name, std::string metavar, std::vector<int>* target, int min_value,
-                          int max_value, std::string help) {
+                           int max_value, std::string help) {
   std::string flag = name;
-  const std::string expected = "comma-separated integers in [" + std::to_string(min_value) + ", " +
-                               std::to_string(max_value) + "]";
+  const std::string expected =
+      "comma-separated integers in [" + std::to_string(min_value) + ", " + std::to_string(max_value) + "]";
   return add(std::move(name), std::move(metavar), std::move(help),
              [target, flag, expected, min_value, max_value](const std::string& value) {
                std::vector<int> numbers;

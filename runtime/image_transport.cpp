@@ -9,9 +9,7 @@
 
 namespace heslam::runtime {
 
-std::string_view to_string(ImageTransport transport) {
-  return transport == ImageTransport::kShm ? "shm" : "udp";
-}
+std::string_view to_string(ImageTransport transport) { return transport == ImageTransport::kShm ? "shm" : "udp"; }
 
 std::optional<ImageTransport> parse_image_transport(std::string_view text) {
   if (text == "udp") return ImageTransport::kUdp;
@@ -59,9 +57,8 @@ const Participant& ImageParticipant::get() {
       base = uri != nullptr && *uri != '\0' ? std::string(uri) : default_dds_config();
     }
     // Shared memory with DDS Security is untested, so heslam-supervisor refuses that combination.
-    shm_.emplace(ParticipantOptions{.domain_id = image_domain_id_,
-                                    .dds_config = base + "," + shm_dds_config_fragment(),
-                                    .security_identity = {}});
+    shm_.emplace(ParticipantOptions{
+        .domain_id = image_domain_id_, .dds_config = base + "," + shm_dds_config_fragment(), .security_identity = {}});
   }
   return *shm_;
 }

@@ -28,13 +28,21 @@ class Logger {
 
   // Streams every argument: log.info("frame ", seq, " took ", ms, " ms").
   template <typename... Args>
-  void debug(const Args&... args) const { log(LogLevel::kDebug, args...); }
+  void debug(const Args&... args) const {
+    log(LogLevel::kDebug, args...);
+  }
   template <typename... Args>
-  void info(const Args&... args) const { log(LogLevel::kInfo, args...); }
+  void info(const Args&... args) const {
+    log(LogLevel::kInfo, args...);
+  }
   template <typename... Args>
-  void warn(const Args&... args) const { log(LogLevel::kWarn, args...); }
+  void warn(const Args&... args) const {
+    log(LogLevel::kWarn, args...);
+  }
   template <typename... Args>
-  void error(const Args&... args) const { log(LogLevel::kError, args...); }
+  void error(const Args&... args) const {
+    log(LogLevel::kError, args...);
+  }
 
   // A warning of class `key` (e.g. the stats counter it goes with, "bad_frames") that may repeat per
   // frame: the first few are printed, then one line per second saying how many it stands for.

@@ -35,7 +35,8 @@ std::optional<std::string> LogThrottle::admit(std::string_view key, const std::s
     state.last_printed_ns = now;
     if (state.printed_in_burst < options_.burst) return message;
     char limit[96];
-    std::snprintf(limit, sizeof limit, "' warnings: one line per %g s)", static_cast<double>(options_.period_ns) * 1e-9);
+    std::snprintf(limit, sizeof limit, "' warnings: one line per %g s)",
+                  static_cast<double>(options_.period_ns) * 1e-9);
     return message + " (further '" + std::string(key) + limit;
   }
   ++state.held_back;

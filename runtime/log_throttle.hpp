@@ -50,10 +50,10 @@ class LogThrottle {
   struct KeyState {
     bool seen = false;
     std::size_t printed_in_burst = 0;
-    std::size_t held_back = 0;        // occurrences since the last printed line
+    std::size_t held_back = 0;  // occurrences since the last printed line
     std::int64_t last_printed_ns = 0;
     std::int64_t last_seen_ns = 0;
-    std::string latest;               // the newest held-back message
+    std::string latest;  // the newest held-back message
   };
 
   static std::string repeated_line(const KeyState& state, std::int64_t now_ns);

@@ -50,11 +50,11 @@ namespace heslam::runtime {
 template <typename T>
 struct MessageTraits;
 
-#define HESLAM_RUNTIME_MESSAGE(TYPE, NAME)                                         \
-  template <>                                                                      \
-  struct MessageTraits<TYPE> {                                                     \
-    static const dds_topic_descriptor_t* descriptor() { return &TYPE##_desc; }    \
-    static constexpr const char* name() { return NAME; }                           \
+#define HESLAM_RUNTIME_MESSAGE(TYPE, NAME)                                     \
+  template <>                                                                  \
+  struct MessageTraits<TYPE> {                                                 \
+    static const dds_topic_descriptor_t* descriptor() { return &TYPE##_desc; } \
+    static constexpr const char* name() { return NAME; }                       \
   }
 
 HESLAM_RUNTIME_MESSAGE(heslam_msg_StereoFrame, "StereoFrame");
@@ -72,8 +72,8 @@ HESLAM_RUNTIME_MESSAGE(heslam_msg_ComponentStatus, "ComponentStatus");
 
 template <typename T>
 concept Message = requires(T sample) {
-  { MessageTraits<T>::descriptor() };
-  { sample.schema_version };
+  {MessageTraits<T>::descriptor()};
+  {sample.schema_version};
 };
 
 }  // namespace heslam::runtime

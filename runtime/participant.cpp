@@ -84,9 +84,7 @@ Participant::~Participant() {
 }
 
 Participant::Participant(Participant&& other) noexcept
-    : domain_(std::move(other.domain_)),
-      handle_(std::exchange(other.handle_, 0)),
-      domain_id_(other.domain_id_) {}
+    : domain_(std::move(other.domain_)), handle_(std::exchange(other.handle_, 0)), domain_id_(other.domain_id_) {}
 
 Participant& Participant::operator=(Participant&& other) noexcept {
   if (this != &other) {

@@ -164,8 +164,8 @@ Qos& Qos::volatile_durability() {
 
 Qos& Qos::transient_local(int32_t replay_depth) {
   dds_qset_durability(qos_, DDS_DURABILITY_TRANSIENT_LOCAL);
-  dds_qset_durability_service(qos_, 0, DDS_HISTORY_KEEP_LAST, replay_depth, DDS_LENGTH_UNLIMITED,
-                              DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
+  dds_qset_durability_service(qos_, 0, DDS_HISTORY_KEEP_LAST, replay_depth, DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED,
+                              DDS_LENGTH_UNLIMITED);
   return *this;
 }
 

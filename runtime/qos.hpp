@@ -12,15 +12,15 @@
 namespace heslam::runtime {
 
 enum class QosRole {
-  kImages,        // reliable, volatile, KEEP_LAST(4), 100 ms max blocking: a slow reader drops frames
-  kCalibration,   // reliable, transient-local, KEEP_LAST(1): late joiners get the current calibration
-  kOdometry,      // reliable, transient-local, KEEP_LAST(1200): a stalled recorder catches up; never blocks
-  kKeyframes,     // keyed, reliable, transient-local, KEEP_LAST(1) per instance (one version per id)
-  kMapState,      // keyed, reliable, transient-local, KEEP_LAST(1) per instance; deletions are disposes
-  kCorrections,   // reliable, transient-local, KEEP_ALL + durability_service KEEP_LAST(100), 100 ms blocking
-  kLockstep,      // reliable, volatile, KEEP_LAST(64): acknowledgements are tiny and must not be lost
-  kStatus,        // keyed by name, reliable, volatile, KEEP_LAST(1), liveliness automatic 2 s
-  kSpy,           // readers only: best effort, KEEP_LAST(1), volatile — tapping never slows writers
+  kImages,       // reliable, volatile, KEEP_LAST(4), 100 ms max blocking: a slow reader drops frames
+  kCalibration,  // reliable, transient-local, KEEP_LAST(1): late joiners get the current calibration
+  kOdometry,     // reliable, transient-local, KEEP_LAST(1200): a stalled recorder catches up; never blocks
+  kKeyframes,    // keyed, reliable, transient-local, KEEP_LAST(1) per instance (one version per id)
+  kMapState,     // keyed, reliable, transient-local, KEEP_LAST(1) per instance; deletions are disposes
+  kCorrections,  // reliable, transient-local, KEEP_ALL + durability_service KEEP_LAST(100), 100 ms blocking
+  kLockstep,     // reliable, volatile, KEEP_LAST(64): acknowledgements are tiny and must not be lost
+  kStatus,       // keyed by name, reliable, volatile, KEEP_LAST(1), liveliness automatic 2 s
+  kSpy,          // readers only: best effort, KEEP_LAST(1), volatile — tapping never slows writers
 };
 
 std::string_view to_string(QosRole role);

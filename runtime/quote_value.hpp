@@ -17,7 +17,7 @@ inline std::string quote_value(std::string_view text, std::size_t max_chars = 80
   while (i < text.size() && chars < max_chars) {
     const auto byte = static_cast<unsigned char>(text[i]);
     // The length of a valid UTF-8 sequence starting here (0: not one).
-    std::size_t length = byte < 0x80           ? 1
+    std::size_t length = byte < 0x80             ? 1
                          : (byte & 0xE0) == 0xC0 ? 2
                          : (byte & 0xF0) == 0xE0 ? 3
                          : (byte & 0xF8) == 0xF0 ? 4

@@ -71,7 +71,8 @@ class Reader {
       received.info.publication_handle = info.publication_handle;
       received.info.instance_handle = info.instance_handle;
       if (info.valid_data && received.sample->schema_version != msg::kSchemaVersion) {
-        if (schema_mismatches_++ == 0) std::cerr << schema_mismatch_message(name(), received.sample->schema_version) << "\n";
+        if (schema_mismatches_++ == 0)
+          std::cerr << schema_mismatch_message(name(), received.sample->schema_version) << "\n";
         continue;
       }
       return true;
@@ -82,9 +83,10 @@ class Reader {
   // For work that should yield to new input, e.g. a real-time bundle adjustment.
   bool has_unread() {
     if (!unread_condition_) {
-      unread_condition_ = Entity(check_dds(
-          dds_create_readcondition(entity_.get(), DDS_NOT_READ_SAMPLE_STATE | DDS_ANY_VIEW_STATE | DDS_ANY_INSTANCE_STATE),
-          "topic '" + name() + "': cannot create read condition"));
+      unread_condition_ =
+          Entity(check_dds(dds_create_readcondition(
+                               entity_.get(), DDS_NOT_READ_SAMPLE_STATE | DDS_ANY_VIEW_STATE | DDS_ANY_INSTANCE_STATE),
+                           "topic '" + name() + "': cannot create read condition"));
     }
     return check_dds(dds_triggered(unread_condition_.get()), "topic '" + name() + "': read condition") > 0;
   }

@@ -34,13 +34,14 @@ class RoleBinding {
   enum class Claim { kAccepted, kHeld, kRefused };
 
   // `topic`: the name the lines and the per-topic counter use.
-  RoleBinding(const Logger& log, Stats& stats, std::string topic) : log_(log), stats_(stats), topic_(std::move(topic)) {}
+  RoleBinding(const Logger& log, Stats& stats, std::string topic)
+      : log_(log), stats_(stats), topic_(std::move(topic)) {}
 
-  // A data sample of `writer` (read by `reader`, asked whether writers are still matched) that claims `role` (e.g. "frontend", or "mapper" for any mapper name).
-  // `again`: a held sample asked about once more (never proof that its writer is alive now).
-  // `subject`: what the sample acknowledges (a frame seq, a keyframe id): a claimant that acknowledges
-  // what the bound writer acknowledged, before the caller is done() with it, while that one is
-  // matched is a conflict at once (a forger that acknowledged first, the real one after it).
+  // A data sample of `writer` (read by `reader`, asked whether writers are still matched) that claims `role` (e.g.
+  // "frontend", or "mapper" for any mapper name). `again`: a held sample asked about once more (never proof that its
+  // writer is alive now). `subject`: what the sample acknowledges (a frame seq, a keyframe id): a claimant that
+  // acknowledges what the bound writer acknowledged, before the caller is done() with it, while that one is matched is
+  // a conflict at once (a forger that acknowledged first, the real one after it).
   Claim claim(dds_entity_t reader, const std::string& role, dds_instance_handle_t writer, std::uint64_t subject,
               bool again = false) {
     Role& bound = roles_[role];
@@ -90,8 +91,8 @@ class RoleBinding {
 
   struct Role {
     dds_instance_handle_t owner = 0;
-    std::set<std::uint64_t> subjects;                         // the owner's, recent
-    std::deque<std::uint64_t> subject_order;                  // to forget the oldest
+    std::set<std::uint64_t> subjects;                          // the owner's, recent
+    std::deque<std::uint64_t> subject_order;                   // to forget the oldest
     std::map<dds_instance_handle_t, std::uint64_t> claimants;  // wrote while the owner was matched, not yet judged
     std::set<dds_instance_handle_t> refused;
   };

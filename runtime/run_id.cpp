@@ -26,7 +26,8 @@ std::string run_id_of(pid_t pid) {
   const std::size_t close = text.rfind(')');
   std::istringstream fields(close == std::string::npos ? std::string() : text.substr(close + 1));
   std::string field;
-  for (int index = 3; index <= kStatStartTimeField && fields >> field; ++index) {}
+  for (int index = 3; index <= kStatStartTimeField && fields >> field; ++index) {
+  }
   return std::to_string(pid) + ":" + field;
 }
 

@@ -31,7 +31,7 @@ namespace heslam::runtime {
 class RunJournal {
  public:
   struct Contents {
-    bool same_run = false;            // the file was this run's; otherwise it is now an empty one of this run
+    bool same_run = false;             // the file was this run's; otherwise it is now an empty one of this run
     bool other_file_replaced = false;  // a file of another run or format was there (and is replaced)
     std::vector<std::string> records;  // the trusted records, in order
     int torn_lines = 0;                // an incomplete last line (a kill mid-write), cut off

@@ -36,10 +36,10 @@ class Sample {
 
 // What DDS says about a taken sample besides its data.
 struct SampleInfo {
-  bool valid_data = false;        // false: only the key fields are set (a dispose / unregister notice)
-  bool disposed = false;          // the instance was disposed (a deleted keyframe / point)
-  bool no_writers = false;        // the instance's writers are gone (writer died or unregistered)
-  std::int64_t source_stamp_ns = 0;  // the writer's write time (CLOCK_REALTIME)
+  bool valid_data = false;                       // false: only the key fields are set (a dispose / unregister notice)
+  bool disposed = false;                         // the instance was disposed (a deleted keyframe / point)
+  bool no_writers = false;                       // the instance's writers are gone (writer died or unregistered)
+  std::int64_t source_stamp_ns = 0;              // the writer's write time (CLOCK_REALTIME)
   dds_instance_handle_t publication_handle = 0;  // which writer sent it
   dds_instance_handle_t instance_handle = 0;     // which instance (key value) of a keyed topic
 };

@@ -46,7 +46,7 @@ SecurityFiles security_files(const std::filesystem::path& dir, const std::string
 
 SecurityFiles security_files(const std::filesystem::path& identity_dir) {
   std::filesystem::path normal = std::filesystem::absolute(identity_dir).lexically_normal();
-  if (!normal.has_filename()) normal = normal.parent_path();  // "DIR/identities/NAME/"
+  if (!normal.has_filename()) normal = normal.parent_path();              // "DIR/identities/NAME/"
   const std::filesystem::path root = normal.parent_path().parent_path();  // DIR/identities/NAME -> DIR
   return SecurityFiles{root / "ca" / "identity_ca.pem", root / "ca" / "permissions_ca.pem",
                        root / "governance.p7s",         identity_dir / "cert.pem",
@@ -83,8 +83,7 @@ std::string security_config_xml(const SecurityFiles& files) {
          "</Governance><Permissions>" + file_uri(files.permissions) +
          "</Permissions></AccessControl>"
          "<Cryptographic>" +
-         library("crypto", "init_crypto", "finalize_crypto") +
-         "</Cryptographic></Security></Domain></CycloneDDS>";
+         library("crypto", "init_crypto", "finalize_crypto") + "</Cryptographic></Security></Domain></CycloneDDS>";
 }
 
 }  // namespace heslam::runtime

@@ -22,12 +22,12 @@ std::filesystem::path security_identity_from_env();
 
 // The folders and files of a secure run made by heslam-security (layout above).
 struct SecurityFiles {
-  std::filesystem::path identity_ca;      // DIR/ca/identity_ca.pem
-  std::filesystem::path permissions_ca;   // DIR/ca/permissions_ca.pem
-  std::filesystem::path governance;       // DIR/governance.p7s (signed)
-  std::filesystem::path certificate;      // DIR/identities/NAME/cert.pem
-  std::filesystem::path private_key;      // DIR/identities/NAME/key.pem
-  std::filesystem::path permissions;      // DIR/identities/NAME/permissions.p7s (signed)
+  std::filesystem::path identity_ca;     // DIR/ca/identity_ca.pem
+  std::filesystem::path permissions_ca;  // DIR/ca/permissions_ca.pem
+  std::filesystem::path governance;      // DIR/governance.p7s (signed)
+  std::filesystem::path certificate;     // DIR/identities/NAME/cert.pem
+  std::filesystem::path private_key;     // DIR/identities/NAME/key.pem
+  std::filesystem::path permissions;     // DIR/identities/NAME/permissions.p7s (signed)
 };
 
 // The files of identity `name` under the security folder `dir`.

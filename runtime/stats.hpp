@@ -31,7 +31,8 @@ class Stats {
     ScopedTimer(Stats& stats, std::string stage)
         : stats_(stats), stage_(std::move(stage)), start_(std::chrono::steady_clock::now()) {}
     ~ScopedTimer() {
-      stats_.record_ms(stage_, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count());
+      stats_.record_ms(stage_,
+                       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count());
     }
     ScopedTimer(const ScopedTimer&) = delete;
     ScopedTimer& operator=(const ScopedTimer&) = delete;

@@ -16,9 +16,9 @@ class Topic {
   // Throws std::runtime_error naming the topic when DDS refuses (e.g. same name, different type).
   Topic(const Participant& participant, const TopicSpec<T>& spec)
       : spec_(spec),
-        entity_(check_dds(dds_create_topic(participant.handle(), MessageTraits<T>::descriptor(), spec.name.c_str(),
-                                           nullptr, nullptr),
-                          "topic '" + spec.name + "': cannot create")) {}
+        entity_(check_dds(
+            dds_create_topic(participant.handle(), MessageTraits<T>::descriptor(), spec.name.c_str(), nullptr, nullptr),
+            "topic '" + spec.name + "': cannot create")) {}
 
   dds_entity_t handle() const { return entity_.get(); }
   const TopicSpec<T>& spec() const { return spec_; }

@@ -18,8 +18,7 @@ namespace heslam::runtime {
 
 // The integer an IDL enum field holds, whatever it is (no load through the enum type).
 template <typename Enum>
-  requires std::is_enum_v<Enum>
-std::int64_t wire_value(const Enum& field) {
+requires std::is_enum_v<Enum> std::int64_t wire_value(const Enum& field) {
   std::underlying_type_t<Enum> raw;
   std::memcpy(&raw, &field, sizeof raw);
   return static_cast<std::int64_t>(raw);
@@ -28,7 +27,7 @@ std::int64_t wire_value(const Enum& field) {
 // Stores `value` into an IDL enum field as the wire would (a parsed journal or file field, or a test
 // making a hostile sample); check it with wire_value before using the field as the enum.
 template <typename Enum>
-  requires std::is_enum_v<Enum>
+requires std::is_enum_v<Enum>
 void set_wire_value(Enum& field, std::int64_t value) {
   const auto raw = static_cast<std::underlying_type_t<Enum>>(value);
   std::memcpy(&field, &raw, sizeof raw);
@@ -36,7 +35,7 @@ void set_wire_value(Enum& field, std::int64_t value) {
 
 // True when the field holds one of `enumerators`.
 template <typename Enum, typename... Enumerators>
-  requires std::is_enum_v<Enum>
+requires std::is_enum_v<Enum>
 bool wire_value_is_one_of(const Enum& field, Enumerators... enumerators) {
   const std::int64_t value = wire_value(field);
   return ((value == static_cast<std::int64_t>(enumerators)) || ...);

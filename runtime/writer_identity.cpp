@@ -61,7 +61,8 @@ std::optional<std::string> writer_run_id(dds_entity_t reader, dds_instance_handl
   if (!endpoint) return std::nullopt;
   void* value = nullptr;
   size_t size = 0;
-  if (endpoint->qos == nullptr || !dds_qget_userdata(endpoint->qos, &value, &size) || value == nullptr) return std::string();
+  if (endpoint->qos == nullptr || !dds_qget_userdata(endpoint->qos, &value, &size) || value == nullptr)
+    return std::string();
   const std::string_view user_data(static_cast<const char*>(value), size);
   std::string run_id;
   if (user_data.starts_with(kRunUserDataPrefix)) run_id = std::string(user_data.substr(kRunUserDataPrefix.size()));

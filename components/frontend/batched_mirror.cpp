@@ -53,7 +53,8 @@ void BatchedMirror::add(const msg::MapPointState& state) {
   copy.sample = state;
   const auto observations = runtime::view(state.observations);
   copy.observations.assign(observations.begin(), observations.end());
-  for (const msg::PointObservation& observation : observations) note_id(largest_keyframe_counter_, observation.keyframe_id);
+  for (const msg::PointObservation& observation : observations)
+    note_id(largest_keyframe_counter_, observation.keyframe_id);
   copy.sample.observations = {};
   copy.disposed_after = false;
 }
@@ -121,7 +122,8 @@ BatchedMirror::Applied BatchedMirror::apply(Map& map) {
   // mapper's does whatever the ids' order, and the applied map no longer depends on it.
   std::map<PointId, PointId> merged_into;
   for (const auto& [id, copy] : point_states_) {
-    if (copy.sample.map_version <= complete && copy.sample.merged_into != kNoId) merged_into.emplace(id, copy.sample.merged_into);
+    if (copy.sample.map_version <= complete && copy.sample.merged_into != kNoId)
+      merged_into.emplace(id, copy.sample.merged_into);
   }
   const auto final_target = [&](PointId into) {
     for (std::size_t hops = 0; hops < merged_into.size(); ++hops) {
@@ -158,7 +160,8 @@ void BatchedMirror::move_keyframes_in_flight(Map& map, const std::map<KeyframeId
   std::map<KeyframeId, Pose3> moved;
   for (const auto& [id, T_old] : old_T_wc) {
     const Keyframe* keyframe = map.keyframe(id);
-    if (keyframe != nullptr && keyframe->T_wc.matrix() != T_old.matrix()) moved.emplace(id, keyframe->T_wc * T_old.inverse());
+    if (keyframe != nullptr && keyframe->T_wc.matrix() != T_old.matrix())
+      moved.emplace(id, keyframe->T_wc * T_old.inverse());
   }
   // Id order is creation order: a keyframe tracked against another one in flight follows it.
   for (const auto& [id, in_flight] : in_flight_) {

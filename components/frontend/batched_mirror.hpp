@@ -32,8 +32,8 @@ class BatchedMirror {
     int keyframe_states = 0;
     int unknown_keyframe_states = 0;  // for keyframes this map does not hold (ignored)
     int point_states = 0;
-    bool correction = false;          // a loop correction's batch was among them
-    int keyframes_moved = 0;          // own keyframes in flight moved with their reference
+    bool correction = false;  // a loop correction's batch was among them
+    int keyframes_moved = 0;  // own keyframes in flight moved with their reference
   };
 
   // Samples as taken from the readers (markers included); copied.
@@ -78,17 +78,17 @@ class BatchedMirror {
     std::uint64_t tracked_map_version = 0;
   };
 
-  void move_keyframes_in_flight(Map& map, const std::map<KeyframeId, Pose3>& old_T_wc,
-                                std::uint64_t correction_version, Applied& applied);
+  void move_keyframes_in_flight(Map& map, const std::map<KeyframeId, Pose3>& old_T_wc, std::uint64_t correction_version,
+                                Applied& applied);
 
   messages::MirrorVersion version_;
-  messages::MirrorVersion markers_;                  // taken since the last apply
-  std::set<std::uint64_t> correction_versions_;      // marked, not yet applied
-  std::set<std::uint64_t> applied_corrections_;      // versions applied as corrections
+  messages::MirrorVersion markers_;              // taken since the last apply
+  std::set<std::uint64_t> correction_versions_;  // marked, not yet applied
+  std::set<std::uint64_t> applied_corrections_;  // versions applied as corrections
   std::map<KeyframeId, KeyframeStateCopy> keyframe_states_;
   std::map<PointId, PointStateCopy> point_states_;
-  std::set<PointId> pending_disposes_;               // disposes of points with no state waiting
-  std::map<KeyframeId, InFlight> in_flight_;         // own keyframes without a mapper state yet
+  std::set<PointId> pending_disposes_;                              // disposes of points with no state waiting
+  std::map<KeyframeId, InFlight> in_flight_;                        // own keyframes without a mapper state yet
   std::map<std::uint8_t, std::uint64_t> largest_keyframe_counter_;  // by creator tag, over every id seen
   std::map<std::uint8_t, std::uint64_t> largest_point_counter_;
 };

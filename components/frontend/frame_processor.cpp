@@ -37,7 +37,8 @@ FrameOutput FrameProcessor::process(std::int64_t stamp_ns, std::uint64_t seq, co
     if (image->size() != raw) {
       throw std::runtime_error("stereo frame " + std::to_string(seq) + ": " + side + " image is " +
                                std::to_string(image->cols) + "x" + std::to_string(image->rows) +
-                               ", the calibration expects " + std::to_string(raw.width) + "x" + std::to_string(raw.height));
+                               ", the calibration expects " + std::to_string(raw.width) + "x" +
+                               std::to_string(raw.height));
     }
   }
   // Each image rectified on its own thread of the feature pipeline's pair, which goes on with it

@@ -52,9 +52,9 @@ constexpr std::size_t kHeldCalibrations = 4;
 // still counts as matched.
 constexpr std::size_t kMaxHeldKeyframeDone = 64;
 // Counters of samples refused from the topics' writers or from other participants (log_rejections).
-constexpr const char* kRejectionCounters[] = {"rejected_calibrations", "refused_calibrations", "rejected_keyframe_states",
-                                             "rejected_points", runtime::kSecondWriterSamples, runtime::kSecondWriters,
-                                             runtime::kOtherRunWriters};
+constexpr const char* kRejectionCounters[] = {
+    "rejected_calibrations",       "refused_calibrations",  "rejected_keyframe_states", "rejected_points",
+    runtime::kSecondWriterSamples, runtime::kSecondWriters, runtime::kOtherRunWriters};
 
 bool same_camera(const PinholeStereo& a, const PinholeStereo& b) {
   return std::abs(a.fx_px - b.fx_px) < kCameraTolerance && std::abs(a.fy_px - b.fy_px) < kCameraTolerance &&
@@ -75,16 +75,17 @@ std::uint64_t peak_resident_bytes() {
 
 // One summary line per stage, in pipeline order: the per-frame breakdown of the run.
 void log_stage_summary(const runtime::Logger& log, const runtime::Stats& stats) {
-  static const char* const kOrder[] = {"rectify", "he", "extract", "stereo", "features", "track_initial",
-                                       "track_local_map", "track_keyframe", "track", "cpu", "total"};
+  static const char* const kOrder[] = {
+      "rectify",        "he",    "extract", "stereo", "features", "track_initial", "track_local_map",
+      "track_keyframe", "track", "cpu",     "total"};
   const std::vector<runtime::StageSummary> stages = stats.stages();
   for (const char* name : kOrder) {
     for (const runtime::StageSummary& stage : stages) {
       if (stage.name != name) continue;
       std::ostringstream line;
-      line << std::fixed << std::setprecision(2) << "stage " << std::left << std::setw(16) << stage.name
-           << " median " << std::right << std::setw(7) << stage.p50_ms << " ms  p90 " << std::setw(7) << stage.p90_ms
-           << " ms  max " << std::setw(7) << stage.max_ms << " ms  (" << stage.count << " frames)";
+      line << std::fixed << std::setprecision(2) << "stage " << std::left << std::setw(16) << stage.name << " median "
+           << std::right << std::setw(7) << stage.p50_ms << " ms  p90 " << std::setw(7) << stage.p90_ms << " ms  max "
+           << std::setw(7) << stage.max_ms << " ms  (" << stage.count << " frames)";
       log.info(line.str());
     }
   }
@@ -128,7 +129,8 @@ void Frontend::configure(const runtime::Config& config) {
   keyframe_writer_.emplace(participant(), topics().keyframes());
   frame_done_writer_.emplace(participant(), topics().frame_done());
   resume_from_journal();
-  log().info("settings ", options_.settings_file.empty() ? std::string("(built-in defaults)") : options_.settings_file.string(),
+  log().info("settings ",
+             options_.settings_file.empty() ? std::string("(built-in defaults)") : options_.settings_file.string(),
              ": ", describe_settings(options_.features, options_.tracker));
   if (!options_.settings_unused_keys.empty()) {
     std::string keys;
@@ -144,7 +146,8 @@ void Frontend::configure(const runtime::Config& config) {
   if (options_.localize && !std::filesystem::exists(options_.mapper_map_file, no_file)) {
     // The mapper (started before us) writes the saved map there at its start: without it there is
     // nothing to localize in, and tracking would silently start a new map.
-    throw std::runtime_error("--localize: no saved map: the local mapper's map file " + options_.mapper_map_file.string() +
+    throw std::runtime_error("--localize: no saved map: the local mapper's map file " +
+                             options_.mapper_map_file.string() +
                              " does not exist (start the mapper with --load-map FILE)");
   }
   if (options_.vocabulary) {
@@ -185,8 +188,7 @@ void Frontend::resume_from_journal() {
     if (!last_seq_ || odometry.seq > *last_seq_) resumed_unfinished_seqs_.insert(odometry.seq);
   }
   log().info("resuming after frame ", last_seq_ ? std::to_string(*last_seq_) : std::string("none"), ": ",
-             resumed.frames.size(), " frames from ",
-             journal_->path().string(),
+             resumed.frames.size(), " frames from ", journal_->path().string(),
              resumed.torn_lines > 0 ? " (" + std::to_string(resumed.torn_lines) + " torn lines skipped)" : "",
              "; their odometry published again");
 }
@@ -213,7 +215,8 @@ void Frontend::run() {
   log().info("processed ", count("frames"), " frames (", count("lost"), " lost, ", count("bad_frames"), " bad), ",
              count("keyframes"), " keyframes");
   if (count("frames_already_processed") > 0) {
-    log().info(count("frames_already_processed"), " frames published again were acknowledged without tracking them twice");
+    log().info(count("frames_already_processed"),
+               " frames published again were acknowledged without tracking them twice");
   }
   if (count("frames_missed") > 0) {
     log().warn(count("frames_missed"), " frames missed: published while this frontend was busy, only the newest kept");
@@ -221,8 +224,8 @@ void Frontend::run() {
   log_stage_summary(log(), stats());
   if (options_.localize && !relocalized_at_seq_) {
     // A localization run that never found itself in the map has no pose at all: a failure.
-    throw std::runtime_error("never relocalized in the saved map (" + options_.mapper_map_file.string() + "): " +
-                             std::to_string(count("frames")) + " frames, none tracked");
+    throw std::runtime_error("never relocalized in the saved map (" + options_.mapper_map_file.string() +
+                             "): " + std::to_string(count("frames")) + " frames, none tracked");
   }
 }
 
@@ -234,10 +237,11 @@ void Frontend::take_calibration() {
     if (processor_ && calibration_camera_ && same_camera(*calibration_camera_, announced)) continue;
     if (processor_ && received.info.publication_handle != calibration_writer_) {
       stats().count("refused_calibrations");
-      log().error("topic '", calibration_reader_->name(), "': refused a different calibration ('",
-                  runtime::to_string(message.source), "', fx ", announced.fx_px, " px, baseline ", announced.baseline_m,
-                  " m) from ", runtime::describe_writer(calibration_reader_->handle(), received.info.publication_handle),
-                  ": only the writer the run started with may change the calibration (counted as refused_calibrations)");
+      log().error(
+          "topic '", calibration_reader_->name(), "': refused a different calibration ('",
+          runtime::to_string(message.source), "', fx ", announced.fx_px, " px, baseline ", announced.baseline_m,
+          " m) from ", runtime::describe_writer(calibration_reader_->handle(), received.info.publication_handle),
+          ": only the writer the run started with may change the calibration (counted as refused_calibrations)");
       continue;
     }
     try {
@@ -255,8 +259,8 @@ void Frontend::take_calibration() {
       if (options_.mapper_enabled) resume_in_mapper_map();
       const PinholeStereo& camera = processor_->camera();
       warn_if_settings_disagree(camera);
-      log().info("calibration '", calibration.source, "': rectified ", camera.width_px, "x", camera.height_px,
-                 ", fx ", camera.fx_px, " px, baseline ", camera.baseline_m, " m");
+      log().info("calibration '", calibration.source, "': rectified ", camera.width_px, "x", camera.height_px, ", fx ",
+                 camera.fx_px, " px, baseline ", camera.baseline_m, " m");
     } catch (const std::exception& error) {
       stats().count("bad_calibrations");
       log().error(error.what());
@@ -339,8 +343,8 @@ void Frontend::resume_in_mapper_map() {
   if (tracker.resume_in_map(journal_last_pose_)) {
     stats().count("resumed_in_map");
     log().info("resuming in the local mapper's map (", tracker.local_map().keyframes.size(), " keyframes, ",
-               tracker.local_map().points.size(), " points): ",
-               journal_last_pose_ ? "tracking on from the last journaled pose" : "relocalizing",
+               tracker.local_map().points.size(),
+               " points): ", journal_last_pose_ ? "tracking on from the last journaled pose" : "relocalizing",
                " instead of starting a new map");
   }
 }
@@ -473,14 +477,14 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
   if (resumed_unfinished_seqs_.erase(frame.seq) == 0) stats().count(runtime::kOdometryFrames);
   if (journal_ && result.new_keyframe) journal_->append(odometry.get(), /*finished=*/false);
   log().debug("frame ", frame.seq, ": ", to_string(result.state), " (", to_string(result.method), "), ",
-              result.tracked_points, " points, ", output.keypoints, " keypoints (", output.stereo_keypoints, " stereo), ",
-              output.timings.back().ms, " ms");
+              result.tracked_points, " points, ", output.keypoints, " keypoints (", output.stereo_keypoints,
+              " stereo), ", output.timings.back().ms, " ms");
 
   if (result.new_keyframe && options_.wait_for_mapper && !wait_for_keyframe_done(result.new_keyframe->id)) {
     stats().count("mapper_timeouts");
     log().warn_throttled("mapper_timeouts", "keyframe ", result.new_keyframe->id, ": no KeyframeDone from the mapper",
-               options_.loop_closers.empty() ? "" : " and the loop closer", " within ",
-               options_.mapper_timeout.count(), " ms; going on without it");
+                         options_.loop_closers.empty() ? "" : " and the loop closer", " within ",
+                         options_.mapper_timeout.count(), " ms; going on without it");
   }
   // Journaled before the acknowledgement: killed in between, the restarted process acknowledges
   // the frame the replay sends again instead of tracking it twice.
@@ -509,8 +513,12 @@ void Frontend::mirror_map_state() {
     }
     // Each component name is a role of its own (the mapper, each loop closer, awaited or not).
     const std::string component = received.sample->component == nullptr ? "" : received.sample->component;
-    HeldKeyframeDone done{received.info.publication_handle, component, component, received.sample->keyframe_id,
-                          received.sample->map_version, received.sample->correction_id};
+    HeldKeyframeDone done{received.info.publication_handle,
+                          component,
+                          component,
+                          received.sample->keyframe_id,
+                          received.sample->map_version,
+                          received.sample->correction_id};
     switch (keyframe_done_roles_->claim(keyframe_done_reader_->handle(), done.role, done.writer, done.keyframe_id)) {
       case runtime::RoleBinding::Claim::kAccepted: use_keyframe_done(done); break;
       case runtime::RoleBinding::Claim::kHeld:
@@ -630,7 +638,8 @@ bool Frontend::keyframe_acknowledged(KeyframeId id) const {
   // The mapper: any component that is not an awaited loop closer (its name is the pipeline's).
   bool mapper_done = false;
   for (const std::string& component : it->second) {
-    if (std::find(options_.loop_closers.begin(), options_.loop_closers.end(), component) == options_.loop_closers.end()) {
+    if (std::find(options_.loop_closers.begin(), options_.loop_closers.end(), component) ==
+        options_.loop_closers.end()) {
       mapper_done = true;
     }
   }

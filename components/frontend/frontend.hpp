@@ -15,8 +15,8 @@
 #include "components/frontend/batched_mirror.hpp"
 #include "components/frontend/frame_processor.hpp"
 #include "components/frontend/frontend_options.hpp"
-#include "runtime/checked_reader.hpp"
 #include "components/frontend/odometry_journal.hpp"
+#include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
 #include "runtime/role_binding.hpp"
 

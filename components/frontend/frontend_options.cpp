@@ -53,17 +53,20 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
   std::string loop_closer = config.get_string("lockstep.loop_closer", "none");
   const std::string loop_closer_name = config.get_string("lockstep.loop_closer_name", "loop_closer");
   runtime::Flags flags("heslam-frontend [options]");
-  flags.custom("--settings", "FILE", "ORB-SLAM2 settings file (empty: the config's settings.file)",
-               [&options](const std::string& value) {
-                 if (!value.empty()) options.settings_file = value;
-               })
+  flags
+      .custom("--settings", "FILE", "ORB-SLAM2 settings file (empty: the config's settings.file)",
+              [&options](const std::string& value) {
+                if (!value.empty()) options.settings_file = value;
+              })
       .path("--mapper-map-file", "FILE", &options.mapper_map_file, "the local mapper's map file (mapper.map_file)")
       .path("--journal", "FILE", &options.journal_file, "the odometry journal (journal.file)")
-      .text("--loop-closer", "EXECUTABLE|none", &loop_closer, "the loop closer of a lockstep run (lockstep.loop_closer)")
+      .text("--loop-closer", "EXECUTABLE|none", &loop_closer,
+            "the loop closer of a lockstep run (lockstep.loop_closer)")
       .toggle("--localize", &options.localize, "track against the saved map of --mapper-map-file");
   flags.parse(rest);
   if (options.localize && (options.mapper_map_file.empty() || !options.mapper_enabled)) {
-    throw std::runtime_error("--localize: needs the local mapper (mapper.enabled) and its map file (--mapper-map-file FILE)");
+    throw std::runtime_error(
+        "--localize: needs the local mapper (mapper.enabled) and its map file (--mapper-map-file FILE)");
   }
   if (!loop_closer.empty() && loop_closer != "none" && options.wait_for_mapper) {
     options.loop_closers.push_back(loop_closer_name);

@@ -27,7 +27,7 @@ struct FrontendOptions {
   // defaults to 0 (docs/configuration.md).
   std::filesystem::path settings_file;
   std::vector<std::string> settings_unused_keys;  // keys of it nothing reads (warned at start)
-  double settings_camera_fx = 0.0;  // its Camera.fx / Camera.bf, compared with the data's calibration
+  double settings_camera_fx = 0.0;                // its Camera.fx / Camera.bf, compared with the data's calibration
   double settings_camera_bf = 0.0;
   // vocabulary.file: the ORB vocabulary of the tracker's keyframe database (a lost frame is
   // relocalized anywhere in the map). Empty: the build's default vocabulary; "none": no vocabulary

@@ -34,12 +34,13 @@ bool read_record(const std::string& record, msg::Odometry& odometry, bool& finis
   unsigned keypoints = 0, tracked_points = 0;
   std::string rest;
   if (!(fields >> seq >> stamp_ns >> state >> reference) || !read_pose(fields, odometry.T_wc) ||
-      !read_pose(fields, odometry.T_ref_c) || !(fields >> keypoints >> tracked_points >> keyframe_created >> finished_flag) ||
-      fields >> rest) {
+      !read_pose(fields, odometry.T_ref_c) ||
+      !(fields >> keypoints >> tracked_points >> keyframe_created >> finished_flag) || fields >> rest) {
     return false;
   }
   // A state that is no TrackingState is a damaged line (casting it to the enum would be undefined).
-  if (state != heslam_msg_TRACKING_NOT_INITIALIZED && state != heslam_msg_TRACKING_OK && state != heslam_msg_TRACKING_LOST) {
+  if (state != heslam_msg_TRACKING_NOT_INITIALIZED && state != heslam_msg_TRACKING_OK &&
+      state != heslam_msg_TRACKING_LOST) {
     return false;
   }
   odometry.seq = seq;

@@ -9,12 +9,12 @@
 #include <stdexcept>
 #include <string>
 
+#include "components/local_mapper/write_batch.hpp"
 #include "components/messages/camera.hpp"
 #include "components/messages/checks.hpp"
 #include "components/messages/keyframe.hpp"
 #include "components/messages/loop_correction.hpp"
 #include "components/messages/map_state.hpp"
-#include "components/local_mapper/write_batch.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/run_journal.hpp"
 #include "runtime/sequence.hpp"
@@ -33,9 +33,9 @@ constexpr std::size_t kHeldCorrections = 100;
 
 // The per-keyframe stages in pipeline order (status percentiles and the final summary).
 // `*_cpu`: CPU time of the mapper's thread in that stage, the figure to compare on a loaded machine.
-constexpr const char* kStageOrder[] = {"insertion",        "point_culling", "triangulation", "fusion",
-                                       "local_ba",         "local_ba_cpu",  "keyframe_culling", "mapping_total",
-                                       "map_save",         "publish",       "publish_cpu",   "correction"};
+constexpr const char* kStageOrder[] = {"insertion", "point_culling", "triangulation",    "fusion",
+                                       "local_ba",  "local_ba_cpu",  "keyframe_culling", "mapping_total",
+                                       "map_save",  "publish",       "publish_cpu",      "correction"};
 
 // CPU time of the calling thread, milliseconds.
 double thread_cpu_ms() {
@@ -80,11 +80,11 @@ void MapperNode::configure(const runtime::Config& config) {
     };
   }
   load_initial_map();
-  log().info(options_.map_file.empty() ? std::string("no map file (map not persisted)")
-                                       : "map file " + options_.map_file.string() + ", saved every " +
-                                             std::to_string(options_.save_every_keyframes) + " keyframe(s)",
-             options_.real_time ? "; real-time: local BA stops when a new keyframe waits"
-                                : "; local BA always completes");
+  log().info(
+      options_.map_file.empty() ? std::string("no map file (map not persisted)")
+                                : "map file " + options_.map_file.string() + ", saved every " +
+                                      std::to_string(options_.save_every_keyframes) + " keyframe(s)",
+      options_.real_time ? "; real-time: local BA stops when a new keyframe waits" : "; local BA always completes");
 }
 
 void MapperNode::load_initial_map() {
@@ -180,7 +180,8 @@ void MapperNode::take_keyframes() {
     if (!received.info.valid_data) continue;  // a frontend that left: its keyframes stay in the map
     const msg::Keyframe& message = *received.sample;
     try {
-      if (auto problem = messages::check(message)) throw std::runtime_error("topic '" + keyframe_reader_->name() + "': " + *problem);
+      if (auto problem = messages::check(message))
+        throw std::runtime_error("topic '" + keyframe_reader_->name() + "': " + *problem);
       PendingKeyframe keyframe{messages::to_keyframe(message), messages::to_camera(message.camera)};
       if (!(keyframe.camera.fx_px > 0.0) || !(keyframe.camera.baseline_m > 0.0)) {
         throw std::runtime_error("keyframe " + std::to_string(message.id) + ": camera fx " +
@@ -260,8 +261,8 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
   if (const Keyframe* known = map.keyframe(id); known != nullptr) {
     if (known->stamp_ns != keyframe.decoded.keyframe.stamp_ns) {
       stats().count("duplicate_keyframe_ids");
-      log().warn_throttled("duplicate_keyframe_ids", "keyframe ", id, ": id already in the map with stamp ", known->stamp_ns, " ns, received with ",
-                 keyframe.decoded.keyframe.stamp_ns, " ns; ignored");
+      log().warn_throttled("duplicate_keyframe_ids", "keyframe ", id, ": id already in the map with stamp ",
+                           known->stamp_ns, " ns, received with ", keyframe.decoded.keyframe.stamp_ns, " ns; ignored");
       acknowledge(id);
     } else {
       stats().count("keyframes_already_mapped");
@@ -288,15 +289,16 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
   acknowledge(id);
   if (changes.counts.late_keyframes_moved > 0) {
     log().info("keyframe ", id, " was tracked at map version ", keyframe.decoded.tracked_map_version,
-               ", before a correction applied since: moved with its reference keyframe ", keyframe.decoded.reference_kf);
+               ", before a correction applied since: moved with its reference keyframe ",
+               keyframe.decoded.reference_kf);
   }
   log().debug("keyframe ", id, ": ", changes.timings.total_ms, " ms, ", changes.counts.triangulated_points,
               " new points, ", changes.counts.culled_points, " culled points, ", changes.counts.culled_keyframes,
               " culled keyframes, ", changes.changed_points.size(), " points changed; local BA ",
-              changes.counts.bundle_adjustment_free_keyframes, " free + ", changes.counts.bundle_adjustment_fixed_keyframes,
-              " fixed keyframes, ", changes.counts.bundle_adjustment_points, " points, ",
-              changes.counts.bundle_adjustment_observations, " observations, ", changes.timings.bundle_adjustment_cpu_ms,
-              " ms CPU");
+              changes.counts.bundle_adjustment_free_keyframes, " free + ",
+              changes.counts.bundle_adjustment_fixed_keyframes, " fixed keyframes, ",
+              changes.counts.bundle_adjustment_points, " points, ", changes.counts.bundle_adjustment_observations,
+              " observations, ", changes.timings.bundle_adjustment_cpu_ms, " ms CPU");
 }
 
 void MapperNode::apply_corrections() {
@@ -430,11 +432,12 @@ void MapperNode::remember_applied_correction(std::uint64_t id) {
 void MapperNode::log_summary() {
   const auto counters = stats().counters();
   std::ostringstream totals;
-  totals << "mapped " << counter(counters, "keyframes") << " keyframes (" << counter(counters, "keyframes_already_mapped")
-         << " already in the map file, " << counter(counters, "bad_keyframes") << " bad), "
-         << counter(counters, "triangulated_points") << " points triangulated, " << counter(counters, "culled_points")
-         << " culled, " << counter(counters, "culled_keyframes") << " keyframes culled, "
-         << counter(counters, "corrections") << " corrections (" << counter(counters, "late_keyframes_moved")
+  totals << "mapped " << counter(counters, "keyframes") << " keyframes ("
+         << counter(counters, "keyframes_already_mapped") << " already in the map file, "
+         << counter(counters, "bad_keyframes") << " bad), " << counter(counters, "triangulated_points")
+         << " points triangulated, " << counter(counters, "culled_points") << " culled, "
+         << counter(counters, "culled_keyframes") << " keyframes culled, " << counter(counters, "corrections")
+         << " corrections (" << counter(counters, "late_keyframes_moved")
          << " keyframes tracked before one moved into it)";
   if (options_.real_time) totals << "; " << counter(counters, "ba_stopped_early") << " local BAs stopped early";
   log().info(totals.str());
@@ -452,9 +455,9 @@ void MapperNode::log_summary() {
     for (const runtime::StageSummary& stage : stages) {
       if (stage.name != name) continue;
       std::ostringstream line;
-      line << std::fixed << std::setprecision(2) << "stage " << std::left << std::setw(16) << stage.name
-           << " median " << std::right << std::setw(7) << stage.p50_ms << " ms  p90 " << std::setw(7) << stage.p90_ms
-           << " ms  max " << std::setw(7) << stage.max_ms << " ms  (" << stage.count << " keyframes)";
+      line << std::fixed << std::setprecision(2) << "stage " << std::left << std::setw(16) << stage.name << " median "
+           << std::right << std::setw(7) << stage.p50_ms << " ms  p90 " << std::setw(7) << stage.p90_ms << " ms  max "
+           << std::setw(7) << stage.max_ms << " ms  (" << stage.count << " keyframes)";
       log().info(line.str());
     }
   }

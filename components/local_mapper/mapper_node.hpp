@@ -20,8 +20,8 @@
 
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/mapping/local_mapper.hpp"
-#include "components/messages/keyframe.hpp"
 #include "components/local_mapper/mapper_process_options.hpp"
+#include "components/messages/keyframe.hpp"
 #include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
 #include "runtime/run_journal.hpp"
@@ -84,10 +84,10 @@ class MapperNode : public runtime::Component {
   // A loaded map waits here for the first keyframe (which brings the camera the mapper needs).
   std::optional<MapSnapshot> loaded_;
   std::unique_ptr<LocalMapper> mapper_;
-  std::map<KeyframeId, PendingKeyframe> pending_;          // taken, not yet processed; id order
+  std::map<KeyframeId, PendingKeyframe> pending_;  // taken, not yet processed; id order
   std::map<std::uint64_t, LoopCorrection> pending_corrections_;
-  std::set<std::uint64_t> applied_corrections_;            // ids; persisted in run_file_
-  std::optional<runtime::RunJournal> run_file_;            // map_run_file_path(options_.map_file)
+  std::set<std::uint64_t> applied_corrections_;  // ids; persisted in run_file_
+  std::optional<runtime::RunJournal> run_file_;  // map_run_file_path(options_.map_file)
   int unsaved_keyframes_ = 0;
   bool reader_wait_done_ = false;
   MapFileWriteStats last_save_;

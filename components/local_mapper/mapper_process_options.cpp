@@ -36,7 +36,8 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
   m.covisibility.min_shared_points =
       config.get_int("covisibility.min_shared_points", m.covisibility.min_shared_points, 1, kMaxSharedPoints);
   m.enable_triangulation = config.get_bool("triangulation.enabled", m.enable_triangulation);
-  m.triangulation.neighbours = config.get_int("triangulation.neighbours", m.triangulation.neighbours, 1, kMaxNeighbours);
+  m.triangulation.neighbours =
+      config.get_int("triangulation.neighbours", m.triangulation.neighbours, 1, kMaxNeighbours);
   m.enable_fusion = config.get_bool("fusion.enabled", m.enable_fusion);
   m.fusion.neighbours = config.get_int("fusion.neighbours", m.fusion.neighbours, 1, kMaxNeighbours);
   m.enable_bundle_adjustment = config.get_bool("bundle_adjustment.enabled", m.enable_bundle_adjustment);
@@ -44,8 +45,8 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
       "bundle_adjustment.first_pass_iterations", m.bundle_adjustment.first_pass_iterations, 1, kMaxIterations);
   m.bundle_adjustment.second_pass_iterations = config.get_int(
       "bundle_adjustment.second_pass_iterations", m.bundle_adjustment.second_pass_iterations, 0, kMaxIterations);
-  m.bundle_adjustment.disparity_sigma_ratio = config.get_double(
-      "bundle_adjustment.disparity_sigma_ratio", m.bundle_adjustment.disparity_sigma_ratio, 0.01, 100.0);
+  m.bundle_adjustment.disparity_sigma_ratio = config.get_double("bundle_adjustment.disparity_sigma_ratio",
+                                                                m.bundle_adjustment.disparity_sigma_ratio, 0.01, 100.0);
   m.bundle_adjustment.num_threads =
       config.get_int("bundle_adjustment.threads", m.bundle_adjustment.num_threads, 1, kMaxThreads);
   m.enable_keyframe_culling = config.get_bool("keyframe_culling.enabled", m.enable_keyframe_culling);
@@ -54,15 +55,17 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
 
   runtime::Flags flags("heslam-local-mapper [options]");
   flags.path("--map-file", "FILE", &o.map_file, "the map file the mapper publishes from")
-      .custom("--load-map", "FILE", "start from this saved map", [&o](const std::string& value) {
-        o.load_map = value;
-        o.load_map_given_empty = o.load_map.empty();
-      })
+      .custom("--load-map", "FILE", "start from this saved map",
+              [&o](const std::string& value) {
+                o.load_map = value;
+                o.load_map_given_empty = o.load_map.empty();
+              })
       .path("--save-map", "FILE", &o.save_map, "save the map here at the end (\"\": none)");
   flags.parse(rest);
   if (o.load_map_given_empty) {
-    throw std::runtime_error("--load-map: no saved map given (an empty file name; a localize pipeline needs "
-                             "--arg map=FILE, the map an earlier run saved)");
+    throw std::runtime_error(
+        "--load-map: no saved map given (an empty file name; a localize pipeline needs "
+        "--arg map=FILE, the map an earlier run saved)");
   }
   return o;
 }

@@ -45,8 +45,8 @@ struct MapperProcessOptions {
   // per sample.
   bool batch_map_writes = true;
 
-  // Reads the config, then `--map-file FILE` / `--load-map FILE` / `--save-map FILE` from `rest` (the command line wins).
-  // Throws std::runtime_error naming the config file and field, or the bad argument.
+  // Reads the config, then `--map-file FILE` / `--load-map FILE` / `--save-map FILE` from `rest` (the command line
+  // wins). Throws std::runtime_error naming the config file and field, or the bad argument.
   static MapperProcessOptions from_config(const runtime::Config& config, const std::vector<std::string>& rest);
 };
 

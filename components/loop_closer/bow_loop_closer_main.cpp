@@ -19,14 +19,17 @@ class BowLoopCloser final : public LoopCloserNode {
   std::unique_ptr<LoopDetector> make_detector(const runtime::Config& config,
                                               const LoopCloserProcessOptions& options) override {
     BowLoopDetectorOptions detector;
-    detector.min_keyframes_in_map = config.get_int("detection.min_keyframes_in_map", detector.min_keyframes_in_map, 1, 100000);
-    detector.keyframes_after_loop = config.get_int("detection.keyframes_after_loop", detector.keyframes_after_loop, 0, 100000);
+    detector.min_keyframes_in_map =
+        config.get_int("detection.min_keyframes_in_map", detector.min_keyframes_in_map, 1, 100000);
+    detector.keyframes_after_loop =
+        config.get_int("detection.keyframes_after_loop", detector.keyframes_after_loop, 0, 100000);
     detector.consistency_threshold =
         config.get_int("detection.consistency_threshold", detector.consistency_threshold, 0, 1000);
     detector.matching.ratio =
         static_cast<float>(config.get_double("verification.bow_ratio", detector.matching.ratio, 0.1, 1.0));
     const std::string setting = options.vocabulary.string();
-    if (setting == kNoVocabularySetting) throw std::runtime_error("vocabulary.file: the bag-of-words loop closer needs a vocabulary");
+    if (setting == kNoVocabularySetting)
+      throw std::runtime_error("vocabulary.file: the bag-of-words loop closer needs a vocabulary");
     std::shared_ptr<const Vocabulary> vocabulary = load_vocabulary_setting(setting);
     log().info("vocabulary ", describe_vocabulary_setting(setting), ": ", vocabulary->word_count(), " words, k ",
                vocabulary->branching(), ", L ", vocabulary->levels());

@@ -1,10 +1,10 @@
 // A loop closer process's DDS side (see loop_closer_node.hpp).
 #include "components/loop_closer/loop_closer_node.hpp"
 
-#include <cstddef>
-#include <iterator>
 #include <chrono>
+#include <cstddef>
 #include <ctime>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -69,9 +69,10 @@ void LoopCloserNode::configure(const runtime::Config& config) {
   keyframe_done_writer_.emplace(participant(), topics().keyframe_done());
   correction_counter_ = clock_counter_start();
   load_state();
-  log().info("detector ", detector_->name(), ", global BA ",
-             options_.global_bundle_adjustment ? (options_.real_time ? "on (own thread, real time)" : "on (lockstep)") : "off",
-             options_.state_file.empty() ? ", no state file" : ", state file " + options_.state_file.string());
+  log().info(
+      "detector ", detector_->name(), ", global BA ",
+      options_.global_bundle_adjustment ? (options_.real_time ? "on (own thread, real time)" : "on (lockstep)") : "off",
+      options_.state_file.empty() ? ", no state file" : ", state file " + options_.state_file.string());
 }
 
 void LoopCloserNode::run() {
@@ -115,7 +116,8 @@ std::size_t LoopCloserNode::take_all() {
         mirror_.apply_keyframe_state(*received.sample);
       } catch (const std::exception& error) {
         stats().count("bad_keyframe_states");
-        log().warn_throttled("bad_keyframe_states", "topic '", topics().keyframe_states().name, "': ", error.what(), "; skipped");
+        log().warn_throttled("bad_keyframe_states", "topic '", topics().keyframe_states().name, "': ", error.what(),
+                             "; skipped");
       }
     }
     for (auto& received : point_state_reader_->take()) {
@@ -134,7 +136,8 @@ std::size_t LoopCloserNode::take_all() {
         mirror_.apply_point_state(*received.sample);
       } catch (const std::exception& error) {
         stats().count("bad_point_states");
-        log().warn_throttled("bad_point_states", "topic '", topics().map_points().name, "': ", error.what(), "; skipped");
+        log().warn_throttled("bad_point_states", "topic '", topics().map_points().name, "': ", error.what(),
+                             "; skipped");
       }
     }
     taken += batch;
@@ -169,7 +172,8 @@ std::size_t LoopCloserNode::take_all() {
       mapped_[done.keyframe_id] = done.map_version;
     }
   }
-  if (std::ssize(still_held) > kMaxHeldKeyframeDone) still_held.erase(still_held.begin(), still_held.end() - kMaxHeldKeyframeDone);
+  if (std::ssize(still_held) > kMaxHeldKeyframeDone)
+    still_held.erase(still_held.begin(), still_held.end() - kMaxHeldKeyframeDone);
   held_keyframe_done_ = std::move(still_held);
   return taken;
 }
@@ -260,13 +264,15 @@ bool LoopCloserNode::publish_and_wait(LoopCorrection correction) {
   const auto deadline = std::chrono::steady_clock::now() + options_.mapper_timeout;
   for (;;) {
     take_all();
-    if (auto it = corrections_applied_.find(id); it != corrections_applied_.end() && mirror_.map().version >= it->second) {
+    if (auto it = corrections_applied_.find(id);
+        it != corrections_applied_.end() && mirror_.map().version >= it->second) {
       corrections_applied_.erase(it);
       return true;
     }
     const auto now = std::chrono::steady_clock::now();
     if (now >= deadline || shutdown_requested()) break;
-    if (waitset_->wait(std::min<std::chrono::nanoseconds>(kWaitPeriod, deadline - now)) == runtime::Wake::kShutdown) break;
+    if (waitset_->wait(std::min<std::chrono::nanoseconds>(kWaitPeriod, deadline - now)) == runtime::Wake::kShutdown)
+      break;
   }
   if (!shutdown_requested()) {
     stats().count("correction_timeouts");
@@ -348,13 +354,15 @@ void LoopCloserNode::log_summary() {
              " points (map version ", mirror_.map().version, ")");
   log().info("processed ", count("keyframes"), " keyframes: ", count("candidates"), " loop candidates, ",
              count("loops_accepted"), " loops accepted, ", count("loops_rejected"), " rejected, ",
-             count("global_bundle_adjustments"), " global BAs (", count("global_ba_aborted"), " aborted), ", count("correction_timeouts"), " corrections unacknowledged");
-  if (count(runtime::kSecondWriterSamples) + count("bad_keyframes") + count("bad_keyframe_states") + count("bad_point_states") > 0) {
+             count("global_bundle_adjustments"), " global BAs (", count("global_ba_aborted"), " aborted), ",
+             count("correction_timeouts"), " corrections unacknowledged");
+  if (count(runtime::kSecondWriterSamples) + count("bad_keyframes") + count("bad_keyframe_states") +
+          count("bad_point_states") >
+      0) {
     log().warn("samples refused: ", count(runtime::kSecondWriterSamples), " from second writers (",
                count(runtime::kSecondWriters), " writers, ", count(runtime::kOtherRunWriters), " of another run), ",
-               count("bad_keyframes"),
-               " bad keyframes, ", count("bad_keyframe_states"), " bad keyframe states, ", count("bad_point_states"),
-               " bad point states");
+               count("bad_keyframes"), " bad keyframes, ", count("bad_keyframe_states"), " bad keyframe states, ",
+               count("bad_point_states"), " bad point states");
   }
   for (const runtime::StageSummary& stage : stats().stages()) {
     log().info("stage ", stage.name, " median ", stage.p50_ms, " ms, p90 ", stage.p90_ms, " ms, max ", stage.max_ms,

@@ -81,11 +81,11 @@ class LoopCloserNode : public runtime::Component {
 
   std::unique_ptr<LoopDetector> detector_;  // moved into closing_ once the camera is known
   std::unique_ptr<LoopClosing> closing_;
-  BackgroundGlobalBa global_ba_;  // after closing_: stopped before closing_ goes
-  MapMirror mirror_{KeyframeAdmission::kWithMapperState};  // loop closing on mapped keyframes only
-  std::map<KeyframeId, std::uint64_t> mapped_;                 // mapper acknowledged: keyframe -> map version
+  BackgroundGlobalBa global_ba_;                                // after closing_: stopped before closing_ goes
+  MapMirror mirror_{KeyframeAdmission::kWithMapperState};       // loop closing on mapped keyframes only
+  std::map<KeyframeId, std::uint64_t> mapped_;                  // mapper acknowledged: keyframe -> map version
   std::map<std::uint64_t, std::uint64_t> corrections_applied_;  // correction id -> map version after it
-  std::optional<runtime::RunJournal> state_file_;  // with options_.state_file
+  std::optional<runtime::RunJournal> state_file_;               // with options_.state_file
   KeyframeId last_processed_ = kNoId;
   std::uint64_t correction_counter_ = 0;
   std::vector<std::pair<KeyframeId, KeyframeId>> restored_loops_;

@@ -20,11 +20,12 @@ LoopCloserProcessOptions LoopCloserProcessOptions::from_config(const runtime::Co
                                                                const std::vector<std::string>& rest) {
   LoopCloserProcessOptions o;
   LoopClosingOptions& c = o.closing;
-  c.min_candidate_matches = config.get_int("verification.min_candidate_matches", c.min_candidate_matches, 3, kMaxMatches);
+  c.min_candidate_matches =
+      config.get_int("verification.min_candidate_matches", c.min_candidate_matches, 3, kMaxMatches);
   c.min_ransac_inliers = config.get_int("verification.min_ransac_inliers", c.min_ransac_inliers, 3, kMaxMatches);
   c.min_loop_matches = config.get_int("verification.min_loop_matches", c.min_loop_matches, 3, kMaxMatches);
-  c.projection_radius_px =
-      static_cast<float>(config.get_double("verification.projection_radius_px", c.projection_radius_px, 0.5, kMaxPixels));
+  c.projection_radius_px = static_cast<float>(
+      config.get_double("verification.projection_radius_px", c.projection_radius_px, 0.5, kMaxPixels));
   c.max_drift_fraction = config.get_double("verification.max_drift_fraction", c.max_drift_fraction, 0.0, 10.0);
   c.min_drift_allowance_m = config.get_double("verification.min_drift_allowance_m", c.min_drift_allowance_m, 0.0, 1e6);
   c.max_rotation_drift_deg_per_m =

@@ -99,7 +99,8 @@ msg::RectifiedStereoCamera to_message(const PinholeStereo& camera) {
 }
 
 GreyPair to_grey_images(const msg::StereoFrame& frame) {
-  if (auto problem = check(frame)) throw std::runtime_error("stereo frame " + std::to_string(frame.seq) + ": " + *problem);
+  if (auto problem = check(frame))
+    throw std::runtime_error("stereo frame " + std::to_string(frame.seq) + ": " + *problem);
   const int width = static_cast<int>(frame.width_px);
   const int height = static_cast<int>(frame.height_px);
   const int channels = frame.encoding == heslam_msg_ENCODING_BGR8 ? 3 : 1;

@@ -48,9 +48,9 @@ std::optional<std::string> finite_coordinates(const Number* values, int count, c
 }
 
 std::optional<std::string> check_rectified(const msg::RectifiedStereoCamera& camera, const std::string& field) {
-  for (const auto& [value, name] : {std::pair{camera.fx_px, "fx_px"}, std::pair{camera.fy_px, "fy_px"},
-                                    std::pair{camera.cx_px, "cx_px"}, std::pair{camera.cy_px, "cy_px"},
-                                    std::pair{camera.baseline_m, "baseline_m"}}) {
+  for (const auto& [value, name] :
+       {std::pair{camera.fx_px, "fx_px"}, std::pair{camera.fy_px, "fy_px"}, std::pair{camera.cx_px, "cx_px"},
+        std::pair{camera.cy_px, "cy_px"}, std::pair{camera.baseline_m, "baseline_m"}}) {
     if (auto problem = finite(value, field + "." + name)) return problem;
   }
   return std::nullopt;
@@ -114,8 +114,8 @@ std::optional<std::string> check(const msg::StereoFrame& frame) {
   std::string got;
   if (left != expected) got += text("left has ", left);
   if (right != expected) got += text(got.empty() ? "" : ", ", "right has ", right);
-  return text("expected ", expected, " bytes per image for ", frame.width_px, "x", frame.height_px, "x", channels,
-              ", ", got);
+  return text("expected ", expected, " bytes per image for ", frame.width_px, "x", frame.height_px, "x", channels, ", ",
+              got);
 }
 
 std::optional<std::string> check(const msg::StereoCalibration& calibration) {
@@ -146,7 +146,8 @@ std::optional<std::string> check(const msg::Keyframe& keyframe) {
   const std::string name = text("keyframe ", keyframe.id, ": ");
   if (auto problem = check(keyframe.T_wc, "T_wc")) return name + *problem;
   if (auto problem = check_rectified(keyframe.camera, "camera")) return name + *problem;
-  if (!(keyframe.camera.fx_px > 0.0) || !(keyframe.camera.fy_px > 0.0)) return name + "camera focal length is not positive";
+  if (!(keyframe.camera.fx_px > 0.0) || !(keyframe.camera.fy_px > 0.0))
+    return name + "camera focal length is not positive";
   if (keyframe.pyramid_levels < 1 || keyframe.pyramid_levels > kMaxPyramidLevels) {
     return text(name, "pyramid_levels ", keyframe.pyramid_levels, ", expected 1..", kMaxPyramidLevels);
   }
@@ -154,7 +155,8 @@ std::optional<std::string> check(const msg::Keyframe& keyframe) {
     return text(name, "scale_factor ", keyframe.scale_factor, ", expected a finite number >= 1");
   }
   const auto keypoints = runtime::view(keyframe.keypoints);
-  if (keyframe.descriptors._length != keypoints.size() * kDescriptorBytes || keyframe.point_ids._length != keypoints.size()) {
+  if (keyframe.descriptors._length != keypoints.size() * kDescriptorBytes ||
+      keyframe.point_ids._length != keypoints.size()) {
     return text(name, keypoints.size(), " keypoints but ", keyframe.descriptors._length, " descriptor bytes and ",
                 keyframe.point_ids._length, " point ids");
   }
@@ -212,13 +214,15 @@ std::optional<std::string> check(const msg::LoopCorrection& correction) {
   if (auto problem = check(correction.T_matched_loop, "T_matched_loop")) return name + *problem;
   for (const msg::CorrectedKeyframePose& pose : runtime::view(correction.corrected_poses)) {
     if (pose.keyframe_id == 0) return name + "a corrected pose has keyframe id 0";
-    if (auto problem = check(pose.T_wc, "corrected_poses.T_wc")) return text(name, "keyframe ", pose.keyframe_id, ": ", *problem);
+    if (auto problem = check(pose.T_wc, "corrected_poses.T_wc"))
+      return text(name, "keyframe ", pose.keyframe_id, ": ", *problem);
   }
   for (const msg::PointMerge& merge : runtime::view(correction.point_merges)) {
     if (merge.from_id == 0 || merge.into_id == 0) return name + "a point merge has id 0";
   }
   for (const msg::CorrectedPointPosition& point : runtime::view(correction.corrected_points)) {
-    if (auto problem = finite_coordinates(point.position_w_m, 3, text("corrected point ", point.point_id, " position_w_m"))) {
+    if (auto problem =
+            finite_coordinates(point.position_w_m, 3, text("corrected point ", point.point_id, " position_w_m"))) {
       return name + *problem;
     }
   }

@@ -35,8 +35,8 @@ class KeyframeMessage {
 // rebuild a map from the keyframes topic. Throws std::runtime_error when sequence lengths disagree.
 struct DecodedKeyframe {
   Keyframe keyframe;
-  std::vector<MapPoint> new_points;  // position and creating observation only
-  KeyframeId reference_kf = kNoId;   // the keyframe it was tracked against (kNoId: none)
+  std::vector<MapPoint> new_points;       // position and creating observation only
+  KeyframeId reference_kf = kNoId;        // the keyframe it was tracked against (kNoId: none)
   std::uint64_t tracked_map_version = 0;  // the mapper's map version the frontend tracked it in
 };
 DecodedKeyframe to_keyframe(const msg::Keyframe& message);

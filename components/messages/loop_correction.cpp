@@ -25,7 +25,7 @@ LoopCorrectionMessage::LoopCorrectionMessage(const LoopCorrection& correction) {
   runtime::borrow(message_.corrected_poses, poses_);
   runtime::borrow(message_.point_merges, merges_);
   message_.kind = correction.kind == CorrectionKind::kGlobalBundleAdjustment ? heslam_msg_CORRECTION_GLOBAL_BA
-                                                                              : heslam_msg_CORRECTION_LOOP;
+                                                                             : heslam_msg_CORRECTION_LOOP;
   runtime::borrow(message_.corrected_points, points_);
 }
 
@@ -37,7 +37,8 @@ LoopCorrection to_loop_correction(const msg::LoopCorrection& message) {
   correction.loop_kf = message.loop_keyframe_id;
   correction.matched_kf = message.matched_keyframe_id;
   correction.T_matched_loop = to_pose(message.T_matched_loop);
-  if (!correction.T_matched_loop.matrix().allFinite()) throw std::runtime_error(name + ": T_matched_loop is not finite");
+  if (!correction.T_matched_loop.matrix().allFinite())
+    throw std::runtime_error(name + ": T_matched_loop is not finite");
   for (const msg::CorrectedKeyframePose& entry : runtime::view(message.corrected_poses)) {
     const Pose3 T_wc = to_pose(entry.T_wc);
     if (entry.keyframe_id == kNoId || !T_wc.matrix().allFinite()) {
@@ -57,8 +58,8 @@ LoopCorrection to_loop_correction(const msg::LoopCorrection& message) {
   if (!runtime::wire_value_is_one_of(message.kind, heslam_msg_CORRECTION_LOOP, heslam_msg_CORRECTION_GLOBAL_BA)) {
     throw std::runtime_error(name + ": kind " + std::to_string(runtime::wire_value(message.kind)) + " is unknown");
   }
-  correction.kind = message.kind == heslam_msg_CORRECTION_GLOBAL_BA ? CorrectionKind::kGlobalBundleAdjustment
-                                                             : CorrectionKind::kLoop;
+  correction.kind =
+      message.kind == heslam_msg_CORRECTION_GLOBAL_BA ? CorrectionKind::kGlobalBundleAdjustment : CorrectionKind::kLoop;
   for (const msg::CorrectedPointPosition& entry : runtime::view(message.corrected_points)) {
     const Eigen::Vector3d p_w(entry.position_w_m[0], entry.position_w_m[1], entry.position_w_m[2]);
     if (entry.point_id == kNoId || !p_w.allFinite()) {

@@ -21,7 +21,8 @@ bool observes_keyframe(const MapPoint& point, KeyframeId keyframe_id) {
 // out of its range.
 PointId* slot_of(Map& map, KeyframeId keyframe_id, int keypoint_index) {
   Keyframe* keyframe = map.keyframe(keyframe_id);
-  if (keyframe == nullptr || keypoint_index < 0 || static_cast<std::size_t>(keypoint_index) >= keyframe->point_ids.size()) {
+  if (keyframe == nullptr || keypoint_index < 0 ||
+      static_cast<std::size_t>(keypoint_index) >= keyframe->point_ids.size()) {
     return nullptr;
   }
   return &keyframe->point_ids[static_cast<std::size_t>(keypoint_index)];
@@ -124,7 +125,6 @@ bool apply_keyframe_state(Map& map, const msg::KeyframeState& state) {
   }
   keyframe->culled = state.culled;
   return true;  // a culled keyframe stays (flagged) so frames referencing it keep their anchor
-
 }
 
 void apply_point_state(Map& map, const msg::MapPointState& state) {

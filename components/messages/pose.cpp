@@ -19,8 +19,10 @@ Pose3 to_pose(const msg::Pose& pose) {
   Eigen::Quaterniond q(pose.orientation_xyzw[3], pose.orientation_xyzw[0], pose.orientation_xyzw[1],
                        pose.orientation_xyzw[2]);
   const double norm = q.norm();
-  if (!(norm > 0.0)) q = Eigen::Quaterniond::Identity();  // an all-zero pose is "no pose": identity
-  else q.coeffs() /= norm;
+  if (!(norm > 0.0))
+    q = Eigen::Quaterniond::Identity();  // an all-zero pose is "no pose": identity
+  else
+    q.coeffs() /= norm;
   Pose3 T = Pose3::Identity();
   T.linear() = q.toRotationMatrix();
   T.translation() = Eigen::Vector3d(pose.position_m[0], pose.position_m[1], pose.position_m[2]);

@@ -243,8 +243,8 @@ void exec_child(int argc, char** argv) {
   for (int i = 3; i < argc; ++i) args.push_back(argv[i]);
   args.push_back(nullptr);
   execv(argv[2], args.data());
-  const std::string message = std::string("heslam-supervisor: cannot execute ") + argv[2] + ": " +
-                              std::strerror(errno) + "\n";
+  const std::string message =
+      std::string("heslam-supervisor: cannot execute ") + argv[2] + ": " + std::strerror(errno) + "\n";
   [[maybe_unused]] const ssize_t ignored = write(STDERR_FILENO, message.data(), message.size());
   _exit(127);
 }

@@ -8,8 +8,8 @@
 
 #include <sys/types.h>
 
-#include <filesystem>
 #include <cstdint>
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <set>

@@ -33,7 +33,8 @@ constexpr auto kAutoListen = std::chrono::milliseconds(1000);
 std::optional<std::string> run_of(const dds_builtintopic_endpoint_t& endpoint) {
   void* value = nullptr;
   size_t size = 0;
-  if (endpoint.qos == nullptr || !dds_qget_userdata(endpoint.qos, &value, &size) || value == nullptr) return std::nullopt;
+  if (endpoint.qos == nullptr || !dds_qget_userdata(endpoint.qos, &value, &size) || value == nullptr)
+    return std::nullopt;
   const std::string user_data(static_cast<const char*>(value), size);
   dds_free(value);
   if (!user_data.starts_with(runtime::kRunUserDataPrefix)) return std::nullopt;
@@ -51,7 +52,8 @@ bool run_alive_here(const std::string& run) {
   std::istringstream fields(close == std::string::npos ? std::string() : text.substr(close + 1));
   std::string field;
   constexpr int kStartTimeField = 22;  // proc(5), counted from 1; fields 1-2 are before the ')'
-  for (int index = 3; index <= kStartTimeField && fields >> field; ++index) {}
+  for (int index = 3; index <= kStartTimeField && fields >> field; ++index) {
+  }
   return field == run.substr(colon + 1);
 }
 
@@ -78,7 +80,8 @@ std::optional<DomainClaim> DomainClaim::try_claim(int domain_id, const std::stri
     return std::nullopt;
   }
   const std::string pid = std::to_string(getpid());
-  if (::ftruncate(fd, 0) == 0) [[maybe_unused]] const ssize_t written = ::pwrite(fd, pid.data(), pid.size(), 0);
+  if (::ftruncate(fd, 0) == 0) [[maybe_unused]]
+    const ssize_t written = ::pwrite(fd, pid.data(), pid.size(), 0);
   return DomainClaim(fd);
 }
 
@@ -99,7 +102,8 @@ DomainClaim::~DomainClaim() {
 OtherRunWatch::OtherRunWatch(dds_entity_t participant, std::string ns, std::string own_run)
     : prefix_(std::move(ns) + "/"), own_run_(std::move(own_run)) {
   reader_ = dds_create_reader(participant, DDS_BUILTIN_TOPIC_DCPSPUBLICATION, nullptr, nullptr);
-  if (reader_ < 0) throw std::runtime_error(std::string("cannot watch the domain's writers: ") + dds_strretcode(reader_));
+  if (reader_ < 0)
+    throw std::runtime_error(std::string("cannot watch the domain's writers: ") + dds_strretcode(reader_));
   if (dds_get_guid(participant, &own_participant_) != DDS_RETCODE_OK) {
     throw std::runtime_error("cannot watch the domain's writers: no participant GUID");
   }

@@ -58,9 +58,10 @@ runtime::Flags supervisor_flags(Arguments& a) {
       "heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N|auto] [--namespace NAME]\n"
       "                         [--log-dir DIR] [--log-level debug|info|warn|error] [--host NAME | --only a,b]\n"
       "                         [--no-progress] [--security DIR] [--image-transport udp|shm] [--image-domain N]");
-  flags.toggle("--check", &a.check,
-               "validate the pipeline file, every file it references and each heslam program's\n"
-               "arguments and config (the program's own --check); start nothing")
+  flags
+      .toggle("--check", &a.check,
+              "validate the pipeline file, every file it references and each heslam program's\n"
+              "arguments and config (the program's own --check); start nothing")
       .custom("--domain", "N|auto",
               "DDS domain 0-232 (overrides the file's); auto: the first domain no other heslam run\n"
               "uses (the file's, then 1, 2, ...). A domain in use by another run is refused",
@@ -103,8 +104,8 @@ runtime::Flags supervisor_flags(Arguments& a) {
                   throw std::runtime_error("--only: expected component names, e.g. --only frontend,replay");
                 }
               })
-      .toggle("--no-progress", &a.progress, "no run progress (default: a line redrawn on a terminal, else a line per 10 %)",
-              false)
+      .toggle("--no-progress", &a.progress,
+              "no run progress (default: a line redrawn on a terminal, else a line per 10 %)", false)
       .custom("--security", "DIR",
               "DDS Security: run every process with its identity from DIR (heslam-security init DIR;\n"
               "overrides the file's 'security'; docs/security.md)",
@@ -199,10 +200,10 @@ int run(int argc, char** argv) {
   options.self_executable = self;
   options.log_dir = arguments.log_dir.empty() ? default_log_dir(loaded.pipeline.name) : arguments.log_dir;
   options.log_level = arguments.log_level;
-  options.progress = !arguments.progress                 ? supervisor::RunProgress::Mode::kOff
+  options.progress = !arguments.progress     ? supervisor::RunProgress::Mode::kOff
                      : isatty(STDERR_FILENO) ? supervisor::RunProgress::Mode::kLive
                                              : supervisor::RunProgress::Mode::kPlain;
-  
+
   supervisor::Pipeline pipeline = loaded.pipeline;
   if (pipeline.network) {
     // The profile's XML beside the logs: every process reads the same file, and it is kept with

@@ -99,7 +99,8 @@ void load_network_profile(const Config& config, Pipeline& pipeline, std::vector<
   });
   runtime::DdsNetworkProfile network;
   collect(problems, [&] { network.interface = substitute("dds_interface", config.get_string("dds_interface", "")); });
-  collect(problems, [&] { network.peers = runtime::split_list(substitute("dds_peers", config.get_string("dds_peers", ""))); });
+  collect(problems,
+          [&] { network.peers = runtime::split_list(substitute("dds_peers", config.get_string("dds_peers", ""))); });
   collect(problems, [&] {
     const std::string text = substitute("dds_lease_s", config.get_scalar("dds_lease_s", "10"));
     std::istringstream parse(text);
@@ -107,17 +108,20 @@ void load_network_profile(const Config& config, Pipeline& pipeline, std::vector<
         network.lease_s > runtime::kMaxLeaseS) {
       std::ostringstream expected;
       expected << "expected seconds in [" << runtime::kMinLeaseS << ", " << runtime::kMaxLeaseS << "]";
-      throw std::runtime_error(source + ": field 'dds_lease_s': " + expected.str() + ", got '" + runtime::quote_value(text) + "'");
+      throw std::runtime_error(source + ": field 'dds_lease_s': " + expected.str() + ", got '" +
+                               runtime::quote_value(text) + "'");
     }
   });
   if (profile != "network") return;
   collect(problems, [&] {
     if (!pipeline.dds_config.empty()) {
-      throw std::runtime_error(source + ": fields 'dds_config' and 'dds_profile: network' exclude each other "
+      throw std::runtime_error(source +
+                               ": fields 'dds_config' and 'dds_profile: network' exclude each other "
                                "(the profile writes its own Cyclone XML)");
     }
     if (network.interface.empty()) {
-      throw std::runtime_error(source + ": dds_profile network: field 'dds_interface' is empty (give the "
+      throw std::runtime_error(source +
+                               ": dds_profile network: field 'dds_interface' is empty (give the "
                                "interface by name, e.g. --arg dds_interface=eth0)");
     }
     if (const auto problem = runtime::check_network_interface(network.interface)) {
@@ -147,7 +151,8 @@ void select_local_components(Pipeline& pipeline, const PipelineOverrides& overri
     if (known.count(name) != 0) return true;
     std::string names;
     for (const auto& each : known) names += (names.empty() ? "" : ", ") + each;
-    problems.push_back(source + ": " + where + ": no component '" + runtime::quote_value(name) + "' (components: " + names + ")");
+    problems.push_back(source + ": " + where + ": no component '" + runtime::quote_value(name) +
+                       "' (components: " + names + ")");
     return false;
   };
   // Every enabled component in exactly one group, so the hosts together run the whole pipeline.
@@ -157,8 +162,8 @@ void select_local_components(Pipeline& pipeline, const PipelineOverrides& overri
       if (!check_known(name, "field 'hosts." + group + "'")) continue;
       const auto [it, inserted] = group_of.emplace(name, group);
       if (!inserted) {
-        problems.push_back(source + ": field 'hosts." + group + "': component '" + name +
-                           "' is already in hosts." + it->second);
+        problems.push_back(source + ": field 'hosts." + group + "': component '" + name + "' is already in hosts." +
+                           it->second);
       }
     }
   }
@@ -193,8 +198,8 @@ void select_local_components(Pipeline& pipeline, const PipelineOverrides& overri
 
 }  // namespace
 
-std::map<std::string, std::string> resolve_args(const std::map<std::string, std::string>& args, const std::string& source,
-                                                std::vector<std::string>& problems) {
+std::map<std::string, std::string> resolve_args(const std::map<std::string, std::string>& args,
+                                                const std::string& source, std::vector<std::string>& problems) {
   std::map<std::string, std::string> resolved;
   std::set<std::string> failed;
   std::vector<std::string> chain;  // the arguments being resolved, outermost first
@@ -278,8 +283,8 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
   collect(problems, [&] { args = config->get_string_map("args"); });
   for (const auto& [key, value] : overrides.args) {
     if (args.count(key) == 0) {
-      problems.push_back(source + ": --arg " + key + ": the pipeline declares no such argument (declared: " +
-                         join_keys(args) + ")");
+      problems.push_back(source + ": --arg " + key +
+                         ": the pipeline declares no such argument (declared: " + join_keys(args) + ")");
     }
     args[key] = value;
   }
@@ -288,8 +293,8 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
     std::vector<std::string> unknown;
     std::string out = substitute_args(text, args, unknown);
     for (const auto& name : unknown) {
-      problems.push_back(source + ": field '" + field + "': unknown $(arg " + name + ") (declared: " +
-                         join_keys(args) + ")");
+      problems.push_back(source + ": field '" + field + "': unknown $(arg " + name + ") (declared: " + join_keys(args) +
+                         ")");
     }
     return out;
   };
@@ -352,7 +357,8 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
     if (overrides.image_domain_id) {
       pipeline.image_domain_id = *overrides.image_domain_id;
     } else if (domain_text.empty()) {
-      pipeline.image_domain_id = pipeline.domain_id < runtime::kMaxDomainId ? pipeline.domain_id + 1 : pipeline.domain_id - 1;
+      pipeline.image_domain_id =
+          pipeline.domain_id < runtime::kMaxDomainId ? pipeline.domain_id + 1 : pipeline.domain_id - 1;
     } else {
       std::istringstream parse(domain_text);
       if (!(parse >> pipeline.image_domain_id) || !parse.eof()) pipeline.image_domain_id = -1;
@@ -371,9 +377,8 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
     pipeline.roudi_config = std::filesystem::absolute(roudi).lexically_normal();
   });
   load_network_profile(*config, pipeline, problems, substitute);
-  collect(problems, [&] {
-    pipeline.remote_ready_timeout_s = config->get_double("remote_ready_timeout_s", 120.0, 0.1, 86400.0);
-  });
+  collect(problems,
+          [&] { pipeline.remote_ready_timeout_s = config->get_double("remote_ready_timeout_s", 120.0, 0.1, 86400.0); });
   collect(problems, [&] {
     for (const auto& [group, names] : config->get_string_map("hosts")) {
       pipeline.hosts[group] = runtime::split_list(substitute("hosts." + group, names));
@@ -396,7 +401,8 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
                                std::to_string(pipeline.domain_id));
     }
     if (pipeline.image_transport == runtime::ImageTransport::kShm) {
-      throw std::runtime_error(source + ": field 'security': DDS security with image_transport shm is not supported "
+      throw std::runtime_error(source +
+                               ": field 'security': DDS security with image_transport shm is not supported "
                                "(untested); use image_transport udp");
     }
     pipeline.security_dir = std::filesystem::absolute(path).lexically_normal();
@@ -409,13 +415,15 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
 
   std::vector<Config> sections;
   collect(problems, [&] { sections = config->get_sections("components"); });
-  if (sections.empty() && problems.empty()) problems.push_back(source + ": field 'components': expected a non-empty list");
+  if (sections.empty() && problems.empty())
+    problems.push_back(source + ": field 'components': expected a non-empty list");
   collect(problems, [&] { config->reject_unknown(); });
 
   // A component of another host reads its inputs there: not checked here (the dataset is on the
   // camera host only). hosts.NAME may be misspelled: select_local_components reports that below.
   const auto runs_here = [&](const std::string& name) {
-    if (!overrides.only.empty()) return std::find(overrides.only.begin(), overrides.only.end(), name) != overrides.only.end();
+    if (!overrides.only.empty())
+      return std::find(overrides.only.begin(), overrides.only.end(), name) != overrides.only.end();
     const auto group = pipeline.hosts.find(overrides.host);
     if (overrides.host.empty() || group == pipeline.hosts.end()) return true;
     return std::find(group->second.begin(), group->second.end(), name) != group->second.end();
@@ -448,17 +456,19 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       }
       const auto resolved = resolve_executable(text, folder, bin_dir);
       if (!resolved) {
-        throw std::runtime_error(source + ": " + label + ": executable '" + runtime::quote_value(text) + "' not found (looked in " +
+        throw std::runtime_error(source + ": " + label + ": executable '" + runtime::quote_value(text) +
+                                 "' not found (looked in " +
                                  (bin_dir.empty() ? std::string() : bin_dir.string() + " and ") + "$PATH)");
       }
       spec.executable = *resolved;
     });
     collect(problems, [&] {
-      for (const std::string& arg : section.get_strings("args", {})) spec.args.push_back(substitute(where + ".args", arg));
+      for (const std::string& arg : section.get_strings("args", {}))
+        spec.args.push_back(substitute(where + ".args", arg));
     });
     collect(problems, [&] {
-      const std::vector<std::string> entries = section.is_list("config") ? section.get_strings("config", {})
-                                                                          : std::vector{section.get_string("config", "")};
+      const std::vector<std::string> entries =
+          section.is_list("config") ? section.get_strings("config", {}) : std::vector{section.get_string("config", "")};
       if (disabled) return;  // a disabled component's config may name its executable
       for (const std::string& entry : entries) {
         const std::string text = substitute(where + ".config", entry);
@@ -505,12 +515,11 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
     });
     collect(problems, [&] { spec.max_restarts = section.get_int("max_restarts", 3, 0, 1000); });
     collect(problems, [&] { spec.restart_backoff_s = section.get_double("restart_backoff_s", 0.1, 0.0, 600.0); });
-    collect(problems, [&] {
-      spec.restart_backoff_max_s = section.get_double("restart_backoff_max_s", 5.0, 0.0, 3600.0);
-    });
+    collect(problems,
+            [&] { spec.restart_backoff_max_s = section.get_double("restart_backoff_max_s", 5.0, 0.0, 3600.0); });
     collect(problems, [&] {
       spec.ready = section.get_choice("ready", "status", {"status", "started"}) == "status" ? Readiness::kStatus
-                                                                                           : Readiness::kStarted;
+                                                                                            : Readiness::kStarted;
     });
     collect(problems, [&] { spec.ready_timeout_s = section.get_double("ready_timeout_s", 10.0, 0.1, 3600.0); });
     collect(problems, [&] { spec.required = section.get_bool("required", true); });

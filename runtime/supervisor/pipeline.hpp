@@ -16,25 +16,25 @@ enum class RestartPolicy { kNever, kOnFailure, kAlways };
 enum class Readiness { kStatus, kStarted };
 
 struct ComponentSpec {
-  std::string name;                       // unique in the pipeline; also its --name and log file
-  std::filesystem::path executable;       // resolved absolute path
-  std::vector<std::string> args;          // after $(arg) substitution
+  std::string name;                  // unique in the pipeline; also its --name and log file
+  std::filesystem::path executable;  // resolved absolute path
+  std::vector<std::string> args;     // after $(arg) substitution
   // --config files in order, each overlaying the ones before (field `config`: a file, or a list such
   // as [shipped.yaml, $(arg user_config)], empty entries skipped); empty: none.
   std::vector<std::filesystem::path> configs;
   // Files or folders it reads (e.g. the dataset): each must exist, checked by --check and before
   // anything starts, so a wrong path is one line and exit 1 instead of a failing, restarting process.
   std::vector<std::filesystem::path> inputs;
-  std::map<std::string, std::string> env; // added to the supervisor's environment
+  std::map<std::string, std::string> env;  // added to the supervisor's environment
   RestartPolicy restart = RestartPolicy::kNever;
-  int max_restarts = 3;                   // restarts allowed before giving up
-  double restart_backoff_s = 0.1;         // first delay; doubles per consecutive restart
+  int max_restarts = 3;            // restarts allowed before giving up
+  double restart_backoff_s = 0.1;  // first delay; doubles per consecutive restart
   double restart_backoff_max_s = 5.0;
-  Readiness ready = Readiness::kStatus;   // status: the next component waits for this one's status
+  Readiness ready = Readiness::kStatus;  // status: the next component waits for this one's status
   double ready_timeout_s = 10.0;
-  bool required = true;                   // its failure fails the run (exit code 1)
-  bool shutdown_on_exit = false;          // on_exit: shutdown — its end ends the run
-  bool common_args = true;                // pass --domain --namespace --name [--config] --log-level --dds-config
+  bool required = true;           // its failure fails the run (exit code 1)
+  bool shutdown_on_exit = false;  // on_exit: shutdown — its end ends the run
+  bool common_args = true;        // pass --domain --namespace --name [--config] --log-level --dds-config
   // Added to the supervisor's own niceness for this process and all its threads (0-19): a real-time
   // pipeline puts the mapper and the loop closer below the frontend, whose frames have a deadline.
   int nice = 0;
@@ -48,10 +48,10 @@ struct ComponentSpec {
 
 struct Pipeline {
   std::filesystem::path file;
-  std::string name;                       // default: file stem
+  std::string name;  // default: file stem
   int domain_id = 0;
   std::string ns = "heslam";
-  std::string dds_config;                 // "file://ABS" or "" (built-in loopback XML)
+  std::string dds_config;  // "file://ABS" or "" (built-in loopback XML)
   // Secure mode: the folder made by heslam-security init (absolute); empty: plain DDS. The
   // supervisor runs as identity "supervisor", each component as its own (docs/security.md).
   std::filesystem::path security_dir;
@@ -89,9 +89,9 @@ struct PipelineOverrides {
   std::map<std::string, std::string> args;  // --arg key=value
   std::optional<int> domain_id;
   std::optional<std::string> ns;
-  std::string host;               // --host NAME: run the components of the file's hosts.NAME group
-  std::vector<std::string> only;  // --only a,b: run only these components (the others run elsewhere)
-  std::optional<std::string> security_dir;  // --security DIR ("" = plain even if the file says otherwise)
+  std::string host;                            // --host NAME: run the components of the file's hosts.NAME group
+  std::vector<std::string> only;               // --only a,b: run only these components (the others run elsewhere)
+  std::optional<std::string> security_dir;     // --security DIR ("" = plain even if the file says otherwise)
   std::optional<std::string> image_transport;  // --image-transport udp|shm
   std::optional<int> image_domain_id;          // --image-domain N
 };
@@ -111,8 +111,8 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
 // The arguments with the $(arg NAME) / $(stem NAME) in their values replaced by the other
 // arguments' (an argument may default to another's); a cycle, or a chain deeper than 16, is one
 // problem naming the arguments involved.
-std::map<std::string, std::string> resolve_args(const std::map<std::string, std::string>& args, const std::string& source,
-                                                std::vector<std::string>& problems);
+std::map<std::string, std::string> resolve_args(const std::map<std::string, std::string>& args,
+                                                const std::string& source, std::vector<std::string>& problems);
 
 // Replaces every $(arg NAME), and $(stem NAME) by the value without its extension (a/run.txt ->
 // a/run: the outputs of a run are named OUTPUT stem + .map, .loop, ...); unknown names are reported

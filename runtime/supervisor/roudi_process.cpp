@@ -77,7 +77,8 @@ std::unique_ptr<RoudiProcess> RoudiProcess::ensure(const std::filesystem::path& 
   if (error == ENOENT) {
     throw std::runtime_error("image transport shm: iox-roudi not found on PATH (apt-get install iceoryx)");
   }
-  if (error != 0) throw std::runtime_error(std::string("image transport shm: cannot start iox-roudi: ") + std::strerror(error));
+  if (error != 0)
+    throw std::runtime_error(std::string("image transport shm: cannot start iox-roudi: ") + std::strerror(error));
   std::unique_ptr<RoudiProcess> roudi(new RoudiProcess(pid));
   const auto deadline = Clock::now() + kReadyTimeout;
   while (read_file(log_file).find(kReadyLine) == std::string::npos) {

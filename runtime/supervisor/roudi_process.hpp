@@ -17,8 +17,8 @@ class RoudiProcess {
  public:
   // nullptr when a RouDi already runs. Throws one line when iox-roudi is not installed, exits at
   // once, or does not say it is ready in time. Its output goes to log_file.
-  static std::unique_ptr<RoudiProcess> ensure(const std::filesystem::path& config, const std::filesystem::path& log_file,
-                                              const runtime::Logger& log);
+  static std::unique_ptr<RoudiProcess> ensure(const std::filesystem::path& config,
+                                              const std::filesystem::path& log_file, const runtime::Logger& log);
   ~RoudiProcess();
   RoudiProcess(const RoudiProcess&) = delete;
   RoudiProcess& operator=(const RoudiProcess&) = delete;

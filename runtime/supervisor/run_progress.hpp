@@ -15,7 +15,7 @@ struct RunCounts {
   std::optional<std::uint64_t> tracked;  // frames with a pose (the recorder's status); unset: no recorder
   std::uint64_t published = 0;           // frames the replay published (this pass)
   std::uint64_t total = 0;               // frames per pass; 0: unknown (a live camera)
-  double fps = 0.0;                       // published frames per second; 0: not measured yet
+  double fps = 0.0;                      // published frames per second; 0: not measured yet
 };
 
 // "tracked 40/160 frames  26%  19.9 fps  ETA 5.9 s" (published/total for the %, fps and ETA);

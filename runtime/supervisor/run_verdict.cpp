@@ -30,7 +30,8 @@ std::string restate_tracked(const std::string& result, std::uint64_t with_pose, 
   const std::size_t lost = result.find(kLost);
   if (!result.starts_with(kTracked) || lost == std::string::npos) return result;
   return std::string(kTracked) + std::to_string(with_pose) + "/" + std::to_string(published) + " frames, " +
-         std::to_string(published - std::min(published, with_pose)) + std::string(kLost) + result.substr(lost + kLost.size());
+         std::to_string(published - std::min(published, with_pose)) + std::string(kLost) +
+         result.substr(lost + kLost.size());
 }
 
 // "NAME: two live writers claimed one role on TOPIC[, TOPIC] (N times)..." for the first program that

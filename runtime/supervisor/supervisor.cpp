@@ -88,10 +88,10 @@ constexpr auto kKilledRunLinger = 3000ms;
 
 struct Supervisor::Dds {
   Dds(const Pipeline& pipeline)
-      : participant(runtime::ParticipantOptions{
-            pipeline.domain_id, pipeline.dds_config,
-            pipeline.security_dir.empty() ? std::filesystem::path()
-                                          : pipeline.security_dir / "identities" / kSupervisorIdentity}),
+      : participant(runtime::ParticipantOptions{pipeline.domain_id, pipeline.dds_config,
+                                                pipeline.security_dir.empty()
+                                                    ? std::filesystem::path()
+                                                    : pipeline.security_dir / "identities" / kSupervisorIdentity}),
         topics(pipeline.ns),
         status_reader(participant, topics.status()),
         status(participant, topics, supervisor_status_name(pipeline), stats),
@@ -105,7 +105,7 @@ struct Supervisor::Dds {
   runtime::Stats stats;
   runtime::StatusPublisher status;
   std::map<std::string, StatusSeen> seen;
-  std::string status_name;  // ours: remote supervisors are the other "supervisor@..." names
+  std::string status_name;             // ours: remote supervisors are the other "supervisor@..." names
   std::optional<OtherRunWatch> watch;  // other runs' writers on the domain (single-host runs)
 };
 
@@ -207,9 +207,8 @@ void Supervisor::start(Managed& component) {
   // The last words of the process before a restart are still its own.
   component.process.read_notifications();
   component.participants.insert(component.process.participants().begin(), component.process.participants().end());
-  component.process =
-      ChildProcess::spawn(options_.self_executable, component.spec.executable, child_args(component), env,
-                          component.spec.nice);
+  component.process = ChildProcess::spawn(options_.self_executable, component.spec.executable, child_args(component),
+                                          env, component.spec.nice);
   component.phase = Phase::kRunning;
   component.started_at = Clock::now();
   component.ready = component.spec.ready == Readiness::kStarted;
@@ -383,8 +382,8 @@ bool Supervisor::wait_remote_ready(Managed& component) {
     if (runtime::shutdown_requested() || end_requested_) return false;
     if (Clock::now() >= deadline) {
       // Not ours to fail: the other host's supervisor reports its own components.
-      log_.warn(component.spec.name, ": no RUNNING status from another host within ",
-                pipeline_.remote_ready_timeout_s, " s; starting the next components anyway");
+      log_.warn(component.spec.name, ": no RUNNING status from another host within ", pipeline_.remote_ready_timeout_s,
+                " s; starting the next components anyway");
       return true;
     }
     pump(kPumpPeriod);
@@ -411,8 +410,9 @@ void Supervisor::report_progress() {
     latest_published_.emplace(now, counts.published);
   }
   if (first_published_ && latest_published_ && latest_published_->first - first_published_->first >= kMinFpsSpan) {
-    counts.fps = static_cast<double>(latest_published_->second - std::min(latest_published_->second, first_published_->second)) /
-                 std::chrono::duration<double>(latest_published_->first - first_published_->first).count();
+    counts.fps =
+        static_cast<double>(latest_published_->second - std::min(latest_published_->second, first_published_->second)) /
+        std::chrono::duration<double>(latest_published_->first - first_published_->first).count();
   }
   const std::optional<std::string> line = progress_.update(counts, now);
   if (!line) return;
@@ -452,9 +452,8 @@ void Supervisor::on_exit(Managed& component, int wait_status) {
   const std::string how = describe_exit(wait_status);
   const std::string& name = component.spec.name;
   // A failing heslam program's last line is its one-line reason ("heslam-recorder: ...").
-  const std::string why = !success && WIFEXITED(wait_status) && !component.last_line.empty()
-                              ? ": " + component.last_line
-                              : std::string();
+  const std::string why =
+      !success && WIFEXITED(wait_status) && !component.last_line.empty() ? ": " + component.last_line : std::string();
   component.phase = Phase::kEnded;
   component.ready = false;
   if (component.stopping) {
@@ -479,15 +478,14 @@ void Supervisor::on_exit(Managed& component, int wait_status) {
   }
   // It exited with an error after saying "starting" but before "running" (runtime/startup_notify.hpp):
   // a bad config, a missing input, an unwritable output. Restarting cannot fix that.
-  const bool startup_error = WIFEXITED(wait_status) && !success && component.process.said_starting() &&
-                             !component.process.said_running();
+  const bool startup_error =
+      WIFEXITED(wait_status) && !success && component.process.said_starting() && !component.process.said_running();
   if (startup_error) {
     // A restart that cannot start fails mid-run, not at the run's start-up.
-    const std::string reason =
-        component.restarts == 0
-            ? name + " failed at start-up (" + how + ")" + why
-            : name + " failed mid-run: restart " + std::to_string(component.restarts) + " failed at its start-up (" +
-                  how + ")" + why;
+    const std::string reason = component.restarts == 0
+                                   ? name + " failed at start-up (" + how + ")" + why
+                                   : name + " failed mid-run: restart " + std::to_string(component.restarts) +
+                                         " failed at its start-up (" + how + ")" + why;
     log_.error(reason, component.spec.restart == RestartPolicy::kNever
                            ? ""
                            : "; not restarted: a restart cannot fix a start-up error");
@@ -586,8 +584,8 @@ void Supervisor::stop(Managed& component) {
   if (component.phase != Phase::kRunning) return;
   component.stopping = true;
   component.process.signal_group(SIGTERM);
-  const auto stop_timeout = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(pipeline_.stop_timeout_s));
+  const auto stop_timeout =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(pipeline_.stop_timeout_s));
   const auto deadline = Clock::now() + stop_timeout;
   // A stopped process (SIGSTOP, a debugger, Ctrl-Z) holds SIGTERM: half-way to the timeout it is
   // resumed, so it still does its shutdown work (the recorder's files, the mapper's map) instead of
@@ -623,8 +621,8 @@ void Supervisor::stop_all() {
 }
 
 int Supervisor::run() {
-  log_.info("pipeline '", pipeline_.name, "' on domain ", pipeline_.domain_id, ", namespace '", pipeline_.ns,
-            "', run ", runtime::process_run_id(), "; logs in ", options_.log_dir.string());
+  log_.info("pipeline '", pipeline_.name, "' on domain ", pipeline_.domain_id, ", namespace '", pipeline_.ns, "', run ",
+            runtime::process_run_id(), "; logs in ", options_.log_dir.string());
   dds_->status.set_state(runtime::ComponentState::kRunning);
   if (dds_->watch) {
     if (const std::optional<std::string> other = other_run_alive(*dds_->watch, kDomainListen, kKilledRunLinger)) {
@@ -684,7 +682,7 @@ int Supervisor::run() {
   dds_->status.set_state(runtime::ComponentState::kShuttingDown, failed_ ? "pipeline failed: " + failure_ : "");
   stop_all();
   roudi_.reset();  // after every component that used its shared memory
-  read_status();  // the last results
+  read_status();   // the last results
   watch_other_runs();
   judge();
   clear_progress();
@@ -733,10 +731,10 @@ std::string Supervisor::outcome() const {
   if (failed_) return "pipeline failed: " + failure_ + other_runs_note();
   const std::string results = results_ + other_runs_note();
   const char* signal_name = sigabbrev_np(runtime::shutdown_signal());
-  const std::string text = remote_ended_                   ? "pipeline finished (ended by another host)"
+  const std::string text = remote_ended_                    ? "pipeline finished (ended by another host)"
                            : !runtime::shutdown_requested() ? "pipeline finished"
-                           : signal_name != nullptr       ? std::string("pipeline stopped by SIG") + signal_name
-                                                          : "pipeline stopped";
+                           : signal_name != nullptr         ? std::string("pipeline stopped by SIG") + signal_name
+                                                            : "pipeline stopped";
   return results.empty() ? text : text + ": " + results;
 }
 

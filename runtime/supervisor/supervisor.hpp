@@ -58,7 +58,7 @@ class Supervisor {
     int restarts = 0;
     int consecutive_restarts = 0;
     bool ready = false;
-    bool stopping = false;  // we sent SIGTERM: the exit is expected
+    bool stopping = false;        // we sent SIGTERM: the exit is expected
     bool killed_at_stop = false;  // did not stop within stop_timeout_s: we sent SIGKILL
     std::string last_reported_failure;
     std::string last_line;  // of its output: a failing heslam program's one-line reason
@@ -117,9 +117,9 @@ class Supervisor {
   bool failed_ = false;
   std::string failure_;  // the first reason the run failed
   bool end_requested_ = false;
-  bool remote_ended_ = false;  // another host's supervisor ended the run
-  std::string results_;        // the programs' results, from judge()
-  std::string other_runs_;     // other runs seen on the domain mid-run (OtherRunWatch::describe)
+  bool remote_ended_ = false;                       // another host's supervisor ended the run
+  std::string results_;                             // the programs' results, from judge()
+  std::string other_runs_;                          // other runs seen on the domain mid-run (OtherRunWatch::describe)
   std::set<std::uint64_t> refused_status_writers_;  // publication handles, named once each
   std::uint64_t refused_status_samples_ = 0;
   RunProgress progress_;

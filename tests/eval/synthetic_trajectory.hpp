@@ -6,8 +6,8 @@
 #include <fstream>
 #include <string>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "tools/eval/trajectory.hpp"
 

@@ -83,7 +83,8 @@ TEST(EvalApe, KnownNoiseGivesTheExpectedError) {
   for (std::size_t i = 0; i < est.size(); ++i) {
     Pose3& T = est.poses_wc[i];
     T.translation().z() += (i % 2 == 0 ? kOffsetM : -kOffsetM);
-    T.linear() = (T.linear() * Eigen::AngleAxisd(kAngleRad, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix()).eval();
+    T.linear() =
+        (T.linear() * Eigen::AngleAxisd(kAngleRad, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix()).eval();
   }
   apply_sim3(est, inverse(known_transform(1.0)));
 

@@ -23,7 +23,7 @@ TEST(EvalAssociation, PairsNearestStampWithinMaxDt) {
   const Trajectory est = stamped({0.004, 0.196, 0.33, 0.509}, "est");
   const AlignedPair pair = associate(gt, est, AssociationOptions{.max_dt_s = 0.01});
   EXPECT_TRUE(pair.by_time);
-  EXPECT_EQ(pair.gt_rows, (std::vector<std::size_t>{0, 2, 5}));   // 0.33 is 0.03 from 0.30: dropped
+  EXPECT_EQ(pair.gt_rows, (std::vector<std::size_t>{0, 2, 5}));  // 0.33 is 0.03 from 0.30: dropped
   EXPECT_EQ(pair.est_rows, (std::vector<std::size_t>{0, 1, 3}));
   EXPECT_EQ(pair.size(), 3u);
   EXPECT_DOUBLE_EQ(pair.est.stamps_s[1], 0.196);
@@ -67,8 +67,7 @@ TEST(EvalAssociation, InterpolatesTheGroundTruthAtTheEstimateStampsPlusOffset) {
   Trajectory est;
   est.name = "est";
   for (const double s : {-0.05, 0.0, 0.033, 0.5, 0.977, 0.99}) est.push_back(Pose3::Identity(), 0, s);
-  const AlignedPair pair =
-      associate(gt, est, AssociationOptions{.est_offset_s = 0.02, .interpolate_gt = true});
+  const AlignedPair pair = associate(gt, est, AssociationOptions{.est_offset_s = 0.02, .interpolate_gt = true});
   // -0.05 + 0.02 is before the ground truth, 0.99 + 0.02 after it.
   EXPECT_EQ(pair.est_rows, (std::vector<std::size_t>{1, 2, 3, 4}));
   EXPECT_EQ(pair.gt_rows, (std::vector<std::size_t>{0, 0, 5, 9}));

@@ -1,10 +1,10 @@
 // The heslam-eval executable: tables, JSON and plots from real files, and one-line errors with exit 1.
+#include <sys/wait.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
-#include <sys/wait.h>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -50,9 +50,9 @@ TEST(EvalCli, ApeOnSyntheticFilesWritesTableJsonAndPlots) {
   write_trajectory(dir / "gt.csv", gt, Format::euroc);
   write_trajectory(dir / "est.txt", est, Format::heslam_default);
   const ToolRun run = run_eval("ape --gt " + (dir / "gt.csv").string() + " --est " + (dir / "est.txt").string() +
-                               " --align none --json " + (dir / "ape.json").string() + " --plot " +
-                               (dir / "ape.png").string() + " --errors " + (dir / "ape_errors.txt").string(),
-                           dir);
+                                   " --align none --json " + (dir / "ape.json").string() + " --plot " +
+                                   (dir / "ape.png").string() + " --errors " + (dir / "ape_errors.txt").string(),
+                               dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.out.find("APE: 400 pairs"), std::string::npos) << run.out;
   // Below 1 m the table is in millimetres with 3 decimals.
@@ -84,12 +84,13 @@ TEST(EvalCli, ApeOnSyntheticFilesWritesTableJsonAndPlots) {
   EXPECT_EQ(rows, 400u);
 
   const ToolRun rpe = run_eval("rpe --gt " + (dir / "gt.csv").string() + " --est " + (dir / "est.txt").string() +
-                               " --delta 10 --unit m --plot " + (dir / "rpe.svg").string() + " --errors " +
-                               (dir / "rpe_errors.txt").string(),
-                           dir);
+                                   " --delta 10 --unit m --plot " + (dir / "rpe.svg").string() + " --errors " +
+                                   (dir / "rpe_errors.txt").string(),
+                               dir);
   ASSERT_EQ(rpe.exit_code, 0) << rpe.err;
   const std::string rpe_errors = slurp(dir / "rpe_errors.txt");
-  EXPECT_EQ(rpe_errors.rfind("# est_row_i est_row_j stamp_i_s stamp_j_s translation_error_m rotation_error_deg\n", 0), 0u);
+  EXPECT_EQ(rpe_errors.rfind("# est_row_i est_row_j stamp_i_s stamp_j_s translation_error_m rotation_error_deg\n", 0),
+            0u);
   const std::size_t pairs_end = rpe.out.find(" pairs, ");
   ASSERT_NE(pairs_end, std::string::npos) << rpe.out;
   const std::size_t pairs_begin = rpe.out.rfind(' ', pairs_end - 1) + 1;
@@ -136,7 +137,8 @@ TEST(EvalCli, EurocGroundTruthAgainstItselfShiftedWithInterpolation) {
   std::snprintf(rmse_row, sizeof rmse_row, "  rmse    %11.3f mm", printed_rmse(shifted) * 1e3);
   EXPECT_NE(readable.out.find(rmse_row), std::string::npos) << rmse_row << " in\n" << readable.out;
   ASSERT_EQ(shifted.exit_code, 0) << shifted.err;
-  std::printf("[ figures  ] MH01 ground truth against itself 9 ms later: ATE rmse %.2f mm\n", printed_rmse(shifted) * 1e3);
+  std::printf("[ figures  ] MH01 ground truth against itself 9 ms later: ATE rmse %.2f mm\n",
+              printed_rmse(shifted) * 1e3);
   EXPECT_GT(printed_rmse(shifted), 0.002);
   EXPECT_LT(printed_rmse(shifted), 0.0035);
 }
@@ -145,14 +147,16 @@ TEST(EvalCli, PublishedFiguresPrintInFull) {
   HESLAM_REQUIRE_SHARED_DATA("trajectories");
   const auto dir = test::scratch_dir();
   const auto data = ::heslam::test::shared_dataset("trajectories");
-  const ToolRun kitti = run_eval("kitti --gt " + (data / "kitti_gt_poses/09.txt").string() + " --est " +
-                                 (data / "kitti_example_results/09.txt").string() + " --align sim3 --full-precision",
-                             dir);
+  const ToolRun kitti =
+      run_eval("kitti --gt " + (data / "kitti_gt_poses/09.txt").string() + " --est " +
+                   (data / "kitti_example_results/09.txt").string() + " --align sim3 --full-precision",
+               dir);
   ASSERT_EQ(kitti.exit_code, 0) << kitti.err;
   EXPECT_NE(kitti.out.find("translation drift [%]:     2.88411251140"), std::string::npos) << kitti.out;
   EXPECT_NE(kitti.out.find("ATE [m]:                   8.386619228786"), std::string::npos) << kitti.out;
   const ToolRun readable = run_eval("kitti --gt " + (data / "kitti_gt_poses/09.txt").string() + " --est " +
-                                    (data / "kitti_example_results/09.txt").string() + " --align sim3", dir);
+                                        (data / "kitti_example_results/09.txt").string() + " --align sim3",
+                                    dir);
   ASSERT_EQ(readable.exit_code, 0) << readable.err;
   EXPECT_NE(readable.out.find("translation drift:  2.884 %"), std::string::npos) << readable.out;
   EXPECT_NE(readable.out.find("ATE:                8.387 m"), std::string::npos) << readable.out;
@@ -190,7 +194,8 @@ TEST(EvalCli, JsonToStdoutIsTheDocumentAlone) {
   }
   const ToolRun table = run_eval("ape " + files + " --align none --full-precision", dir);
   ASSERT_EQ(table.exit_code, 0) << table.err;
-  EXPECT_NE(table.out.find("   translation [m]    rotation [deg]\n  rmse                 0.003                 0\n"), std::string::npos)
+  EXPECT_NE(table.out.find("   translation [m]    rotation [deg]\n  rmse                 0.003                 0\n"),
+            std::string::npos)
       << table.out;
 }
 
@@ -202,7 +207,8 @@ TEST(EvalCli, FrameHeaderMustMatchTheGroundTruthsFrame) {
   const auto dir = test::scratch_dir();
   const Trajectory gt = test::figure_eight(50);
   write_trajectory(dir / "gt.csv", gt, Format::euroc);
-  test::write_file(dir / "sensor.yaml", "T_BS:\n  cols: 4\n  rows: 4\n  data: [0, -1, 0, 0.1, 1, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\n");
+  test::write_file(dir / "sensor.yaml",
+                   "T_BS:\n  cols: 4\n  rows: 4\n  data: [0, -1, 0, 0.1, 1, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\n");
   Trajectory est = gt;
   est.frame = PoseFrame::body;
   write_trajectory(dir / "body.txt", est);

@@ -13,7 +13,7 @@ namespace {
 
 constexpr double kRelativeTolerance = 1e-6;
 
-#define EXPECT_RELATIVE(actual, expected) EXPECT_NEAR((actual), (expected), kRelativeTolerance * std::abs(expected))
+#define EXPECT_RELATIVE(actual, expected) EXPECT_NEAR((actual), (expected), kRelativeTolerance* std::abs(expected))
 
 std::filesystem::path trajectories() { return ::heslam::test::shared_dataset("trajectories"); }
 
@@ -82,8 +82,10 @@ TEST(EvalPublishedFigures, OtherFilesRunThrough) {
   EXPECT_LT(k10.translation_error_percent, 10.0);
 
   // KITTI with the sequence's times associates by time and gives the frame-index result.
-  const Trajectory gt_timed = read_trajectory(evo / "KITTI_00_gt.txt", ReadOptions{.times_path = evo / "KITTI_00_gt_times.txt"});
-  const Trajectory orb_timed = read_trajectory(evo / "KITTI_00_ORB.txt", ReadOptions{.times_path = evo / "KITTI_00_gt_times.txt"});
+  const Trajectory gt_timed =
+      read_trajectory(evo / "KITTI_00_gt.txt", ReadOptions{.times_path = evo / "KITTI_00_gt_times.txt"});
+  const Trajectory orb_timed =
+      read_trajectory(evo / "KITTI_00_ORB.txt", ReadOptions{.times_path = evo / "KITTI_00_gt_times.txt"});
   const ApeResult timed = compute_ape(associate(gt_timed, orb_timed), ApeOptions{.align = AlignMode::se3});
   EXPECT_RELATIVE(timed.translation_m.rmse, 1.3034497145650266);
 }

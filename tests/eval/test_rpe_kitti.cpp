@@ -12,9 +12,7 @@ namespace heslam::eval {
 namespace {
 
 // Ground truth drives 1 m per frame, the estimate 1.1 m per frame: every motion is 10 % too long.
-AlignedPair stretched_drive() {
-  return associate(test::straight_line(100, 1.0), test::straight_line(100, 1.1));
-}
+AlignedPair stretched_drive() { return associate(test::straight_line(100, 1.0), test::straight_line(100, 1.1)); }
 
 TEST(EvalRpe, FramesDeltaUsesConsecutiveBlocks) {
   const RpeResult rpe = compute_rpe(stretched_drive(), RpeOptions{.delta = 5, .unit = DeltaUnit::frames});
@@ -23,7 +21,8 @@ TEST(EvalRpe, FramesDeltaUsesConsecutiveBlocks) {
   EXPECT_EQ(rpe.pairs.back(), (std::pair<std::size_t, std::size_t>{90, 95}));
   EXPECT_NEAR(rpe.translation_m.rmse, 0.5, 1e-12);
   EXPECT_NEAR(rpe.rotation_deg.max, 0.0, 1e-12);
-  const RpeResult all = compute_rpe(stretched_drive(), RpeOptions{.delta = 5, .unit = DeltaUnit::frames, .all_pairs = true});
+  const RpeResult all =
+      compute_rpe(stretched_drive(), RpeOptions{.delta = 5, .unit = DeltaUnit::frames, .all_pairs = true});
   EXPECT_EQ(all.pairs.size(), 95u);
 }
 

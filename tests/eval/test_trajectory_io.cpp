@@ -117,12 +117,14 @@ TEST(EvalTrajectoryIo, MalformedLinesNameFileAndLine) {
   EXPECT_EQ(error_of([&] { read_trajectory(dir / "bad_number.txt", ReadOptions{.format = Format::tum}); }),
             (dir / "bad_number.txt").string() + ":3: expected a number in column 4, got 'x'");
   write_file(dir / "short.txt", "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 1\n");
-  EXPECT_NE(error_of([&] { read_trajectory(dir / "short.txt", ReadOptions{.format = Format::tum}); })
-                .find("short.txt:2: expected 8 columns"),
+  EXPECT_NE(error_of([&] {
+              read_trajectory(dir / "short.txt", ReadOptions{.format = Format::tum});
+            }).find("short.txt:2: expected 8 columns"),
             std::string::npos);
   write_file(dir / "kitti.txt", "1 0 0 0 0 1 0 0 0 0 1\n");
-  EXPECT_NE(error_of([&] { read_trajectory(dir / "kitti.txt", ReadOptions{.format = Format::kitti}); })
-                .find("kitti.txt:1: expected 12 or 13 columns"),
+  EXPECT_NE(error_of([&] {
+              read_trajectory(dir / "kitti.txt", ReadOptions{.format = Format::kitti});
+            }).find("kitti.txt:1: expected 12 or 13 columns"),
             std::string::npos);
   write_file(dir / "empty.txt", "# nothing\n\n");
   EXPECT_NE(error_of([&] { read_trajectory(dir / "empty.txt"); }).find("empty.txt: no poses"), std::string::npos);
@@ -158,8 +160,8 @@ TEST(EvalTrajectoryIo, ReadsBothEurocLayoutsAndAppliesTheExtrinsic) {
   const Pose3 T_bs = read_euroc_extrinsic(mh01 / "cam0/sensor.yaml");
   EXPECT_NEAR(T_bs.translation().x(), -0.0216401454975, 1e-15);
   EXPECT_NEAR(T_bs.linear()(0, 1), -0.999880929698, 1e-15);
-  const Trajectory camera =
-      read_trajectory(mh01 / "state_groundtruth_estimate0/data.csv", ReadOptions{.extrinsic_path = mh01 / "cam0/sensor.yaml"});
+  const Trajectory camera = read_trajectory(mh01 / "state_groundtruth_estimate0/data.csv",
+                                            ReadOptions{.extrinsic_path = mh01 / "cam0/sensor.yaml"});
   ASSERT_EQ(camera.size(), body.size());
   for (std::size_t i = 0; i < camera.size(); i += 40) {
     EXPECT_LT(max_abs_difference(camera.poses_wc[i], body.poses_wc[i] * T_bs), 1e-15);
@@ -178,7 +180,8 @@ TEST(EvalTrajectoryIo, BadExtrinsicIsOneClearLine) {
   EXPECT_EQ(error_of([&] { read_euroc_extrinsic(dir / "sensor.yaml"); }),
             (dir / "sensor.yaml").string() + ": T_BS.data: expected 16 numbers (row-major 4x4), got 3");
   write_file(dir / "other.yaml", "rate_hz: 20\n");
-  EXPECT_EQ(error_of([&] { read_euroc_extrinsic(dir / "other.yaml"); }), (dir / "other.yaml").string() + ": no field T_BS");
+  EXPECT_EQ(error_of([&] { read_euroc_extrinsic(dir / "other.yaml"); }),
+            (dir / "other.yaml").string() + ": no field T_BS");
 }
 
 }  // namespace
@@ -217,7 +220,8 @@ TEST(EvalTrajectoryIo, ExtrinsicOnABodyFileMakesItCam0) {
   Trajectory body = figure_eight(10);
   body.frame = PoseFrame::body;
   write_trajectory(dir / "body.txt", body);
-  write_file(dir / "sensor.yaml", "T_BS:\n  cols: 4\n  rows: 4\n  data: [1, 0, 0, 0.1, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\n");
+  write_file(dir / "sensor.yaml",
+             "T_BS:\n  cols: 4\n  rows: 4\n  data: [1, 0, 0, 0.1, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\n");
   const Trajectory camera = read_trajectory(dir / "body.txt", ReadOptions{.extrinsic_path = dir / "sensor.yaml"});
   EXPECT_EQ(camera.frame, PoseFrame::cam0);
 }

@@ -151,7 +151,8 @@ TEST(FrontendBatchedMirror, CorrectionBatchMovesOwnKeyframesInFlightWithTheirRef
   const Pose3 motion = corrected1 * before.keyframes.at(1).T_wc.inverse();
   for (const KeyframeId id : {KeyframeId{2}, KeyframeId{3}}) {
     EXPECT_LT(difference(map.keyframes.at(id).T_wc, motion * before.keyframes.at(id).T_wc), 1e-12) << "keyframe " << id;
-    EXPECT_LT((map.points.at(100 + id).p_w - motion * before.points.at(100 + id).p_w).norm(), 1e-12) << "point of " << id;
+    EXPECT_LT((map.points.at(100 + id).p_w - motion * before.points.at(100 + id).p_w).norm(), 1e-12)
+        << "point of " << id;
   }
   EXPECT_LT(difference(map.keyframes.at(4).T_wc, before.keyframes.at(4).T_wc), 1e-15);
   EXPECT_EQ(map.points.at(104).p_w, before.points.at(104).p_w);

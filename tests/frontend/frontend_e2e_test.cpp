@@ -15,9 +15,9 @@
 #include <string>
 #include <vector>
 
-#include "test_support.hpp"
 #include "child_process.hpp"
 #include "components/core/camera/stereo_rectifier.hpp"
+#include "test_support.hpp"
 #include "tools/bench/frontend_offline/offline_run.hpp"
 #include "tools/eval/ape.hpp"
 #include "tools/eval/trajectory_io.hpp"
@@ -45,7 +45,7 @@ std::string read_text(const fs::path& path) {
 
 struct PipelineRun {
   int exit_code = -1;
-  std::string output;      // the supervisor's combined, prefixed output
+  std::string output;  // the supervisor's combined, prefixed output
   fs::path trajectory;
   fs::path keyframes;
   fs::path lost;
@@ -57,12 +57,12 @@ PipelineRun run_pipeline(const std::string& pipeline, const fs::path& dataset, c
   run.trajectory = dir / (label + ".txt");
   run.keyframes = dir / (label + ".keyframes.txt");
   run.lost = dir / (label + ".lost.txt");
-  test::ChildProcess supervisor(test::bin_dir() / "heslam-supervisor",
-                                {(test::source_dir() / "config/pipelines" / (pipeline + ".yaml")).string(),
-                                 "--domain", std::to_string(test_domain()), "--namespace", test_namespace(),
-                                 "--log-dir", (dir / "logs").string(),
-                                 "--arg", "dataset=" + dataset.string(), "--arg", "output=" + run.trajectory.string()},
-                                dir, "supervisor_" + label);
+  test::ChildProcess supervisor(
+      test::bin_dir() / "heslam-supervisor",
+      {(test::source_dir() / "config/pipelines" / (pipeline + ".yaml")).string(), "--domain",
+       std::to_string(test_domain()), "--namespace", test_namespace(), "--log-dir", (dir / "logs").string(), "--arg",
+       "dataset=" + dataset.string(), "--arg", "output=" + run.trajectory.string()},
+      dir, "supervisor_" + label);
   std::optional<int> code = supervisor.wait(kPipelineTimeout);
   if (!code) {
     supervisor.signal(SIGTERM);
@@ -111,11 +111,13 @@ TEST(FrontendEndToEnd, EurocMh01TracksEveryFrameAndMatchesTheOfflineChain) {
   const eval::Trajectory truth = ground_truth_for(dataset, estimate);
   const eval::ApeResult ape = eval::compute_ape(truth, estimate);
   ASSERT_EQ(ape.translation_m.count, 160u);
-  const eval::ApeResult from_start = eval::compute_ape(truth, estimate, eval::ApeOptions{.align = eval::AlignMode::origin});
-  std::printf("[ figures  ] euroc_mh01_handheld over DDS: %zu frames, %zu keyframes, ATE rmse %.3f mm; rotation APE "
-              "(body frame) rmse %.3f deg aligned se3, %.3f deg aligned at the first pose\n",
-              estimate.size(), eval::read_trajectory(run.keyframes).size(), ape.translation_m.rmse * 1e3,
-              ape.rotation_deg.rmse, from_start.rotation_deg.rmse);
+  const eval::ApeResult from_start =
+      eval::compute_ape(truth, estimate, eval::ApeOptions{.align = eval::AlignMode::origin});
+  std::printf(
+      "[ figures  ] euroc_mh01_handheld over DDS: %zu frames, %zu keyframes, ATE rmse %.3f mm; rotation APE "
+      "(body frame) rmse %.3f deg aligned se3, %.3f deg aligned at the first pose\n",
+      estimate.size(), eval::read_trajectory(run.keyframes).size(), ape.translation_m.rmse * 1e3, ape.rotation_deg.rmse,
+      from_start.rotation_deg.rmse);
   // Target 4 mm (ORB-SLAM2/3 with local mapping: 3.6 mm). This frontend alone, without a local mapper,
   // measures 4.1 mm — the offline chain's figure, bound 4.5 mm in tests/tracking as well.
   EXPECT_LT(ape.translation_m.rmse, 0.0045);
@@ -138,7 +140,8 @@ TEST(FrontendEndToEnd, EurocMh01TracksEveryFrameAndMatchesTheOfflineChain) {
   for (std::size_t k = 0; k < estimate.size(); ++k) {
     ASSERT_EQ(offline.frames[k].state, TrackingState::kOk) << "frame " << k;
     EXPECT_NEAR(estimate.stamps_s[k], static_cast<double>(offline.frames[k].stamp_ns) * 1e-9, 1e-6) << "frame " << k;
-    worst = std::max(worst, max_abs_difference(estimate.poses_wc[k], eval::to_pose_frame(offline.frames[k].T_wc, T_B_rect)));
+    worst = std::max(worst,
+                     max_abs_difference(estimate.poses_wc[k], eval::to_pose_frame(offline.frames[k].T_wc, T_B_rect)));
   }
   std::printf("[ figures  ] largest pose element difference DDS vs offline chain: %.3g\n", worst);
   EXPECT_LT(worst, 1e-12);
@@ -196,9 +199,10 @@ TEST(FrontendEndToEnd, EurocV101StillCameraStaysStill) {
   double max_distance_m = 0.0;
   for (const Pose3& T_wc : estimate.poses_wc) max_distance_m = std::max(max_distance_m, T_wc.translation().norm());
   const eval::ApeResult ape = eval::compute_ape(ground_truth_for(dataset, estimate), estimate);
-  std::printf("[ figures  ] euroc_v101_head over DDS: path length %.1f mm, max distance from start %.1f mm, "
-              "ATE rmse %.2f mm\n",
-              estimate.path_length_m() * 1e3, max_distance_m * 1e3, ape.translation_m.rmse * 1e3);
+  std::printf(
+      "[ figures  ] euroc_v101_head over DDS: path length %.1f mm, max distance from start %.1f mm, "
+      "ATE rmse %.2f mm\n",
+      estimate.path_length_m() * 1e3, max_distance_m * 1e3, ape.translation_m.rmse * 1e3);
   // Target: path length < 5 mm (measured 2.9 mm for the rectified camera, 4.1 mm for the body frame
   // the recorder writes: the body sits ~7 cm from the camera, so the rocking moves it more; 63 mm of
   // per-frame jitter without the tracker's stationary test, tests/tracking/test_stationary.cpp). The
@@ -273,7 +277,8 @@ TEST(FrontendProcess, ShippedPipelinesPassTheSupervisorCheck) {
                                         "P2: 50.0 0.0 32.0 0.0 0.0 50.0 24.0 0.0 0.0 0.0 1.0 0.0\n"
                                         "P3: 50.0 0.0 32.0 0.0 0.0 50.0 24.0 0.0 0.0 0.0 1.0 0.0\n";
   for (const char* name : {"000000.png", "000001.png", "000002.png"}) {
-    for (const char* side : {"image_0", "image_1"}) cv::imwrite((kitti / side / name).string(), cv::Mat(48, 64, CV_8UC1, 128));
+    for (const char* side : {"image_0", "image_1"})
+      cv::imwrite((kitti / side / name).string(), cv::Mat(48, 64, CV_8UC1, 128));
   }
   const fs::path euroc = test::shared_dataset("euroc_mh01_handheld");
   int checked = 0;

@@ -37,8 +37,8 @@ TEST(FrontendOptions, EmptyConfigKeepsTheCoreDefaults) {
 class SettingsScratch {
  public:
   SettingsScratch()
-      : dir_(std::filesystem::temp_directory_path() / ("heslam_settings_" + std::to_string(getpid()) + "_" +
-                                                       std::to_string(counter_++))) {
+      : dir_(std::filesystem::temp_directory_path() /
+             ("heslam_settings_" + std::to_string(getpid()) + "_" + std::to_string(counter_++))) {
     std::filesystem::create_directories(dir_);
   }
   ~SettingsScratch() { std::filesystem::remove_all(dir_); }
@@ -54,7 +54,8 @@ class SettingsScratch {
 };
 
 FrontendOptions with_settings(const std::filesystem::path& file, const std::string& config_yaml = "") {
-  return FrontendOptions::from_config(runtime::Config::parse(config_yaml, "frontend.yaml"), {"--settings", file.string()});
+  return FrontendOptions::from_config(runtime::Config::parse(config_yaml, "frontend.yaml"),
+                                      {"--settings", file.string()});
 }
 
 std::string reported(const FrontendOptions& options) { return describe_settings(options.features, options.tracker); }
@@ -88,16 +89,30 @@ TEST(FrontendOptions, EachDocumentedSettingsKeyChangesWhatTheFrontendReports) {
   std::ifstream in(euroc);
   const std::string base((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::string baseline = reported(with_settings(euroc));
-  const std::pair<const char*, const char*> changes[] = {
-      {"HE.mode", "\"global\""},          {"HE.stereo", "\"shared\""},         {"HE.globalClipLimit", "3.0"},
-      {"HE.clipLimit", "4.0"},            {"HE.tilesX", "4"},                  {"HE.tilesY", "4"},
-      {"ORBextractor.nFeatures", "1500"}, {"ORBextractor.scaleFactor", "1.3"}, {"ORBextractor.nLevels", "6"},
-      {"ORBextractor.iniThFAST", "25"},   {"ORBextractor.minThFAST", "5"},     {"ORBextractor.cellSize", "40.0"},
-      {"Stereo.maxDistance", "80"},       {"Stereo.rowBand", "3.0"},           {"Stereo.sadHalfWindow", "4"},
-      {"Stereo.sadSearch", "6"},          {"Stereo.minDepthBaselines", "2.0"}, {"Pipeline.parallel", "0"},
-      {"Pipeline.rightFeaturesFactor", "1.5"}, {"Pipeline.leftOnlyFeatures", "0.5"},
-      {"ThDepth", "40.0"},                {"Camera.fps", "30.0"},              {"Tracker.referenceRatioStereo", "0.8"},
-      {"Tracker.referenceNearClipWeight", "0.5"}};
+  const std::pair<const char*, const char*> changes[] = {{"HE.mode", "\"global\""},
+                                                         {"HE.stereo", "\"shared\""},
+                                                         {"HE.globalClipLimit", "3.0"},
+                                                         {"HE.clipLimit", "4.0"},
+                                                         {"HE.tilesX", "4"},
+                                                         {"HE.tilesY", "4"},
+                                                         {"ORBextractor.nFeatures", "1500"},
+                                                         {"ORBextractor.scaleFactor", "1.3"},
+                                                         {"ORBextractor.nLevels", "6"},
+                                                         {"ORBextractor.iniThFAST", "25"},
+                                                         {"ORBextractor.minThFAST", "5"},
+                                                         {"ORBextractor.cellSize", "40.0"},
+                                                         {"Stereo.maxDistance", "80"},
+                                                         {"Stereo.rowBand", "3.0"},
+                                                         {"Stereo.sadHalfWindow", "4"},
+                                                         {"Stereo.sadSearch", "6"},
+                                                         {"Stereo.minDepthBaselines", "2.0"},
+                                                         {"Pipeline.parallel", "0"},
+                                                         {"Pipeline.rightFeaturesFactor", "1.5"},
+                                                         {"Pipeline.leftOnlyFeatures", "0.5"},
+                                                         {"ThDepth", "40.0"},
+                                                         {"Camera.fps", "30.0"},
+                                                         {"Tracker.referenceRatioStereo", "0.8"},
+                                                         {"Tracker.referenceNearClipWeight", "0.5"}};
   for (const auto& [key, value] : changes) {
     // The key's line replaced, or appended when the file does not set it.
     std::string text = base;
@@ -170,7 +185,8 @@ TEST(FrontendOptions, OrbSlam3SettingsFileIsHonoured) {
   const FrontendOptions options = with_settings(scratch.write(
       "File.version: \"1.0\"\nCamera.type: \"PinHole\"\nCamera1.fx: 400.0\nCamera1.fy: 400.0\nCamera1.cx: 376.0\n"
       "Camera1.cy: 240.0\nCamera.width: 752\nCamera.height: 480\nCamera.fps: 10\nCamera.RGB: 1\nStereo.b: 0.1\n"
-      "Stereo.ThDepth: 60.0\nORBextractor.nFeatures: 1300\nORBextractor.nFeaturess: 1400\nViewer.KeyFrameSize: 0.05\n"));
+      "Stereo.ThDepth: 60.0\nORBextractor.nFeatures: 1300\nORBextractor.nFeaturess: 1400\nViewer.KeyFrameSize: "
+      "0.05\n"));
   EXPECT_EQ(options.features.orb.features, 1300);
   EXPECT_EQ(options.tracker.close_depth_baselines, 60.0);
   EXPECT_EQ(options.tracker.max_frames_between_keyframes, 10);
@@ -216,8 +232,8 @@ TEST(FrontendOptions, VocabularyFileDefaultNoneAndBadFiles) {
 TEST(FrontendOptions, EurocAndSynthConfigsAreTheCoreDefaults) {
   const FrontendOptions defaults = FrontendOptions::from_config(runtime::Config::empty());
   for (const char* name : {"euroc", "synth"}) {
-    const FrontendOptions options = FrontendOptions::from_config(
-        runtime::Config::load(std::filesystem::path(HESLAM_SOURCE_DIR) / "config/frontend" / (std::string(name) + ".yaml")));
+    const FrontendOptions options = FrontendOptions::from_config(runtime::Config::load(
+        std::filesystem::path(HESLAM_SOURCE_DIR) / "config/frontend" / (std::string(name) + ".yaml")));
     EXPECT_EQ(options.features.he.mode, defaults.features.he.mode) << name;
     EXPECT_EQ(options.features.orb.features, defaults.features.orb.features) << name;
     EXPECT_EQ(options.features.stereo.max_distance, defaults.features.stereo.max_distance) << name;
@@ -227,7 +243,8 @@ TEST(FrontendOptions, EurocAndSynthConfigsAreTheCoreDefaults) {
 }
 
 TEST(FrontendOptions, ShippedConfigsLoad) {
-  for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(HESLAM_SOURCE_DIR) / "config/frontend")) {
+  for (const auto& entry :
+       std::filesystem::directory_iterator(std::filesystem::path(HESLAM_SOURCE_DIR) / "config/frontend")) {
     const std::string name = entry.path().filename().string();
     const auto config = runtime::Config::load(entry.path());
     EXPECT_NO_THROW(FrontendOptions::from_config(config)) << name;

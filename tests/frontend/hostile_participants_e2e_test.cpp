@@ -114,8 +114,8 @@ TEST(HostileParticipants, LockstepRunIsUnchangedAndEveryRefusalIsCounted) {
                              {"--domain", domain_arg, "--dataset", dataset.string(), "--seconds", kHostileSeconds},
                              dir.path(), "hostile_publisher");
   test::ChildProcess second_replay(test::bin_dir() / "heslam-replay",
-                                   {dataset.string(), "--rate", "1", "--duration", kSecondReplayDuration_s, "--wait", "1",
-                                    "--no-progress", "--no-keyboard", "--domain", domain_arg},
+                                   {dataset.string(), "--rate", "1", "--duration", kSecondReplayDuration_s, "--wait",
+                                    "1", "--no-progress", "--no-keyboard", "--domain", domain_arg},
                                    dir.path(), "second_replay");
 
   ASSERT_EQ(test::finish(*run), 0) << run->out() << run->err();
@@ -182,10 +182,10 @@ TEST(HostileParticipants, ADifferentCalibrationFromAnotherWriterIsRefusedEvenAft
   const CalibrationMessage different_message(different, StereoRectifier(different).camera());
   const runtime::Topics topics;
 
-  test::ChildProcess frontend(test::bin_dir() / "heslam-frontend",
-                              {"--domain", std::to_string(domain), "--config",
-                               (test::source_dir() / "config/frontend/euroc.yaml").string()},
-                              dir.path(), "frontend");
+  test::ChildProcess frontend(
+      test::bin_dir() / "heslam-frontend",
+      {"--domain", std::to_string(domain), "--config", (test::source_dir() / "config/frontend/euroc.yaml").string()},
+      dir.path(), "frontend");
   runtime::Participant second(runtime::ParticipantOptions{domain, ""});
   runtime::Writer<msg::StereoCalibration> second_writer(second, topics.calibration());
   {
@@ -197,7 +197,8 @@ TEST(HostileParticipants, ADifferentCalibrationFromAnotherWriterIsRefusedEvenAft
   }  // the run's calibration writer leaves
   ASSERT_TRUE(second_writer.wait_for_readers(1, std::chrono::seconds(10)));
   second_writer.write(different_message.get());
-  EXPECT_TRUE(err_contains_within(frontend, "refused a different calibration ('another writer'", std::chrono::seconds(10)))
+  EXPECT_TRUE(
+      err_contains_within(frontend, "refused a different calibration ('another writer'", std::chrono::seconds(10)))
       << frontend.err();
   frontend.signal(SIGTERM);
   EXPECT_EQ(frontend.wait(test::kStopTimeout).value_or(-1), 0) << frontend.err();

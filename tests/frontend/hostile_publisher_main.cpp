@@ -7,10 +7,10 @@
 //   stray_frame       a valid StereoFrame of the dataset's size with seq 1,000,000
 //   malformed_frame   a StereoFrame whose images hold 16 bytes, seq 2,000,000
 //   calibration       the dataset's calibration with the left fx 10 % larger (a valid, different one)
-//   nan_keyframe      a Keyframe with a NaN pose;  nan_keyframe_state: KeyframeState of fe:1, NaN pose (wrong_keyframe_state: fe:2)
-//   nan_point         MapPointState lm:1 with a NaN position;  nan_odometry: Odometry seq 5, NaN pose
-//   nan_correction    a LoopCorrection moving fe:1 to a NaN pose
-//   wrong_keyframe_state, wrong_odometry: valid samples with a pose 100 m away (only the
+//   nan_keyframe      a Keyframe with a NaN pose;  nan_keyframe_state: KeyframeState of fe:1, NaN pose
+//   (wrong_keyframe_state: fe:2) nan_point         MapPointState lm:1 with a NaN position;  nan_odometry: Odometry seq
+//   5, NaN pose nan_correction    a LoopCorrection moving fe:1 to a NaN pose wrong_keyframe_state, wrong_odometry:
+//   valid samples with a pose 100 m away (only the
 //                     single-writer rule keeps these out)
 //
 //   heslam-test-hostile --domain N --dataset DIR [--seconds S]
@@ -69,7 +69,7 @@ struct Hostile {
   runtime::Participant participant;
   std::shared_ptr<void> writer;  // a runtime::Writer<T>; declared last, so deleted before the participant
   std::function<int()> matched_readers;
-  std::function<void()> write;   // the sample is copied into the closure (its buffers stay alive in run())
+  std::function<void()> write;  // the sample is copied into the closure (its buffers stay alive in run())
 };
 
 template <typename T>

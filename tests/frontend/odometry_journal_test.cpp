@@ -58,7 +58,7 @@ TEST(OdometryJournal, ResumesTheFramesOfItsRunExactlyAndSurvivesATornLine) {
     EXPECT_EQ(first.tracked_points, 300u);
     EXPECT_TRUE(first.keyframe_created);
     EXPECT_EQ(opened.frames[1].state, heslam_msg_TRACKING_LOST);
-    journal.append(odometry(2, heslam_msg_TRACKING_OK, 2.0), true);  // after the torn line, not glued to it
+    journal.append(odometry(2, heslam_msg_TRACKING_OK, 2.0), true);   // after the torn line, not glued to it
     journal.append(odometry(3, heslam_msg_TRACKING_OK, 3.0), false);  // killed while waiting for the mapper
   }
   {
@@ -67,7 +67,7 @@ TEST(OdometryJournal, ResumesTheFramesOfItsRunExactlyAndSurvivesATornLine) {
     ASSERT_EQ(opened.frames.size(), 4u);  // the unfinished frame's odometry too (its keyframe) ...
     EXPECT_EQ(opened.frames[3].seq, 3u);
     EXPECT_EQ(opened.torn_lines, 0);  // cut off by the open before
-    EXPECT_EQ(opened.last_seq, 2u);  // ... but it is tracked again
+    EXPECT_EQ(opened.last_seq, 2u);   // ... but it is tracked again
   }
   {
     OdometryJournal journal(path);
@@ -93,7 +93,7 @@ TEST(OdometryJournal, ALineWithAnUnknownStateIsSkipped) {
   std::stringstream text;
   text << std::ifstream(path).rdbuf();
   std::string content = text.str();
-  const std::size_t last = content.rfind('\n', content.size() - 2) + 1;  // the start of seq 1's line
+  const std::size_t last = content.rfind('\n', content.size() - 2) + 1;             // the start of seq 1's line
   const std::size_t state_at = content.find(' ', content.find(' ', last) + 1) + 1;  // its third field
   ASSERT_EQ(content.substr(last, 2), "1 ");
   ASSERT_EQ(content[state_at], '1');  // TRACKING_OK
@@ -124,10 +124,10 @@ TEST(OdometryJournal, AForgedLineIsDroppedAndCountedNotResumedFrom) {
   std::stringstream text;
   text << std::ifstream(path).rdbuf();
   std::string content = text.str();
-  std::size_t x_at = content.find("\n1 ") + 1;  // seq 1's line
+  std::size_t x_at = content.find("\n1 ") + 1;                                 // seq 1's line
   for (int field = 0; field < 4; ++field) x_at = content.find(' ', x_at) + 1;  // seq stamp state reference
-  ASSERT_EQ(content.substr(x_at, 2), "1 ");  // T_wc's x
-  content.replace(x_at, 1, "9.7");           // right format, wrong checksum
+  ASSERT_EQ(content.substr(x_at, 2), "1 ");                                    // T_wc's x
+  content.replace(x_at, 1, "9.7");                                             // right format, wrong checksum
   std::ofstream(path, std::ios::trunc) << content;
   {
     OdometryJournal journal(path);
@@ -142,8 +142,9 @@ TEST(OdometryJournal, AForgedLineIsDroppedAndCountedNotResumedFrom) {
     journal.append(odometry(1, heslam_msg_TRACKING_OK, 1.0), true);
   }
   // A line with a right checksum but a number already used (a line copied, or another writer).
-  std::ofstream(path, std::ios::app) << runtime::RunJournal::line(2, "5 1250000000 1 72057594037927936 8.7 0 0 0 0 0 1 "
-                                                                     "0 0 0 0 0 0 1 1200 305 0 1");
+  std::ofstream(path, std::ios::app) << runtime::RunJournal::line(2,
+                                                                  "5 1250000000 1 72057594037927936 8.7 0 0 0 0 0 1 "
+                                                                  "0 0 0 0 0 0 1 1200 305 0 1");
   OdometryJournal journal(path);
   const OdometryJournal::Opened opened = journal.open_for_run("run-a");
   ASSERT_EQ(opened.frames.size(), 2u);

@@ -64,7 +64,7 @@ TEST(TrajectoryRecorder, CulledKeyframeFollowsItsParent) {
   recorder.add_keyframe(1, 0, 0, translation(0, 0, 0));
   recorder.add_keyframe(2, 10, 5, translation(1, 0, 0));
   recorder.add_frame(tracked(6, 2, translation(0, 0, 1), translation(1, 0, 1)));
-  recorder.update_keyframe(2, translation(1, 0, 0), 1, true);  // culled, parent 1
+  recorder.update_keyframe(2, translation(1, 0, 0), 1, true);       // culled, parent 1
   recorder.update_keyframe(1, translation(0, 2, 0), kNoId, false);  // parent moved afterwards
   const RecordedTrajectories out = recorder.build();
   ASSERT_EQ(out.frames.size(), 1u);
@@ -117,8 +117,8 @@ TEST(RecorderFiles, WritesTrajectoryKeyframesAndLostListInTheChosenFormat) {
   recorder.add_keyframe(1, 1'000'000'000, 0, translation(0, 0, 0));
   recorder.add_frame(tracked(0, 1, translation(0, 0, 0), translation(0, 0, 0)));
   recorder.add_frame(tracked(1, 1, translation(0.1, 0, 0), translation(0.1, 0, 0)));
-  const RecorderOptions options =
-      RecorderOptions::from(runtime::Config::empty(), {"--output", (dir / "sub/run.csv").string(), "--format", "euroc"});
+  const RecorderOptions options = RecorderOptions::from(
+      runtime::Config::empty(), {"--output", (dir / "sub/run.csv").string(), "--format", "euroc"});
   EXPECT_EQ(options.keyframe_output, dir / "sub/run.keyframes.csv");
   EXPECT_EQ(options.lost_output, dir / "sub/run.lost.txt");
   write_recording(recorder.build(), options);
@@ -146,7 +146,8 @@ Pose3 rotation_about(const Eigen::Vector3d& axis, double angle_rad, const Eigen:
 TEST(RecorderFrames, BodyFrameGivesTheBodysMotionAndRectifiedIsUntouched) {
   const Pose3 T_b_r = rotation_about({0.2, 1, 0.1}, 1.5, {-0.02, 0.065, 0.01});
   std::vector<Pose3> T_Wb;
-  for (int t = 0; t < 5; ++t) T_Wb.push_back(rotation_about({t * 0.3, 1, 0.5}, 0.1 * t + 0.4, {1.0 + 0.2 * t, 2.0, 0.1 * t * t}));
+  for (int t = 0; t < 5; ++t)
+    T_Wb.push_back(rotation_about({t * 0.3, 1, 0.5}, 0.1 * t + 0.4, {1.0 + 0.2 * t, 2.0, 0.1 * t * t}));
   RecordedTrajectories recording;
   for (int t = 0; t < 5; ++t) {
     const Pose3 T_wr = (T_Wb[0] * T_b_r).inverse() * (T_Wb[t] * T_b_r);
@@ -221,8 +222,8 @@ TEST(RecorderFiles, FolderAsOutputIsAnErrorAndWritesAreAtomic) {
     write_recording(recorder.build(), options);
     ADD_FAILURE() << "a folder accepted as the trajectory file";
   } catch (const std::runtime_error& error) {
-    EXPECT_EQ(std::string(error.what()), (dir / "taken.txt").string() +
-                                             ": is a folder; expected the file name of the trajectory");
+    EXPECT_EQ(std::string(error.what()),
+              (dir / "taken.txt").string() + ": is a folder; expected the file name of the trajectory");
   }
   options = RecorderOptions::from(runtime::Config::empty(), {"--output", (dir / "run.txt").string()});
   write_recording(recorder.build(), options);
@@ -325,8 +326,8 @@ TEST(FrameJournal, AFrameAppendedAfterATornLineSurvivesTheNextOpen) {
 TEST(FrameJournal, APhantomLineIsDroppedAndCountedNotRecorded) {
   const std::filesystem::path path = journal_of_tracked_frames("heslam_frame_journal_phantom.journal", 2);
   const std::string phantom = "142 8100000000 1 OK 7 0 0 0 0 0 0 1 5 0 0 0 0 0 1";
-  std::ofstream(path, std::ios::app) << phantom << " #3 0badf00d\n";                  // a wrong checksum
-  std::ofstream(path, std::ios::app) << runtime::RunJournal::line(2, phantom);        // a number used before
+  std::ofstream(path, std::ios::app) << phantom << " #3 0badf00d\n";            // a wrong checksum
+  std::ofstream(path, std::ios::app) << runtime::RunJournal::line(2, phantom);  // a number used before
   FrameJournal journal(path);
   const FrameJournal::Opened opened = journal.open_for_run("run-a");
   ASSERT_EQ(opened.frames.size(), 2u);

@@ -73,7 +73,9 @@ TEST(EurocImu, PreintegrationFollowsTheGroundTruthOfMh01) {
   for (std::size_t k = 0; k < intervals.size(); ++k) {
     const std::size_t i = starts[k];
     const std::size_t j = i + kStride;
-    const auto degrees = [&](const Eigen::Matrix3d& dR) { return so3::log(dR.transpose() * rotations[k]).norm() * 180.0 / M_PI; };
+    const auto degrees = [&](const Eigen::Matrix3d& dR) {
+      return so3::log(dR.transpose() * rotations[k]).norm() * 180.0 / M_PI;
+    };
     worst_zero_bias_deg = std::max(worst_zero_bias_deg, degrees(intervals[k].delta_R()));
     worst_rotation_deg = std::max(worst_rotation_deg, degrees(intervals[k].delta_R(bias)));
     NavState start;
@@ -84,10 +86,11 @@ TEST(EurocImu, PreintegrationFollowsTheGroundTruthOfMh01) {
     const NavState end = intervals[k].predict(start, kGravity, bias);
     worst_position_m = std::max(worst_position_m, (end.p_wb - truth.poses_wc[j].translation()).norm());
   }
-  std::printf("[ figures  ] MH01, %zu windows of 0.5 s: gyro bias (%.4f, %.4f, %.4f) rad/s in %d iterations; rotation "
-              "error worst %.3f deg with it, %.3f deg with zero bias; position worst %.1f mm\n",
-              intervals.size(), gyro.gyro_rad_s.x(), gyro.gyro_rad_s.y(), gyro.gyro_rad_s.z(), gyro.iterations,
-              worst_rotation_deg, worst_zero_bias_deg, worst_position_m * 1e3);
+  std::printf(
+      "[ figures  ] MH01, %zu windows of 0.5 s: gyro bias (%.4f, %.4f, %.4f) rad/s in %d iterations; rotation "
+      "error worst %.3f deg with it, %.3f deg with zero bias; position worst %.1f mm\n",
+      intervals.size(), gyro.gyro_rad_s.x(), gyro.gyro_rad_s.y(), gyro.gyro_rad_s.z(), gyro.iterations,
+      worst_rotation_deg, worst_zero_bias_deg, worst_position_m * 1e3);
   EXPECT_GT(worst_zero_bias_deg, 1.0);  // the ADIS16448's bias on MH01 is large: it must be estimated
   // EuRoC's own estimate for MH_01_easy (its 17-column ground truth's b_w): (-0.0022, 0.0207, 0.0764) rad/s.
   EXPECT_LT((gyro.gyro_rad_s - Eigen::Vector3d(-0.0022, 0.0207, 0.0764)).lpNorm<Eigen::Infinity>(), 0.005);
@@ -114,7 +117,8 @@ class EurocImuErrors : public ::testing::Test {
 };
 
 constexpr const char* kSensorYaml =
-    "T_BS:\n  cols: 4\n  rows: 4\n  data: [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]\n"
+    "T_BS:\n  cols: 4\n  rows: 4\n  data: [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, "
+    "1.0]\n"
     "rate_hz: 200\ngyroscope_noise_density: 1.6968e-04\ngyroscope_random_walk: 1.9393e-05\n"
     "accelerometer_noise_density: 2.0000e-3\naccelerometer_random_walk: 3.0000e-3\n";
 constexpr const char* kHeader = "#timestamp [ns],wx,wy,wz,ax,ay,az\n";

@@ -7,8 +7,8 @@
 #include <random>
 #include <vector>
 
-#include <Eigen/LU>
 #include <gtest/gtest.h>
+#include <Eigen/LU>
 
 #include "components/core/imu/gyro_bias.hpp"
 #include "components/core/imu/so3.hpp"
@@ -42,9 +42,7 @@ TEST(So3, ExpAndLogAreInverseAndJacobiansMatchFiniteDifferences) {
 
 // A smooth body trajectory with closed-form position and orientation; the IMU's readings from it.
 struct Trajectory {
-  static Eigen::Vector3d position(double t) {
-    return {std::sin(t), std::cos(1.3 * t), 0.5 * std::sin(0.7 * t)};
-  }
+  static Eigen::Vector3d position(double t) { return {std::sin(t), std::cos(1.3 * t), 0.5 * std::sin(0.7 * t)}; }
   static Eigen::Vector3d velocity(double t) {
     return {std::cos(t), -1.3 * std::sin(1.3 * t), 0.35 * std::cos(0.7 * t)};
   }
@@ -85,8 +83,7 @@ TEST(ImuPreintegration, PredictsAnAnalyticTrajectoryAndConvergesWithTheRate) {
   double previous_position_error = 0.0;
   for (const double rate_hz : {200.0, 1000.0}) {
     const std::vector<ImuSample> samples = Trajectory::samples(t0 - 0.05, t1 + 0.05, rate_hz);
-    const ImuPreintegration preintegration =
-        preintegrate(samples, std::llround(t0 * 1e9), std::llround(t1 * 1e9));
+    const ImuPreintegration preintegration = preintegrate(samples, std::llround(t0 * 1e9), std::llround(t1 * 1e9));
     EXPECT_NEAR(preintegration.duration_s(), t1 - t0, 1e-9);
     const NavState predicted = preintegration.predict(Trajectory::state(t0), kGravity);
     const NavState truth = Trajectory::state(t1);
@@ -142,9 +139,10 @@ TEST(ImuPreintegration, BiasJacobiansMatchReintegration) {
   const double rotation_left = rotation_error_rad(preintegration.delta_R(updated), again.delta_R());
   const double velocity_left = (preintegration.delta_v(updated) - again.delta_v()).norm();
   const double position_left = (preintegration.delta_p(updated) - again.delta_p()).norm();
-  std::printf("[ figures  ] bias change: rotation %.2e -> %.2e rad, velocity %.2e -> %.2e m/s, position %.2e -> "
-              "%.2e m after the first-order correction\n",
-              rotation_change, rotation_left, velocity_change, velocity_left, position_change, position_left);
+  std::printf(
+      "[ figures  ] bias change: rotation %.2e -> %.2e rad, velocity %.2e -> %.2e m/s, position %.2e -> "
+      "%.2e m after the first-order correction\n",
+      rotation_change, rotation_left, velocity_change, velocity_left, position_change, position_left);
   EXPECT_LT(rotation_left, 0.02 * rotation_change);
   EXPECT_LT(velocity_left, 0.02 * velocity_change);
   EXPECT_LT(position_left, 0.02 * position_change);
@@ -199,7 +197,8 @@ TEST(ImuPreintegration, CovarianceMatchesAMonteCarloOfNoisyMeasurements) {
   const double cross = propagated.block<3, 3>(6, 3).trace();
   const double measured_cross = sample_covariance.block<3, 3>(6, 3).trace();
   EXPECT_NEAR(measured_cross / cross, 1.0, 0.15);
-  EXPECT_NEAR(nominal.bias_random_walk_covariance()(0, 0), noise.gyro_random_walk * noise.gyro_random_walk * 0.5, 1e-15);
+  EXPECT_NEAR(nominal.bias_random_walk_covariance()(0, 0), noise.gyro_random_walk * noise.gyro_random_walk * 0.5,
+              1e-15);
 }
 
 // A gyro bias added to exact readings is recovered from the true rotations of a few intervals.

@@ -65,8 +65,9 @@ void expect_like_equal_exposure(const fs::path& source, const fs::path& dir, con
   options.stereo_gain = {gain};
   photometric::write_dataset_copy(source, copy, options);
   const RunFigures apart = run_full_system(copy, dir, label);
-  std::printf("[ figures  ] MH01 full system, left x%g / right x%g: ATE %.3f mm (%.2fx equal), %d keyframes (equal %d)\n",
-              gain.left, gain.right, apart.ate_m * 1e3, apart.ate_m / equal.ate_m, apart.keyframes, equal.keyframes);
+  std::printf(
+      "[ figures  ] MH01 full system, left x%g / right x%g: ATE %.3f mm (%.2fx equal), %d keyframes (equal %d)\n",
+      gain.left, gain.right, apart.ate_m * 1e3, apart.ate_m / equal.ate_m, apart.keyframes, equal.keyframes);
   EXPECT_EQ(apart.poses, kFrames) << label;
   EXPECT_LE(apart.keyframes, kMaxKeyframeRatio * equal.keyframes) << label;
   EXPECT_LT(apart.ate_m, kMaxAteRatio * equal.ate_m) << label;

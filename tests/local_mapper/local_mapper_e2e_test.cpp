@@ -1,8 +1,8 @@
 // heslam-local-mapper end to end: replay -> frontend -> local mapper -> recorder as real processes
-// under heslam-supervisor, in lockstep (config/pipelines/euroc.yaml with --arg loop_closer=none), and the fault case: the
-// mapper is killed with SIGKILL mid-run, the supervisor restarts it, it resumes from its map file and
-// the run completes with every frame and every keyframe. Each test uses its own DDS domain; children
-// are always killed and reaped (ChildProcess; the supervisor's children die with it).
+// under heslam-supervisor, in lockstep (config/pipelines/euroc.yaml with --arg loop_closer=none), and the fault case:
+// the mapper is killed with SIGKILL mid-run, the supervisor restarts it, it resumes from its map file and the run
+// completes with every frame and every keyframe. Each test uses its own DDS domain; children are always killed and
+// reaped (ChildProcess; the supervisor's children die with it).
 #include <gtest/gtest.h>
 
 #include <signal.h>
@@ -26,8 +26,8 @@
 
 #include "components/core/mapping/map_file.hpp"
 #include "pipeline_runs.hpp"
-#include "test_support.hpp"
 #include "synth_render.hpp"
+#include "test_support.hpp"
 #include "tools/bench/frontend_offline/kidnapped_copy.hpp"
 
 namespace heslam {
@@ -89,9 +89,10 @@ TEST(LocalMapperEndToEnd, EurocMh01LockstepWithMapperNoWorseThanFrontendAlone) {
   ASSERT_EQ(finish(*alone), 0) << alone->out() << alone->err();
   const double mapper_ate_m = ate_rmse_m(dataset, dir.path() / "mapper.txt");
   const double alone_ate_m = ate_rmse_m(dataset, dir.path() / "alone.txt");
-  std::printf("[ figures  ] euroc_mh01_handheld lockstep: frontend + local mapper ATE rmse %.3f mm, frontend alone "
-              "%.3f mm; %d keyframes, %zu map points\n",
-              mapper_ate_m * 1e3, alone_ate_m * 1e3, keyframes, map.map.points.size());
+  std::printf(
+      "[ figures  ] euroc_mh01_handheld lockstep: frontend + local mapper ATE rmse %.3f mm, frontend alone "
+      "%.3f mm; %d keyframes, %zu map points\n",
+      mapper_ate_m * 1e3, alone_ate_m * 1e3, keyframes, map.map.points.size());
   // The local mapper's target (3.5 mm, better than the frontend alone) is NOT reached. Since the frontend's
   // disparity residual and clipped HE the frontend alone measures 3.784 mm and the mapper run 3.808
   // mm; before them 4.03 and 3.89 mm. The mapper's local BA does not move the clip's error (it is not
@@ -114,7 +115,8 @@ KilledRun run_and_kill(const fs::path& dataset, const fs::path& dir, const std::
   const auto deadline = std::chrono::steady_clock::now() + kPipelineTimeout;
   pid_t killed = 0;
   KilledRun run;
-  while (killed == 0 && std::chrono::steady_clock::now() < deadline && !supervisor->wait(std::chrono::milliseconds(0))) {
+  while (killed == 0 && std::chrono::steady_clock::now() < deadline &&
+         !supervisor->wait(std::chrono::milliseconds(0))) {
     if (keyframes_in(map_file) >= kKeyframesBeforeKill) {
       const pid_t pid = child_pid(supervisor->pid(), comm);
       if (pid > 0 && kill(pid, SIGKILL) == 0) killed = pid;
@@ -155,9 +157,10 @@ TEST(LocalMapperEndToEnd, KilledMapperIsRestartedResumesAndLosesNoKeyframe) {
         << "keyframe " << id << " of the map is not in the recorded keyframes";
   }
   const double ate_m = ate_rmse_m(dataset, dir.path() / "fault.txt");
-  std::printf("[ figures  ] mapper killed at %zu keyframes, restarted: %zu keyframes in the final map, %zu points, "
-              "ATE rmse %.3f mm\n",
-              keyframes_at_kill, map.map.keyframes.size(), map.map.points.size(), ate_m * 1e3);
+  std::printf(
+      "[ figures  ] mapper killed at %zu keyframes, restarted: %zu keyframes in the final map, %zu points, "
+      "ATE rmse %.3f mm\n",
+      keyframes_at_kill, map.map.keyframes.size(), map.map.points.size(), ate_m * 1e3);
   EXPECT_LT(ate_m, 0.0045);
 }
 
@@ -177,8 +180,10 @@ TEST(LocalMapperEndToEnd, KilledFrontendIsRestartedRelocalizesAndLosesNoFrame) {
   ASSERT_EQ(estimate.size(), 160u) << output;
   // One map: a second one would be a different world frame and wreck the ATE.
   const double ate_m = ate_rmse_m(dataset, dir.path() / "fault.txt");
-  std::printf("[ figures  ] frontend killed at %zu keyframes, restarted and relocalized: 160/160 frames, ATE rmse "
-              "%.3f mm\n", run.keyframes_at_kill, ate_m * 1e3);
+  std::printf(
+      "[ figures  ] frontend killed at %zu keyframes, restarted and relocalized: 160/160 frames, ATE rmse "
+      "%.3f mm\n",
+      run.keyframes_at_kill, ate_m * 1e3);
   EXPECT_LT(ate_m, 0.0045);
 }
 
@@ -234,9 +239,10 @@ TEST(LocalMapperEndToEnd, SyntheticRoomWithMapperBeatsFrontendAlone) {
   ASSERT_EQ(eval::read_trajectory(dir.path() / "mapper.txt").size(), truth.size());
   const double mapper_ate_m = ate_rmse_m(dataset, dir.path() / "mapper.txt");
   const double alone_ate_m = ate_rmse_m(dataset, dir.path() / "alone.txt");
-  std::printf("[ figures  ] synthetic room, %zu frames, path %.2f m: frontend + local mapper ATE rmse %.2f mm, "
-              "frontend alone %.2f mm\n",
-              truth.size(), truth.path_length_m(), mapper_ate_m * 1e3, alone_ate_m * 1e3);
+  std::printf(
+      "[ figures  ] synthetic room, %zu frames, path %.2f m: frontend + local mapper ATE rmse %.2f mm, "
+      "frontend alone %.2f mm\n",
+      truth.size(), truth.path_length_m(), mapper_ate_m * 1e3, alone_ate_m * 1e3);
   // Measured 5.29 mm with the mapper, 9.14 mm alone (lockstep: deterministic).
   EXPECT_LT(mapper_ate_m, alone_ate_m);
 }
@@ -312,9 +318,11 @@ TEST(LocalMapperProcess, AForgedRunFileLineIsDroppedAndCounted) {
   }
   std::ofstream(run_file, std::ios::app) << "17 #1 0badf00d\n";  // a correction id, as if applied
   auto mapper = start_mapper();
-  const std::string expected = run_file.string() + ": 1 line dropped, not resumed from (1 failing their checksum, 0 out of sequence)";
+  const std::string expected =
+      run_file.string() + ": 1 line dropped, not resumed from (1 failing their checksum, 0 out of sequence)";
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while ((mapper->out() + mapper->err()).find(expected) == std::string::npos && std::chrono::steady_clock::now() < deadline) {
+  while ((mapper->out() + mapper->err()).find(expected) == std::string::npos &&
+         std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   mapper->signal(SIGTERM);
@@ -395,9 +403,10 @@ TEST(LocalMapperEndToEnd, SavedMapIsLoadedAndALaterRunLocalizesInIt) {
   eval::ApeOptions same_frame;
   same_frame.align = eval::AlignMode::none;
   const auto ape = eval::compute_ape(eval::read_trajectory(dir.path() / "first.txt"), later, same_frame);
-  std::printf("[ figures  ] later run in the saved map: %zu poses, against the first run without alignment: rmse "
-              "%.2f mm, max %.2f mm\n",
-              later.size(), ape.translation_m.rmse * 1e3, ape.translation_m.max * 1e3);
+  std::printf(
+      "[ figures  ] later run in the saved map: %zu poses, against the first run without alignment: rmse "
+      "%.2f mm, max %.2f mm\n",
+      later.size(), ape.translation_m.rmse * 1e3, ape.translation_m.max * 1e3);
   EXPECT_LT(ape.translation_m.rmse, 0.005);
   EXPECT_LT(ape.translation_m.max, 0.01);
 
@@ -408,8 +417,8 @@ TEST(LocalMapperEndToEnd, SavedMapIsLoadedAndALaterRunLocalizesInIt) {
     std::printf("[ skipped  ] the map-of-another-place part: shared data 'euroc_v101_head' not found\n");
     return;
   }
-  auto elsewhere = start_pipeline("euroc_localize", other_place, dir.path(), "elsewhere", test_domain(),
-                                  {"map=" + saved.string()});
+  auto elsewhere =
+      start_pipeline("euroc_localize", other_place, dir.path(), "elsewhere", test_domain(), {"map=" + saved.string()});
   EXPECT_EQ(finish(*elsewhere), 1) << elsewhere->out() << elsewhere->err();
   const std::string elsewhere_output = elsewhere->out() + elsewhere->err();
   EXPECT_NE(elsewhere_output.find("never relocalized in the saved map"), std::string::npos) << elsewhere_output;
@@ -422,8 +431,8 @@ TEST(LocalMapperEndToEnd, SavedMapIsLoadedAndALaterRunLocalizesInIt) {
 TEST(LocalMapperEndToEnd, LocalizeWithoutAMapRefusesToStart) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const test::ScratchDir dir("localize_nomap");
-  auto run = start_pipeline("euroc_localize", test::shared_dataset("euroc_mh01_handheld"), dir.path(), "nomap",
-                            test_domain());
+  auto run =
+      start_pipeline("euroc_localize", test::shared_dataset("euroc_mh01_handheld"), dir.path(), "nomap", test_domain());
   EXPECT_EQ(finish(*run), 1) << run->out() << run->err();
   const std::string output = run->out() + run->err();
   EXPECT_NE(output.find("local_mapper failed at start-up (exit code 1)"), std::string::npos) << output;
@@ -504,11 +513,12 @@ TEST(LocalMapperEndToEnd, SavedMapLocalizesALaterRunStartingFarFromItsNewestKeyf
   // ... and the frontend says why: it never found itself in the saved map.
   EXPECT_NE(newest_only->err().find("never relocalized in the saved map"), std::string::npos) << newest_only->err();
   const int lost_without = test::lost_entries(dir.path() / "newest_only.lost.txt");
-  std::printf("[ figures  ] later run at frames %d-%d of a saved %d-frame corridor_loop map: relocalized at its "
-              "frame %d, %zu poses, largest distance to the first run %.2f mm; newest keyframes only: %d of %d "
-              "frames lost\n",
-              kRevisitFirst, kRevisitFirst + kRevisitFrames - 1, kMappedFrames, relocalized_at, relocalized.size(),
-              max_error_m * 1e3, lost_without, kRevisitFrames);
+  std::printf(
+      "[ figures  ] later run at frames %d-%d of a saved %d-frame corridor_loop map: relocalized at its "
+      "frame %d, %zu poses, largest distance to the first run %.2f mm; newest keyframes only: %d of %d "
+      "frames lost\n",
+      kRevisitFirst, kRevisitFirst + kRevisitFrames - 1, kMappedFrames, relocalized_at, relocalized.size(),
+      max_error_m * 1e3, lost_without, kRevisitFrames);
   EXPECT_EQ(lost_without, kRevisitFrames) << newest_only->out() << newest_only->err();
 }
 

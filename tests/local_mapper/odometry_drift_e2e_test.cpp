@@ -43,8 +43,8 @@ TEST(OdometryDrift, CorridorLoopWithoutLoopCloserStaysAtItsMeasuredDrift) {
   const std::string render_error = test::cached_synth("corridor_loop", kCorridorFrames, dataset);
   ASSERT_TRUE(render_error.empty()) << render_error;
   const test::ScratchDir dir("drift_corridor");
-  auto supervisor = test::start_pipeline("synth", dataset, dir.path(), "odometry", test::exclusive_domain_id(),
-                                         {"loop_closer=none"});
+  auto supervisor =
+      test::start_pipeline("synth", dataset, dir.path(), "odometry", test::exclusive_domain_id(), {"loop_closer=none"});
   ASSERT_EQ(test::finish(*supervisor), 0) << supervisor->out() << supervisor->err();
   const fs::path trajectory = dir.path() / "odometry.txt";
   const eval::Trajectory truth = test::camera_ground_truth(dataset);
@@ -71,10 +71,11 @@ TEST(OdometryDrift, StreetWithoutLoopCloserStaysAtItsMeasuredKittiDrift) {
   ASSERT_EQ(estimate.size(), truth.size());
   const double ate_m = eval::compute_ape(truth, estimate).translation_m.rmse;
   const eval::KittiResult drift = eval::compute_kitti_metrics(truth, estimate);
-  std::printf("[ figures  ] street %d frames, %.1f m, no loop closer: ATE rmse %.1f mm, KITTI drift %.3f %% / "
-              "%.4f deg/100 m\n",
-              kStreetFrames, truth.path_length_m(), ate_m * 1e3, drift.translation_error_percent,
-              drift.rotation_error_deg_per_100m);
+  std::printf(
+      "[ figures  ] street %d frames, %.1f m, no loop closer: ATE rmse %.1f mm, KITTI drift %.3f %% / "
+      "%.4f deg/100 m\n",
+      kStreetFrames, truth.path_length_m(), ate_m * 1e3, drift.translation_error_percent,
+      drift.rotation_error_deg_per_100m);
   EXPECT_LT(ate_m, kMargin * kStreetAteM);
   EXPECT_LT(drift.translation_error_percent, kMargin * kStreetDriftPercent);
   EXPECT_LT(drift.rotation_error_deg_per_100m, kMargin * kStreetRotationDegPer100m);

@@ -63,7 +63,8 @@ TEST(LoopClosingTest, DriftGateRejectsALoopThatNeedsMoreDriftThanOdometryMakes) 
   const LoopClosingResult result = closing.process_keyframe(w.map, test::loop_kf_id(kQuery));
   EXPECT_FALSE(result.correction);
   ASSERT_EQ(result.rejected.size(), 1u);
-  EXPECT_NE(result.rejected.front().reason.find("drift gate: implies"), std::string::npos) << result.rejected.front().reason;
+  EXPECT_NE(result.rejected.front().reason.find("drift gate: implies"), std::string::npos)
+      << result.rejected.front().reason;
   EXPECT_NE(result.rejected.front().reason.find("m travelled"), std::string::npos) << result.rejected.front().reason;
 }
 

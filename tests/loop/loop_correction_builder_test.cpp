@@ -11,7 +11,7 @@
 namespace heslam {
 namespace {
 
-constexpr int kLoopIndex = 39;     // revisits keyframe 3's place
+constexpr int kLoopIndex = 39;  // revisits keyframe 3's place
 constexpr int kMatchedIndex = 3;
 
 double max_position_error_m(const test::LoopWorld& w, const std::vector<std::pair<KeyframeId, Pose3>>& T_wc) {

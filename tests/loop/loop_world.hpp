@@ -31,7 +31,7 @@ struct LoopWorldOptions {
   double yaw_bias_rad = 0.004;
   Eigen::Vector3d translation_bias_m{0.002, 0.0005, 0.001};
   double pixel_noise_px = 0.5;  // keypoint noise at level 0 (the disparity's is half of it)
-  int track_window = 6;          // a point not seen for this many keyframes is lost (re-created)
+  int track_window = 6;         // a point not seen for this many keyframes is lost (re-created)
   unsigned seed = 11;
   double camera_radius_m = 2.0;  // the keyframes' circle (the revisit runs 5 cm further out)
   double ring_radius_m = 6.0;    // the points' ring
@@ -44,7 +44,7 @@ struct LoopWorld {
   SyntheticWorld world;
   Map map;
   std::map<KeyframeId, Pose3> true_T_wc;
-  std::map<PointId, int> truth_of_point;                   // world point index
+  std::map<PointId, int> truth_of_point;                     // world point index
   std::map<KeyframeId, std::vector<int>> truth_of_keypoint;  // per keypoint: world point or -1
 };
 

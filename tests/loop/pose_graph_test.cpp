@@ -32,9 +32,9 @@ struct DriftedGraph {
 DriftedGraph make_graph() {
   DriftedGraph graph;
   Pose3 bias = Pose3::Identity();
-  bias.linear() = (Eigen::AngleAxisd(0.007, Eigen::Vector3d::UnitY()) *
-                   Eigen::AngleAxisd(0.0017, Eigen::Vector3d::UnitZ()))
-                      .toRotationMatrix();
+  bias.linear() =
+      (Eigen::AngleAxisd(0.007, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(0.0017, Eigen::Vector3d::UnitZ()))
+          .toRotationMatrix();
   bias.translation() = Eigen::Vector3d(0.01, 0.0, 0.005);
   graph.initial_T_wc[id_of(0)] = true_pose(0);
   for (int k = 1; k < kVertices; ++k) {

@@ -90,9 +90,10 @@ TEST_F(CorridorLoop, ProximityLoopCloserClosesTheSameLoop) {
   ASSERT_EQ(closed.code, 0) << closed.output;
   const eval::Trajectory truth = test::camera_ground_truth(dataset_);
   const double path_m = truth.path_length_m();
-  std::printf("[ figures  ] corridor_loop: with heslam-loop-closer-proximity ATE rmse %.1f mm (%.3f %% of %.1f m), "
-              "%d loop(s) accepted\n",
-              closed.ate_m * 1e3, 100.0 * closed.ate_m / path_m, path_m, loops_accepted(closed.output));
+  std::printf(
+      "[ figures  ] corridor_loop: with heslam-loop-closer-proximity ATE rmse %.1f mm (%.3f %% of %.1f m), "
+      "%d loop(s) accepted\n",
+      closed.ate_m * 1e3, 100.0 * closed.ate_m / path_m, path_m, loops_accepted(closed.output));
   EXPECT_EQ(closed.poses, truth.size());
   EXPECT_GE(loops_accepted(closed.output), 1) << closed.output;
   EXPECT_LT(closed.ate_m, kMaxAteOfPath * path_m);
@@ -103,8 +104,8 @@ TEST_F(CorridorLoop, ProximityLoopCloserClosesTheSameLoop) {
 // still closed where the camera comes back; every frame is in the trajectory.
 TEST_F(CorridorLoop, BowLoopCloserKilledMidRunStillClosesTheLoopAndRemovesTheDrift) {
   const fs::path dir = dir_.path();
-  auto supervisor = test::start_pipeline("synth", dataset_, dir, "killed", test_domain(),
-                                         {"loop_closer=heslam-loop-closer"});
+  auto supervisor =
+      test::start_pipeline("synth", dataset_, dir, "killed", test_domain(), {"loop_closer=heslam-loop-closer"});
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
   bool killed = false;
   while (!killed && std::chrono::steady_clock::now() < deadline) {
@@ -125,10 +126,11 @@ TEST_F(CorridorLoop, BowLoopCloserKilledMidRunStillClosesTheLoopAndRemovesTheDri
   const eval::Trajectory truth = test::camera_ground_truth(dataset_);
   const double path_m = truth.path_length_m();
   const double ate_m = test::ate_rmse_m(dataset_, dir / "killed.txt");
-  std::printf("[ figures  ] corridor_loop %d frames, path %.1f m, heslam-loop-closer killed and restarted: ATE rmse "
-              "%.1f mm (%.3f %%; %.1f mm without a loop closer), %d loop(s) accepted\n",
-              kCorridorFrames, path_m, ate_m * 1e3, 100.0 * ate_m / path_m, kCorridorOdometryAteM * 1e3,
-              loops_accepted(output));
+  std::printf(
+      "[ figures  ] corridor_loop %d frames, path %.1f m, heslam-loop-closer killed and restarted: ATE rmse "
+      "%.1f mm (%.3f %%; %.1f mm without a loop closer), %d loop(s) accepted\n",
+      kCorridorFrames, path_m, ate_m * 1e3, 100.0 * ate_m / path_m, kCorridorOdometryAteM * 1e3,
+      loops_accepted(output));
   EXPECT_EQ(eval::read_trajectory(dir / "killed.txt").size(), truth.size());
   EXPECT_NE(output.find("restart"), std::string::npos) << output;
   EXPECT_GE(loops_accepted(output), 1) << output;
@@ -203,8 +205,9 @@ TEST(LoopCloserEndToEnd, StartedByHandMidRunPicksUpTheMapFromDds) {
                                  dir.path(), "loop_closer_by_hand");
   unsetenv("HESLAM_RUN_ID");
   for (const auto joined_by = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-       loop_closer.out().find("detector ") == std::string::npos && loop_closer.err().find("detector ") == std::string::npos &&
-       !loop_closer.wait(std::chrono::milliseconds(0)) && std::chrono::steady_clock::now() < joined_by;) {
+       loop_closer.out().find("detector ") == std::string::npos &&
+       loop_closer.err().find("detector ") == std::string::npos && !loop_closer.wait(std::chrono::milliseconds(0)) &&
+       std::chrono::steady_clock::now() < joined_by;) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   kill(replay, SIGUSR2);
@@ -222,8 +225,10 @@ TEST(LoopCloserEndToEnd, StartedByHandMidRunPicksUpTheMapFromDds) {
   ASSERT_TRUE(std::regex_search(log, processed_match, processed)) << log;
   const int keyframes = std::stoi(copy_match[1]);
   const int processed_keyframes = std::stoi(processed_match[1]);
-  std::printf("[ figures  ] loop closer started by hand after %d frames: map copy %d keyframes, %s points; "
-              "processed %d keyframes\n", frames, keyframes, copy_match[2].str().c_str(), processed_keyframes);
+  std::printf(
+      "[ figures  ] loop closer started by hand after %d frames: map copy %d keyframes, %s points; "
+      "processed %d keyframes\n",
+      frames, keyframes, copy_match[2].str().c_str(), processed_keyframes);
   // Every keyframe of the run is in its copy, including those written before it joined.
   EXPECT_EQ(keyframes, static_cast<int>(eval::read_trajectory(dir.path() / "byhand.keyframes.txt").size()));
   // It processes the keyframes acknowledged from then on and the recent ones the lockstep topic
@@ -241,8 +246,8 @@ TEST(LoopCloserProcess, AForgedStateFileLineIsDroppedAndCounted) {
   const auto start_loop_closer = [&] {
     return std::make_unique<test::ChildProcess>(
         test::bin_dir() / "heslam-loop-closer-proximity",
-        std::vector<std::string>{"--domain", std::to_string(test_domain()), "--state-file", state.string()},
-        dir.path(), "loop_closer");
+        std::vector<std::string>{"--domain", std::to_string(test_domain()), "--state-file", state.string()}, dir.path(),
+        "loop_closer");
   };
   {
     auto loop_closer = start_loop_closer();
@@ -256,7 +261,8 @@ TEST(LoopCloserProcess, AForgedStateFileLineIsDroppedAndCounted) {
   std::ofstream(state, std::ios::app) << "loop 3 9 #3 0badf00d\n";  // a loop never closed
   auto loop_closer = start_loop_closer();
   const std::string expected =
-      state.string() + ": 1 line dropped, not resumed from (1 failing their checksum, 0 out of sequence); starting afresh";
+      state.string() +
+      ": 1 line dropped, not resumed from (1 failing their checksum, 0 out of sequence); starting afresh";
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   while ((loop_closer->out() + loop_closer->err()).find(expected) == std::string::npos &&
          std::chrono::steady_clock::now() < deadline) {

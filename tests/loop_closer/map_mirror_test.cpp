@@ -33,7 +33,8 @@ double max_abs_difference(const Pose3& a, const Pose3& b) { return (a.matrix() -
 
 class MirrorOfARealTimeRun : public ::testing::Test {
  protected:
-  MirrorOfARealTimeRun() : world_(test::make_room(2500, 91)), frontend_(world_), mapper_(world_.camera, insertion_only()) {}
+  MirrorOfARealTimeRun()
+      : world_(test::make_room(2500, 91)), frontend_(world_), mapper_(world_.camera, insertion_only()) {}
 
   static Pose3 truth(KeyframeId id) { return test::circle_pose(static_cast<int>(id) - 1, 0.05); }
 

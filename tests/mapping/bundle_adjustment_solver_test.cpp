@@ -74,7 +74,9 @@ TEST(BundleAdjustmentSolver, AnalyticJacobiansMatchAutomaticDifferentiation) {
     double* jacobians[2] = {auto_J_pose.data(), auto_J_point.data()};
     ASSERT_TRUE(autodiff.Evaluate(parameters, auto_residual, jacobians));
     EXPECT_LT((residual - Eigen::Vector3d(auto_residual[0], auto_residual[1], auto_residual[2])).norm(), 1e-10);
-    EXPECT_LT((J_pose - auto_J_pose).norm(), 1e-8 * J_pose.norm()) << "stereo " << stereo << "\n" << J_pose << "\n" << auto_J_pose;
+    EXPECT_LT((J_pose - auto_J_pose).norm(), 1e-8 * J_pose.norm()) << "stereo " << stereo << "\n"
+                                                                   << J_pose << "\n"
+                                                                   << auto_J_pose;
     EXPECT_LT((J_point - auto_J_point).norm(), 1e-8 * J_point.norm()) << "stereo " << stereo;
 
     // The Ceres term of the loop closer's global BA: the same residual and (tangent) Jacobians.

@@ -5,8 +5,8 @@
 // survives a map file round trip.
 #include <gtest/gtest.h>
 
-#include <filesystem>
 #include <unistd.h>
+#include <filesystem>
 
 #include "components/core/mapping/local_mapper.hpp"
 #include "tests/mapping/correction_test_util.hpp"
@@ -134,7 +134,7 @@ TEST_F(LocalMapperLateKeyframes, GlobalBaAfterALoopCorrectionMovesEveryKeyframeO
     global_ba.corrected_T_wc.emplace_back(id, B * kf.T_wc);
   }
   const std::uint64_t g = mapper.map().version;
-  const Sent six = insert(mapper, 6, 5, g);    // mapped before the global BA lands: follows its parent
+  const Sent six = insert(mapper, 6, 5, g);  // mapped before the global BA lands: follows its parent
   mapper.apply_correction(global_ba);
   const Sent seven = insert(mapper, 7, 5, g);  // tracked before it landed: moved with keyframe 5
 
@@ -152,8 +152,8 @@ TEST_F(LocalMapperLateKeyframes, RememberedCorrectionsSurviveAMapFileRoundTrip) 
   const std::uint64_t tracked = mapper.map().version;
   const Pose3 A = motion(0.04, Eigen::Vector3d(0.3, 1.0, 0.0), Eigen::Vector3d(0.1, 0.1, -0.2));
   mapper.apply_correction(correct_3_and_4(mapper, A, 1));
-  const auto path = std::filesystem::temp_directory_path() /
-                    ("heslam_late_keyframe_" + std::to_string(::getpid()) + ".map");
+  const auto path =
+      std::filesystem::temp_directory_path() / ("heslam_late_keyframe_" + std::to_string(::getpid()) + ".map");
   mapper.save(path);
   LocalMapper restarted(world_.camera, insertion_only(), load_map_file(path));
   std::filesystem::remove(path);

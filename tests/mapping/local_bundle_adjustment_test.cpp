@@ -40,7 +40,8 @@ PerturbedProblem make_problem(double pixel_noise_px) {
 
 double translation_error_m(const test::TruthMap& truth) {
   double sum = 0.0;
-  for (const auto& [id, kf] : truth.map.keyframes) sum += (kf.T_wc.translation() - truth.true_T_wc.at(id).translation()).norm();
+  for (const auto& [id, kf] : truth.map.keyframes)
+    sum += (kf.T_wc.translation() - truth.true_T_wc.at(id).translation()).norm();
   return sum;
 }
 
@@ -48,8 +49,8 @@ TEST(LocalBundleAdjustment, ReachesNoiseLevelAndReducesPoseError) {
   constexpr double kPixelNoise = 0.5;
   auto problem = make_problem(kPixelNoise);
   MapChanges changes;
-  const auto result = local_bundle_adjustment(problem.truth.map, 6, problem.world.camera,
-                                              LocalBundleAdjustmentOptions{}, changes);
+  const auto result =
+      local_bundle_adjustment(problem.truth.map, 6, problem.world.camera, LocalBundleAdjustmentOptions{}, changes);
   EXPECT_EQ(result.fixed_keyframes, 1);
   EXPECT_EQ(result.free_keyframes, 5);
   EXPECT_GT(result.initial_rms_px, 5.0 * kPixelNoise);
@@ -67,8 +68,8 @@ TEST(LocalBundleAdjustment, ReachesNoiseLevelAndReducesPoseError) {
 TEST(LocalBundleAdjustment, RecoversTheTruthExactlyWithoutNoise) {
   auto problem = make_problem(0.0);
   MapChanges changes;
-  const auto result = local_bundle_adjustment(problem.truth.map, 6, problem.world.camera,
-                                              LocalBundleAdjustmentOptions{}, changes);
+  const auto result =
+      local_bundle_adjustment(problem.truth.map, 6, problem.world.camera, LocalBundleAdjustmentOptions{}, changes);
   // Keypoints are floats (~6e-5 px resolution at u = 700): "exact" means at that level.
   EXPECT_LT(result.final_rms_px, 1e-3);
   EXPECT_LT(translation_error_m(problem.truth), 1e-5);
@@ -89,8 +90,8 @@ TEST(LocalBundleAdjustment, RemovesGrossOutliers) {
     corrupted.emplace_back(kf.point_ids[i], static_cast<int>(i));
   }
   MapChanges changes;
-  const auto result = local_bundle_adjustment(problem.truth.map, 6, problem.world.camera,
-                                              LocalBundleAdjustmentOptions{}, changes);
+  const auto result =
+      local_bundle_adjustment(problem.truth.map, 6, problem.world.camera, LocalBundleAdjustmentOptions{}, changes);
   EXPECT_GE(result.outliers_removed, 20);
   EXPECT_LT(result.outliers_removed, 40);
   for (const auto& [point_id, index] : corrupted) {

@@ -29,7 +29,8 @@ void expect_consistent(const Map& map) {
     }
     for (const auto& [other, weight] : kf.covisible) {
       const auto& back = map.keyframes.at(other).covisible;
-      ASSERT_TRUE(std::any_of(back.begin(), back.end(), [&](const auto& e) { return e.first == id && e.second == weight; }))
+      ASSERT_TRUE(
+          std::any_of(back.begin(), back.end(), [&](const auto& e) { return e.first == id && e.second == weight; }))
           << "edge " << id << "-" << other << " not symmetric";
     }
     if (!kf.culled && id != map.keyframes.begin()->first) {
@@ -197,7 +198,8 @@ TEST(LocalMapper, RigidCorrectionMovesCulledKeyframesAndPointsRigidly) {
   LocalMapper mapper(world.camera, LocalMapperOptions{});
   test::FrontendEmulator frontend(world);
   for (int k = 0; k < 14; ++k) {
-    auto view = test::make_view(world, static_cast<KeyframeId>(k + 1), test::circle_pose(k, 0.05), 900 + static_cast<unsigned>(k));
+    auto view = test::make_view(world, static_cast<KeyframeId>(k + 1), test::circle_pose(k, 0.05),
+                                900 + static_cast<unsigned>(k));
     auto [kf, points] = frontend.keyframe(mapper.map(), view, view.kf.T_wc);
     mapper.process_keyframe(std::move(kf), std::move(points));
   }
@@ -214,7 +216,8 @@ TEST(LocalMapper, RigidCorrectionMovesCulledKeyframesAndPointsRigidly) {
   const MapChanges changes = mapper.apply_correction(correction);
   EXPECT_EQ(changes.changed_keyframes.size(), before.keyframes.size());
   for (const auto& [id, kf] : mapper.map().keyframes) {
-    EXPECT_LT(test::max_abs_difference(kf.T_wc, T * before.keyframes.at(id).T_wc), 1e-9) << "keyframe " << id << (kf.culled ? " (culled)" : "");
+    EXPECT_LT(test::max_abs_difference(kf.T_wc, T * before.keyframes.at(id).T_wc), 1e-9)
+        << "keyframe " << id << (kf.culled ? " (culled)" : "");
   }
   for (const auto& [id, point] : mapper.map().points) {
     EXPECT_LT((point.p_w - T * before.points.at(id).p_w).norm(), 1e-9) << "point " << id;

@@ -12,8 +12,7 @@ namespace heslam {
 namespace {
 
 std::filesystem::path temp_path(const std::string& name) {
-  return std::filesystem::temp_directory_path() /
-         ("heslam_mapping_" + std::to_string(::getpid()) + "_" + name);
+  return std::filesystem::temp_directory_path() / ("heslam_mapping_" + std::to_string(::getpid()) + "_" + name);
 }
 
 void expect_maps_equal(const Map& a, const Map& b) {
@@ -54,9 +53,11 @@ void expect_maps_equal(const Map& a, const Map& b) {
 }
 
 // Runs the mapper over keyframes [first, last] of the synthetic circle.
-void run(LocalMapper& mapper, test::FrontendEmulator& frontend, const test::SyntheticWorld& world, int first, int last) {
+void run(LocalMapper& mapper, test::FrontendEmulator& frontend, const test::SyntheticWorld& world, int first,
+         int last) {
   for (int k = first; k <= last; ++k) {
-    auto view = test::make_view(world, static_cast<KeyframeId>(k + 1), test::circle_pose(k), 1000 + static_cast<unsigned>(k));
+    auto view =
+        test::make_view(world, static_cast<KeyframeId>(k + 1), test::circle_pose(k), 1000 + static_cast<unsigned>(k));
     auto [kf, points] = frontend.keyframe(mapper.map(), view, view.kf.T_wc);
     mapper.process_keyframe(std::move(kf), std::move(points));
   }
@@ -123,7 +124,7 @@ TEST_F(MapFileTest, ResumedMapperMatchesUninterruptedRun) {
 TEST_F(MapFileTest, TruncatedFileGivesOneLineError) {
   const auto size = std::filesystem::file_size(path_);
   for (const std::size_t keep : {std::size_t{0}, std::size_t{5}, std::size_t{23}, std::size_t{100},
-                                  static_cast<std::size_t>(size / 2), static_cast<std::size_t>(size - 1)}) {
+                                 static_cast<std::size_t>(size / 2), static_cast<std::size_t>(size - 1)}) {
     const auto path = damaged([keep](std::vector<char>& bytes) { bytes.resize(keep); });
     const std::string error = load_error(path);
     EXPECT_NE(error.find("map file " + path.string()), std::string::npos) << error;

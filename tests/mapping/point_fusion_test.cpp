@@ -39,7 +39,7 @@ TEST(PointFusion, MergesDuplicatesAndKeepsDistinctPoints) {
     if (t % 2 == 0) {  // one shared point: gives the two keyframes their covisibility edge
       const PointId id = new_point(t, 1, static_cast<int>(i));
       add_observation(map, id, 2, it->second);
-    } else {           // the same world point mapped twice
+    } else {  // the same world point mapped twice
       new_point(t, 1, static_cast<int>(i));
       new_point(t, 2, it->second);
       duplicated_pairs.emplace_back(static_cast<int>(i), it->second);

@@ -71,22 +71,23 @@ inline Pose3 circle_pose(int k, double step_rad = 0.12, double radius_m = 0.6) {
   const double theta = k * step_rad;
   Pose3 T_wc = Pose3::Identity();
   T_wc.linear() = Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitY()).toRotationMatrix();
-  T_wc.translation() = Eigen::Vector3d(radius_m * std::sin(theta), 0.1 * std::sin(3 * theta), radius_m * std::cos(theta)) -
-                       Eigen::Vector3d(0, 0, radius_m);
+  T_wc.translation() =
+      Eigen::Vector3d(radius_m * std::sin(theta), 0.1 * std::sin(3 * theta), radius_m * std::cos(theta)) -
+      Eigen::Vector3d(0, 0, radius_m);
   return T_wc;
 }
 
 struct ViewOptions {
-  double pixel_noise_px = 0.5;   // per coordinate, level 0
+  double pixel_noise_px = 0.5;  // per coordinate, level 0
   // Disparity noise over pixel noise. Our stereo matcher measures the disparity by SAD on a patch
   // around the LEFT keypoint, so the right coordinate is u - disparity: its error is the left
   // keypoint's plus an independent, smaller disparity error (the BA model, motion_only_ba.hpp).
   double disparity_noise_ratio = 0.5;
   double stereo_fraction = 1.0;  // share of keypoints with a stereo match
   double max_stereo_depth_m = 8.0;
-  int max_octave = 2;            // keypoint octave = min(the point's octave, max_octave)
-  int max_flipped_bits = 4;      // descriptor noise
-  int clutter = 50;              // keypoints that are no world point
+  int max_octave = 2;        // keypoint octave = min(the point's octave, max_octave)
+  int max_flipped_bits = 4;  // descriptor noise
+  int clutter = 50;          // keypoints that are no world point
 };
 
 struct SyntheticView {
@@ -123,7 +124,8 @@ inline SyntheticView make_view(const SyntheticWorld& world, KeyframeId id, const
     f.descriptors.push_back(d);
     const bool stereo = depth > 0.0 && depth < options.max_stereo_depth_m && unit(rng) < options.stereo_fraction;
     const auto measured_disparity = [&] {
-      return disparity_true + noise(rng) * options.disparity_noise_ratio * f.pyramid.scale[static_cast<std::size_t>(octave)];
+      return disparity_true +
+             noise(rng) * options.disparity_noise_ratio * f.pyramid.scale[static_cast<std::size_t>(octave)];
     };
     f.u_right_px.push_back(stereo ? static_cast<float>(u - measured_disparity()) : kNoStereo);
     f.depth_m.push_back(stereo ? static_cast<float>(camera.bf() / (u - f.u_right_px.back())) : kNoStereo);

@@ -86,7 +86,8 @@ TEST(Triangulation, StereoMatchUsesTheBetterParallax) {
     if (t < 0 || !view1.kf.features.has_stereo(i)) continue;
     const auto j = std::find(view2.truth.begin(), view2.truth.end(), t) - view2.truth.begin();
     if (j == static_cast<long>(view2.truth.size())) continue;
-    const auto p_w = triangulate_match(view1.kf, static_cast<int>(i), view2.kf, static_cast<int>(j), world.camera, options);
+    const auto p_w =
+        triangulate_match(view1.kf, static_cast<int>(i), view2.kf, static_cast<int>(j), world.camera, options);
     if (!p_w) continue;
     const Eigen::Vector3d& truth = world.points_w[static_cast<std::size_t>(t)];
     EXPECT_LT((*p_w - truth).norm(), 0.05 * truth.norm() + 0.05);

@@ -70,7 +70,7 @@ TEST(MapStateMessages, VersionMarkersEndABatchOnBothTopics) {
   EXPECT_TRUE(is_version_marker(keyframe_marker));
   EXPECT_TRUE(is_version_marker(point_marker));
   EXPECT_EQ(keyframe_marker.map_version, 12u);
-  EXPECT_EQ(keyframe_marker.correction_id, 0u);  // a keyframe's batch
+  EXPECT_EQ(keyframe_marker.correction_id, 0u);                 // a keyframe's batch
   EXPECT_EQ(keyframe_version_marker(13, 7).correction_id, 7u);  // the batch that applied correction 7
   MirrorVersion version;
   version.keyframe_states = keyframe_marker.map_version;

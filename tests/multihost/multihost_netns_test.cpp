@@ -60,7 +60,8 @@ pid_t child_named(pid_t parent, const std::string& name) {
   for (const auto& entry : std::filesystem::directory_iterator("/proc", error)) {
     const std::string stat = read_file(entry.path() / "stat");
     const auto open = stat.find('('), close = stat.rfind(')');
-    if (open == std::string::npos || close == std::string::npos || stat.substr(open + 1, close - open - 1) != name) continue;
+    if (open == std::string::npos || close == std::string::npos || stat.substr(open + 1, close - open - 1) != name)
+      continue;
     std::istringstream rest(stat.substr(close + 1));
     std::string state;
     pid_t ppid = 0;
@@ -115,13 +116,25 @@ class MultiHost : public ::testing::Test {
                                                  int domain, const std::vector<std::string>& more_args = {}) {
     const std::string group = host == kCamera ? "camera" : "server";
     std::vector<std::string> args{(test::source_dir() / "config/pipelines" / (pipeline + ".yaml")).string(),
-                                  "--host", group, "--domain", std::to_string(domain), "--log-dir",
+                                  "--host",
+                                  group,
+                                  "--domain",
+                                  std::to_string(domain),
+                                  "--log-dir",
                                   (dir_.path() / ("logs_" + label + "_" + group)).string(),
-                                  "--arg", "dds_profile=network", "--arg", "dds_interface=" + hosts_->interface(host),
-                                  "--arg", "dds_peers=" + hosts_->peers(), "--arg", "dataset=" + dataset_.string(),
-                                  "--arg", "output=" + (dir_.path() / (label + ".txt")).string()};
+                                  "--arg",
+                                  "dds_profile=network",
+                                  "--arg",
+                                  "dds_interface=" + hosts_->interface(host),
+                                  "--arg",
+                                  "dds_peers=" + hosts_->peers(),
+                                  "--arg",
+                                  "dataset=" + dataset_.string(),
+                                  "--arg",
+                                  "output=" + (dir_.path() / (label + ".txt")).string()};
     args.insert(args.end(), more_args.begin(), more_args.end());
-    return hosts_->spawn(host, test::bin_dir() / "heslam-supervisor", args, dir_.path(), "supervisor_" + label + "_" + group);
+    return hosts_->spawn(host, test::bin_dir() / "heslam-supervisor", args, dir_.path(),
+                         "supervisor_" + label + "_" + group);
   }
 
   std::filesystem::path dataset_;
@@ -152,8 +165,9 @@ TEST_F(MultiHost, LockstepOverTwoHostsIsBitIdenticalToOneHost) {
   ASSERT_FALSE(reference.empty());
   EXPECT_EQ(split, reference) << "the two-host trajectory differs from the single-host one";
   EXPECT_EQ(read_file(dir_.path() / "two.keyframes.txt"), read_file(dir_.path() / "single.keyframes.txt"));
-  std::cout << "[ figures ] MH01 lockstep over two namespaces: ATE " << test::ate_rmse_m(dataset_, dir_.path() / "two.txt") * 1000
-            << " mm (single host " << test::ate_rmse_m(dataset_, dir_.path() / "single.txt") * 1000 << " mm), "
+  std::cout << "[ figures ] MH01 lockstep over two namespaces: ATE "
+            << test::ate_rmse_m(dataset_, dir_.path() / "two.txt") * 1000 << " mm (single host "
+            << test::ate_rmse_m(dataset_, dir_.path() / "single.txt") * 1000 << " mm), "
             << count_poses(dir_.path() / "two.txt") << " poses\n";
 }
 
@@ -231,9 +245,9 @@ TEST_F(MultiHost, RealTimeRunSurvivesATwoSecondLinkCut) {
   EXPECT_EQ(mapped, made) << "keyframes lost across the link cut";
   const auto ms = [](auto duration) { return std::chrono::duration_cast<std::chrono::milliseconds>(duration).count(); };
   std::cout << "[ figures ] MH01 real time over two namespaces, link down " << ms(kLinkDown) << " ms: " << made
-            << " keyframes made, " << mapped << " mapped on the other host, " << count_poses(trajectory)
-            << " poses (" << poses_in_cut << " by the end of the cut), ATE "
-            << test::ate_rmse_m(dataset_, trajectory) * 1000 << " mm; first pose " << ms(first_pose - replay_started)
+            << " keyframes made, " << mapped << " mapped on the other host, " << count_poses(trajectory) << " poses ("
+            << poses_in_cut << " by the end of the cut), ATE " << test::ate_rmse_m(dataset_, trajectory) * 1000
+            << " mm; first pose " << ms(first_pose - replay_started)
             << " ms after the replay started; first map write after the link came back: "
             << (resumed_after ? std::to_string(ms(*resumed_after)) + " ms" : std::string("none before the run ended"))
             << "\n";

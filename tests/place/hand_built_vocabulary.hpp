@@ -7,8 +7,8 @@
 #include <random>
 #include <vector>
 
-#include "components/core/place/vocabulary.hpp"
 #include "../tracking/synthetic_scene.hpp"
+#include "components/core/place/vocabulary.hpp"
 
 namespace heslam::test {
 

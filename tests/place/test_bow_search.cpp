@@ -89,7 +89,8 @@ TEST(BowSearch, KeyframePointsMatchTheirOwnFeaturesInTheFrame) {
   Frame frame(0, 1, scene.frame_features, camera());
   const FeatureVector frame_fv = features_of(v.vocabulary(), frame.features.descriptors);
   const FeatureVector keyframe_fv = features_of(v.vocabulary(), scene.keyframe.features.descriptors);
-  const int matches = search_keyframe_by_bow(frame, frame_fv, scene.keyframe, keyframe_fv, scene.map, BowSearchOptions{});
+  const int matches =
+      search_keyframe_by_bow(frame, frame_fv, scene.keyframe, keyframe_fv, scene.map, BowSearchOptions{});
 
   int correct = 0;
   int with_point = 0;
@@ -151,9 +152,9 @@ TEST(BowSearch, KeyframeAgainstKeyframeGivesIndexPairs) {
     other.point_ids.push_back(500 + k);
     map.points[500 + k].id = 500 + k;
   }
-  const auto pairs = match_keyframes_by_bow(scene.keyframe, features_of(v.vocabulary(), scene.keyframe.features.descriptors),
-                                            other, features_of(v.vocabulary(), other.features.descriptors), map,
-                                            BowSearchOptions{});
+  const auto pairs =
+      match_keyframes_by_bow(scene.keyframe, features_of(v.vocabulary(), scene.keyframe.features.descriptors), other,
+                             features_of(v.vocabulary(), other.features.descriptors), map, BowSearchOptions{});
   ASSERT_FALSE(pairs.empty());
   for (std::size_t m = 0; m < pairs.size(); ++m) {
     EXPECT_EQ(pairs[m].b, scene.frame_index_of[pairs[m].a]);
@@ -164,9 +165,9 @@ TEST(BowSearch, KeyframeAgainstKeyframeGivesIndexPairs) {
   }
   // A culled point on one side takes its feature out.
   map.points[scene.keyframe.point_ids[pairs[0].a]].culled = true;
-  const auto fewer = match_keyframes_by_bow(scene.keyframe, features_of(v.vocabulary(), scene.keyframe.features.descriptors),
-                                            other, features_of(v.vocabulary(), other.features.descriptors), map,
-                                            BowSearchOptions{});
+  const auto fewer =
+      match_keyframes_by_bow(scene.keyframe, features_of(v.vocabulary(), scene.keyframe.features.descriptors), other,
+                             features_of(v.vocabulary(), other.features.descriptors), map, BowSearchOptions{});
   EXPECT_EQ(fewer.size() + 1, pairs.size());
 }
 

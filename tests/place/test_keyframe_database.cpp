@@ -96,10 +96,10 @@ TEST(KeyframeDatabase, SyncHoldsExactlyTheMapsLiveKeyframes) {
 TEST(KeyframeDatabase, LoopCandidatesExcludeTheQueryAndItsCovisibleKeyframes) {
   const HandBuiltVocabulary v;
   Map map;
-  map.keyframes[1] = keyframe_with(1, v, {0, 1, 2, 3, 4});   // the place, long ago
-  map.keyframes[2] = keyframe_with(2, v, {9, 10, 11});       // elsewhere
-  map.keyframes[8] = keyframe_with(8, v, {0, 1, 2, 3, 4});   // the same place, seen just now
-  map.keyframes[9] = keyframe_with(9, v, {0, 1, 2, 3, 4});   // the query
+  map.keyframes[1] = keyframe_with(1, v, {0, 1, 2, 3, 4});  // the place, long ago
+  map.keyframes[2] = keyframe_with(2, v, {9, 10, 11});      // elsewhere
+  map.keyframes[8] = keyframe_with(8, v, {0, 1, 2, 3, 4});  // the same place, seen just now
+  map.keyframes[9] = keyframe_with(9, v, {0, 1, 2, 3, 4});  // the query
   link(map, 8, 9, 100);
   KeyframeDatabase database(v.vocabulary());
   database.sync(map);
@@ -121,10 +121,10 @@ TEST(KeyframeDatabase, GroupAccumulationAnswersWithTheBestOfAGroup) {
   Map map;
   // A group of three covisible keyframes that each resemble the query, and a lone keyframe that
   // resembles it a bit more than any one of them but has no neighbours to back it up.
-  map.keyframes[10] = keyframe_with(10, v, {0, 1, 2, 12, 13});   // 3 of 5 words
-  map.keyframes[11] = keyframe_with(11, v, {0, 1, 2, 3, 14});    // 4 of 5: the group's best
-  map.keyframes[12] = keyframe_with(12, v, {0, 1, 2, 13, 14});   // 3 of 5
-  map.keyframes[20] = keyframe_with(20, v, {0, 1, 2, 3, 15});    // 4 of 5, alone
+  map.keyframes[10] = keyframe_with(10, v, {0, 1, 2, 12, 13});  // 3 of 5 words
+  map.keyframes[11] = keyframe_with(11, v, {0, 1, 2, 3, 14});   // 4 of 5: the group's best
+  map.keyframes[12] = keyframe_with(12, v, {0, 1, 2, 13, 14});  // 3 of 5
+  map.keyframes[20] = keyframe_with(20, v, {0, 1, 2, 3, 15});   // 4 of 5, alone
   link(map, 10, 11, 50);
   link(map, 11, 12, 40);
   link(map, 10, 12, 30);
@@ -179,7 +179,8 @@ TEST(KeyframeDatabase, ResultsDoNotDependOnInsertionOrder) {
   KeyframeDatabase forward(v.vocabulary());
   forward.sync(map);
   KeyframeDatabase backward(v.vocabulary());
-  for (auto it = map.keyframes.rbegin(); it != map.keyframes.rend(); ++it) backward.add(it->first, it->second.features.descriptors);
+  for (auto it = map.keyframes.rbegin(); it != map.keyframes.rend(); ++it)
+    backward.add(it->first, it->second.features.descriptors);
   const BowVector query = bow_of(v, {1, 2, 3, 5, 8, 13});
   const auto a = forward.relocalization_candidates(query, map);
   const auto b = backward.relocalization_candidates(query, map);

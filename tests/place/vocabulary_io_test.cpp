@@ -31,13 +31,12 @@ Vocabulary trained_vocabulary() {
 
 std::vector<Descriptor> query_descriptors() {
   std::vector<Descriptor> out;
-  for (const auto& cluster : test::clustered_descriptors(30, 5, 30, 9)) out.insert(out.end(), cluster.begin(), cluster.end());
+  for (const auto& cluster : test::clustered_descriptors(30, 5, 30, 9))
+    out.insert(out.end(), cluster.begin(), cluster.end());
   return out;
 }
 
-void write_file(const fs::path& path, const std::string& content) {
-  std::ofstream(path, std::ios::binary) << content;
-}
+void write_file(const fs::path& path, const std::string& content) { std::ofstream(path, std::ios::binary) << content; }
 
 std::string read_file(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -57,7 +56,8 @@ std::string error_of(Load&& load) {
   return "";
 }
 
-std::string node_line(const std::string& parent, const std::string& is_leaf, int bytes = 32, const std::string& weight = "0.5") {
+std::string node_line(const std::string& parent, const std::string& is_leaf, int bytes = 32,
+                      const std::string& weight = "0.5") {
   std::string line = parent + " " + is_leaf;
   for (int i = 0; i < bytes; ++i) line += " 7";
   return line + " " + weight + "\n";

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 #include <opencv2/imgcodecs.hpp>
 
 #include "components/core/place/default_vocabulary.hpp"
@@ -52,9 +52,11 @@ std::vector<ClipFrame> read_clip(const fs::path& clip) {
 
 TEST(VocabularyRealImages, NeighbourFrameScoresHigherThanADistantView) {
   const fs::path clip = test::shared_dataset("euroc_mh01_handheld");
-  if (clip.empty()) GTEST_SKIP() << "no " << (test::shared_data() / "euroc_mh01_handheld").string() << " (shared data absent)";
+  if (clip.empty())
+    GTEST_SKIP() << "no " << (test::shared_data() / "euroc_mh01_handheld").string() << " (shared data absent)";
   if (!fs::exists(default_vocabulary_path())) {
-    GTEST_SKIP() << "default vocabulary " << default_vocabulary_path().string() << " not built (tools/train-vocabulary.sh)";
+    GTEST_SKIP() << "default vocabulary " << default_vocabulary_path().string()
+                 << " not built (tools/train-vocabulary.sh)";
   }
   const Vocabulary vocabulary = load_vocabulary(default_vocabulary_path());
   const std::vector<ClipFrame> frames = read_clip(clip);

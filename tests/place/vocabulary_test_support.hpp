@@ -22,8 +22,8 @@ inline Descriptor bytes_set(std::size_t first, std::size_t last) {
 // B -> leaves b1 (ones), b2 (bytes 4-31 set). Words 0..3 = a1, a2, b1, b2 with idf 1, 2, 0.5, 1.
 inline Vocabulary tiny_vocabulary() {
   const std::vector<Vocabulary::NodeRecord> nodes = {
-      {0, false, bytes_set(0, 0), 0.f},   {0, false, bytes_set(0, 32), 0.f}, {1, true, bytes_set(0, 0), 1.f},
-      {1, true, bytes_set(0, 4), 2.f},    {2, true, bytes_set(0, 32), 0.5f}, {2, true, bytes_set(4, 32), 1.f},
+      {0, false, bytes_set(0, 0), 0.f}, {0, false, bytes_set(0, 32), 0.f}, {1, true, bytes_set(0, 0), 1.f},
+      {1, true, bytes_set(0, 4), 2.f},  {2, true, bytes_set(0, 32), 0.5f}, {2, true, bytes_set(4, 32), 1.f},
   };
   return Vocabulary(2, 2, BowScoring::kL1, BowWeighting::kTfIdf, nodes);
 }

@@ -16,7 +16,7 @@ TEST(VocabularyTree, DescendsToTheNearestLeaf) {
   EXPECT_EQ(vocabulary.word_count(), 4u);
   EXPECT_EQ(vocabulary.node_count(), 7u);
   EXPECT_EQ(vocabulary.word_of(bytes_set(0, 0)), 0u);
-  EXPECT_EQ(vocabulary.word_of(bytes_set(0, 3)), 1u);   // 24 bits from a1's 0, 8 from a2's
+  EXPECT_EQ(vocabulary.word_of(bytes_set(0, 3)), 1u);  // 24 bits from a1's 0, 8 from a2's
   EXPECT_EQ(vocabulary.word_of(bytes_set(0, 32)), 2u);
   EXPECT_EQ(vocabulary.word_of(bytes_set(5, 32)), 3u);
   EXPECT_EQ(vocabulary.node_of_word(3), 6u);

@@ -45,11 +45,11 @@ struct KillEvent {
 };
 
 struct FaultPlanOptions {
-  int kills = 3;           // events per run
-  int first_frame = 10;    // not before this frame: the map and every process exist
-  int last_frame = 150;    // not after this one: the replay has frames left to send (of 160)
-  int max_gap_ms = 500;    // near-simultaneous: the two deaths of a pair at most this far apart
-  int all_gap_ms = 100;    // all but the supervisor: one after the other within this
+  int kills = 3;         // events per run
+  int first_frame = 10;  // not before this frame: the map and every process exist
+  int last_frame = 150;  // not after this one: the replay has frames left to send (of 160)
+  int max_gap_ms = 500;  // near-simultaneous: the two deaths of a pair at most this far apart
+  int all_gap_ms = 100;  // all but the supervisor: one after the other within this
 };
 
 // Event kinds by probability: a single component 40 %, two 40 %, all of them 20 %.

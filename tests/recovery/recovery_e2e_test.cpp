@@ -43,10 +43,10 @@ constexpr std::chrono::milliseconds kPoll{10};
 
 struct RunResult {
   int exit_code = -1;
-  std::string output;             // the supervisor's
-  std::size_t poses = 0;          // lines of the trajectory
-  double ate_m = -1.0;            // against the ground truth (SE(3) aligned, as heslam-eval ape)
-  std::vector<std::string> kills; // what was killed, for the failure message and the figures
+  std::string output;              // the supervisor's
+  std::size_t poses = 0;           // lines of the trajectory
+  double ate_m = -1.0;             // against the ground truth (SE(3) aligned, as heslam-eval ape)
+  std::vector<std::string> kills;  // what was killed, for the failure message and the figures
   std::size_t processes_killed = 0;
   int keyframes_without_stamp = -1;  // in the keyframe trajectory (a keyframe whose creation was never seen)
 };
@@ -164,8 +164,8 @@ TEST(Recovery, FrontendKilledNearTheEndLosesNoFrame) {
   const RunResult run = run_with_faults(dataset, dir.path(), "near_end", {{kAtFrame, {"frontend"}, {0}}});
   EXPECT_EQ(run.exit_code, 0) << joined(run.kills) << "\n" << run.output;
   EXPECT_EQ(run.poses, kClipFrames) << joined(run.kills) << "\n" << run.output;
-  std::printf("[ figures  ] MH01 full system, frontend killed at frame %d: rc %d, %zu/%zu poses, ATE %.3f mm\n", kAtFrame,
-              run.exit_code, run.poses, kClipFrames, run.ate_m * 1e3);
+  std::printf("[ figures  ] MH01 full system, frontend killed at frame %d: rc %d, %zu/%zu poses, ATE %.3f mm\n",
+              kAtFrame, run.exit_code, run.poses, kClipFrames, run.ate_m * 1e3);
 }
 
 // The mapper and the frontend killed within half a second of each other, in either order.
@@ -184,16 +184,18 @@ TEST(Recovery, MapperAndFrontendKilledTogetherKeepTheMapAndLoseNoFrame) {
   const RunResult mapper_first = run_with_faults(dataset, dir.path(), "mapper_first",
                                                  {{kAtFrame, {"local_mapper", "frontend"}, {0, kMapperFirstGapMs}}});
   expect_recovered(mapper_first, undisturbed_m, "mapper, then frontend");
-  const RunResult frontend_first = run_with_faults(dataset, dir.path(), "frontend_first",
-                                                   {{kAtFrame, {"frontend", "local_mapper"}, {0, kFrontendFirstGapMs}}});
+  const RunResult frontend_first = run_with_faults(
+      dataset, dir.path(), "frontend_first", {{kAtFrame, {"frontend", "local_mapper"}, {0, kFrontendFirstGapMs}}});
   expect_recovered(frontend_first, undisturbed_m, "frontend, then mapper");
   EXPECT_EQ(mapper_first.output.find("from another run"), std::string::npos);
-  EXPECT_NE(frontend_first.output.find("resuming in the local mapper's map"), std::string::npos) << frontend_first.output;
-  std::printf("[ figures  ] MH01 full system, mapper and frontend killed at frame %d: mapper, frontend %d ms later: "
-              "%zu/%zu poses, ATE %.3f mm; frontend, mapper %d ms later: %zu/%zu poses, ATE %.3f mm; undisturbed "
-              "%.3f mm\n",
-              kAtFrame, kMapperFirstGapMs, mapper_first.poses, kClipFrames, mapper_first.ate_m * 1e3, kFrontendFirstGapMs, frontend_first.poses,
-              kClipFrames, frontend_first.ate_m * 1e3, undisturbed_m * 1e3);
+  EXPECT_NE(frontend_first.output.find("resuming in the local mapper's map"), std::string::npos)
+      << frontend_first.output;
+  std::printf(
+      "[ figures  ] MH01 full system, mapper and frontend killed at frame %d: mapper, frontend %d ms later: "
+      "%zu/%zu poses, ATE %.3f mm; frontend, mapper %d ms later: %zu/%zu poses, ATE %.3f mm; undisturbed "
+      "%.3f mm\n",
+      kAtFrame, kMapperFirstGapMs, mapper_first.poses, kClipFrames, mapper_first.ate_m * 1e3, kFrontendFirstGapMs,
+      frontend_first.poses, kClipFrames, frontend_first.ate_m * 1e3, undisturbed_m * 1e3);
 }
 
 // The frontend killed while the mapper's map file is unusable (corrupted on disk;
@@ -239,9 +241,10 @@ TEST(Recovery, FrontendRestartedWithAnUnusableMapFileResumesInTheMappersMapFromD
   ASSERT_TRUE(fs::exists(trajectory)) << output;
   const std::size_t poses = eval::read_trajectory(trajectory).size();
   const double ate_m = test::ate_rmse_m(dataset, trajectory);
-  std::printf("[ figures  ] MH01 full system, frontend killed at frame %zu with the map file corrupt: rc %d, %zu/%zu "
-              "poses, ATE %.3f mm (undisturbed %.3f mm)\n",
-              kAtFrame, exit_code, poses, kClipFrames, ate_m * 1e3, undisturbed_m * 1e3);
+  std::printf(
+      "[ figures  ] MH01 full system, frontend killed at frame %zu with the map file corrupt: rc %d, %zu/%zu "
+      "poses, ATE %.3f mm (undisturbed %.3f mm)\n",
+      kAtFrame, exit_code, poses, kClipFrames, ate_m * 1e3, undisturbed_m * 1e3);
   EXPECT_EQ(exit_code, 0) << output;
   EXPECT_EQ(poses, kClipFrames) << output;
   EXPECT_NE(output.find("of the local mapper's map from DDS"), std::string::npos) << output;
@@ -284,21 +287,22 @@ TEST(Recovery, SoakRandomKillsLoseNoFrameAndKeepTheAccuracy) {
     worst_m = std::max(worst_m, run.ate_m);
     best_m = std::min(best_m, run.ate_m);
     std::printf("[ soak     ] run %llu seed %llu: %s: rc %d, %zu/%zu poses, ATE %.3f mm; killed%s\n",
-                static_cast<unsigned long long>(r + 1), static_cast<unsigned long long>(run_seed),
-                ok ? "ok" : "FAILED", run.exit_code, run.poses, kClipFrames, run.ate_m * 1e3, joined(run.kills).c_str());
+                static_cast<unsigned long long>(r + 1), static_cast<unsigned long long>(run_seed), ok ? "ok" : "FAILED",
+                run.exit_code, run.poses, kClipFrames, run.ate_m * 1e3, joined(run.kills).c_str());
     std::fflush(stdout);
-    expect_recovered(run, undisturbed_m, "seed " + std::to_string(run_seed) + " (tools/soak.sh --seed " +
-                                             std::to_string(run_seed) + " --runs 1)");
+    expect_recovered(
+        run, undisturbed_m,
+        "seed " + std::to_string(run_seed) + " (tools/soak.sh --seed " + std::to_string(run_seed) + " --runs 1)");
     if (!ok) {
       std::printf("[ soak     ] logs of seed %llu kept in %s\n", static_cast<unsigned long long>(run_seed),
                   (dir.path() / ("logs_" + label)).c_str());
     }
   }
-  std::printf("[ figures  ] soak: %llu runs from seed %llu, %d kill events per run, %zu processes killed, %d failed; "
-              "ATE %.3f-%.3f mm (undisturbed %.3f mm, bound %.3f mm)\n",
-              static_cast<unsigned long long>(runs), static_cast<unsigned long long>(seed), options.kills,
-              processes_killed, failed, best_m * 1e3, worst_m * 1e3, undisturbed_m * 1e3,
-              undisturbed_m * kAteFactor * 1e3);
+  std::printf(
+      "[ figures  ] soak: %llu runs from seed %llu, %d kill events per run, %zu processes killed, %d failed; "
+      "ATE %.3f-%.3f mm (undisturbed %.3f mm, bound %.3f mm)\n",
+      static_cast<unsigned long long>(runs), static_cast<unsigned long long>(seed), options.kills, processes_killed,
+      failed, best_m * 1e3, worst_m * 1e3, undisturbed_m * 1e3, undisturbed_m * kAteFactor * 1e3);
 }
 
 }  // namespace

@@ -16,13 +16,13 @@
 
 #include <gtest/gtest.h>
 
+#include "child_process.hpp"
 #include "runtime/checked_reader.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/role_binding.hpp"
 #include "runtime/topics.hpp"
 #include "runtime/writer.hpp"
 #include "runtime/writer_identity.hpp"
-#include "child_process.hpp"
 #include "test_domain.hpp"
 
 namespace heslam::runtime {
@@ -184,7 +184,7 @@ TEST_F(CheckedReaderTest, ASecondWriterTakesOverWhenTheFirstLeaves) {
     second.write(odometry(0, 1.0));
     second.write(odometry(1, 1.0));
     EXPECT_TRUE(take_until_counted(reader, kSecondWriterSamples, 2).empty());  // held
-  }  // the first writer is deleted
+  }                                                                            // the first writer is deleted
   second.write(odometry(2, 1.0));
   // Held samples first, in order, then the new ones.
   EXPECT_EQ(take_seqs(reader, 3), (std::vector<std::uint64_t>{0, 1, 2}));
@@ -297,7 +297,8 @@ TEST_F(CheckedReaderTest, OnlyAWriterOfTheOwnersRunTakesOverWhenTheOwnerCrashes)
   Participant restarted_participant = make_participant();
   CheckedReader<msg::Odometry> reader(reading, topics.odometry(), log, stats, finite_pose, options());
   test::ChildProcess owner(test::bin_dir() / "heslam-test-odometry-writer",
-                           {std::to_string(test::test_domain_id()), topic_namespace, owners_run, "2"}, dir.path(), "owner");
+                           {std::to_string(test::test_domain_id()), topic_namespace, owners_run, "2"}, dir.path(),
+                           "owner");
   ASSERT_EQ(take_seqs(reader, 2), (std::vector<std::uint64_t>{0, 1})) << owner.err();
   Writer<msg::Odometry> stray = writer_of_run(stray_participant, kOtherRun);
   Writer<msg::Odometry> restarted = writer_of_run(restarted_participant, owners_run);

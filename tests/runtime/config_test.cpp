@@ -56,8 +56,11 @@ TEST(Config, WrongTypeNamesFileFieldAndValue) {
 // A field's bad value is quoted short: a 1 MB string is 80 characters and its size, never a 1 MB line.
 TEST(Config, AHugeBadValueIsQuotedShort) {
   const Config config = Config::parse("mode: " + std::string(1 << 20, 'x') + "\n", "f.yaml");
-  EXPECT_EQ(error_of([&] { config.get_choice("mode", "global", {"global", "clahe"}); }),
-            "f.yaml: field 'mode': expected one of global clahe, got '" + std::string(80, 'x') + "... (1048576 bytes)'");
+  EXPECT_EQ(
+      error_of([&] {
+        config.get_choice("mode", "global", {"global", "clahe"});
+      }),
+      "f.yaml: field 'mode': expected one of global clahe, got '" + std::string(80, 'x') + "... (1048576 bytes)'");
 }
 
 TEST(Config, OutOfRangeIsAnError) {
@@ -72,7 +75,9 @@ TEST(Config, BadBoolChoiceAndList) {
   const Config config = Config::parse("parallel: maybe\nmode: fancy\nfast: 20\n", "f.yaml");
   EXPECT_EQ(error_of([&] { config.get_bool("parallel", true); }),
             "f.yaml: field 'parallel': expected true or false, got 'maybe'");
-  EXPECT_EQ(error_of([&] { config.get_choice("mode", "global", {"global", "clahe"}); }),
+  EXPECT_EQ(error_of([&] {
+              config.get_choice("mode", "global", {"global", "clahe"});
+            }),
             "f.yaml: field 'mode': expected one of global clahe, got 'fancy'");
   EXPECT_EQ(error_of([&] { config.get_doubles("fast", {}); }),
             "f.yaml: field 'fast': expected a list of numbers, got 20");
@@ -81,8 +86,7 @@ TEST(Config, BadBoolChoiceAndList) {
 TEST(Config, UnknownFieldIsRejected) {
   const Config config = Config::parse("levels: 4\norb:\n  levle: 3\n", "f.yaml");
   config.get_int("levels", 8);
-  EXPECT_EQ(error_of([&] { config.reject_unknown(); }),
-            "f.yaml: unknown field 'orb.levle' (no such option)");
+  EXPECT_EQ(error_of([&] { config.reject_unknown(); }), "f.yaml: unknown field 'orb.levle' (no such option)");
 }
 
 TEST(Config, DuplicateFieldIsRejected) {

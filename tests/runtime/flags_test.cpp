@@ -68,9 +68,26 @@ TEST(Flags, DefaultsStayWithoutFlags) {
 TEST(Flags, EveryKindInBothSpellings) {
   Values v;
   Flags flags = declare(v);
-  flags.parse({"in1", "--name", "a b", "--file=x.txt", "--count", "+7", "--big=9223372036854775807", "--rate", "2.5",
-               "--offset=-0.25", "--pin", "off", "--lockstep", "--no-progress", "--mode=slow", "--tag", "t1", "in2",
-               "--tag=t2", "--tag="});
+  flags.parse({"in1",
+               "--name",
+               "a b",
+               "--file=x.txt",
+               "--count",
+               "+7",
+               "--big=9223372036854775807",
+               "--rate",
+               "2.5",
+               "--offset=-0.25",
+               "--pin",
+               "off",
+               "--lockstep",
+               "--no-progress",
+               "--mode=slow",
+               "--tag",
+               "t1",
+               "in2",
+               "--tag=t2",
+               "--tag="});
   EXPECT_EQ(v.name, "a b");
   EXPECT_EQ(v.file, "x.txt");
   EXPECT_EQ(v.count, 7);
@@ -148,7 +165,8 @@ TEST(Flags, WithoutAPositionalDeclarationAnArgumentIsAnError) {
 TEST(Flags, KeepsWhatItDoesNotKnowInOrder) {
   Values v;
   Flags flags = declare(v);
-  const auto rest = flags.parse({"DATASET", "--count", "4", "--rate-x", "1", "--other=2", "--lockstep"}, Flags::Unknown::kKeep);
+  const auto rest =
+      flags.parse({"DATASET", "--count", "4", "--rate-x", "1", "--other=2", "--lockstep"}, Flags::Unknown::kKeep);
   EXPECT_EQ(rest, (std::vector<std::string>{"DATASET", "--rate-x", "1", "--other=2"}));
   EXPECT_EQ(v.count, 4);
   EXPECT_TRUE(v.lockstep);
@@ -183,10 +201,12 @@ TEST(Flags, AliasesAndCustomValues) {
   bool help = false;
   std::string pair;
   Flags flags("heslam-z");
-  flags.toggle("--help", &help, "this help").alias("-h").custom("--arg", "K=V", "a pair", [&](const std::string& value) {
-    if (value.find('=') == std::string::npos) throw_bad_flag_value("--arg", "key=value", value);
-    pair = value;
-  });
+  flags.toggle("--help", &help, "this help")
+      .alias("-h")
+      .custom("--arg", "K=V", "a pair", [&](const std::string& value) {
+        if (value.find('=') == std::string::npos) throw_bad_flag_value("--arg", "key=value", value);
+        pair = value;
+      });
   flags.parse({"-h", "--arg", "a=1"});
   EXPECT_TRUE(help);
   EXPECT_TRUE(flags.given("--help"));
@@ -204,8 +224,7 @@ TEST(Flags, AliasesAndCustomValues) {
 TEST(Flags, UsageComesFromTheDeclarations) {
   Values v;
   Flags flags = declare(v);
-  flags.note("Pause: space.")
-      .text("--a-flag-whose-name-is-far-too-long", "VALUE", &v.name, "first line\nsecond line");
+  flags.note("Pause: space.").text("--a-flag-whose-name-is-far-too-long", "VALUE", &v.name, "first line\nsecond line");
   const std::string usage = flags.usage();
   EXPECT_EQ(usage.substr(0, usage.find('\n')), "usage: heslam-x INPUT [options]");
   EXPECT_NE(usage.find("\n  Does x.\n"), std::string::npos);

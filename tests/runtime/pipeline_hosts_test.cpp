@@ -103,8 +103,9 @@ TEST_F(PipelineHosts, OnlyRunsTheNamedComponents) {
 TEST_F(PipelineHosts, UnknownHostOrComponentIsOneLine) {
   PipelineOverrides host;
   host.host = "robot";
-  EXPECT_NE(problems(load(kTwoHosts, host)).find("--host robot: the pipeline has no such host group (hosts: camera, server)"),
-            std::string::npos)
+  EXPECT_NE(
+      problems(load(kTwoHosts, host)).find("--host robot: the pipeline has no such host group (hosts: camera, server)"),
+      std::string::npos)
       << problems(load(kTwoHosts, host));
   PipelineOverrides only;
   only.only = {"frontend"};
@@ -115,8 +116,7 @@ TEST_F(PipelineHosts, EveryComponentInExactlyOneGroup) {
   const std::string missing =
       "components:\n  - {name: a, executable: true}\n  - {name: b, executable: true}\nhosts:\n  one: a\n";
   EXPECT_NE(problems(load(missing)).find("component 'b' is in no host group"), std::string::npos);
-  const std::string twice =
-      "components:\n  - {name: a, executable: true}\nhosts:\n  one: a\n  two: a\n";
+  const std::string twice = "components:\n  - {name: a, executable: true}\nhosts:\n  one: a\n  two: a\n";
   EXPECT_NE(problems(load(twice)).find("component 'a' is already in hosts.one"), std::string::npos);
   const std::string typo = "components:\n  - {name: a, executable: true}\nhosts:\n  one: \"a, x\"\n";
   EXPECT_NE(problems(load(typo)).find("field 'hosts.one': no component 'x'"), std::string::npos);
@@ -192,8 +192,8 @@ TEST(DdsNetworkProfile, CycloneAcceptsTheXml) {
   profile.interface = "lo";
   profile.peers = {"127.0.0.1"};
   const int domain = test::exclusive_domain_id();
-  const dds_entity_t created = dds_create_domain(static_cast<dds_domainid_t>(domain),
-                                                 runtime::network_dds_config(profile).c_str());
+  const dds_entity_t created =
+      dds_create_domain(static_cast<dds_domainid_t>(domain), runtime::network_dds_config(profile).c_str());
   ASSERT_GT(created, 0) << dds_strretcode(created);
   dds_delete(created);
 }

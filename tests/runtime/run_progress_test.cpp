@@ -52,7 +52,7 @@ TEST(RunProgress, PlainModePrintsOneLinePerTenPercent) {
   EXPECT_EQ(lines.back(), "tracked 160/160 frames  100%  20.0 fps  ETA 0.0 s");
 
   RunProgress jumpy(RunProgress::Mode::kPlain);
-  EXPECT_TRUE(jumpy.update(counts(70, 70, 100, 1.0), t0).has_value());   // 70 %: one line, not seven
+  EXPECT_TRUE(jumpy.update(counts(70, 70, 100, 1.0), t0).has_value());  // 70 %: one line, not seven
   EXPECT_FALSE(jumpy.update(counts(75, 75, 100, 1.0), t0).has_value());
   EXPECT_TRUE(jumpy.update(counts(80, 80, 100, 1.0), t0).has_value());
 

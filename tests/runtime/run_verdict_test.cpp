@@ -13,7 +13,9 @@ namespace {
 
 ProgramReport recorder(std::uint64_t recorded, std::uint64_t with_pose, std::uint64_t accounted) {
   return {"recorder",
-          {{runtime::kFramesRecorded, recorded}, {runtime::kFramesWithPose, with_pose}, {runtime::kFramesAccounted, accounted}},
+          {{runtime::kFramesRecorded, recorded},
+           {runtime::kFramesWithPose, with_pose},
+           {runtime::kFramesAccounted, accounted}},
           "tracked " + std::to_string(with_pose) + "/" + std::to_string(accounted) + " frames, " +
               std::to_string(accounted - with_pose) + " lost, trajectory /tmp/t.txt"};
 }
@@ -53,8 +55,7 @@ TEST(RunVerdict, FramesTheFrontendProducedButTheOutputLacksFailTheRun) {
             "recorder: 120 of the 160 frames the frontend produced odometry for are missing from its output (it "
             "recorded 40; it was stalled or cut off while they were published)");
   // The recorder's own count (40/40) is restated against what the replay published.
-  EXPECT_EQ(verdict.results,
-            "tracked 40/160 frames, 120 lost, trajectory /tmp/t.txt; 160 of 160 frames published");
+  EXPECT_EQ(verdict.results, "tracked 40/160 frames, 120 lost, trajectory /tmp/t.txt; 160 of 160 frames published");
 }
 
 TEST(RunVerdict, ACompleteRunPassesWithTheResultsJoined) {
@@ -73,8 +74,9 @@ TEST(RunVerdict, FramesTheFrontendMissedAreNotMissingFromTheOutput) {
 TEST(RunVerdict, ASkippedPairIsOnTheLastLine) {
   const RunVerdict verdict = judge_run({recorder(159, 159, 159), frontend(159), replay(159, 160, 1)});
   EXPECT_FALSE(verdict.failure);
-  EXPECT_EQ(verdict.results, "tracked 159/159 frames, 0 lost, trajectory /tmp/t.txt; 159 of 160 frames published, 1 "
-                             "skipped (a missing or corrupt image)");
+  EXPECT_EQ(verdict.results,
+            "tracked 159/159 frames, 0 lost, trajectory /tmp/t.txt; 159 of 160 frames published, 1 "
+            "skipped (a missing or corrupt image)");
 }
 
 // Programs that report none of these counters (a talker, a pipeline without recorder) are judged by
@@ -92,10 +94,12 @@ TEST(QuoteValue, AHugeValueIsCutAndItsSizeSaid) {
 }
 
 TEST(QuoteValue, BytesThatAreNotPrintableUtf8AreEscaped) {
-  EXPECT_EQ(runtime::quote_value("a\xFF" "b"), "a\\xFFb");
+  EXPECT_EQ(runtime::quote_value("a\xFF"
+                                 "b"),
+            "a\\xFFb");
   EXPECT_EQ(runtime::quote_value("line\nbreak\x1b[2J"), "line\\x0Abreak\\x1B[2J");
   EXPECT_EQ(runtime::quote_value("caf\xC3\xA9"), "caf\xC3\xA9");  // valid UTF-8 stays
-  EXPECT_EQ(runtime::quote_value("\xC3"), "\\xC3");                // a cut sequence does not
+  EXPECT_EQ(runtime::quote_value("\xC3"), "\\xC3");               // a cut sequence does not
 }
 
 }  // namespace

@@ -1,9 +1,9 @@
 // heslam-supervisor end to end: real processes (heslam-test-talker) on the test's own DDS domain.
 // Every wait is bounded; every process started is killed in TearDown whatever happened.
 #include <fcntl.h>
-#include <sys/file.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -47,9 +47,8 @@ bool process_alive(pid_t pid) {
 class SupervisorTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() /
-           ("heslam_supervisor_test_" + std::to_string(getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = std::filesystem::temp_directory_path() / ("heslam_supervisor_test_" + std::to_string(getpid()) + "_" +
+                                                     ::testing::UnitTest::GetInstance()->current_test_info()->name());
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
   }
@@ -68,8 +67,7 @@ class SupervisorTest : public ::testing::Test {
   // A pipeline on this test's domain; components is the YAML list body.
   std::string pipeline(const std::string& components, const std::string& extra = "") {
     return "name: test\ndomain: " + std::to_string(test_domain_id()) + "\nnamespace: t" + std::to_string(getpid()) +
-           "\nstop_timeout_s: 3\n" + extra +
-           "components:\n" + components;
+           "\nstop_timeout_s: 3\n" + extra + "components:\n" + components;
   }
 
   pid_t spawn_supervisor(std::vector<std::string> args, const std::string& output_name = "supervisor.out") {
@@ -115,7 +113,6 @@ class SupervisorTest : public ::testing::Test {
     waitpid(pid, nullptr, 0);
     return -1;
   }
-
 
   // Polls the supervisor's output for a regex until bound.
   bool wait_for_output(const std::string& pattern, std::chrono::milliseconds bound,
@@ -196,9 +193,9 @@ TEST_F(SupervisorTest, RestartsAComponentKilledWithSigkillAfterItsRestartDelay) 
   EXPECT_TRUE(restarted) << output();
   std::printf("[ figures  ] talker restarted %.0f ms after its SIGKILL (requirement: < 1000 ms on an idle machine)\n",
               std::chrono::duration<double, std::milli>(Clock::now() - killed_at).count());
-  EXPECT_TRUE(wait_for_output("talker \\(pid " + std::to_string(first) +
-                                  "\\) killed by SIGKILL; restarting in 0.1 s \\(restart 1 of 3\\)",
-                              kStartupBound))
+  EXPECT_TRUE(wait_for_output(
+      "talker \\(pid " + std::to_string(first) + "\\) killed by SIGKILL; restarting in 0.1 s \\(restart 1 of 3\\)",
+      kStartupBound))
       << output();
   EXPECT_TRUE(wait_for_output("restarted talker", kStartupBound)) << output();
 
@@ -222,8 +219,9 @@ TEST_F(SupervisorTest, RestartsAComponentKilledWithSigkillAfterItsRestartDelay) 
 }
 
 TEST_F(SupervisorTest, SigtermStopsEverythingInReverseOrder) {
-  start(pipeline("  - name: first\n    executable: heslam-test-talker\n"
-                 "  - name: second\n    executable: heslam-test-talker\n"));
+  start(
+      pipeline("  - name: first\n    executable: heslam-test-talker\n"
+               "  - name: second\n    executable: heslam-test-talker\n"));
   ASSERT_TRUE(wait_for_output("second is ready", kStartupBound)) << output();
   kill(supervisor_pid_, SIGTERM);
   EXPECT_EQ(wait_exit(kExitBound), 0) << output();
@@ -242,9 +240,10 @@ TEST_F(SupervisorTest, SigtermStopsEverythingInReverseOrder) {
 }
 
 TEST_F(SupervisorTest, KilledSupervisorLeavesNoOrphans) {
-  start(pipeline("  - name: first\n    executable: heslam-test-talker\n"
-                 "  - name: other\n    executable: /bin/sleep\n    args: [\"600\"]\n"
-                 "    common_args: false\n    ready: started\n"));
+  start(
+      pipeline("  - name: first\n    executable: heslam-test-talker\n"
+               "  - name: other\n    executable: /bin/sleep\n    args: [\"600\"]\n"
+               "    common_args: false\n    ready: started\n"));
   ASSERT_TRUE(wait_for_output("started other", kStartupBound)) << output();
   ASSERT_TRUE(wait_for_output("first is ready", kStartupBound)) << output();
   kill(supervisor_pid_, SIGKILL);
@@ -257,10 +256,11 @@ TEST_F(SupervisorTest, KilledSupervisorLeavesNoOrphans) {
 // nice: N lowers the component's priority (all its threads: set before exec) by N relative to the
 // supervisor's own; other components keep the supervisor's.
 TEST_F(SupervisorTest, NiceLowersTheComponentsPriority) {
-  start(pipeline("  - name: background\n    executable: /bin/sleep\n    args: [\"600\"]\n"
-                 "    common_args: false\n    ready: started\n    nice: 7\n"
-                 "  - name: foreground\n    executable: /bin/sleep\n    args: [\"600\"]\n"
-                 "    common_args: false\n    ready: started\n"));
+  start(
+      pipeline("  - name: background\n    executable: /bin/sleep\n    args: [\"600\"]\n"
+               "    common_args: false\n    ready: started\n    nice: 7\n"
+               "  - name: foreground\n    executable: /bin/sleep\n    args: [\"600\"]\n"
+               "    common_args: false\n    ready: started\n"));
   ASSERT_TRUE(wait_for_output("started foreground", kStartupBound)) << output();
   EXPECT_TRUE(wait_for_output("started background \\(pid [0-9]+\\), nice \\+7", kStartupBound)) << output();
   // Field 19 of /proc/PID/stat is the niceness; the process may still be the trampoline for a moment.
@@ -308,7 +308,7 @@ TEST_F(SupervisorTest, RequiredComponentFailureFailsTheRun) {
 TEST_F(SupervisorTest, GivesUpAfterMaxRestarts) {
   write("fail.yaml", "exit_after_s: 0.1\nexit_code: 1\n");
   start(pipeline(std::string(kTalker) + "    config: fail.yaml\n    restart: on-failure\n    max_restarts: 2\n"
-                 "    restart_backoff_s: 0.05\n"));
+                                        "    restart_backoff_s: 0.05\n"));
   EXPECT_EQ(wait_exit(kExitBound), 1) << output();
   EXPECT_NE(output().find("giving up after 2 restarts"), std::string::npos) << output();
   EXPECT_EQ(started_pids("talker").size(), 3u);
@@ -319,7 +319,8 @@ TEST_F(SupervisorTest, GivesUpAfterMaxRestarts) {
 // its one-line reason in the supervisor's last line, exit 1. (Before: 1 + max_restarts tries.)
 TEST_F(SupervisorTest, StartupErrorIsNotRestarted) {
   write("bad.yaml", "exit_code: 300\n");
-  start(pipeline(std::string(kTalker) + "    config: bad.yaml\n    restart: on-failure\n    restart_backoff_s: 0.05\n"));
+  start(
+      pipeline(std::string(kTalker) + "    config: bad.yaml\n    restart: on-failure\n    restart_backoff_s: 0.05\n"));
   EXPECT_EQ(wait_exit(kExitBound), 1) << output();
   EXPECT_EQ(started_pids("talker").size(), 1u) << output();
   const std::string text = output();
@@ -337,7 +338,7 @@ TEST_F(SupervisorTest, StartupErrorIsNotRestarted) {
 TEST_F(SupervisorTest, FailureAfterStartupIsStillRestarted) {
   write("fail.yaml", "exit_after_s: 0.1\nexit_code: 1\n");
   start(pipeline(std::string(kTalker) + "    config: fail.yaml\n    restart: on-failure\n    max_restarts: 1\n"
-                 "    restart_backoff_s: 0.05\n"));
+                                        "    restart_backoff_s: 0.05\n"));
   EXPECT_EQ(wait_exit(kExitBound), 1) << output();
   EXPECT_EQ(started_pids("talker").size(), 2u) << output();
   EXPECT_EQ(output().find("failed at start-up"), std::string::npos) << output();
@@ -355,7 +356,8 @@ TEST_F(SupervisorTest, StoppedComponentIsResumedAndStopsCleanly) {
   kill(supervisor_pid_, SIGTERM);
   EXPECT_EQ(wait_exit(kExitBound), 0) << output();
   EXPECT_NE(output().find("talker is stopped (SIGSTOP or a debugger); resuming it (SIGCONT) so that it stops"),
-            std::string::npos) << output();
+            std::string::npos)
+      << output();
   EXPECT_NE(output().find("talker stopped"), std::string::npos) << output();
   EXPECT_EQ(output().find("did not stop"), std::string::npos) << output();
 }
@@ -365,14 +367,14 @@ TEST_F(SupervisorTest, StoppedComponentIsResumedAndStopsCleanly) {
 TEST_F(SupervisorTest, RestartFailingAtItsStartUpIsAMidRunFailure) {
   write("talker.yaml", "exit_after_s: 1\nexit_code: 1\n");
   start(pipeline(std::string(kTalker) + "    config: talker.yaml\n    restart: on-failure\n    max_restarts: 10\n"
-                 "    restart_backoff_s: 0.3\n    restart_backoff_max_s: 0.3\n"));
+                                        "    restart_backoff_s: 0.3\n    restart_backoff_max_s: 0.3\n"));
   ASSERT_TRUE(wait_for_output("talker is ready", kStartupBound)) << output();
   write("talker.yaml", "exit_code: 300\n");  // what the next restart reads: a start-up error
   EXPECT_EQ(wait_exit(kExitBound), 1) << output();
   // Which restart it is depends on how fast the machine made the first one ready.
-  EXPECT_TRUE(std::regex_search(last_line(output()),
-                                std::regex(R"(^\[supervisor\] error: pipeline failed: talker failed mid-run: restart \d+ )"
-                                           R"(failed at its start-up \(exit code 1\): heslam-test-talker: )")))
+  EXPECT_TRUE(std::regex_search(
+      last_line(output()), std::regex(R"(^\[supervisor\] error: pipeline failed: talker failed mid-run: restart \d+ )"
+                                      R"(failed at its start-up \(exit code 1\): heslam-test-talker: )")))
       << output();
   EXPECT_GE(started_pids("talker").size(), 2u) << output();
 }
@@ -383,17 +385,19 @@ TEST_F(SupervisorTest, RestartFailingAtItsStartUpIsAMidRunFailure) {
 TEST_F(SupervisorTest, SecondRunOnTheSameDomainIsRefusedAndDomainAutoPicksAFreeOne) {
   start(pipeline(kTalker));
   ASSERT_TRUE(wait_for_output("talker is ready", kStartupBound)) << output();
-  const pid_t second = spawn_supervisor({(dir_ / "pipeline.yaml").string(), "--log-dir", (dir_ / "logs2").string()},
-                                        "second.out");
+  const pid_t second =
+      spawn_supervisor({(dir_ / "pipeline.yaml").string(), "--log-dir", (dir_ / "logs2").string()}, "second.out");
   EXPECT_EQ(wait_exit_of(second, kExitBound), 1) << output("second.out");
   const std::string refused = output("second.out");
   EXPECT_NE(refused.find("domain " + std::to_string(test_domain_id()) + ", namespace 't" + std::to_string(getpid()) +
                          "' is in use by another heslam run on this host (supervisor pid " +
-                         std::to_string(supervisor_pid_) + ")"), std::string::npos) << refused;
+                         std::to_string(supervisor_pid_) + ")"),
+            std::string::npos)
+      << refused;
   EXPECT_EQ(refused.find("started talker"), std::string::npos) << refused;
 
-  const pid_t automatic = spawn_supervisor({(dir_ / "pipeline.yaml").string(), "--domain", "auto", "--log-dir",
-                                            (dir_ / "logs3").string()}, "auto.out");
+  const pid_t automatic = spawn_supervisor(
+      {(dir_ / "pipeline.yaml").string(), "--domain", "auto", "--log-dir", (dir_ / "logs3").string()}, "auto.out");
   ASSERT_TRUE(wait_for_output("talker is ready", kStartupBound, "auto.out")) << output("auto.out");
   const std::string text = output("auto.out");
   std::smatch match;
@@ -413,22 +417,26 @@ TEST_F(SupervisorTest, AnotherRunAppearingMidRunIsReportedAndRefusesNewRuns) {
   start(pipeline(kTalker));
   ASSERT_TRUE(wait_for_output("talker is ready", kStartupBound)) << output();
   std::ofstream(dir_ / "stray.yaml") << "%YAML:1.0\n---\ndata_writer: true\n";
-  const pid_t stray = spawn(bin_dir() / "heslam-test-talker",
-                            {"--domain", std::to_string(test_domain_id()), "--namespace", "t" + std::to_string(getpid()),
-                             "--name", "stray", "--config", (dir_ / "stray.yaml").string()},
-                            "stray.out");
+  const pid_t stray =
+      spawn(bin_dir() / "heslam-test-talker",
+            {"--domain", std::to_string(test_domain_id()), "--namespace", "t" + std::to_string(getpid()), "--name",
+             "stray", "--config", (dir_ / "stray.yaml").string()},
+            "stray.out");
   ASSERT_GT(stray, 0);
   EXPECT_TRUE(wait_for_output("another heslam run appeared on domain", kStartupBound)) << output();
   kill(supervisor_pid_, SIGTERM);
   EXPECT_EQ(wait_exit(kExitBound), 0) << output();
-  EXPECT_NE(last_line(output()).find("another heslam run appeared on the domain (run " + std::to_string(getpid()) + ":"),
-            std::string::npos) << output();
+  EXPECT_NE(
+      last_line(output()).find("another heslam run appeared on the domain (run " + std::to_string(getpid()) + ":"),
+      std::string::npos)
+      << output();
 
-  const pid_t second = spawn_supervisor({(dir_ / "pipeline.yaml").string(), "--log-dir", (dir_ / "logs2").string()},
-                                        "second.out");
+  const pid_t second =
+      spawn_supervisor({(dir_ / "pipeline.yaml").string(), "--log-dir", (dir_ / "logs2").string()}, "second.out");
   EXPECT_EQ(wait_exit_of(second, kExitBound), 1) << output("second.out");
   EXPECT_NE(output("second.out").find("is in use by another heslam run: run " + std::to_string(getpid()) + ":"),
-            std::string::npos) << output("second.out");
+            std::string::npos)
+      << output("second.out");
   EXPECT_EQ(output("second.out").find("started talker"), std::string::npos) << output("second.out");
   kill(stray, SIGKILL);
   waitpid(stray, nullptr, 0);
@@ -455,8 +463,9 @@ TEST(TestDomains, ADomainAHeslamRunHoldsIsNotReserved) {
 
 TEST_F(SupervisorTest, OnExitShutdownEndsTheRunCleanly) {
   write("short.yaml", "exit_after_s: 0.3\n");
-  start(pipeline("  - name: service\n    executable: heslam-test-talker\n"
-                 "  - name: job\n    executable: heslam-test-talker\n    config: short.yaml\n    on_exit: shutdown\n"));
+  start(
+      pipeline("  - name: service\n    executable: heslam-test-talker\n"
+               "  - name: job\n    executable: heslam-test-talker\n    config: short.yaml\n    on_exit: shutdown\n"));
   EXPECT_EQ(wait_exit(kExitBound), 0) << output();
   EXPECT_NE(output().find("job finished (exit code 0)"), std::string::npos) << output();
   EXPECT_NE(output().find("service stopped"), std::string::npos) << output();
@@ -496,7 +505,8 @@ TEST_F(ComponentErrors, UnknownField) {
   write("typo.yaml", "exit_afer_s: 1\n");
   const auto [code, text] = run_talker({"--config", (dir_ / "typo.yaml").string()});
   EXPECT_EQ(code, 1);
-  EXPECT_EQ(text, "heslam-test-talker: " + (dir_ / "typo.yaml").string() + ": unknown field 'exit_afer_s' (no such option)\n");
+  EXPECT_EQ(text, "heslam-test-talker: " + (dir_ / "typo.yaml").string() +
+                      ": unknown field 'exit_afer_s' (no such option)\n");
 }
 
 TEST_F(ComponentErrors, MissingConfigAndBadFlags) {
@@ -535,8 +545,9 @@ TEST_F(SupervisorCheck, RejectsAMissingOrEmptyInput) {
   EXPECT_EQ(out, "heslam-supervisor: " + file() + ": component 'talker': input " + missing + " does not exist\n");
   std::tie(code, out) = check(text);
   EXPECT_EQ(code, 1);
-  EXPECT_EQ(out, "heslam-supervisor: " + file() +
-                     ": component 'talker': input '$(arg dataset)' is empty (give it with --arg, e.g. --arg dataset=DIR)\n");
+  EXPECT_EQ(out,
+            "heslam-supervisor: " + file() +
+                ": component 'talker': input '$(arg dataset)' is empty (give it with --arg, e.g. --arg dataset=DIR)\n");
   std::tie(code, out) = check(text, {"--arg", "dataset=" + dir_.string()});
   EXPECT_EQ(code, 0) << out;
   // A run fails the same way, starting nothing.
@@ -590,8 +601,8 @@ TEST_F(SupervisorCheck, RejectsUnknownArg) {
   const auto [code, text] =
       check(pipeline(std::string(kTalker) + "    args: [\"$(arg dataset)\"]\n", "args:\n  rate: 1\n"));
   EXPECT_EQ(code, 1);
-  EXPECT_EQ(text, "heslam-supervisor: " + file() +
-                      ": field 'components[0].args': unknown $(arg dataset) (declared: rate)\n");
+  EXPECT_EQ(text,
+            "heslam-supervisor: " + file() + ": field 'components[0].args': unknown $(arg dataset) (declared: rate)\n");
 }
 
 TEST_F(SupervisorCheck, ArgOverridesAreSubstitutedAndUndeclaredOnesRejected) {
@@ -600,7 +611,8 @@ TEST_F(SupervisorCheck, ArgOverridesAreSubstitutedAndUndeclaredOnesRejected) {
   EXPECT_EQ(code, 0) << text;
   std::tie(code, text) = check(pipeline(std::string(kTalker), "args:\n  mode: a\n"), {"--arg", "speed=2"});
   EXPECT_EQ(code, 1);
-  EXPECT_EQ(text, "heslam-supervisor: " + file() + ": --arg speed: the pipeline declares no such argument (declared: mode)\n");
+  EXPECT_EQ(text, "heslam-supervisor: " + file() +
+                      ": --arg speed: the pipeline declares no such argument (declared: mode)\n");
 }
 
 TEST_F(SupervisorCheck, RejectsANegativeNice) {
@@ -614,7 +626,8 @@ TEST_F(SupervisorCheck, RejectsUnknownFieldsAndBadValues) {
   EXPECT_EQ(code, 1);
   EXPECT_EQ(text, "heslam-supervisor: " + file() +
                       ": field 'components[0].restart': expected one of never on-failure always, got 'sometimes'\n"
-                      "heslam-supervisor: " + file() + ": unknown field 'components[0].restrat' (no such option)\n");
+                      "heslam-supervisor: " +
+                      file() + ": unknown field 'components[0].restrat' (no such option)\n");
 }
 
 // The pipeline's name names the log folder: a huge or unprintable one is refused by --check with a
@@ -627,8 +640,10 @@ TEST_F(SupervisorCheck, RejectsAHugeOrUnprintablePipelineNameWithAShortLine) {
   auto [code, out] = check(text);
   EXPECT_EQ(code, 1);
   EXPECT_LT(out.size(), 400u) << out.substr(0, 400);
-  EXPECT_NE(out.find("field 'name': expected 1-64 letters, digits, '_', '-' or '.' (it names the log folder), got 'nnn"),
-            std::string::npos) << out.substr(0, 400);
+  EXPECT_NE(
+      out.find("field 'name': expected 1-64 letters, digits, '_', '-' or '.' (it names the log folder), got 'nnn"),
+      std::string::npos)
+      << out.substr(0, 400);
   EXPECT_NE(out.find("... (10485760 bytes)"), std::string::npos) << out.substr(0, 400);
 
   text = pipeline(kTalker);
@@ -646,10 +661,11 @@ TEST_F(SupervisorCheck, ArgumentsReferringToEachOtherAreResolvedAndACycleIsRefus
   auto [code, out] = check(pipeline(std::string(kTalker) + "    args: [\"--log-level\", \"$(arg level)\"]\n",
                                     "args:\n  level: \"$(arg default_level)\"\n  default_level: warn\n"));
   EXPECT_EQ(code, 0) << out;
-  std::tie(code, out) = check(pipeline(std::string(kTalker) + "    args: [\"$(arg a)\"]\n",
-                                       "args:\n  a: \"x$(arg b)\"\n  b: \"$(arg a)\"\n"));
+  std::tie(code, out) = check(
+      pipeline(std::string(kTalker) + "    args: [\"$(arg a)\"]\n", "args:\n  a: \"x$(arg b)\"\n  b: \"$(arg a)\"\n"));
   EXPECT_EQ(code, 1);
-  EXPECT_EQ(out, "heslam-supervisor: " + file() + ": argument 'a': the arguments refer to each other in a cycle (a -> b -> a)\n");
+  EXPECT_EQ(out, "heslam-supervisor: " + file() +
+                     ": argument 'a': the arguments refer to each other in a cycle (a -> b -> a)\n");
 }
 
 // --check runs each heslam program's own check of its arguments: what a run would refuse, --check
@@ -657,8 +673,9 @@ TEST_F(SupervisorCheck, ArgumentsReferringToEachOtherAreResolvedAndACycleIsRefus
 TEST_F(SupervisorCheck, RunsEachProgramsOwnCheckOfItsArguments) {
   const auto [code, out] = check(pipeline(std::string(kTalker) + "    args: [\"--log-level\", \"loud\"]\n"));
   EXPECT_EQ(code, 1);
-  EXPECT_EQ(out, "heslam-supervisor: pipeline.yaml: component 'talker': heslam-test-talker: --log-level: expected debug, "
-                 "info, warn, error or off, got 'loud'\n");
+  EXPECT_EQ(out,
+            "heslam-supervisor: pipeline.yaml: component 'talker': heslam-test-talker: --log-level: expected debug, "
+            "info, warn, error or off, got 'loud'\n");
 }
 
 }  // namespace

@@ -46,6 +46,4 @@ class Talker : public runtime::Component {
 
 }  // namespace heslam::test
 
-int main(int argc, char** argv) {
-  return heslam::runtime::component_main<heslam::test::Talker>(argc, argv, "talker");
-}
+int main(int argc, char** argv) { return heslam::runtime::component_main<heslam::test::Talker>(argc, argv, "talker"); }

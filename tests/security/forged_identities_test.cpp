@@ -30,8 +30,8 @@ using test::last_line;
 // any run: killed when the test ends.
 std::unique_ptr<test::ChildProcess> start_forger(const fs::path& dir, const std::string& mode, int domain,
                                                  pid_t supervisor, const std::vector<std::string>& more = {}) {
-  std::vector<std::string> args{"--domain", std::to_string(domain), mode, "--seconds", "3600", "--run-of",
-                                std::to_string(supervisor)};
+  std::vector<std::string> args{"--domain", std::to_string(domain),    mode, "--seconds", "3600",
+                                "--run-of", std::to_string(supervisor)};
   args.insert(args.end(), more.begin(), more.end());
   return std::make_unique<test::ChildProcess>(test::bin_dir() / "heslam-test-secure-peer", args, dir, "forger_" + mode);
 }

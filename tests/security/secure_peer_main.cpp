@@ -28,9 +28,9 @@
 #include <fstream>
 #include <iostream>
 #include <iterator>
+#include <limits>
 #include <optional>
 #include <sstream>
-#include <limits>
 #include <string>
 #include <thread>
 #include <vector>
@@ -61,8 +61,8 @@ struct PeerArgs {
   std::string identity;
   std::string mode;
   double seconds = 3.0;
-  int run_of = 0;                // forge-*: copy the run id of this process (a heslam-supervisor)
-  int pid = 0;                   // forge-status: the pid claimed
+  int run_of = 0;                 // forge-*: copy the run id of this process (a heslam-supervisor)
+  int pid = 0;                    // forge-status: the pid claimed
   std::string name = "recorder";  // forge-status: the component claimed
 };
 
@@ -90,8 +90,8 @@ PeerArgs parse(int argc, char** argv) {
       args.mode != "read-stereo" && args.mode != "forge-odometry" && args.mode != "forge-status" &&
       args.mode != "forge-frame-done" && args.mode != "forge-keyframe-done") {
     throw std::runtime_error(
-        "MODE: expected publish-stereo, publish-correction, publish-hostile, read-stereo or forge-*, got '" + args.mode +
-        "'");
+        "MODE: expected publish-stereo, publish-correction, publish-hostile, read-stereo or forge-*, got '" +
+        args.mode + "'");
   }
   return args;
 }
@@ -213,7 +213,8 @@ std::string run_id_of(int pid) {
   if (close == std::string::npos) throw std::runtime_error("--run-of " + std::to_string(pid) + ": no such process");
   std::istringstream fields(text.substr(close + 1));
   std::string field;
-  for (int index = 3; index <= 22 && fields >> field; ++index) {}  // field 22: start time (proc(5))
+  for (int index = 3; index <= 22 && fields >> field; ++index) {
+  }  // field 22: start time (proc(5))
   return std::to_string(pid) + ":" + field;
 }
 
@@ -282,9 +283,9 @@ int forge(runtime::Participant& participant, const runtime::Topics& topics, cons
       sample.executable = executable;
       sample.state = heslam_msg_STATE_RUNNING;
       sample.message = result;
-      sample.stamp_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                            std::chrono::system_clock::now().time_since_epoch())
-                            .count();
+      sample.stamp_ns =
+          std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+              .count();
       status->write(sample);
       ++written;
     }

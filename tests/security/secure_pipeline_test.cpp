@@ -27,10 +27,9 @@ using test::last_line;
 
 std::unique_ptr<test::ChildProcess> start_intruder(const fs::path& dir, const std::string& mode, int domain) {
   // Longer than any run: killed when the test ends.
-  return std::make_unique<test::ChildProcess>(test::bin_dir() / "heslam-test-secure-peer",
-                                              std::vector<std::string>{"--domain", std::to_string(domain), mode,
-                                                                       "--seconds", "3600"},
-                                              dir, "intruder_" + mode);
+  return std::make_unique<test::ChildProcess>(
+      test::bin_dir() / "heslam-test-secure-peer",
+      std::vector<std::string>{"--domain", std::to_string(domain), mode, "--seconds", "3600"}, dir, "intruder_" + mode);
 }
 
 TEST(SecurePipeline, SynthRoomGivesThePlainTrajectoryWhileAnIntruderPublishes) {
@@ -80,24 +79,24 @@ TEST(SecurePipeline, CheckNamesTheFolderAndAMissingIdentity) {
   // --check opens the dataset as the replay would (its own --check): a real one.
   fs::path dataset;
   ASSERT_EQ(test::cached_synth("room", kFrames, dataset), "");
-  test::ChildProcess check(test::bin_dir() / "heslam-supervisor",
-                           {pipeline.string(), "--check", "--arg", "dataset=" + dataset.string(), "--arg",
-                            "security=" + security.string()},
-                           dir.path(), "check_ok");
+  test::ChildProcess check(
+      test::bin_dir() / "heslam-supervisor",
+      {pipeline.string(), "--check", "--arg", "dataset=" + dataset.string(), "--arg", "security=" + security.string()},
+      dir.path(), "check_ok");
   ASSERT_EQ(check.wait(std::chrono::seconds(60)), 0) << check.err();
   EXPECT_NE(check.out().find(", DDS security from " + security.string()), std::string::npos) << check.out();
 
   fs::remove_all(security / "identities/recorder");
-  test::ChildProcess missing(test::bin_dir() / "heslam-supervisor",
-                             {pipeline.string(), "--check", "--arg", "dataset=" + dataset.string(), "--security",
-                              security.string()},
-                             dir.path(), "check_missing");
+  test::ChildProcess missing(
+      test::bin_dir() / "heslam-supervisor",
+      {pipeline.string(), "--check", "--arg", "dataset=" + dataset.string(), "--security", security.string()},
+      dir.path(), "check_missing");
   ASSERT_EQ(missing.wait(std::chrono::seconds(60)), 1) << missing.out();
-  EXPECT_EQ(last_line(missing.err()), "heslam-supervisor: " + pipeline.string() +
-                                          ": component 'recorder': DDS security: " +
-                                          (security / "identities/recorder/cert.pem").string() +
-                                          " does not exist (make the folder with heslam-security init DIR; one more "
-                                          "identity with heslam-security add DIR NAME:PUBLISH:SUBSCRIBE)");
+  EXPECT_EQ(last_line(missing.err()),
+            "heslam-supervisor: " + pipeline.string() +
+                ": component 'recorder': DDS security: " + (security / "identities/recorder/cert.pem").string() +
+                " does not exist (make the folder with heslam-security init DIR; one more "
+                "identity with heslam-security add DIR NAME:PUBLISH:SUBSCRIBE)");
 }
 
 }  // namespace

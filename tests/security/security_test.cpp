@@ -102,8 +102,8 @@ TEST(SecurityInit, GrantsEachTopicOnlyToTheComponentsThatNeedIt) {
   const test::ScratchDir dir("security_init");
   const fs::path security = test::make_security_folder(dir.path() / "sec", dir.path());
   const auto grants = read_grants(security);
-  const std::set<std::string> expected{"replay", "frontend", "local_mapper", "loop_closer", "recorder",
-                                       "viewer",  "supervisor", "spy"};
+  const std::set<std::string> expected{"replay",   "frontend", "local_mapper", "loop_closer",
+                                       "recorder", "viewer",   "supervisor",   "spy"};
   std::set<std::string> names;
   for (const auto& [name, grant] : grants) names.insert(name);
   EXPECT_EQ(names, expected);
@@ -114,11 +114,15 @@ TEST(SecurityInit, GrantsEachTopicOnlyToTheComponentsThatNeedIt) {
 
   // Every topic of the table has a writer and a reader, and the single-writer topics one writer.
   const std::map<std::string, std::set<std::string>> only_writers{
-      {"camera/stereo", {"replay"}},           {"camera/calibration", {"replay"}},
-      {"odometry", {"frontend"}},              {"map/keyframes", {"frontend"}},
-      {"map/keyframe_states", {"local_mapper"}}, {"map/points", {"local_mapper"}},
+      {"camera/stereo", {"replay"}},
+      {"camera/calibration", {"replay"}},
+      {"odometry", {"frontend"}},
+      {"map/keyframes", {"frontend"}},
+      {"map/keyframe_states", {"local_mapper"}},
+      {"map/points", {"local_mapper"}},
       {"map/mapper_keyframes", {"local_mapper"}},
-      {"loop/corrections", {"loop_closer"}},   {"lockstep/frame_done", {"frontend"}},
+      {"loop/corrections", {"loop_closer"}},
+      {"lockstep/frame_done", {"frontend"}},
       {"lockstep/keyframe_done", {"local_mapper", "loop_closer"}}};
   for (const runtime::TopicEntry& topic : runtime::all_topics()) {
     const std::string pattern = "*/" + std::string(topic.relative_name);
@@ -143,7 +147,8 @@ TEST(SecurityInit, GrantsEachTopicOnlyToTheComponentsThatNeedIt) {
 }
 
 TEST(SecurityFiles, IdentityFolderNamesTheFilesOfItsRunFolder) {
-  for (const char* identity : {"/sec/identities/frontend", "/sec/identities/frontend/", "/sec/x/../identities/frontend"}) {
+  for (const char* identity :
+       {"/sec/identities/frontend", "/sec/identities/frontend/", "/sec/x/../identities/frontend"}) {
     const runtime::SecurityFiles files = runtime::security_files(identity);
     EXPECT_EQ(files.governance, fs::path("/sec/governance.p7s")) << identity;
     EXPECT_EQ(files.identity_ca, fs::path("/sec/ca/identity_ca.pem")) << identity;
@@ -159,8 +164,7 @@ TEST(SecureDds, AuthorisedReaderGetsTheImagesAndTheWireCarriesNoImageBytes) {
   const fs::path security = test::make_security_folder(dir.path() / "sec", dir.path());
   test::LoopbackCapture capture(domain);
   if (!capture.error().empty()) GTEST_SKIP() << capture.error();
-  runtime::Participant participant(
-      runtime::ParticipantOptions{domain, "", security / "identities/frontend"});
+  runtime::Participant participant(runtime::ParticipantOptions{domain, "", security / "identities/frontend"});
   auto peer = start_peer(dir.path(), "replay", domain, "publish-stereo", security / "identities/replay", 120);
   const auto [received, with_pattern] = read_frames(participant, kDeliveryBoundSeconds, 5);
   EXPECT_EQ(received, 5) << "the credentialed replay's frames did not arrive; peer: " << peer->out() << peer->err();
@@ -212,8 +216,8 @@ TEST(SecureDds, ParticipantWithoutCredentialsCannotInject) {
   auto frames = start_peer(dir.path(), "plain_replay", domain, "publish-stereo", "", 120);
   auto injector = start_peer(dir.path(), "plain_loop", domain, "publish-correction", "", 120);
   // This process is the mapper (it may not read images); the frontend is a process of its own.
-  auto frontend = start_peer(dir.path(), "frontend", domain, "read-stereo", security / "identities/frontend",
-                             kSilenceSeconds);
+  auto frontend =
+      start_peer(dir.path(), "frontend", domain, "read-stereo", security / "identities/frontend", kSilenceSeconds);
   std::this_thread::sleep_for(std::chrono::duration<double>(kSilenceSeconds));
   EXPECT_TRUE(corrections.take().empty()) << "a correction from a participant without credentials arrived";
   const auto code = frontend->wait(kDeliveryBound);
@@ -309,8 +313,8 @@ TEST(SecureDds, TamperedPermissionsAreRejected) {
   ASSERT_NE(at, std::string::npos);
   text.replace(at, granted.size(), "<topic>*/camera/stereo</topic>");
   std::ofstream(signed_document) << text;
-  EXPECT_THROW(runtime::Participant(runtime::ParticipantOptions{test::exclusive_domain_id(), "",
-                                                                security / "identities/frontend"}),
+  EXPECT_THROW(runtime::Participant(
+                   runtime::ParticipantOptions{test::exclusive_domain_id(), "", security / "identities/frontend"}),
                std::runtime_error);
 }
 

@@ -28,7 +28,8 @@ class NetnsPair {
     if (geteuid() != 0) return "needs root to create network namespaces (ip netns); run as root to test multi-host";
     if (ip_path().empty()) return "needs the `ip` command (iproute2) for network namespaces";
     const std::string probe = std::string(kPrefix) + "probe" + std::to_string(getpid());
-    if (!run(ip_path() + " netns add " + probe)) return "`ip netns add` failed here (a container without CAP_SYS_ADMIN?)";
+    if (!run(ip_path() + " netns add " + probe))
+      return "`ip netns add` failed here (a container without CAP_SYS_ADMIN?)";
     run(ip_path() + " netns del " + probe);
     return std::nullopt;
   }
@@ -47,7 +48,8 @@ class NetnsPair {
     const std::string ip = ip_path();
     ok_ = run(ip + " netns add " + ns_[0]) && run(ip + " netns add " + ns_[1]) &&
           run(ip + " link add " + veth_[0] + " type veth peer name " + veth_[1]) &&
-          run(ip + " link set " + veth_[0] + " netns " + ns_[0]) && run(ip + " link set " + veth_[1] + " netns " + ns_[1]);
+          run(ip + " link set " + veth_[0] + " netns " + ns_[0]) &&
+          run(ip + " link set " + veth_[1] + " netns " + ns_[1]);
     // Both ends get the same name inside their namespace, as two real hosts both have "eth0": one
     // dds_interface works for both halves of a pipeline.
     for (int i = 0; i < 2 && ok_; ++i) {
@@ -55,8 +57,8 @@ class NetnsPair {
       if (ok_) veth_[i] = kInterface;
     }
     for (int i = 0; i < 2 && ok_; ++i) {
-      ok_ = exec(i, "ip addr add " + address_[i] + "/24 dev " + veth_[i]) && exec(i, "ip link set " + veth_[i] + " up") &&
-            exec(i, "ip link set lo up");
+      ok_ = exec(i, "ip addr add " + address_[i] + "/24 dev " + veth_[i]) &&
+            exec(i, "ip link set " + veth_[i] + " up") && exec(i, "ip link set lo up");
     }
   }
   ~NetnsPair() {
@@ -83,8 +85,9 @@ class NetnsPair {
     return exec(0, "ip link set " + veth_[0] + state) && exec(1, "ip link set " + veth_[1] + state);
   }
   // program with args inside host's namespace (`ip netns exec` execs it: the pid is the program's).
-  std::unique_ptr<ChildProcess> spawn(int host, const std::filesystem::path& program, const std::vector<std::string>& args,
-                                      const std::filesystem::path& log_dir, const std::string& label) const {
+  std::unique_ptr<ChildProcess> spawn(int host, const std::filesystem::path& program,
+                                      const std::vector<std::string>& args, const std::filesystem::path& log_dir,
+                                      const std::string& label) const {
     std::vector<std::string> all{"netns", "exec", ns_[host], program.string()};
     all.insert(all.end(), args.begin(), args.end());
     return std::make_unique<ChildProcess>(ip_path(), all, log_dir, label);
@@ -108,7 +111,8 @@ class NetnsPair {
     for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
       const std::string name = entry.path().filename().string();
       if (name.rfind(kPrefix, 0) != 0 || name.size() < std::string(kPrefix).size() + 2) continue;
-      const std::string digits = name.substr(std::string(kPrefix).size(), name.size() - std::string(kPrefix).size() - 1);
+      const std::string digits =
+          name.substr(std::string(kPrefix).size(), name.size() - std::string(kPrefix).size() - 1);
       if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos) continue;
       const pid_t pid = std::stoi(digits);
       if (kill(pid, 0) != 0 && errno == ESRCH) run(ip_path() + " netns del " + name);

@@ -33,9 +33,15 @@ inline constexpr std::chrono::seconds kStopTimeout{20};
 inline std::unique_ptr<ChildProcess> start_pipeline(const std::string& pipeline, const std::filesystem::path& dataset,
                                                     const std::filesystem::path& dir, const std::string& label,
                                                     int domain, const std::vector<std::string>& pipeline_args = {}) {
-  std::vector<std::string> args{(source_dir() / "config/pipelines" / (pipeline + ".yaml")).string(), "--domain",
-                                std::to_string(domain), "--log-dir", (dir / ("logs_" + label)).string(), "--arg",
-                                "dataset=" + dataset.string(), "--arg", "output=" + (dir / (label + ".txt")).string()};
+  std::vector<std::string> args{(source_dir() / "config/pipelines" / (pipeline + ".yaml")).string(),
+                                "--domain",
+                                std::to_string(domain),
+                                "--log-dir",
+                                (dir / ("logs_" + label)).string(),
+                                "--arg",
+                                "dataset=" + dataset.string(),
+                                "--arg",
+                                "output=" + (dir / (label + ".txt")).string()};
   for (const std::string& arg : pipeline_args) args.insert(args.end(), {"--arg", arg});
   return std::make_unique<ChildProcess>(bin_dir() / "heslam-supervisor", args, dir, "supervisor_" + label);
 }

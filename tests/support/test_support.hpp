@@ -118,10 +118,10 @@ inline int lost_entries(const std::filesystem::path& lost) {
 }  // namespace heslam::test
 
 // Skips the current test with a clear message when a shared data set is absent.
-#define HESLAM_REQUIRE_SHARED_DATA(name)                                                     \
-  do {                                                                                       \
-    if (::heslam::test::shared_dataset(name).empty()) {                                      \
-      GTEST_SKIP() << "shared data '" << (name) << "' not found under "                      \
-                   << ::heslam::test::shared_data() << " (tests on real images are skipped)"; \
-    }                                                                                        \
+#define HESLAM_REQUIRE_SHARED_DATA(name)                                                                 \
+  do {                                                                                                   \
+    if (::heslam::test::shared_dataset(name).empty()) {                                                  \
+      GTEST_SKIP() << "shared data '" << (name) << "' not found under " << ::heslam::test::shared_data() \
+                   << " (tests on real images are skipped)";                                             \
+    }                                                                                                    \
   } while (0)

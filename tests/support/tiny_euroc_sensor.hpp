@@ -12,7 +12,9 @@ inline std::string tiny_euroc_sensor_yaml(double tx_m) {
   return "%YAML:1.0\n"
          "sensor_type: camera\n"
          "T_BS:\n  cols: 4\n  rows: 4\n"
-         "  data: [1.0, 0.0, 0.0, " + std::to_string(tx_m) + ",\n"
+         "  data: [1.0, 0.0, 0.0, " +
+         std::to_string(tx_m) +
+         ",\n"
          "         0.0, 1.0, 0.0, 0.0,\n         0.0, 0.0, 1.0, 0.0,\n         0.0, 0.0, 0.0, 1.0]\n"
          "rate_hz: 20\nresolution: [40, 30]\ncamera_model: pinhole\n"
          "intrinsics: [50.0, 51.0, 20.0, 15.0]\n"

@@ -38,7 +38,8 @@ double patch_disparity(const cv::Mat& left, const cv::Mat& right, cv::Point cent
   for (int it = 0; it < 30; ++it) {
     auto sample = [&](double disparity) {
       cv::Mat p;
-      cv::getRectSubPix(right, size, cv::Point2f(static_cast<float>(center.x - disparity), static_cast<float>(center.y)), p, CV_32F);
+      cv::getRectSubPix(right, size,
+                        cv::Point2f(static_cast<float>(center.x - disparity), static_cast<float>(center.y)), p, CV_32F);
       return p;
     };
     const cv::Mat r = sample(d) - ref;
@@ -71,7 +72,8 @@ CornerErrors measure(SequenceRenderer& renderer, int frame_index) {
         uv.y() > cam.height_px - kMarginPx || ur < kMarginPx)
       continue;
     // Occluded corners (another surface in front) are not visible features.
-    const float z_rendered = depth.at<float>(static_cast<int>(std::lround(uv.y())), static_cast<int>(std::lround(uv.x())));
+    const float z_rendered =
+        depth.at<float>(static_cast<int>(std::lround(uv.y())), static_cast<int>(std::lround(uv.x())));
     if (std::abs(z_rendered - p_c.z()) > 0.02) continue;
     const cv::Point2f guess_l(static_cast<float>(uv.x() + 0.7), static_cast<float>(uv.y() - 0.6));
     const cv::Point2f guess_r(static_cast<float>(ur - 0.6), static_cast<float>(uv.y() + 0.7));
@@ -117,7 +119,8 @@ TEST(SynthGeometry, DistortedRenderingMatchesOpenCvProjection) {
   std::vector<cv::Point3d> pts;
   for (const MarkerCorner& m : renderer.scene().marker_corners) {
     const Eigen::Vector3d p = T_cw * m.p_w;
-    if (p.z() > 0.3 && std::abs(p.x() / p.z()) < 0.6 && std::abs(p.y() / p.z()) < 0.4) pts.push_back({p.x(), p.y(), p.z()});
+    if (p.z() > 0.3 && std::abs(p.x() / p.z()) < 0.6 && std::abs(p.y() / p.z()) < 0.4)
+      pts.push_back({p.x(), p.y(), p.z()});
   }
   ASSERT_GT(pts.size(), 30u);
   std::vector<cv::Point2d> projected;
@@ -125,8 +128,10 @@ TEST(SynthGeometry, DistortedRenderingMatchesOpenCvProjection) {
   double max_err = 0;
   int count = 0;
   for (const auto& uv : projected) {
-    if (uv.x < kMarginPx || uv.y < kMarginPx || uv.x > c.width_px - kMarginPx || uv.y > c.height_px - kMarginPx) continue;
-    const cv::Point2f found = locate_corner(f.left, cv::Point2f(static_cast<float>(uv.x + 0.5), static_cast<float>(uv.y - 0.5)));
+    if (uv.x < kMarginPx || uv.y < kMarginPx || uv.x > c.width_px - kMarginPx || uv.y > c.height_px - kMarginPx)
+      continue;
+    const cv::Point2f found =
+        locate_corner(f.left, cv::Point2f(static_cast<float>(uv.x + 0.5), static_cast<float>(uv.y - 0.5)));
     max_err = std::max(max_err, std::hypot(found.x - uv.x, found.y - uv.y));
     ++count;
   }
@@ -166,7 +171,8 @@ TEST(SynthGeometry, EurocGroundTruthFilesReprojectMarkerCornersOntoTheImages) {
     const Pose3 T_BS = eval::read_euroc_extrinsic(cam_dir / "sensor.yaml");
     for (int i = 0; i < 3; ++i) {
       const std::int64_t stamp = renderer.stamp_ns(i);
-      const cv::Mat image = cv::imread((cam_dir / "data" / (std::to_string(stamp) + ".png")).string(), cv::IMREAD_GRAYSCALE);
+      const cv::Mat image =
+          cv::imread((cam_dir / "data" / (std::to_string(stamp) + ".png")).string(), cv::IMREAD_GRAYSCALE);
       ASSERT_FALSE(image.empty());
       const std::optional<Pose3> T_wb = poses_at_stamps(truth, {stamp}, /*max_gap_s=*/0.0).front();
       ASSERT_TRUE(T_wb.has_value()) << "stamp " << stamp << " not in the ground truth";
@@ -175,9 +181,13 @@ TEST(SynthGeometry, EurocGroundTruthFilesReprojectMarkerCornersOntoTheImages) {
         const Eigen::Vector3d p = T_cw * m.p_w;
         if (p.z() < 0.5 || std::abs(p.x() / p.z()) > 0.6 || std::abs(p.y() / p.z()) > 0.4) continue;
         std::vector<cv::Point2d> uv;
-        cv::projectPoints(std::vector<cv::Point3d>{{p.x(), p.y(), p.z()}}, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, dist, uv);
-        if (uv[0].x < kMarginPx || uv[0].y < kMarginPx || uv[0].x > image.cols - kMarginPx || uv[0].y > image.rows - kMarginPx) continue;
-        const cv::Point2f found = locate_corner(image, cv::Point2f(static_cast<float>(uv[0].x - 0.5), static_cast<float>(uv[0].y + 0.5)));
+        cv::projectPoints(std::vector<cv::Point3d>{{p.x(), p.y(), p.z()}}, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K,
+                          dist, uv);
+        if (uv[0].x < kMarginPx || uv[0].y < kMarginPx || uv[0].x > image.cols - kMarginPx ||
+            uv[0].y > image.rows - kMarginPx)
+          continue;
+        const cv::Point2f found =
+            locate_corner(image, cv::Point2f(static_cast<float>(uv[0].x - 0.5), static_cast<float>(uv[0].y + 0.5)));
         max_err = std::max(max_err, std::hypot(found.x - uv[0].x, found.y - uv[0].y));
         ++checked;
       }

@@ -128,13 +128,13 @@ EurocRectification read_euroc_rectification(const cv::FileStorage& fs) {
                        D_l.empty() || D_r.empty() || rows_l == 0 || rows_r == 0 || cols_l == 0 || cols_r == 0;
   EXPECT_FALSE(missing) << "stereo_euroc: ERROR: Calibration parameters to rectify stereo are missing!";
   if (missing) return r;
-  cv::initUndistortRectifyMap(K_l, D_l, R_l, P_l.rowRange(0, 3).colRange(0, 3), cv::Size(cols_l, rows_l), CV_32F,
-                              r.M1l, r.M2l);
-  cv::initUndistortRectifyMap(K_r, D_r, R_r, P_r.rowRange(0, 3).colRange(0, 3), cv::Size(cols_r, rows_r), CV_32F,
-                              r.M1r, r.M2r);
+  cv::initUndistortRectifyMap(K_l, D_l, R_l, P_l.rowRange(0, 3).colRange(0, 3), cv::Size(cols_l, rows_l), CV_32F, r.M1l,
+                              r.M2l);
+  cv::initUndistortRectifyMap(K_r, D_r, R_r, P_r.rowRange(0, 3).colRange(0, 3), cv::Size(cols_r, rows_r), CV_32F, r.M1r,
+                              r.M2r);
   // ORB-SLAM2's stereo model: the right camera's P must carry -fx * baseline, both share fx.
-  EXPECT_NEAR(-P_r.at<double>(0, 3) / P_r.at<double>(0, 0), static_cast<double>(fs["Camera.bf"]) /
-                                                                 static_cast<double>(fs["Camera.fx"]), 1e-6);
+  EXPECT_NEAR(-P_r.at<double>(0, 3) / P_r.at<double>(0, 0),
+              static_cast<double>(fs["Camera.bf"]) / static_cast<double>(fs["Camera.fx"]), 1e-6);
   EXPECT_NEAR(P_l.at<double>(0, 0), static_cast<double>(fs["Camera.fx"]), 1e-6);
   return r;
 }
@@ -142,7 +142,8 @@ EurocRectification read_euroc_rectification(const cv::FileStorage& fs) {
 TEST(SynthOrbSlam2, StereoEurocReadsDistortedAndUndistortedSequences) {
   for (const bool distorted : {true, false}) {
     SCOPED_TRACE(distorted ? "distorted" : "undistorted");
-    const fs::path dir = fs::temp_directory_path() / (std::string("heslam_synth_orbslam_euroc_") + (distorted ? "d" : "u"));
+    const fs::path dir =
+        fs::temp_directory_path() / (std::string("heslam_synth_orbslam_euroc_") + (distorted ? "d" : "u"));
     fs::remove_all(dir);
     SequenceRenderer renderer(test::repo_preset("room"), {.seed = 2, .frames = 3, .apply_distortion = distorted});
     ASSERT_EQ(renderer.distortion_applied(), distorted);

@@ -50,7 +50,8 @@ TEST(SynthOutput, EurocLayoutAndMetadata) {
     EXPECT_EQ(csv[0], "#timestamp [ns],filename");
     EXPECT_EQ(csv[1], "1600000000000000000,1600000000000000000.png");
     EXPECT_EQ(csv[2], "1600000000050000000,1600000000050000000.png");
-    const cv::Mat img = cv::imread((dir / "mav0" / cam / "data" / "1600000000050000000.png").string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat img =
+        cv::imread((dir / "mav0" / cam / "data" / "1600000000050000000.png").string(), cv::IMREAD_UNCHANGED);
     ASSERT_EQ(img.type(), CV_8UC1);
     EXPECT_EQ(img.cols, 752);
     EXPECT_EQ(img.rows, 480);

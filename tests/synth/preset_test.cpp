@@ -46,8 +46,8 @@ TEST(SynthPresets, TrajectoriesHaveRealisticSpeedsAndRates) {
     const char* name;
     double max_speed_mps, max_rate_rad_s, min_length_m;
   };
-  for (const Case& c : {Case{"room", 1.3, 2.0, 20.0}, Case{"corridor_loop", 1.5, 2.0, 40.0}, Case{"street", 11.0, 0.8, 500.0},
-                        Case{"town", 11.0, 0.8, 500.0}}) {
+  for (const Case& c : {Case{"room", 1.3, 2.0, 20.0}, Case{"corridor_loop", 1.5, 2.0, 40.0},
+                        Case{"street", 11.0, 0.8, 500.0}, Case{"town", 11.0, 0.8, 500.0}}) {
     const Preset p = test::repo_preset(c.name);
     const BuiltScene scene = build_scene(p);
     const Trajectory traj(scene.path, p.trajectory, 1);
@@ -178,7 +178,8 @@ TEST(SynthPresets, BadFilesNameFileAndField) {
   expect_error("scene: room\nevents:\n  - type: stereo_gain\n    start_s: 1\n    end_s: 2\n", "'events[0].left'");
   expect_error("scene: room\nevents:\n  - type: stereo_gain\n    start_s: 1\n    end_s: 2\n    left: 1\n    right: 0\n",
                "'events[0].right'");
-  expect_error("scene: room\nevents:\n  - type: darkness\n    start_s: 1\n    end_s: 2\n    left: 2\n", "'events[0].left'");
+  expect_error("scene: room\nevents:\n  - type: darkness\n    start_s: 1\n    end_s: 2\n    left: 2\n",
+               "'events[0].left'");
   expect_error("scene: town\ntrajectory:\n  stops:\n    - {at_m: 50, wait_s: 1}\n    - {at_m: 20, wait_s: 1}\n",
                "'trajectory.stops[1].at_m'");
   EXPECT_THROW(find_preset("no_such_preset"), std::runtime_error);

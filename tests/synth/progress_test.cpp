@@ -14,7 +14,9 @@
 namespace heslam::synth {
 namespace {
 
-std::size_t count(const std::string& text, char c) { return static_cast<std::size_t>(std::count(text.begin(), text.end(), c)); }
+std::size_t count(const std::string& text, char c) {
+  return static_cast<std::size_t>(std::count(text.begin(), text.end(), c));
+}
 
 TEST(SynthProgress, NotATerminalPrintsOneLinePerTenPercent) {
   std::ostringstream out;

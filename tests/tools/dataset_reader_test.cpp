@@ -35,7 +35,8 @@ void write_text(const fs::path& path, const std::string& text) {
 cv::Mat test_image(int index, int side) {
   cv::Mat image(kHeight, kWidth, CV_8UC1);
   for (int v = 0; v < kHeight; ++v)
-    for (int u = 0; u < kWidth; ++u) image.at<uchar>(v, u) = static_cast<uchar>(u * 3 + v * 5 + index * 17 + side * 101);
+    for (int u = 0; u < kWidth; ++u)
+      image.at<uchar>(v, u) = static_cast<uchar>(u * 3 + v * 5 + index * 17 + side * 101);
   return image;
 }
 
@@ -151,8 +152,7 @@ TEST_F(DatasetReader, EurocLeftRightStampMismatch) {
 
 TEST_F(DatasetReader, EurocNonIncreasingStamps) {
   make_euroc("100,100.png\n300,300.png\n200,200.png\n", kThreeRows);
-  EXPECT_NE(open_error().find("cam0/data.csv line 4: stamp 200 is not after the previous stamp 300"),
-            std::string::npos)
+  EXPECT_NE(open_error().find("cam0/data.csv line 4: stamp 200 is not after the previous stamp 300"), std::string::npos)
       << open_error();
 }
 
@@ -165,8 +165,7 @@ TEST_F(DatasetReader, EurocMalformedRow) {
 
 TEST_F(DatasetReader, EurocEmptyFrameList) {
   make_euroc("", kThreeRows);
-  EXPECT_NE(open_error().find("cam0/data.csv: no frames listed (empty recording)"), std::string::npos)
-      << open_error();
+  EXPECT_NE(open_error().find("cam0/data.csv: no frames listed (empty recording)"), std::string::npos) << open_error();
 }
 
 TEST_F(DatasetReader, EurocUnreadableCalibrationNamesTheFile) {
@@ -181,8 +180,8 @@ TEST_F(DatasetReader, CalibrationFromASettingsFileReplacesTheDatasets) {
   const fs::path settings = root_ / "rig.yaml";
   write_text(settings,
              "%YAML:1.0\nFile.version: \"1.0\"\nCamera.type: \"PinHole\"\nCamera1.fx: 50.0\nCamera1.fy: 50.0\n"
-             "Camera1.cx: 20.0\nCamera1.cy: 15.0\nCamera.width: " + std::to_string(kWidth) + "\nCamera.height: " +
-                 std::to_string(kHeight) + "\nStereo.b: 0.3\n");
+             "Camera1.cx: 20.0\nCamera1.cy: 15.0\nCamera.width: " +
+                 std::to_string(kWidth) + "\nCamera.height: " + std::to_string(kHeight) + "\nStereo.b: 0.3\n");
   make_euroc(kThreeRows, kThreeRows);
   DatasetOptions options;
   options.calibration_file = settings;
@@ -226,8 +225,8 @@ TEST(GroundTruth, PosesAtStampsTakeTheNearestRowWithinTheGap) {
     T.translation().x() = k;
     truth.push_back(T, k, 1.0 + 0.01 * k);  // rows at 1.00 s, 1.01 s, 1.02 s
   }
-  const std::vector<std::int64_t> stamps_ns{1'000'000'000, 1'004'000'000, 1'006'000'000, 1'016'000'000,
-                                            1'040'000'000, 900'000'000};
+  const std::vector<std::int64_t> stamps_ns{1'000'000'000, 1'004'000'000, 1'006'000'000,
+                                            1'016'000'000, 1'040'000'000, 900'000'000};
   const std::vector<std::optional<Pose3>> poses = poses_at_stamps(truth, stamps_ns, 0.005);
   ASSERT_EQ(poses.size(), stamps_ns.size());
   ASSERT_TRUE(poses[0] && poses[1] && poses[2] && poses[3]);
@@ -235,8 +234,8 @@ TEST(GroundTruth, PosesAtStampsTakeTheNearestRowWithinTheGap) {
   EXPECT_EQ(poses[1]->translation().x(), 0.0);  // 4 ms after row 0
   EXPECT_EQ(poses[2]->translation().x(), 1.0);  // 4 ms before row 1
   EXPECT_EQ(poses[3]->translation().x(), 2.0);  // 4 ms before row 2
-  EXPECT_FALSE(poses[4]);                        // 20 ms after the last row
-  EXPECT_FALSE(poses[5]);                        // before the first
+  EXPECT_FALSE(poses[4]);                       // 20 ms after the last row
+  EXPECT_FALSE(poses[5]);                       // before the first
   EXPECT_EQ(euroc_ground_truth_file("/d/mav0"), fs::path("/d/mav0/state_groundtruth_estimate0/data.csv"));
 }
 
@@ -293,9 +292,8 @@ TEST_F(DatasetReader, MissingCorruptAndMismatchedImagesNameTheFile) {
   EXPECT_EQ(error_of(dataset.frames[1]),
             dataset.frames[1].left.string() + ": cannot be decoded as an image (corrupt file?)");
   cv::imwrite(dataset.frames[2].right.string(), cv::Mat(10, 10, CV_8UC1, cv::Scalar(7)));
-  EXPECT_EQ(error_of(dataset.frames[2]), "stereo pair differs in size or channels: " +
-                                             dataset.frames[2].left.string() + " is 40x30x1, " +
-                                             dataset.frames[2].right.string() + " is 10x10x1");
+  EXPECT_EQ(error_of(dataset.frames[2]), "stereo pair differs in size or channels: " + dataset.frames[2].left.string() +
+                                             " is 40x30x1, " + dataset.frames[2].right.string() + " is 10x10x1");
 }
 
 // With the calibration's size known, the file at fault is named: here the LEFT image is wrong
@@ -310,8 +308,7 @@ TEST_F(DatasetReader, WrongSizedLeftImageIsBlamedNotTheRight) {
     load_stereo_images(dataset.frames[0], calibrated);
     ADD_FAILURE() << "expected an error";
   } catch (const std::runtime_error& error) {
-    EXPECT_EQ(std::string(error.what()),
-              dataset.frames[0].left.string() + ": 32x24 image; the calibration says 40x30");
+    EXPECT_EQ(std::string(error.what()), dataset.frames[0].left.string() + ": 32x24 image; the calibration says 40x30");
   }
   EXPECT_NO_THROW(load_stereo_images(dataset.frames[1], calibrated));
 }
@@ -327,7 +324,8 @@ std::uint32_t png_crc(const std::uint8_t* data, std::size_t size) {
 }
 
 void put_big_endian(std::vector<std::uint8_t>& bytes, std::size_t at, std::uint32_t value) {
-  for (int i = 0; i < 4; ++i) bytes[at + static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(value >> (24 - 8 * i));
+  for (int i = 0; i < 4; ++i)
+    bytes[at + static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(value >> (24 - 8 * i));
 }
 
 // Runs `load` with stderr captured; returns what was printed there.
@@ -357,8 +355,8 @@ TEST_F(DatasetReader, DamagedPngFilesAreNamedWithoutLibpngNoise) {
   std::vector<std::uint8_t> png;
   cv::imencode(".png", test_image(0, 0), png);
   auto write_bytes = [](const fs::path& path, const std::vector<std::uint8_t>& bytes) {
-    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
-                                                static_cast<std::streamsize>(bytes.size()));
+    std::ofstream(path, std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   };
 
   std::vector<std::uint8_t> truncated(png.begin(), png.begin() + static_cast<std::ptrdiff_t>(png.size() / 2));

@@ -70,17 +70,19 @@ TEST(EvaluateScript, RunsSyntheticKittiAndEurocLayoutsEndToEnd) {
   test::ScratchDir dir("evaluate");
   const fs::path synth = test::bin_dir() / "heslam-synth";
   const fs::path kitti = dir.path() / "kitti";
-  ASSERT_EQ(run(synth, {"--preset", "street", "--format", "kitti", "--frames", std::to_string(kStreetFrames), "--out",
-                        (kitti / "sequences/00").string()},
+  ASSERT_EQ(run(synth,
+                {"--preset", "street", "--format", "kitti", "--frames", std::to_string(kStreetFrames), "--out",
+                 (kitti / "sequences/00").string()},
                 dir.path(), "synth_street", kSynthTimeout),
             0);
   // The KITTI odometry layout keeps the ground truth beside the sequences: poses/NN.txt.
   fs::create_directories(kitti / "poses");
   fs::rename(kitti / "sequences/00/poses.txt", kitti / "poses/00.txt");
   const fs::path euroc = dir.path() / "euroc";
-  ASSERT_EQ(run(synth, {"--preset", "room", "--frames", std::to_string(kRoomFrames), "--out", (euroc / "room").string()},
-                dir.path(), "synth_room", kSynthTimeout),
-            0);
+  ASSERT_EQ(
+      run(synth, {"--preset", "room", "--frames", std::to_string(kRoomFrames), "--out", (euroc / "room").string()},
+          dir.path(), "synth_room", kSynthTimeout),
+      0);
 
   const fs::path out = dir.path() / "out";
   std::string output;

@@ -45,7 +45,8 @@ std::string read_bytes(const fs::path& path) {
 cv::Mat test_image(int index, int side) {
   cv::Mat image(kHeight, kWidth, CV_8UC1);
   for (int v = 0; v < kHeight; ++v)
-    for (int u = 0; u < kWidth; ++u) image.at<uchar>(v, u) = static_cast<uchar>((u * 3 + v * 5 + index * 17 + side * 101) % 256);
+    for (int u = 0; u < kWidth; ++u)
+      image.at<uchar>(v, u) = static_cast<uchar>((u * 3 + v * 5 + index * 17 + side * 101) % 256);
   return image;
 }
 
@@ -120,7 +121,8 @@ int pixels_off(const cv::Mat& original, const cv::Mat& transformed, Expected exp
   if (original.size() != transformed.size()) return static_cast<int>(original.total());
   int off = 0;
   for (int v = 0; v < original.rows; ++v)
-    for (int u = 0; u < original.cols; ++u) off += transformed.at<uchar>(v, u) != expected(original.at<uchar>(v, u)) ? 1 : 0;
+    for (int u = 0; u < original.cols; ++u)
+      off += transformed.at<uchar>(v, u) != expected(original.at<uchar>(v, u)) ? 1 : 0;
   return off;
 }
 
@@ -142,10 +144,12 @@ TEST_F(PhotometricCopy, EurocGainsTransformEveryPixelAndKeepOtherFiles) {
     const std::string name = std::to_string(100 * (k + 1)) + ".png";
     const cv::Mat left = read_grey(output_ / "mav0" / "cam0" / "data" / name);
     const cv::Mat right = read_grey(output_ / "mav0" / "cam1" / "data" / name);
-    EXPECT_EQ(pixels_off(test_image(k, 0), left, [](int g) { return static_cast<int>(std::lround(g * 0.4)); }), 0) << name;
+    EXPECT_EQ(pixels_off(test_image(k, 0), left, [](int g) { return static_cast<int>(std::lround(g * 0.4)); }), 0)
+        << name;
     EXPECT_EQ(pixels_off(test_image(k, 1), right, [](int g) { return std::min(255, 2 * g); }), 0) << name;
   }
-  // Spot values by hand: frame 0 left (0,0) = 0, (1,0) = 3 x 0.4 -> 1; right (0,0) = 101 x 2 = 202, (27,0) = 182 -> 255.
+  // Spot values by hand: frame 0 left (0,0) = 0, (1,0) = 3 x 0.4 -> 1; right (0,0) = 101 x 2 = 202, (27,0) = 182 ->
+  // 255.
   const cv::Mat left0 = read_grey(output_ / "mav0" / "cam0" / "data" / "100.png");
   const cv::Mat right0 = read_grey(output_ / "mav0" / "cam1" / "data" / "100.png");
   EXPECT_EQ(left0.at<uchar>(0, 1), 1);
@@ -166,7 +170,8 @@ TEST_F(PhotometricCopy, ScheduleGivesEachBlockOfFramesItsGains) {
   for (int k = 0; k < kFrames; ++k) {
     const std::string name = std::to_string(100 * (k + 1)) + ".png";
     const int f = factor[k];
-    EXPECT_EQ(pixels_off(test_image(k, 0), read_grey(output_ / "mav0" / "cam0" / "data" / name), [](int g) { return g; }), 0);
+    EXPECT_EQ(
+        pixels_off(test_image(k, 0), read_grey(output_ / "mav0" / "cam0" / "data" / name), [](int g) { return g; }), 0);
     EXPECT_EQ(pixels_off(test_image(k, 1), read_grey(output_ / "mav0" / "cam1" / "data" / name),
                          [f](int g) { return std::min(255, f * g); }),
               0)
@@ -212,7 +217,8 @@ TEST_F(PhotometricCopy, ErrorsNameTheFileAndLeaveNoHalfCopy) {
   DatasetCopyOptions options;
   options.stereo_gain = {{0.5, 1.5}};
   // Not a dataset.
-  EXPECT_NE(copy_error(options).find("no EuRoC (mav0/cam0/data.csv) or KITTI"), std::string::npos) << copy_error(options);
+  EXPECT_NE(copy_error(options).find("no EuRoC (mav0/cam0/data.csv) or KITTI"), std::string::npos)
+      << copy_error(options);
   EXPECT_FALSE(fs::exists(output_));
 
   make_euroc();
@@ -246,10 +252,10 @@ TEST(PhotometricCli, UsageErrorsExitTwoAndABadInputExitsOne) {
     const int status = std::system((command + " >/dev/null 2>&1").c_str());
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   };
-  EXPECT_EQ(exit_code(tool + " in out"), 2);                          // nothing to do
-  EXPECT_EQ(exit_code(tool + " in out --stereo-gain 0.5"), 2);        // not L,R
-  EXPECT_EQ(exit_code(tool + " in out --variant bright"), 2);         // unknown variant
-  EXPECT_EQ(exit_code(tool + " in --stereo-gain 1,2"), 2);            // no output
+  EXPECT_EQ(exit_code(tool + " in out"), 2);                    // nothing to do
+  EXPECT_EQ(exit_code(tool + " in out --stereo-gain 0.5"), 2);  // not L,R
+  EXPECT_EQ(exit_code(tool + " in out --variant bright"), 2);   // unknown variant
+  EXPECT_EQ(exit_code(tool + " in --stereo-gain 1,2"), 2);      // no output
   const test::ScratchDir scratch("photometric_cli");
   EXPECT_EQ(exit_code(tool + " " + scratch.path().string() + "/missing " + scratch.path().string() +
                       "/out --stereo-gain 1,2"),

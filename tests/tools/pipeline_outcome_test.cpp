@@ -179,9 +179,10 @@ TEST_F(PipelineOutcome, OutputThatIsAFolderFailsAtStartupWithOneLine) {
   auto supervisor = test::start_pipeline("synth", dataset_, dir.path(), "run", test_domain(), {"loop_closer=none"});
   EXPECT_EQ(test::finish(*supervisor), 1) << supervisor->err();
   const std::string err = supervisor->err();
-  EXPECT_EQ(last_line(err), "[supervisor] error: pipeline failed: recorder failed at start-up (exit code 1): "
-                            "heslam-recorder: " + (dir.path() / "run.txt").string() +
-                                ": is a folder; expected the file name of the trajectory")
+  EXPECT_EQ(last_line(err),
+            "[supervisor] error: pipeline failed: recorder failed at start-up (exit code 1): "
+            "heslam-recorder: " +
+                (dir.path() / "run.txt").string() + ": is a folder; expected the file name of the trajectory")
       << err;
   EXPECT_EQ(err.find("started local_mapper"), std::string::npos) << err;
   EXPECT_EQ(err.find("restarting"), std::string::npos) << err;
@@ -193,8 +194,8 @@ TEST_F(PipelineOutcome, MissingDatasetAndBadCalibrationAreOneLineWithoutRestarts
   const test::ScratchDir dir("outcome_dataset");
   const fs::path missing = dir.path() / "no_such_dataset";
   const std::string pipeline = (test::source_dir() / "config/pipelines/synth.yaml").string();
-  const std::string expected = "heslam-supervisor: " + pipeline + ": component 'replay': input " + missing.string() +
-                               " does not exist";
+  const std::string expected =
+      "heslam-supervisor: " + pipeline + ": component 'replay': input " + missing.string() + " does not exist";
   test::ChildProcess check(test::bin_dir() / "heslam-supervisor",
                            {pipeline, "--check", "--arg", "dataset=" + missing.string()}, dir.path(), "check");
   EXPECT_EQ(check.wait(30s).value_or(-1), 1);
@@ -218,8 +219,10 @@ TEST_F(PipelineOutcome, MissingDatasetAndBadCalibrationAreOneLineWithoutRestarts
   const std::string err = broken->err();
   EXPECT_EQ(err.find("restarting"), std::string::npos) << err;
   const std::string last = last_line(err);
-  EXPECT_EQ(last.rfind("[supervisor] error: pipeline failed: replay failed at start-up (exit code 1): heslam-replay: ", 0),
-            0u) << err;
+  EXPECT_EQ(
+      last.rfind("[supervisor] error: pipeline failed: replay failed at start-up (exit code 1): heslam-replay: ", 0),
+      0u)
+      << err;
   EXPECT_NE(last.find("sensor.yaml"), std::string::npos) << last;
 }
 
@@ -231,11 +234,10 @@ TEST_F(PipelineOutcome, LastLineSaysWhatTheRunProduced) {
   const std::size_t poses = poses_in(dir.path() / "run.txt");
   const int lost = test::lost_entries(dir.path() / "run.lost.txt");
   EXPECT_EQ(poses + static_cast<std::size_t>(lost), static_cast<std::size_t>(kFrames));
-  EXPECT_EQ(last_line(supervisor->err()), "[supervisor] info: pipeline finished: tracked " + std::to_string(poses) + "/" +
-                                              std::to_string(kFrames) + " frames, " + std::to_string(lost) +
-                                              " lost, trajectory " + (dir.path() / "run.txt").string() + "; " +
-                                              std::to_string(kFrames) + " of " + std::to_string(kFrames) +
-                                              " frames published");
+  EXPECT_EQ(last_line(supervisor->err()),
+            "[supervisor] info: pipeline finished: tracked " + std::to_string(poses) + "/" + std::to_string(kFrames) +
+                " frames, " + std::to_string(lost) + " lost, trajectory " + (dir.path() / "run.txt").string() + "; " +
+                std::to_string(kFrames) + " of " + std::to_string(kFrames) + " frames published");
 }
 
 // --check runs the replay's own check of its arguments and of the dataset: what a run would refuse,
@@ -257,19 +259,25 @@ TEST_F(PipelineOutcome, CheckRefusesWhatTheReplayWouldRefuse) {
   EXPECT_EQ(code, 0) << err;
   std::tie(code, err) = check(dataset_, {"--arg", "ack_timeout_s=1e308"});
   EXPECT_EQ(code, 1);
-  EXPECT_EQ(err, "heslam-supervisor: synth_odometry.yaml: component 'replay': heslam-replay: --ack-timeout: expected a "
-                 "number in [0.001, 86400], got '1e308'\n");
-  auto run = test::start_pipeline("synth_odometry", dataset_, dir.path(), "huge", test_domain(), {"ack_timeout_s=1e308"});
+  EXPECT_EQ(err,
+            "heslam-supervisor: synth_odometry.yaml: component 'replay': heslam-replay: --ack-timeout: expected a "
+            "number in [0.001, 86400], got '1e308'\n");
+  auto run =
+      test::start_pipeline("synth_odometry", dataset_, dir.path(), "huge", test_domain(), {"ack_timeout_s=1e308"});
   EXPECT_EQ(test::finish(*run), 1) << run->err();
   EXPECT_EQ(run->err().find("restarting"), std::string::npos) << run->err();
-  EXPECT_NE(last_line(run->err()).find("replay failed at start-up (exit code 1): heslam-replay: --ack-timeout: expected a "
-                                       "number in [0.001, 86400], got '1e308'"), std::string::npos) << run->err();
+  EXPECT_NE(last_line(run->err())
+                .find("replay failed at start-up (exit code 1): heslam-replay: --ack-timeout: expected a "
+                      "number in [0.001, 86400], got '1e308'"),
+            std::string::npos)
+      << run->err();
 
   // A copy of the dataset whose right camera has a nan distortion coefficient.
   const fs::path bad = dir.path() / "nan_distortion";
   for (const char* camera : {"cam0", "cam1"}) {
     fs::create_directories(bad / "mav0" / camera);
-    for (const char* entry : {"data", "data.csv"}) fs::create_symlink(dataset_ / "mav0" / camera / entry, bad / "mav0" / camera / entry);
+    for (const char* entry : {"data", "data.csv"})
+      fs::create_symlink(dataset_ / "mav0" / camera / entry, bad / "mav0" / camera / entry);
   }
   fs::copy_file(dataset_ / "mav0/cam0/sensor.yaml", bad / "mav0/cam0/sensor.yaml");
   std::ifstream right_in(dataset_ / "mav0/cam1/sensor.yaml");
@@ -312,7 +320,8 @@ TEST_F(PipelineOutcome, ASkippedPairIsOnTheLastLine) {
   auto supervisor = test::start_pipeline("synth_odometry", copy, dir.path(), "run", test_domain());
   ASSERT_EQ(test::finish(*supervisor), 0) << supervisor->err();
   const std::string last = last_line(supervisor->err());
-  EXPECT_NE(last.find("; 39 of 40 frames published, 1 skipped (a missing or corrupt image)"), std::string::npos) << last;
+  EXPECT_NE(last.find("; 39 of 40 frames published, 1 skipped (a missing or corrupt image)"), std::string::npos)
+      << last;
   EXPECT_EQ(last.rfind("[supervisor] info: pipeline finished: tracked ", 0), 0u) << last;
 }
 
@@ -339,8 +348,10 @@ TEST(PipelineOutcomeLockstep, RecorderStalledUntilTheFrontendExitedIsJudgedAgain
   const std::size_t poses = poses_in(trajectory);
   const std::size_t lost = static_cast<std::size_t>(test::lost_entries(dir.path() / "stall.lost.txt"));
   const std::string last = last_line(supervisor->err());
-  std::printf("[ figures  ] MH01 lockstep, recorder stopped from pose 40 to the frontend's exit: %zu poses, %zu "
-              "untracked of 160; exit code %d\n", poses, lost, code);
+  std::printf(
+      "[ figures  ] MH01 lockstep, recorder stopped from pose 40 to the frontend's exit: %zu poses, %zu "
+      "untracked of 160; exit code %d\n",
+      poses, lost, code);
   if (poses + lost == 160) {
     EXPECT_EQ(code, 0) << supervisor->err();
     EXPECT_NE(last.find("pipeline finished: tracked " + std::to_string(poses) + "/160 frames"), std::string::npos)
@@ -349,7 +360,8 @@ TEST(PipelineOutcomeLockstep, RecorderStalledUntilTheFrontendExitedIsJudgedAgain
     EXPECT_EQ(code, 1) << supervisor->err();
     EXPECT_NE(last.find("pipeline failed: recorder: " + std::to_string(160 - poses - lost) +
                         " of the 160 frames the frontend produced odometry for are missing from its output"),
-              std::string::npos) << last;
+              std::string::npos)
+        << last;
   }
 }
 

@@ -60,7 +60,8 @@ TEST(ReplayProgress, LineAndSummary) {
   counts.skipped_images = 1;
   EXPECT_EQ(format_progress_line(counts), "frame 40/95   42%  20.0 fps  ETA 2.8 s  pass 2  skipped 1  [paused]");
   counts.unpaired_rows = 4;
-  EXPECT_EQ(format_summary(counts), "published 40 frames in 2.00 s (20.0 fps) over 2 passes; skipped 1 images; 4 unpaired rows");
+  EXPECT_EQ(format_summary(counts),
+            "published 40 frames in 2.00 s (20.0 fps) over 2 passes; skipped 1 images; 4 unpaired rows");
 }
 
 std::string option_error(const std::vector<std::string>& args) {
@@ -73,10 +74,9 @@ std::string option_error(const std::vector<std::string>& args) {
 }
 
 TEST(ReplayOptions, ParsesEveryOption) {
-  const ReplayOptions options =
-      parse_replay_options({"/data/V101", "--format", "euroc", "--rate", "0.5", "--loop", "--start-offset", "1.5",
-                            "--duration", "2", "--start-paused", "--strict", "--wait", "0", "--no-progress",
-                            "--preload", "200"});
+  const ReplayOptions options = parse_replay_options({"/data/V101", "--format", "euroc", "--rate", "0.5", "--loop",
+                                                      "--start-offset", "1.5", "--duration", "2", "--start-paused",
+                                                      "--strict", "--wait", "0", "--no-progress", "--preload", "200"});
   EXPECT_EQ(options.dataset, "/data/V101");
   EXPECT_EQ(options.format, DatasetFormat::kEuroc);
   EXPECT_DOUBLE_EQ(options.rate, 0.5);
@@ -117,7 +117,8 @@ TEST(ReplayOptions, EveryNumberHasARangeAndABadValueIsQuotedShort) {
   EXPECT_EQ(option_error({"d", "--duration", "inf"}), "--duration: expected a number in [0, 1e+06], got 'inf'");
   const std::string huge(100000, '9');
   const std::string error = option_error({"d", "--start-offset", huge.c_str()});
-  EXPECT_EQ(error, "--start-offset: expected a number in [0, 1e+06], got '" + std::string(80, '9') + "... (100000 bytes)'");
+  EXPECT_EQ(error,
+            "--start-offset: expected a number in [0, 1e+06], got '" + std::string(80, '9') + "... (100000 bytes)'");
 }
 
 // The replay's result on the run's last line: what it published of the recording, and what it skipped.

@@ -1,15 +1,16 @@
 // heslam-replay and heslam-spy as real processes on loopback DDS, each test on its own domain:
 // lockstep replay delivers every EuRoC pair bit-identical to the PNGs (also with --preload); spy hz measures a --rate 1
-// replay (at most 20 Hz; the rate itself is a printed figure); spy list / echo / info show the topics; replay's errors are one clear line.
+// replay (at most 20 Hz; the rate itself is a printed figure); spy list / echo / info show the topics; replay's errors
+// are one clear line.
 #include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <string>
 #include <iostream>
 #include <regex>
 #include <set>
+#include <string>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -49,7 +50,8 @@ class ReplaySpy : public ::testing::Test {
     if (!HasFailure()) fs::remove_all(log_dir_);
   }
 
-  std::unique_ptr<test::ChildProcess> start(const std::string& tool, std::vector<std::string> args, const std::string& label) {
+  std::unique_ptr<test::ChildProcess> start(const std::string& tool, std::vector<std::string> args,
+                                            const std::string& label) {
     args.insert(args.end(), {"--domain", std::to_string(domain_)});
     return std::make_unique<test::ChildProcess>(test::bin_dir() / ("heslam-" + tool), args, log_dir_, label);
   }
@@ -82,8 +84,8 @@ std::string ReplaySpy::replay_lockstep_and_compare(const std::vector<std::string
   runtime::WaitSet waitset(participant);
   waitset.attach(frames);
 
-  std::vector<std::string> args{test::shared_dataset(kClip).string(), "--lockstep", "--ack-timeout", "20",
-                                "--no-progress", "--no-keyboard"};
+  std::vector<std::string> args{
+      test::shared_dataset(kClip).string(), "--lockstep", "--ack-timeout", "20", "--no-progress", "--no-keyboard"};
   args.insert(args.end(), extra_args.begin(), extra_args.end());
   auto replay = start("replay", args, "replay");
   std::size_t received = 0;
@@ -101,9 +103,9 @@ std::string ReplaySpy::replay_lockstep_and_compare(const std::vector<std::string
       const StereoImages png = load_stereo_images(files);
       const auto left = runtime::view(sample.left);
       const auto right = runtime::view(sample.right);
-      const bool same = sample.width_px == 752u && sample.height_px == 480u && sample.encoding == heslam_msg_ENCODING_MONO8 &&
-                        left.size() == png.left.total() && right.size() == png.right.total() &&
-                        std::equal(left.begin(), left.end(), png.left.data) &&
+      const bool same = sample.width_px == 752u && sample.height_px == 480u &&
+                        sample.encoding == heslam_msg_ENCODING_MONO8 && left.size() == png.left.total() &&
+                        right.size() == png.right.total() && std::equal(left.begin(), left.end(), png.left.data) &&
                         std::equal(right.begin(), right.end(), png.right.data);
       identical += same ? 1 : 0;
       msg::FrameDone done{};
@@ -151,8 +153,9 @@ TEST_F(ReplaySpy, SpyHzMeasuresRealTimeReplayAtMost20Hz) {
   // The spy taps a running replay, as a user would. A 1 s excerpt looped: after the first pass the
   // replay publishes from decoded memory, so a loaded 2-core machine still keeps 20 Hz; passes join
   // seamlessly (stamps shift by the excerpt length plus one period).
-  auto replay = start("replay", {test::shared_dataset(kClip).string(), "--rate", "1", "--duration", "1", "--loop",
-                                 "--no-progress", "--no-keyboard"},
+  auto replay = start("replay",
+                      {test::shared_dataset(kClip).string(), "--rate", "1", "--duration", "1", "--loop",
+                       "--no-progress", "--no-keyboard"},
                       "replay");
   auto spy = start("spy", {"hz", "camera/stereo", "--count", "80", "--window", "80", "--timeout", "30"}, "spy");
   ASSERT_EQ(run(*spy, seconds(60)), 0) << spy->err();
@@ -175,9 +178,10 @@ TEST_F(ReplaySpy, SpyHzMeasuresRealTimeReplayAtMost20Hz) {
 
 TEST_F(ReplaySpy, SpyListEchoAndInfoShowTheReplayTopics) {
   HESLAM_REQUIRE_SHARED_DATA(kClip);
-  auto replay = start("replay", {test::shared_dataset(kClip).string(), "--rate", "1", "--loop", "--wait", "0",
-                                 "--no-progress", "--no-keyboard"},
-                      "replay");
+  auto replay = start(
+      "replay",
+      {test::shared_dataset(kClip).string(), "--rate", "1", "--loop", "--wait", "0", "--no-progress", "--no-keyboard"},
+      "replay");
 
   // echo first: it waits for the replay to be up (startup takes seconds on a loaded machine).
   auto echo = start("spy", {"echo", "camera/stereo", "--once", "--timeout", "20"}, "echo");
@@ -189,7 +193,8 @@ TEST_F(ReplaySpy, SpyListEchoAndInfoShowTheReplayTopics) {
   ASSERT_EQ(run(*list), 0) << list->err();
   EXPECT_TRUE(std::regex_search(list->out(), std::regex("heslam/camera/stereo +heslam::msg::StereoFrame +1 +0")))
       << list->out();
-  EXPECT_TRUE(std::regex_search(list->out(), std::regex("heslam/camera/calibration +heslam::msg::StereoCalibration +1")))
+  EXPECT_TRUE(
+      std::regex_search(list->out(), std::regex("heslam/camera/calibration +heslam::msg::StereoCalibration +1")))
       << list->out();
 
   // Published once before this reader existed: arrives only through transient-local history.
@@ -211,9 +216,10 @@ TEST_F(ReplaySpy, SpyListEchoAndInfoShowTheReplayTopics) {
 
 TEST_F(ReplaySpy, LockstepWithoutConsumerFailsWithOneClearLine) {
   HESLAM_REQUIRE_SHARED_DATA(kClip);
-  auto replay = start("replay", {test::shared_dataset(kClip).string(), "--lockstep", "--ack-timeout", "1",
-                                 "--no-progress", "--no-keyboard"},
-                      "replay");
+  auto replay = start(
+      "replay",
+      {test::shared_dataset(kClip).string(), "--lockstep", "--ack-timeout", "1", "--no-progress", "--no-keyboard"},
+      "replay");
   EXPECT_EQ(run(*replay), 1);
   EXPECT_NE(replay->err().find("heslam-replay: --lockstep: no consumer within 1"), std::string::npos) << replay->err();
 }
@@ -221,7 +227,8 @@ TEST_F(ReplaySpy, LockstepWithoutConsumerFailsWithOneClearLine) {
 TEST_F(ReplaySpy, BadDatasetAndBadOptionsAreOneClearLine) {
   auto missing = start("replay", {"/nonexistent/sequence"}, "missing");
   EXPECT_EQ(run(*missing), 1);
-  EXPECT_EQ(missing->err(), "heslam-replay: /nonexistent/sequence: not a folder (expected an EuRoC or KITTI sequence)\n");
+  EXPECT_EQ(missing->err(),
+            "heslam-replay: /nonexistent/sequence: not a folder (expected an EuRoC or KITTI sequence)\n");
   auto empty = start("replay", {log_dir_.string()}, "empty");
   EXPECT_EQ(run(*empty), 1);
   EXPECT_NE(empty->err().find("layout found"), std::string::npos) << empty->err();
@@ -254,12 +261,15 @@ TEST_F(ReplaySpy, SequenceWithOnlyUnreadableImagesFailsWithOneLine) {
       const std::string png = name.substr(0, name.find_last_not_of("\r ") + 1);
       fs::copy_file(source / cam / "data" / png, copy / cam / "data" / png);
       // the left images cut in half: unreadable
-      if (std::string(cam) == "cam0") fs::resize_file(copy / cam / "data" / png, fs::file_size(copy / cam / "data" / png) / 2);
+      if (std::string(cam) == "cam0")
+        fs::resize_file(copy / cam / "data" / png, fs::file_size(copy / cam / "data" / png) / 2);
     }
   }
-  auto replay = start("replay", {copy.parent_path().string(), "--rate", "0", "--no-progress", "--no-keyboard"}, "replay");
+  auto replay =
+      start("replay", {copy.parent_path().string(), "--rate", "0", "--no-progress", "--no-keyboard"}, "replay");
   EXPECT_EQ(run(*replay), 1) << replay->err();
-  EXPECT_NE(replay->err().find("published no frame: all 3 image pairs were skipped"), std::string::npos) << replay->err();
+  EXPECT_NE(replay->err().find("published no frame: all 3 image pairs were skipped"), std::string::npos)
+      << replay->err();
 }
 
 // echo --once on a keyed topic: one sample per instance (every component's status), not just the
@@ -295,9 +305,10 @@ TEST_F(ReplaySpy, EchoOnceOnStatusShowsEveryComponent) {
 // whether a writer runs; the replay itself does not claim to publish while paused.
 TEST_F(ReplaySpy, PausedReplayIsReportedAsMatchedButSilent) {
   HESLAM_REQUIRE_SHARED_DATA(kClip);
-  auto replay = start("replay", {test::shared_dataset(kClip).string(), "--start-paused", "--wait", "0.2",
-                                 "--no-progress", "--no-keyboard"},
-                      "replay");
+  auto replay =
+      start("replay",
+            {test::shared_dataset(kClip).string(), "--start-paused", "--wait", "0.2", "--no-progress", "--no-keyboard"},
+            "replay");
   // The spy starts once the replay has given up waiting for a subscriber (and said so).
   const auto deadline = std::chrono::steady_clock::now() + seconds(30);
   while (replay->err().find("no subscriber") == std::string::npos && std::chrono::steady_clock::now() < deadline &&
@@ -323,9 +334,11 @@ TEST_F(ReplaySpy, StartPausedWaitsForSigusr2) {
   // KEEP_ALL on our side; the replay's image writer keeps its newest 4 frames (KEEP_LAST, a slow
   // reader drops frames by design), so how many of the 10 frames published flat out reach a reader
   // of a loaded machine is speed, not behaviour.
-  runtime::Reader<msg::StereoFrame> frames(participant, topics.stereo(), runtime::Qos(runtime::QosRole::kImages).keep_all());
-  auto replay = start("replay", {test::shared_dataset(kClip).string(), "--rate", "0", "--duration", "0.5",
-                                 "--start-paused", "--no-progress", "--no-keyboard"},
+  runtime::Reader<msg::StereoFrame> frames(participant, topics.stereo(),
+                                           runtime::Qos(runtime::QosRole::kImages).keep_all());
+  auto replay = start("replay",
+                      {test::shared_dataset(kClip).string(), "--rate", "0", "--duration", "0.5", "--start-paused",
+                       "--no-progress", "--no-keyboard"},
                       "replay");
   ASSERT_TRUE(frames.wait_for_writers(1, seconds(10)));
   std::this_thread::sleep_for(seconds(1));

@@ -5,8 +5,8 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
-#include <fstream>
 #include <cstring>
+#include <fstream>
 #include <optional>
 #include <thread>
 
@@ -176,7 +176,8 @@ TEST(Ros2BridgeProcess, RepublishesOdometryPathAndPointsOnRos2Topics) {
   Ros2Subscriber<Odometry> ros_odometry(participant, &nav_msgs_msg_dds__Odometry__desc, "rt/heslam/odometry", false);
   Ros2Subscriber<PoseStamped> ros_pose(participant, &geometry_msgs_msg_dds__PoseStamped__desc, "rt/heslam/pose", false);
   Ros2Subscriber<Path> ros_path(participant, &nav_msgs_msg_dds__Path__desc, "rt/heslam/keyframe_trajectory", true);
-  Ros2Subscriber<PointCloud2> ros_cloud(participant, &sensor_msgs_msg_dds__PointCloud2__desc, "rt/heslam/map_points", true);
+  Ros2Subscriber<PointCloud2> ros_cloud(participant, &sensor_msgs_msg_dds__PointCloud2__desc, "rt/heslam/map_points",
+                                        true);
 
   std::ofstream(dir.path() / "bridge.yaml") << "publish_period_s: 0.2\nworld_frame: map\n";
   test::ChildProcess bridge(test::bin_dir() / "heslam-ros2-bridge",

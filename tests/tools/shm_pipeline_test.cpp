@@ -76,10 +76,18 @@ TEST(ShmPipeline, SynthRoomOverSharedMemoryGivesTheUdpTrajectory) {
   auto udp = test::start_pipeline("synth", dataset, dir.path(), "udp", domain);
   ASSERT_EQ(test::finish(*udp), 0) << udp->err();
 
-  std::vector<std::string> args{(test::source_dir() / "config/pipelines/synth.yaml").string(), "--domain",
-                                std::to_string(domain), "--image-transport", "shm", "--image-domain",
-                                std::to_string(image_domain), "--log-dir", (dir.path() / "logs_shm").string(),
-                                "--arg", "dataset=" + dataset.string(), "--arg",
+  std::vector<std::string> args{(test::source_dir() / "config/pipelines/synth.yaml").string(),
+                                "--domain",
+                                std::to_string(domain),
+                                "--image-transport",
+                                "shm",
+                                "--image-domain",
+                                std::to_string(image_domain),
+                                "--log-dir",
+                                (dir.path() / "logs_shm").string(),
+                                "--arg",
+                                "dataset=" + dataset.string(),
+                                "--arg",
                                 "output=" + (dir.path() / "shm.txt").string()};
   test::ChildProcess shm(test::bin_dir() / "heslam-supervisor", args, dir.path(), "supervisor_shm");
   ASSERT_EQ(test::finish(shm), 0) << shm.err();
@@ -115,11 +123,19 @@ TEST(ShmPipeline, SynthRoomOverSharedMemoryGivesTheUdpTrajectory) {
 TEST(ShmPipeline, MissingRoudiIsOneClearLine) {
   const int domain = test::exclusive_domain_id();
   const test::ScratchDir dir("shm_pipeline_no_roudi");
-  std::vector<std::string> args{"PATH=/nonexistent", (test::bin_dir() / "heslam-supervisor").string(),
-                                (test::source_dir() / "config/pipelines/synth.yaml").string(), "--domain",
-                                std::to_string(domain), "--image-transport", "shm", "--image-domain",
-                                std::to_string(second_exclusive_domain_id(domain)), "--log-dir",
-                                (dir.path() / "logs").string(), "--arg", "dataset=" + dir.path().string(),
+  std::vector<std::string> args{"PATH=/nonexistent",
+                                (test::bin_dir() / "heslam-supervisor").string(),
+                                (test::source_dir() / "config/pipelines/synth.yaml").string(),
+                                "--domain",
+                                std::to_string(domain),
+                                "--image-transport",
+                                "shm",
+                                "--image-domain",
+                                std::to_string(second_exclusive_domain_id(domain)),
+                                "--log-dir",
+                                (dir.path() / "logs").string(),
+                                "--arg",
+                                "dataset=" + dir.path().string(),
                                 "--no-progress"};
   if (on_path("iox-roudi") && std::system("pidof iox-roudi >/dev/null 2>&1") == 0) {
     GTEST_SKIP() << "an iox-roudi is running on this host: the supervisor would use it";

@@ -209,7 +209,8 @@ TEST(SpyTopic, ResolvesRelativeAndFullNames) {
   EXPECT_EQ(full.type_name, "Keyframe");
   EXPECT_THROW(resolve_topic("camera/mono", "heslam"), std::runtime_error);
   std::string visited;
-  with_message_type("FrameDone", [&]<typename T>(std::type_identity<T>) { visited = runtime::MessageTraits<T>::name(); });
+  with_message_type("FrameDone",
+                    [&]<typename T>(std::type_identity<T>) { visited = runtime::MessageTraits<T>::name(); });
   EXPECT_EQ(visited, "FrameDone");
   EXPECT_THROW(with_message_type("Image", [](auto) {}), std::runtime_error);
 }

@@ -79,9 +79,9 @@ inline Pose3 trajectory_pose(int k) {
 }
 
 struct SyntheticFrameOptions {
-  double pixel_noise_px = 0.3;    // at octave 0, scaled by the octave's scale (FAST corners: ~0.3 px)
-  int descriptor_bit_flips = 6;   // per observation
-  int clutter_keypoints = 80;     // random unmatched keypoints with random descriptors
+  double pixel_noise_px = 0.3;   // at octave 0, scaled by the octave's scale (FAST corners: ~0.3 px)
+  int descriptor_bit_flips = 6;  // per observation
+  int clutter_keypoints = 80;    // random unmatched keypoints with random descriptors
 };
 
 inline StereoFeatures make_frame(const std::vector<SyntheticPoint>& points, const PinholeStereo& camera,

@@ -20,7 +20,8 @@ Frame make_counted_frame(const PinholeStereo& camera, int tracked, int untracked
     f.u_right_px.push_back(kp.u_px - 20.f);
   }
   Frame frame(0, 0, f, camera);
-  for (int i = 0; i < tracked; ++i) frame.point_ids[static_cast<std::size_t>(i)] = make_id(1, static_cast<std::uint64_t>(i + 1));
+  for (int i = 0; i < tracked; ++i)
+    frame.point_ids[static_cast<std::size_t>(i)] = make_id(1, static_cast<std::uint64_t>(i + 1));
   return frame;
 }
 
@@ -105,10 +106,10 @@ TEST(KeyframeDecision, ReferenceRatioWeighsNearClipPoints) {
   const Frame frame = make_counted_frame(camera, 200, 50);  // 200 tracked close: the close rule is quiet
   KeyframeDecisionInput input;
   input.frames_since_keyframe = 3;
-  input.tracked_inliers = 340;            // 100 clear + 240 near a clip edge
+  input.tracked_inliers = 340;  // 100 clear + 240 near a clip edge
   input.tracked_inliers_near_clip = 240;
   input.keyframes_in_map = 5;
-  input.reference_tracked_points = 480;   // 100 clear + 380 near a clip edge
+  input.reference_tracked_points = 480;  // 100 clear + 380 near a clip edge
   input.reference_points_near_clip = 380;
   TrackerOptions options;
   EXPECT_DOUBLE_EQ(options.reference_near_clip_weight, 1.0);
@@ -117,7 +118,7 @@ TEST(KeyframeDecision, ReferenceRatioWeighsNearClipPoints) {
   EXPECT_FALSE(decide_keyframe(frame, camera, input, options).insert);
   options.reference_near_clip_weight = 0.5;  // 100 + 120 = 220, not < 0.75 x (100 + 190) = 217.5
   EXPECT_FALSE(decide_keyframe(frame, camera, input, options).insert);
-  input.tracked_inliers = 300;               // 70 clear + 230 near clip: 70 + 115 = 185 < 217.5
+  input.tracked_inliers = 300;  // 70 clear + 230 near clip: 70 + 115 = 185 < 217.5
   input.tracked_inliers_near_clip = 230;
   EXPECT_TRUE(decide_keyframe(frame, camera, input, options).insert);
   // No marks (equally exposed pairs): any weight leaves the rule as it was.

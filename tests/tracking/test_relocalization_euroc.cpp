@@ -15,8 +15,8 @@
 namespace heslam {
 namespace {
 
-constexpr int kFirstValidImage = 80;        // the first frame after the black ones
-constexpr int kMaxFramesToRelocalize = 3;   // relocalized at frame 83 at the latest
+constexpr int kFirstValidImage = 80;       // the first frame after the black ones
+constexpr int kMaxFramesToRelocalize = 3;  // relocalized at frame 83 at the latest
 constexpr double kMaxPositionError_m = 0.02;
 
 TEST(KidnappedCamera, Mh01RelocalizedWithinThreeFramesAtTheFirstPassPoses) {
@@ -37,7 +37,8 @@ TEST(KidnappedCamera, Mh01RelocalizedWithinThreeFramesAtTheFirstPassPoses) {
   ASSERT_EQ(run.frames.size(), 160u);
   ASSERT_EQ(first_pass.tracked_frames(), 80);
 
-  for (int k = 0; k < 60; ++k) EXPECT_EQ(run.frames[static_cast<std::size_t>(k)].state, TrackingState::kOk) << "frame " << k;
+  for (int k = 0; k < 60; ++k)
+    EXPECT_EQ(run.frames[static_cast<std::size_t>(k)].state, TrackingState::kOk) << "frame " << k;
   for (int k = 60; k < kFirstValidImage; ++k) {
     EXPECT_NE(run.frames[static_cast<std::size_t>(k)].state, TrackingState::kOk) << "black frame " << k;
   }
@@ -60,10 +61,12 @@ TEST(KidnappedCamera, Mh01RelocalizedWithinThreeFramesAtTheFirstPassPoses) {
     max_error_m = std::max(max_error_m, error_m);
     EXPECT_LT(error_m, kMaxPositionError_m) << "frame " << k << " (image of frame " << k - kFirstValidImage << ")";
   }
-  std::printf("[ figures  ] kidnapped MH01: relocalized at frame %d (%d frames lost after the black ones), "
-              "relocalization %.1f ms, %d/%d frames tracked after it, largest distance to the first pass %.2f mm\n",
-              relocalized_at, relocalized_at - kFirstValidImage, run.frames[static_cast<std::size_t>(relocalized_at)].tracking_ms,
-              tracked_after, 160 - relocalized_at, max_error_m * 1e3);
+  std::printf(
+      "[ figures  ] kidnapped MH01: relocalized at frame %d (%d frames lost after the black ones), "
+      "relocalization %.1f ms, %d/%d frames tracked after it, largest distance to the first pass %.2f mm\n",
+      relocalized_at, relocalized_at - kFirstValidImage,
+      run.frames[static_cast<std::size_t>(relocalized_at)].tracking_ms, tracked_after, 160 - relocalized_at,
+      max_error_m * 1e3);
   EXPECT_EQ(tracked_after, 160 - relocalized_at);
 }
 

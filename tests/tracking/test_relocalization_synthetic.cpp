@@ -24,8 +24,8 @@
 namespace heslam {
 namespace {
 
-constexpr int kJump = 430;             // the first frame after the teleport (21.5 s at 20 Hz)
-constexpr int kReplaySource = 20;      // it shows the walk's frame 20 (1.0 s): 20.5 s earlier
+constexpr int kJump = 430;         // the first frame after the teleport (21.5 s at 20 Hz)
+constexpr int kReplaySource = 20;  // it shows the walk's frame 20 (1.0 s): 20.5 s earlier
 constexpr int kReplayedFrames = 20;
 constexpr int kFrames = kJump + kReplayedFrames;
 constexpr int kMaxFramesToRelocalize = 3;
@@ -90,12 +90,13 @@ TEST(KidnappedCamera, CorridorLoopTeleportedTwentySecondsBackIsRelocalizedOnlyWi
   for (int k = kJump; k < static_cast<int>(without.frames.size()); ++k) {
     relocalized_without += frame_at(without, k).state == TrackingState::kOk ? 1 : 0;
   }
-  std::printf("[ figures  ] teleported corridor_loop: with the database relocalized at frame %d (%d frames lost), "
-              "relocalization %.1f ms (CPU %.1f ms), largest distance to the first pass %.2f mm, to the ground "
-              "truth %.2f mm; newest keyframes only: %d of frames %d-%zu tracked\n",
-              relocalized_at, relocalized_at - kJump, frame_at(run, relocalized_at).tracking_ms,
-              frame_at(run, relocalized_at).tracking_cpu_ms, max_to_first_pass_m * 1e3, max_to_truth_m * 1e3,
-              relocalized_without, kJump, without.frames.size() - 1);
+  std::printf(
+      "[ figures  ] teleported corridor_loop: with the database relocalized at frame %d (%d frames lost), "
+      "relocalization %.1f ms (CPU %.1f ms), largest distance to the first pass %.2f mm, to the ground "
+      "truth %.2f mm; newest keyframes only: %d of frames %d-%zu tracked\n",
+      relocalized_at, relocalized_at - kJump, frame_at(run, relocalized_at).tracking_ms,
+      frame_at(run, relocalized_at).tracking_cpu_ms, max_to_first_pass_m * 1e3, max_to_truth_m * 1e3,
+      relocalized_without, kJump, without.frames.size() - 1);
   EXPECT_EQ(relocalized_without, 0) << "the newest keyframes relocalized a place seen 20 s before";
 }
 

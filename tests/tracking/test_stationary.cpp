@@ -19,13 +19,14 @@ struct TrackedRun {
   std::vector<TrackResult> results;
   int still = 0;
   int rotating = 0;
-  double path_m = 0.0;            // summed distance between consecutive estimated positions
+  double path_m = 0.0;  // summed distance between consecutive estimated positions
   double max_position_error_m = 0.0;
   double max_rotation_error_deg = 0.0;
 };
 
 // Tracks `frames` frames of the camera at truth(k) (camera to world); errors in the first camera's frame.
-TrackedRun track_camera(const std::function<Pose3(int)>& truth, int frames, const TrackerOptions& options = TrackerOptions{}) {
+TrackedRun track_camera(const std::function<Pose3(int)>& truth, int frames,
+                        const TrackerOptions& options = TrackerOptions{}) {
   const auto points = test::make_points(4000, 17);
   const PinholeStereo camera = test::synthetic_camera();
   Tracker tracker(camera, options);
@@ -39,7 +40,8 @@ TrackedRun track_camera(const std::function<Pose3(int)>& truth, int frames, cons
     r.rotating += result.motion == FrameMotion::kRotatingInPlace ? 1 : 0;
     if (k > 0) r.path_m += (result.T_wc.translation() - r.results[r.results.size() - 2].T_wc.translation()).norm();
     const Pose3 expected = truth(0).inverse() * truth(k);
-    r.max_position_error_m = std::max(r.max_position_error_m, (result.T_wc.translation() - expected.translation()).norm());
+    r.max_position_error_m =
+        std::max(r.max_position_error_m, (result.T_wc.translation() - expected.translation()).norm());
     r.max_rotation_error_deg = std::max(r.max_rotation_error_deg, test::rotation_error_deg(result.T_wc, expected));
   }
   return r;
@@ -82,10 +84,11 @@ TEST(StationaryTest, StillCameraKeepsItsPoseExactly) {
 TEST(StationaryTest, CameraTurningInPlaceKeepsItsCentre) {
   const TrackedRun with = track_camera(turning_in_place, 60);
   const TrackedRun without = track_camera(turning_in_place, 60, without_stationary_test());
-  std::printf("[ figures  ] turning in place, 3 degrees: path %.3f mm with the test (%d rotating, %d still), "
-              "%.3f mm without; rotation error %.4f / %.4f deg\n",
-              with.path_m * 1e3, with.rotating, with.still, without.path_m * 1e3, with.max_rotation_error_deg,
-              without.max_rotation_error_deg);
+  std::printf(
+      "[ figures  ] turning in place, 3 degrees: path %.3f mm with the test (%d rotating, %d still), "
+      "%.3f mm without; rotation error %.4f / %.4f deg\n",
+      with.path_m * 1e3, with.rotating, with.still, without.path_m * 1e3, with.max_rotation_error_deg,
+      without.max_rotation_error_deg);
   EXPECT_GE(with.rotating, 50);
   EXPECT_EQ(with.path_m, 0.0);  // rotating frames keep the centre, still ones the whole pose
   EXPECT_GT(without.path_m, 0.005);
@@ -95,9 +98,10 @@ TEST(StationaryTest, CameraTurningInPlaceKeepsItsCentre) {
 TEST(StationaryTest, SlowCreepIsReleasedNotAccumulated) {
   const int frames = 100;  // 20 mm in all
   const TrackedRun with = track_camera(creeping, frames);
-  std::printf("[ figures  ] creep of 0.2 mm per frame: %d still, %d rotating, max position error %.2f mm, "
-              "estimated path %.1f mm of 19.8 mm\n",
-              with.still, with.rotating, with.max_position_error_m * 1e3, with.path_m * 1e3);
+  std::printf(
+      "[ figures  ] creep of 0.2 mm per frame: %d still, %d rotating, max position error %.2f mm, "
+      "estimated path %.1f mm of 19.8 mm\n",
+      with.still, with.rotating, with.max_position_error_m * 1e3, with.path_m * 1e3);
   // Held frames lag the truth by at most what the test cannot tell apart (a few millimetres at 2-6 m),
   // never by the accumulated creep.
   EXPECT_LT(with.max_position_error_m, 0.006);

@@ -45,7 +45,8 @@ TEST(TrackerSynthetic, TracksEveryFrameWithSmallError) {
     const TrackResult& r = run.results[static_cast<std::size_t>(k)];
     ASSERT_EQ(r.state, TrackingState::kOk) << "frame " << k;
     EXPECT_GE(r.tracked_points, 100) << "frame " << k;
-    max_translation_error = std::max(max_translation_error, (r.T_wc.translation() - truth_in_first_camera(k).translation()).norm());
+    max_translation_error =
+        std::max(max_translation_error, (r.T_wc.translation() - truth_in_first_camera(k).translation()).norm());
     max_rotation_error = std::max(max_rotation_error, test::rotation_error_deg(r.T_wc, truth_in_first_camera(k)));
   }
   // 0.3 px noise, 2-6 m depth, 0.11 m baseline: a stereo point's depth is off by up to ~10 cm and
@@ -104,14 +105,16 @@ TEST(TrackerSynthetic, InconsistentFeaturesAreRejectedWithoutStateChange) {
   const PinholeStereo camera = test::synthetic_camera();
   const auto points = test::make_points(3000, 41);
   Tracker tracker(camera, TrackerOptions{});
-  ASSERT_EQ(tracker.track(0, 0, test::make_frame(points, camera, test::trajectory_pose(0), 1)).state, TrackingState::kOk);
+  ASSERT_EQ(tracker.track(0, 0, test::make_frame(points, camera, test::trajectory_pose(0), 1)).state,
+            TrackingState::kOk);
   StereoFeatures bad = test::make_frame(points, camera, test::trajectory_pose(1), 2);
   bad.depth_m.pop_back();
   EXPECT_THROW(tracker.track(kFramePeriodNs, 1, bad), std::invalid_argument);
   StereoFeatures bad_octave = test::make_frame(points, camera, test::trajectory_pose(1), 2);
   bad_octave.keypoints[3].octave = 99;
   EXPECT_THROW(tracker.track(kFramePeriodNs, 1, bad_octave), std::invalid_argument);
-  const TrackResult next = tracker.track(kFramePeriodNs, 1, test::make_frame(points, camera, test::trajectory_pose(1), 2));
+  const TrackResult next =
+      tracker.track(kFramePeriodNs, 1, test::make_frame(points, camera, test::trajectory_pose(1), 2));
   EXPECT_EQ(next.state, TrackingState::kOk);
   EXPECT_LT((next.T_wc.translation() - truth_in_first_camera(1).translation()).norm(), 0.01);
 }
@@ -122,8 +125,9 @@ TEST(TrackerSynthetic, GarbageFrameIsLostThenRelocalizesAfterAJump) {
   Tracker tracker(camera, TrackerOptions{});
   int k = 0;
   for (; k < 40; ++k) {
-    const TrackResult r = tracker.track(k * kFramePeriodNs, static_cast<std::uint64_t>(k),
-                                        test::make_frame(points, camera, test::trajectory_pose(k), 500 + static_cast<std::uint64_t>(k)));
+    const TrackResult r =
+        tracker.track(k * kFramePeriodNs, static_cast<std::uint64_t>(k),
+                      test::make_frame(points, camera, test::trajectory_pose(k), 500 + static_cast<std::uint64_t>(k)));
     ASSERT_EQ(r.state, TrackingState::kOk) << "frame " << k;
   }
   // A frame of pure clutter (e.g. the lens covered): no pose may be published.
@@ -155,10 +159,12 @@ TEST(TrackerSynthetic, ResumeInMapRelocalizesInTheOldMapAndContinuesIds) {
   Tracker first(camera, TrackerOptions{});
   int k = 0;
   for (; k < 40; ++k) {
-    ASSERT_EQ(first.track(k * kFramePeriodNs, static_cast<std::uint64_t>(k),
-                          test::make_frame(points, camera, test::trajectory_pose(k), 500 + static_cast<std::uint64_t>(k)))
-                  .state,
-              TrackingState::kOk);
+    ASSERT_EQ(
+        first
+            .track(k * kFramePeriodNs, static_cast<std::uint64_t>(k),
+                   test::make_frame(points, camera, test::trajectory_pose(k), 500 + static_cast<std::uint64_t>(k)))
+            .state,
+        TrackingState::kOk);
   }
   const KeyframeId last_id = first.local_map().keyframes.rbegin()->first;
 
@@ -177,8 +183,9 @@ TEST(TrackerSynthetic, ResumeInMapRelocalizesInTheOldMapAndContinuesIds) {
   // Tracks on and makes keyframes with ids after the old map's.
   KeyframeId new_id = kNoId;
   for (++k; k < kFrames && new_id == kNoId; ++k) {
-    const TrackResult r = restarted.track(k * kFramePeriodNs, static_cast<std::uint64_t>(k),
-                                          test::make_frame(points, camera, test::trajectory_pose(k), 900 + static_cast<std::uint64_t>(k)));
+    const TrackResult r = restarted.track(
+        k * kFramePeriodNs, static_cast<std::uint64_t>(k),
+        test::make_frame(points, camera, test::trajectory_pose(k), 900 + static_cast<std::uint64_t>(k)));
     ASSERT_EQ(r.state, TrackingState::kOk) << "frame " << k;
     if (r.new_keyframe) new_id = r.new_keyframe->id;
   }
@@ -206,8 +213,9 @@ TEST(TrackerSynthetic, ResumeInMapFromTheLastFramePoseTracksTheNextFrameDirectly
   ASSERT_TRUE(restarted.resume_in_map(LastFramePose{last.reference_kf, last.T_ref_c, last.T_wc}));
   EXPECT_EQ(restarted.state(), TrackingState::kOk);
   for (int n = 0; n < 5; ++n, ++k) {
-    const TrackResult r = restarted.track(k * kFramePeriodNs, static_cast<std::uint64_t>(k),
-                                          test::make_frame(points, camera, test::trajectory_pose(k), 900 + static_cast<std::uint64_t>(k)));
+    const TrackResult r = restarted.track(
+        k * kFramePeriodNs, static_cast<std::uint64_t>(k),
+        test::make_frame(points, camera, test::trajectory_pose(k), 900 + static_cast<std::uint64_t>(k)));
     ASSERT_EQ(r.state, TrackingState::kOk) << "frame " << k;
     EXPECT_NE(r.method, TrackingMethod::kRelocalization) << "frame " << k;
     if (n == 0) {

@@ -40,7 +40,8 @@ TEST(TrackingEuroc, Mh01HandheldEveryFrameTrackedWithMillimetreAte) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   int tracked = 0;
   int frames = 0;
-  const double ate = tracked_clip_ate("euroc_mh01_handheld", HeMode::kClipped, PhotometricVariant::kNone, &tracked, &frames);
+  const double ate =
+      tracked_clip_ate("euroc_mh01_handheld", HeMode::kClipped, PhotometricVariant::kNone, &tracked, &frames);
   EXPECT_EQ(frames, 160);
   EXPECT_EQ(tracked, frames);
   // Target 4.0 mm (ORB-SLAM2/3 with local mapping: 3.6 mm). This tracker alone, without local BA,
@@ -96,10 +97,10 @@ TEST(TrackingEuroc, V101StillCameraEstimatedStill) {
   const double path_m = bench::tracked_path_length_m(run);
   const auto ate = bench::compute_ate_se3(run);
   ASSERT_TRUE(ate.has_value());
-  std::printf("[ figures  ] euroc_v101_head: %d/%zu tracked, path length %.1f mm, max distance from start %.1f mm, "
-              "ATE rmse %.2f mm; stationary test: %d still, %d rotating in place\n",
-              run.tracked_frames(), run.frames.size(), path_m * 1e3, max_drift_m * 1e3, ate->rmse_m * 1e3, still,
-              rotating);
+  std::printf(
+      "[ figures  ] euroc_v101_head: %d/%zu tracked, path length %.1f mm, max distance from start %.1f mm, "
+      "ATE rmse %.2f mm; stationary test: %d still, %d rotating in place\n",
+      run.tracked_frames(), run.frames.size(), path_m * 1e3, max_drift_m * 1e3, ate->rmse_m * 1e3, still, rotating);
   // Target: path length < 5 mm; measured 2.9 mm (71 frames still, 21 rotating in place). Without the
   // stationary test it is 63 mm: per-frame pose noise of ~0.7 mm against one keyframe, most of it the
   // vehicle's real rocking (0.15 degrees over the clip, up to 0.11 degrees a frame) read partly as
@@ -113,7 +114,8 @@ TEST(TrackingEuroc, DarkWithGlobalHe) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   int tracked = 0;
   int frames = 0;
-  const double ate = tracked_clip_ate("euroc_mh01_handheld", HeMode::kGlobal, PhotometricVariant::kDark, &tracked, &frames);
+  const double ate =
+      tracked_clip_ate("euroc_mh01_handheld", HeMode::kGlobal, PhotometricVariant::kDark, &tracked, &frames);
   EXPECT_EQ(tracked, frames);
   // Target 6 mm; global HE stretches the x0.1 image's noise too and measures 8.3 mm (clipped: 4.1 mm).
   EXPECT_LT(ate, 0.010);
@@ -123,7 +125,8 @@ TEST(TrackingEuroc, DarkWithClippedHe) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   int tracked = 0;
   int frames = 0;
-  const double ate = tracked_clip_ate("euroc_mh01_handheld", HeMode::kClipped, PhotometricVariant::kDark, &tracked, &frames);
+  const double ate =
+      tracked_clip_ate("euroc_mh01_handheld", HeMode::kClipped, PhotometricVariant::kDark, &tracked, &frames);
   EXPECT_EQ(tracked, frames);
   // Target 6 mm with HE; measured 4.13 mm (no HE: 4.6 mm, DarkWithoutHeReported).
   EXPECT_LT(ate, 0.006);
@@ -133,7 +136,8 @@ TEST(TrackingEuroc, DarkWithClahe) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   int tracked = 0;
   int frames = 0;
-  const double ate = tracked_clip_ate("euroc_mh01_handheld", HeMode::kClahe, PhotometricVariant::kDark, &tracked, &frames);
+  const double ate =
+      tracked_clip_ate("euroc_mh01_handheld", HeMode::kClahe, PhotometricVariant::kDark, &tracked, &frames);
   EXPECT_EQ(tracked, frames);
   EXPECT_LT(ate, 0.006);
 }
@@ -142,7 +146,8 @@ TEST(TrackingEuroc, DarkWithoutHeReported) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   int tracked = 0;
   int frames = 0;
-  const double ate = tracked_clip_ate("euroc_mh01_handheld", HeMode::kNone, PhotometricVariant::kDark, &tracked, &frames);
+  const double ate =
+      tracked_clip_ate("euroc_mh01_handheld", HeMode::kNone, PhotometricVariant::kDark, &tracked, &frames);
   // Reported, loosely bounded: without HE the dark frames keep about 360 features of 1200.
   EXPECT_GE(tracked, frames * 9 / 10);
   EXPECT_LT(ate, 0.02);

@@ -44,7 +44,8 @@ Figures figures_of(const bench::OfflineRun& run, const char* label) {
   int stereo = 0;
   for (const auto& frame : run.frames) stereo += frame.stereo_features;
   std::printf("[ figures  ] %s: %d/%d tracked, %d keyframes, ATE rmse %.2f mm, %.0f stereo points per frame\n", label,
-              f.tracked, f.frames, f.keyframes, f.ate_m * 1e3, f.frames > 0 ? static_cast<double>(stereo) / f.frames : 0.0);
+              f.tracked, f.frames, f.keyframes, f.ate_m * 1e3,
+              f.frames > 0 ? static_cast<double>(stereo) / f.frames : 0.0);
   return f;
 }
 

@@ -50,11 +50,12 @@ TEST(TrackingStreet, FirstCornerEveryFrameTrackedWithKittiDriftBelowOnePointFive
 
   const auto ate = bench::compute_ate_se3(run);
   const auto drift = bench::compute_kitti_drift(run);
-  std::printf("[ figures  ] street first %d frames: %d tracked, %d keyframes, ATE %.3f m, KITTI drift %.2f %% "
-              "(%zu sub-sequences), %.3f deg/100 m\n",
-              kFirstCornerFrames, run.tracked_frames(), run.keyframes, ate ? ate->rmse_m : -1.0,
-              drift ? drift->translation_error_percent : -1.0, drift ? drift->segments.size() : 0,
-              drift ? drift->rotation_error_deg_per_100m : -1.0);
+  std::printf(
+      "[ figures  ] street first %d frames: %d tracked, %d keyframes, ATE %.3f m, KITTI drift %.2f %% "
+      "(%zu sub-sequences), %.3f deg/100 m\n",
+      kFirstCornerFrames, run.tracked_frames(), run.keyframes, ate ? ate->rmse_m : -1.0,
+      drift ? drift->translation_error_percent : -1.0, drift ? drift->segments.size() : 0,
+      drift ? drift->rotation_error_deg_per_100m : -1.0);
   EXPECT_EQ(run.tracked_frames(), kFirstCornerFrames);
   ASSERT_TRUE(drift.has_value());
   // The target (ORB-SLAM2 publishes 0.4-1.4 % on real KITTI 00-10 stereo).

@@ -38,7 +38,8 @@ Scene circle_scene(int keyframes) {
     scene.keyframes_T_wc.push_back(T_wc);
   }
   for (int i = 0; i < 200; ++i) {
-    scene.points.push_back({Eigen::Vector3d(-1.0 + 0.01 * i, 0.0, 3.5), i % 4 == 0 ? PointCategory::kRecent : PointCategory::kMap});
+    scene.points.push_back(
+        {Eigen::Vector3d(-1.0 + 0.01 * i, 0.0, 3.5), i % 4 == 0 ? PointCategory::kRecent : PointCategory::kMap});
   }
   scene.map_keyframes = scene.keyframes_T_wc.size();
   scene.map_points = scene.points.size();
@@ -118,7 +119,8 @@ TEST(ViewerFrameView, RectifyingForTheRightHalfLeavesTheRawImageUntouched) {
 }
 
 TEST(ViewerOptions, ParsesFlagsAndRejectsWhatCannotWork) {
-  const ViewerOptions o = ViewerOptions::parse({"--headless", "--out", "/tmp/x", "--snapshot-every", "2.5", "--rate", "10"});
+  const ViewerOptions o =
+      ViewerOptions::parse({"--headless", "--out", "/tmp/x", "--snapshot-every", "2.5", "--rate", "10"});
   EXPECT_TRUE(o.headless);
   EXPECT_EQ(o.out_dir, "/tmp/x");
   EXPECT_DOUBLE_EQ(o.snapshot_every_s, 2.5);
@@ -136,7 +138,8 @@ TEST(ViewerVideoSink, WritesAVideoOrAPngSequence) {
   cv::Mat frame(120, 160, CV_8UC3, cv::Scalar(0, 128, 255));
   for (int i = 0; i < 5; ++i) sink.write(frame);
   const std::string summary = sink.close();
-  const bool video = std::filesystem::exists(dir.path() / "view.mp4") && std::filesystem::file_size(dir.path() / "view.mp4") > 0;
+  const bool video =
+      std::filesystem::exists(dir.path() / "view.mp4") && std::filesystem::file_size(dir.path() / "view.mp4") > 0;
   const bool pngs = std::filesystem::exists(dir.path() / "view_000004.png");
   EXPECT_TRUE(video || pngs) << summary;
   EXPECT_NE(summary.find("5 frames"), std::string::npos) << summary;

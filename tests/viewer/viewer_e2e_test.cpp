@@ -101,11 +101,12 @@ std::unique_ptr<ChildProcess> start_xvfb(const fs::path& dir, std::string& displ
   std::error_code ignored;
   fs::remove(fs::path("/tmp/.X11-unix") / std::string(1, 'X').append(std::to_string(number)), ignored);
   fs::remove(fs::path("/tmp") / std::string(".X").append(std::to_string(number)).append("-lock"), ignored);
-  auto server = std::make_unique<ChildProcess>(xvfb, std::vector<std::string>{display, "-screen", "0", "1920x1200x24", "-nolisten", "tcp"},
-                                               dir, "xvfb");
+  auto server = std::make_unique<ChildProcess>(
+      xvfb, std::vector<std::string>{display, "-screen", "0", "1920x1200x24", "-nolisten", "tcp"}, dir, "xvfb");
   const auto deadline = std::chrono::steady_clock::now() + kXvfbStart;
   const fs::path socket = fs::path("/tmp/.X11-unix") / std::string(1, 'X').append(std::to_string(number));
-  while (!fs::exists(socket) && std::chrono::steady_clock::now() < deadline && !server->wait(std::chrono::milliseconds(0))) {
+  while (!fs::exists(socket) && std::chrono::steady_clock::now() < deadline &&
+         !server->wait(std::chrono::milliseconds(0))) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
   if (!fs::exists(socket)) return nullptr;
@@ -133,22 +134,33 @@ TEST(ViewerEndToEnd, JoinsAMh01RunDrawsEveryKeyframeAndLeavesTheOutputBitIdentic
   // A headless viewer with the ground truth overlaid, up before the run: a viewer that joins mid-run
   // may, on a loaded machine, join after the last frame (CI saw 1 of 160), so the frame and trajectory
   // checks are made on this one.
-  const std::vector<std::string> headless_args{
-      "--domain", std::to_string(domain), "--headless", "--out", (dir.path() / "headless").string(), "--gt",
-      (dataset / "mav0/state_groundtruth_estimate0/data.csv").string(), "--gt-extrinsic",
-      (dataset / "mav0/cam0/sensor.yaml").string()};
+  const std::vector<std::string> headless_args{"--domain",
+                                               std::to_string(domain),
+                                               "--headless",
+                                               "--out",
+                                               (dir.path() / "headless").string(),
+                                               "--gt",
+                                               (dataset / "mav0/state_groundtruth_estimate0/data.csv").string(),
+                                               "--gt-extrinsic",
+                                               (dataset / "mav0/cam0/sensor.yaml").string()};
   ChildProcess headless(test::bin_dir() / "heslam-viewer", headless_args, dir.path(), "headless_viewer");
   const auto ready_deadline = std::chrono::steady_clock::now() + kViewerReady;
-  while (headless.err().find("info: headless") == std::string::npos && std::chrono::steady_clock::now() < ready_deadline &&
-         !headless.wait(std::chrono::milliseconds(0))) {
+  while (headless.err().find("info: headless") == std::string::npos &&
+         std::chrono::steady_clock::now() < ready_deadline && !headless.wait(std::chrono::milliseconds(0))) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
   ASSERT_NE(headless.err().find("info: headless"), std::string::npos) << headless.out() << headless.err();
 
   auto viewed = test::start_pipeline("euroc", dataset, dir.path(), "viewed", domain);
   std::this_thread::sleep_for(kViewerStartDelay);
-  std::vector<std::string> viewer_args{"--domain", std::to_string(domain), "--out", (dir.path() / "pictures").string(),
-                                       "--snapshot-every", "2", "--record", (dir.path() / "frames.mp4").string()};
+  std::vector<std::string> viewer_args{"--domain",
+                                       std::to_string(domain),
+                                       "--out",
+                                       (dir.path() / "pictures").string(),
+                                       "--snapshot-every",
+                                       "2",
+                                       "--record",
+                                       (dir.path() / "frames.mp4").string()};
   if (!xvfb) viewer_args.push_back("--headless");
   ChildProcess viewer(test::bin_dir() / "heslam-viewer", viewer_args, dir.path(), "viewer");
   const int pipeline_code = test::finish(*viewed);
@@ -216,11 +228,12 @@ TEST(ViewerEndToEnd, JoinsAMh01RunDrawsEveryKeyframeAndLeavesTheOutputBitIdentic
     cv::minMaxLoc(view_3d, &low, &high);
     EXPECT_GT(high - low, 50.0);
   }
-  std::printf("[ figures  ] viewer on MH01 (%s): %s frames received, %s drawn, %s dropped before drawing, %s never "
-              "received; %d keyframes, %s points; the viewer up before the run: %d trajectory poses\n",
-              xvfb ? "Xvfb, viz" : "headless", stats.at("frames_received").c_str(), stats.at("frames_drawn").c_str(),
-              stats.at("frames_not_drawn").c_str(), stats.at("frames_missed").c_str(), keyframes,
-              stats.at("map_points").c_str(), headless_trajectory);
+  std::printf(
+      "[ figures  ] viewer on MH01 (%s): %s frames received, %s drawn, %s dropped before drawing, %s never "
+      "received; %d keyframes, %s points; the viewer up before the run: %d trajectory poses\n",
+      xvfb ? "Xvfb, viz" : "headless", stats.at("frames_received").c_str(), stats.at("frames_drawn").c_str(),
+      stats.at("frames_not_drawn").c_str(), stats.at("frames_missed").c_str(), keyframes,
+      stats.at("map_points").c_str(), headless_trajectory);
 }
 
 }  // namespace

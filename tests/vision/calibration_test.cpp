@@ -185,18 +185,18 @@ TEST(Calibration, SameRigGivesSameModelInEveryFormat) {
                 "%%YAML:1.0\nCamera.fx: %.17g\nCamera.fy: %.17g\nCamera.cx: %.17g\nCamera.cy: %.17g\n"
                 "Camera.width: %d\nCamera.height: %d\nCamera.fps: 20.0\nCamera.bf: %.17g\n",
                 m.fx_px, m.fy_px, m.cx_px, m.cy_px, m.width_px, m.height_px, m.bf());
-  write(dir / "raw.yaml", std::string(header) + matrix_yaml("LEFT.K", K(euroc.left)) +
-                              matrix_yaml("LEFT.D", D(euroc.left)) + matrix_yaml("LEFT.R", R1) +
-                              matrix_yaml("LEFT.P", P1) + matrix_yaml("RIGHT.K", K(euroc.right)) +
-                              matrix_yaml("RIGHT.D", D(euroc.right)) + matrix_yaml("RIGHT.R", R2) +
-                              matrix_yaml("RIGHT.P", P2));
+  write(dir / "raw.yaml",
+        std::string(header) + matrix_yaml("LEFT.K", K(euroc.left)) + matrix_yaml("LEFT.D", D(euroc.left)) +
+            matrix_yaml("LEFT.R", R1) + matrix_yaml("LEFT.P", P1) + matrix_yaml("RIGHT.K", K(euroc.right)) +
+            matrix_yaml("RIGHT.D", D(euroc.right)) + matrix_yaml("RIGHT.R", R2) + matrix_yaml("RIGHT.P", P2));
   const StereoCalibration raw_settings = load_orbslam_settings(dir / "raw.yaml");
   expect_same_model(StereoRectifier(raw_settings).camera(), m, 1e-9);
   EXPECT_LT((raw_settings.T_rl().translation() - euroc.T_rl().translation()).norm(), 1e-9);
 
   // The rectified model written as KITTI calib.txt and as ORB-SLAM2 rectified (KITTI-style) settings.
   char line[512];
-  std::snprintf(line, sizeof line, "P0: %.17g 0 %.17g 0 0 %.17g %.17g 0 0 0 1 0\nP1: %.17g 0 %.17g %.17g 0 %.17g %.17g 0 0 0 1 0\n",
+  std::snprintf(line, sizeof line,
+                "P0: %.17g 0 %.17g 0 0 %.17g %.17g 0 0 0 1 0\nP1: %.17g 0 %.17g %.17g 0 %.17g %.17g 0 0 0 1 0\n",
                 m.fx_px, m.cx_px, m.fy_px, m.cy_px, m.fx_px, m.cx_px, -m.bf(), m.fy_px, m.cy_px);
   write(dir / "calib.txt", std::string("P2: 1 0 0 0 0 1 0 0 0 0 1 0\n") + line);
   const StereoRectifier from_kitti(load_kitti_calibration(dir / "calib.txt", m.width_px, m.height_px));
@@ -225,8 +225,9 @@ TEST(Calibration, OrbSlam3SettingsGiveTheSameModelOrOneClearLine) {
                   name.c_str(), c.distortion[3]);
     return std::string(text);
   };
-  const std::string header = "%YAML:1.0\nFile.version: \"1.0\"\nCamera.type: \"PinHole\"\n"
-                             "Camera.width: 752\nCamera.height: 480\nCamera.fps: 20\nStereo.ThDepth: 60.0\n";
+  const std::string header =
+      "%YAML:1.0\nFile.version: \"1.0\"\nCamera.type: \"PinHole\"\n"
+      "Camera.width: 752\nCamera.height: 480\nCamera.fps: 20\nStereo.ThDepth: 60.0\n";
   const Eigen::Matrix4d T_c1_c2 = (euroc.left.T_BS.inverse() * euroc.right.T_BS).matrix();
   const std::string raw = header + camera("Camera1", euroc.left) + camera("Camera2", euroc.right) +
                           matrix_yaml("Stereo.T_c1_c2", T_c1_c2) + matrix_yaml("IMU.T_b_c1", euroc.left.T_BS.matrix());
@@ -254,7 +255,8 @@ TEST(Calibration, OrbSlam3SettingsGiveTheSameModelOrOneClearLine) {
   expect_one_line_naming(error_of([&] { load_orbslam_settings(dir / "resized.yaml"); }), "resized.yaml",
                          "Camera.newWidth");
   write(dir / "version.yaml", replace(raw, "\"1.0\"", "\"2.0\""));
-  expect_one_line_naming(error_of([&] { load_orbslam_settings(dir / "version.yaml"); }), "version.yaml", "File.version");
+  expect_one_line_naming(error_of([&] { load_orbslam_settings(dir / "version.yaml"); }), "version.yaml",
+                         "File.version");
   // The shipped ORB-SLAM3-format EuRoC file is this rig.
   const StereoCalibration shipped = load_orbslam_settings(test::source_dir() / "config/camera/EuRoC_ORB-SLAM3.yaml");
   expect_same_model(StereoRectifier(shipped).camera(), m, 1e-6);
@@ -339,8 +341,7 @@ TEST(Calibration, MalformedEurocFilesGiveOneClearLine) {
        "intrinsics"},
       {replace(kEurocCam0, "resolution: [752, 480]", ""), "resolution"},
       {replace(kEurocCam0, "camera_model: pinhole", "camera_model: omni"), "camera_model"},
-      {replace(kEurocCam0, "distortion_model: radial-tangential", "distortion_model: equidistant"),
-       "distortion_model"},
+      {replace(kEurocCam0, "distortion_model: radial-tangential", "distortion_model: equidistant"), "distortion_model"},
       {replace(kEurocCam0, "0.0, 0.0, 0.0, 1.0]", "0.0, 0.0, 1.0]"), "T_BS"},
       {replace(kEurocCam0, "0.0148655429818, -0.999880929698", "2.0148655429818, -0.999880929698"), "T_BS"},
       {replace(kEurocCam0, "intrinsics: [458.654,", "intrinsics: [abc,"), "intrinsics"},
@@ -397,8 +398,9 @@ TEST(Calibration, MalformedKittiAndOrbSlamFilesGiveOneClearLine) {
   write(dir / "no_p1.txt", "P0: 718.856 0 607.1928 0 0 718.856 185.2157 0 0 0 1 0\n");
   expect_one_line_naming(error_of([&] { load_kitti_calibration(dir / "no_p1.txt", 1241, 376); }), "no_p1.txt", "P1");
 
-  const std::string good = "%YAML:1.0\nCamera.fx: 718.856\nCamera.fy: 718.856\nCamera.cx: 607.1928\n"
-                           "Camera.cy: 185.2157\nCamera.width: 1241\nCamera.height: 376\nCamera.bf: 386.1448\n";
+  const std::string good =
+      "%YAML:1.0\nCamera.fx: 718.856\nCamera.fy: 718.856\nCamera.cx: 607.1928\n"
+      "Camera.cy: 185.2157\nCamera.width: 1241\nCamera.height: 376\nCamera.bf: 386.1448\n";
   write(dir / "good.yaml", good);
   EXPECT_NO_THROW(load_orbslam_settings(dir / "good.yaml"));
   write(dir / "no_bf.yaml", replace(good, "Camera.bf: 386.1448\n", ""));
@@ -408,7 +410,8 @@ TEST(Calibration, MalformedKittiAndOrbSlamFilesGiveOneClearLine) {
   write(dir / "distorted.yaml", good + "Camera.k1: -0.2\n");
   expect_one_line_naming(error_of([&] { load_orbslam_settings(dir / "distorted.yaml"); }), "distorted.yaml",
                          "Camera.k1");
-  write(dir / "bad_k.yaml", good + "LEFT.K: !!opencv-matrix\n   rows: 2\n   cols: 2\n   dt: d\n   data: [1, 0, 0, 1]\n");
+  write(dir / "bad_k.yaml",
+        good + "LEFT.K: !!opencv-matrix\n   rows: 2\n   cols: 2\n   dt: d\n   data: [1, 0, 0, 1]\n");
   expect_one_line_naming(error_of([&] { load_orbslam_settings(dir / "bad_k.yaml"); }), "bad_k.yaml", "LEFT.K");
 }
 

@@ -46,8 +46,8 @@ TEST(DescriptorBlur, EqualsOpenCvOnRandomImagesAndRegions) {
     const int w = 1 + static_cast<int>(rng() % static_cast<unsigned>(width - r - x));
     const int h = 1 + static_cast<int>(rng() % static_cast<unsigned>(height - r - y));
     const cv::Rect region = trial % 2 == 0 ? cv::Rect(x, y, w, h) : cv::Rect(r, r, width - 2 * r, height - 2 * r);
-    ASSERT_EQ(differing_pixels(image, region), 0) << "trial " << trial << ", image " << width << "x" << height
-                                                  << ", region " << region;
+    ASSERT_EQ(differing_pixels(image, region), 0)
+        << "trial " << trial << ", image " << width << "x" << height << ", region " << region;
   }
 }
 

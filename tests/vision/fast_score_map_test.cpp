@@ -135,7 +135,8 @@ TEST(FastScoreMap, EveryScoreEqualsTheArcDefinition) {
   // Smooth ramps with a few steps (arcs of equal differences), and only 0 and 255 (saturation).
   cv::Mat ramps(noise.size(), CV_8UC1);
   for (int y = 0; y < ramps.rows; ++y) {
-    for (int x = 0; x < ramps.cols; ++x) ramps.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>((x * 7 + (y / 5) * 40) % 256);
+    for (int x = 0; x < ramps.cols; ++x)
+      ramps.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>((x * 7 + (y / 5) * 40) % 256);
   }
   const cv::Mat binary = noise > 127;
   for (const cv::Mat& image : {noise, ramps, binary}) {

@@ -131,8 +131,8 @@ TEST(HistogramEqualizer, AdaptiveSwitchesWithHysteresis) {
     return out;
   };
   HistogramEqualizer equalizer(with_mode(HeMode::kAdaptive));
-  const std::vector<std::pair<double, bool>> sequence = {
-      {60, false}, {30, false}, {20, true}, {30, true}, {34, true}, {40, false}, {30, false}, {10, true}};
+  const std::vector<std::pair<double, bool>> sequence = {{60, false}, {30, false}, {20, true},  {30, true},
+                                                         {34, true},  {40, false}, {30, false}, {10, true}};
   for (const auto& [contrast, expect_active] : sequence) {
     const cv::Mat image = with_contrast(contrast);
     cv::Mat left_out, right_out;
@@ -147,7 +147,8 @@ TEST(HistogramEqualizer, AdaptiveSwitchesWithHysteresis) {
 
 TEST(HistogramEqualizer, OptionsFromYaml) {
   const std::string text =
-      "%YAML:1.0\nHE.mode: clahe\nHE.stereo: separate\nHE.clipLimit: 3.5\nHE.tilesX: 4\nHE.tilesY: 3\nHE.adaptiveOnBelow: 10\n"
+      "%YAML:1.0\nHE.mode: clahe\nHE.stereo: separate\nHE.clipLimit: 3.5\nHE.tilesX: 4\nHE.tilesY: "
+      "3\nHE.adaptiveOnBelow: 10\n"
       "HE.adaptiveOffAbove: 20\n";
   cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
   const HistogramEqualizerOptions o = HistogramEqualizerOptions::from_yaml(fs.root(), "test.yaml");
@@ -281,7 +282,7 @@ TEST(HistogramEqualizer, DarkAndFlatEurocFramesKeepTheirFeatures) {
   HESLAM_REQUIRE_SHARED_DATA(test::kEurocDataset);
   PinholeStereo camera;
   const auto original = test::load_euroc_pairs({0, 60, 120}, &camera);
-  cv::RNG rng(2023);  // seeded: the same noise every run
+  cv::RNG rng(2023);                   // seeded: the same noise every run
   constexpr double kNoiseSigma = 1.0;  // grey levels, sensor read noise on the dark frames
   auto degrade = [&](const cv::Mat& image, bool dark) {
     cv::Mat f;
@@ -308,8 +309,8 @@ TEST(HistogramEqualizer, DarkAndFlatEurocFramesKeepTheirFeatures) {
     std::printf("%-9s %-9s %9zu %9zu\n", to_string(mode), "original", base.features, base.stereo);
     for (const auto& [name, pairs] : {std::pair{"dark", &dark}, std::pair{"flat", &flat}}) {
       const Counts c = count(camera, mode, *pairs);
-      std::printf("%-9s %-9s %9zu %9zu  (%3.0f %% / %3.0f %% of original)\n", to_string(mode), name, c.features, c.stereo,
-                  100.0 * c.features / base.features, 100.0 * c.stereo / base.stereo);
+      std::printf("%-9s %-9s %9zu %9zu  (%3.0f %% / %3.0f %% of original)\n", to_string(mode), name, c.features,
+                  c.stereo, 100.0 * c.features / base.features, 100.0 * c.stereo / base.stereo);
       if (mode == HeMode::kGlobal || mode == HeMode::kClipped || mode == HeMode::kAdaptive) {
         EXPECT_GE(c.features, 0.8 * base.features) << to_string(mode) << " " << name;
         EXPECT_GE(c.stereo, 0.8 * base.stereo) << to_string(mode) << " " << name;
@@ -335,14 +336,16 @@ TEST(HistogramEqualizer, EurocPairsExposedApartKeepTheirStereoMatches) {
     }
     return pairs;
   };
-  std::printf("%-9s %-9s %9s %9s %9s   (3 EuRoC MH01 pairs, clipped HE)\n", "stereo", "gains", "features", "stereo", "");
-  for (const StereoPhotometry stereo : {StereoPhotometry::kShared, StereoPhotometry::kMatched, StereoPhotometry::kSeparate}) {
+  std::printf("%-9s %-9s %9s %9s %9s   (3 EuRoC MH01 pairs, clipped HE)\n", "stereo", "gains", "features", "stereo",
+              "");
+  for (const StereoPhotometry stereo :
+       {StereoPhotometry::kShared, StereoPhotometry::kMatched, StereoPhotometry::kSeparate}) {
     const Counts base = count(camera, HeMode::kClipped, original, stereo);
     std::printf("%-9s %-9s %9zu %9zu\n", to_string(stereo), "1/1", base.features, base.stereo);
     for (const auto& [name, left_gain, right_gain] : {std::tuple{"0.35/2", 0.35, 2.0}, std::tuple{"1/4", 1.0, 4.0}}) {
       const Counts c = count(camera, HeMode::kClipped, with_gains(left_gain, right_gain), stereo);
-      std::printf("%-9s %-9s %9zu %9zu  (%3.0f %% of the equal exposure's stereo)\n", to_string(stereo), name, c.features,
-                  c.stereo, 100.0 * c.stereo / base.stereo);
+      std::printf("%-9s %-9s %9zu %9zu  (%3.0f %% of the equal exposure's stereo)\n", to_string(stereo), name,
+                  c.features, c.stereo, 100.0 * c.stereo / base.stereo);
       // Measured: shared 49 % / 44 %, matched 102 % / 94 % (the left clipped where the right is white,
       // so its features lie where both cameras see texture), separate 61 % / 50 %.
       if (stereo == StereoPhotometry::kMatched) {
@@ -364,8 +367,8 @@ TEST(HistogramEqualizer, SplitOnTwoThreadsGivesTheOneCallPixels) {
   HESLAM_REQUIRE_SHARED_DATA(test::kEurocDataset);
   const auto original = test::load_euroc_pairs({0, 60, 120}, nullptr);
   std::vector<test::RectifiedPair> pairs;
-  for (const auto& [left_gain, right_gain] : {std::pair{1.0, 1.0}, std::pair{0.35, 2.0}, std::pair{1.0, 4.0},
-                                              std::pair{0.1, 0.1}, std::pair{1.0, 1.0}}) {
+  for (const auto& [left_gain, right_gain] :
+       {std::pair{1.0, 1.0}, std::pair{0.35, 2.0}, std::pair{1.0, 4.0}, std::pair{0.1, 0.1}, std::pair{1.0, 1.0}}) {
     for (const auto& p : original) {
       test::RectifiedPair q;
       p.left.convertTo(q.left, CV_8U, left_gain);  // rounds and saturates
@@ -375,7 +378,8 @@ TEST(HistogramEqualizer, SplitOnTwoThreadsGivesTheOneCallPixels) {
   }
   using Side = HistogramEqualizer::Side;
   for (const HeMode mode : {HeMode::kNone, HeMode::kGlobal, HeMode::kClipped, HeMode::kClahe, HeMode::kAdaptive}) {
-    for (const StereoPhotometry stereo : {StereoPhotometry::kShared, StereoPhotometry::kMatched, StereoPhotometry::kSeparate}) {
+    for (const StereoPhotometry stereo :
+         {StereoPhotometry::kShared, StereoPhotometry::kMatched, StereoPhotometry::kSeparate}) {
       HistogramEqualizer one_call(with_mode(mode, stereo));
       HistogramEqualizer split(with_mode(mode, stereo));
       cv::Mat left_buffer, right_buffer;

@@ -51,8 +51,9 @@ TEST(HistogramMatching, UndoesAMonotonicToneChangeOfTheOtherCamera) {
   HESLAM_REQUIRE_TEXTURE();
   const cv::Mat left = test::load_texture();
   // The "right camera": x0.35 and a gamma of 0.8, and separately x2 with the top clipped.
-  for (const auto& [name, tone] : {std::pair{"dark gamma", +[](double v) { return 255.0 * std::pow(0.35 * v / 255.0, 0.8); }},
-                                   std::pair{"bright clipped", +[](double v) { return 2.0 * v; }}}) {
+  for (const auto& [name, tone] :
+       {std::pair{"dark gamma", +[](double v) { return 255.0 * std::pow(0.35 * v / 255.0, 0.8); }},
+        std::pair{"bright clipped", +[](double v) { return 2.0 * v; }}}) {
     cv::Mat right(left.size(), CV_8UC1);
     for (int y = 0; y < left.rows; ++y) {
       for (int x = 0; x < left.cols; ++x) {

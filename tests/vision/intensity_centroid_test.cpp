@@ -60,10 +60,12 @@ TEST(IntensityCentroid, EqualsTheScalarMomentsOnAEurocImage) {
 TEST(IntensityCentroid, AngleOfAGradientPointsToTheBrightSide) {
   cv::Mat image(64, 64, CV_8UC1);
   for (int y = 0; y < image.rows; ++y) {
-    for (int x = 0; x < image.cols; ++x) image.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(2 * y);  // brighter downwards
+    for (int x = 0; x < image.cols; ++x)
+      image.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(2 * y);  // brighter downwards
   }
   const IntensityCentroid centroid;
-  EXPECT_NEAR(centroid.angle_deg(image.ptr<std::uint8_t>(32) + 32, static_cast<std::ptrdiff_t>(image.step1())), 90.f, 1e-4f);
+  EXPECT_NEAR(centroid.angle_deg(image.ptr<std::uint8_t>(32) + 32, static_cast<std::ptrdiff_t>(image.step1())), 90.f,
+              1e-4f);
   EXPECT_EQ(centroid.half_width(0), 15);
   EXPECT_EQ(centroid.half_width(15), 0);
 }

@@ -68,9 +68,10 @@ TEST(LeftOnlyFeatures, RightCameraSaturatedGivesMonocularKeypointsWhereOnlyTheLe
     // follows the tone curve rather than each pixel's counterpart (measured 93-99 %).
     EXPECT_GT(on_saturated_right, static_cast<int>(0.85 * static_cast<double>(added))) << "pair " << p;
     const auto with_depth = std::count_if(plain.depth_m.begin(), plain.depth_m.end(), [](float d) { return d > 0.f; });
-    std::printf("[ figures  ] MH01 pair %zu, right x4: %zu stereo-side keypoints (%ld with depth), %zu left-only, "
-                "%d of them where the right saturates\n",
-                p, plain.size(), static_cast<long>(with_depth), added, on_saturated_right);
+    std::printf(
+        "[ figures  ] MH01 pair %zu, right x4: %zu stereo-side keypoints (%ld with depth), %zu left-only, "
+        "%d of them where the right saturates\n",
+        p, plain.size(), static_cast<long>(with_depth), added, on_saturated_right);
   }
 }
 

@@ -76,8 +76,9 @@ TEST(LinearResize, EqualsOpenCvForOtherRatiosAndTinyImages) {
   LinearResize resize;  // one object, sizes changing between calls
   const cv::Mat src = noise_image(517, 333, 4, false);
   for (double ratio : {1.0, 1.05, 1.5, 1.99, 2.0, 2.5, 3.7}) {
-    expect_same_as_opencv(resize, src, cv::Size(static_cast<int>(std::lround(src.cols / ratio)),
-                                                static_cast<int>(std::lround(src.rows / ratio))));
+    expect_same_as_opencv(
+        resize, src,
+        cv::Size(static_cast<int>(std::lround(src.cols / ratio)), static_cast<int>(std::lround(src.rows / ratio))));
   }
   expect_same_as_opencv(resize, src, cv::Size(40, 300));  // different ratios per direction
   expect_same_as_opencv(resize, noise_image(9, 7, 5, false), cv::Size(7, 5));

@@ -52,8 +52,10 @@ TEST(OrbExtractor, RotatedImageGivesSameDescriptors) {
     for (std::size_t i = 0; i < original.keypoints.size(); ++i) {
       const Keypoint& k = original.keypoints[i];
       if (std::hypot(k.u_px - center.x, k.v_px - center.y) > side * 0.35) continue;
-      const double u = rotation.at<double>(0, 0) * k.u_px + rotation.at<double>(0, 1) * k.v_px + rotation.at<double>(0, 2);
-      const double v = rotation.at<double>(1, 0) * k.u_px + rotation.at<double>(1, 1) * k.v_px + rotation.at<double>(1, 2);
+      const double u =
+          rotation.at<double>(0, 0) * k.u_px + rotation.at<double>(0, 1) * k.v_px + rotation.at<double>(0, 2);
+      const double v =
+          rotation.at<double>(1, 0) * k.u_px + rotation.at<double>(1, 1) * k.v_px + rotation.at<double>(1, 2);
       // The same physical corner: detected within 1 px (x scale) on the same level.
       const float radius = 1.f * extractor.scale_pyramid().scale[static_cast<std::size_t>(k.octave)] + 0.5f;
       int best = -1;
@@ -82,9 +84,10 @@ TEST(OrbExtractor, RotatedImageGivesSameDescriptors) {
     std::sort(angle_error_deg.begin(), angle_error_deg.end());
     const int same = median(same_point_distance);
     const int random = median(random_distance);
-    std::printf("rotation %5.1f deg: %zu corresponding keypoints, median Hamming %d (random pairs %d), "
-                "median orientation error %.2f deg\n",
-                angle_deg, same_point_distance.size(), same, random, angle_error_deg[angle_error_deg.size() / 2]);
+    std::printf(
+        "rotation %5.1f deg: %zu corresponding keypoints, median Hamming %d (random pairs %d), "
+        "median orientation error %.2f deg\n",
+        angle_deg, same_point_distance.size(), same, random, angle_error_deg[angle_error_deg.size() / 2]);
     EXPECT_LT(same, 40) << "angle " << angle_deg;
     EXPECT_GT(random, 100) << "angle " << angle_deg;
     EXPECT_LT(angle_error_deg[angle_error_deg.size() / 2], 5.0) << "angle " << angle_deg;

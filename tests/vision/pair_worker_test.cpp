@@ -25,11 +25,12 @@ TEST(PairWorker, ManyHandOffsPollingOrSleepingSeeEachOthersWrites) {
     for (PairWorker::Then then : {PairWorker::Then::kMoreSoon, PairWorker::Then::kMoreSoon, PairWorker::Then::kSleep}) {
       const int a = values[0];
       const int b = values[1];
-      worker.run([&] {
-        worker_thread = std::this_thread::get_id();
-        values[1] = a + b + 1;  // reads the caller's write of the previous hand-off
-      },
-                 [&] { values[0] = a + b + 2; }, then);
+      worker.run(
+          [&] {
+            worker_thread = std::this_thread::get_id();
+            values[1] = a + b + 1;  // reads the caller's write of the previous hand-off
+          },
+          [&] { values[0] = a + b + 2; }, then);
       ASSERT_EQ(values[0], a + b + 2);
       ASSERT_EQ(values[1], a + b + 1);
       values[0] %= 1000;

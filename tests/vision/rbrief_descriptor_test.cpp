@@ -37,7 +37,8 @@ TEST(OrbDescriptor, BitIsSetWhenTheFirstPointIsDarker) {
   // (x1, y1) and (x2, y2) directly.
   std::vector<std::uint8_t> image(kSide * kSide);
   for (int y = 0; y < kSide; ++y) {
-    for (int x = 0; x < kSide; ++x) image[static_cast<std::size_t>(y * kSide + x)] = static_cast<std::uint8_t>(x + 2 * y);
+    for (int x = 0; x < kSide; ++x)
+      image[static_cast<std::size_t>(y * kSide + x)] = static_cast<std::uint8_t>(x + 2 * y);
   }
   RotatedOrbPattern offsets;
   rotate_orb_pattern(1.f, 0.f, kSide, offsets);

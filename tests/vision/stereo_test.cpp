@@ -68,7 +68,7 @@ SlantedPlane render_slanted_plane(const cv::Mat& texture) {
 }
 
 struct PlaneFigures {
-  double matched = 0.0;           // share of left keypoints with depth
+  double matched = 0.0;             // share of left keypoints with depth
   double depth_error_median = 1.0;  // relative
   double depth_error_p90 = 1.0;
   double disparity_error_median_px = 1e9;
@@ -84,8 +84,8 @@ PlaneFigures measure_plane(const SlantedPlane& plane, const cv::Mat& left, const
     if (!features.has_stereo(i)) continue;
     const double true_depth = 1.0 / plane.inverse_depth(features.keypoints[i].v_px);
     relative_error.push_back(std::abs(features.depth_m[i] - true_depth) / true_depth);
-    disparity_error_px.push_back(std::abs(features.keypoints[i].u_px - features.u_right_px[i] -
-                                          plane.camera.bf() / true_depth));
+    disparity_error_px.push_back(
+        std::abs(features.keypoints[i].u_px - features.u_right_px[i] - plane.camera.bf() / true_depth));
   }
   PlaneFigures f;
   if (relative_error.empty()) return f;
@@ -93,10 +93,11 @@ PlaneFigures measure_plane(const SlantedPlane& plane, const cv::Mat& left, const
   f.depth_error_median = median(relative_error);
   f.depth_error_p90 = percentile(relative_error, 0.9);
   f.disparity_error_median_px = median(disparity_error_px);
-  std::printf("%s: %zu of %zu keypoints matched (%.0f %%), depth error median %.3f %% (90th pct %.3f %%), "
-              "disparity error median %.3f px\n",
-              label, relative_error.size(), features.size(), 100 * f.matched, 100 * f.depth_error_median,
-              100 * f.depth_error_p90, f.disparity_error_median_px);
+  std::printf(
+      "%s: %zu of %zu keypoints matched (%.0f %%), depth error median %.3f %% (90th pct %.3f %%), "
+      "disparity error median %.3f px\n",
+      label, relative_error.size(), features.size(), 100 * f.matched, 100 * f.depth_error_median,
+      100 * f.depth_error_p90, f.disparity_error_median_px);
   return f;
 }
 
@@ -154,10 +155,11 @@ TEST(StereoMatcher, RealEurocPairsMatchOnTheSameRow) {
     const double within_1px =
         static_cast<double>(std::count_if(near.begin(), near.end(), [](double e) { return e <= 1.0 + 1e-4; })) /
         static_cast<double>(near.size());
-    std::printf("EuRoC pair %zu: %zu of %zu left features have stereo (%.0f %%); unconstrained level-0/1 matches: "
-                "%zu, %.0f %% within %.0f px of the row, of those: median row error %.2f px, %.0f %% within 1 (level) px\n",
-                p, stereo, features.size(), 100.0 * stereo / features.size(), row_error_px.size(), 100 * near_share,
-                kNearRowPx, median(near), 100 * within_1px);
+    std::printf(
+        "EuRoC pair %zu: %zu of %zu left features have stereo (%.0f %%); unconstrained level-0/1 matches: "
+        "%zu, %.0f %% within %.0f px of the row, of those: median row error %.2f px, %.0f %% within 1 (level) px\n",
+        p, stereo, features.size(), 100.0 * stereo / features.size(), row_error_px.size(), 100 * near_share, kNearRowPx,
+        median(near), 100 * within_1px);
     EXPECT_GT(stereo, features.size() / 2);
     EXPECT_GE(near_share, 0.8);
     EXPECT_LE(median(near), 0.5);
@@ -267,9 +269,9 @@ TEST(StereoFeaturePipeline, ShippedSettingsGiveTheDocumentedOptions) {
   }
   // A bad value is one line naming the file and the key.
   const auto bad = std::filesystem::path(::testing::TempDir()) / "heslam_bad_pipeline.yaml";
-  for (const auto& [key, value] : {std::pair{"ORBextractor.nFeatures", "many"},
-                                   std::pair{"Pipeline.leftOnlyFeatures", "-1"},
-                                   std::pair{"Stereo.clipEdgeRadius", "-1"}}) {
+  for (const auto& [key, value] :
+       {std::pair{"ORBextractor.nFeatures", "many"}, std::pair{"Pipeline.leftOnlyFeatures", "-1"},
+        std::pair{"Stereo.clipEdgeRadius", "-1"}}) {
     std::ofstream(bad) << "%YAML:1.0\n" << key << ": " << value << "\n";
     try {
       StereoFeaturePipelineOptions::load(bad);

@@ -20,11 +20,11 @@ inline const char* kTexturePath = "/usr/share/doc/opencv-doc/examples/data/graf1
 
 inline cv::Mat load_texture() { return cv::imread(kTexturePath, cv::IMREAD_GRAYSCALE); }
 
-#define HESLAM_REQUIRE_TEXTURE()                                                                          \
-  do {                                                                                                    \
-    if (!std::filesystem::exists(::heslam::test::kTexturePath)) {                                         \
-      GTEST_SKIP() << "texture " << ::heslam::test::kTexturePath << " not found (install opencv-doc)";    \
-    }                                                                                                     \
+#define HESLAM_REQUIRE_TEXTURE()                                                                       \
+  do {                                                                                                 \
+    if (!std::filesystem::exists(::heslam::test::kTexturePath)) {                                      \
+      GTEST_SKIP() << "texture " << ::heslam::test::kTexturePath << " not found (install opencv-doc)"; \
+    }                                                                                                  \
   } while (0)
 
 inline const char* kEurocDataset = "euroc_mh01_handheld";

@@ -51,7 +51,8 @@ void read_sensor_yaml(const fs::path& file, ImuRecording& recording) {
   recording.noise.gyro_random_walk = positive_number(fs["gyroscope_random_walk"], file, "gyroscope_random_walk");
   recording.noise.accel_noise_density =
       positive_number(fs["accelerometer_noise_density"], file, "accelerometer_noise_density");
-  recording.noise.accel_random_walk = positive_number(fs["accelerometer_random_walk"], file, "accelerometer_random_walk");
+  recording.noise.accel_random_walk =
+      positive_number(fs["accelerometer_random_walk"], file, "accelerometer_random_walk");
   const cv::FileNode data = fs["T_BS"]["data"];
   if (!data.isSeq() || data.size() != 16) fail(file, "T_BS", "expected {rows: 4, cols: 4, data: [16 numbers]}");
   Eigen::Matrix4d T;

@@ -57,8 +57,8 @@ StereoDataset read_kitti(const fs::path& sequence_dir, const DatasetOptions& opt
                                " s is not after the previous time (times must increase)");
     }
     const std::size_t index = dataset.frames.size();
-    dataset.frames.push_back({stamp_ns, stamp_ns, image_path(sequence_dir / "image_0", index),
-                              image_path(sequence_dir / "image_1", index)});
+    dataset.frames.push_back(
+        {stamp_ns, stamp_ns, image_path(sequence_dir / "image_0", index), image_path(sequence_dir / "image_1", index)});
   }
   if (dataset.frames.empty()) throw std::runtime_error(times_txt.string() + ": no frames listed (empty recording)");
   if (!options.load_calibration) return dataset;

@@ -58,7 +58,8 @@ void check_png(std::span<const std::uint8_t> bytes) {
     }
     const std::uint32_t stored_crc = big_endian(bytes, at + 8 + length);
     if (crc32_of(bytes.subspan(at + 4, 4 + length)) != stored_crc) {
-      throw std::runtime_error("corrupt PNG: chunk " + name + " at byte " + std::to_string(at) + " fails its CRC check");
+      throw std::runtime_error("corrupt PNG: chunk " + name + " at byte " + std::to_string(at) +
+                               " fails its CRC check");
     }
     if (first) {
       if (name != "IHDR" || length != kIhdrLength) {

@@ -50,10 +50,10 @@ struct StereoFrameFiles {
 
 struct StereoDataset {
   DatasetFormat format = DatasetFormat::kAuto;
-  std::filesystem::path root;             // the folder holding mav0/ (EuRoC) or times.txt (KITTI)
-  StereoCalibration calibration;          // raw cameras, as the calibration loaders return them
-  std::vector<StereoFrameFiles> frames;   // strictly increasing stamp_ns
-  std::vector<std::string> warnings;      // one line per skipped row (unpaired left or right)
+  std::filesystem::path root;            // the folder holding mav0/ (EuRoC) or times.txt (KITTI)
+  StereoCalibration calibration;         // raw cameras, as the calibration loaders return them
+  std::vector<StereoFrameFiles> frames;  // strictly increasing stamp_ns
+  std::vector<std::string> warnings;     // one line per skipped row (unpaired left or right)
   int skipped_rows = 0;
 
   // Seconds from the first to the last frame (0 for fewer than two frames).

@@ -24,8 +24,8 @@ struct ApeOptions {
 
 struct ApeResult {
   AlignMode align = AlignMode::se3;
-  Sim3 alignment;           // applied to the estimate
-  Trajectory est_aligned;   // the estimate after alignment, paired row by row with `gt`
+  Sim3 alignment;          // applied to the estimate
+  Trajectory est_aligned;  // the estimate after alignment, paired row by row with `gt`
   Trajectory gt;
   std::vector<double> translation_errors_m;
   std::vector<double> rotation_errors_deg;

@@ -52,8 +52,8 @@ void write_euroc(const std::filesystem::path& path, const Trajectory& trajectory
     const Eigen::Quaterniond q(Eigen::Matrix3d(T.linear()));
     const Eigen::Vector3d t = T.translation();
     const long long stamp_ns = std::llround(trajectory.stamps_s[i] / kSecondsPerNanosecond);
-    std::snprintf(line, sizeof line, "%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", stamp_ns,
-                  t.x(), t.y(), t.z(), q.w(), q.x(), q.y(), q.z());
+    std::snprintf(line, sizeof line, "%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", stamp_ns, t.x(), t.y(), t.z(),
+                  q.w(), q.x(), q.y(), q.z());
     out << line;
   }
   if (!out) throw std::runtime_error("error writing " + path.string());

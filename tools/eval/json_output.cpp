@@ -29,8 +29,8 @@ class JsonObject {
   JsonObject& boolean(const std::string& key, bool value) { return raw(key, value ? "true" : "false"); }
   JsonObject& string(const std::string& key, const std::string& value) { return raw(key, quote(value)); }
   JsonObject& raw(const std::string& key, const std::string& json) {
-    out_ << (first_ ? "\n" : ",\n") << std::string(static_cast<std::size_t>(indent_ + 2), ' ') << quote(key)
-         << ": " << json;
+    out_ << (first_ ? "\n" : ",\n") << std::string(static_cast<std::size_t>(indent_ + 2), ' ') << quote(key) << ": "
+         << json;
     first_ = false;
     return *this;
   }
@@ -90,8 +90,11 @@ std::string sim3_json(const Sim3& S, int indent) {
     translation << (k == 0 ? "" : ", ") << buffer;
   }
   translation << "]";
-  return JsonObject(indent).raw("rotation_row_major", rotation.str()).raw("translation", translation.str())
-      .number("scale", S.scale).str();
+  return JsonObject(indent)
+      .raw("rotation_row_major", rotation.str())
+      .raw("translation", translation.str())
+      .number("scale", S.scale)
+      .str();
 }
 
 JsonObject header(const std::string& metric, const JsonContext& context) {
@@ -115,7 +118,8 @@ std::string to_json(const ApeResult& ape, const JsonContext& context) {
              .integer("pairs", static_cast<long long>(ape.translation_m.count))
              .raw("translation_m", stats_json(ape.translation_m, 2))
              .raw("rotation_deg", stats_json(ape.rotation_deg, 2))
-             .str() + "\n";
+             .str() +
+         "\n";
 }
 
 std::string to_json(const RpeResult& rpe, const JsonContext& context) {
@@ -127,7 +131,8 @@ std::string to_json(const RpeResult& rpe, const JsonContext& context) {
              .integer("pairs", static_cast<long long>(rpe.pairs.size()))
              .raw("translation_m", stats_json(rpe.translation_m, 2))
              .raw("rotation_deg", stats_json(rpe.rotation_deg, 2))
-             .str() + "\n";
+             .str() +
+         "\n";
 }
 
 std::string to_json(const KittiResult& kitti, const JsonContext& context) {
@@ -155,7 +160,8 @@ std::string to_json(const KittiResult& kitti, const JsonContext& context) {
              .number("rpe_m", kitti.rpe_m)
              .number("rpe_deg", kitti.rpe_deg)
              .raw("per_length", lengths.str())
-             .str() + "\n";
+             .str() +
+         "\n";
 }
 
 void write_text_file(const std::filesystem::path& path, const std::string& text) {

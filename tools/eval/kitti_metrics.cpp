@@ -99,8 +99,7 @@ KittiResult compute_kitti_metrics(const Trajectory& gt, const Trajectory& est, c
       const Matrix4 gt_delta = gt_rel.at(id_a).inverse() * gt_rel.at(id_b);
       const Matrix4 est_delta = est_a->second.inverse() * est_b->second;
       const Matrix4 E = est_delta.inverse() * gt_delta;
-      result.segments.push_back(
-          {id_a, length_m, translation_error_m(E) / length_m, rotation_error_rad(E) / length_m});
+      result.segments.push_back({id_a, length_m, translation_error_m(E) / length_m, rotation_error_rad(E) / length_m});
     }
   }
   if (result.segments.empty()) {

@@ -35,7 +35,7 @@ struct KittiOptions {
 struct KittiSegmentError {
   std::int64_t first_frame = 0;
   double length_m = 0.0;
-  double translation_error = 0.0;       // metres per metre
+  double translation_error = 0.0;  // metres per metre
   double rotation_error_rad_per_m = 0.0;
 };
 
@@ -49,10 +49,10 @@ struct KittiLengthError {
 struct KittiResult {
   AlignMode align = AlignMode::none;
   Sim3 alignment;
-  std::size_t pairs = 0;                     // frames present in both
+  std::size_t pairs = 0;  // frames present in both
   std::vector<KittiSegmentError> segments;
   std::vector<KittiLengthError> per_length;
-  double translation_error_percent = 0.0;    // average over all sub-sequences
+  double translation_error_percent = 0.0;  // average over all sub-sequences
   double rotation_error_deg_per_100m = 0.0;
   double ate_m = 0.0;
   double rpe_m = 0.0;

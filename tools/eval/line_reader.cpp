@@ -33,7 +33,8 @@ bool LineReader::next() {
     }
     if (tokens_.empty()) {
       const std::size_t first = line_.find_first_not_of(" \t");
-      if (!data_seen_ && first != std::string::npos && line_[first] == '#') header_comments_.push_back(line_.substr(first));
+      if (!data_seen_ && first != std::string::npos && line_[first] == '#')
+        header_comments_.push_back(line_.substr(first));
       continue;
     }
     data_seen_ = true;

@@ -15,7 +15,7 @@ namespace {
 
 constexpr int kWidthPx = 1400;
 constexpr int kHeightPx = 700;
-constexpr double kMarginLeftPx = 80;    // room for tick labels
+constexpr double kMarginLeftPx = 80;  // room for tick labels
 constexpr double kMarginRightPx = 30;
 constexpr double kMarginTopPx = 70;     // title and legend
 constexpr double kMarginBottomPx = 60;  // tick labels and axis label
@@ -91,8 +91,11 @@ struct Panel {
       canvas.line({left_px, py}, {left_px + width_px, py}, kGrid, 1);
       canvas.text({left_px - 6, py + 5}, tick_label(v, step_y), kBlack, kTickPx, Anchor::end);
     }
-    canvas.polyline({{left_px, top_px}, {left_px, bottom}, {left_px + width_px, bottom},
-                     {left_px + width_px, top_px}, {left_px, top_px}},
+    canvas.polyline({{left_px, top_px},
+                     {left_px, bottom},
+                     {left_px + width_px, bottom},
+                     {left_px + width_px, top_px},
+                     {left_px, top_px}},
                     kBlack, 1);
     canvas.text({left_px + width_px / 2, bottom + 42}, x_label, kBlack, kLabelPx, Anchor::middle);
     canvas.text({left_px, top_px - 8}, y_label, kBlack, kLabelPx, Anchor::start);
@@ -135,7 +138,8 @@ void draw_top_view(Canvas& canvas, const PlotInput& input, Panel panel) {
   }
   const char* names[] = {"x [m]", "y [m]", "z [m]"};
   panel.draw_axes(canvas, names[a], names[b]);
-  for (const auto& [t, color, width] : {std::tuple{&input.gt, kGroundTruth, 3.0}, std::tuple{&input.est, kEstimate, 1.5}}) {
+  for (const auto& [t, color, width] :
+       {std::tuple{&input.gt, kGroundTruth, 3.0}, std::tuple{&input.est, kEstimate, 1.5}}) {
     std::vector<Eigen::Vector2d> points;
     points.reserve(t->size());
     for (const Pose3& T : t->poses_wc) points.push_back(panel.to_px(T.translation()[a], T.translation()[b]));
@@ -224,9 +228,9 @@ PlotInput rpe_plot(const AlignedPair& pair, const RpeResult& rpe, const std::str
   input.title = title;
   input.gt = pair.gt;
   input.est = pair.est;
-  apply_sim3(input.est, compute_alignment(pair.gt, pair.est, rpe.options.align == AlignMode::none
-                                                                  ? AlignMode::origin
-                                                                  : rpe.options.align));
+  apply_sim3(input.est,
+             compute_alignment(pair.gt, pair.est,
+                               rpe.options.align == AlignMode::none ? AlignMode::origin : rpe.options.align));
   std::vector<std::size_t> rows;
   for (const auto& [i, j] : rpe.pairs) rows.push_back(i);
   input.error_x = error_x_of_rows(pair.gt, rows, input.error_x_label);

@@ -22,8 +22,8 @@ namespace heslam::eval {
 struct PlotInput {
   std::string title;
   Trajectory gt;
-  Trajectory est;                   // already aligned to gt
-  std::vector<double> error_x;      // x of each error: seconds since the first pose, or a row index
+  Trajectory est;               // already aligned to gt
+  std::vector<double> error_x;  // x of each error: seconds since the first pose, or a row index
   std::string error_x_label = "time [s]";
   std::vector<double> errors;
   std::string error_label = "APE translation [m]";

@@ -92,16 +92,15 @@ class SvgCanvas final : public Canvas {
   }
 
   void circle(const Eigen::Vector2d& center_px, double radius_px, Color color) override {
-    body_ << "<circle cx=\"" << center_px.x() << "\" cy=\"" << center_px.y() << "\" r=\"" << radius_px
-          << "\" fill=\"" << css(color) << "\"/>\n";
+    body_ << "<circle cx=\"" << center_px.x() << "\" cy=\"" << center_px.y() << "\" r=\"" << radius_px << "\" fill=\""
+          << css(color) << "\"/>\n";
   }
 
   void text(const Eigen::Vector2d& position_px, const std::string& text, Color color, double size_px,
             Anchor anchor) override {
     const char* anchor_name = anchor == Anchor::start ? "start" : anchor == Anchor::middle ? "middle" : "end";
     body_ << "<text x=\"" << position_px.x() << "\" y=\"" << position_px.y() << "\" font-size=\"" << size_px
-          << "\" fill=\"" << css(color) << "\" text-anchor=\"" << anchor_name << "\">" << escape(text)
-          << "</text>\n";
+          << "\" fill=\"" << css(color) << "\" text-anchor=\"" << anchor_name << "\">" << escape(text) << "</text>\n";
   }
 
   void save() override {
@@ -120,10 +119,14 @@ class SvgCanvas final : public Canvas {
   static std::string escape(const std::string& text) {
     std::string out;
     for (const char c : text) {
-      if (c == '<') out += "&lt;";
-      else if (c == '>') out += "&gt;";
-      else if (c == '&') out += "&amp;";
-      else out += c;
+      if (c == '<')
+        out += "&lt;";
+      else if (c == '>')
+        out += "&gt;";
+      else if (c == '&')
+        out += "&amp;";
+      else
+        out += c;
     }
     return out;
   }

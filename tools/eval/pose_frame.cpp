@@ -30,9 +30,7 @@ std::string pose_frame_header(PoseFrame frame) {
     case PoseFrame::body:
       line += " (T_wb: the calibration's body frame (T_BS), world = the body at the first keyframe)";
       break;
-    case PoseFrame::cam0:
-      line += " (T_wc: the raw left camera, world = that camera at the first keyframe)";
-      break;
+    case PoseFrame::cam0: line += " (T_wc: the raw left camera, world = that camera at the first keyframe)"; break;
     case PoseFrame::rectified:
       line += " (T_wc: the rectified left camera, world = that camera at the first keyframe)";
       break;

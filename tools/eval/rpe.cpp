@@ -20,8 +20,8 @@ std::vector<std::pair<std::size_t, std::size_t>> pairs_by_frames(std::size_t n, 
   return pairs;
 }
 
-std::vector<std::pair<std::size_t, std::size_t>> pairs_by_path(const Trajectory& est, double delta_m,
-                                                               bool all_pairs, double tol_m) {
+std::vector<std::pair<std::size_t, std::size_t>> pairs_by_path(const Trajectory& est, double delta_m, bool all_pairs,
+                                                               double tol_m) {
   std::vector<std::pair<std::size_t, std::size_t>> pairs;
   const std::size_t n = est.size();
   if (all_pairs) {

@@ -30,11 +30,11 @@ std::optional<DeltaUnit> parse_delta_unit(std::string_view name);  // "frames"/"
 const char* delta_unit_name(DeltaUnit unit);
 
 struct RpeOptions {
-  double delta = 1.0;                  // frames (integer) or metres
+  double delta = 1.0;  // frames (integer) or metres
   DeltaUnit unit = DeltaUnit::frames;
   bool all_pairs = false;
-  double rel_tol = 0.1;                // --all-pairs in metres: accepted |path - delta| / delta (evo)
-  AlignMode align = AlignMode::none;   // RPE is alignment-free except for the scale (sim3)
+  double rel_tol = 0.1;               // --all-pairs in metres: accepted |path - delta| / delta (evo)
+  AlignMode align = AlignMode::none;  // RPE is alignment-free except for the scale (sim3)
 };
 
 struct RpeResult {

@@ -34,9 +34,8 @@ void attach_times(Trajectory& trajectory, const std::filesystem::path& times_pat
   trajectory.stamps_s.clear();
   for (const std::int64_t frame_id : trajectory.frame_ids) {
     if (frame_id < 0 || static_cast<std::size_t>(frame_id) >= stamps_s.size()) {
-      throw std::runtime_error(times_path.string() + ": has " + std::to_string(stamps_s.size()) +
-                               " stamps, but " + trajectory.name + " has frame index " +
-                               std::to_string(frame_id));
+      throw std::runtime_error(times_path.string() + ": has " + std::to_string(stamps_s.size()) + " stamps, but " +
+                               trajectory.name + " has frame index " + std::to_string(frame_id));
     }
     trajectory.stamps_s.push_back(stamps_s[static_cast<std::size_t>(frame_id)]);
   }
@@ -45,8 +44,7 @@ void attach_times(Trajectory& trajectory, const std::filesystem::path& times_pat
 void check_stamps_increase(const Trajectory& trajectory) {
   for (std::size_t i = 1; i < trajectory.stamps_s.size(); ++i) {
     if (!(trajectory.stamps_s[i] >= trajectory.stamps_s[i - 1])) {
-      throw std::runtime_error(trajectory.name + ": time stamps go backwards at pose " +
-                               std::to_string(i + 1) + " (" +
+      throw std::runtime_error(trajectory.name + ": time stamps go backwards at pose " + std::to_string(i + 1) + " (" +
                                std::to_string(trajectory.stamps_s[i]) + " s after " +
                                std::to_string(trajectory.stamps_s[i - 1]) + " s)");
     }
@@ -136,8 +134,7 @@ Pose3 read_euroc_extrinsic(const std::filesystem::path& sensor_yaml) {
     throw std::runtime_error(sensor_yaml.string() + ": not readable as YAML (" + e.err + ")");
   }
   if (data.size() != 16) {
-    throw std::runtime_error(where + ".data: expected 16 numbers (row-major 4x4), got " +
-                             std::to_string(data.size()));
+    throw std::runtime_error(where + ".data: expected 16 numbers (row-major 4x4), got " + std::to_string(data.size()));
   }
   Pose3 T_bs = Pose3::Identity();
   for (int row = 0; row < 3; ++row) {

@@ -50,8 +50,7 @@ struct ReadOptions {
 };
 
 Trajectory read_trajectory(const std::filesystem::path& path, const ReadOptions& options = {});
-void write_trajectory(const std::filesystem::path& path, const Trajectory& trajectory,
-                      Format format = Format::tum);
+void write_trajectory(const std::filesystem::path& path, const Trajectory& trajectory, Format format = Format::tum);
 
 // The T_BS matrix (sensor to body) of an EuRoC sensor.yaml.
 Pose3 read_euroc_extrinsic(const std::filesystem::path& sensor_yaml);

@@ -41,10 +41,10 @@ void write_tum(const std::filesystem::path& path, const Trajectory& trajectory) 
     const Eigen::Quaterniond q(Eigen::Matrix3d(T.linear()));
     const Eigen::Vector3d t = T.translation();
     // Stamps fall back to the frame id so that a stamp-less trajectory still writes valid TUM.
-    const double stamp_s = trajectory.has_stamps() ? trajectory.stamps_s[i]
-                                                   : static_cast<double>(trajectory.frame_ids[i]);
-    std::snprintf(line, sizeof line, "%.9f %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", stamp_s,
-                  t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+    const double stamp_s =
+        trajectory.has_stamps() ? trajectory.stamps_s[i] : static_cast<double>(trajectory.frame_ids[i]);
+    std::snprintf(line, sizeof line, "%.9f %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", stamp_s, t.x(), t.y(), t.z(),
+                  q.x(), q.y(), q.z(), q.w());
     out << line;
   }
   if (!out) throw std::runtime_error("error writing " + path.string());

@@ -73,7 +73,8 @@ class OutputGuard {
 
 }  // namespace
 
-DatasetCopySummary write_dataset_copy(const fs::path& input, const fs::path& output, const DatasetCopyOptions& options) {
+DatasetCopySummary write_dataset_copy(const fs::path& input, const fs::path& output,
+                                      const DatasetCopyOptions& options) {
   DatasetOptions dataset_options;
   dataset_options.format = options.format;
   const StereoDataset dataset = open_dataset(input, dataset_options);
@@ -100,7 +101,8 @@ DatasetCopySummary write_dataset_copy(const fs::path& input, const fs::path& out
   OutputGuard guard(output);
   DatasetCopySummary summary;
   summary.format = dataset.format;
-  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(input_root, fs::directory_options::follow_directory_symlink)) {
+  for (const fs::directory_entry& entry :
+       fs::recursive_directory_iterator(input_root, fs::directory_options::follow_directory_symlink)) {
     const fs::path relative = entry.path().lexically_relative(input_root);
     if (entry.is_directory()) {
       fs::create_directories(output_root / relative);

@@ -24,8 +24,8 @@ struct DatasetCopyOptions {
 
 struct DatasetCopySummary {
   DatasetFormat format = DatasetFormat::kAuto;
-  std::size_t frames = 0;          // stereo pairs transformed (two images each)
-  std::size_t copied_files = 0;    // every other file, unchanged
+  std::size_t frames = 0;        // stereo pairs transformed (two images each)
+  std::size_t copied_files = 0;  // every other file, unchanged
   // Share of pixels at grey 255 after the transform, over all pairs: how much each camera is clipped.
   double left_saturated_share = 0.0;
   double right_saturated_share = 0.0;

@@ -21,16 +21,18 @@ namespace {
 heslam::runtime::Flags photometric_flags(std::string& input, std::string& output,
                                          heslam::photometric::DatasetCopyOptions& options, bool& help) {
   using namespace heslam;
-  runtime::Flags flags("heslam-photometric IN OUT [--stereo-gain L,R[/L,R...]] [--variant none|dark|low_contrast]\n"
-                       "                          [--format auto|euroc|kitti]",
-                       "  IN   an EuRoC (mav0/cam0/data.csv) or KITTI (times.txt, image_0/) stereo folder\n"
-                       "  OUT  the copy to write (must not exist or be empty, not inside IN)");
-  flags.custom("--stereo-gain", "L,R",
-               "left image x L, right x R, rounded and saturated to 8 bit (cameras\n"
-               "exposed apart); L,R/L,R/...: the sequence split into equal blocks",
-               [&options](const std::string& value) {
-                 options.stereo_gain = photometric::parse_stereo_gain_schedule(value);
-               })
+  runtime::Flags flags(
+      "heslam-photometric IN OUT [--stereo-gain L,R[/L,R...]] [--variant none|dark|low_contrast]\n"
+      "                          [--format auto|euroc|kitti]",
+      "  IN   an EuRoC (mav0/cam0/data.csv) or KITTI (times.txt, image_0/) stereo folder\n"
+      "  OUT  the copy to write (must not exist or be empty, not inside IN)");
+  flags
+      .custom("--stereo-gain", "L,R",
+              "left image x L, right x R, rounded and saturated to 8 bit (cameras\n"
+              "exposed apart); L,R/L,R/...: the sequence split into equal blocks",
+              [&options](const std::string& value) {
+                options.stereo_gain = photometric::parse_stereo_gain_schedule(value);
+              })
       .custom("--variant", "V",
               "dark (x0.1 plus noise) or low_contrast (x0.12 around mid grey), applied\n"
               "before the gains",
@@ -46,7 +48,8 @@ heslam::runtime::Flags photometric_flags(std::string& input, std::string& output
         } else if (output.empty()) {
           output = arg;
         } else {
-          throw std::runtime_error("unexpected argument '" + runtime::quote_value(arg) + "' (expected IN OUT and options)");
+          throw std::runtime_error("unexpected argument '" + runtime::quote_value(arg) +
+                                   "' (expected IN OUT and options)");
         }
       });
   return flags;
@@ -78,11 +81,12 @@ int main(int argc, char** argv) {
   }
   try {
     const photometric::DatasetCopySummary summary = photometric::write_dataset_copy(input, output, options);
-    std::printf("%s -> %s: %s, %zu stereo pairs transformed (variant %s, stereo gain %s), %zu other files copied; "
-                "pixels at 255: left %.1f %%, right %.1f %%\n",
-                input.c_str(), output.c_str(), to_string(summary.format), summary.frames,
-                photometric::to_string(options.variant), photometric::describe(options.stereo_gain).c_str(),
-                summary.copied_files, 100.0 * summary.left_saturated_share, 100.0 * summary.right_saturated_share);
+    std::printf(
+        "%s -> %s: %s, %zu stereo pairs transformed (variant %s, stereo gain %s), %zu other files copied; "
+        "pixels at 255: left %.1f %%, right %.1f %%\n",
+        input.c_str(), output.c_str(), to_string(summary.format), summary.frames,
+        photometric::to_string(options.variant), photometric::describe(options.stereo_gain).c_str(),
+        summary.copied_files, 100.0 * summary.left_saturated_share, 100.0 * summary.right_saturated_share);
   } catch (const std::exception& error) {
     std::fprintf(stderr, "heslam-photometric: %s\n", error.what());
     return 1;

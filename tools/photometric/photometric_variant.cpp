@@ -37,8 +37,7 @@ const char* to_string(PhotometricVariant variant) {
 
 void apply_photometric_variant(cv::Mat& image, PhotometricVariant variant, std::uint64_t seed) {
   switch (variant) {
-    case PhotometricVariant::kNone:
-      return;
+    case PhotometricVariant::kNone: return;
     case PhotometricVariant::kDark: {
       cv::Mat scaled;
       image.convertTo(scaled, CV_32F, kDarkGain);
@@ -64,7 +63,9 @@ std::string StereoGain::describe() const {
 
 StereoGain parse_stereo_gain(const std::string& value) {
   const std::size_t comma = value.find(',');
-  const auto fail = [&] { return std::runtime_error("--stereo-gain: expected L,R (two positive numbers), got '" + value + "'"); };
+  const auto fail = [&] {
+    return std::runtime_error("--stereo-gain: expected L,R (two positive numbers), got '" + value + "'");
+  };
   if (comma == std::string::npos) throw fail();
   StereoGain gain;
   const std::string left = value.substr(0, comma);

@@ -14,7 +14,8 @@ constexpr const char* kFormat = "heslam-recorder-journal 2";
 void write_pose(std::ostringstream& record, const Pose3& T) {
   const Eigen::Quaterniond q(T.linear());
   const Eigen::Vector3d t = T.translation();
-  record << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w();
+  record << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' '
+         << q.w();
 }
 
 bool read_pose(std::istringstream& in, Pose3& T) {

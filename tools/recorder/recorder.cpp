@@ -44,9 +44,9 @@ constexpr const char* kFramesPublishedCounter = "frames_published";
 constexpr std::size_t kHeldOdometry = 1200;
 constexpr std::size_t kHeldKeyframes = 64;
 // Counters of samples refused (invalid, or from a second writer), reported at exit.
-constexpr const char* kRejectionCounters[] = {"rejected_odometry", "rejected_keyframes", "rejected_keyframe_states",
-                                             runtime::kSecondWriterSamples, runtime::kSecondWriters,
-                                             runtime::kOtherRunWriters};
+constexpr const char* kRejectionCounters[] = {"rejected_odometry",        "rejected_keyframes",
+                                              "rejected_keyframe_states", runtime::kSecondWriterSamples,
+                                              runtime::kSecondWriters,    runtime::kOtherRunWriters};
 
 // The field as its wire integer (runtime/wire_enum.hpp): a sample may hold a value of no enumerator.
 const char* state_name(const heslam_msg_TrackingState& field) {
@@ -142,7 +142,8 @@ void write_recording(const RecordedTrajectories& recording, const RecorderOption
   write_output(options.lost_output, "list of untracked frames", [&](const std::filesystem::path& path) {
     std::ofstream lost(path);
     lost << "# frames without a pose (not tracked; never interpolated): seq stamp_ns state\n";
-    for (const LostFrame& frame : recording.lost) lost << frame.seq << " " << frame.stamp_ns << " " << frame.state << "\n";
+    for (const LostFrame& frame : recording.lost)
+      lost << frame.seq << " " << frame.stamp_ns << " " << frame.state << "\n";
     lost.flush();
     if (!lost) throw std::runtime_error("write error");
   });
@@ -240,8 +241,10 @@ void Recorder::take_calibration() {
       // The frontend's own rectification (the same calibration, the same computation), hence its
       // rectified camera exactly.
       const Pose3 T_B_rect = StereoRectifier(calibration).T_B_rect();
-      T_frame_rect_ = options_.frame == eval::PoseFrame::body ? T_B_rect : Pose3(calibration.left.T_BS.inverse() * T_B_rect);
-      log().info("poses of the ", eval::pose_frame_name(options_.frame), " frame (calibration '", calibration.source, "')");
+      T_frame_rect_ =
+          options_.frame == eval::PoseFrame::body ? T_B_rect : Pose3(calibration.left.T_BS.inverse() * T_B_rect);
+      log().info("poses of the ", eval::pose_frame_name(options_.frame), " frame (calibration '", calibration.source,
+                 "')");
     } catch (const std::exception& error) {
       stats().count("bad_calibrations");
       log().error("topic ", topics().calibration().name, ": ", error.what());
@@ -333,16 +336,19 @@ void Recorder::on_shutdown() {
   stats().count(runtime::kFramesWithPose, account.with_pose);
   stats().count(runtime::kFramesAccounted, account.published);
   if (!T_frame_rect_) {
-    log().warn("no camera calibration on ", topics().calibration().name, ": poses written in the rectified left camera "
-               "frame (the files' header says so), not the ", eval::pose_frame_name(options_.frame), " frame");
+    log().warn("no camera calibration on ", topics().calibration().name,
+               ": poses written in the rectified left camera "
+               "frame (the files' header says so), not the ",
+               eval::pose_frame_name(options_.frame), " frame");
   }
   journal_->remove();  // the outputs hold everything now
   if (recording.frames_without_reference > 0) {
-    log().warn(recording.frames_without_reference, " frames referenced a keyframe that never arrived (odometry pose used)");
+    log().warn(recording.frames_without_reference,
+               " frames referenced a keyframe that never arrived (odometry pose used)");
   }
-  log().info("wrote ", recording.frames.size(), " poses to ", options_.output.string(), ", ", recording.keyframes.size(),
-             " keyframes to ", options_.keyframe_output.string(), ", ", recording.lost.size(), " untracked frames to ",
-             options_.lost_output.string());
+  log().info("wrote ", recording.frames.size(), " poses to ", options_.output.string(), ", ",
+             recording.keyframes.size(), " keyframes to ", options_.keyframe_output.string(), ", ",
+             recording.lost.size(), " untracked frames to ", options_.lost_output.string());
   if (account.never_received_count() > 0) {
     log().warn(account.never_received_count(), " frames never reached the recorder (seq ",
                account.never_received_text(), "): missed by the frontend (its 'frames missed') or lost on the way");
@@ -351,7 +357,8 @@ void Recorder::on_shutdown() {
   std::string refused;
   for (const char* name : kRejectionCounters) {
     const auto it = counters.find(name);
-    if (it != counters.end() && it->second > 0) refused += (refused.empty() ? "" : ", ") + std::string(name) + " " + std::to_string(it->second);
+    if (it != counters.end() && it->second > 0)
+      refused += (refused.empty() ? "" : ", ") + std::string(name) + " " + std::to_string(it->second);
   }
   if (!refused.empty()) log().warn("samples refused (invalid, or from a second writer; not recorded): ", refused);
   const std::string summary = summary_line(account, options_.output);

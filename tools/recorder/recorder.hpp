@@ -58,7 +58,9 @@ class Recorder : public runtime::Component {
  public:
   explicit Recorder(const runtime::CommonArgs& args);
   // --check (heslam-supervisor --check): the flags and fields a run would refuse.
-  static void check(const runtime::CommonArgs& args, const runtime::Config& config) { RecorderOptions::from(config, args.rest); }
+  static void check(const runtime::CommonArgs& args, const runtime::Config& config) {
+    RecorderOptions::from(config, args.rest);
+  }
 
  private:
   void configure(const runtime::Config& config) override;

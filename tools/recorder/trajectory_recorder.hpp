@@ -20,8 +20,8 @@ namespace heslam::recorder {
 struct RecordedFrame {
   std::int64_t stamp_ns = 0;
   std::uint64_t seq = 0;
-  bool tracked = false;       // state OK: the pose fields are meaningful
-  std::string state;          // for the lost list: "LOST", "NOT_INITIALIZED"
+  bool tracked = false;  // state OK: the pose fields are meaningful
+  std::string state;     // for the lost list: "LOST", "NOT_INITIALIZED"
   KeyframeId reference = kNoId;
   Pose3 T_ref_c = Pose3::Identity();
   Pose3 T_wc = Pose3::Identity();  // as estimated at the time (fallback when the reference is unknown)
@@ -86,15 +86,15 @@ class TrajectoryRecorder {
     Pose3 T_wc = Pose3::Identity();
     KeyframeId parent = kNoId;
     bool culled = false;
-    std::optional<Pose3> T_parent_kf;  // fixed when culled
+    std::optional<Pose3> T_parent_kf;   // fixed when culled
     bool from_keyframe_sample = false;  // stamp and frame from the Keyframe sample (else odometry or none)
   };
   // The keyframe's final pose, following culled keyframes up their parents; nullopt when unknown.
   std::optional<Pose3> final_pose(KeyframeId id, int depth = 0) const;
   void cull(KeyframeRecord& record);
 
-  std::map<std::uint64_t, RecordedFrame> frames_;    // by seq
-  std::map<KeyframeId, KeyframeRecord> keyframes_;   // by id
+  std::map<std::uint64_t, RecordedFrame> frames_;   // by seq
+  std::map<KeyframeId, KeyframeRecord> keyframes_;  // by id
 };
 
 }  // namespace heslam::recorder

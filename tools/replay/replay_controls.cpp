@@ -24,7 +24,7 @@ constexpr char kQuitKey = 'q';
 }  // namespace
 
 ReplayControls::ReplayControls(bool keyboard) {
-  struct sigaction action{};
+  struct sigaction action {};
   sigemptyset(&action.sa_mask);
   action.sa_flags = SA_RESTART;
   action.sa_handler = on_pause_signal;

@@ -12,17 +12,18 @@ namespace {
 
 // The documented range of each number (docs/tools.md): beyond it a value is a typo, and a huge one
 // would overflow the durations made of it.
-constexpr double kMaxRate = 100.0;           // x100 a camera's speed; 0 = as fast as possible
-constexpr double kMaxSeconds = 86400.0;      // --ack-timeout, --wait: a day
-constexpr double kMaxRecordingS = 1.0e6;     // --start-offset, --duration: 11 days of recording
-constexpr double kMaxPreloadMb = 1.0e6;      // a terabyte
+constexpr double kMaxRate = 100.0;        // x100 a camera's speed; 0 = as fast as possible
+constexpr double kMaxSeconds = 86400.0;   // --ack-timeout, --wait: a day
+constexpr double kMaxRecordingS = 1.0e6;  // --start-offset, --duration: 11 days of recording
+constexpr double kMaxPreloadMb = 1.0e6;   // a terabyte
 
 runtime::Flags replay_flags(ReplayOptions& options) {
   runtime::Flags flags("heslam-replay DATASET [options]",
                        "  Publishes an EuRoC ASL folder or a KITTI odometry sequence on camera/stereo and\n"
                        "  camera/calibration.");
-  flags.custom("--format", "euroc|kitti|auto", "dataset layout (default auto)",
-               [&options](const std::string& value) { options.format = parse_dataset_format(value); })
+  flags
+      .custom("--format", "euroc|kitti|auto", "dataset layout (default auto)",
+              [&options](const std::string& value) { options.format = parse_dataset_format(value); })
       .path("--camera", "FILE", &options.camera_file,
             "the calibration from this ORB-SLAM2/ORB-SLAM3 stereo settings file\n"
             "instead of the dataset's (empty: the dataset's)")

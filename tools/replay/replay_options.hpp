@@ -17,17 +17,17 @@ struct ReplayOptions {
   // --camera FILE: the calibration from this ORB-SLAM2 / ORB-SLAM3 settings file instead of the
   // dataset's (empty: the dataset's sensor.yaml / calib.txt).
   std::filesystem::path camera_file;
-  double rate = 1.0;                  // --rate: 1 = real time, 0 = as fast as the transport allows
-  bool lockstep = false;              // --lockstep: frame n+1 after FrameDone(n)
+  double rate = 1.0;      // --rate: 1 = real time, 0 = as fast as the transport allows
+  bool lockstep = false;  // --lockstep: frame n+1 after FrameDone(n)
   bool loop = false;
   double start_offset_s = 0.0;
-  double duration_s = 0.0;            // 0 = to the end
+  double duration_s = 0.0;  // 0 = to the end
   bool start_paused = false;
-  bool strict = false;                // --strict: a bad image or unpaired row stops the replay
-  double ack_timeout_s = 10.0;        // --ack-timeout: lockstep wait for a consumer / a FrameDone
-  double wait_subscriber_s = 2.0;     // --wait: before frame 0, wait this long for a frame reader
-  bool progress = true;               // --no-progress: no progress line even on a TTY
-  bool keyboard = true;               // --no-keyboard: do not read the TTY (space = pause)
+  bool strict = false;             // --strict: a bad image or unpaired row stops the replay
+  double ack_timeout_s = 10.0;     // --ack-timeout: lockstep wait for a consumer / a FrameDone
+  double wait_subscriber_s = 2.0;  // --wait: before frame 0, wait this long for a frame reader
+  bool progress = true;            // --no-progress: no progress line even on a TTY
+  bool keyboard = true;            // --no-keyboard: do not read the TTY (space = pause)
   // --preload MB: decode the pairs before frame 0 while they fit in MB megabytes (0 = off), so that
   // PNG decoding does not compete with the consumers for the cores during the run, as with a live
   // camera whose driver hands over decoded images (the whole-system benchmarks).

@@ -27,7 +27,7 @@ class ReplayPacer {
  private:
   double rate_;
   std::int64_t first_stamp_ns_ = 0;
-  std::int64_t anchor_ns_ = 0;       // wall time of the first frame, moved later by each pause
+  std::int64_t anchor_ns_ = 0;  // wall time of the first frame, moved later by each pause
   std::int64_t paused_at_ns_ = 0;
   bool paused_ = false;
 };

@@ -19,16 +19,15 @@ double fps(const ReplayCounts& counts) {
 
 std::string format_progress_line(const ReplayCounts& counts) {
   const double rate = fps(counts);
-  const double percent = counts.total > 0 ? 100.0 * static_cast<double>(counts.pass_published) /
-                                                static_cast<double>(counts.total)
-                                          : 0.0;
+  const double percent =
+      counts.total > 0 ? 100.0 * static_cast<double>(counts.pass_published) / static_cast<double>(counts.total) : 0.0;
   char eta[32] = "ETA -";
   if (rate > 0.0 && counts.total >= counts.pass_published) {
     std::snprintf(eta, sizeof(eta), "ETA %.1f s", static_cast<double>(counts.total - counts.pass_published) / rate);
   }
   char line[160];
-  std::snprintf(line, sizeof(line), "frame %zu/%zu %4.0f%%  %.1f fps  %s", counts.pass_published, counts.total,
-                percent, rate, eta);
+  std::snprintf(line, sizeof(line), "frame %zu/%zu %4.0f%%  %.1f fps  %s", counts.pass_published, counts.total, percent,
+                rate, eta);
   std::string text = line;
   if (counts.pass > 1) text += "  pass " + std::to_string(counts.pass);
   if (counts.skipped_images > 0) text += "  skipped " + std::to_string(counts.skipped_images);
@@ -38,8 +37,8 @@ std::string format_progress_line(const ReplayCounts& counts) {
 
 std::string format_summary(const ReplayCounts& counts) {
   char line[200];
-  std::snprintf(line, sizeof(line), "published %zu frames in %.2f s (%.1f fps)", counts.published,
-                playing_s(counts), fps(counts));
+  std::snprintf(line, sizeof(line), "published %zu frames in %.2f s (%.1f fps)", counts.published, playing_s(counts),
+                fps(counts));
   std::string text = line;
   if (counts.pass > 1) text += " over " + std::to_string(counts.pass) + " passes";
   text += "; skipped " + std::to_string(counts.skipped_images) + " images";
@@ -48,9 +47,10 @@ std::string format_summary(const ReplayCounts& counts) {
 }
 
 std::string format_result(const ReplayCounts& counts, bool loop, bool stopped_early) {
-  std::string text = loop ? "published " + std::to_string(counts.published) + " frames over " +
-                                std::to_string(counts.pass) + (counts.pass == 1 ? " pass" : " passes")
-                          : std::to_string(counts.published) + " of " + std::to_string(counts.total) + " frames published";
+  std::string text =
+      loop ? "published " + std::to_string(counts.published) + " frames over " + std::to_string(counts.pass) +
+                 (counts.pass == 1 ? " pass" : " passes")
+           : std::to_string(counts.published) + " of " + std::to_string(counts.total) + " frames published";
   if (counts.skipped_images > 0) {
     text += ", " + std::to_string(counts.skipped_images) + " skipped (a missing or corrupt image)";
   }

@@ -7,15 +7,15 @@
 namespace heslam {
 
 struct ReplayCounts {
-  std::size_t published = 0;        // frames written, over all --loop passes
-  std::size_t total = 0;            // frames per pass
-  std::size_t pass_published = 0;   // frames written in the current pass
-  std::size_t skipped_images = 0;   // missing or corrupt image files, skipped
-  std::size_t unpaired_rows = 0;    // dataset rows without a partner in the other camera
-  int pass = 1;                     // 1-based --loop pass
+  std::size_t published = 0;       // frames written, over all --loop passes
+  std::size_t total = 0;           // frames per pass
+  std::size_t pass_published = 0;  // frames written in the current pass
+  std::size_t skipped_images = 0;  // missing or corrupt image files, skipped
+  std::size_t unpaired_rows = 0;   // dataset rows without a partner in the other camera
+  int pass = 1;                    // 1-based --loop pass
   bool paused = false;
-  double elapsed_s = 0.0;           // wall time since the first frame, pauses included
-  double paused_s = 0.0;            // of which paused
+  double elapsed_s = 0.0;  // wall time since the first frame, pauses included
+  double paused_s = 0.0;   // of which paused
 };
 
 // e.g. "frame 40/95  42%  19.9 fps  ETA 2.8 s" (+ "  pass 2", "  [paused]").

@@ -25,8 +25,8 @@
 #include "runtime/topics.hpp"
 #include "runtime/waitset.hpp"
 #include "runtime/writer.hpp"
-#include "tools/dataset/stereo_images.hpp"
 #include "runtime/writer_identity.hpp"
+#include "tools/dataset/stereo_images.hpp"
 #include "tools/replay/replay_controls.hpp"
 #include "tools/replay/replay_messages.hpp"
 #include "tools/replay/replay_pacer.hpp"
@@ -169,11 +169,11 @@ class Replay {
     if (!wait_for_consumer()) return finish();
 
     const std::int64_t first_stamp_ns = dataset_.frames.front().stamp_ns;
-    const std::int64_t pass_offset_step_ns =
-        dataset_.frames.size() > 1
-            ? (dataset_.frames.back().stamp_ns - first_stamp_ns) +
-                  (dataset_.frames.back().stamp_ns - first_stamp_ns) / static_cast<std::int64_t>(dataset_.frames.size() - 1)
-            : kSingleFrameLoopGapNs;
+    const std::int64_t pass_offset_step_ns = dataset_.frames.size() > 1
+                                                 ? (dataset_.frames.back().stamp_ns - first_stamp_ns) +
+                                                       (dataset_.frames.back().stamp_ns - first_stamp_ns) /
+                                                           static_cast<std::int64_t>(dataset_.frames.size() - 1)
+                                                 : kSingleFrameLoopGapNs;
     start_ns_ = now_ns();
     if (options_.start_paused) set_paused(true);
     std::int64_t pass_offset_ns = 0;
@@ -193,7 +193,8 @@ class Replay {
         if (!wait_until_due(frame.stamp_ns + pass_offset_ns)) return finish();
         if (!images) continue;
         publish(*images, frame, pass_offset_ns);
-        if (options_.lockstep && !wait_for_ack(seq_ - 1, [&] { republish(*images, frame, pass_offset_ns, seq_ - 1); })) {
+        if (options_.lockstep &&
+            !wait_for_ack(seq_ - 1, [&] { republish(*images, frame, pass_offset_ns, seq_ - 1); })) {
           return finish();
         }
         if (quit_) return finish();
@@ -221,8 +222,7 @@ class Replay {
     std::snprintf(rate, sizeof(rate), "rate %g", options_.rate);
     log_.info("replaying ", dataset_.root.string(), " (", to_string(dataset_.format), ", ", dataset_.frames.size(),
               " frames, ", span, " s) on domain ", participant_.domain_id(), " as '", frame_writer_.name(), "'",
-              image_transport_note(), ", ",
-              options_.lockstep ? "lockstep" : rate);
+              image_transport_note(), ", ", options_.lockstep ? "lockstep" : rate);
   }
 
   // Lockstep: a consumer must read frames and write FrameDone. Rate mode: give readers a moment
@@ -232,10 +232,13 @@ class Replay {
       if (!frame_writer_.wait_for_readers(1, to_ms(options_.wait_subscriber_s)) && options_.wait_subscriber_s > 0) {
         // Paused from the start nothing is published yet: "publishing anyway" would be wrong.
         if (options_.start_paused) {
-          log_.info("no subscriber of '", frame_writer_.name(), "' yet; paused (--start-paused): the first frame goes "
-                    "out on resume (space, or kill -USR2 ", getpid(), ") to whoever has subscribed by then");
+          log_.info("no subscriber of '", frame_writer_.name(),
+                    "' yet; paused (--start-paused): the first frame goes "
+                    "out on resume (space, or kill -USR2 ",
+                    getpid(), ") to whoever has subscribed by then");
         } else {
-          log_.info("no subscriber of '", frame_writer_.name(), "' yet; publishing anyway (frames before one "
+          log_.info("no subscriber of '", frame_writer_.name(),
+                    "' yet; publishing anyway (frames before one "
                     "subscribes are lost)");
         }
       }
@@ -295,7 +298,8 @@ class Replay {
       if (due_ns <= now) return true;
       update_counts();
       progress_.update(counts_);
-      const std::int64_t slice_ns = std::min<std::int64_t>(due_ns - now, std::chrono::nanoseconds(kControlPollPeriod).count());
+      const std::int64_t slice_ns =
+          std::min<std::int64_t>(due_ns - now, std::chrono::nanoseconds(kControlPollPeriod).count());
       std::this_thread::sleep_for(std::chrono::nanoseconds(slice_ns));
     }
   }
@@ -342,8 +346,8 @@ class Replay {
         preload_failed_[index] = true;  // counted and warned once, here
         continue;
       }
-      const std::size_t pair_bytes = images->left.total() * images->left.elemSize() +
-                                     images->right.total() * images->right.elemSize();
+      const std::size_t pair_bytes =
+          images->left.total() * images->left.elemSize() + images->right.total() * images->right.elemSize();
       if (bytes + pair_bytes > budget_bytes) {
         decoded_[index].reset();
         break;
@@ -425,7 +429,8 @@ class Replay {
         if (!received.info.valid_data || !runtime::writer_of_this_run(acks_->handle(), writer)) continue;
         // One consumer paces the replay, whatever name it claims: a second live writer of FrameDone
         // (a forger acknowledging the frames in step) is a conflict (runtime/role_binding.hpp).
-        const runtime::RoleBinding::Claim claim = consumer_.claim(acks_->handle(), kConsumerRole, writer, received.sample->seq);
+        const runtime::RoleBinding::Claim claim =
+            consumer_.claim(acks_->handle(), kConsumerRole, writer, received.sample->seq);
         if (claim == runtime::RoleBinding::Claim::kHeld && received.sample->seq >= seq) {
           held_acks_.push_back({writer, received.sample->seq});
           if (held_acks_.size() > kMaxHeldAcks) held_acks_.erase(held_acks_.begin());
@@ -491,7 +496,8 @@ class Replay {
     log_.info(format_summary(counts_), stopped_early ? " (stopped early)" : "");
     // An empty result is never a success: every pair of the sequence was unreadable.
     if (counts_.published == 0 && counts_.skipped_images > 0 && !stopped_early) {
-      log_.error("published no frame: all ", counts_.skipped_images, " image pairs were skipped (see the warnings above)");
+      log_.error("published no frame: all ", counts_.skipped_images,
+                 " image pairs were skipped (see the warnings above)");
       return 1;
     }
     return 0;

@@ -43,8 +43,10 @@ Ros2Bridge::Ros2Bridge(const runtime::CommonArgs& args) : Component("ros2_bridge
 void Ros2Bridge::configure(const runtime::Config& config) {
   options_ = BridgeOptions::from(config);
   const std::string prefix = options_.ros_namespace + "/";
-  odometry_writer_.emplace(participant(), &nav_msgs_msg_dds__Odometry__desc, ros2_topic(prefix + "odometry"), stream_qos());
-  pose_writer_.emplace(participant(), &geometry_msgs_msg_dds__PoseStamped__desc, ros2_topic(prefix + "pose"), stream_qos());
+  odometry_writer_.emplace(participant(), &nav_msgs_msg_dds__Odometry__desc, ros2_topic(prefix + "odometry"),
+                           stream_qos());
+  pose_writer_.emplace(participant(), &geometry_msgs_msg_dds__PoseStamped__desc, ros2_topic(prefix + "pose"),
+                       stream_qos());
   path_writer_.emplace(participant(), &nav_msgs_msg_dds__Path__desc, ros2_topic(prefix + "keyframe_trajectory"),
                        latched_qos());
   cloud_writer_.emplace(participant(), &sensor_msgs_msg_dds__PointCloud2__desc, ros2_topic(prefix + "map_points"),

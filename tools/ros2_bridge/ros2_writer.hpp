@@ -18,10 +18,12 @@ class Ros2Writer {
   Ros2Writer(const runtime::Participant& participant, const dds_topic_descriptor_t* descriptor, std::string topic,
              const runtime::Qos& qos)
       : name_(std::move(topic)) {
-    topic_ = runtime::Entity(runtime::check_dds(dds_create_topic(participant.handle(), descriptor, name_.c_str(), nullptr, nullptr),
-                                                "topic '" + name_ + "': cannot create topic"));
-    writer_ = runtime::Entity(runtime::check_dds(dds_create_writer(participant.handle(), topic_.get(), qos.get(), nullptr),
-                                                 "topic '" + name_ + "': cannot create writer"));
+    topic_ = runtime::Entity(
+        runtime::check_dds(dds_create_topic(participant.handle(), descriptor, name_.c_str(), nullptr, nullptr),
+                           "topic '" + name_ + "': cannot create topic"));
+    writer_ =
+        runtime::Entity(runtime::check_dds(dds_create_writer(participant.handle(), topic_.get(), qos.get(), nullptr),
+                                           "topic '" + name_ + "': cannot create writer"));
   }
 
   void write(const T& sample) {

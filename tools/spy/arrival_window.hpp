@@ -9,17 +9,17 @@
 namespace heslam {
 
 struct RateStats {
-  std::size_t periods = 0;     // periods in the window (arrivals - 1)
-  double rate_hz = 0.0;        // periods / (last - first arrival)
+  std::size_t periods = 0;  // periods in the window (arrivals - 1)
+  double rate_hz = 0.0;     // periods / (last - first arrival)
   double min_period_s = 0.0;
   double max_period_s = 0.0;
-  double std_period_s = 0.0;   // population standard deviation of the periods
+  double std_period_s = 0.0;  // population standard deviation of the periods
 };
 
 struct BandwidthStats {
   std::size_t samples = 0;
-  double bytes_per_s = 0.0;    // bytes of all but the first arrival / (last - first arrival)
-  double mean_bytes = 0.0;     // per sample, over the whole window
+  double bytes_per_s = 0.0;  // bytes of all but the first arrival / (last - first arrival)
+  double mean_bytes = 0.0;   // per sample, over the whole window
   std::size_t min_bytes = 0;
   std::size_t max_bytes = 0;
 };

@@ -27,8 +27,9 @@ bool partitions_overlap(const std::vector<std::string>& a, const std::vector<std
   const auto& left = a.empty() ? default_partition : a;
   const auto& right = b.empty() ? default_partition : b;
   // Exact names only: the spy does not evaluate partition wildcards.
-  return std::any_of(left.begin(), left.end(),
-                     [&](const std::string& name) { return std::find(right.begin(), right.end(), name) != right.end(); });
+  return std::any_of(left.begin(), left.end(), [&](const std::string& name) {
+    return std::find(right.begin(), right.end(), name) != right.end();
+  });
 }
 
 }  // namespace
@@ -92,7 +93,8 @@ std::string describe(const EndpointQos& qos, bool is_writer) {
             (qos.service_keep_all ? std::string("all") : "KEEP_LAST(" + std::to_string(qos.service_depth) + ")") + ")";
   }
   text += qos.keep_all ? " KEEP_ALL" : " KEEP_LAST(" + std::to_string(qos.depth) + ")";
-  text += std::string(" liveliness ") + kLivelinessNames[std::clamp(qos.liveliness, 0, 2)] + "(" + duration(qos.lease_ns) + ")";
+  text += std::string(" liveliness ") + kLivelinessNames[std::clamp(qos.liveliness, 0, 2)] + "(" +
+          duration(qos.lease_ns) + ")";
   if (qos.deadline_ns != DDS_INFINITY) text += " deadline " + duration(qos.deadline_ns);
   if (qos.exclusive_ownership) text += " EXCLUSIVE";
   if (!qos.partitions.empty()) {
@@ -105,19 +107,22 @@ std::string describe(const EndpointQos& qos, bool is_writer) {
 
 std::vector<std::string> incompatibilities(const EndpointQos& writer, const EndpointQos& reader) {
   std::vector<std::string> reasons;
-  if (reader.reliable && !writer.reliable) reasons.push_back("RELIABILITY: reader requests RELIABLE, writer offers BEST_EFFORT");
+  if (reader.reliable && !writer.reliable)
+    reasons.push_back("RELIABILITY: reader requests RELIABLE, writer offers BEST_EFFORT");
   if (reader.durability > writer.durability) {
-    reasons.push_back(std::string("DURABILITY: reader requests ") + kDurabilityNames[std::clamp(reader.durability, 0, 3)] +
-                      ", writer offers " + kDurabilityNames[std::clamp(writer.durability, 0, 3)]);
+    reasons.push_back(std::string("DURABILITY: reader requests ") +
+                      kDurabilityNames[std::clamp(reader.durability, 0, 3)] + ", writer offers " +
+                      kDurabilityNames[std::clamp(writer.durability, 0, 3)]);
   }
   if (reader.deadline_ns < writer.deadline_ns) {
     reasons.push_back("DEADLINE: reader requests " + duration(reader.deadline_ns) + ", writer offers " +
                       duration(writer.deadline_ns));
   }
   if (reader.liveliness > writer.liveliness || reader.lease_ns < writer.lease_ns) {
-    reasons.push_back(std::string("LIVELINESS: reader requests ") + kLivelinessNames[std::clamp(reader.liveliness, 0, 2)] +
-                      "(" + duration(reader.lease_ns) + "), writer offers " +
-                      kLivelinessNames[std::clamp(writer.liveliness, 0, 2)] + "(" + duration(writer.lease_ns) + ")");
+    reasons.push_back(std::string("LIVELINESS: reader requests ") +
+                      kLivelinessNames[std::clamp(reader.liveliness, 0, 2)] + "(" + duration(reader.lease_ns) +
+                      "), writer offers " + kLivelinessNames[std::clamp(writer.liveliness, 0, 2)] + "(" +
+                      duration(writer.lease_ns) + ")");
   }
   if (reader.exclusive_ownership != writer.exclusive_ownership) reasons.push_back("OWNERSHIP: kinds differ");
   if (!partitions_overlap(writer.partitions, reader.partitions)) reasons.push_back("PARTITION: no common partition");

@@ -12,12 +12,12 @@ namespace heslam {
 
 struct EndpointQos {
   bool reliable = false;
-  int durability = 0;                // 0 volatile, 1 transient-local, 2 transient, 3 persistent
+  int durability = 0;  // 0 volatile, 1 transient-local, 2 transient, 3 persistent
   bool keep_all = false;
   std::int32_t depth = 1;            // KEEP_LAST depth
   std::int64_t max_blocking_ns = 0;  // reliable writers
   std::int64_t deadline_ns = DDS_INFINITY;
-  int liveliness = 0;                // 0 automatic, 1 manual by participant, 2 manual by topic
+  int liveliness = 0;  // 0 automatic, 1 manual by participant, 2 manual by topic
   std::int64_t lease_ns = DDS_INFINITY;
   bool exclusive_ownership = false;
   std::vector<std::string> partitions;  // empty = the default partition ""

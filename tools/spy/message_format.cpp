@@ -77,8 +77,8 @@ std::string pose(const msg::Pose& value) {
 
 std::string camera(const msg::RectifiedStereoCamera& value) {
   return "{fx_px: " + number(value.fx_px) + ", fy_px: " + number(value.fy_px) + ", cx_px: " + number(value.cx_px) +
-         ", cy_px: " + number(value.cy_px) + ", baseline_m: " + number(value.baseline_m) + ", size: " +
-         std::to_string(value.width_px) + "x" + std::to_string(value.height_px) + "}";
+         ", cy_px: " + number(value.cy_px) + ", baseline_m: " + number(value.baseline_m) +
+         ", size: " + std::to_string(value.width_px) + "x" + std::to_string(value.height_px) + "}";
 }
 
 // Enum fields are shown from their wire integers (runtime/wire_enum.hpp): a spied sample may hold
@@ -96,11 +96,12 @@ std::string raw_camera(const msg::CameraModel& value) {
   const auto coefficients = runtime::view(value.distortion);
   for (std::size_t i = 0; i < coefficients.size(); ++i) distortion += (i ? ", " : "") + number(coefficients[i]);
   distortion += "]";
-  return "{size: " + std::to_string(value.width_px) + "x" + std::to_string(value.height_px) + ", fx_px: " +
-         number(value.fx_px) + ", fy_px: " + number(value.fy_px) + ", cx_px: " + number(value.cx_px) +
+  return "{size: " + std::to_string(value.width_px) + "x" + std::to_string(value.height_px) +
+         ", fx_px: " + number(value.fx_px) + ", fy_px: " + number(value.fy_px) + ", cx_px: " + number(value.cx_px) +
          ", cy_px: " + number(value.cy_px) + ", distortion: " +
-         (runtime::wire_value(value.distortion_model) == heslam_msg_DISTORTION_RADIAL_TANGENTIAL ? "radtan " : "none ") + distortion +
-         ", T_BS: " + array(value.T_BS) + "}";
+         (runtime::wire_value(value.distortion_model) == heslam_msg_DISTORTION_RADIAL_TANGENTIAL ? "radtan "
+                                                                                                 : "none ") +
+         distortion + ", T_BS: " + array(value.T_BS) + "}";
 }
 
 }  // namespace
@@ -118,8 +119,9 @@ std::string format_message(const msg::StereoFrame& frame, const FormatOptions& o
   text.line(0, "seq", std::to_string(frame.seq));
   text.line(0, "stamp_ns", std::to_string(frame.stamp_ns));
   text.line(0, "stamp_right_ns", std::to_string(frame.stamp_right_ns));
-  text.line(0, "size", std::to_string(frame.width_px) + "x" + std::to_string(frame.height_px) + " " +
-                           encoding_name(frame.encoding));
+  text.line(
+      0, "size",
+      std::to_string(frame.width_px) + "x" + std::to_string(frame.height_px) + " " + encoding_name(frame.encoding));
   char mean[64];
   std::snprintf(mean, sizeof(mean), "%.2f / %.2f", mean_intensity(frame, false), mean_intensity(frame, true));
   text.line(0, "mean_intensity_left_right", mean);
@@ -153,10 +155,10 @@ std::string format_message(const msg::StereoCalibration& calibration, const Form
 std::string format_message(const msg::Odometry& odometry, const FormatOptions& options) {
   Text text;
   const std::int64_t tracking = runtime::wire_value(odometry.state);
-  const char* state = tracking == heslam_msg_TRACKING_OK                 ? "OK"
-                      : tracking == heslam_msg_TRACKING_LOST             ? "LOST"
-                      : tracking == heslam_msg_TRACKING_NOT_INITIALIZED  ? "NOT_INITIALIZED"
-                                                                         : "unknown";
+  const char* state = tracking == heslam_msg_TRACKING_OK                ? "OK"
+                      : tracking == heslam_msg_TRACKING_LOST            ? "LOST"
+                      : tracking == heslam_msg_TRACKING_NOT_INITIALIZED ? "NOT_INITIALIZED"
+                                                                        : "unknown";
   text.line(0, "seq", std::to_string(odometry.seq));
   text.line(0, "stamp_ns", std::to_string(odometry.stamp_ns));
   text.line(0, "state", state);
@@ -168,8 +170,9 @@ std::string format_message(const msg::Odometry& odometry, const FormatOptions& o
   text.line(0, "keyframe_created", odometry.keyframe_created ? "true" : "false");
   FormatOptions all = options;
   all.full = true;  // at most 16 stages: always all of them
-  sequence<msg::StageTime>(text, 0, "stage_times", runtime::view(odometry.stage_times), all,
-                           [](const msg::StageTime& stage) { return std::string(stage.stage) + ": " + number(stage.ms) + " ms"; });
+  sequence<msg::StageTime>(
+      text, 0, "stage_times", runtime::view(odometry.stage_times), all,
+      [](const msg::StageTime& stage) { return std::string(stage.stage) + ": " + number(stage.ms) + " ms"; });
   return text.str();
 }
 
@@ -183,12 +186,12 @@ std::string format_message(const msg::Keyframe& keyframe, const FormatOptions& o
   text.line(0, "tracked_map_version", std::to_string(keyframe.tracked_map_version));
   text.line(0, "camera", camera(keyframe.camera));
   text.line(0, "pyramid", std::to_string(keyframe.pyramid_levels) + " levels x " + number(keyframe.scale_factor));
-  sequence<msg::KeyframeKeypoint>(text, 0, "keypoints", runtime::view(keyframe.keypoints), options,
-                                  [](const msg::KeyframeKeypoint& k) {
-                                    return "{u_px: " + number(k.u_px) + ", v_px: " + number(k.v_px) +
-                                           ", u_right_px: " + number(k.u_right_px) + ", depth_m: " + number(k.depth_m) +
-                                           ", angle_deg: " + number(k.angle_deg) + ", octave: " + std::to_string(k.octave) + "}";
-                                  });
+  sequence<msg::KeyframeKeypoint>(
+      text, 0, "keypoints", runtime::view(keyframe.keypoints), options, [](const msg::KeyframeKeypoint& k) {
+        return "{u_px: " + number(k.u_px) + ", v_px: " + number(k.v_px) + ", u_right_px: " + number(k.u_right_px) +
+               ", depth_m: " + number(k.depth_m) + ", angle_deg: " + number(k.angle_deg) +
+               ", octave: " + std::to_string(k.octave) + "}";
+      });
   text.line(0, "descriptor_bytes", std::to_string(keyframe.descriptors._length));
   if (options.full) bytes(text, 0, "descriptors", runtime::view(keyframe.descriptors));
   std::size_t observed = 0;
@@ -198,11 +201,11 @@ std::string format_message(const msg::Keyframe& keyframe, const FormatOptions& o
     sequence<std::uint64_t>(text, 0, "point_ids", runtime::view(keyframe.point_ids), options,
                             [](const std::uint64_t& id) { return format_id(id); });
   }
-  sequence<msg::NewStereoPoint>(text, 0, "new_points", runtime::view(keyframe.new_points), options,
-                                [](const msg::NewStereoPoint& p) {
-                                  return "{id: " + format_id(p.id) + ", keypoint_index: " +
-                                         std::to_string(p.keypoint_index) + ", position_w_m: " + array(p.position_w_m) + "}";
-                                });
+  sequence<msg::NewStereoPoint>(
+      text, 0, "new_points", runtime::view(keyframe.new_points), options, [](const msg::NewStereoPoint& p) {
+        return "{id: " + format_id(p.id) + ", keypoint_index: " + std::to_string(p.keypoint_index) +
+               ", position_w_m: " + array(p.position_w_m) + "}";
+      });
   return text.str();
 }
 
@@ -230,7 +233,8 @@ std::string format_message(const msg::MapPointState& point, const FormatOptions&
   text.line(0, "reference_keyframe_id", format_id(point.reference_keyframe_id));
   text.line(0, "culled", point.culled ? "true" : "false");
   text.line(0, "merged_into", format_id(point.merged_into));
-  if (options.full) bytes(text, 0, "descriptor", std::span<const std::uint8_t>(point.descriptor, sizeof(point.descriptor)));
+  if (options.full)
+    bytes(text, 0, "descriptor", std::span<const std::uint8_t>(point.descriptor, sizeof(point.descriptor)));
   sequence<msg::PointObservation>(text, 0, "observations", runtime::view(point.observations), options,
                                   [](const msg::PointObservation& o) {
                                     return "{keyframe_id: " + format_id(o.keyframe_id) +
@@ -248,7 +252,8 @@ std::string format_message(const msg::LoopCorrection& correction, const FormatOp
   text.line(0, "T_matched_loop", pose(correction.T_matched_loop));
   sequence<msg::CorrectedKeyframePose>(text, 0, "corrected_poses", runtime::view(correction.corrected_poses), options,
                                        [](const msg::CorrectedKeyframePose& c) {
-                                         return "{keyframe_id: " + format_id(c.keyframe_id) + ", T_wc: " + pose(c.T_wc) + "}";
+                                         return "{keyframe_id: " + format_id(c.keyframe_id) +
+                                                ", T_wc: " + pose(c.T_wc) + "}";
                                        });
   sequence<msg::PointMerge>(text, 0, "point_merges", runtime::view(correction.point_merges), options,
                             [](const msg::PointMerge& m) {

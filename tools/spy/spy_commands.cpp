@@ -32,7 +32,9 @@ constexpr std::chrono::milliseconds kWaitSlice{100};
 // appeared for this long: status is published every second, so every living component is heard.
 constexpr std::chrono::milliseconds kInstanceSettle{1500};
 
-std::chrono::milliseconds to_ms(double seconds) { return std::chrono::milliseconds(static_cast<std::int64_t>(seconds * 1e3)); }
+std::chrono::milliseconds to_ms(double seconds) {
+  return std::chrono::milliseconds(static_cast<std::int64_t>(seconds * 1e3));
+}
 
 std::int64_t now_ns() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
@@ -62,12 +64,15 @@ class TimeoutGuard {
       std::snprintf(seconds, sizeof seconds, "%g", timeout_s_);
       if (matched_writers > 0) {
         throw std::runtime_error("no sample on '" + topic_ + "' within " + seconds + " s, although " +
-                                 std::to_string(matched_writers) + (matched_writers == 1 ? " writer is" : " writers are") +
+                                 std::to_string(matched_writers) +
+                                 (matched_writers == 1 ? " writer is" : " writers are") +
                                  " matched: the writer is silent (paused, waiting for its input, or publishing "
                                  "only on change)");
       }
-      throw std::runtime_error("no sample on '" + topic_ + "' within " + seconds + " s and no writer matched (is a "
-                               "writer running on domain " + std::to_string(domain) + " with the same --namespace?)");
+      throw std::runtime_error("no sample on '" + topic_ + "' within " + seconds +
+                               " s and no writer matched (is a "
+                               "writer running on domain " +
+                               std::to_string(domain) + " with the same --namespace?)");
     }
   }
 
@@ -170,7 +175,8 @@ int echo_each_instance(const runtime::Participant& participant, runtime::Reader<
       std::cout << format_message(*received.sample, format) << "---\n" << std::flush;
     }
   }
-  if (!seen.empty()) std::cout << "# " << seen.size() << (seen.size() == 1 ? " instance" : " instances") << ", one sample each\n";
+  if (!seen.empty())
+    std::cout << "# " << seen.size() << (seen.size() == 1 ? " instance" : " instances") << ", one sample each\n";
   return 0;
 }
 
@@ -228,7 +234,8 @@ std::string megabytes(double bytes) {
 
 void print_bandwidth(const BandwidthStats& stats) {
   std::printf("%s/s from %zu messages\n\tmessage size mean: %s min: %s max: %s\n", megabytes(stats.bytes_per_s).c_str(),
-              stats.samples, megabytes(stats.mean_bytes).c_str(), megabytes(static_cast<double>(stats.min_bytes)).c_str(),
+              stats.samples, megabytes(stats.mean_bytes).c_str(),
+              megabytes(static_cast<double>(stats.min_bytes)).c_str(),
               megabytes(static_cast<double>(stats.max_bytes)).c_str());
   std::fflush(stdout);
 }
@@ -236,7 +243,8 @@ void print_bandwidth(const BandwidthStats& stats) {
 // hz and bw: serialized samples (dds_takecdr) are counted, never deserialized.
 template <runtime::Message T>
 int run_rate(const runtime::Participant& participant, const ResolvedTopic& topic, const SpyOptions& options) {
-  runtime::Reader<T> reader(participant, runtime::TopicSpec<T>{topic.full_name, topic.role}, spy_qos(topic.role, false));
+  runtime::Reader<T> reader(participant, runtime::TopicSpec<T>{topic.full_name, topic.role},
+                            spy_qos(topic.role, false));
   runtime::WaitSet waitset(participant);
   waitset.attach(reader);
   TimeoutGuard timeout(options.timeout_s, topic.full_name);

@@ -14,9 +14,9 @@
 namespace heslam {
 
 struct ResolvedTopic {
-  std::string full_name;     // e.g. "heslam/camera/stereo"
-  std::string type_name;     // MessageTraits<T>::name(), e.g. "StereoFrame"
-  runtime::QosRole role;     // the role its writers use
+  std::string full_name;  // e.g. "heslam/camera/stereo"
+  std::string type_name;  // MessageTraits<T>::name(), e.g. "StereoFrame"
+  runtime::QosRole role;  // the role its writers use
 };
 
 // "camera/stereo" -> under `ns`; "robot2/camera/stereo" -> as given (any namespace). Throws

@@ -31,8 +31,10 @@ Eigen::Vector2d undistort_radtan(const Eigen::Vector2d& xy_distorted, const std:
     if (err.squaredNorm() < kNewtonTolerance * kNewtonTolerance) break;
     const double h = 1e-7;
     Eigen::Matrix2d J;
-    J.col(0) = (distort_radtan(xy + Eigen::Vector2d(h, 0), k) - distort_radtan(xy - Eigen::Vector2d(h, 0), k)) / (2 * h);
-    J.col(1) = (distort_radtan(xy + Eigen::Vector2d(0, h), k) - distort_radtan(xy - Eigen::Vector2d(0, h), k)) / (2 * h);
+    J.col(0) =
+        (distort_radtan(xy + Eigen::Vector2d(h, 0), k) - distort_radtan(xy - Eigen::Vector2d(h, 0), k)) / (2 * h);
+    J.col(1) =
+        (distort_radtan(xy + Eigen::Vector2d(0, h), k) - distort_radtan(xy - Eigen::Vector2d(0, h), k)) / (2 * h);
     xy -= J.inverse() * err;
   }
   return xy;
@@ -54,7 +56,8 @@ CameraRays::CameraRays(const CameraSpec& camera, bool apply_distortion)
     for (int c = 0; c < width_; ++c) {
       const Eigen::Vector2d xd((c - camera.cx_px) / camera.fx_px, (r - camera.cy_px) / camera.fy_px);
       const Eigen::Vector2d xu = undistort_radtan(xd, k);
-      const std::size_t i = static_cast<std::size_t>(r) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(c);
+      const std::size_t i =
+          static_cast<std::size_t>(r) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(c);
       x_[i] = static_cast<float>(xu.x());
       y_[i] = static_cast<float>(xu.y());
     }

@@ -76,7 +76,8 @@ int main(int argc, char** argv) {
     RenderOptions& options = arguments.options;
     const OutputFormat fmt = arguments.format;
     const std::string format = fmt == OutputFormat::kEuroc ? "euroc" : "kitti";
-    if (preset_name.empty() || out_dir.empty()) throw std::runtime_error("--preset and --out are required\n" + flags.usage());
+    if (preset_name.empty() || out_dir.empty())
+      throw std::runtime_error("--preset and --out are required\n" + flags.usage());
     // KITTI images are rectified by definition: render ideal pinhole images for it.
     if (fmt == OutputFormat::kKitti) options.apply_distortion = false;
 

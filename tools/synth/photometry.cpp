@@ -26,12 +26,12 @@ std::uint64_t splitmix(std::uint64_t& state) {
 const std::array<float, kGaussTableSize>& gauss_table() {
   static const std::array<float, kGaussTableSize> table = [] {
     std::array<float, kGaussTableSize> t{};
-    const double a[] = {-3.969683028665376e+01, 2.209460984245205e+02, -2.759285104469687e+02,
-                        1.383577518672690e+02, -3.066479806614716e+01, 2.506628277459239e+00};
-    const double b[] = {-5.447609879822406e+01, 1.615858368580409e+02, -1.556989798598866e+02,
-                        6.680131188771972e+01, -1.328068155288572e+01};
+    const double a[] = {-3.969683028665376e+01, 2.209460984245205e+02,  -2.759285104469687e+02,
+                        1.383577518672690e+02,  -3.066479806614716e+01, 2.506628277459239e+00};
+    const double b[] = {-5.447609879822406e+01, 1.615858368580409e+02, -1.556989798598866e+02, 6.680131188771972e+01,
+                        -1.328068155288572e+01};
     const double c[] = {-7.784894002430293e-03, -3.223964580411365e-01, -2.400758277161838e+00,
-                        -2.549732539343734e+00, 4.374664141464968e+00, 2.938163982698783e+00};
+                        -2.549732539343734e+00, 4.374664141464968e+00,  2.938163982698783e+00};
     const double d[] = {7.784695709041462e-03, 3.224671290700398e-01, 2.445134137142996e+00, 3.754408661907416e+00};
     for (std::size_t i = 0; i < kGaussTableSize; ++i) {
       const double p = (static_cast<double>(i) + 0.5) / static_cast<double>(kGaussTableSize);
@@ -88,9 +88,7 @@ PhotometricState photometric_state(const std::vector<ExposureEvent>& events, dou
         // Geometric interpolation: the log-exposure ramps linearly, as an auto-exposure step would.
         s.gain *= std::pow(e.strength, w);
         break;
-      case EventKind::kHaze:
-        s.haze = std::max(s.haze, e.strength * w);
-        break;
+      case EventKind::kHaze: s.haze = std::max(s.haze, e.strength * w); break;
       case EventKind::kStereoGain:
         s.left_gain *= std::pow(e.left, w);
         s.right_gain *= std::pow(e.right, w);

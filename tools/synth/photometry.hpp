@@ -33,8 +33,8 @@ class Sensor {
 
   // Exposes `radiance` (CV_32F) into image_u8 (CV_8U). Noise is a pure function of noise_seed, so
   // one seed gives identical bytes.
-  void expose(const cv::Mat& radiance, const CameraRays& rays, const PhotometricState& state,
-              std::uint64_t noise_seed, cv::Mat& image_u8) const;
+  void expose(const cv::Mat& radiance, const CameraRays& rays, const PhotometricState& state, std::uint64_t noise_seed,
+              cv::Mat& image_u8) const;
 
  private:
   PhotometrySpec spec_;

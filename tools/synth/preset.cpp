@@ -197,7 +197,8 @@ Preset load_preset(const fs::path& yaml_path) {
     for (const auto& e : ev) {
       const std::string pre = "events[" + std::to_string(i++) + "].";
       if (!e.isMap()) fail(f, pre.substr(0, pre.size() - 1), "expected a map");
-      if (e["type"].empty() || !e["type"].isString()) fail(f, pre + "type", "expected overexposure, darkness, haze, drift or stereo_gain");
+      if (e["type"].empty() || !e["type"].isString())
+        fail(f, pre + "type", "expected overexposure, darkness, haze, drift or stereo_gain");
       ExposureEvent event;
       event.kind = parse_event(static_cast<std::string>(e["type"]), pre + "type", f);
       read_number(e, "start_s", pre, f, event.start_s);
@@ -217,7 +218,8 @@ Preset load_preset(const fs::path& yaml_path) {
       if (event.ramp_s < 0 || 2 * event.ramp_s > event.end_s - event.start_s)
         fail(f, pre + "ramp_s", "must be >= 0 and at most half the event");
       if (!(event.strength > 0)) fail(f, pre + "strength", "must be positive");
-      if (event.kind == EventKind::kHaze && event.strength > 1.0) fail(f, pre + "strength", "haze fraction must be <= 1");
+      if (event.kind == EventKind::kHaze && event.strength > 1.0)
+        fail(f, pre + "strength", "haze fraction must be <= 1");
       p.events.push_back(event);
     }
   }

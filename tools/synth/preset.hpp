@@ -38,23 +38,23 @@ struct TrajectorySpec {
   double yaw_wiggle_deg = 15.0;   // amplitude of the seeded smooth heading oscillation
   double pitch_wiggle_deg = 4.0;
   double roll_wiggle_deg = 2.0;
-  double wiggle_hz = 0.2;         // base frequency of the oscillations (two harmonics are added)
+  double wiggle_hz = 0.2;  // base frequency of the oscillations (two harmonics are added)
   // Stops, braking and starting again at the accel_time_s rate (a constant speed profile without).
   // With stops or stop_at_end the oscillations follow the distance travelled (wiggle_hz at cruising
   // speed), so a vehicle at rest does not sway.
   std::vector<StopSpec> stops;
-  bool stop_at_end = false;       // open paths: brake to rest at the end (without: stop dead there)
+  bool stop_at_end = false;  // open paths: brake to rest at the end (without: stop dead there)
 };
 
 struct PhotometrySpec {
-  double exposure = 1.0;           // scene radiance 1.0 maps to this fraction of 255 DN
-  double full_well_e = 6000.0;     // electrons at 255 DN: sets the shot noise
-  double read_noise_dn = 1.2;      // Gaussian read noise, DN
-  double vignetting = 0.3;         // relative brightness loss in the image corners (cos^4-like)
-  double lens_blur_px = 0.6;       // Gaussian point-spread sigma of the lens + pixel area, pixels
-  double haze_airlight = 0.85;     // radiance the haze converges to
-  int motion_blur_samples = 1;     // 1 = off; N sub-renders averaged over the exposure time
-  double exposure_time_s = 0.01;   // shutter time for motion blur
+  double exposure = 1.0;          // scene radiance 1.0 maps to this fraction of 255 DN
+  double full_well_e = 6000.0;    // electrons at 255 DN: sets the shot noise
+  double read_noise_dn = 1.2;     // Gaussian read noise, DN
+  double vignetting = 0.3;        // relative brightness loss in the image corners (cos^4-like)
+  double lens_blur_px = 0.6;      // Gaussian point-spread sigma of the lens + pixel area, pixels
+  double haze_airlight = 0.85;    // radiance the haze converges to
+  int motion_blur_samples = 1;    // 1 = off; N sub-renders averaged over the exposure time
+  double exposure_time_s = 0.01;  // shutter time for motion blur
   bool noise = true;
 };
 
@@ -79,14 +79,14 @@ struct ExposureEvent {
 struct Preset {
   std::string name;
   SceneKind scene = SceneKind::kRoom;
-  int frames = 600;                 // default sequence length (--frames overrides)
-  int texture_size_px = 512;        // level-0 size of every texture (power of two)
+  int frames = 600;           // default sequence length (--frames overrides)
+  int texture_size_px = 512;  // level-0 size of every texture (power of two)
   std::filesystem::path photo_dir = "/usr/share/doc/opencv-doc/examples/data";
   CameraSpec camera;
   TrajectorySpec trajectory;
   PhotometrySpec photometry;
   std::vector<ExposureEvent> events;
-  std::filesystem::path source;     // file it was read from
+  std::filesystem::path source;  // file it was read from
 };
 
 std::string to_string(SceneKind kind);

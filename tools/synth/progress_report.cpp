@@ -8,16 +8,15 @@ namespace heslam::synth {
 std::string ProgressReport::line(int done, int total, double elapsed_s) const {
   char text[256];
   const double percent = total > 0 ? 100.0 * done / total : 100.0;
-  std::snprintf(text, sizeof text, "heslam-synth: %s %d/%d frames %3.0f%% (%.1f pairs/s)", label_.c_str(), done,
-                total, percent, elapsed_s > 0 ? done / elapsed_s : 0.0);
+  std::snprintf(text, sizeof text, "heslam-synth: %s %d/%d frames %3.0f%% (%.1f pairs/s)", label_.c_str(), done, total,
+                percent, elapsed_s > 0 ? done / elapsed_s : 0.0);
   return text;
 }
 
 void ProgressReport::update(int done, int total, double elapsed_s) {
   const bool last = done >= total;
   switch (mode_) {
-    case Mode::quiet:
-      return;
+    case Mode::quiet: return;
     case Mode::live:
       if (!last && last_redraw_s_ >= 0.0 && elapsed_s - last_redraw_s_ < kLiveRedrawPeriod_s) return;
       last_redraw_s_ = elapsed_s;

@@ -28,8 +28,7 @@ class ProgressReport {
     return quiet ? Mode::quiet : stderr_is_terminal ? Mode::live : Mode::steps;
   }
 
-  ProgressReport(std::ostream& out, Mode mode, std::string label)
-      : out_(out), mode_(mode), label_(std::move(label)) {}
+  ProgressReport(std::ostream& out, Mode mode, std::string label) : out_(out), mode_(mode), label_(std::move(label)) {}
 
   // `done` of `total` frames written after `elapsed_s` seconds.
   void update(int done, int total, double elapsed_s);

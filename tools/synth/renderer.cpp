@@ -223,7 +223,8 @@ void Renderer::render(const Pose3& T_wc, cv::Mat& radiance, cv::Mat* depth_m) {
           const int rr = r + dr, cc = c + dc;
           if (rr < 0 || cc < 0 || rr >= h || cc >= w) continue;
           const int nid = hit_[static_cast<std::size_t>(rr * w + cc)];
-          if (nid >= 0 && std::find(candidates, candidates + count, nid) == candidates + count) candidates[count++] = nid;
+          if (nid >= 0 && std::find(candidates, candidates + count, nid) == candidates + count)
+            candidates[count++] = nid;
         }
       }
       float sum = 0.0f;

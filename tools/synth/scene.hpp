@@ -22,11 +22,11 @@ struct Quad {
   Eigen::Vector3d axis_v_w = Eigen::Vector3d::UnitY();  // unit, orthogonal to axis_u_w
   double size_u_m = 1.0;
   double size_v_m = 1.0;
-  int texture = 0;           // index into Scene::textures
-  double texel_m = 0.005;    // metres per level-0 texel
-  double s0_texels = 0.0;    // texture offset, so repeated photos do not all start at one corner
+  int texture = 0;         // index into Scene::textures
+  double texel_m = 0.005;  // metres per level-0 texel
+  double s0_texels = 0.0;  // texture offset, so repeated photos do not all start at one corner
   double t0_texels = 0.0;
-  float shade = 1.0f;        // albedo x illumination of this face, multiplies the texture
+  float shade = 1.0f;  // albedo x illumination of this face, multiplies the texture
 
   Eigen::Vector3d normal_w() const { return axis_u_w.cross(axis_v_w); }
   Eigen::Vector3d point(double u_m, double v_m) const { return origin_w + u_m * axis_u_w + v_m * axis_v_w; }
@@ -57,8 +57,8 @@ struct Scene {
                std::uint64_t variation_seed);
   // A checkerboard marker on a plane: centre, in-plane right and down directions; registers its
   // inner corners in marker_corners. Returns the quad index.
-  int add_checker_marker(const Eigen::Vector3d& center_w, const Eigen::Vector3d& right_w,
-                         const Eigen::Vector3d& down_w, double cell_m, const CheckerLayout& layout);
+  int add_checker_marker(const Eigen::Vector3d& center_w, const Eigen::Vector3d& right_w, const Eigen::Vector3d& down_w,
+                         double cell_m, const CheckerLayout& layout);
 
   // All quad corners (world), e.g. box corners for geometry tests.
   std::vector<Eigen::Vector3d> quad_corners_w() const;

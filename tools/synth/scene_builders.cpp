@@ -11,11 +11,11 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 // Photographs (Debian opencv-doc examples) used as wall, facade and box textures.
-const char* const kPhotos[] = {"building.jpg", "graf1.png",        "leuvenA.jpg",  "aero1.jpg",      "baboon.jpg",
-                               "fruits.jpg",   "home.jpg",         "box_in_scene.png", "stuff.jpg", "starry_night.jpg",
-                               "board.jpg",    "orange.jpg",       "rubberwhale1.png", "basketball1.png", "messi5.jpg",
-                               "butterfly.jpg", "smarties.png",    "apple.jpg",    "graf3.png",      "leuvenB.jpg",
-                               "aero3.jpg",    "blox.jpg"};
+const char* const kPhotos[] = {
+    "building.jpg",     "graf1.png",        "leuvenA.jpg", "aero1.jpg",        "baboon.jpg",   "fruits.jpg",
+    "home.jpg",         "box_in_scene.png", "stuff.jpg",   "starry_night.jpg", "board.jpg",    "orange.jpg",
+    "rubberwhale1.png", "basketball1.png",  "messi5.jpg",  "butterfly.jpg",    "smarties.png", "apple.jpg",
+    "graf3.png",        "leuvenB.jpg",      "aero3.jpg",   "blox.jpg"};
 constexpr int kNumPhotos = sizeof(kPhotos) / sizeof(kPhotos[0]);
 // Markers hang this far in front of their wall so the two planes never fight for a pixel.
 constexpr double kMarkerStandoffM = 0.01;
@@ -82,8 +82,7 @@ void add_wall(Scene& s, const Eigen::Vector3d& a, const Eigen::Vector3d& b, doub
 }
 
 // A marker on the wall from a to b (seen from its left), centred at fraction f along it, height z.
-void add_wall_marker(Scene& s, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double f, double z,
-                     double cell_m) {
+void add_wall_marker(Scene& s, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double f, double z, double cell_m) {
   const Eigen::Vector3d along = (b - a).normalized();
   const Eigen::Vector3d left(-along.y(), along.x(), 0.0);
   const Eigen::Vector3d center = a + f * (b - a) + z * Eigen::Vector3d::UnitZ() + kMarkerStandoffM * left;
@@ -129,7 +128,8 @@ BuiltScene build_room(const Preset& preset) {
   s.add_box({0.0, 0.0, 0.0}, {1.4, 0.8, 0.75}, 0.2, {t.bricks, t.photo(4)}, t.photo(10), 0.004, 0.9f, 1);
   s.add_box({0.3, 0.2, 0.75}, {0.4, 0.3, 0.3}, 0.7, {t.photo(5), t.photo(6)}, t.photo(7), 0.0015, 1.0f, 2);
   s.add_box({-4.2, -2.5, 0.0}, {0.9, 1.4, 1.9}, 0.0, {t.photo(8), t.photo(12)}, t.tiles, 0.004, 0.95f, 3);
-  s.add_box({4.1, 2.4, 0.0}, {1.0, 1.0, 1.1}, 0.3, {t.photo(13), t.photo(14), t.photo(15)}, t.photo(16), 0.003, 1.0f, 4);
+  s.add_box({4.1, 2.4, 0.0}, {1.0, 1.0, 1.1}, 0.3, {t.photo(13), t.photo(14), t.photo(15)}, t.photo(16), 0.003, 1.0f,
+            4);
   s.add_box({3.6, -3.2, 0.0}, {1.6, 0.7, 0.8}, -0.1, {t.photo(17), t.bricks}, t.photo(18), 0.003, 0.9f, 5);
   s.add_box({-3.5, 3.2, 0.0}, {1.2, 0.8, 1.5}, 0.15, {t.photo(19), t.photo(20)}, t.photo(21), 0.003, 1.0f, 6);
   s.add_box({-0.5, 3.4, 0.0}, {0.6, 0.6, 0.6}, 0.6, {t.photo(1), t.photo(2)}, t.photo(3), 0.002, 1.0f, 7);
@@ -178,7 +178,8 @@ BuiltScene build_corridor_loop(const Preset& preset) {
   auto& p = out.path.control_points_w;
   const double z = 1.5;
   // Evenly spaced control points: uneven spacing at corners would make the spline turn sharply.
-  const std::vector<Eigen::Vector3d> ring = {{4.0, lo, z}, {xr, lo, z}, {xr, yt, z}, {lo, yt, z}, {lo, lo, z}, {9.0, lo, z}};
+  const std::vector<Eigen::Vector3d> ring = {{4.0, lo, z}, {xr, lo, z}, {xr, yt, z},
+                                             {lo, yt, z},  {lo, lo, z}, {9.0, lo, z}};
   p = resample_polyline(ring, 2.0);
   // U-turn on a 0.75 m circle (dense points keep the spline's radius close to it).
   for (int k = -4; k <= 4; ++k) {
@@ -283,8 +284,8 @@ class CityBuilder {
 
   Scene& s_;
   const Textures& t_;
-  double setback_;  // centre line to facades
-  double curb_;     // centre line to curb (parked cars stand beyond it)
+  double setback_;     // centre line to facades
+  double curb_;        // centre line to curb (parked cars stand beyond it)
   double no_parking_;  // junction centre to the first / last parking place
   std::mt19937_64 rng_;
   int photo_ = 0;
@@ -355,7 +356,8 @@ BuiltScene build_town(const Preset& preset) {
   CityBuilder city(s, t, /*setback_m=*/9.0, /*curb_m=*/5.5, /*no_parking_m=*/22.0);
   for (int i = 0; i < 2; ++i) {
     for (int j = 0; j < 2; ++j) {
-      const Eigen::Vector2d c[5] = {{xs[i], ys[j]}, {xs[i + 1], ys[j]}, {xs[i + 1], ys[j + 1]}, {xs[i], ys[j + 1]}, {xs[i], ys[j]}};
+      const Eigen::Vector2d c[5] = {
+          {xs[i], ys[j]}, {xs[i + 1], ys[j]}, {xs[i + 1], ys[j + 1]}, {xs[i], ys[j + 1]}, {xs[i], ys[j]}};
       for (int edge = 0; edge < 4; ++edge) {
         city.building_row(c[edge], c[edge + 1], 1.0);
         city.sidewalk(c[edge], c[edge + 1], 1.0);
@@ -374,8 +376,14 @@ BuiltScene build_town(const Preset& preset) {
   for (const double x : xs) city.lane_dashes({x, ys[0]}, {x, ys[2]});
   // Path: east, left at the T-junction, north to the crossroads (the preset stops there), right,
   // left, left, left, straight over the crossroads, right at the T-junction, and back west.
-  drive_through({{xs[0], ys[0]}, {xs[1], ys[0]}, {xs[1], ys[1]}, {xs[2], ys[1]}, {xs[2], ys[2]}, {xs[1], ys[2]},
-                 {xs[1], ys[0]}, {xs[0], ys[0]}},
+  drive_through({{xs[0], ys[0]},
+                 {xs[1], ys[0]},
+                 {xs[1], ys[1]},
+                 {xs[2], ys[1]},
+                 {xs[2], ys[2]},
+                 {xs[1], ys[2]},
+                 {xs[1], ys[0]},
+                 {xs[0], ys[0]}},
                 out.path.control_points_w);
   out.path.closed = false;
   return out;
@@ -388,7 +396,8 @@ BuiltScene build_marker_wall(const Preset& preset) {
   // A textured wall facing -x at x = 4 with a 3 x 2 grid of markers, a floor, and one box.
   add_horizontal(s, -2, -6, 4, 6, 0.0, true, t.concrete, 0.008, 1.0f);
   const Eigen::Vector3d a(4, -6, 0), b(4, 6, 0);
-  add_wall(s, a, b, 4.0, 3.0, [&](int i) { return t.photo(i); }, 0.006, 1.0f);
+  add_wall(
+      s, a, b, 4.0, 3.0, [&](int i) { return t.photo(i); }, 0.006, 1.0f);
   for (int row = 0; row < 2; ++row)
     for (int col = 0; col < 3; ++col) add_wall_marker(s, a, b, 0.4 + 0.1 * col, 1.0 + 1.0 * row, 0.05);
   s.add_box({3.2, -2.7, 0}, {0.6, 0.6, 0.8}, 0.3, {t.photo(5), t.photo(6)}, t.photo(7), 0.002, 1.0f, 1);

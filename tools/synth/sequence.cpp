@@ -80,7 +80,8 @@ void SequenceRenderer::render_camera(int camera, const SynthFrame& frame, cv::Ma
     cv::GaussianBlur(radiance, radiance, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
   }
   const std::uint64_t noise_seed =
-      mix_seed(mix_seed(options_.seed ^ kNoiseStream, static_cast<std::uint64_t>(frame.index)), static_cast<std::uint64_t>(camera));
+      mix_seed(mix_seed(options_.seed ^ kNoiseStream, static_cast<std::uint64_t>(frame.index)),
+               static_cast<std::uint64_t>(camera));
   sensor_.expose(radiance, rays_, frame.photometry.for_camera(camera), noise_seed, out);
 }
 

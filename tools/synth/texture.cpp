@@ -78,8 +78,7 @@ MipTexture::MipTexture(const cv::Mat& image, int size_px) {
   }
 }
 
-MipTexture load_photo_texture(const std::filesystem::path& photo_dir, const std::string& file_name,
-                              int size_px) {
+MipTexture load_photo_texture(const std::filesystem::path& photo_dir, const std::string& file_name, int size_px) {
   const auto path = photo_dir / file_name;
   const cv::Mat image = cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
   if (image.empty()) {
@@ -101,9 +100,7 @@ MipTexture make_procedural_texture(ProceduralKind kind, std::uint64_t seed, int 
       tex += speckle;
       break;
     }
-    case ProceduralKind::kPlaster:
-      tex = 0.75 + 0.04 * fractal_noise(rng, size_px, size_px / 8.0, 4);
-      break;
+    case ProceduralKind::kPlaster: tex = 0.75 + 0.04 * fractal_noise(rng, size_px, size_px / 8.0, 4); break;
     case ProceduralKind::kAsphalt: {
       tex = 0.32 + 0.05 * fractal_noise(rng, size_px, size_px / 32.0, 4);
       cv::Mat grit(size_px, size_px, CV_32F);
@@ -152,8 +149,7 @@ MipTexture make_checker_marker(const CheckerLayout& layout) {
     for (int c = 0; c < layout.squares; ++c) {
       if ((r + c) % 2 == 0) {
         const cv::Rect cell(layout.border_texels + c * layout.cell_texels,
-                            layout.border_texels + r * layout.cell_texels, layout.cell_texels,
-                            layout.cell_texels);
+                            layout.border_texels + r * layout.cell_texels, layout.cell_texels, layout.cell_texels);
         tex(cell).setTo(0.08);
       }
     }

@@ -41,8 +41,7 @@ inline const std::filesystem::path kDefaultPhotoDir = "/usr/share/doc/opencv-doc
 
 // Loads a photograph by file name from `photo_dir`; throws std::runtime_error naming the file and the
 // package to install when it is missing.
-MipTexture load_photo_texture(const std::filesystem::path& photo_dir, const std::string& file_name,
-                              int size_px);
+MipTexture load_photo_texture(const std::filesystem::path& photo_dir, const std::string& file_name, int size_px);
 
 // Procedural textures, deterministic for a seed.
 enum class ProceduralKind { kConcrete, kTiles, kBricks, kAsphalt, kChecker, kPlaster };

@@ -41,7 +41,10 @@ Trajectory::Trajectory(const PathSpec& path, const TrajectorySpec& spec, std::ui
   // Jitter is a smooth function of the distance along the control polygon (two seeded sine waves),
   // so densely placed control points (tight turns) are displaced together instead of zig-zagging.
   std::vector<double> along(cps.size(), 0.0);
-  for (int i = 1; i < n; ++i) along[static_cast<std::size_t>(i)] = along[static_cast<std::size_t>(i) - 1] + (cps[static_cast<std::size_t>(i)] - cps[static_cast<std::size_t>(i) - 1]).norm();
+  for (int i = 1; i < n; ++i)
+    along[static_cast<std::size_t>(i)] =
+        along[static_cast<std::size_t>(i) - 1] +
+        (cps[static_cast<std::size_t>(i)] - cps[static_cast<std::size_t>(i) - 1]).norm();
   const double polygon_length = along.back() + (closed_ ? (cps.front() - cps.back()).norm() : 0.0);
   auto wavelength = [&](double nominal) {
     // Closed paths need a whole number of waves so the jitter closes on itself too.
@@ -51,7 +54,8 @@ Trajectory::Trajectory(const PathSpec& path, const TrajectorySpec& spec, std::ui
   double jitter_phase[4];
   for (double& ph : jitter_phase) ph = signed_unit(rng) * kPi;
   auto jitter = [&](double s, int k) {
-    return 0.6 * std::sin(2 * kPi * s / wave_long + jitter_phase[2 * k]) + 0.4 * std::sin(2 * kPi * s / wave_short + jitter_phase[2 * k + 1]);
+    return 0.6 * std::sin(2 * kPi * s / wave_long + jitter_phase[2 * k]) +
+           0.4 * std::sin(2 * kPi * s / wave_short + jitter_phase[2 * k + 1]);
   };
   std::vector<Eigen::Vector3d> jittered(cps.size());
   for (int i = 0; i < n; ++i) {
@@ -59,10 +63,11 @@ Trajectory::Trajectory(const PathSpec& path, const TrajectorySpec& spec, std::ui
     const Eigen::Vector3d& next = cps[static_cast<std::size_t>(closed_ ? (i + 1) % n : std::min(i + 1, n - 1))];
     Eigen::Vector3d dir = next - prev;
     dir.z() = 0;
-    const Eigen::Vector3d side = dir.norm() > 1e-9 ? Eigen::Vector3d(-dir.y(), dir.x(), 0).normalized()
-                                                   : Eigen::Vector3d::Zero();
+    const Eigen::Vector3d side =
+        dir.norm() > 1e-9 ? Eigen::Vector3d(-dir.y(), dir.x(), 0).normalized() : Eigen::Vector3d::Zero();
     const double s_i = along[static_cast<std::size_t>(i)];
-    jittered[static_cast<std::size_t>(i)] = cps[static_cast<std::size_t>(i)] + spec.lateral_jitter_m * jitter(s_i, 0) * side +
+    jittered[static_cast<std::size_t>(i)] = cps[static_cast<std::size_t>(i)] +
+                                            spec.lateral_jitter_m * jitter(s_i, 0) * side +
                                             spec.height_jitter_m * jitter(s_i, 1) * Eigen::Vector3d::UnitZ();
   }
   for (double& ph : phases_) ph = signed_unit(rng) * kPi;
@@ -192,7 +197,9 @@ Pose3 Trajectory::T_wb(double t_s) const {
   // With stops the sway follows the distance (none at rest); else time, as presets always had.
   const double sway_t_s = speed_phases_.empty() ? t_s : s / spec_.speed_mps;
   const double w = 2 * kPi * spec_.wiggle_hz * sway_t_s;
-  auto wiggle = [&](int k) { return 0.7 * std::sin(w + phases_[2 * k]) + 0.3 * std::sin(kSecondHarmonic * w + phases_[2 * k + 1]); };
+  auto wiggle = [&](int k) {
+    return 0.7 * std::sin(w + phases_[2 * k]) + 0.3 * std::sin(kSecondHarmonic * w + phases_[2 * k + 1]);
+  };
   const double yaw = heading + deg(spec_.yaw_offset_deg) + deg(spec_.yaw_wiggle_deg) * wiggle(0);
   const double pitch = deg(spec_.pitch_offset_deg) + deg(spec_.pitch_wiggle_deg) * wiggle(1);
   const double roll = deg(spec_.roll_wiggle_deg) * wiggle(2);

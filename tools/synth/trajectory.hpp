@@ -49,7 +49,7 @@ class Trajectory {
   void plan_stops();
 
   std::vector<SpeedPhase> speed_phases_;
-  std::vector<double> arc_length_;       // cumulative length at each table sample
+  std::vector<double> arc_length_;  // cumulative length at each table sample
   double table_step_u_ = 0.0;
   double phases_[6] = {0, 0, 0, 0, 0, 0};
 };

@@ -72,8 +72,7 @@ void write_euroc_sensor_yaml(const fs::path& file, const SequenceRenderer& r, in
   auto out = open_out(file);
   // The EuRoC text behind "%YAML 1.0 / ---": cv::FileStorage needs a %YAML line, and this spelling
   // (unlike OpenCV's own "%YAML:1.0") is also valid YAML for the EuRoC Python tools.
-  out << kYamlHeader
-      << "# General sensor definitions.\n"
+  out << kYamlHeader << "# General sensor definitions.\n"
       << "sensor_type: camera\n"
       << "comment: heslam-synth cam" << camera << " (preset " << r.preset().name << ")\n\n"
       << "# Sensor extrinsics wrt. the body-frame.\n"
@@ -113,8 +112,8 @@ void write_orbslam_settings(const fs::path& file, const SequenceRenderer& r) {
     const cv::Mat R = cv::Mat::eye(3, 3, CV_64F);
     const cv::Mat T = (cv::Mat_<double>(3, 1) << -c.baseline_m, 0, 0);
     cv::Mat Q;
-    cv::stereoRectify(K, D, K, D, cv::Size(c.width_px, c.height_px), R, T, R1, R2, P1, P2, Q,
-                      cv::CALIB_ZERO_DISPARITY, 0);
+    cv::stereoRectify(K, D, K, D, cv::Size(c.width_px, c.height_px), R, T, R1, R2, P1, P2, Q, cv::CALIB_ZERO_DISPARITY,
+                      0);
   }
   const double fx = P1.at<double>(0, 0);
   const double fy = P1.at<double>(1, 1);
@@ -131,7 +130,8 @@ void write_orbslam_settings(const fs::path& file, const SequenceRenderer& r) {
       << "# Close/Far threshold. Baseline times.\nThDepth: 35\n\n";
   auto mat = [&](const char* name, const cv::Mat& m) {
     out << name << ": !!opencv-matrix\n   rows: " << m.rows << "\n   cols: " << m.cols << "\n   dt: d\n   data: [";
-    for (int i = 0; i < m.rows * m.cols; ++i) out << (i ? ", " : "") << fmt("%.12g", m.at<double>(i / m.cols, i % m.cols));
+    for (int i = 0; i < m.rows * m.cols; ++i)
+      out << (i ? ", " : "") << fmt("%.12g", m.at<double>(i / m.cols, i % m.cols));
     out << "]\n";
   };
   out << "LEFT.height: " << c.height_px << "\nLEFT.width: " << c.width_px << "\n";
@@ -156,7 +156,8 @@ void write_orbslam_settings(const fs::path& file, const SequenceRenderer& r) {
 void write_metadata(const fs::path& file, const SequenceRenderer& r, OutputFormat format) {
   const Preset& p = r.preset();
   auto out = open_out(file);
-  out << kYamlHeader << "# heslam-synth sequence metadata: what was rendered and when each photometric event is active.\n"
+  out << kYamlHeader
+      << "# heslam-synth sequence metadata: what was rendered and when each photometric event is active.\n"
       << "generator: heslam-synth\n"
       << "preset: " << p.name << "\n"
       << "preset_file: \"" << p.source.string() << "\"\n"
@@ -204,7 +205,8 @@ void write_euroc(SequenceRenderer& r, const fs::path& out_dir, const Progress& p
   for (int cam = 0; cam < 2; ++cam) write_euroc_sensor_yaml(cam_dirs[cam] / "sensor.yaml", r, cam);
   {
     auto body = open_out(mav0 / "body.yaml");
-    body << kYamlHeader << "comment: 'heslam-synth rig body frame: x forward, y left, z up, centred between the cameras.'\n";
+    body << kYamlHeader
+         << "comment: 'heslam-synth rig body frame: x forward, y left, z up, centred between the cameras.'\n";
   }
   std::ofstream csv[2] = {open_out(cam_dirs[0] / "data.csv"), open_out(cam_dirs[1] / "data.csv")};
   for (auto& c : csv) c << "#timestamp [ns],filename\n";
@@ -223,8 +225,9 @@ void write_euroc(SequenceRenderer& r, const fs::path& out_dir, const Progress& p
     const Eigen::Quaterniond q(f.T_wb.linear());
     const Eigen::Vector3d p = f.T_wb.translation();
     const Eigen::Vector3d v = r.trajectory().velocity_w(f.t_s);
-    gt << f.stamp_ns << fmt(",%.9f,%.9f,%.9f,%.12f,%.12f,%.12f,%.12f,%.9f,%.9f,%.9f,0,0,0,0,0,0\n", p.x(), p.y(), p.z(),
-                            q.w(), q.x(), q.y(), q.z(), v.x(), v.y(), v.z());
+    gt << f.stamp_ns
+       << fmt(",%.9f,%.9f,%.9f,%.12f,%.12f,%.12f,%.12f,%.9f,%.9f,%.9f,0,0,0,0,0,0\n", p.x(), p.y(), p.z(), q.w(), q.x(),
+              q.y(), q.z(), v.x(), v.y(), v.z());
     if (progress) progress(i + 1, r.num_frames());
   }
 }
@@ -238,14 +241,16 @@ void write_kitti(SequenceRenderer& r, const fs::path& out_dir, const Progress& p
   const CameraSpec& c = r.preset().camera;
   {
     auto calib = open_out(out_dir / "calib.txt");
-    const std::string p0 = fmt("%.12e 0.000000000000e+00 %.12e 0.000000000000e+00 0.000000000000e+00 %.12e %.12e "
-                               "0.000000000000e+00 0.000000000000e+00 0.000000000000e+00 1.000000000000e+00 "
-                               "0.000000000000e+00",
-                               c.fx_px, c.cx_px, c.fy_px, c.cy_px);
-    const std::string p1 = fmt("%.12e 0.000000000000e+00 %.12e %.12e 0.000000000000e+00 %.12e %.12e "
-                               "0.000000000000e+00 0.000000000000e+00 0.000000000000e+00 1.000000000000e+00 "
-                               "0.000000000000e+00",
-                               c.fx_px, c.cx_px, -c.fx_px * c.baseline_m, c.fy_px, c.cy_px);
+    const std::string p0 =
+        fmt("%.12e 0.000000000000e+00 %.12e 0.000000000000e+00 0.000000000000e+00 %.12e %.12e "
+            "0.000000000000e+00 0.000000000000e+00 0.000000000000e+00 1.000000000000e+00 "
+            "0.000000000000e+00",
+            c.fx_px, c.cx_px, c.fy_px, c.cy_px);
+    const std::string p1 =
+        fmt("%.12e 0.000000000000e+00 %.12e %.12e 0.000000000000e+00 %.12e %.12e "
+            "0.000000000000e+00 0.000000000000e+00 0.000000000000e+00 1.000000000000e+00 "
+            "0.000000000000e+00",
+            c.fx_px, c.cx_px, -c.fx_px * c.baseline_m, c.fy_px, c.cy_px);
     calib << "P0: " << p0 << "\nP1: " << p1 << "\nP2: " << p0 << "\nP3: " << p1 << "\n"
           << "Tr: 1.000000000000e+00 0.000000000000e+00 0.000000000000e+00 0.000000000000e+00 0.000000000000e+00 "
              "1.000000000000e+00 0.000000000000e+00 0.000000000000e+00 0.000000000000e+00 0.000000000000e+00 "
@@ -269,7 +274,8 @@ void write_kitti(SequenceRenderer& r, const fs::path& out_dir, const Progress& p
 
 }  // namespace
 
-void write_sequence(SequenceRenderer& renderer, OutputFormat format, const fs::path& out_dir, const Progress& progress) {
+void write_sequence(SequenceRenderer& renderer, OutputFormat format, const fs::path& out_dir,
+                    const Progress& progress) {
   if (format == OutputFormat::kKitti && renderer.distortion_applied()) {
     throw std::runtime_error("KITTI output holds rectified images: render with apply_distortion = false");
   }

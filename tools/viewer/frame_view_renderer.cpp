@@ -80,7 +80,8 @@ cv::Mat FrameViewRenderer::render(const Scene& scene) {
   }
 
   char line[256];
-  std::snprintf(line, sizeof(line), "frame %llu  %s  %.1f ms  tracked %u  |  %zu keyframes  %zu points  %llu loop corrections",
+  std::snprintf(line, sizeof(line),
+                "frame %llu  %s  %.1f ms  tracked %u  |  %zu keyframes  %zu points  %llu loop corrections",
                 static_cast<unsigned long long>(scene.frame_seq), to_string(scene.status), scene.frame_time_ms,
                 scene.tracked_points, scene.map_keyframes, scene.map_points,
                 static_cast<unsigned long long>(scene.loop_corrections));

@@ -23,7 +23,8 @@ class MapWindow {
   // Redraws the map widgets from `scene` (the camera pose every call; the map only when
   // `map_changed`, since rebuilding VTK actors costs milliseconds), and processes window events
   // for `spin_ms`. Keys pressed in the window are appended to `keys`.
-  virtual void update(const Scene& scene, const Layers& layers, bool map_changed, int spin_ms, std::vector<int>& keys) = 0;
+  virtual void update(const Scene& scene, const Layers& layers, bool map_changed, int spin_ms,
+                      std::vector<int>& keys) = 0;
   // The user closed the window.
   virtual bool closed() const = 0;
   virtual cv::Mat screenshot() = 0;

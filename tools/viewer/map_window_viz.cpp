@@ -47,7 +47,8 @@ class VizMapWindow final : public MapWindow {
     window_.showWidget("origin", cv::viz::WCoordinateSystem(0.2));
   }
 
-  void update(const Scene& scene, const Layers& layers, bool map_changed, int spin_ms, std::vector<int>& keys) override {
+  void update(const Scene& scene, const Layers& layers, bool map_changed, int spin_ms,
+              std::vector<int>& keys) override {
     if (map_changed || layers_changed(layers)) rebuild(scene, layers);
     remove_if_shown("camera");
     if (scene.has_camera) {
@@ -119,7 +120,8 @@ class VizMapWindow final : public MapWindow {
       if (point.category == PointCategory::kCulled && !layers.culled_points) continue;
       cloud.at<cv::Vec3d>(0, n) = vec(point.p_w);
       const cv::Scalar c = colours::of(point.category);
-      cloud_colours.at<cv::Vec3b>(0, n) = cv::Vec3b(static_cast<uchar>(c[0]), static_cast<uchar>(c[1]), static_cast<uchar>(c[2]));
+      cloud_colours.at<cv::Vec3b>(0, n) =
+          cv::Vec3b(static_cast<uchar>(c[0]), static_cast<uchar>(c[1]), static_cast<uchar>(c[2]));
       ++n;
     }
     if (n == 0) return;

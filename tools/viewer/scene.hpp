@@ -40,34 +40,34 @@ const char* to_string(TrackingStatus status);
 
 struct Scene {
   std::vector<ScenePoint> points;
-  std::vector<Pose3> keyframes_T_wc;       // keyframes not culled (one frustum each)
+  std::vector<Pose3> keyframes_T_wc;  // keyframes not culled (one frustum each)
   std::vector<SceneEdge> covisibility;
   std::vector<SceneEdge> spanning_tree;
-  bool has_camera = false;                 // an odometry sample arrived
+  bool has_camera = false;  // an odometry sample arrived
   Pose3 current_T_wc = Pose3::Identity();
-  std::vector<Eigen::Vector3d> trajectory_w;     // estimated camera positions, frame by frame
+  std::vector<Eigen::Vector3d> trajectory_w;       // estimated camera positions, frame by frame
   std::vector<std::int64_t> trajectory_stamps_ns;  // their frame stamps
-  std::vector<Eigen::Vector3d> ground_truth_w;   // aligned to the estimate; empty without --gt
-  PinholeStereo camera;                    // rectified model (frustum shape); zero until known
+  std::vector<Eigen::Vector3d> ground_truth_w;     // aligned to the estimate; empty without --gt
+  PinholeStereo camera;                            // rectified model (frustum shape); zero until known
 
   // The 2D view.
   bool has_frame = false;
   std::uint64_t frame_seq = 0;
   std::int64_t frame_stamp_ns = 0;
-  cv::Mat raw_left;                        // 8-bit grey, as published (not rectified)
+  cv::Mat raw_left;                                  // 8-bit grey, as published (not rectified)
   std::shared_ptr<const StereoRectifier> rectifier;  // from the calibration topic; null until it arrives
-  bool frame_is_keyframe = false;          // features are the keyframe's own keypoints
+  bool frame_is_keyframe = false;                    // features are the keyframe's own keypoints
   std::vector<SceneFeature> features;
   TrackingStatus status = TrackingStatus::kNone;
-  double frame_time_ms = 0.0;              // the frontend's "total" stage of this frame
+  double frame_time_ms = 0.0;  // the frontend's "total" stage of this frame
   std::uint32_t tracked_points = 0;
-  bool loop_flash = false;                 // a loop correction arrived moments ago
+  bool loop_flash = false;  // a loop correction arrived moments ago
   std::uint64_t loop_corrections = 0;
 
   // Counts.
-  std::size_t map_keyframes = 0;           // keyframes not culled
-  std::size_t map_points = 0;              // live points (culled ones excluded)
-  std::uint64_t map_version = 0;           // the mapper's, as last received
+  std::size_t map_keyframes = 0;  // keyframes not culled
+  std::size_t map_points = 0;     // live points (culled ones excluded)
+  std::uint64_t map_version = 0;  // the mapper's, as last received
 };
 
 }  // namespace heslam::viewer

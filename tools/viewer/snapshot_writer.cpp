@@ -19,7 +19,8 @@ constexpr bool kSyncWrites = false;
 void write_png(const std::filesystem::path& file, const cv::Mat& image) {
   if (image.empty()) return;
   std::vector<unsigned char> png;
-  if (!cv::imencode(".png", image, png)) throw std::runtime_error("cannot write " + file.string() + ": PNG encoding failed");
+  if (!cv::imencode(".png", image, png))
+    throw std::runtime_error("cannot write " + file.string() + ": PNG encoding failed");
   runtime::replace_file_contents(file, {reinterpret_cast<const char*>(png.data()), png.size()}, kSyncWrites);
 }
 

@@ -28,7 +28,8 @@ class Projection {
   Projection(double min_x, double max_x, double min_z, double max_z, cv::Size size) {
     const double extent_x = std::max(max_x - min_x, kMinExtentM);
     const double extent_z = std::max(max_z - min_z, kMinExtentM);
-    scale_ = std::min((size.width - 2.0 * kMarginPx) / extent_x, (size.height - 2.0 * kMarginPx - kLegendTopPx) / extent_z);
+    scale_ =
+        std::min((size.width - 2.0 * kMarginPx) / extent_x, (size.height - 2.0 * kMarginPx - kLegendTopPx) / extent_z);
     centre_x_ = 0.5 * (min_x + max_x);
     centre_z_ = 0.5 * (min_z + max_z);
     size_ = size;
@@ -94,7 +95,8 @@ void draw_frustum(cv::Mat& image, const Projection& project, const Pose3& T_wc, 
   cv::Point corners[4];
   const double signs[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
   for (int i = 0; i < 4; ++i) {
-    corners[i] = project(T_wc * Eigen::Vector3d(signs[i][0] * half_w * depth_m, signs[i][1] * half_h * depth_m, depth_m));
+    corners[i] =
+        project(T_wc * Eigen::Vector3d(signs[i][0] * half_w * depth_m, signs[i][1] * half_h * depth_m, depth_m));
     cv::line(image, centre, corners[i], colour, thickness, cv::LINE_8);
   }
   for (int i = 0; i < 4; ++i) cv::line(image, corners[i], corners[(i + 1) % 4], colour, thickness, cv::LINE_8);
@@ -147,7 +149,8 @@ TopView TopViewRenderer::render(const Scene& scene, const Layers& layers) const 
       ++view.frustums_drawn;
     }
   }
-  if (scene.has_camera) draw_frustum(image, project, scene.current_T_wc, scene.camera, 2.0 * frustum_m, colours::kCurrentCamera, 2);
+  if (scene.has_camera)
+    draw_frustum(image, project, scene.current_T_wc, scene.camera, 2.0 * frustum_m, colours::kCurrentCamera, 2);
 
   const std::string legend = "top view (x right, z up)  " + std::to_string(scene.map_keyframes) + " keyframes  " +
                              std::to_string(scene.map_points) + " points  " + std::to_string(scene.loop_corrections) +

@@ -14,7 +14,7 @@
 namespace heslam::viewer {
 
 struct TopView {
-  cv::Mat image;                 // BGR
+  cv::Mat image;                   // BGR
   std::size_t frustums_drawn = 0;  // keyframe frustums (== scene.keyframes_T_wc.size() with the layer on)
   std::size_t points_drawn = 0;
 };

@@ -35,8 +35,8 @@ std::string VideoSink::close() {
     writer_.release();
     return "recorded " + std::to_string(frames_) + " frames to " + file_.string();
   }
-  return "no video codec could write " + file_.string() + ": recorded " + std::to_string(frames_) +
-         " frames as " + (file_.parent_path() / (file_.stem().string() + "_NNNNNN.png")).string();
+  return "no video codec could write " + file_.string() + ": recorded " + std::to_string(frames_) + " frames as " +
+         (file_.parent_path() / (file_.stem().string() + "_NNNNNN.png")).string();
 }
 
 }  // namespace heslam::viewer

@@ -141,7 +141,8 @@ Scene ViewerModel::scene(Clock::time_point now) {
     scene.keyframes_T_wc.push_back(keyframe.T_wc);
     for (const auto& [neighbour_id, weight] : keyframe.covisible) {
       const Keyframe* neighbour = map.keyframe(neighbour_id);
-      if (neighbour_id > id && weight >= options_.covisibility_min_weight && neighbour != nullptr && !neighbour->culled) {
+      if (neighbour_id > id && weight >= options_.covisibility_min_weight && neighbour != nullptr &&
+          !neighbour->culled) {
         scene.covisibility.push_back({keyframe.T_wc.translation(), neighbour->T_wc.translation()});
       }
     }
@@ -203,13 +204,15 @@ Scene ViewerModel::scene(Clock::time_point now) {
     scene.rectifier = rectifier_;
     if (auto odometry = odometry_.find(frame->seq); odometry != odometry_.end()) {
       scene.status = odometry->second.status;
-      if (scene.status == TrackingStatus::kTracking && relocalized_ && now - relocalized_at_ < options_.relocalized_shown) {
+      if (scene.status == TrackingStatus::kTracking && relocalized_ &&
+          now - relocalized_at_ < options_.relocalized_shown) {
         scene.status = TrackingStatus::kRelocalized;
       }
       scene.frame_time_ms = odometry->second.frame_time_ms;
       scene.tracked_points = odometry->second.tracked_points;
       add_map_features(scene, *frame);
-      if (!scene.frame_is_keyframe && is_tracking(odometry->second.status)) add_projected_points(scene, odometry->second);
+      if (!scene.frame_is_keyframe && is_tracking(odometry->second.status))
+        add_projected_points(scene, odometry->second);
     }
   }
   scene.loop_corrections = loop_corrections_;

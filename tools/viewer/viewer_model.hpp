@@ -20,7 +20,7 @@
 namespace heslam::viewer {
 
 struct ViewerModelOptions {
-  int recent_keyframes = 5;          // see ViewerOptions
+  int recent_keyframes = 5;  // see ViewerOptions
   int covisibility_min_weight = 100;
   // How long the 2D view flashes after a loop correction arrives.
   std::chrono::milliseconds loop_flash{1500};
@@ -66,7 +66,8 @@ class ViewerModel {
   std::size_t live_keyframes() const;
   // Any frame, odometry or map sample arrived.
   bool received_anything() const {
-    return frames_.received > 0 || !odometry_.empty() || !mirror_.map().keyframes.empty() || !mirror_.map().points.empty();
+    return frames_.received > 0 || !odometry_.empty() || !mirror_.map().keyframes.empty() ||
+           !mirror_.map().points.empty();
   }
 
  private:
@@ -93,13 +94,13 @@ class ViewerModel {
 
   ViewerModelOptions options_;
   loop_closer::MapMirror mirror_;
-  std::map<PointId, Eigen::Vector3d> culled_points_;  // last known position of disposed points
-  std::set<PointId> loop_merged_points_;              // targets of a loop correction's merges
-  std::set<PointId> merged_away_;                     // merged into another point: gone, not culled
+  std::map<PointId, Eigen::Vector3d> culled_points_;       // last known position of disposed points
+  std::set<PointId> loop_merged_points_;                   // targets of a loop correction's merges
+  std::set<PointId> merged_away_;                          // merged into another point: gone, not culled
   std::map<std::uint64_t, KeyframeId> keyframe_of_frame_;  // frame seq -> keyframe made from it
-  std::shared_ptr<const StereoRectifier> rectifier_;  // immutable once made: shared with drawings
-  std::deque<FrameEntry> frames_recent_;              // newest last
-  std::map<std::uint64_t, OdometryEntry> odometry_;   // by frame seq, every frame seen (trajectory)
+  std::shared_ptr<const StereoRectifier> rectifier_;       // immutable once made: shared with drawings
+  std::deque<FrameEntry> frames_recent_;                   // newest last
+  std::map<std::uint64_t, OdometryEntry> odometry_;        // by frame seq, every frame seen (trajectory)
   std::optional<std::uint64_t> last_seq_;
   bool was_lost_ = false;
   Clock::time_point relocalized_at_{};

@@ -4,8 +4,8 @@
 #include <chrono>
 #include <cstdlib>
 #include <map>
-#include <stdexcept>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <tuple>
 
@@ -68,7 +68,8 @@ void ViewerNode::configure(const runtime::Config& /*config*/) {
   model_ = std::make_unique<ViewerModel>(model);
 
   // Frames are read from the first odometry on (maybe_subscribe_frames).
-  odometry_reader_.emplace(participant(), topics().odometry(), runtime::Qos(runtime::QosRole::kSpy).keep_last(kOdometryDepth));
+  odometry_reader_.emplace(participant(), topics().odometry(),
+                           runtime::Qos(runtime::QosRole::kSpy).keep_last(kOdometryDepth));
   // Calibration and map: their own transient-local QoS, so a late viewer gets them from DDS.
   calibration_reader_.emplace(participant(), topics().calibration());
   keyframe_reader_.emplace(participant(), topics().keyframes());
@@ -205,7 +206,8 @@ std::size_t ViewerNode::take_all() {
 
 void ViewerNode::draw_loop() {
   try {
-    const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / options_.draw_rate_hz));
+    const auto period =
+        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / options_.draw_rate_hz));
     const auto snapshot_period =
         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options_.snapshot_every_s));
     Layers layers;
@@ -255,7 +257,8 @@ void ViewerNode::draw_loop() {
       if (!windows && !video && !want_snapshot) continue;  // headless: draw only what is written
       const auto timer = stats().time("draw");
       Scene scene = make_scene(now);
-      const auto map_key = std::make_tuple(scene.map_version, scene.map_keyframes, scene.points.size(), scene.loop_corrections);
+      const auto map_key =
+          std::make_tuple(scene.map_version, scene.map_keyframes, scene.points.size(), scene.loop_corrections);
       const bool map_changed = map_key != last_map && now - last_rebuild >= kMapRebuildPeriod;
       if (map_changed) {
         last_map = map_key;

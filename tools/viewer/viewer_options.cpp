@@ -19,15 +19,15 @@ runtime::Flags viewer_flags(ViewerOptions& o) {
   runtime::Flags flags(
       "heslam-viewer [options] [common options]",
       "Shows the map being built (3D) and the current frame (2D) of a running pipeline; joins at any time.");
-  flags.toggle("--headless", &o.headless,
-               "no window: render off-screen, write PNG snapshots to --out\n(also when $DISPLAY is unset)")
+  flags
+      .toggle("--headless", &o.headless,
+              "no window: render off-screen, write PNG snapshots to --out\n(also when $DISPLAY is unset)")
       .path("--out", "DIR", &o.out_dir,
             "snapshots (map_*.png top view, frame_*.png, map_final.png,\n"
             "frame_final.png) and viewer_stats.txt at the end")
       .number("--snapshot-every", "S", &o.snapshot_every_s, 0.0, kMaxSnapshotPeriodS,
               "also write snapshots every S seconds (default 0: only at the end)")
-      .path("--record", "FILE.mp4", &o.record_file,
-            "record the 2D view (VideoWriter mp4v; PNG sequence if no codec)")
+      .path("--record", "FILE.mp4", &o.record_file, "record the 2D view (VideoWriter mp4v; PNG sequence if no codec)")
       .path("--gt", "FILE", &o.gt_file, "ground truth drawn over the map (TUM, EuRoC csv, KITTI), aligned SE(3)")
       .path("--gt-extrinsic", "sensor.yaml", &o.gt_extrinsic, "EuRoC T_BS: body ground truth -> camera poses")
       .number("--rate", "HZ", &o.draw_rate_hz, 0.1, kMaxRateHz,
@@ -49,11 +49,12 @@ runtime::Flags viewer_flags(ViewerOptions& o) {
       .note("c  covisibility     t  spanning tree      g  ground truth     j  trajectory")
       .note("f  follow camera / free camera (mouse)    s  write a snapshot now (needs --out)")
       .note("q  close the viewer (the pipeline goes on)")
-      .note("Colours: points black = map, red = recent, magenta = merged by a loop closure, grey = culled;\n"
-            "keyframes blue, current camera green, covisibility green lines, spanning tree orange,\n"
-            "ground truth purple. 2D view: raw left | rectified + equalized left with features\n"
-            "(green = map point match, blue = stereo only) on keyframes, local map points projected at the\n"
-            "tracked pose on other frames (green crosses).");
+      .note(
+          "Colours: points black = map, red = recent, magenta = merged by a loop closure, grey = culled;\n"
+          "keyframes blue, current camera green, covisibility green lines, spanning tree orange,\n"
+          "ground truth purple. 2D view: raw left | rectified + equalized left with features\n"
+          "(green = map point match, blue = stereo only) on keyframes, local map points projected at the\n"
+          "tracked pose on other frames (green crosses).");
   return flags;
 }
 

@@ -41,7 +41,8 @@ std::vector<std::optional<Pose3>> ground_truth(const StereoDataset& dataset) {
   const fs::path mav0 = fs::exists(dataset.root / "mav0") ? dataset.root / "mav0" : dataset.root;
   const fs::path csv = euroc_ground_truth_file(mav0);
   if (!fs::exists(csv)) throw std::runtime_error(csv.string() + ": no ground truth (score needs it)");
-  const eval::Trajectory t = eval::read_trajectory(csv, {.format = eval::Format::euroc, .extrinsic_path = mav0 / "cam0" / "sensor.yaml"});
+  const eval::Trajectory t =
+      eval::read_trajectory(csv, {.format = eval::Format::euroc, .extrinsic_path = mav0 / "cam0" / "sensor.yaml"});
   std::vector<std::int64_t> stamps_ns;
   for (const StereoFrameFiles& frame : dataset.frames) stamps_ns.push_back(frame.stamp_ns);
   return poses_at_stamps(t, stamps_ns, kMaxStampGapS);
@@ -96,7 +97,8 @@ ScoreSummary score_dataset(const ScoreOptions& options, const Vocabulary& vocabu
         best = c;
       }
       const double distance = (frames[c].T_wc.translation() - query.T_wc.translation()).norm();
-      revisit = revisit || (distance < options.max_distance_m && view_angle_deg(frames[c].T_wc, query.T_wc) < options.max_angle_deg);
+      revisit = revisit || (distance < options.max_distance_m &&
+                            view_angle_deg(frames[c].T_wc, query.T_wc) < options.max_angle_deg);
     }
     if (best == frames.size()) continue;
     const double distance = (frames[best].T_wc.translation() - query.T_wc.translation()).norm();
@@ -107,8 +109,8 @@ ScoreSummary score_dataset(const ScoreOptions& options, const Vocabulary& vocabu
     summary.correct += correct ? 1 : 0;
     if (options.verbose) {
       char line[160];
-      std::snprintf(line, sizeof(line), "%zu %zu %.4f %.2f %.1f %d %d\n", query.index, frames[best].index, best_score, distance, angle,
-                    correct ? 1 : 0, revisit ? 1 : 0);
+      std::snprintf(line, sizeof(line), "%zu %zu %.4f %.2f %.1f %d %d\n", query.index, frames[best].index, best_score,
+                    distance, angle, correct ? 1 : 0, revisit ? 1 : 0);
       out << line;
     }
   }

@@ -12,12 +12,12 @@
 namespace heslam::vocab {
 
 struct ScoreSummary {
-  int frames = 0;             // frames scored (every step-th)
-  int queries = 0;            // frames with at least one candidate
-  int revisits = 0;           // queries with a true match among their candidates
-  int correct = 0;            // queries whose top candidate is a true match
-  double precision_all = 0;   // correct / queries (every top candidate accepted)
-  double recall_all = 0;      // correct / revisits
+  int frames = 0;                    // frames scored (every step-th)
+  int queries = 0;                   // frames with at least one candidate
+  int revisits = 0;                  // queries with a true match among their candidates
+  int correct = 0;                   // queries whose top candidate is a true match
+  double precision_all = 0;          // correct / queries (every top candidate accepted)
+  double recall_all = 0;             // correct / revisits
   double recall_at_precision_1 = 0;  // best recall with no wrong accepted candidate
   double threshold_at_precision_1 = 0;
   double mean_transform_ms = 0;

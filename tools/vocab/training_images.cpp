@@ -20,7 +20,8 @@ namespace fs = std::filesystem;
 
 bool is_image_file(const fs::path& path) {
   std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
 }
 
@@ -93,13 +94,14 @@ class Collector {
     for (int i = 0; i < renderer.num_frames(); i += options_.synth_step, ++frames) {
       add(extractor.extract(renderer.render_frame(i).left));
     }
-    report("synth " + source.preset + " (seed " + std::to_string(source.seed) + "): " + std::to_string(frames) + " frames");
+    report("synth " + source.preset + " (seed " + std::to_string(source.seed) + "): " + std::to_string(frames) +
+           " frames");
   }
 
   void report(const std::string& what) {
     if (progress_) {
-      progress_(what + ", " + std::to_string(set_.images.size()) + " images / " + std::to_string(set_.descriptor_count) +
-                " descriptors so far");
+      progress_(what + ", " + std::to_string(set_.images.size()) + " images / " +
+                std::to_string(set_.descriptor_count) + " descriptors so far");
     }
   }
 
@@ -119,7 +121,8 @@ TrainingSet collect_training_set(const TrainOptions& options, const std::functio
   for (const fs::path& dir : options.dataset_dirs) {
     const StereoDataset dataset = open_dataset(dir);
     std::vector<fs::path> files;
-    for (std::size_t i = 0; i < dataset.frames.size(); i += options.dataset_step) files.push_back(dataset.frames[i].left);
+    for (std::size_t i = 0; i < dataset.frames.size(); i += options.dataset_step)
+      files.push_back(dataset.frames[i].left);
     collector.add_files(files, dir.string());
   }
   for (const SynthSource& source : options.synth) collector.add_synth(source);

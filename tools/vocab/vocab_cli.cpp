@@ -32,9 +32,11 @@ constexpr int kMaxInt = std::numeric_limits<int>::max();
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 runtime::Flags train_flags(TrainOptions& o) {
-  runtime::Flags flags("heslam-vocab train [--images DIR...] [--dataset DIR...] [--synth PRESET[:SEED]...] --out FILE [options]");
-  flags.custom("--images", "DIR...", "every *.jpg / *.png below, recursively",
-               [&o](const std::string& value) { o.image_dirs.emplace_back(value); })
+  runtime::Flags flags(
+      "heslam-vocab train [--images DIR...] [--dataset DIR...] [--synth PRESET[:SEED]...] --out FILE [options]");
+  flags
+      .custom("--images", "DIR...", "every *.jpg / *.png below, recursively",
+              [&o](const std::string& value) { o.image_dirs.emplace_back(value); })
       .custom("--dataset", "DIR...", "EuRoC / KITTI folders: their left images",
               [&o](const std::string& value) { o.dataset_dirs.emplace_back(value); })
       .custom("--synth", "PRESET[:SEED]...", "synthetic sequences rendered on the fly",
@@ -72,8 +74,8 @@ runtime::Flags score_flags(ScoreOptions& o) {
 // argument up to the next flag.
 std::vector<std::string> expand_multi_value_flags(const std::vector<std::string>& args) {
   std::vector<std::string> out;
-  std::string multi;          // the multi-value flag whose values are being read ("" : none)
-  bool own_value = false;     // the next argument is the flag's own value
+  std::string multi;       // the multi-value flag whose values are being read ("" : none)
+  bool own_value = false;  // the next argument is the flag's own value
   for (const std::string& arg : args) {
     if (arg.starts_with("--")) {
       multi = arg == "--images" || arg == "--dataset" || arg == "--synth" ? arg : "";
@@ -130,7 +132,8 @@ Cli parse_cli(int argc, char** argv) {
                                std::to_string(cli.files.size()) + " arguments");
     }
   } else {
-    throw std::runtime_error("unknown command '" + runtime::quote_value(command) + "' (train, convert, info, score; --help)");
+    throw std::runtime_error("unknown command '" + runtime::quote_value(command) +
+                             "' (train, convert, info, score; --help)");
   }
   return cli;
 }

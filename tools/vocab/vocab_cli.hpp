@@ -41,7 +41,7 @@ struct ScoreOptions {
   double max_distance_m = 1.0;       // ground truth: a true match is this close
   double max_angle_deg = 30.0;       // ... and looks within this angle
   int features = 1200;
-  bool verbose = false;              // one line per query
+  bool verbose = false;  // one line per query
 };
 
 struct Cli {

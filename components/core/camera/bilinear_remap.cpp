@@ -47,9 +47,10 @@ std::uint8_t remap_pixel(const cv::Mat& src, int sx, int sy, int frac) {
 
 BilinearRemap::BilinearRemap(const cv::Mat& map_xy, const cv::Mat& map_frac, cv::Size src_size)
     : map_xy_(map_xy), map_frac_(map_frac), src_size_(src_size) {
-  if (map_xy.type() != CV_16SC2 || map_frac.type() != CV_16UC1 || map_xy.size() != map_frac.size() ||
-      map_xy.empty() || src_size.width < 2 || src_size.height < 2) {
-    throw std::invalid_argument("BilinearRemap: expected CV_16SC2 and CV_16UC1 maps of one size and a source of at least 2x2");
+  if (map_xy.type() != CV_16SC2 || map_frac.type() != CV_16UC1 || map_xy.size() != map_frac.size() || map_xy.empty() ||
+      src_size.width < 2 || src_size.height < 2) {
+    throw std::invalid_argument(
+        "BilinearRemap: expected CV_16SC2 and CV_16UC1 maps of one size and a source of at least 2x2");
   }
   blocks_per_row_ = (map_xy.cols + kBlock - 1) / kBlock;
   const std::size_t blocks = static_cast<std::size_t>(blocks_per_row_) * static_cast<std::size_t>(map_xy.rows);
@@ -66,7 +67,8 @@ BilinearRemap::BilinearRemap(const cv::Mat& map_xy, const cv::Mat& map_frac, cv:
     for (int block = 0; block < blocks_per_row_; ++block) {
       const int x0 = block * kBlock;
       if (x0 + kBlock > map_xy.cols) continue;
-      const std::size_t b = static_cast<std::size_t>(y) * static_cast<std::size_t>(blocks_per_row_) + static_cast<std::size_t>(block);
+      const std::size_t b =
+          static_cast<std::size_t>(y) * static_cast<std::size_t>(blocks_per_row_) + static_cast<std::size_t>(block);
       bool inside = true;
       bool windows = true;
       for (int half = 0; half < 2; ++half) {
@@ -82,7 +84,8 @@ BilinearRemap::BilinearRemap(const cv::Mat& map_xy, const cv::Mat& map_frac, cv:
           highest = std::max(highest, offset);
         }
         windows = windows && highest + 1 - lowest < kWindow && lowest + width + kWindow <= buffer_bytes;
-        block_window_[2 * b + static_cast<std::size_t>(half)] = static_cast<std::int32_t>(std::max<std::int64_t>(lowest, 0));
+        block_window_[2 * b + static_cast<std::size_t>(half)] =
+            static_cast<std::int32_t>(std::max<std::int64_t>(lowest, 0));
       }
       if (inside) block_mode_[b] = windows ? kWindows : kGathers;
     }
@@ -91,9 +94,10 @@ BilinearRemap::BilinearRemap(const cv::Mat& map_xy, const cv::Mat& map_frac, cv:
 
 void BilinearRemap::apply(const cv::Mat& src, cv::Mat& dst) const {
   if (src.type() != CV_8UC1 || src.size() != src_size_) {
-    throw std::invalid_argument("BilinearRemap: source is " + std::to_string(src.cols) + "x" + std::to_string(src.rows) +
-                                " type " + std::to_string(src.type()) + ", expected " + std::to_string(src_size_.width) +
-                                "x" + std::to_string(src_size_.height) + " 8-bit grey");
+    throw std::invalid_argument("BilinearRemap: source is " + std::to_string(src.cols) + "x" +
+                                std::to_string(src.rows) + " type " + std::to_string(src.type()) + ", expected " +
+                                std::to_string(src_size_.width) + "x" + std::to_string(src_size_.height) +
+                                " 8-bit grey");
   }
   if (empty()) throw std::invalid_argument("BilinearRemap: no maps");
   dst.create(map_xy_.size(), CV_8UC1);
@@ -142,8 +146,9 @@ void BilinearRemap::apply(const cv::Mat& src, cv::Mat& dst) const {
           top = _mm256_shuffle_epi8(row0, spread);
           bottom = _mm256_shuffle_epi8(row1, spread);
         }
-        const __m256i f = _mm256_and_si256(
-            _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(frac + x0))), _mm256_set1_epi32(kFracMask));
+        const __m256i f =
+            _mm256_and_si256(_mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(frac + x0))),
+                             _mm256_set1_epi32(kFracMask));
         const __m256i tab = _mm256_set1_epi32(kTab);
         const __m256i fx = _mm256_and_si256(f, _mm256_set1_epi32(kTab - 1));
         const __m256i fy = _mm256_srli_epi32(f, 5);

@@ -56,7 +56,8 @@ double read_number(const cv::FileNode& node, const std::filesystem::path& file, 
 // An image width or height: a whole number of pixels in 1..kMaxImageSidePx (checked before the
 // conversion to int, which would be undefined for a huge value).
 int read_image_side(double value, const std::filesystem::path& file, const std::string& field) {
-  if (!(value >= 1.0 && value <= static_cast<double>(kMaxImageSidePx)) || value != static_cast<double>(static_cast<int>(value))) {
+  if (!(value >= 1.0 && value <= static_cast<double>(kMaxImageSidePx)) ||
+      value != static_cast<double>(static_cast<int>(value))) {
     std::ostringstream text;
     text << "image size " << value << " px: " << image_size_expectation();
     fail(file, field, text.str());
@@ -82,7 +83,8 @@ std::vector<double> read_sequence(const cv::FileNode& node, const std::filesyste
     if (!item.isReal() && !item.isInt()) fail(file, field, "expected only numbers in the list");
     const double value = static_cast<double>(item);
     if (!std::isfinite(value)) {
-      fail(file, field, "expected finite numbers, item " + std::to_string(values.size()) + " is " + non_finite_text(value));
+      fail(file, field,
+           "expected finite numbers, item " + std::to_string(values.size()) + " is " + non_finite_text(value));
     }
     values.push_back(value);
   }
@@ -95,8 +97,8 @@ std::vector<double> read_sequence(const cv::FileNode& node, const std::filesyste
 // An OpenCV "!!opencv-matrix" of the given size, as doubles.
 cv::Mat read_matrix(const cv::FileNode& node, const std::filesystem::path& file, const std::string& field, int rows,
                     int cols) {
-  if (node.empty() || node.isNone()) fail(file, field, "missing (expected a " + std::to_string(rows) + "x" +
-                                                           std::to_string(cols) + " !!opencv-matrix)");
+  if (node.empty() || node.isNone())
+    fail(file, field, "missing (expected a " + std::to_string(rows) + "x" + std::to_string(cols) + " !!opencv-matrix)");
   cv::Mat m;
   try {
     node >> m;
@@ -179,9 +181,10 @@ StereoCalibration load_euroc_calibration(const std::filesystem::path& mav0_dir) 
 }
 
 StereoCalibration load_kitti_calibration(const std::filesystem::path& calib_txt, int width_px, int height_px) {
-  if (!image_size_plausible(static_cast<std::uint64_t>(std::max(width_px, 0)), static_cast<std::uint64_t>(std::max(height_px, 0)))) {
-    fail(calib_txt, "image size", std::to_string(width_px) + "x" + std::to_string(height_px) + ": " +
-                                      image_size_expectation());
+  if (!image_size_plausible(static_cast<std::uint64_t>(std::max(width_px, 0)),
+                            static_cast<std::uint64_t>(std::max(height_px, 0)))) {
+    fail(calib_txt, "image size",
+         std::to_string(width_px) + "x" + std::to_string(height_px) + ": " + image_size_expectation());
   }
   std::ifstream in(calib_txt);
   if (!in) throw std::runtime_error(calib_txt.string() + ": cannot open file");
@@ -234,8 +237,8 @@ namespace {
 StereoCalibration load_orbslam3_settings(const cv::FileStorage& fs, const std::filesystem::path& file) {
   const std::string type = fs["Camera.type"].isString() ? static_cast<std::string>(fs["Camera.type"]) : "";
   if (type != "PinHole") {
-    fail(file, "Camera.type", "expected \"PinHole\" (heslam rectifies pinhole radial-tangential cameras; got '" +
-                                  type.substr(0, 40) + "')");
+    fail(file, "Camera.type",
+         "expected \"PinHole\" (heslam rectifies pinhole radial-tangential cameras; got '" + type.substr(0, 40) + "')");
   }
   for (const char* key : {"Camera.newWidth", "Camera.newHeight"}) {
     if (!fs[key].empty()) fail(file, key, "not supported: give the calibration of the images as they are published");
@@ -285,7 +288,8 @@ StereoCalibration load_orbslam3_settings(const cv::FileStorage& fs, const std::f
     if (calibration.left.distortion_model != DistortionModel::kNone &&
         std::any_of(calibration.left.distortion.begin(), calibration.left.distortion.end(),
                     [](double k) { return k != 0.0; })) {
-      fail(file, "Camera1.k1", "expected no distortion for a rectified pair (give Camera2.* and Stereo.T_c1_c2 for raw images)");
+      fail(file, "Camera1.k1",
+           "expected no distortion for a rectified pair (give Camera2.* and Stereo.T_c1_c2 for raw images)");
     }
     calibration.left.distortion.clear();
     calibration.left.distortion_model = DistortionModel::kNone;
@@ -313,7 +317,8 @@ StereoCalibration load_orbslam_settings(const std::filesystem::path& settings_ya
   cv::FileStorage fs = open_yaml(file, /*add_header_if_missing=*/true);
   if (!fs["File.version"].empty()) {
     const std::string version = fs["File.version"].isString() ? static_cast<std::string>(fs["File.version"]) : "";
-    if (version != "1.0") fail(file, "File.version", "expected \"1.0\" (ORB-SLAM3's format) or no such key (ORB-SLAM2's)");
+    if (version != "1.0")
+      fail(file, "File.version", "expected \"1.0\" (ORB-SLAM3's format) or no such key (ORB-SLAM2's)");
     return load_orbslam3_settings(fs, file);
   }
   StereoCalibration calibration;
@@ -373,8 +378,9 @@ StereoCalibration load_orbslam_settings(const std::filesystem::path& settings_ya
       for (int c = 0; c < 4; ++c) (*P)(r, c) = Pm.at<double>(r, c);
     }
     check_rotation(*R, file, side + ".R");
-    camera.width_px = fs[side + ".width"].empty() ? width_px
-                                                  : static_cast<int>(read_positive(fs[side + ".width"], file, side + ".width"));
+    camera.width_px = fs[side + ".width"].empty()
+                          ? width_px
+                          : static_cast<int>(read_positive(fs[side + ".width"], file, side + ".width"));
     camera.height_px = fs[side + ".height"].empty()
                            ? height_px
                            : static_cast<int>(read_positive(fs[side + ".height"], file, side + ".height"));

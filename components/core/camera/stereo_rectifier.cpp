@@ -53,7 +53,8 @@ void check_image(const cv::Mat& image, cv::Size expected, const char* which) {
 // Every number of the calibration is finite, or one line naming the camera and the field.
 void check_finite(const StereoCalibration& calibration) {
   const auto check = [&](const std::string& field, bool finite) {
-    if (!finite) throw std::runtime_error(calibration.source + ": " + field + ": expected finite numbers, got a nan or inf");
+    if (!finite)
+      throw std::runtime_error(calibration.source + ": " + field + ": expected finite numbers, got a nan or inf");
   };
   for (const auto& [camera, which] : {std::pair{&calibration.left, "left"}, std::pair{&calibration.right, "right"}}) {
     const std::string name = std::string(which) + " camera";
@@ -111,7 +112,8 @@ StereoRectifier::StereoRectifier(const StereoCalibration& calibration) {
       compute_rectification(calibration);
     } catch (const cv::Exception& error) {
       // OpenCV's own text names its source file and function, not the calibration at fault.
-      throw std::runtime_error(calibration.source + ": cannot rectify with this calibration (OpenCV: " + error.err + ")");
+      throw std::runtime_error(calibration.source + ": cannot rectify with this calibration (OpenCV: " + error.err +
+                               ")");
     }
   }
   if (!(camera_.baseline_m > 0.0)) {

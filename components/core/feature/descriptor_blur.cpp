@@ -68,7 +68,9 @@ struct SimdLanes {
   }
   static V load_u16(const std::uint16_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p)); }
   static void store_u16(std::uint16_t* p, V v) { _mm_storeu_si128(reinterpret_cast<__m128i*>(p), v); }
-  static void store_u8(std::uint8_t* p, V v) { _mm_storel_epi64(reinterpret_cast<__m128i*>(p), _mm_packus_epi16(v, v)); }
+  static void store_u8(std::uint8_t* p, V v) {
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(p), _mm_packus_epi16(v, v));
+  }
   static V add(V a, V b) { return _mm_add_epi16(a, b); }
   static V mul(V a, std::uint16_t k) { return _mm_mullo_epi16(a, _mm_set1_epi16(static_cast<short>(k))); }
   static V high_byte(V a) { return _mm_srli_epi16(a, 8); }
@@ -149,7 +151,8 @@ static_assert(2 * (kHalf3 + kHalf2 + kHalf1) + kHalf0 == 128 && 2 * kHalf3 == kT
 // a signed byte pack and a flip of the byte's top bit, no 32-bit constant to add.
 constexpr std::int16_t kRowBias = 16320;
 static_assert(128 * kRowBias + (1 << 13) == 128 << 14, "the bias must turn the rounding into + 128 after the shift");
-static_assert(2 * (128 * 255 - kRowBias) <= 32767 && -2 * kRowBias >= -32768, "pair sums of biased rows must fit 16 bits");
+static_assert(2 * (128 * 255 - kRowBias) <= 32767 && -2 * kRowBias >= -32768,
+              "pair sums of biased rows must fit 16 bits");
 
 // Byte pairs (low, high) as one pmaddubsw weight vector.
 __m256i byte_pair(int low, int high) { return _mm256_set1_epi16(static_cast<short>(low | (high << 8))); }

@@ -16,9 +16,22 @@ namespace heslam {
 namespace {
 
 // The 16-pixel Bresenham circle of radius 3 in circular order (as cv::FAST's TYPE_9_16), (dx, dy).
-constexpr std::array<std::array<int, 2>, 16> kCircle = {{{0, 3}, {1, 3}, {2, 2}, {3, 1}, {3, 0}, {3, -1},
-                                                         {2, -2}, {1, -3}, {0, -3}, {-1, -3}, {-2, -2},
-                                                         {-3, -1}, {-3, 0}, {-3, 1}, {-2, 2}, {-1, 3}}};
+constexpr std::array<std::array<int, 2>, 16> kCircle = {{{0, 3},
+                                                         {1, 3},
+                                                         {2, 2},
+                                                         {3, 1},
+                                                         {3, 0},
+                                                         {3, -1},
+                                                         {2, -2},
+                                                         {1, -3},
+                                                         {0, -3},
+                                                         {-1, -3},
+                                                         {-2, -2},
+                                                         {-3, -1},
+                                                         {-3, 0},
+                                                         {-3, 1},
+                                                         {-2, 2},
+                                                         {-1, 3}}};
 
 // The circle's rows are those of the centre -3 .. +3: rows[kRadiusRows + dy].
 constexpr int kRadiusRows = FastScoreMap::kRadiusPx;
@@ -106,7 +119,8 @@ template <class L, class Worst, class Best>
 // whose differences all exceed t, i.e. strength >= t + 1, and cv::FAST reports strength - 1 as its
 // score.
 template <class L>
-[[gnu::always_inline]] inline void score_lanes(const std::uint8_t* const (&rows)[2 * kRadiusRows + 1], std::ptrdiff_t x, std::uint8_t* out) {
+[[gnu::always_inline]] inline void score_lanes(const std::uint8_t* const (&rows)[2 * kRadiusRows + 1], std::ptrdiff_t x,
+                                               std::uint8_t* out) {
   using V = typename L::V;
   const V v = L::load(rows[kRadiusRows] + x);
   V p[16];

@@ -39,9 +39,9 @@ struct Keypoint {
 struct ScalePyramid {
   int levels = 8;
   float scale_factor = 1.2f;
-  std::vector<float> scale;            // scale[l] = scale_factor^l
+  std::vector<float> scale;  // scale[l] = scale_factor^l
   std::vector<float> inv_scale;
-  std::vector<float> sigma2;           // scale[l]^2: variance of a keypoint's position at level l
+  std::vector<float> sigma2;  // scale[l]^2: variance of a keypoint's position at level l
   std::vector<float> inv_sigma2;
 
   static ScalePyramid make(int levels, float scale_factor) {

@@ -77,8 +77,8 @@ float IntensityCentroid::angle_deg(const std::uint8_t* center, std::ptrdiff_t st
   int m10 = 0;
   int m01 = 0;
   moments(center, step, m10, m01);
-  float angle = static_cast<float>(std::atan2(static_cast<double>(m01), static_cast<double>(m10)) *
-                                   (180.0 / std::numbers::pi));
+  float angle =
+      static_cast<float>(std::atan2(static_cast<double>(m01), static_cast<double>(m10)) * (180.0 / std::numbers::pi));
   if (angle < 0.f) angle += 360.f;
   if (angle >= 360.f) angle -= 360.f;
   return angle;

@@ -42,10 +42,10 @@ class LinearResize {
   // The row's last 2 kBlockColumns columns as one more pair of blocks (overlapping the leading ones),
   // each loading the 16 bytes that end at the row's end when its first pixel is closer to it.
   bool tail_blocks_ = false;
-  int tail_base_[2] = {0, 0};                // source pixel each tail block loads from
+  int tail_base_[2] = {0, 0};               // source pixel each tail block loads from
   std::vector<std::uint8_t> tail_shuffle_;  // 2 x 16 byte indices relative to tail_base_
-  std::vector<std::int16_t> rows_[2];   // horizontal pass (h >> 4) of two source rows
-  int row_y_[2] = {-1, -1};             // the source row each buffer holds
+  std::vector<std::int16_t> rows_[2];       // horizontal pass (h >> 4) of two source rows
+  int row_y_[2] = {-1, -1};                 // the source row each buffer holds
 };
 
 }  // namespace heslam

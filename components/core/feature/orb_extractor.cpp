@@ -65,7 +65,8 @@ void reflect_border(cv::Mat& padded, int border) {
   for (int k = 1; k <= border; ++k) {
     const auto bytes = static_cast<std::size_t>(padded.cols);
     std::memcpy(padded.ptr<std::uint8_t>(border - k), padded.ptr<std::uint8_t>(border + k), bytes);
-    std::memcpy(padded.ptr<std::uint8_t>(border + height - 1 + k), padded.ptr<std::uint8_t>(border + height - 1 - k), bytes);
+    std::memcpy(padded.ptr<std::uint8_t>(border + height - 1 + k), padded.ptr<std::uint8_t>(border + height - 1 - k),
+                bytes);
   }
 }
 
@@ -81,7 +82,8 @@ OrbOptions OrbOptions::from_yaml(const cv::FileNode& root, const std::string& so
   yaml_option::read(root, "ORBextractor.cellSize", source, o.cell_size_px);
   yaml_option::read(root, "ORBextractor.featuresByArea", source, o.features_by_area);
   // The upper bounds only catch typos: a value beyond them is certainly a mistake.
-  if (o.features < 1 || o.features > 100000) yaml_option::fail(source, "ORBextractor.nFeatures", "an integer in [1, 100000]");
+  if (o.features < 1 || o.features > 100000)
+    yaml_option::fail(source, "ORBextractor.nFeatures", "an integer in [1, 100000]");
   if (!(o.scale_factor > 1.f) || o.scale_factor > 4.f) {
     yaml_option::fail(source, "ORBextractor.scaleFactor", "a number in (1, 4]");
   }
@@ -118,8 +120,8 @@ OrbExtractor::OrbExtractor(const OrbOptions& options)
 
 void OrbExtractor::share_features(int features) {
   // Geometric share per level: factor^l with factor = 1/s^2 (area) or 1/s (ORB-SLAM2).
-  const double factor = options_.features_by_area ? 1.0 / (options_.scale_factor * options_.scale_factor)
-                                                  : 1.0 / options_.scale_factor;
+  const double factor =
+      options_.features_by_area ? 1.0 / (options_.scale_factor * options_.scale_factor) : 1.0 / options_.scale_factor;
   const double first = features * (1.0 - factor) / (1.0 - std::pow(factor, options_.levels));
   int assigned = 0;
   features_per_level_.resize(static_cast<std::size_t>(options_.levels));
@@ -145,7 +147,8 @@ void OrbExtractor::extract(const cv::Mat& image, OrbFeatures& out) {
 }
 
 void OrbExtractor::build_pyramid(const cv::Mat& image) {
-  if (image.empty() || image.type() != CV_8UC1) throw std::invalid_argument("OrbExtractor: expected an 8-bit grey image");
+  if (image.empty() || image.type() != CV_8UC1)
+    throw std::invalid_argument("OrbExtractor: expected an 8-bit grey image");
   for (int l = 0; l < options_.levels; ++l) {
     const cv::Size size(static_cast<int>(std::lround(image.cols * scales_.inv_scale[l])),
                         static_cast<int>(std::lround(image.rows * scales_.inv_scale[l])));

@@ -10,9 +10,9 @@
 
 #include "components/core/feature/descriptor_blur.hpp"
 #include "components/core/feature/fast_score_map.hpp"
+#include "components/core/feature/features.hpp"
 #include "components/core/feature/intensity_centroid.hpp"
 #include "components/core/feature/linear_resize.hpp"
-#include "components/core/feature/features.hpp"
 
 namespace heslam {
 
@@ -21,8 +21,8 @@ namespace heslam {
 inline constexpr int kOrbBorderPx = 19;
 
 struct OrbOptions {
-  int features = 1200;              // per image: ORB-SLAM2's EuRoC value (KITTI: 2000)
-  float scale_factor = 1.2f;        // between pyramid levels
+  int features = 1200;        // per image: ORB-SLAM2's EuRoC value (KITTI: 2000)
+  float scale_factor = 1.2f;  // between pyramid levels
   int levels = 8;
   int fast_threshold_initial = 20;  // FAST threshold tried first in every grid cell
   int fast_threshold_min = 7;       // used in cells where the initial threshold finds nothing
@@ -92,16 +92,16 @@ class OrbExtractor {
   OrbOptions options_;
   ScalePyramid scales_;
   std::vector<int> features_per_level_;
-  cv::Mat region_;  // set_region's; empty = the whole image
+  cv::Mat region_;              // set_region's; empty = the whole image
   IntensityCentroid centroid_;  // keypoint orientation
 
-  std::vector<cv::Mat> padded_;   // level image with border
-  std::vector<cv::Mat> level_;    // ROI of padded_ without border
+  std::vector<cv::Mat> padded_;  // level image with border
+  std::vector<cv::Mat> level_;   // ROI of padded_ without border
   // padded_ blurred for the descriptors: only the part the keypoints' patterns read is computed.
   std::vector<cv::Mat> blurred_;
   std::vector<DescriptorBlur> blurs_;  // one per level: levels may be described on different threads
   cv::Mat resize_scratch_;
-  std::vector<LinearResize> resizes_;  // one per level: its column plan is kept across frames
+  std::vector<LinearResize> resizes_;                   // one per level: its column plan is kept across frames
   std::vector<FastScoreMap> score_maps_;                // FAST scores per level (reused buffers)
   std::vector<std::vector<ScoredPoint>> level_points_;  // FAST corners per level before distribution
   std::vector<std::vector<LevelKeypoint>> level_keypoints_;

@@ -51,7 +51,8 @@ OrbOptions right_options(const StereoFeaturePipelineOptions& options) {
 
 }  // namespace
 
-StereoFeaturePipelineOptions StereoFeaturePipelineOptions::from_yaml(const cv::FileNode& root, const std::string& source) {
+StereoFeaturePipelineOptions StereoFeaturePipelineOptions::from_yaml(const cv::FileNode& root,
+                                                                     const std::string& source) {
   StereoFeaturePipelineOptions o;
   o.he = HistogramEqualizerOptions::from_yaml(root, source);
   o.orb = OrbOptions::from_yaml(root, source);
@@ -195,8 +196,8 @@ StereoFeatures StereoFeaturePipeline::process_from(const ImageSource& left_sourc
   equalizer_.compute_mappings();
   // Whether the tone is followed decides on the histograms' own curve, so that the curve applied
   // cannot switch it off and on from pair to pair.
-  const bool follow_tone = options_.tone_from_matches && options_.he.stereo == StereoPhotometry::kMatched &&
-                           equalizer_.last_exposed_apart();
+  const bool follow_tone =
+      options_.tone_from_matches && options_.he.stereo == StereoPhotometry::kMatched && equalizer_.last_exposed_apart();
   if (follow_tone) {
     if (const std::optional<LinearTone> tone = tone_tracker_.predict(equalizer_.last_histogram_tone())) {
       equalizer_.compute_mappings(&*tone);

@@ -144,7 +144,7 @@ class StereoFeaturePipeline {
   // Checks a made image's type and size; `side` names it in the message.
   void check_image(const cv::Mat& image, const char* side) const;
 
-  std::unique_ptr<PairWorker> worker_;  // only when parallel
+  std::unique_ptr<PairWorker> worker_;        // only when parallel
   cv::Mat left_he_, right_he_;                // the equalized images: a buffer below or the input itself
   cv::Mat left_he_buffer_, right_he_buffer_;  // written by the equalizer, reused frame to frame
   OrbFeatures left_, right_;

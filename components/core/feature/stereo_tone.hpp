@@ -29,9 +29,9 @@
 namespace heslam {
 
 struct StereoToneMeasureOptions {
-  int half_window = 3;         // 7 x 7 pixels around the left keypoint and its right match (level 0)
-  double min_texture = 2.0;    // std of the left patch in grey levels: flatter patches carry no gain
-  int min_matches = 30;        // fewer usable matches: no measurement
+  int half_window = 3;       // 7 x 7 pixels around the left keypoint and its right match (level 0)
+  double min_texture = 2.0;  // std of the left patch in grey levels: flatter patches carry no gain
+  int min_matches = 30;      // fewer usable matches: no measurement
 };
 
 struct StereoToneMeasurement {
@@ -88,7 +88,7 @@ class StereoToneTracker {
   std::vector<LinearTone> recent_;  // oldest first, at most window_pairs
   int age_pairs_ = 0;               // pairs since the newest of recent_
   bool have_last_histogram_ = false;
-  LinearTone last_histogram_;       // the last pair's histograms' fit
+  LinearTone last_histogram_;  // the last pair's histograms' fit
 };
 
 }  // namespace heslam

@@ -71,7 +71,8 @@ void clip_histogram(Histogram& histogram, double clip_limit, std::uint64_t count
   for (std::uint32_t& bin : histogram) bin += batch;
   if (residual > 0) {
     const std::uint32_t step = std::max<std::uint32_t>(kLevels / residual, 1u);
-    for (std::uint32_t v = 0, given = 0; v < static_cast<std::uint32_t>(kLevels) && given < residual; v += step, ++given) {
+    for (std::uint32_t v = 0, given = 0; v < static_cast<std::uint32_t>(kLevels) && given < residual;
+         v += step, ++given) {
       ++histogram[v];
     }
   }
@@ -246,14 +247,16 @@ HistogramEqualizerOptions HistogramEqualizerOptions::from_yaml(const cv::FileNod
   if (!(o.match_shift_full > o.match_shift_from) || o.match_shift_full > 255.0) {
     yaml_option::fail(source, "HE.matchShiftFull", "a number in (HE.matchShiftFrom, 255]");
   }
-  if (!(o.saturation_excess > 0.0) || o.saturation_excess > 1.0) yaml_option::fail(source, "HE.saturationExcess", "a number in (0, 1]");
+  if (!(o.saturation_excess > 0.0) || o.saturation_excess > 1.0)
+    yaml_option::fail(source, "HE.saturationExcess", "a number in (0, 1]");
   yaml_option::read(root, "HE.clipLimit", source, o.clahe_clip_limit);
   yaml_option::read(root, "HE.globalClipLimit", source, o.global_clip_limit);
   yaml_option::read(root, "HE.tilesX", source, o.clahe_tiles_x);
   yaml_option::read(root, "HE.tilesY", source, o.clahe_tiles_y);
   yaml_option::read(root, "HE.adaptiveOnBelow", source, o.adaptive_on_below);
   yaml_option::read(root, "HE.adaptiveOffAbove", source, o.adaptive_off_above);
-  if (!(o.clahe_clip_limit > 0.0) || o.clahe_clip_limit > 1000.0) yaml_option::fail(source, "HE.clipLimit", "a number in (0, 1000]");
+  if (!(o.clahe_clip_limit > 0.0) || o.clahe_clip_limit > 1000.0)
+    yaml_option::fail(source, "HE.clipLimit", "a number in (0, 1000]");
   if (!(o.global_clip_limit > 0.0) || o.global_clip_limit > 1000.0) {
     yaml_option::fail(source, "HE.globalClipLimit", "a number in (0, 1000]");
   }
@@ -418,7 +421,8 @@ const cv::Mat& HistogramEqualizer::apply(Side side, const cv::Mat& image, cv::Ma
   return buffer;
 }
 
-std::vector<HistogramEqualizer::Lut> HistogramEqualizer::clahe_tile_luts(std::initializer_list<const SideState*> images) const {
+std::vector<HistogramEqualizer::Lut> HistogramEqualizer::clahe_tile_luts(
+    std::initializer_list<const SideState*> images) const {
   // One clipped-histogram LUT per tile, from the same tile of the given images.
   const TileGrid grid(options_, sides_[0].size);
   std::vector<Lut> luts(static_cast<std::size_t>(grid.tiles_x * grid.tiles_y));
@@ -438,7 +442,8 @@ std::vector<HistogramEqualizer::Lut> HistogramEqualizer::clahe_tile_luts(std::in
   return luts;
 }
 
-void HistogramEqualizer::clahe_map(const cv::Mat& in, const Lut& tone, const std::vector<Lut>& luts, cv::Mat& out) const {
+void HistogramEqualizer::clahe_map(const cv::Mat& in, const Lut& tone, const std::vector<Lut>& luts,
+                                   cv::Mat& out) const {
   // Bilinear interpolation between the LUTs of the four nearest tile centres.
   const TileGrid grid(options_, in.size());
   const int tiles_x = grid.tiles_x;

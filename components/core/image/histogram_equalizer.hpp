@@ -7,9 +7,9 @@
 //
 // Modes: none; global (the paper: y = 255 * cdf(x)); clipped (global with the histogram clipped at
 // a multiple of its mean bin, so a few dominant grey levels -- sky, a white wall, a dark floor -- do
-// not stretch their neighbourhood into noise; the default, see docs/vision.md); clahe (contrast-limited, per tile, bilinear
-// between tiles, tile LUTs from both images); adaptive (global HE only while the pair's contrast is
-// low, switched with hysteresis so it does not flicker from frame to frame).
+// not stretch their neighbourhood into noise; the default, see docs/vision.md); clahe (contrast-limited, per tile,
+// bilinear between tiles, tile LUTs from both images); adaptive (global HE only while the pair's contrast is low,
+// switched with hysteresis so it does not flicker from frame to frame).
 //
 // Two forms, the same pixels: equalize() does the pair at once; the split form lets each image of
 // the pair be measured and mapped on its own thread (the frontend's pair: each thread rectifies its
@@ -75,7 +75,8 @@ struct HistogramEqualizerOptions {
   // pairs fit 0.89-1.04 (dark or not).
   double match_gain_from = 1.5;
 
-  // Reads HE.mode, HE.stereo, HE.saturationExcess, HE.matchShiftFrom, HE.matchShiftFull, HE.matchGainFrom, HE.globalClipLimit, HE.clipLimit, HE.tilesX, HE.tilesY, HE.adaptiveOnBelow, HE.adaptiveOffAbove.
+  // Reads HE.mode, HE.stereo, HE.saturationExcess, HE.matchShiftFrom, HE.matchShiftFull, HE.matchGainFrom,
+  // HE.globalClipLimit, HE.clipLimit, HE.tilesX, HE.tilesY, HE.adaptiveOnBelow, HE.adaptiveOffAbove.
   static HistogramEqualizerOptions from_yaml(const cv::FileNode& root, const std::string& source);
 };
 

@@ -20,7 +20,7 @@ GreyLut match_histogram(const GreyHistogram& source, const GreyHistogram& refere
 
   // Walk both cdfs once: source levels in increasing order have increasing quantiles.
   const double scale = static_cast<double>(reference_total) / static_cast<double>(source_total);
-  std::uint64_t source_below = 0;  // source pixels below level x
+  std::uint64_t source_below = 0;     // source pixels below level x
   std::uint64_t reference_below = 0;  // reference pixels below level y
   int y = 0;
   for (int x = 0; x < kLevels; ++x) {
@@ -31,8 +31,7 @@ GreyLut match_histogram(const GreyHistogram& source, const GreyHistogram& refere
       reference_below += reference[y];
       ++y;
     }
-    const double inside =
-        reference[y] > 0 ? (target - static_cast<double>(reference_below)) / reference[y] : 0.5;
+    const double inside = reference[y] > 0 ? (target - static_cast<double>(reference_below)) / reference[y] : 0.5;
     const double level = static_cast<double>(y) - 0.5 + std::clamp(inside, 0.0, 1.0);
     lut[x] = static_cast<std::uint8_t>(std::clamp(std::lround(level), 0l, 255l));
   }
@@ -85,7 +84,8 @@ StereoToneCurves align_stereo_tones(const GreyHistogram& left, const GreyHistogr
   curves.quantile = match_histogram(right, left);
   if (measured != nullptr) {
     for (int x = 0; x < 256; ++x) {
-      curves.right[x] = static_cast<std::uint8_t>(std::clamp(std::lround(measured->gain * x + measured->offset), 0l, 255l));
+      curves.right[x] =
+          static_cast<std::uint8_t>(std::clamp(std::lround(measured->gain * x + measured->offset), 0l, 255l));
     }
   } else {
     curves.right = curves.quantile;
@@ -102,9 +102,10 @@ StereoToneCurves align_stereo_tones(const GreyHistogram& left, const GreyHistogr
   const double top_excess = right[255] / right_total - left[255] / left_total;
   if (top_excess > saturation_excess) {
     // With a measured relation, where it says the right saturates; else at the same quantile.
-    const int ceiling = measured != nullptr
-                            ? static_cast<int>(std::clamp(std::lround(measured->gain * 255.0 + measured->offset), 1l, 255l))
-                            : level_at_count(left, (1.0 - right[255] / right_total) * left_total);
+    const int ceiling =
+        measured != nullptr
+            ? static_cast<int>(std::clamp(std::lround(measured->gain * 255.0 + measured->offset), 1l, 255l))
+            : level_at_count(left, (1.0 - right[255] / right_total) * left_total);
     for (int v = ceiling; v < 256; ++v) curves.left[v] = static_cast<std::uint8_t>(ceiling);
     curves.right[255] = static_cast<std::uint8_t>(ceiling);
     for (int v = 0; v < 255; ++v) curves.right[v] = std::min(curves.right[v], static_cast<std::uint8_t>(ceiling));

@@ -16,16 +16,14 @@ constexpr double kConvergedStepRadS = 1e-9;
 
 }  // namespace
 
-GyroBiasEstimate estimate_gyro_bias(std::span<const ImuPreintegration> intervals,
-                                    std::span<const Eigen::Matrix3d> R_ij, int max_iterations) {
+GyroBiasEstimate estimate_gyro_bias(std::span<const ImuPreintegration> intervals, std::span<const Eigen::Matrix3d> R_ij,
+                                    int max_iterations) {
   if (intervals.size() < 2 || intervals.size() != R_ij.size()) {
     throw std::invalid_argument("estimate_gyro_bias: expected at least two intervals, each with its rotation");
   }
   GyroBiasEstimate estimate;
   ImuBias bias = intervals.front().bias();
-  const auto residual = [&](std::size_t k) {
-    return so3::log(intervals[k].delta_R(bias).transpose() * R_ij[k]);
-  };
+  const auto residual = [&](std::size_t k) { return so3::log(intervals[k].delta_R(bias).transpose() * R_ij[k]); };
   for (int iteration = 0; iteration < max_iterations; ++iteration) {
     Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
     Eigen::Vector3d g = Eigen::Vector3d::Zero();

@@ -21,7 +21,7 @@ struct GyroBiasEstimate {
 // intervals[k] preintegrates [t_i, t_j]; R_ij[k] is the body's rotation over the same interval
 // (R_wb(t_i)^T R_wb(t_j)). The estimate starts from the intervals' linearization bias. Throws
 // std::invalid_argument for fewer than two intervals or sizes that differ.
-GyroBiasEstimate estimate_gyro_bias(std::span<const ImuPreintegration> intervals,
-                                    std::span<const Eigen::Matrix3d> R_ij, int max_iterations = 10);
+GyroBiasEstimate estimate_gyro_bias(std::span<const ImuPreintegration> intervals, std::span<const Eigen::Matrix3d> R_ij,
+                                    int max_iterations = 10);
 
 }  // namespace heslam

@@ -99,7 +99,8 @@ Eigen::Matrix<double, 6, 6> ImuPreintegration::bias_random_walk_covariance() con
   return covariance;
 }
 
-NavState ImuPreintegration::predict(const NavState& start, const Eigen::Vector3d& gravity_w, const ImuBias& bias) const {
+NavState ImuPreintegration::predict(const NavState& start, const Eigen::Vector3d& gravity_w,
+                                    const ImuBias& bias) const {
   const double t = duration_s_;
   NavState end;
   end.R_wb = so3::normalized(start.R_wb * delta_R(bias));
@@ -127,7 +128,8 @@ ImuPreintegration preintegrate(std::span<const ImuSample> samples, std::int64_t 
   for (auto it = first; it != last; ++it) {
     const auto next = std::next(it);
     if (next->stamp_ns <= it->stamp_ns) {
-      throw std::invalid_argument("preintegrate: IMU stamps not increasing at " + std::to_string(next->stamp_ns) + " ns");
+      throw std::invalid_argument("preintegrate: IMU stamps not increasing at " + std::to_string(next->stamp_ns) +
+                                  " ns");
     }
     const ImuSample from = it->stamp_ns < t0_ns ? interpolated(*it, *next, t0_ns) : *it;
     const ImuSample to = next->stamp_ns > t1_ns ? interpolated(*it, *next, t1_ns) : *next;

@@ -25,10 +25,10 @@ struct ImuSample {
 
 // Continuous-time noise model (sensor.yaml names). Defaults: the EuRoC VI sensor's ADIS16448.
 struct ImuNoise {
-  double gyro_noise_density = 1.6968e-4;   // rad/s/sqrt(Hz)    gyroscope_noise_density
-  double gyro_random_walk = 1.9393e-5;     // rad/s^2/sqrt(Hz)  gyroscope_random_walk
-  double accel_noise_density = 2.0e-3;     // m/s^2/sqrt(Hz)    accelerometer_noise_density
-  double accel_random_walk = 3.0e-3;       // m/s^3/sqrt(Hz)    accelerometer_random_walk
+  double gyro_noise_density = 1.6968e-4;  // rad/s/sqrt(Hz)    gyroscope_noise_density
+  double gyro_random_walk = 1.9393e-5;    // rad/s^2/sqrt(Hz)  gyroscope_random_walk
+  double accel_noise_density = 2.0e-3;    // m/s^2/sqrt(Hz)    accelerometer_noise_density
+  double accel_random_walk = 3.0e-3;      // m/s^3/sqrt(Hz)    accelerometer_random_walk
 };
 
 struct ImuBias {
@@ -83,7 +83,9 @@ class ImuPreintegration {
   // The state at the end from the state at the start, with gravity g_w (e.g. (0, 0, -9.81) in a
   // z-up world) and the given bias.
   NavState predict(const NavState& start, const Eigen::Vector3d& gravity_w, const ImuBias& bias) const;
-  NavState predict(const NavState& start, const Eigen::Vector3d& gravity_w) const { return predict(start, gravity_w, bias_); }
+  NavState predict(const NavState& start, const Eigen::Vector3d& gravity_w) const {
+    return predict(start, gravity_w, bias_);
+  }
 
  private:
   ImuBias bias_;

@@ -25,8 +25,7 @@ Eigen::Matrix3d exp(const Eigen::Vector3d& phi) {
   const double angle = phi.norm();
   const Eigen::Matrix3d W = hat(phi);
   if (angle < kSmallAngleRad) return Eigen::Matrix3d::Identity() + W + 0.5 * W * W;
-  return Eigen::Matrix3d::Identity() + std::sin(angle) / angle * W +
-         (1.0 - std::cos(angle)) / (angle * angle) * W * W;
+  return Eigen::Matrix3d::Identity() + std::sin(angle) / angle * W + (1.0 - std::cos(angle)) / (angle * angle) * W * W;
 }
 
 Eigen::Vector3d log(const Eigen::Matrix3d& R) {

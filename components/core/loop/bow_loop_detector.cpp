@@ -111,7 +111,7 @@ LoopCandidates BowLoopDetector::detect(const Map& map, KeyframeId query) {
 }
 
 std::vector<std::pair<std::uint32_t, std::uint32_t>> BowLoopDetector::match(const Map& map, KeyframeId query,
-                                                                             KeyframeId candidate) const {
+                                                                            KeyframeId candidate) const {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
   const Keyframe* a = map.keyframe(query);
   const Keyframe* b = map.keyframe(candidate);

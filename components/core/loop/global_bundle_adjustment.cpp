@@ -116,8 +116,7 @@ GlobalBundleAdjustmentResult GlobalBundleAdjustment::compute(const Map& map, con
   for (std::size_t p = 0; p < point_ids.size(); ++p) {
     if (problem.HasParameterBlock(points[p].data())) result.p_w.emplace_back(point_ids[p], points[p]);
   }
-  result.stats.time_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  result.stats.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
 

@@ -18,15 +18,15 @@
 namespace heslam {
 
 struct GlobalBundleAdjustmentOptions {
-  int max_iterations = 10;            // ORB-SLAM2's global BA after a loop: 10 iterations
-  double mono_chi2 = 5.991;           // Huber thresholds: 2- and 3-dof chi2 at 95 %
+  int max_iterations = 10;   // ORB-SLAM2's global BA after a loop: 10 iterations
+  double mono_chi2 = 5.991;  // Huber thresholds: 2- and 3-dof chi2 at 95 %
   double stereo_chi2 = 7.815;
-  double disparity_sigma_ratio = 0.5; // as LocalBundleAdjustmentOptions (the same measurement model)
-  int num_threads = 1;                // the machine is shared with the other processes
+  double disparity_sigma_ratio = 0.5;  // as LocalBundleAdjustmentOptions (the same measurement model)
+  int num_threads = 1;                 // the machine is shared with the other processes
 };
 
 struct GlobalBundleAdjustmentStats {
-  int keyframes = 0;        // optimized, the fixed one included
+  int keyframes = 0;  // optimized, the fixed one included
   int points = 0;
   int observations = 0;
   int iterations = 0;
@@ -37,8 +37,8 @@ struct GlobalBundleAdjustmentStats {
 };
 
 struct GlobalBundleAdjustmentResult {
-  std::vector<std::pair<KeyframeId, Pose3>> corrected_T_wc;   // every live keyframe, id order
-  std::vector<std::pair<PointId, Eigen::Vector3d>> p_w;        // every optimized point, id order
+  std::vector<std::pair<KeyframeId, Pose3>> corrected_T_wc;  // every live keyframe, id order
+  std::vector<std::pair<PointId, Eigen::Vector3d>> p_w;      // every optimized point, id order
   GlobalBundleAdjustmentStats stats;
 };
 

@@ -29,7 +29,8 @@ int best_projection_match(const MapPoint& point, const Keyframe& kf, const Pose3
   const float radius = options.radius_px * pyramid.scale[static_cast<std::size_t>(level)];
   int best_distance = options.max_descriptor_distance + 1;
   int best_index = -1;
-  for (const int index : grid.in_area(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius, level - 1, level)) {
+  for (const int index :
+       grid.in_area(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius, level - 1, level)) {
     const int d = hamming_distance(point.descriptor, kf.features.descriptors[static_cast<std::size_t>(index)]);
     if (d < best_distance) {
       best_distance = d;

@@ -40,7 +40,8 @@ struct VerifiedLoop {
 double path_between(const Map& map, KeyframeId from, KeyframeId to) {
   double path_m = 0.0;
   const Keyframe* previous = nullptr;
-  for (auto it = map.keyframes.lower_bound(std::min(from, to)); it != map.keyframes.end() && it->first <= std::max(from, to); ++it) {
+  for (auto it = map.keyframes.lower_bound(std::min(from, to));
+       it != map.keyframes.end() && it->first <= std::max(from, to); ++it) {
     if (it->second.culled) continue;
     if (previous != nullptr) path_m += (it->second.T_wc.translation() - previous->T_wc.translation()).norm();
     previous = &it->second;
@@ -60,8 +61,9 @@ std::string implausible_drift(const Map& map, const Keyframe& loop_kf, const Key
   const double allowed_deg = options.max_rotation_drift_deg_per_m * path_m + options.min_rotation_allowance_deg;
   if (drift_m <= allowed_m && drift_deg <= allowed_deg) return {};
   char reason[160];
-  std::snprintf(reason, sizeof reason, "implies %.2f m / %.1f deg of drift over %.1f m travelled (allowed %.2f m / %.1f deg)",
-                drift_m, drift_deg, path_m, allowed_m, allowed_deg);
+  std::snprintf(reason, sizeof reason,
+                "implies %.2f m / %.1f deg of drift over %.1f m travelled (allowed %.2f m / %.1f deg)", drift_m,
+                drift_deg, path_m, allowed_m, allowed_deg);
   return reason;
 }
 
@@ -123,8 +125,9 @@ LoopClosingResult LoopClosing::process_keyframe(const Map& map, KeyframeId query
     ransac_options.seed = options_.ransac_seed ^ query ^ (candidate_id << 1);
     const auto ransac = Se3Ransac(ransac_options).compute(camera_, correspondences);
     if (!ransac) {
-      result.rejected.push_back({candidate_id, "SE(3) RANSAC: fewer than " + std::to_string(options_.min_ransac_inliers) +
-                                                   " of " + std::to_string(correspondences.size()) + " matches agree"});
+      result.rejected.push_back({candidate_id, "SE(3) RANSAC: fewer than " +
+                                                   std::to_string(options_.min_ransac_inliers) + " of " +
+                                                   std::to_string(correspondences.size()) + " matches agree"});
       continue;
     }
     if (std::string why = implausible_drift(map, loop_kf, *candidate, ransac->T_ab, options_); !why.empty()) {
@@ -171,7 +174,8 @@ LoopClosingResult LoopClosing::process_keyframe(const Map& map, KeyframeId query
       }
     }
     if (verified.matches < options_.min_loop_matches) {
-      result.rejected.push_back({candidate_id, std::to_string(verified.matches) + " matches after the projection top-up (< " +
+      result.rejected.push_back({candidate_id, std::to_string(verified.matches) +
+                                                   " matches after the projection top-up (< " +
                                                    std::to_string(options_.min_loop_matches) + ")"});
       continue;
     }
@@ -201,7 +205,8 @@ LoopClosingResult LoopClosing::process_keyframe(const Map& map, KeyframeId query
   return result;
 }
 
-std::optional<LoopCorrection> LoopClosing::global_bundle_adjustment(const Map& map, const std::atomic<bool>* abort) const {
+std::optional<LoopCorrection> LoopClosing::global_bundle_adjustment(const Map& map,
+                                                                    const std::atomic<bool>* abort) const {
   GlobalBundleAdjustmentResult adjusted = GlobalBundleAdjustment().compute(map, camera_, abort);
   if (adjusted.stats.aborted) return std::nullopt;
   LoopCorrection correction;

@@ -26,7 +26,7 @@ struct LoopClosingOptions {
   // over the candidate's covisible group (ORB-SLAM2: 40): below either the candidate is rejected.
   int min_ransac_inliers = 20;
   int min_loop_matches = 40;
-  float projection_radius_px = 10.f;     // ORB-SLAM2 SearchByProjection in ComputeSim3
+  float projection_radius_px = 10.f;  // ORB-SLAM2 SearchByProjection in ComputeSim3
   // Drift gate. A verified loop says how far the odometry drifted since the matched keyframe: the loop
   // keyframe would move from its estimate to matched.T_wc * T_matched_loop. Stereo odometry drifts
   // about 1 % of the path and 0.3-1 deg per 100 m (KITTI), so a loop that needs far more is a look-alike
@@ -41,7 +41,7 @@ struct LoopClosingOptions {
   double max_rotation_drift_deg_per_m = 0.2;
   double min_rotation_allowance_deg = 10.0;
   std::uint64_t ransac_seed = 0x100b;
-  TrackerOptions matching;               // descriptor thresholds, orientation check
+  TrackerOptions matching;  // descriptor thresholds, orientation check
 };
 
 struct LoopRejection {

@@ -5,8 +5,8 @@
 #include <set>
 
 #include "components/core/loop/keyframe_projection.hpp"
-#include "components/core/match/feature_grid.hpp"
 #include "components/core/mapping/point_statistics.hpp"
+#include "components/core/match/feature_grid.hpp"
 
 namespace heslam {
 namespace {
@@ -199,8 +199,8 @@ LoopCorrectionOutput LoopCorrectionBuilder::compute(
     }
   }
 
-  EssentialGraph graph = EssentialGraphBuilder(options_.essential_graph)
-                             .compute(map, corrected_T_wc, connections, previous_loop_edges);
+  EssentialGraph graph =
+      EssentialGraphBuilder(options_.essential_graph).compute(map, corrected_T_wc, connections, previous_loop_edges);
   std::map<KeyframeId, Pose3> initial_T_wc;
   for (const auto& [id, kf] : map.keyframes) {
     if (kf.culled) continue;

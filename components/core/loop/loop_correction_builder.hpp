@@ -50,17 +50,17 @@ struct LoopCorrectionStats {
   int loop_group_points = 0;
   int matched_group_points = 0;
   int point_merges = 0;
-  int unlinked_matches = 0;         // projections onto a free keypoint (ORB-SLAM2 would add an observation)
-  int loop_connections = 0;         // keyframe pairs newly covisible through the merges
-  EssentialGraph graph_edges;       // edge counts (edges themselves cleared)
+  int unlinked_matches = 0;    // projections onto a free keypoint (ORB-SLAM2 would add an observation)
+  int loop_connections = 0;    // keyframe pairs newly covisible through the merges
+  EssentialGraph graph_edges;  // edge counts (edges themselves cleared)
   PoseGraphStats pose_graph;
   double fusion_ms = 0.0;
   double total_ms = 0.0;
 };
 
 struct LoopCorrectionOutput {
-  std::string error;                 // empty on success; else what was wrong with the input
-  LoopCorrection correction;         // id 0: the loop closer numbers its corrections
+  std::string error;                                  // empty on success; else what was wrong with the input
+  LoopCorrection correction;                          // id 0: the loop closer numbers its corrections
   std::map<PointId, Eigen::Vector3d> loop_group_p_w;  // (b): the group's points after the rigid correction
   LoopCorrectionStats stats;
 };

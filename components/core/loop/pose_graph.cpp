@@ -26,9 +26,8 @@ VertexBlock to_block(const Pose3& T_wc) {
 
 Pose3 from_block(const VertexBlock& block) {
   Pose3 T_wc = Pose3::Identity();
-  T_wc.linear() = Eigen::Quaterniond(block.q_wc[3], block.q_wc[0], block.q_wc[1], block.q_wc[2])
-                      .normalized()
-                      .toRotationMatrix();
+  T_wc.linear() =
+      Eigen::Quaterniond(block.q_wc[3], block.q_wc[0], block.q_wc[1], block.q_wc[2]).normalized().toRotationMatrix();
   T_wc.translation() = Eigen::Vector3d(block.t_wc[0], block.t_wc[1], block.t_wc[2]);
   return T_wc;
 }
@@ -37,7 +36,8 @@ class RelativePoseResidual {
  public:
   RelativePoseResidual(const Pose3& T_from_to, double weight)
       : q_measured_inverse_(Eigen::Quaterniond(T_from_to.rotation()).conjugate()),
-        t_measured_(T_from_to.translation()), sqrt_weight_(std::sqrt(weight)) {}
+        t_measured_(T_from_to.translation()),
+        sqrt_weight_(std::sqrt(weight)) {}
 
   template <typename T>
   bool operator()(const T* q_from, const T* t_from, const T* q_to, const T* t_to, T* residuals) const {

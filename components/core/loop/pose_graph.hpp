@@ -25,13 +25,13 @@ struct PoseGraphEdge {
 };
 
 struct PoseGraphOptions {
-  int max_iterations = 20;    // ORB-SLAM2: 20 Levenberg-Marquardt iterations
-  bool robust = false;        // ORB-SLAM2 uses no robust kernel on the essential graph
-  double huber_delta = 0.1;   // with `robust`: residual norm (rad / m) beyond which an edge counts linearly
+  int max_iterations = 20;   // ORB-SLAM2: 20 Levenberg-Marquardt iterations
+  bool robust = false;       // ORB-SLAM2 uses no robust kernel on the essential graph
+  double huber_delta = 0.1;  // with `robust`: residual norm (rad / m) beyond which an edge counts linearly
 };
 
 struct PoseGraphStats {
-  int vertices = 0;           // vertices touched by an edge
+  int vertices = 0;  // vertices touched by an edge
   int fixed_vertices = 0;
   int edges = 0;
   int skipped_edges = 0;      // edges naming an unknown vertex (or a self loop)

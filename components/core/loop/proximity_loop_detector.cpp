@@ -27,7 +27,8 @@ LoopCandidates ProximityLoopDetector::detect(const Map& map, KeyframeId query) {
   int live = 0;
   for (const auto& [id, kf] : map.keyframes) live += kf.culled ? 0 : 1;
   if (live < options_.min_keyframes_in_map) {
-    result.reason = "map has " + std::to_string(live) + " keyframes (< " + std::to_string(options_.min_keyframes_in_map) + ")";
+    result.reason =
+        "map has " + std::to_string(live) + " keyframes (< " + std::to_string(options_.min_keyframes_in_map) + ")";
     return result;
   }
   if (keyframes_since_loop_ <= options_.keyframes_after_loop) {

@@ -9,8 +9,8 @@
 namespace heslam {
 
 struct ProximityLoopDetectorOptions {
-  double base_radius_m = 1.0;        // search radius around the query's camera centre ...
-  double drift_ratio = 0.05;         // ... plus this fraction of the path travelled since the candidate
+  double base_radius_m = 1.0;  // search radius around the query's camera centre ...
+  double drift_ratio = 0.05;   // ... plus this fraction of the path travelled since the candidate
   double max_radius_m = 30.0;
   double max_view_angle_deg = 45.0;  // optical axes of query and candidate at most this far apart
   double min_path_since_m = 5.0;     // candidates are at least this far back along the path

@@ -11,9 +11,9 @@
 #include <memory>
 #include <random>
 
-#include <Eigen/Geometry>
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
+#include <Eigen/Geometry>
 
 namespace heslam {
 namespace {
@@ -76,9 +76,16 @@ int classify(const PinholeStereo& camera, const std::vector<Se3Correspondence>& 
 // Parameters: angle-axis and translation of T_ab, the point in A.
 struct TwoViewStereoResidual {
   TwoViewStereoResidual(const PinholeStereo& camera, const Se3Correspondence& c, double disparity_sigma_ratio)
-      : fx(camera.fx_px), fy(camera.fy_px), cx(camera.cx_px), cy(camera.cy_px), bf(camera.bf()), c(c),
-        disparity_a(camera.bf() / c.p_a.z()), disparity_b(camera.bf() / c.p_b.z()),
-        inv_sigma_a(1.0 / std::sqrt(c.sigma2_a)), inv_sigma_b(1.0 / std::sqrt(c.sigma2_b)),
+      : fx(camera.fx_px),
+        fy(camera.fy_px),
+        cx(camera.cx_px),
+        cy(camera.cy_px),
+        bf(camera.bf()),
+        c(c),
+        disparity_a(camera.bf() / c.p_a.z()),
+        disparity_b(camera.bf() / c.p_b.z()),
+        inv_sigma_a(1.0 / std::sqrt(c.sigma2_a)),
+        inv_sigma_b(1.0 / std::sqrt(c.sigma2_b)),
         inv_disparity_ratio(1.0 / disparity_sigma_ratio) {}
 
   template <typename T>
@@ -134,8 +141,8 @@ Pose3 refine_reprojection(const PinholeStereo& camera, const std::vector<Se3Corr
   ceres::Solve(solver_options, &problem, &summary);
   Pose3 refined = Pose3::Identity();
   const double angle = rotation.norm();
-  refined.linear() = angle > 0.0 ? Eigen::AngleAxisd(angle, rotation / angle).toRotationMatrix()
-                                 : Eigen::Matrix3d::Identity();
+  refined.linear() =
+      angle > 0.0 ? Eigen::AngleAxisd(angle, rotation / angle).toRotationMatrix() : Eigen::Matrix3d::Identity();
   refined.translation() = translation;
   return refined;
 }

@@ -1,6 +1,7 @@
 // Relative pose of two stereo keyframes from 3D-3D correspondences with outliers: RANSAC over
 // minimal samples of three, closed-form rigid alignment (Umeyama without scale), inliers by their
-// reprojection error in BOTH images, refined on the inliers (closed form, then a small two-view BA). The loop closer's geometric check.
+// reprojection error in BOTH images, refined on the inliers (closed form, then a small two-view BA). The loop closer's
+// geometric check.
 //
 // Stereo gives metric depth, so the transform is SE(3) (ORB-SLAM2's Sim3Solver with fixed scale).
 // Seeded, so the same input and seed give the same transform bit for bit.
@@ -44,7 +45,7 @@ struct Se3RansacResult {
   Pose3 T_ab = Pose3::Identity();  // p_a = T_ab * p_b
   std::vector<bool> inlier;        // per correspondence
   int inliers = 0;
-  int iterations = 0;              // RANSAC hypotheses drawn
+  int iterations = 0;  // RANSAC hypotheses drawn
 };
 
 class Se3Ransac {

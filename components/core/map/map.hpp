@@ -32,22 +32,22 @@ struct Keyframe {
   std::vector<PointId> point_ids;  // per keypoint: the observed map point, or kNoId
 
   // State owned by the local mapper after creation.
-  KeyframeId parent = kNoId;                                  // spanning tree
-  std::vector<std::pair<KeyframeId, int>> covisible;          // (neighbour, shared points), by weight desc
+  KeyframeId parent = kNoId;                          // spanning tree
+  std::vector<std::pair<KeyframeId, int>> covisible;  // (neighbour, shared points), by weight desc
   bool culled = false;
 };
 
 struct MapPoint {
   PointId id = kNoId;
   Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
-  Descriptor descriptor{};                       // representative (median-distance) descriptor
+  Descriptor descriptor{};                           // representative (median-distance) descriptor
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // mean viewing direction, unit
-  float min_distance_m = 0.f;                    // scale-invariance range
+  float min_distance_m = 0.f;                        // scale-invariance range
   float max_distance_m = 0.f;
   KeyframeId reference_kf = kNoId;
   std::vector<std::pair<KeyframeId, int>> observations;  // (keyframe, keypoint index)
-  int visible = 1;  // times predicted visible in a frame
-  int found = 1;    // times actually matched
+  int visible = 1;                                       // times predicted visible in a frame
+  int found = 1;                                         // times actually matched
   bool culled = false;
   PointId merged_into = kNoId;
 };

@@ -63,11 +63,11 @@ double total_cost(const BundleAdjustmentProblem& problem, const std::vector<Pose
 
 // The normal equations of one linearisation, in blocks.
 struct NormalEquations {
-  std::vector<Matrix6d> H_pp;   // per free pose
-  std::vector<Vector6d> b_p;    // -gradient, per free pose
+  std::vector<Matrix6d> H_pp;         // per free pose
+  std::vector<Vector6d> b_p;          // -gradient, per free pose
   std::vector<Eigen::Matrix3d> H_xx;  // per point
   std::vector<Eigen::Vector3d> b_x;
-  std::vector<Matrix63> H_px;   // per observation (free pose only)
+  std::vector<Matrix63> H_px;  // per observation (free pose only)
 };
 
 }  // namespace
@@ -87,9 +87,9 @@ bool linearise_observation(const PinholeStereo& camera, const BundleAdjustmentOb
   // d residual / d p_c, whitened; the third row is zero for a monocular observation.
   const double inv_z2 = inv_z * inv_z;
   Eigen::Matrix3d J_pc;
-  J_pc << obs.weight * camera.fx_px * inv_z, 0.0, -obs.weight * camera.fx_px * p_c.x() * inv_z2,
-          0.0, obs.weight * camera.fy_px * inv_z, -obs.weight * camera.fy_px * p_c.y() * inv_z2,
-          0.0, 0.0, obs.stereo ? -obs.disparity_weight * bf * inv_z2 : 0.0;
+  J_pc << obs.weight * camera.fx_px * inv_z, 0.0, -obs.weight * camera.fx_px * p_c.x() * inv_z2, 0.0,
+      obs.weight * camera.fy_px * inv_z, -obs.weight * camera.fy_px * p_c.y() * inv_z2, 0.0, 0.0,
+      obs.stereo ? -obs.disparity_weight * bf * inv_z2 : 0.0;
   if (J_point != nullptr) J_point->noalias() = J_pc * R_cw;
   if (J_pose != nullptr) {
     // p_c(w, r) = Exp(w) R p + t + r  =>  d/dw = -[R p]x, d/dr = I.
@@ -114,7 +114,8 @@ BundleAdjustmentSolverSummary solve_bundle_adjustment(BundleAdjustmentProblem& p
   // Observations of point j: [point_begin[j], point_begin[j + 1]) after grouping.
   std::vector<std::size_t> order;  // observation indices grouped by point, stable
   std::vector<std::size_t> point_begin(num_points + 1, 0);
-  for (const BundleAdjustmentObservation& obs : problem.observations) ++point_begin[static_cast<std::size_t>(obs.point) + 1];
+  for (const BundleAdjustmentObservation& obs : problem.observations)
+    ++point_begin[static_cast<std::size_t>(obs.point) + 1];
   for (std::size_t j = 0; j < num_points; ++j) point_begin[j + 1] += point_begin[j];
   {
     std::vector<std::size_t> fill(point_begin.begin(), point_begin.end() - 1);
@@ -170,7 +171,8 @@ BundleAdjustmentSolverSummary solve_bundle_adjustment(BundleAdjustmentProblem& p
       Eigen::Matrix3d J_x;
       Eigen::Matrix<double, 3, 6> J_p;
       // In front: the current state passed total_cost.
-      linearise_observation(problem.camera, obs, T.R_cw, T.t_cw, problem.points[point], r, f < 0 ? nullptr : &J_p, &J_x);
+      linearise_observation(problem.camera, obs, T.R_cw, T.t_cw, problem.points[point], r, f < 0 ? nullptr : &J_p,
+                            &J_x);
       // IRLS weight of the Huber kernel: rho'(s).
       const double s = r.squaredNorm();
       const double w = s <= obs.huber_delta * obs.huber_delta ? 1.0 : obs.huber_delta / std::sqrt(s);

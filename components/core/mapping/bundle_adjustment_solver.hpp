@@ -50,11 +50,11 @@ struct BundleAdjustmentProblem {
 };
 
 struct BundleAdjustmentSolverOptions {
-  int max_iterations = 10;             // successful and rejected steps, as Ceres counts them
-  double function_tolerance = 1e-6;    // Ceres' default: stop when |cost change| / cost falls below
-  double gradient_tolerance = 1e-10;   // Ceres' default: stop when the largest gradient entry falls below
-  double parameter_tolerance = 1e-8;   // Ceres' default: stop when |step| / (|x| + tol) falls below
-  double initial_trust_radius = 1e4;   // Ceres' default: damping starts at diag(J^T J) / 1e4
+  int max_iterations = 10;            // successful and rejected steps, as Ceres counts them
+  double function_tolerance = 1e-6;   // Ceres' default: stop when |cost change| / cost falls below
+  double gradient_tolerance = 1e-10;  // Ceres' default: stop when the largest gradient entry falls below
+  double parameter_tolerance = 1e-8;  // Ceres' default: stop when |step| / (|x| + tol) falls below
+  double initial_trust_radius = 1e4;  // Ceres' default: damping starts at diag(J^T J) / 1e4
   // Asked after every iteration; true ends the solve there (the state reached is kept).
   std::function<bool()> stop_requested;
 };
@@ -62,8 +62,8 @@ struct BundleAdjustmentSolverOptions {
 struct BundleAdjustmentSolverSummary {
   int iterations = 0;
   int successful_steps = 0;
-  bool stopped = false;        // stop_requested ended it
-  double initial_cost = 0.0;   // 0.5 * sum of rho(|whitened residual|^2) over active observations
+  bool stopped = false;       // stop_requested ended it
+  double initial_cost = 0.0;  // 0.5 * sum of rho(|whitened residual|^2) over active observations
   double final_cost = 0.0;
 };
 

@@ -12,7 +12,9 @@
 namespace heslam {
 namespace {
 
-Eigen::Quaterniond quaternion_of(const double* block) { return Eigen::Quaterniond(block[3], block[0], block[1], block[2]); }
+Eigen::Quaterniond quaternion_of(const double* block) {
+  return Eigen::Quaterniond(block[3], block[0], block[1], block[2]);
+}
 
 Eigen::Quaterniond exp_so3(const Eigen::Vector3d& w) {
   const double angle = w.norm();
@@ -34,7 +36,12 @@ PoseBlock to_pose_block(const Pose3& T_wc) {
   const Eigen::Matrix3d R = T_cw.linear();
   double q_wxyz[4];
   ceres::RotationMatrixToQuaternion(ceres::ColumnMajorAdapter3x3(R.data()), q_wxyz);
-  return {q_wxyz[1], q_wxyz[2], q_wxyz[3], q_wxyz[0], T_cw.translation().x(), T_cw.translation().y(),
+  return {q_wxyz[1],
+          q_wxyz[2],
+          q_wxyz[3],
+          q_wxyz[0],
+          T_cw.translation().x(),
+          T_cw.translation().y(),
           T_cw.translation().z()};
 }
 
@@ -85,8 +92,16 @@ bool PoseManifold::MinusJacobian(const double*, double* jacobian) const {
 
 ReprojectionCost::ReprojectionCost(const PinholeStereo& camera, double u_px, double v_px, double u_right_px,
                                    double inv_sigma, bool stereo, double disparity_sigma_ratio)
-    : fx_(camera.fx_px), fy_(camera.fy_px), cx_(camera.cx_px), cy_(camera.cy_px), bf_(camera.bf()), u_(u_px),
-      v_(v_px), disparity_(u_px - u_right_px), weight_(inv_sigma), disparity_weight_(inv_sigma / disparity_sigma_ratio),
+    : fx_(camera.fx_px),
+      fy_(camera.fy_px),
+      cx_(camera.cx_px),
+      cy_(camera.cy_px),
+      bf_(camera.bf()),
+      u_(u_px),
+      v_(v_px),
+      disparity_(u_px - u_right_px),
+      weight_(inv_sigma),
+      disparity_weight_(inv_sigma / disparity_sigma_ratio),
       stereo_(stereo) {
   set_num_residuals(stereo ? 3 : 2);
   mutable_parameter_block_sizes()->push_back(7);
@@ -109,9 +124,7 @@ bool ReprojectionCost::Evaluate(const double* const* parameters, double* residua
   // d residual / d p_c, whitened.
   Eigen::Matrix<double, 3, 3> J_pc;
   const double inv_z2 = inv_z * inv_z;
-  J_pc << fx_ * inv_z, 0.0, -fx_ * p_c.x() * inv_z2,
-          0.0, fy_ * inv_z, -fy_ * p_c.y() * inv_z2,
-          0.0, 0.0, -bf_ * inv_z2;
+  J_pc << fx_ * inv_z, 0.0, -fx_ * p_c.x() * inv_z2, 0.0, fy_ * inv_z, -fy_ * p_c.y() * inv_z2, 0.0, 0.0, -bf_ * inv_z2;
   J_pc.topRows<2>() *= weight_;
   J_pc.row(2) *= disparity_weight_;
   const int rows = stereo_ ? 3 : 2;

@@ -28,8 +28,8 @@ struct TrackedAgainst {
 
 // One applied correction.
 struct CorrectionMotion {
-  std::uint64_t map_version = 0;               // the map version applying it produced
-  std::map<KeyframeId, Pose3> T_new_old;       // per moved keyframe: T_new(kf) T_old(kf)^-1 (world)
+  std::uint64_t map_version = 0;          // the map version applying it produced
+  std::map<KeyframeId, Pose3> T_new_old;  // per moved keyframe: T_new(kf) T_old(kf)^-1 (world)
 };
 
 // Records a correction just applied: `old_T_wc` are the poses before it, `map` the map after it

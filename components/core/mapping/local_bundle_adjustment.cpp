@@ -33,8 +33,7 @@ struct Observation {
 }  // namespace
 
 LocalBundleAdjustmentResult local_bundle_adjustment(Map& map, KeyframeId kf_id, const PinholeStereo& camera,
-                                                    const LocalBundleAdjustmentOptions& options,
-                                                    MapChanges& changes) {
+                                                    const LocalBundleAdjustmentOptions& options, MapChanges& changes) {
   LocalBundleAdjustmentResult result;
   const Keyframe* kf = map.keyframe(kf_id);
   if (kf == nullptr || kf->culled || map.keyframes.empty()) return result;

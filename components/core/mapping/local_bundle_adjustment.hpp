@@ -1,4 +1,5 @@
-// Local bundle adjustment (ORB-SLAM2's Optimizer::LocalBundleAdjustment) with its own solver (bundle_adjustment_solver.hpp).
+// Local bundle adjustment (ORB-SLAM2's Optimizer::LocalBundleAdjustment) with its own solver
+// (bundle_adjustment_solver.hpp).
 //
 // Free: the keyframe and its covisible keyframes, and every point they observe. Fixed: the other
 // keyframes observing those points (they anchor the gauge), and the map's first keyframe. Residuals
@@ -22,15 +23,14 @@ struct LocalBundleAdjustmentResult {
   int fixed_keyframes = 0;
   int points = 0;
   int observations = 0;
-  int outliers_removed = 0;        // observations unlinked after the second pass
-  bool aborted = false;            // stop_requested stopped it; the state reached so far is kept
-  double initial_rms_px = 0.0;     // RMS of the whitened residual over all observations, before
-  double final_rms_px = 0.0;       // ... and after, over the inliers
+  int outliers_removed = 0;     // observations unlinked after the second pass
+  bool aborted = false;         // stop_requested stopped it; the state reached so far is kept
+  double initial_rms_px = 0.0;  // RMS of the whitened residual over all observations, before
+  double final_rms_px = 0.0;    // ... and after, over the inliers
 };
 
 // Runs on `map` in place: moved keyframes / points and removed points are recorded in `changes`.
 LocalBundleAdjustmentResult local_bundle_adjustment(Map& map, KeyframeId kf_id, const PinholeStereo& camera,
-                                                    const LocalBundleAdjustmentOptions& options,
-                                                    MapChanges& changes);
+                                                    const LocalBundleAdjustmentOptions& options, MapChanges& changes);
 
 }  // namespace heslam

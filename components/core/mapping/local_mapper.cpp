@@ -144,7 +144,8 @@ void LocalMapper::cull_recent_points(MapChanges& changes) {
     bool erase_entry = false;
     if (point == nullptr) {
       erase_entry = true;
-    } else if (point->visible > 0 && static_cast<float>(point->found) < o.min_found_ratio * static_cast<float>(point->visible)) {
+    } else if (point->visible > 0 &&
+               static_cast<float>(point->found) < o.min_found_ratio * static_cast<float>(point->visible)) {
       erase_point(map_, it->first);
       changes.removed_points[it->first] = kNoId;
       ++changes.counts.culled_points;
@@ -213,8 +214,8 @@ MapChanges LocalMapper::process_keyframe(Keyframe kf, std::vector<MapPoint> new_
   changes.timings.point_culling_ms = ms_since(stage);
 
   if (options_.enable_triangulation) {
-    const auto created = create_new_points(map_, kf_id, camera_, options_.triangulation, kMapperTag,
-                                           state_.next_point_counter);
+    const auto created =
+        create_new_points(map_, kf_id, camera_, options_.triangulation, kMapperTag, state_.next_point_counter);
     for (const PointId id : created) {
       state_.recent_points[id] = state_.keyframes_processed;
       changes.changed_points.insert(id);

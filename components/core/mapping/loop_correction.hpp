@@ -21,10 +21,10 @@ enum class CorrectionKind { kLoop, kGlobalBundleAdjustment };
 
 struct LoopCorrection {
   std::uint64_t id = 0;
-  std::uint64_t map_version = 0;  // map version the correction was computed on
-  KeyframeId loop_kf = kNoId;     // the current keyframe that closed the loop
-  KeyframeId matched_kf = kNoId;  // the old keyframe it matched
-  Pose3 T_matched_loop = Pose3::Identity();  // loop keyframe in the matched keyframe's frame
+  std::uint64_t map_version = 0;                             // map version the correction was computed on
+  KeyframeId loop_kf = kNoId;                                // the current keyframe that closed the loop
+  KeyframeId matched_kf = kNoId;                             // the old keyframe it matched
+  Pose3 T_matched_loop = Pose3::Identity();                  // loop keyframe in the matched keyframe's frame
   std::vector<std::pair<KeyframeId, Pose3>> corrected_T_wc;  // new camera->world poses
   std::vector<std::pair<PointId, PointId>> point_merges;     // (from, into): `from` is replaced
   CorrectionKind kind = CorrectionKind::kLoop;

@@ -26,7 +26,7 @@ struct LocalMapperCounts {
   int rejected_observations = 0;  // keyframe referenced an unknown / culled point
   int culled_points = 0;
   int triangulated_points = 0;
-  int fused_points = 0;           // duplicates merged or observations added by fusion
+  int fused_points = 0;  // duplicates merged or observations added by fusion
   int bundle_adjustment_outliers = 0;
   // Size of the local BA's problem (its cost scales with these).
   int bundle_adjustment_free_keyframes = 0;
@@ -35,14 +35,14 @@ struct LocalMapperCounts {
   int bundle_adjustment_observations = 0;
   int culled_keyframes = 0;
   bool bundle_adjustment_aborted = false;
-  int late_keyframes_moved = 0;   // tracked before a correction applied since: moved into its frame
+  int late_keyframes_moved = 0;  // tracked before a correction applied since: moved into its frame
 };
 
 struct MapChanges {
-  std::uint64_t map_version = 0;               // version after the step
-  std::set<KeyframeId> changed_keyframes;      // republish state (includes newly culled ones)
-  std::set<PointId> changed_points;            // republish state
-  std::map<PointId, PointId> removed_points;   // dispose: id -> merged_into (kNoId when culled)
+  std::uint64_t map_version = 0;              // version after the step
+  std::set<KeyframeId> changed_keyframes;     // republish state (includes newly culled ones)
+  std::set<PointId> changed_points;           // republish state
+  std::map<PointId, PointId> removed_points;  // dispose: id -> merged_into (kNoId when culled)
   LocalMapperTimings timings;
   LocalMapperCounts counts;
 

@@ -255,7 +255,8 @@ void read_payload(Reader& r, std::uint32_t format, MapSnapshot& out) {
       kp.angle_deg = r.get<float>();
       kp.response = r.get<float>();
       kp.octave = r.get<std::int32_t>();
-      if (kp.octave < 0 || kp.octave >= levels) r.fail("keypoint octave " + std::to_string(kp.octave) + " out of range");
+      if (kp.octave < 0 || kp.octave >= levels)
+        r.fail("keypoint octave " + std::to_string(kp.octave) + " out of range");
       f.u_right_px[i] = r.get<float>();
       f.depth_m[i] = r.get<float>();
       f.descriptors[i] = r.get<Descriptor>();

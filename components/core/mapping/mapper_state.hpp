@@ -14,9 +14,9 @@
 namespace heslam {
 
 struct MapperState {
-  std::uint64_t next_point_counter = 0;   // last counter used for kMapperTag point ids
-  std::uint64_t keyframes_processed = 0;  // keyframe sequence number (ids need not be contiguous)
-  KeyframeId last_keyframe = kNoId;       // the last keyframe processed (restart: what to skip)
+  std::uint64_t next_point_counter = 0;                 // last counter used for kMapperTag point ids
+  std::uint64_t keyframes_processed = 0;                // keyframe sequence number (ids need not be contiguous)
+  KeyframeId last_keyframe = kNoId;                     // the last keyframe processed (restart: what to skip)
   std::map<KeyframeId, std::uint64_t> created_version;  // map version at which a keyframe was inserted
   std::map<PointId, std::uint64_t> recent_points;       // young point -> keyframes_processed at creation
   std::map<KeyframeId, Pose3> culled_T_pc;              // culled keyframe relative to its parent

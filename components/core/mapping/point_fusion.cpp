@@ -110,8 +110,8 @@ int fuse_with_neighbours(Map& map, KeyframeId kf_id, const PinholeStereo& camera
     for (const PointId id : map.keyframe(kf_id)->point_ids) {
       if (id != kNoId) own_points.push_back(id);
     }
-    fused += fuse_into_keyframe(map, target, make_grid(*map.keyframe(target), camera), own_points, camera, options,
-                                changes);
+    fused +=
+        fuse_into_keyframe(map, target, make_grid(*map.keyframe(target), camera), own_points, camera, options, changes);
   }
 
   std::set<PointId> candidates;

@@ -46,8 +46,8 @@ double stereo_parallax_cos(const Keyframe& kf, std::size_t i, const PinholeStere
 
 }  // namespace
 
-std::optional<Eigen::Vector3d> triangulate_linear(const Pose3& T_cw1, const Pose3& T_cw2,
-                                                  const Eigen::Vector2d& x1, const Eigen::Vector2d& x2) {
+std::optional<Eigen::Vector3d> triangulate_linear(const Pose3& T_cw1, const Pose3& T_cw2, const Eigen::Vector2d& x1,
+                                                  const Eigen::Vector2d& x2) {
   const Eigen::Matrix<double, 3, 4> P1 = T_cw1.matrix().topRows<3>();
   const Eigen::Matrix<double, 3, 4> P2 = T_cw2.matrix().topRows<3>();
   Eigen::Matrix4d A;

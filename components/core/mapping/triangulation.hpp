@@ -16,8 +16,8 @@ namespace heslam {
 
 // Linear (DLT) triangulation of normalized image coordinates x = (X/Z, Y/Z) seen by two cameras
 // with world->camera poses T_cw1, T_cw2. nullopt when the system is degenerate.
-std::optional<Eigen::Vector3d> triangulate_linear(const Pose3& T_cw1, const Pose3& T_cw2,
-                                                  const Eigen::Vector2d& x1, const Eigen::Vector2d& x2);
+std::optional<Eigen::Vector3d> triangulate_linear(const Pose3& T_cw1, const Pose3& T_cw2, const Eigen::Vector2d& x1,
+                                                  const Eigen::Vector2d& x2);
 
 // The point from keypoint i1 of kf1 and i2 of kf2 if it passes every check, else nullopt.
 std::optional<Eigen::Vector3d> triangulate_match(const Keyframe& kf1, int i1, const Keyframe& kf2, int i2,

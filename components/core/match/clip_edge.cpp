@@ -26,7 +26,8 @@ int clipped_in_box(const cv::Mat& integral, float u_px, float v_px, float r_px) 
 }  // namespace
 
 int clipped_top_level(const cv::Mat& grey, double min_clipped_fraction) {
-  if (grey.type() != CV_8UC1 || grey.empty()) throw std::invalid_argument("clipped_top_level: expected an 8-bit grey image");
+  if (grey.type() != CV_8UC1 || grey.empty())
+    throw std::invalid_argument("clipped_top_level: expected an 8-bit grey image");
   double low = 0.0;
   double high = 0.0;
   cv::minMaxLoc(grey, &low, &high);
@@ -35,7 +36,8 @@ int clipped_top_level(const cv::Mat& grey, double min_clipped_fraction) {
 }
 
 cv::Mat clipped_pixel_mask(const cv::Mat& grey, double min_clipped_fraction) {
-  if (grey.type() != CV_8UC1 || grey.empty()) throw std::invalid_argument("clipped_pixel_mask: expected an 8-bit grey image");
+  if (grey.type() != CV_8UC1 || grey.empty())
+    throw std::invalid_argument("clipped_pixel_mask: expected an 8-bit grey image");
   cv::Mat mask = cv::Mat::zeros(grey.size(), CV_8UC1);
   double low = 0.0;
   double high = 0.0;
@@ -53,7 +55,8 @@ void mark_near_clip(const cv::Mat& left_clipped, const cv::Mat& right_clipped, c
   const std::size_t n = features.size();
   features.near_clip.assign(n, 0);
   if (options.radius_px <= 0) return;
-  if (left_clipped.size() != right_clipped.size() || left_clipped.type() != CV_8UC1 || right_clipped.type() != CV_8UC1) {
+  if (left_clipped.size() != right_clipped.size() || left_clipped.type() != CV_8UC1 ||
+      right_clipped.type() != CV_8UC1) {
     throw std::invalid_argument("mark_near_clip: expected two 8-bit masks of one size");
   }
   const bool any_left = cv::countNonZero(left_clipped) > 0;
@@ -66,7 +69,8 @@ void mark_near_clip(const cv::Mat& left_clipped, const cv::Mat& right_clipped, c
   for (std::size_t i = 0; i < n; ++i) {
     if (!features.has_stereo(i)) continue;
     const Keypoint& kp = features.keypoints[i];
-    const float r_px = static_cast<float>(options.radius_px) * features.pyramid.scale[static_cast<std::size_t>(kp.octave)];
+    const float r_px =
+        static_cast<float>(options.radius_px) * features.pyramid.scale[static_cast<std::size_t>(kp.octave)];
     const bool near = (any_left && clipped_in_box(left_integral, kp.u_px, kp.v_px, r_px) > 0) ||
                       (any_right && clipped_in_box(right_integral, features.u_right_px[i], kp.v_px, r_px) > 0);
     features.near_clip[i] = near ? 1 : 0;

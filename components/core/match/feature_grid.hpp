@@ -19,8 +19,7 @@ class FeatureGrid {
   FeatureGrid() = default;
   // Keeps a copy of each keypoint's position and octave; indices refer to `keypoints`. Keypoints
   // outside [0, width) x [0, height) are clamped into the border cells (they still answer queries).
-  FeatureGrid(std::span<const Keypoint> keypoints, int width_px, int height_px,
-              const FeatureGridOptions& options = {});
+  FeatureGrid(std::span<const Keypoint> keypoints, int width_px, int height_px, const FeatureGridOptions& options = {});
 
   // Indices (ascending) of keypoints with |u - u_px| < radius_px and |v - v_px| < radius_px (a square
   // window, as ORB-SLAM2) and min_level <= octave <= max_level; -1 means no limit on that side.

@@ -39,7 +39,8 @@ int normalized_sad(const std::uint8_t* left_center, int left_step, const std::ui
     offset = static_cast<int>(left_center[0]) - static_cast<int>(right_center[0]);
   } else if (normalization == StereoMatcherOptions::SadNormalization::kMean) {
     const int n = (2 * half_window + 1) * (2 * half_window + 1);
-    const int difference = patch_sum(left_center, left_step, half_window) - patch_sum(right_center, right_step, half_window);
+    const int difference =
+        patch_sum(left_center, left_step, half_window) - patch_sum(right_center, right_step, half_window);
     offset = (difference >= 0 ? difference + n / 2 : difference - n / 2) / n;
   }
   int sad = 0;
@@ -58,8 +59,8 @@ int normalized_sad(const std::uint8_t* left_center, int left_step, const std::ui
 int normalized_sad_sse(const std::uint8_t* left_center, int left_step, const std::uint8_t* right_center, int right_step,
                        int half_window, StereoMatcherOptions::SadNormalization normalization) {
   const int width = 2 * half_window + 1;
-  const __m128i byte_mask =
-      _mm_cmplt_epi8(_mm_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15), _mm_set1_epi8(static_cast<char>(width)));
+  const __m128i byte_mask = _mm_cmplt_epi8(_mm_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
+                                           _mm_set1_epi8(static_cast<char>(width)));
   const __m128i zero = _mm_setzero_si128();
   const std::uint8_t* l0 = left_center - half_window * left_step - half_window;
   const std::uint8_t* r0 = right_center - half_window * right_step - half_window;
@@ -127,12 +128,14 @@ StereoMatcherOptions StereoMatcherOptions::from_yaml(const cv::FileNode& root, c
                             {"mean", Options::SadNormalization::kMean},
                             {"none", Options::SadNormalization::kNone}},
                            o.sad_normalization);
-  yaml_option::read_choice(root, "Stereo.subpixelFit", source,
-                           {{"parabola", Options::SubpixelFit::kParabola},
-                            {"equiangular", Options::SubpixelFit::kEquiangular}},
-                           o.subpixel_fit);
-  if (o.max_distance < 0 || o.max_distance > 256) yaml_option::fail(source, "Stereo.maxDistance", "an integer in [0, 256]");
-  if (!(o.row_band_px > 0.f) || o.row_band_px > 1000.f) yaml_option::fail(source, "Stereo.rowBand", "a number in (0, 1000]");
+  yaml_option::read_choice(
+      root, "Stereo.subpixelFit", source,
+      {{"parabola", Options::SubpixelFit::kParabola}, {"equiangular", Options::SubpixelFit::kEquiangular}},
+      o.subpixel_fit);
+  if (o.max_distance < 0 || o.max_distance > 256)
+    yaml_option::fail(source, "Stereo.maxDistance", "an integer in [0, 256]");
+  if (!(o.row_band_px > 0.f) || o.row_band_px > 1000.f)
+    yaml_option::fail(source, "Stereo.rowBand", "a number in (0, 1000]");
   if (o.sad_half_window_px < 1 || o.sad_half_window_px > kOrbBorderPx / 2) {
     yaml_option::fail(source, "Stereo.sadHalfWindow", "an integer in [1, 9]");
   }
@@ -226,7 +229,8 @@ void StereoMatcher::match_range(const OrbFeatures& left, const OrbFeatures& righ
     const cv::Mat& image_r = right.pyramid[static_cast<std::size_t>(level)];
     const int ul = static_cast<int>(std::lround(kl.u_px * inv_scale));
     const int vl = static_cast<int>(std::lround(kl.v_px * inv_scale));
-    const int ur0 = static_cast<int>(std::lround(right.keypoints[static_cast<std::size_t>(best_right)].u_px * inv_scale));
+    const int ur0 =
+        static_cast<int>(std::lround(right.keypoints[static_cast<std::size_t>(best_right)].u_px * inv_scale));
     // The level images have kOrbBorderPx readable pixels around them.
     const int reach = w;
     if (ur0 - L - reach < -kOrbBorderPx || ur0 + L + reach >= image_r.cols + kOrbBorderPx) continue;
@@ -297,7 +301,8 @@ void StereoMatcher::match_range(const OrbFeatures& left, const OrbFeatures& righ
       for (int dv = -w; dv <= w; ++dv) {
         for (int du = -w; du <= w; ++du) variation += std::abs(static_cast<int>(center_l[dv * step_l + du]) - mean);
       }
-      outlier_score = static_cast<int>((static_cast<std::int64_t>(best_sad) * kRelativeSadScale) / std::max(variation, 1));
+      outlier_score =
+          static_cast<int>((static_cast<std::int64_t>(best_sad) * kRelativeSadScale) / std::max(variation, 1));
     }
     sad_and_index.emplace_back(outlier_score, static_cast<int>(i));
     ++count.matched;
@@ -310,7 +315,8 @@ void StereoMatcher::reject_outliers(std::vector<std::pair<int, int>>& sad_and_in
   std::sort(sad_and_index.begin(), sad_and_index.end());
   const float median = static_cast<float>(sad_and_index[sad_and_index.size() / 2].first);
   const float threshold = options_.sad_outlier_factor * median;
-  for (auto it = sad_and_index.rbegin(); it != sad_and_index.rend() && static_cast<float>(it->first) > threshold; ++it) {
+  for (auto it = sad_and_index.rbegin(); it != sad_and_index.rend() && static_cast<float>(it->first) > threshold;
+       ++it) {
     u_right_px[static_cast<std::size_t>(it->second)] = kNoStereo;
     depth_m[static_cast<std::size_t>(it->second)] = kNoStereo;
     if (stats) {

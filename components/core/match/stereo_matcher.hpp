@@ -20,9 +20,9 @@ struct StereoMatcherOptions {
   // Hamming. ORB-SLAM2 uses (TH_HIGH + TH_LOW) / 2 = 75; TH_HIGH = 100 keeps more true matches and
   // the SAD refinement and outlier test remove the false ones (docs/vision.md).
   int max_distance = 100;
-  float row_band_px = 2.f;        // |v_left - v_right| allowed, times the right keypoint's scale
-  int sad_half_window_px = 5;     // SAD window is (2w+1)^2 pixels on the keypoint's level
-  int sad_search_px = 5;          // SAD searched +-L pixels (level) around the matched right keypoint
+  float row_band_px = 2.f;          // |v_left - v_right| allowed, times the right keypoint's scale
+  int sad_half_window_px = 5;       // SAD window is (2w+1)^2 pixels on the keypoint's level
+  int sad_search_px = 5;            // SAD searched +-L pixels (level) around the matched right keypoint
   float min_depth_baselines = 1.f;  // closest valid depth, in baselines (max disparity = fx / this)
   // Matches whose SAD exceeds this factor x the median SAD are dropped (ORB-SLAM2: 1.5 x 1.4).
   float sad_outlier_factor = 2.1f;
@@ -45,12 +45,12 @@ struct StereoMatcherOptions {
 
 // Where left keypoints were lost, for tuning and reports.
 struct StereoMatchStats {
-  int no_candidate = 0;     // no right keypoint in the row band, octave range and disparity range
-  int over_distance = 0;    // best Hamming distance above max_distance
-  int sad_at_edge = 0;      // SAD minimum on the edge of the search range
-  int bad_fit = 0;          // flat or inconsistent subpixel fit
-  int out_of_range = 0;     // refined disparity outside [0, max)
-  int sad_outlier = 0;      // dropped by the SAD statistics
+  int no_candidate = 0;   // no right keypoint in the row band, octave range and disparity range
+  int over_distance = 0;  // best Hamming distance above max_distance
+  int sad_at_edge = 0;    // SAD minimum on the edge of the search range
+  int bad_fit = 0;        // flat or inconsistent subpixel fit
+  int out_of_range = 0;   // refined disparity outside [0, max)
+  int sad_outlier = 0;    // dropped by the SAD statistics
   int matched = 0;
 };
 

@@ -14,8 +14,10 @@ std::vector<Descriptor> ImageDescriptorExtractor::extract(const cv::Mat& image) 
   if (image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3)) {
     throw std::invalid_argument("ImageDescriptorExtractor: expected an 8-bit grey or BGR image");
   }
-  if (image.channels() == 3) cv::cvtColor(image, grey_, cv::COLOR_BGR2GRAY);
-  else grey_ = image;
+  if (image.channels() == 3)
+    cv::cvtColor(image, grey_, cv::COLOR_BGR2GRAY);
+  else
+    grey_ = image;
   // The equalizer maps a stereo pair by its joint histogram; the image paired with itself is the
   // image's own histogram.
   equalizer_.equalize(grey_, grey_, equalized_, unused_);

@@ -51,7 +51,8 @@ std::vector<PlaceCandidate> rank_groups(const BowVector& query, SharingTable& ta
     PlaceCandidate best = candidate;
     double accumulated = candidate.score;
     if (const Keyframe* keyframe = map.keyframe(candidate.id)) {
-      const std::size_t group = std::min(keyframe->covisible.size(), static_cast<std::size_t>(std::max(options.group_size, 0)));
+      const std::size_t group =
+          std::min(keyframe->covisible.size(), static_cast<std::size_t>(std::max(options.group_size, 0)));
       for (std::size_t n = 0; n < group; ++n) {
         const KeyframeId neighbour = keyframe->covisible[n].first;
         const auto it = table.find(neighbour);

@@ -58,9 +58,11 @@ const char* to_string(BowScoring scoring) {
 
 Vocabulary::Vocabulary(int branching, int levels, BowScoring scoring, BowWeighting weighting)
     : branching_(branching), levels_(levels), scoring_(scoring), weighting_(weighting) {
-  if (branching < 1) throw std::invalid_argument("vocabulary: branching factor k must be >= 1, got " + std::to_string(branching));
+  if (branching < 1)
+    throw std::invalid_argument("vocabulary: branching factor k must be >= 1, got " + std::to_string(branching));
   if (levels < 1 || levels > kMaxLevels) {
-    throw std::invalid_argument("vocabulary: levels L must be in 1.." + std::to_string(kMaxLevels) + ", got " + std::to_string(levels));
+    throw std::invalid_argument("vocabulary: levels L must be in 1.." + std::to_string(kMaxLevels) + ", got " +
+                                std::to_string(levels));
   }
 }
 
@@ -82,7 +84,8 @@ Vocabulary::Vocabulary(int branching, int levels, BowScoring scoring, BowWeighti
 Vocabulary Vocabulary::from_columns(int branching, int levels, BowScoring scoring, BowWeighting weighting,
                                     const NodeColumns& columns) {
   const std::size_t n = columns.is_leaf.size();
-  if (columns.parents.size() != 4 * n || columns.descriptors.size() != kDescriptorBytes * n || columns.weights.size() != 4 * n) {
+  if (columns.parents.size() != 4 * n || columns.descriptors.size() != kDescriptorBytes * n ||
+      columns.weights.size() != 4 * n) {
     throw std::invalid_argument("vocabulary: node columns of different lengths");
   }
   Vocabulary vocabulary(branching, levels, scoring, weighting);
@@ -114,8 +117,11 @@ void Vocabulary::link(std::span<const std::uint8_t> is_leaf, DescriptorOf&& desc
       throw std::invalid_argument("vocabulary: node " + std::to_string(id) + " has parent " + std::to_string(parent) +
                                   ", which is a leaf");
     }
-    if (depth[parent] + 1 > kMaxLevels) throw std::invalid_argument("vocabulary: node " + std::to_string(id) + " is deeper than " + std::to_string(kMaxLevels) + " levels");
-    if (!std::isfinite(weight_[id])) throw std::invalid_argument("vocabulary: node " + std::to_string(id) + " has a non-finite weight");
+    if (depth[parent] + 1 > kMaxLevels)
+      throw std::invalid_argument("vocabulary: node " + std::to_string(id) + " is deeper than " +
+                                  std::to_string(kMaxLevels) + " levels");
+    if (!std::isfinite(weight_[id]))
+      throw std::invalid_argument("vocabulary: node " + std::to_string(id) + " has a non-finite weight");
     depth[id] = static_cast<std::uint8_t>(depth[parent] + 1);
     ++child_count[parent];
     if (is_leaf[id - 1]) {
@@ -226,9 +232,9 @@ void Vocabulary::transform(std::span<const Descriptor> descriptors, BowVector& b
     const float idf = weight_[node_of_word_[word]];
     float value = 0.f;
     switch (weighting_) {
-      case BowWeighting::kTfIdf: value = count * idf; break;   // normalised below: tf = count / n
+      case BowWeighting::kTfIdf: value = count * idf; break;  // normalised below: tf = count / n
       case BowWeighting::kTf: value = count; break;
-      case BowWeighting::kIdf: value = idf; break;            // DBoW2 adds idf once per word
+      case BowWeighting::kIdf: value = idf; break;  // DBoW2 adds idf once per word
       case BowWeighting::kBinary: value = 1.f; break;
     }
     if (value > 0.f) bow.entries.emplace_back(word, value);
@@ -266,8 +272,12 @@ double Vocabulary::score(const BowVector& a, const BowVector& b) const {
         // |a-b|_1 = |a|_1 + |b|_1 - sum over common words of (|va| + |vb| - |va - vb|) = 2 - that sum.
         case BowScoring::kL1: sum += std::abs(va - vb) - std::abs(va) - std::abs(vb); break;
         case BowScoring::kL2: sum += va * vb; break;
-        case BowScoring::kChiSquare: if (va + vb != 0.0) sum += va * vb / (va + vb); break;
-        case BowScoring::kKl: if (va > 0.0 && vb > 0.0) sum += va * std::log(va / vb); break;
+        case BowScoring::kChiSquare:
+          if (va + vb != 0.0) sum += va * vb / (va + vb);
+          break;
+        case BowScoring::kKl:
+          if (va > 0.0 && vb > 0.0) sum += va * std::log(va / vb);
+          break;
         case BowScoring::kBhattacharyya: sum += std::sqrt(va * vb); break;
         case BowScoring::kDotProduct: sum += va * vb; break;
       }

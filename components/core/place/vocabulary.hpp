@@ -44,8 +44,7 @@ class Vocabulary {
   // Builds the tree from its nodes (index i in `nodes` is node id i + 1; the root is implicit).
   // Throws std::invalid_argument naming the node when a parent id is out of range or not earlier,
   // or when branching / levels are not positive.
-  Vocabulary(int branching, int levels, BowScoring scoring, BowWeighting weighting,
-             std::span<const NodeRecord> nodes);
+  Vocabulary(int branching, int levels, BowScoring scoring, BowWeighting weighting, std::span<const NodeRecord> nodes);
 
   // The same nodes as packed little-endian columns, as heslam's binary file stores them (n nodes:
   // parents n x u32, is_leaf n x u8, descriptors n x 32 bytes, weights n x f32), so a file is turned
@@ -77,8 +76,7 @@ class Vocabulary {
   // `features` is not null, its feature vector: feature i filed under the node of its path at depth
   // levels() - levels_up (the leaf itself for levels_up = 0; the root for levels_up >= levels()).
   // ORB-SLAM2 matches keyframes with levels_up = 4 on a 6-level tree.
-  void transform(std::span<const Descriptor> descriptors, BowVector& bow, FeatureVector* features,
-                 int levels_up) const;
+  void transform(std::span<const Descriptor> descriptors, BowVector& bow, FeatureVector* features, int levels_up) const;
 
   // Similarity of two BoW vectors computed by this vocabulary, DBoW2's definition for the
   // vocabulary's scoring: L1 gives 1 - 0.5 * |a - b|_1 in [0, 1] (1 = identical).
@@ -107,13 +105,13 @@ class Vocabulary {
   int levels_ = 0;
   BowScoring scoring_ = BowScoring::kL1;
   BowWeighting weighting_ = BowWeighting::kTfIdf;
-  std::vector<NodeId> parent_;                // per node; root's parent is 0
-  std::vector<float> weight_;                 // per node
-  std::vector<WordId> word_;                  // per node: its word id, or kNoWord for inner nodes
-  std::vector<std::uint32_t> slot_of_node_;   // per node: its child slot (root: unused)
-  Slot root_;                                 // where the root's children are
-  std::vector<Slot> slot_;                    // per child slot
-  std::vector<Descriptor> slot_descriptor_;   // per child slot
+  std::vector<NodeId> parent_;               // per node; root's parent is 0
+  std::vector<float> weight_;                // per node
+  std::vector<WordId> word_;                 // per node: its word id, or kNoWord for inner nodes
+  std::vector<std::uint32_t> slot_of_node_;  // per node: its child slot (root: unused)
+  Slot root_;                                // where the root's children are
+  std::vector<Slot> slot_;                   // per child slot
+  std::vector<Descriptor> slot_descriptor_;  // per child slot
   std::vector<NodeId> node_of_word_;
 };
 

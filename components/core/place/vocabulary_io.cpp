@@ -164,21 +164,29 @@ TextHeader parse_text_header(const fs::path& path, std::string_view line) {
   std::string_view field;
   for (int& value : values) {
     if (!fields.next(field)) fail_at(path, 1, std::string(expected) + ", got " + quoted(line));
-    if (!parse_number(field, value)) fail_at(path, 1, std::string(expected) + ", " + quoted(field) + " is not an integer");
+    if (!parse_number(field, value))
+      fail_at(path, 1, std::string(expected) + ", " + quoted(field) + " is not an integer");
   }
   if (fields.next(field)) fail_at(path, 1, std::string(expected) + ", got extra field " + quoted(field));
   TextHeader header{values[0], values[1], values[2], values[3]};
   if (header.branching < 1 || header.branching > kMaxTextBranching) {
-    fail_at(path, 1, "branching factor k = " + std::to_string(header.branching) + " is out of range 1.." + std::to_string(kMaxTextBranching));
+    fail_at(path, 1,
+            "branching factor k = " + std::to_string(header.branching) + " is out of range 1.." +
+                std::to_string(kMaxTextBranching));
   }
   if (header.levels < 1 || header.levels > kMaxTextLevels) {
-    fail_at(path, 1, "levels L = " + std::to_string(header.levels) + " is out of range 1.." + std::to_string(kMaxTextLevels));
+    fail_at(path, 1,
+            "levels L = " + std::to_string(header.levels) + " is out of range 1.." + std::to_string(kMaxTextLevels));
   }
   if (header.scoring < 0 || header.scoring > kMaxScoring) {
-    fail_at(path, 1, "scoring " + std::to_string(header.scoring) + " is not a DBoW2 scoring type (0.." + std::to_string(kMaxScoring) + ")");
+    fail_at(path, 1,
+            "scoring " + std::to_string(header.scoring) + " is not a DBoW2 scoring type (0.." +
+                std::to_string(kMaxScoring) + ")");
   }
   if (header.weighting < 0 || header.weighting > kMaxWeighting) {
-    fail_at(path, 1, "weighting " + std::to_string(header.weighting) + " is not a DBoW2 weighting type (0.." + std::to_string(kMaxWeighting) + ")");
+    fail_at(path, 1,
+            "weighting " + std::to_string(header.weighting) + " is not a DBoW2 weighting type (0.." +
+                std::to_string(kMaxWeighting) + ")");
   }
   return header;
 }
@@ -190,28 +198,34 @@ Vocabulary::NodeRecord parse_text_node(const fs::path& path, std::size_t line_nu
   int field_count = 0;
   auto next_field = [&](const char* what) {
     if (!fields.next(field)) {
-      fail_at(path, line_number, "node line has " + std::to_string(field_count) + " fields, expected 35 (parent is_leaf d0..d31 weight); missing " + what);
+      fail_at(path, line_number,
+              "node line has " + std::to_string(field_count) +
+                  " fields, expected 35 (parent is_leaf d0..d31 weight); missing " + what);
     }
     ++field_count;
   };
   Vocabulary::NodeRecord record;
   std::uint64_t parent = 0;
   next_field("parent");
-  if (!parse_number(field, parent)) fail_at(path, line_number, "parent " + quoted(field) + " is not a non-negative integer");
+  if (!parse_number(field, parent))
+    fail_at(path, line_number, "parent " + quoted(field) + " is not a non-negative integer");
   if (parent >= id) {
-    fail_at(path, line_number, "parent " + std::to_string(parent) + " of node " + std::to_string(id) + " is not an earlier node");
+    fail_at(path, line_number,
+            "parent " + std::to_string(parent) + " of node " + std::to_string(id) + " is not an earlier node");
   }
   if (is_leaf_so_far[parent]) fail_at(path, line_number, "parent " + std::to_string(parent) + " is a leaf");
   record.parent = static_cast<NodeId>(parent);
   int is_leaf = 0;
   next_field("is_leaf");
-  if (!parse_number(field, is_leaf) || (is_leaf != 0 && is_leaf != 1)) fail_at(path, line_number, "is_leaf " + quoted(field) + " is not 0 or 1");
+  if (!parse_number(field, is_leaf) || (is_leaf != 0 && is_leaf != 1))
+    fail_at(path, line_number, "is_leaf " + quoted(field) + " is not 0 or 1");
   record.is_leaf = is_leaf == 1;
   for (std::size_t b = 0; b < record.descriptor.size(); ++b) {
     next_field("descriptor bytes");
     unsigned value = 0;
     if (!parse_number(field, value) || value > 255) {
-      fail_at(path, line_number, "descriptor byte " + std::to_string(b) + " " + quoted(field) + " is not an integer 0..255");
+      fail_at(path, line_number,
+              "descriptor byte " + std::to_string(b) + " " + quoted(field) + " is not an integer 0..255");
     }
     record.descriptor[b] = static_cast<std::uint8_t>(value);
   }
@@ -264,13 +278,14 @@ VocabularyFileFormat detect_vocabulary_format(const fs::path& path) {
   if (!in) fail(path, "cannot open file");
   std::array<char, kBinaryMagic.size()> head{};
   in.read(head.data(), head.size());
-  if (in.gcount() == static_cast<std::streamsize>(head.size()) && head == kBinaryMagic) return VocabularyFileFormat::kHeslamBinary;
+  if (in.gcount() == static_cast<std::streamsize>(head.size()) && head == kBinaryMagic)
+    return VocabularyFileFormat::kHeslamBinary;
   return VocabularyFileFormat::kDbow2Text;
 }
 
 Vocabulary load_vocabulary(const fs::path& path) {
   return detect_vocabulary_format(path) == VocabularyFileFormat::kHeslamBinary ? load_vocabulary_binary(path)
-                                                                                : load_vocabulary_text(path);
+                                                                               : load_vocabulary_text(path);
 }
 
 Vocabulary load_vocabulary_text(const fs::path& path) {
@@ -293,7 +308,7 @@ Vocabulary load_vocabulary_text(const fs::path& path) {
   const TextHeader header = parse_text_header(path, line);
 
   std::vector<Vocabulary::NodeRecord> nodes;
-  std::vector<std::uint8_t> is_leaf{0};      // per node id, root first
+  std::vector<std::uint8_t> is_leaf{0};  // per node id, root first
   std::vector<std::uint8_t> has_children{0};
   std::vector<std::size_t> line_of_node{1};  // the root's "line" is the header
   while (next_line(line)) {
@@ -312,7 +327,8 @@ Vocabulary load_vocabulary_text(const fs::path& path) {
   if (nodes.empty()) fail_at(path, line_number + 1, "no nodes after the header (file truncated?)");
   for (std::size_t id = 0; id < is_leaf.size(); ++id) {
     if (!is_leaf[id] && !has_children[id]) {
-      fail_at(path, line_of_node[id], "node " + std::to_string(id) + " is an inner node without children (file truncated?)");
+      fail_at(path, line_of_node[id],
+              "node " + std::to_string(id) + " is an inner node without children (file truncated?)");
     }
   }
   try {
@@ -357,7 +373,8 @@ Vocabulary load_vocabulary_binary(const fs::path& path) {
     fail(path, "truncated: " + std::to_string(data.size()) + " bytes, a binary vocabulary has at least " +
                    std::to_string(kBinaryHeaderBytes + kChecksumBytes));
   }
-  if (!std::equal(kBinaryMagic.begin(), kBinaryMagic.end(), data.begin())) fail(path, "not a heslam binary vocabulary (bad magic)");
+  if (!std::equal(kBinaryMagic.begin(), kBinaryMagic.end(), data.begin()))
+    fail(path, "not a heslam binary vocabulary (bad magic)");
   const char* p = data.data() + kBinaryMagic.size();
   const auto version = get<std::uint32_t>(p);
   const auto branching = get<std::uint32_t>(p + 4);
@@ -366,14 +383,17 @@ Vocabulary load_vocabulary_binary(const fs::path& path) {
   const auto weighting = get<std::uint32_t>(p + 16);
   const auto node_count = get<std::uint64_t>(p + 24);
   if (version != kVocabularyBinaryFormatVersion) {
-    fail(path, "format version " + std::to_string(version) + ", this build reads version " + std::to_string(kVocabularyBinaryFormatVersion));
+    fail(path, "format version " + std::to_string(version) + ", this build reads version " +
+                   std::to_string(kVocabularyBinaryFormatVersion));
   }
   // Checked before the size arithmetic so a corrupt count cannot overflow it.
   const std::size_t max_nodes = (data.size() - kBinaryHeaderBytes - kChecksumBytes) / kBinaryBytesPerNode;
-  const std::size_t expected_size = kBinaryHeaderBytes + std::min<std::uint64_t>(node_count, max_nodes + 1) * kBinaryBytesPerNode + kChecksumBytes;
+  const std::size_t expected_size =
+      kBinaryHeaderBytes + std::min<std::uint64_t>(node_count, max_nodes + 1) * kBinaryBytesPerNode + kChecksumBytes;
   if (node_count > max_nodes || expected_size != data.size()) {
-    fail(path, "size " + std::to_string(data.size()) + " bytes does not match the header's " + std::to_string(node_count) +
-                   " nodes (" + (node_count > max_nodes ? "truncated" : "trailing bytes") + ")");
+    fail(path, "size " + std::to_string(data.size()) + " bytes does not match the header's " +
+                   std::to_string(node_count) + " nodes (" + (node_count > max_nodes ? "truncated" : "trailing bytes") +
+                   ")");
   }
   const std::size_t body_size = data.size() - kChecksumBytes;
   const auto stored_checksum = get<std::uint64_t>(data.data() + body_size);
@@ -390,8 +410,8 @@ Vocabulary load_vocabulary_binary(const fs::path& path) {
   columns.descriptors = {columns.is_leaf.data() + n, 32 * n};
   columns.weights = {columns.descriptors.data() + columns.descriptors.size(), 4 * n};
   try {
-    return Vocabulary::from_columns(static_cast<int>(branching), static_cast<int>(levels), static_cast<BowScoring>(scoring),
-                                    static_cast<BowWeighting>(weighting), columns);
+    return Vocabulary::from_columns(static_cast<int>(branching), static_cast<int>(levels),
+                                    static_cast<BowScoring>(scoring), static_cast<BowWeighting>(weighting), columns);
   } catch (const std::invalid_argument& e) {
     fail(path, e.what());
   }

@@ -84,8 +84,10 @@ class NodeClusterer {
         const Descriptor& d = descriptors_[m];
         auto same = [&](const Child& c) { return c.centre == d; };
         auto it = std::find_if(children.begin(), children.end(), same);
-        if (it == children.end()) children.push_back({d, {m}, true});
-        else it->members.push_back(m);
+        if (it == children.end())
+          children.push_back({d, {m}, true});
+        else
+          it->members.push_back(m);
       }
       return children;
     }
@@ -170,8 +172,8 @@ class NodeClusterer {
 
   // Per cluster and bit, the majority of its members' bits (ties give 0); an emptied cluster keeps
   // its centre.
-  void update_medians(const Members& members, const std::vector<std::uint8_t>& assignment, std::vector<Descriptor>& centres,
-                      int threads) const {
+  void update_medians(const Members& members, const std::vector<std::uint8_t>& assignment,
+                      std::vector<Descriptor>& centres, int threads) const {
     const std::size_t k = centres.size();
     const std::size_t workers = std::max(1, threads);
     std::vector<std::vector<std::uint32_t>> bit_counts(workers, std::vector<std::uint32_t>(k * kDescriptorBits, 0));
@@ -205,14 +207,17 @@ class NodeClusterer {
 
 void check_options(const std::vector<std::vector<Descriptor>>& images, const VocabularyTrainingOptions& options) {
   if (options.branching < 2 || options.branching > 255) {
-    throw std::invalid_argument("train_vocabulary: branching k must be in 2..255, got " + std::to_string(options.branching));
+    throw std::invalid_argument("train_vocabulary: branching k must be in 2..255, got " +
+                                std::to_string(options.branching));
   }
   if (options.levels < 1 || options.levels > 32) {
     throw std::invalid_argument("train_vocabulary: levels L must be in 1..32, got " + std::to_string(options.levels));
   }
-  if (options.threads < 1) throw std::invalid_argument("train_vocabulary: threads must be >= 1, got " + std::to_string(options.threads));
+  if (options.threads < 1)
+    throw std::invalid_argument("train_vocabulary: threads must be >= 1, got " + std::to_string(options.threads));
   if (options.max_iterations < 1) {
-    throw std::invalid_argument("train_vocabulary: max_iterations must be >= 1, got " + std::to_string(options.max_iterations));
+    throw std::invalid_argument("train_vocabulary: max_iterations must be >= 1, got " +
+                                std::to_string(options.max_iterations));
   }
   const bool any = std::any_of(images.begin(), images.end(), [](const auto& image) { return !image.empty(); });
   if (!any) throw std::invalid_argument("train_vocabulary: no descriptors to train on");
@@ -220,7 +225,8 @@ void check_options(const std::vector<std::vector<Descriptor>>& images, const Voc
 
 // The descriptors the tree is clustered from: all, or a uniform sample without replacement, in
 // their original order.
-std::vector<Descriptor> clustering_set(const std::vector<std::vector<Descriptor>>& images, const VocabularyTrainingOptions& options) {
+std::vector<Descriptor> clustering_set(const std::vector<std::vector<Descriptor>>& images,
+                                       const VocabularyTrainingOptions& options) {
   std::vector<Descriptor> all;
   for (const auto& image : images) all.insert(all.end(), image.begin(), image.end());
   if (options.max_cluster_descriptors == 0 || all.size() <= options.max_cluster_descriptors) return all;
@@ -246,7 +252,8 @@ struct PendingNode {
 
 }  // namespace
 
-Vocabulary train_vocabulary(const std::vector<std::vector<Descriptor>>& images, const VocabularyTrainingOptions& options) {
+Vocabulary train_vocabulary(const std::vector<std::vector<Descriptor>>& images,
+                            const VocabularyTrainingOptions& options) {
   check_options(images, options);
   const auto start = std::chrono::steady_clock::now();
   auto report = [&](const std::string& line) {
@@ -258,8 +265,8 @@ Vocabulary train_vocabulary(const std::vector<std::vector<Descriptor>>& images, 
   };
 
   const std::vector<Descriptor> descriptors = clustering_set(images, options);
-  report("clustering " + std::to_string(descriptors.size()) + " descriptors into k = " + std::to_string(options.branching) +
-         ", L = " + std::to_string(options.levels));
+  report("clustering " + std::to_string(descriptors.size()) +
+         " descriptors into k = " + std::to_string(options.branching) + ", L = " + std::to_string(options.levels));
   const NodeClusterer clusterer(descriptors, options.branching, options.max_iterations);
 
   std::vector<Vocabulary::NodeRecord> nodes;  // node id i + 1, breadth first
@@ -295,8 +302,9 @@ Vocabulary train_vocabulary(const std::vector<std::vector<Descriptor>>& images, 
         }
       }
     }
-    report("level " + std::to_string(depth + 1) + "/" + std::to_string(options.levels) + ": " + std::to_string(nodes.size()) +
-           " nodes, " + std::to_string(words) + " words, " + std::to_string(next.size()) + " nodes to split");
+    report("level " + std::to_string(depth + 1) + "/" + std::to_string(options.levels) + ": " +
+           std::to_string(nodes.size()) + " nodes, " + std::to_string(words) + " words, " +
+           std::to_string(next.size()) + " nodes to split");
     level = std::move(next);
   }
 
@@ -320,7 +328,8 @@ Vocabulary train_vocabulary(const std::vector<std::vector<Descriptor>>& images, 
     for (WordId w = 0; w < tree.word_count(); ++w) {
       std::uint32_t count = 0;
       for (const auto& counts : images_with_word) count += counts[w];
-      nodes[tree.node_of_word(w) - 1].weight = static_cast<float>(std::log(image_count / std::max<std::uint32_t>(count, 1)));
+      nodes[tree.node_of_word(w) - 1].weight =
+          static_cast<float>(std::log(image_count / std::max<std::uint32_t>(count, 1)));
     }
     report("weights from " + std::to_string(images.size()) + " images");
   }

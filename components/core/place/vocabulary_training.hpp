@@ -20,8 +20,8 @@ struct VocabularyTrainingOptions {
   BowWeighting weighting = BowWeighting::kTfIdf;
   BowScoring scoring = BowScoring::kL1;
   std::uint64_t seed = 1;
-  int threads = 1;                 // subtrees are clustered in parallel; the result does not depend on it
-  int max_iterations = 10;         // k-medians iterations per node (stops earlier when stable)
+  int threads = 1;          // subtrees are clustered in parallel; the result does not depend on it
+  int max_iterations = 10;  // k-medians iterations per node (stops earlier when stable)
   // The tree is clustered from at most this many descriptors, a uniform sample drawn with `seed`
   // (0 = all). The word weights still count every image's descriptors. Clustering time grows with
   // the sample; ~100 descriptors per word of the final tree are plenty for k = 10, L = 6.

@@ -18,8 +18,8 @@ struct Hypothesis {
   Pose3 T_cw = Pose3::Identity();
 };
 
-Hypothesis solve(const std::vector<PnpCorrespondence>& all, const std::vector<int>& subset, const cv::Mat& K,
-                 int flags, const Pose3* guess) {
+Hypothesis solve(const std::vector<PnpCorrespondence>& all, const std::vector<int>& subset, const cv::Mat& K, int flags,
+                 const Pose3* guess) {
   std::vector<cv::Point3d> object;
   std::vector<cv::Point2d> image;
   object.reserve(subset.size());

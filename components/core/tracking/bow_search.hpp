@@ -17,8 +17,8 @@
 namespace heslam {
 
 struct BowSearchOptions {
-  int max_distance = 50;   // ORB-SLAM2 TH_LOW: a word shares coarse structure only, so be strict
-  float ratio = 0.75f;     // best < ratio x second best (ORB-SLAM2: 0.75 relocalization and loops, 0.7 reference)
+  int max_distance = 50;  // ORB-SLAM2 TH_LOW: a word shares coarse structure only, so be strict
+  float ratio = 0.75f;    // best < ratio x second best (ORB-SLAM2: 0.75 relocalization and loops, 0.7 reference)
   bool check_orientation = true;  // keep matches in the 3 dominant rotation-histogram bins
 };
 

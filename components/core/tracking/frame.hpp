@@ -21,7 +21,7 @@ struct Frame {
   std::int64_t stamp_ns = 0;
   std::uint64_t seq = 0;
   StereoFeatures features;
-  FeatureGrid grid;  // keypoint positions binned for projection searches
+  FeatureGrid grid;                // keypoint positions binned for projection searches
   std::vector<PointId> point_ids;  // per keypoint: matched map point or kNoId
   std::vector<bool> outlier;       // per keypoint: rejected by the last pose optimization
   Pose3 T_wc = Pose3::Identity();

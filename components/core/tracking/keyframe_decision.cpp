@@ -10,7 +10,8 @@ constexpr int kTinyMapKeyframes = 2;
 
 // A reference point's observations in the given unit.
 int observations(const Map& map, const MapPoint& point, ObservationCount unit) {
-  return unit == ObservationCount::weighted ? observation_weight(map, point) : static_cast<int>(point.observations.size());
+  return unit == ObservationCount::weighted ? observation_weight(map, point)
+                                            : static_cast<int>(point.observations.size());
 }
 
 }  // namespace
@@ -65,13 +66,13 @@ KeyframeDecision decide_keyframe(const Frame& frame, const PinholeStereo& camera
       untracked_weight += frame.features.stereo_near_clip(i) ? options.close_untracked_near_clip_weight : 1.0;
     }
   }
-  const bool need_close = decision.tracked_close < options.close_tracked_needed &&
-                          untracked_weight > options.close_untracked_enough;
-  const float ratio = input.keyframes_in_map < 2 ? options.reference_ratio_single_keyframe
-                                                 : options.reference_ratio_stereo;
+  const bool need_close =
+      decision.tracked_close < options.close_tracked_needed && untracked_weight > options.close_untracked_enough;
+  const float ratio =
+      input.keyframes_in_map < 2 ? options.reference_ratio_single_keyframe : options.reference_ratio_stereo;
   const double near_clip_discount = 1.0 - options.reference_near_clip_weight;
-  const auto reference = static_cast<float>(input.reference_tracked_points -
-                                            near_clip_discount * input.reference_points_near_clip);
+  const auto reference =
+      static_cast<float>(input.reference_tracked_points - near_clip_discount * input.reference_points_near_clip);
   const auto tracked = static_cast<float>(input.tracked_inliers - near_clip_discount * input.tracked_inliers_near_clip);
 
   const bool c1a = input.frames_since_keyframe >= options.max_frames_between_keyframes;

@@ -9,11 +9,11 @@
 namespace heslam {
 
 struct KeyframeDecisionInput {
-  int frames_since_keyframe = 0;       // frames tracked since the last keyframe was inserted
+  int frames_since_keyframe = 0;        // frames tracked since the last keyframe was inserted
   int frames_since_relocalization = 0;  // large when never relocalized
   int tracked_inliers = 0;              // map points matched by the local map search, after optimization
   int keyframes_in_map = 0;
-  int reference_tracked_points = 0;     // reference keyframe's points with enough observations
+  int reference_tracked_points = 0;  // reference keyframe's points with enough observations
   // Of those two counts, the ones whose feature is near a clip edge (StereoFeatures::near_clip): they
   // count TrackerOptions::reference_near_clip_weight in the reference-ratio rule.
   int tracked_inliers_near_clip = 0;

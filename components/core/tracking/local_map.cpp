@@ -160,9 +160,8 @@ LocalMapSelection select_local_map(const Frame& frame, const Map& map, const Tra
   return selection;
 }
 
-KeyframeCandidate make_keyframe(const Frame& frame, const PinholeStereo& camera, const Map& map,
-                                KeyframeId keyframe_id, std::uint64_t& next_point_counter,
-                                const TrackerOptions& options) {
+KeyframeCandidate make_keyframe(const Frame& frame, const PinholeStereo& camera, const Map& map, KeyframeId keyframe_id,
+                                std::uint64_t& next_point_counter, const TrackerOptions& options) {
   KeyframeCandidate candidate;
   Keyframe& kf = candidate.keyframe;
   kf.id = keyframe_id;

@@ -26,9 +26,8 @@ struct KeyframeCandidate {
   Keyframe keyframe;
   std::vector<MapPoint> new_points;
 };
-KeyframeCandidate make_keyframe(const Frame& frame, const PinholeStereo& camera, const Map& map,
-                                KeyframeId keyframe_id, std::uint64_t& next_point_counter,
-                                const TrackerOptions& options);
+KeyframeCandidate make_keyframe(const Frame& frame, const PinholeStereo& camera, const Map& map, KeyframeId keyframe_id,
+                                std::uint64_t& next_point_counter, const TrackerOptions& options);
 
 // Inserts a keyframe and its new points into the map. With options.maintain_map (no mapper) it also
 // records the keyframe's observations of existing points, refreshes their normals, distance ranges and

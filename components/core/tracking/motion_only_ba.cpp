@@ -16,8 +16,8 @@
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <utility>
 #include <stdexcept>
+#include <utility>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
@@ -186,9 +186,8 @@ void evaluate(const PinholeStereo& camera, const std::vector<Active>& active, co
 
 // One round: at most `iterations` LM steps on the active observations; updates R and t. `current`
 // holds the pass at (R, t); `trial` receives a step's.
-void solve_round(const PinholeStereo& camera, const std::vector<Active>& active, Eigen::Matrix3d& R,
-                 Eigen::Vector3d& t, bool robust, int iterations,
-                 NormalEquations& current, NormalEquations& trial) {
+void solve_round(const PinholeStereo& camera, const std::vector<Active>& active, Eigen::Matrix3d& R, Eigen::Vector3d& t,
+                 bool robust, int iterations, NormalEquations& current, NormalEquations& trial) {
   double lambda = kInitialLambda;
   double lambda_factor = 2.0;  // grows while steps are rejected in a row (Ceres' decrease factor)
   evaluate(camera, active, R, t, robust, current);
@@ -246,8 +245,8 @@ double observation_chi2(const PinholeStereo& camera, const PoseObservation& obs,
   const Eigen::Vector2d uv = camera.project(p_c);
   double e2 = (uv.x() - obs.u_px) * (uv.x() - obs.u_px) + (uv.y() - obs.v_px) * (uv.y() - obs.v_px);
   if (obs.stereo()) {
-    const double disparity_error = (camera.bf() / p_c.z() - (obs.u_px - obs.u_right_px)) /
-                                   (disparity_sigma_ratio * obs.disparity_sigma_scale);
+    const double disparity_error =
+        (camera.bf() / p_c.z() - (obs.u_px - obs.u_right_px)) / (disparity_sigma_ratio * obs.disparity_sigma_scale);
     e2 += disparity_error * disparity_error;
   }
   return e2 * obs.inv_sigma2;
@@ -298,7 +297,8 @@ MotionOnlyBaResult optimize_pose(const PinholeStereo& camera, const std::vector<
     T_cw.translation() = t;
     for (std::size_t i = 0; i < observations.size(); ++i) {
       const double threshold = observations[i].stereo() ? options.chi2_stereo : options.chi2_mono;
-      result.outlier[i] = !(observation_chi2(camera, observations[i], T_cw, options.disparity_sigma_ratio) <= threshold);
+      result.outlier[i] =
+          !(observation_chi2(camera, observations[i], T_cw, options.disparity_sigma_ratio) <= threshold);
     }
   }
   result.T_cw = Pose3::Identity();

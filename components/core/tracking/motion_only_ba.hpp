@@ -17,7 +17,7 @@
 namespace heslam {
 
 struct PoseObservation {
-  Eigen::Vector3d p_w;       // fixed map point, world frame
+  Eigen::Vector3d p_w;  // fixed map point, world frame
   double u_px = 0.0;
   double v_px = 0.0;
   double u_right_px = -1.0;  // < 0: monocular observation
@@ -29,11 +29,11 @@ struct PoseObservation {
 };
 
 struct MotionOnlyBaOptions {
-  int rounds = 4;                   // ORB-SLAM2: 4 optimizations of 10 iterations
+  int rounds = 4;  // ORB-SLAM2: 4 optimizations of 10 iterations
   int iterations_per_round = 10;
-  int robust_rounds = 2;            // rounds with the Huber kernel; later rounds are plain least squares
-  double chi2_mono = 5.991;         // chi-square 95 % quantile, 2 dof
-  double chi2_stereo = 7.815;       // chi-square 95 % quantile, 3 dof
+  int robust_rounds = 2;       // rounds with the Huber kernel; later rounds are plain least squares
+  double chi2_mono = 5.991;    // chi-square 95 % quantile, 2 dof
+  double chi2_stereo = 7.815;  // chi-square 95 % quantile, 3 dof
   // Sigma of the disparity over the sigma of the keypoint position. Stereo disparity is refined to
   // subpixel by SAD, so it is more precise than the FAST corner: 0.5 measured best on EuRoC MH01
   // (docs/tracking.md); 1 with a u_right residual was ORB-SLAM2's choice.

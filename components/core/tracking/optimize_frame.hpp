@@ -8,8 +8,8 @@
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/geometry/pose.hpp"
 #include "components/core/map/map.hpp"
-#include "components/core/tracking/motion_only_ba.hpp"
 #include "components/core/tracking/frame.hpp"
+#include "components/core/tracking/motion_only_ba.hpp"
 #include "components/core/tracking/tracker_options.hpp"
 
 namespace heslam {

@@ -77,7 +77,8 @@ int search_from_last_frame(Frame& current, const Frame& last, const Map& map, co
       if (!is_free(current, index)) continue;
       const float ur = current.features.u_right_px[static_cast<std::size_t>(index)];
       if (ur > 0.f && std::abs(ur_predicted - ur) > radius) continue;
-      const int distance = hamming_distance(point->descriptor, current.features.descriptors[static_cast<std::size_t>(index)]);
+      const int distance =
+          hamming_distance(point->descriptor, current.features.descriptors[static_cast<std::size_t>(index)]);
       if (distance < best_distance) {
         best_distance = distance;
         best_index = index;
@@ -87,16 +88,16 @@ int search_from_last_frame(Frame& current, const Frame& last, const Map& map, co
     current.point_ids[static_cast<std::size_t>(best_index)] = id;
     ++matches;
     if (options.check_orientation) {
-      histogram.add(last.features.keypoints[i].angle_deg, current.features.keypoints[static_cast<std::size_t>(best_index)].angle_deg,
-                    best_index);
+      histogram.add(last.features.keypoints[i].angle_deg,
+                    current.features.keypoints[static_cast<std::size_t>(best_index)].angle_deg, best_index);
     }
   }
   if (options.check_orientation) apply_rotation_check(current, histogram, matches);
   return matches;
 }
 
-int search_local_points(Frame& current, const std::vector<PointId>& local_points, Map& map,
-                        const PinholeStereo& camera, float radius_px, const TrackerOptions& options) {
+int search_local_points(Frame& current, const std::vector<PointId>& local_points, Map& map, const PinholeStereo& camera,
+                        float radius_px, const TrackerOptions& options) {
   const Pose3 T_cw = current.T_cw();
   const Eigen::Vector3d camera_center_w = current.T_wc.translation();
   const ScalePyramid& pyramid = current.features.pyramid;
@@ -167,9 +168,8 @@ int search_local_points(Frame& current, const std::vector<PointId>& local_points
   return matches;
 }
 
-int search_keyframe_by_projection(Frame& current, const Keyframe& keyframe, const Map& map,
-                                  const PinholeStereo& camera, float radius_px, float ratio,
-                                  const TrackerOptions& options) {
+int search_keyframe_by_projection(Frame& current, const Keyframe& keyframe, const Map& map, const PinholeStereo& camera,
+                                  float radius_px, float ratio, const TrackerOptions& options) {
   const Pose3 T_cw = current.T_cw();
   const ScalePyramid& pyramid = current.features.pyramid;
   RotationHistogram histogram;
@@ -193,7 +193,8 @@ int search_keyframe_by_projection(Frame& current, const Keyframe& keyframe, cons
     int best_index = -1;
     for (int index : candidates) {
       if (!is_free(current, index)) continue;
-      const int d = hamming_distance(keyframe.features.descriptors[i], current.features.descriptors[static_cast<std::size_t>(index)]);
+      const int d = hamming_distance(keyframe.features.descriptors[i],
+                                     current.features.descriptors[static_cast<std::size_t>(index)]);
       if (d < best_distance) {
         second_distance = best_distance;
         best_distance = d;
@@ -255,7 +256,8 @@ int search_keyframe_brute_force(Frame& current, const Keyframe& keyframe, const 
     current.point_ids[k] = keyframe.point_ids[i];
     ++matches;
     if (options.check_orientation) {
-      histogram.add(keyframe.features.keypoints[i].angle_deg, current.features.keypoints[k].angle_deg, static_cast<int>(k));
+      histogram.add(keyframe.features.keypoints[i].angle_deg, current.features.keypoints[k].angle_deg,
+                    static_cast<int>(k));
     }
   }
   if (options.check_orientation) apply_rotation_check(current, histogram, matches);

@@ -21,14 +21,13 @@ int search_from_last_frame(Frame& current, const Frame& last, const Map& map, co
 
 // Local map search: points (not yet matched in `current`) projected with current.T_wc. Increments the
 // `visible` counter of every point predicted in view (as ORB-SLAM2 does), so the map is non-const.
-int search_local_points(Frame& current, const std::vector<PointId>& local_points, Map& map,
-                        const PinholeStereo& camera, float radius_px, const TrackerOptions& options);
+int search_local_points(Frame& current, const std::vector<PointId>& local_points, Map& map, const PinholeStereo& camera,
+                        float radius_px, const TrackerOptions& options);
 
 // Guided keyframe search: the keyframe's points projected with current.T_wc in a wide window, best match
 // kept only if clearly better than the second (ratio) and within TH_HIGH.
-int search_keyframe_by_projection(Frame& current, const Keyframe& keyframe, const Map& map,
-                                  const PinholeStereo& camera, float radius_px, float ratio,
-                                  const TrackerOptions& options);
+int search_keyframe_by_projection(Frame& current, const Keyframe& keyframe, const Map& map, const PinholeStereo& camera,
+                                  float radius_px, float ratio, const TrackerOptions& options);
 
 // Pose-free keyframe search: every keyframe point against every unmatched keypoint, TH_LOW and ratio.
 int search_keyframe_brute_force(Frame& current, const Keyframe& keyframe, const Map& map, float ratio,

@@ -114,7 +114,8 @@ std::optional<Relocalization> relocalize(Frame& frame, Map& map, const PinholeSt
     const KeyframeMatcher brute_force = [&](Frame& f, const Keyframe& k) {
       return search_keyframe_brute_force(f, k, map, options.relocalization_ratio, options);
     };
-    for (auto it = map.keyframes.rbegin(); it != map.keyframes.rend() && tried < options.relocalization_keyframes; ++it) {
+    for (auto it = map.keyframes.rbegin(); it != map.keyframes.rend() && tried < options.relocalization_keyframes;
+         ++it) {
       if (it->second.culled) continue;
       ++tried;
       auto result = try_keyframe(frame, map, it->second, camera, options, brute_force);

@@ -16,15 +16,14 @@ namespace heslam {
 namespace {
 
 // The calibration's keys (ORB-SLAM2's stereo settings; stereo_calibration.hpp reads them).
-constexpr std::array<std::string_view, 13> kCameraKeys{"Camera.fx", "Camera.fy", "Camera.cx", "Camera.cy",
-                                                       "Camera.k1", "Camera.k2", "Camera.p1", "Camera.p2",
-                                                       "Camera.k3", "Camera.width", "Camera.height", "Camera.bf",
-                                                       "Camera.fps"};
+constexpr std::array<std::string_view, 13> kCameraKeys{
+    "Camera.fx", "Camera.fy", "Camera.cx",    "Camera.cy",     "Camera.k1", "Camera.k2", "Camera.p1",
+    "Camera.p2", "Camera.k3", "Camera.width", "Camera.height", "Camera.bf", "Camera.fps"};
 constexpr std::array<std::string_view, 6> kRectificationKeys{"height", "width", "D", "K", "R", "P"};
 
 // ORB-SLAM3's (File.version "1.0"): the format and rig keys; Camera1.* / Camera2.* hold the intrinsics.
 constexpr std::array<std::string_view, 6> kOrbSlam3RigKeys{"File.version", "Camera.type", "Stereo.T_c1_c2",
-                                                           "Stereo.b", "IMU.T_b_c1", "Camera.RGB"};
+                                                           "Stereo.b",     "IMU.T_b_c1",  "Camera.RGB"};
 
 bool calibration_key(const std::string& key) {
   if (std::find(kCameraKeys.begin(), kCameraKeys.end(), key) != kCameraKeys.end()) return true;
@@ -96,10 +95,10 @@ std::string describe_settings(const StereoFeaturePipelineOptions& p, const Track
        << "; stereo max distance " << p.stereo.max_distance << ", row band " << p.stereo.row_band_px << ", SAD window "
        << p.stereo.sad_half_window_px << "/" << p.stereo.sad_search_px << ", min depth " << p.stereo.min_depth_baselines
        << " baselines; pipeline " << (p.parallel ? "parallel" : "serial") << ", right features x"
-       << p.right_features_factor << ", left-only features " << p.left_only_features
-       << "; tracker ThDepth " << t.close_depth_baselines << " baselines, keyframe at least every "
-       << t.max_frames_between_keyframes << " frames, reference ratio " << t.reference_ratio_stereo
-       << " (near-clip weight " << t.reference_near_clip_weight << ")";
+       << p.right_features_factor << ", left-only features " << p.left_only_features << "; tracker ThDepth "
+       << t.close_depth_baselines << " baselines, keyframe at least every " << t.max_frames_between_keyframes
+       << " frames, reference ratio " << t.reference_ratio_stereo << " (near-clip weight "
+       << t.reference_near_clip_weight << ")";
   return line.str();
 }
 

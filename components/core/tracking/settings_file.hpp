@@ -21,7 +21,7 @@ namespace heslam {
 struct SettingsFile {
   std::filesystem::path path;
   StereoFeaturePipelineOptions pipeline;
-  TrackerOptions tracker;               // the defaults given, with the file's keys applied
+  TrackerOptions tracker;                // the defaults given, with the file's keys applied
   std::vector<std::string> unused_keys;  // in the file, read by nothing in heslam
   // The calibration keys as written (0 when absent), for the comparison with the data's calibration.
   double camera_fx = 0.0;

@@ -77,7 +77,8 @@ StationaryTestResult test_stationary(const Frame& frame, const Map& map, const P
   const auto chi2_at = [&](const Pose3& T_wc) {
     const Pose3 T_cw = T_wc.inverse();
     double sum = 0.0;
-    for (const PoseObservation& obs : observations) sum += observation_chi2(camera, obs, T_cw, options.disparity_sigma_ratio);
+    for (const PoseObservation& obs : observations)
+      sum += observation_chi2(camera, obs, T_cw, options.disparity_sigma_ratio);
     return sum;
   };
   const double at_optimum = chi2_at(frame.T_wc);

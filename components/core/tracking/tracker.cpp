@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
-#include <limits>
 
 #include "components/core/tracking/keyframe_decision.hpp"
 #include "components/core/tracking/local_map.hpp"
@@ -73,7 +73,8 @@ const char* to_string(TrackingMethod method) {
   return "unknown";
 }
 
-Tracker::Tracker(const PinholeStereo& camera, const TrackerOptions& options, std::shared_ptr<const Vocabulary> vocabulary)
+Tracker::Tracker(const PinholeStereo& camera, const TrackerOptions& options,
+                 std::shared_ptr<const Vocabulary> vocabulary)
     : camera_(camera), options_(options), vocabulary_(std::move(vocabulary)) {
   if (vocabulary_ && !vocabulary_->empty()) database_.emplace(*vocabulary_);
 }
@@ -283,7 +284,8 @@ bool Tracker::track_local_map(Frame& frame, int& inliers) {
     if (MapPoint* point = map_.point(frame.point_ids[i])) ++point->visible;
   }
   const bool recently_relocalized = frames_since_relocalization_ < kFramesWithoutMotionModelAfterRelocalization;
-  const float radius = recently_relocalized ? options_.local_search_radius_relocalized_px : options_.local_search_radius_px;
+  const float radius =
+      recently_relocalized ? options_.local_search_radius_relocalized_px : options_.local_search_radius_px;
   search_local_points(frame, local.points, map_, camera_, radius, options_);
   optimize_frame_pose(frame, map_, camera_, options_);
   inliers = 0;

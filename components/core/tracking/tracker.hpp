@@ -50,9 +50,10 @@ struct TrackResult {
   Pose3 T_ref_c = Pose3::Identity();  // current camera in the reference keyframe's frame
   int tracked_points = 0;             // inlier map points after the local map search
   int tracked_stereo = 0;             // ... of which with a stereo observation
-  FrameMotion motion = FrameMotion::kMoving;  // still / rotating in place: the stationary test held (part of) the last pose
+  FrameMotion motion =
+      FrameMotion::kMoving;  // still / rotating in place: the stationary test held (part of) the last pose
   std::optional<Keyframe> new_keyframe;
-  std::vector<MapPoint> new_points;   // created with new_keyframe
+  std::vector<MapPoint> new_points;  // created with new_keyframe
   // The reference keyframe new_keyframe was tracked against (reference_kf is the new keyframe
   // itself then); kNoId for the first keyframe. The mapper moves a keyframe that predates a loop
   // correction with this keyframe.
@@ -133,7 +134,7 @@ class Tracker {
   TrackingState state_ = TrackingState::kNotInitialized;
   Frame last_frame_;
   Pose3 last_T_ref_c_ = Pose3::Identity();  // the last frame in its reference keyframe's frame
-  std::optional<Pose3> velocity_;  // T_last_current of the last tracked pair
+  std::optional<Pose3> velocity_;           // T_last_current of the last tracked pair
   KeyframeId reference_kf_ = kNoId;
   std::uint64_t keyframe_counter_ = 0;
   std::uint64_t point_counter_ = 1;

@@ -38,7 +38,7 @@ struct TrackerOptions {
   int min_pose_inliers = 10;
 
   // --- local map search (ORB-SLAM2 SearchLocalPoints) ---
-  float local_search_radius_px = 3.f;          // stereo/RGB-D value in ORB-SLAM2 (th = 3)
+  float local_search_radius_px = 3.f;  // stereo/RGB-D value in ORB-SLAM2 (th = 3)
   float local_search_radius_relocalized_px = 5.f;
   float local_ratio = 0.8f;                    // best / second best, applied when both are on one level
   float min_view_cosine = 0.5f;                // the point was never seen from more than 60 degrees off
@@ -48,7 +48,7 @@ struct TrackerOptions {
   int min_local_map_inliers_after_relocalization = 50;
 
   // --- motion-only bundle adjustment ---
-  int pose_optimization_rounds = 4;      // outlier reclassification rounds
+  int pose_optimization_rounds = 4;       // outlier reclassification rounds
   int pose_optimization_iterations = 10;  // Levenberg-Marquardt iterations per round
   double disparity_sigma_ratio = 0.5;     // disparity sigma / keypoint sigma in motion-only BA (motion_only_ba.hpp)
   // --- stationary test (stationary_test.hpp; not in ORB-SLAM2) ---
@@ -86,11 +86,11 @@ struct TrackerOptions {
   int new_keyframe_min_points = 100;
 
   // --- relocalization ---
-  int relocalization_keyframes = 8;          // most recent keyframes tried, newest first
-  float relocalization_ratio = 0.75f;        // ORB-SLAM2 relocalization BoW ratio
+  int relocalization_keyframes = 8;    // most recent keyframes tried, newest first
+  float relocalization_ratio = 0.75f;  // ORB-SLAM2 relocalization BoW ratio
   int min_relocalization_matches = 15;
-  int min_relocalization_inliers = 50;       // ORB-SLAM2: 50 after pose optimization
-  std::uint64_t ransac_seed = 0x5eed;        // PnP RANSAC: same seed + same frame = same pose
+  int min_relocalization_inliers = 50;  // ORB-SLAM2: 50 after pose optimization
+  std::uint64_t ransac_seed = 0x5eed;   // PnP RANSAC: same seed + same frame = same pose
 
   // --- map maintenance ---
   // True when no local mapper runs: the tracker itself adds observations of tracked points to each new

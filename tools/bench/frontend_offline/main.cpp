@@ -14,13 +14,13 @@
 #include <string>
 #include <vector>
 
-#include "tools/bench/bench_util.hpp"
 #include "components/core/place/vocabulary_setting.hpp"
 #include "components/core/tracking/settings_file.hpp"
-#include "tools/bench/frontend_offline/kidnapped_copy.hpp"
-#include "tools/bench/frontend_offline/offline_run.hpp"
 #include "runtime/flags.hpp"
 #include "runtime/quote_value.hpp"
+#include "tools/bench/bench_util.hpp"
+#include "tools/bench/frontend_offline/kidnapped_copy.hpp"
+#include "tools/bench/frontend_offline/offline_run.hpp"
 
 namespace {
 
@@ -55,12 +55,13 @@ void print_relocalization_summary(const heslam::bench::OfflineRun& run) {
     }
   }
   if (lost == 0 && relocalized_ms.empty()) return;
-  std::printf("relocalization: %d frames lost (tracking median %.2f ms, max %.2f ms); relocalized at frame %s "
-              "(tracking median %.2f ms, max %.2f ms; CPU median %.2f ms)\n",
-              lost, percentile(lost_ms, 0.5), lost_ms.empty() ? 0.0 : *std::max_element(lost_ms.begin(), lost_ms.end()),
-              relocalized_at.empty() ? "none" : relocalized_at.c_str(), percentile(relocalized_ms, 0.5),
-              relocalized_ms.empty() ? 0.0 : *std::max_element(relocalized_ms.begin(), relocalized_ms.end()),
-              percentile(relocalized_cpu_ms, 0.5));
+  std::printf(
+      "relocalization: %d frames lost (tracking median %.2f ms, max %.2f ms); relocalized at frame %s "
+      "(tracking median %.2f ms, max %.2f ms; CPU median %.2f ms)\n",
+      lost, percentile(lost_ms, 0.5), lost_ms.empty() ? 0.0 : *std::max_element(lost_ms.begin(), lost_ms.end()),
+      relocalized_at.empty() ? "none" : relocalized_at.c_str(), percentile(relocalized_ms, 0.5),
+      relocalized_ms.empty() ? 0.0 : *std::max_element(relocalized_ms.begin(), relocalized_ms.end()),
+      percentile(relocalized_cpu_ms, 0.5));
 }
 
 // "B,R,S" or "B,R,S,N" (KidnapPlan's black_first, replay_first, replay_source, replay_frames).
@@ -77,7 +78,8 @@ heslam::bench::KidnapPlan parse_kidnap_plan(const std::string& flag, const std::
     numbers.push_back(static_cast<int>(number));
     begin = comma + 1;
   }
-  if (numbers.size() != 3 && numbers.size() != 4) heslam::runtime::throw_bad_flag_value(flag, "B,R,S or B,R,S,N", value);
+  if (numbers.size() != 3 && numbers.size() != 4)
+    heslam::runtime::throw_bad_flag_value(flag, "B,R,S or B,R,S,N", value);
   return heslam::bench::KidnapPlan{numbers[0], numbers[1], numbers[2], numbers.size() == 4 ? numbers[3] : -1};
 }
 
@@ -106,12 +108,11 @@ heslam::runtime::Flags offline_flags(Arguments& a) {
       .text("--he-stereo", "shared|matched|separate", &a.he_stereo, "how the two images are equalized")
       .custom("--variant", "none|dark|low_contrast", "a photometric variant of the images",
               [&a](const std::string& value) { a.options.variant = heslam::bench::parse_photometric_variant(value); })
-      .custom("--stereo-gain", "L,R[/L,R...]",
-              "left image x L, right x R, saturated to 8 bit: cameras exposed\n"
-              "differently; several: the run split into equal blocks",
-              [&a](const std::string& value) {
-                a.options.stereo_gain = heslam::bench::parse_stereo_gain_schedule(value);
-              })
+      .custom(
+          "--stereo-gain", "L,R[/L,R...]",
+          "left image x L, right x R, saturated to 8 bit: cameras exposed\n"
+          "differently; several: the run split into equal blocks",
+          [&a](const std::string& value) { a.options.stereo_gain = heslam::bench::parse_stereo_gain_schedule(value); })
       .number("--disparity-noise", "SIGMA", &a.options.disparity_noise_px, 0.0, kInfinity,
               "Gaussian noise of SIGMA px added to every stereo disparity, seeded per\n"
               "frame: what stereo noise alone costs the trajectory")
@@ -127,15 +128,15 @@ heslam::runtime::Flags offline_flags(Arguments& a) {
               "start a frame every P ms, idle in between, as a camera: 50 for EuRoC's 20 Hz")
       .custom("--pin-threads", "on|off", "the pipeline's two threads on two CPUs, Pipeline.pinThreads; default on",
               [&a](const std::string& value) {
-                if (value != "on" && value != "off") heslam::runtime::throw_bad_flag_value("--pin-threads", "on or off", value);
+                if (value != "on" && value != "off")
+                  heslam::runtime::throw_bad_flag_value("--pin-threads", "on or off", value);
                 a.pin_threads = value == "on";
               })
       .number("--close-untracked-near-clip-weight", "W", &a.options.tracker.close_untracked_near_clip_weight, 0.0, 1.0,
               "tracker.close_untracked_near_clip_weight, 0-1; default 0.9")
       .number("--reference-near-clip-weight", "W", &a.options.tracker.reference_near_clip_weight, 0.0, 1.0,
               "tracker.reference_near_clip_weight, 0-1; default 1")
-      .number("--stationary-chi2", "X", &a.options.tracker.stationary_test_chi2,
-              "tracker.stationary_test_chi2; 0: off")
+      .number("--stationary-chi2", "X", &a.options.tracker.stationary_test_chi2, "tracker.stationary_test_chi2; 0: off")
       .number("--rotation-chi2", "X", &a.options.tracker.rotation_only_test_chi2,
               "tracker.rotation_only_test_chi2; 0: off")
       .text("--kidnap", "DIR", &a.kidnap_dir,
@@ -150,7 +151,8 @@ heslam::runtime::Flags offline_flags(Arguments& a) {
       .alias("-h")
       .positional("DATASET", "", [&a](const std::string& arg) {
         if (!a.dataset.empty()) {
-          throw std::runtime_error("'" + heslam::runtime::quote_value(arg) + "': unexpected second DATASET (see --help)");
+          throw std::runtime_error("'" + heslam::runtime::quote_value(arg) +
+                                   "': unexpected second DATASET (see --help)");
         }
         a.dataset = arg;
       });
@@ -182,7 +184,8 @@ int run(int argc, char** argv) {
     heslam::SettingsFile file = heslam::load_settings_file(settings, options.tracker);
     options.pipeline = file.pipeline;
     options.tracker = file.tracker;
-    for (const std::string& key : file.unused_keys) std::fprintf(stderr, "%s: %s: not used by heslam\n", settings.c_str(), key.c_str());
+    for (const std::string& key : file.unused_keys)
+      std::fprintf(stderr, "%s: %s: not used by heslam\n", settings.c_str(), key.c_str());
   }
   if (pin_threads) options.pipeline.pin_threads = *pin_threads;
   if (!he_mode.empty()) {
@@ -231,11 +234,12 @@ int run(int argc, char** argv) {
   if (options.drop_stereo_right_above >= 0) {
     noise_note += ", stereo dropped where the right is above " + std::to_string(options.drop_stereo_right_above);
   }
-  std::printf("dataset %s: %zu frames, %d tracked, %d keyframes, %d map points (HE %s %s, variant %s, stereo gain %s%s)\n",
-              dataset.c_str(), result.frames.size(), result.tracked_frames(), result.keyframes, result.map_points,
-              heslam::to_string(options.pipeline.he.mode), heslam::to_string(options.pipeline.he.stereo),
-              heslam::bench::to_string(options.variant), heslam::bench::describe(options.stereo_gain).c_str(),
-              noise_note.c_str());
+  std::printf(
+      "dataset %s: %zu frames, %d tracked, %d keyframes, %d map points (HE %s %s, variant %s, stereo gain %s%s)\n",
+      dataset.c_str(), result.frames.size(), result.tracked_frames(), result.keyframes, result.map_points,
+      heslam::to_string(options.pipeline.he.mode), heslam::to_string(options.pipeline.he.stereo),
+      heslam::bench::to_string(options.variant), heslam::bench::describe(options.stereo_gain).c_str(),
+      noise_note.c_str());
   std::vector<double> features;
   std::vector<double> stereo;
   std::vector<double> near_clip;
@@ -266,17 +270,19 @@ int run(int argc, char** argv) {
   print_stage("total cpu", result.frames, &FrameRecord::cpu_ms);
   if (!result.frames.empty()) {
     const double frames = static_cast<double>(result.frames.size());
-    std::printf("hand-offs between the pipeline's two threads: %.1f per frame, %.1f of them to a sleeping thread; "
-                "threads %s\n",
-                static_cast<double>(result.hand_offs) / frames, static_cast<double>(result.sleeping_hand_offs) / frames,
-                result.threads_pinned ? "pinned to two CPUs" : "not pinned");
+    std::printf(
+        "hand-offs between the pipeline's two threads: %.1f per frame, %.1f of them to a sleeping thread; "
+        "threads %s\n",
+        static_cast<double>(result.hand_offs) / frames, static_cast<double>(result.sleeping_hand_offs) / frames,
+        result.threads_pinned ? "pinned to two CPUs" : "not pinned");
   }
   if (std::getenv("HESLAM_FRONTEND_OFFLINE_PER_FRAME") != nullptr) {
     for (std::size_t k = 0; k < result.frames.size(); ++k) {
       const FrameRecord& f = result.frames[k];
       std::printf("frame %3zu %-8s %-18s tracked %4d features %4d stereo %4d%s %s\n", k, heslam::to_string(f.state),
                   heslam::to_string(f.method), f.tracked_points, f.features, f.stereo_features,
-                  f.keyframe ? " keyframe" : "", f.motion != heslam::FrameMotion::kMoving ? heslam::to_string(f.motion) : "");
+                  f.keyframe ? " keyframe" : "",
+                  f.motion != heslam::FrameMotion::kMoving ? heslam::to_string(f.motion) : "");
     }
   }
   if (const auto ate = heslam::bench::compute_ate_se3(result)) {

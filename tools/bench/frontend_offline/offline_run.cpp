@@ -3,12 +3,12 @@
 
 #include <algorithm>
 #include <chrono>
-#include <thread>
-#include <ctime>
 #include <cmath>
+#include <ctime>
 #include <fstream>
 #include <iomanip>
 #include <stdexcept>
+#include <thread>
 
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -59,7 +59,8 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
   StereoFeaturePipeline pipeline(run.camera, options.pipeline);
   Tracker tracker(run.camera, options.tracker, options.vocabulary);
 
-  const std::size_t first = std::min(sequence.frames.size(), static_cast<std::size_t>(std::max(options.first_frame, 0)));
+  const std::size_t first =
+      std::min(sequence.frames.size(), static_cast<std::size_t>(std::max(options.first_frame, 0)));
   const std::size_t available = sequence.frames.size() - first;
   const std::size_t count =
       options.max_frames > 0 ? std::min(available, static_cast<std::size_t>(options.max_frames)) : available;
@@ -70,14 +71,15 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
   for (std::size_t k = first; k < first + count; ++k) {
     if (options.period_ms > 0.0) {
       std::this_thread::sleep_until(next_frame_start);
-      next_frame_start = std::chrono::steady_clock::now() +
-                         std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                             std::chrono::duration<double, std::milli>(options.period_ms));
+      next_frame_start =
+          std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                 std::chrono::duration<double, std::milli>(options.period_ms));
     }
     const EurocFrame& input = sequence.frames[k];
     cv::Mat left = read_grey(input.left_png);
     cv::Mat right = read_grey(input.right_png);
-    photometric::apply_to_pair(left, right, options.variant, photometric::stereo_gain_at(options.stereo_gain, k - first, count),
+    photometric::apply_to_pair(left, right, options.variant,
+                               photometric::stereo_gain_at(options.stereo_gain, k - first, count),
                                static_cast<std::uint64_t>(k));
 
     FrameRecord record;
@@ -91,7 +93,8 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
     if (options.disparity_noise_px > 0.0) {
       add_disparity_noise(features, rectifier.camera(), options.disparity_noise_px, static_cast<std::uint64_t>(k));
     }
-    if (options.drop_stereo_right_above >= 0) drop_stereo_right_above(features, right_rect, options.drop_stereo_right_above);
+    if (options.drop_stereo_right_above >= 0)
+      drop_stereo_right_above(features, right_rect, options.drop_stereo_right_above);
     record.rectify_ms = timings.source_ms;
     record.rectify_cpu_ms = timings.source_cpu_ms;
     record.he_ms = timings.he_ms;
@@ -232,8 +235,8 @@ void write_tum_trajectory(const std::filesystem::path& path, const OfflineRun& r
     const Eigen::Vector3d t = f.T_wc.translation();
     // Seconds printed from the integer nanoseconds: a double would round the last digits.
     out << f.stamp_ns / 1'000'000'000 << '.' << std::setw(9) << std::setfill('0') << f.stamp_ns % 1'000'000'000
-        << std::setfill(' ') << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x()
-        << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
+        << std::setfill(' ') << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' '
+        << q.z() << ' ' << q.w() << '\n';
   }
 }
 

@@ -13,18 +13,18 @@
 #include "components/core/feature/stereo_feature_pipeline.hpp"
 #include "components/core/tracking/tracker.hpp"
 #include "tools/bench/frontend_offline/euroc_sequence.hpp"
-#include "tools/photometric/photometric_variant.hpp"
 #include "tools/eval/kitti_metrics.hpp"
+#include "tools/photometric/photometric_variant.hpp"
 
 namespace heslam::bench {
 
 // The offline run's image transforms are heslam-photometric's (tools/photometric).
-using photometric::PhotometricVariant;
-using photometric::StereoGain;
+using photometric::describe;
 using photometric::parse_photometric_variant;
 using photometric::parse_stereo_gain_schedule;
+using photometric::PhotometricVariant;
+using photometric::StereoGain;
 using photometric::to_string;
-using photometric::describe;
 
 struct OfflineRunOptions {
   StereoFeaturePipelineOptions pipeline;
@@ -60,8 +60,8 @@ struct FrameRecord {
   std::int64_t stamp_ns = 0;
   TrackingState state = TrackingState::kNotInitialized;
   TrackingMethod method = TrackingMethod::kNone;
-  Pose3 T_wc = Pose3::Identity();           // rectified left camera in the tracker's world
-  std::optional<Pose3> T_wc_truth;          // rectified left camera in the ground-truth world
+  Pose3 T_wc = Pose3::Identity();   // rectified left camera in the tracker's world
+  std::optional<Pose3> T_wc_truth;  // rectified left camera in the ground-truth world
   int features = 0;
   int stereo_features = 0;
   int near_clip_features = 0;  // stereo features marked near a clip edge (StereoFeatures::near_clip)
@@ -76,8 +76,8 @@ struct FrameRecord {
   double tracking_ms = 0.0;
   double tracking_cpu_ms = 0.0;  // CPU time of the tracking call on its own thread: its critical path on an idle core
   double tracking_process_cpu_ms = 0.0;  // ... of the process over it: with the tracker's worker's share
-  double total_ms = 0.0;  // all of the above plus feature bookkeeping (image decoding excluded)
-  double cpu_ms = 0.0;    // CPU time of the process (both threads) over total_ms: the work, not the waiting
+  double total_ms = 0.0;                 // all of the above plus feature bookkeeping (image decoding excluded)
+  double cpu_ms = 0.0;  // CPU time of the process (both threads) over total_ms: the work, not the waiting
 };
 
 struct OfflineRun {

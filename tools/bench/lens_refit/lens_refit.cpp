@@ -15,9 +15,9 @@ namespace heslam::bench {
 namespace {
 
 // ORB-SLAM2's chi2 thresholds (95 %, 2 and 3 dof) as Huber thresholds on the whitened residual.
-constexpr double kMonoHuber = 2.447651936;    // sqrt(5.991)
-constexpr double kStereoHuber = 2.795534;     // sqrt(7.815)
-constexpr double kMinDepthM = 0.01;           // behind or at the camera: no residual
+constexpr double kMonoHuber = 2.447651936;  // sqrt(5.991)
+constexpr double kStereoHuber = 2.795534;   // sqrt(7.815)
+constexpr double kMinDepthM = 0.01;         // behind or at the camera: no residual
 
 using AngleAxisPose = std::array<double, 6>;  // angle-axis of R_cw, then t_cw
 
@@ -83,7 +83,8 @@ Eigen::Vector3d camera_centre(const AngleAxisPose& pose) {
 
 double path_length_m(const std::vector<AngleAxisPose>& poses) {
   double length = 0.0;
-  for (std::size_t i = 1; i < poses.size(); ++i) length += (camera_centre(poses[i]) - camera_centre(poses[i - 1])).norm();
+  for (std::size_t i = 1; i < poses.size(); ++i)
+    length += (camera_centre(poses[i]) - camera_centre(poses[i - 1])).norm();
   return length;
 }
 
@@ -91,7 +92,8 @@ RefitProblem build_problem(const Map& map, const LensRefitOptions& options, Lens
   std::vector<const Keyframe*> live;
   for (const auto& [id, keyframe] : map.keyframes)
     if (!keyframe.culled) live.push_back(&keyframe);
-  std::stable_sort(live.begin(), live.end(), [](const Keyframe* a, const Keyframe* b) { return a->stamp_ns < b->stamp_ns; });
+  std::stable_sort(live.begin(), live.end(),
+                   [](const Keyframe* a, const Keyframe* b) { return a->stamp_ns < b->stamp_ns; });
   const auto count = static_cast<double>(live.size());
   const auto first = static_cast<std::size_t>(std::clamp(options.first_fraction, 0.0, 1.0) * count);
   const auto last = static_cast<std::size_t>(std::clamp(options.last_fraction, 0.0, 1.0) * count);
@@ -207,7 +209,8 @@ LensRefitResult refit_residual_radial(const Map& map, const PinholeStereo& camer
 }
 
 std::vector<LensRefitProfilePoint> refit_profile(const Map& map, const PinholeStereo& camera,
-                                                 const LensRefitOptions& options, const std::vector<double>& radial_ks) {
+                                                 const LensRefitOptions& options,
+                                                 const std::vector<double>& radial_ks) {
   LensRefitResult counts;
   const RefitProblem problem = build_problem(map, options, counts);
   std::vector<LensRefitProfilePoint> profile;

@@ -29,7 +29,7 @@ struct LensRefitOptions {
 
 struct LensRefitResult {
   int keyframes = 0;
-  int points = 0;               // live points with at least two observations in the window
+  int points = 0;  // live points with at least two observations in the window
   int observations = 0;
   int stereo_observations = 0;
   int skipped_observations = 0;  // naming a keypoint the keyframe does not have

@@ -34,8 +34,8 @@
 #include "components/core/mapping/local_mapper.hpp"
 #include "components/core/place/image_descriptors.hpp"
 #include "components/core/place/vocabulary_setting.hpp"
-#include "tests/loop/loop_world.hpp"
 #include "runtime/flags.hpp"
+#include "tests/loop/loop_world.hpp"
 #include "tools/bench/bench_util.hpp"
 #include "tools/bench/frontend_offline/euroc_sequence.hpp"
 
@@ -45,8 +45,8 @@ using namespace heslam;
 
 // The test loop world's geometry (36 keyframes on a 2 m circle, 2500 points on a 6 m ring), kept
 // per keyframe and per metre of wall when the circle grows.
-constexpr int kRevisitKeyframes = 4;                              // the last ones revisit the first
-constexpr double kKeyframeSpacingM = 2.0 * M_PI * 2.0 / 36.0;     // 0.35 m
+constexpr int kRevisitKeyframes = 4;                           // the last ones revisit the first
+constexpr double kKeyframeSpacingM = 2.0 * M_PI * 2.0 / 36.0;  // 0.35 m
 constexpr double kWallDistanceM = 4.0;
 constexpr double kPointsPerWallMetre = 2500.0 / (2.0 * M_PI * 6.0);  // ~460 points in view
 // Odometry drift injected: this much heading error accumulated over the whole loop (0.05 rad ~ 3 deg)
@@ -58,10 +58,10 @@ constexpr double kRansacOutlierFraction = 0.3;
 
 struct Args {
   std::vector<int> keyframes{100, 1000, 5000};
-  int repeats = 3;           // global BA dominates: ~16 s a run at 1,000 keyframes
-  int queries = 20;          // BoW detection: the last Q keyframes are queried in order
-  int ba_max_points = 40000; // global BA: beyond this, every k-th point only (the others culled)
-  std::string vocabulary;    // empty: the build's default vocabulary
+  int repeats = 3;            // global BA dominates: ~16 s a run at 1,000 keyframes
+  int queries = 20;           // BoW detection: the last Q keyframes are queried in order
+  int ba_max_points = 40000;  // global BA: beyond this, every k-th point only (the others culled)
+  std::string vocabulary;     // empty: the build's default vocabulary
   std::string dataset = "../shared/data/euroc_mh01_handheld";  // descriptors for the world's points
 };
 
@@ -69,8 +69,9 @@ Args parse(int argc, char** argv) {
   Args args;
   bool help = false;
   runtime::Flags flags("heslam-bench-loop [options]");
-  flags.integer_list("--keyframes", "N,N,...", &args.keyframes, 2 * kRevisitKeyframes + 10, 1000000,
-                     "the loop sizes (100,1000,5000)")
+  flags
+      .integer_list("--keyframes", "N,N,...", &args.keyframes, 2 * kRevisitKeyframes + 10, 1000000,
+                    "the loop sizes (100,1000,5000)")
       .integer("--repeats", "R", &args.repeats, 1, std::numeric_limits<int>::max(), "runs per size (3)")
       .integer("--queries", "Q", &args.queries, 1, std::numeric_limits<int>::max(),
                "BoW detection: the last Q keyframes are queried (20)")
@@ -209,12 +210,13 @@ void bench_size(const Args& args, int keyframes, const std::vector<Descriptor>& 
   for (const auto& [id, point] : map.points) observations += point.observations.size();
   const Pose3& drifted = map.keyframes.at(loop_kf).T_wc;
   const Pose3& truth = w.true_T_wc.at(loop_kf);
-  std::printf("\n== %d keyframes (loop %.0f m): %zu points, %.1f observations per point, %zu covisibility edges; "
-              "drift at the loop keyframe %.2f m / %.2f deg; built in %.1f s\n",
-              keyframes, kKeyframeSpacingM * keyframes, map.points.size(),
-              static_cast<double>(observations) / static_cast<double>(map.points.size()), covisibility_edges(map),
-              (drifted.translation() - truth.translation()).norm(), rotation_deg(drifted.inverse() * truth),
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count());
+  std::printf(
+      "\n== %d keyframes (loop %.0f m): %zu points, %.1f observations per point, %zu covisibility edges; "
+      "drift at the loop keyframe %.2f m / %.2f deg; built in %.1f s\n",
+      keyframes, kKeyframeSpacingM * keyframes, map.points.size(),
+      static_cast<double>(observations) / static_cast<double>(map.points.size()), covisibility_edges(map),
+      (drifted.translation() - truth.translation()).norm(), rotation_deg(drifted.inverse() * truth),
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count());
 
   // BoW detection: the database is filled with all N keyframes (the first call), then the last
   // queries keyframes are queried in keyframe order (the consistency check keeps state across them).
@@ -256,10 +258,10 @@ void bench_size(const Args& args, int keyframes, const std::vector<Descriptor>& 
   if (!verified) throw std::runtime_error("Se3Ransac found no transform for the loop pair");
   const Pose3 true_T_ab = w.true_T_wc.at(matched_kf).inverse() * w.true_T_wc.at(loop_kf);
   const Pose3 error = verified->T_ab.inverse() * true_T_ab;
-  ransac.report("Se3Ransac", map,
-                format("%zu matches (%d wrong): %d inliers, %d hypotheses, error %.1f mm / %.3f deg", matches.size(),
-                       outliers, verified->inliers, verified->iterations, 1000.0 * error.translation().norm(),
-                       rotation_deg(error)));
+  ransac.report(
+      "Se3Ransac", map,
+      format("%zu matches (%d wrong): %d inliers, %d hypotheses, error %.1f mm / %.3f deg", matches.size(), outliers,
+             verified->inliers, verified->iterations, 1000.0 * error.translation().norm(), rotation_deg(error)));
   const LoopCandidate loop{loop_kf, matched_kf, verified->T_ab, {}};
 
   // The essential graph and its optimization on their own, as LoopCorrectionBuilder sets them up
@@ -285,10 +287,10 @@ void bench_size(const Args& args, int keyframes, const std::vector<Descriptor>& 
   PoseGraphResult optimized;
   const Timings pose_graph =
       repeated(args.repeats, [&] { optimized = PoseGraph().compute(initial_T_wc, graph.edges, {matched_kf}); });
-  pose_graph.report("PoseGraph", map,
-                    format("%d vertices, %d edges, %d iterations, cost %.3g -> %.3g", optimized.stats.vertices,
-                           optimized.stats.edges, optimized.stats.iterations, optimized.stats.initial_cost,
-                           optimized.stats.final_cost));
+  pose_graph.report(
+      "PoseGraph", map,
+      format("%d vertices, %d edges, %d iterations, cost %.3g -> %.3g", optimized.stats.vertices, optimized.stats.edges,
+             optimized.stats.iterations, optimized.stats.initial_cost, optimized.stats.final_cost));
 
   // The whole correction.
   LoopCorrectionOutput output;
@@ -301,13 +303,13 @@ void bench_size(const Args& args, int keyframes, const std::vector<Descriptor>& 
   for (const auto& [id, T_wc] : output.correction.corrected_T_wc) {
     corrected_error_m = std::max(corrected_error_m, (T_wc.translation() - w.true_T_wc.at(id).translation()).norm());
   }
-  builder.report("LoopCorrectionBuilder::compute", map,
-                 format("groups %d / %d kf, %d merges, %d graph edges, fusion %.1f ms, pose graph %.1f ms "
-                        "(%d it); worst kf error after %.2f m",
-                        stats.loop_group_keyframes, stats.matched_group_keyframes, stats.point_merges,
-                        edges.new_loop_edges + edges.spanning_tree_edges + edges.previous_loop_edges +
-                            edges.covisibility_edges,
-                        stats.fusion_ms, stats.pose_graph.time_ms, stats.pose_graph.iterations, corrected_error_m));
+  builder.report(
+      "LoopCorrectionBuilder::compute", map,
+      format("groups %d / %d kf, %d merges, %d graph edges, fusion %.1f ms, pose graph %.1f ms "
+             "(%d it); worst kf error after %.2f m",
+             stats.loop_group_keyframes, stats.matched_group_keyframes, stats.point_merges,
+             edges.new_loop_edges + edges.spanning_tree_edges + edges.previous_loop_edges + edges.covisibility_edges,
+             stats.fusion_ms, stats.pose_graph.time_ms, stats.pose_graph.iterations, corrected_error_m));
   LoopCorrection correction = output.correction;
   correction.id = 1;
 
@@ -335,7 +337,8 @@ void bench_size(const Args& args, int keyframes, const std::vector<Descriptor>& 
   }
   mapper_apply.report("LocalMapper::apply_correction", map,
                       format("the same + covisibility of the merged points' keyframes: %zu keyframes, "
-                             "%zu points changed", applied.changed_keyframes.size(), applied.changed_points.size()));
+                             "%zu points changed",
+                             applied.changed_keyframes.size(), applied.changed_points.size()));
 
   // Global BA on the corrected map; beyond --ba-max-points every k-th point only.
   const std::size_t stride = (corrected_map.points.size() + static_cast<std::size_t>(args.ba_max_points) - 1) /
@@ -364,8 +367,8 @@ int run(int argc, char** argv) {
   }
   const std::vector<Descriptor> pool = real_descriptors(args.dataset);
   if (pool.empty()) std::printf("descriptors: random bytes (--dataset none)\n");
-  std::printf("repeats %d (BoW detection: %d query keyframes); times are wall clock, cpu = process CPU\n",
-              args.repeats, args.queries);
+  std::printf("repeats %d (BoW detection: %d query keyframes); times are wall clock, cpu = process CPU\n", args.repeats,
+              args.queries);
   for (const int keyframes : args.keyframes) bench_size(args, keyframes, pool, vocabulary);
   return 0;
 }

@@ -4,19 +4,19 @@
 // of writing the map file.
 // `heslam-bench-mapping --help` lists the flags.
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <ctime>
-#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "runtime/flags.hpp"
-#include "tools/bench/bench_util.hpp"
 #include "components/core/mapping/local_mapper.hpp"
+#include "runtime/flags.hpp"
 #include "tests/mapping/synthetic_world.hpp"
+#include "tools/bench/bench_util.hpp"
 
 namespace {
 
@@ -101,7 +101,8 @@ int run(int argc, char** argv) {
     frontend_error += (estimate.translation() - T_wc.translation()).norm();
     auto [kf, points] = frontend.keyframe(mapper.map(), view, estimate);
     features.push_back(static_cast<double>(kf.features.size()));
-    tracked.push_back(static_cast<double>(std::count_if(kf.point_ids.begin(), kf.point_ids.end(), [](PointId p) { return p != kNoId; })));
+    tracked.push_back(static_cast<double>(
+        std::count_if(kf.point_ids.begin(), kf.point_ids.end(), [](PointId p) { return p != kNoId; })));
     const double cpu_start = thread_cpu_ms();
     const MapChanges changes = mapper.process_keyframe(std::move(kf), std::move(points));
     cpu.push_back(thread_cpu_ms() - cpu_start);
@@ -130,8 +131,8 @@ int run(int argc, char** argv) {
     mapper_error += (kf.T_wc.translation() - truth.at(id).translation()).norm();
     if (std::getenv("HESLAM_BENCH_VERBOSE") != nullptr) {
       std::printf("  kf %3llu parent %3llu error %.2f mm, %zu covisible\n", static_cast<unsigned long long>(id),
-                  static_cast<unsigned long long>(kf.parent), 1000.0 * (kf.T_wc.translation() - truth.at(id).translation()).norm(),
-                  kf.covisible.size());
+                  static_cast<unsigned long long>(kf.parent),
+                  1000.0 * (kf.T_wc.translation() - truth.at(id).translation()).norm(), kf.covisible.size());
     }
     ++live;
   }
@@ -153,15 +154,17 @@ int run(int argc, char** argv) {
   line("total", total);
   line("total (thread CPU)", cpu);  // what the wall time would be on an idle core
   std::printf("map: %zu live keyframes of %d (%d culled), %zu points, %d triangulated, %d fused\n",
-              static_cast<std::size_t>(live), args.keyframes, culled_kfs, mapper.map().points.size(), triangulated, fused);
+              static_cast<std::size_t>(live), args.keyframes, culled_kfs, mapper.map().points.size(), triangulated,
+              fused);
   std::printf("keyframe position error: frontend %.2f mm mean, after mapping %.2f mm mean\n",
               1000.0 * frontend_error / args.keyframes, 1000.0 * mapper_error / live);
   std::printf("map file %s: %.2f MB at the end (%.1f kB per keyframe)\n", args.map_file.c_str(),
               static_cast<double>(last_save.bytes) / 1e6, static_cast<double>(last_save.bytes) / 1e3 / args.keyframes);
-  std::printf("  snapshot every %d keyframes: median %.2f ms wall (serialize %.2f ms), %.2f ms thread CPU; "
-              "last %.2f ms wall; final one with fsync %.2f ms wall\n",
-              kSaveEvery, percentile(save_ms, 0.5), percentile(serialize_ms, 0.5), percentile(save_cpu_ms, 0.5),
-              save_ms.empty() ? 0.0 : save_ms.back(), synced.serialize_ms + synced.write_ms);
+  std::printf(
+      "  snapshot every %d keyframes: median %.2f ms wall (serialize %.2f ms), %.2f ms thread CPU; "
+      "last %.2f ms wall; final one with fsync %.2f ms wall\n",
+      kSaveEvery, percentile(save_ms, 0.5), percentile(serialize_ms, 0.5), percentile(save_cpu_ms, 0.5),
+      save_ms.empty() ? 0.0 : save_ms.back(), synced.serialize_ms + synced.write_ms);
   std::filesystem::remove(args.map_file);
   return 0;
 }

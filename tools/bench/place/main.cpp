@@ -29,7 +29,6 @@ using namespace heslam;
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-
 // ORB-SLAM2's feature-vector level for SearchByBoW.
 constexpr int kLevelsUp = 4;
 
@@ -82,10 +81,11 @@ void report_transform(const std::string& name, const Vocabulary& vocabulary, con
   FeatureVector features;
   const auto with_features = time_ms(repeats, [&] { vocabulary.transform(descriptors, bow, &features, kLevelsUp); });
   const auto bow_only = time_ms(repeats, [&] { vocabulary.transform(descriptors, bow, nullptr, 0); });
-  std::printf("  transform %-25s %zu descriptors: BoW + feature vector median %.3f ms (p90 %.3f), BoW only %.3f ms"
-              " -> %zu words, %zu nodes at levels_up %d\n",
-              name.c_str(), descriptors.size(), median(with_features), with_features[with_features.size() * 9 / 10],
-              median(bow_only), bow.size(), features.nodes.size(), kLevelsUp);
+  std::printf(
+      "  transform %-25s %zu descriptors: BoW + feature vector median %.3f ms (p90 %.3f), BoW only %.3f ms"
+      " -> %zu words, %zu nodes at levels_up %d\n",
+      name.c_str(), descriptors.size(), median(with_features), with_features[with_features.size() * 9 / 10],
+      median(bow_only), bow.size(), features.nodes.size(), kLevelsUp);
 }
 
 }  // namespace
@@ -100,8 +100,10 @@ int main(int argc, char** argv) {
     bool help = false;
     runtime::Flags flags("heslam-bench-place [options]");
     flags.path("--scratch", "DIR", &scratch, "where the synthetic trees are written (default /tmp/heslam-bench-place)")
-        .path("--vocabulary", "FILE", &trained, "a trained vocabulary to time as well (default: the build's default vocabulary)")
-        .path("--image", "PNG", &image_path, "grey image whose ORB descriptors are transformed (default: an EuRoC MH01 frame)")
+        .path("--vocabulary", "FILE", &trained,
+              "a trained vocabulary to time as well (default: the build's default vocabulary)")
+        .path("--image", "PNG", &image_path,
+              "grey image whose ORB descriptors are transformed (default: an EuRoC MH01 frame)")
         .integer("--repeats", "N", &repeats, 1, std::numeric_limits<int>::max(), "timed repeats (5)")
         .toggle("--skip-text-1m", &text_1m, "do not write and load the 1M-word tree as DBoW2 text", false)
         .toggle("--help", &help, "this help")
@@ -122,8 +124,9 @@ int main(int argc, char** argv) {
       const std::string name = levels == 4 ? "10k" : "1M";
       auto start = Clock::now();
       const Vocabulary tree = full_random_tree(10, levels, 42);
-      std::printf("tree %s: k 10, L %d, %zu words, %zu nodes, random node descriptors (built in %.2f s)\n", name.c_str(), levels,
-                  tree.word_count(), tree.node_count(), std::chrono::duration<double>(Clock::now() - start).count());
+      std::printf("tree %s: k 10, L %d, %zu words, %zu nodes, random node descriptors (built in %.2f s)\n",
+                  name.c_str(), levels, tree.word_count(), tree.node_count(),
+                  std::chrono::duration<double>(Clock::now() - start).count());
       const fs::path binary = scratch / ("random_" + name + ".hvoc");
       const fs::path text = scratch / ("random_" + name + ".txt");
       start = Clock::now();
@@ -140,7 +143,8 @@ int main(int argc, char** argv) {
     }
     if (fs::exists(trained)) {
       const Vocabulary vocabulary = load_vocabulary(trained);
-      std::printf("trained vocabulary %s: %zu words, %zu nodes\n", trained.c_str(), vocabulary.word_count(), vocabulary.node_count());
+      std::printf("trained vocabulary %s: %zu words, %zu nodes\n", trained.c_str(), vocabulary.word_count(),
+                  vocabulary.node_count());
       report_load(trained.filename().string(), trained, repeats);
       report_transform(trained.filename().string(), vocabulary, descriptors, 200);
     } else {

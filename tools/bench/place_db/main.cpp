@@ -17,11 +17,11 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "runtime/flags.hpp"
-#include "tools/bench/bench_util.hpp"
 #include "components/core/place/image_descriptors.hpp"
 #include "components/core/place/keyframe_database.hpp"
 #include "components/core/place/vocabulary_setting.hpp"
+#include "runtime/flags.hpp"
+#include "tools/bench/bench_util.hpp"
 #include "tools/bench/frontend_offline/euroc_sequence.hpp"
 
 namespace {
@@ -96,7 +96,8 @@ int run(int argc, char** argv) {
       }
       database.add(id, with_noise(images[static_cast<std::size_t>(k - 1) % images.size()], rng, noise_bits));
     }
-    const double add_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - add_start).count();
+    const double add_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - add_start).count();
 
     std::vector<double> reloc_ms;
     std::vector<double> loop_ms;
@@ -114,10 +115,11 @@ int run(int argc, char** argv) {
       database.loop_candidates(query, map, 0.0);
       loop_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
     }
-    std::printf("%6d keyframes: add %.2f ms each; relocalization query median %.3f ms p90 %.3f ms (%.0f candidates); "
-                "loop query median %.3f ms p90 %.3f ms\n",
-                size, add_ms / size, percentile(reloc_ms, 0.5), percentile(reloc_ms, 0.9), percentile(reloc_candidates, 0.5),
-                percentile(loop_ms, 0.5), percentile(loop_ms, 0.9));
+    std::printf(
+        "%6d keyframes: add %.2f ms each; relocalization query median %.3f ms p90 %.3f ms (%.0f candidates); "
+        "loop query median %.3f ms p90 %.3f ms\n",
+        size, add_ms / size, percentile(reloc_ms, 0.5), percentile(reloc_ms, 0.9), percentile(reloc_candidates, 0.5),
+        percentile(loop_ms, 0.5), percentile(loop_ms, 0.9));
   }
   return 0;
 }

@@ -106,8 +106,8 @@ std::uint8_t right_marker(std::uint64_t seq) { return static_cast<std::uint8_t>(
 class Domain {
  public:
   Domain(int domain_id, const std::string& xml) {
-    domain_ = runtime::check_dds(dds_create_domain(static_cast<dds_domainid_t>(domain_id), xml.c_str()),
-                                 "create domain");
+    domain_ =
+        runtime::check_dds(dds_create_domain(static_cast<dds_domainid_t>(domain_id), xml.c_str()), "create domain");
     participant_ = runtime::check_dds(dds_create_participant(static_cast<dds_domainid_t>(domain_id), nullptr, nullptr),
                                       "create participant");
   }
@@ -205,7 +205,8 @@ void publish_frames(dds_entity_t writer, bool loan, std::size_t count, std::vect
       frame.width_px = kWidthPx;
       frame.height_px = kHeightPx;
       frame.encoding = heslam_msg_ENCODING_MONO8;
-      frame.left = {static_cast<std::uint32_t>(kImageBytes), static_cast<std::uint32_t>(kImageBytes), source.data(), false};
+      frame.left = {static_cast<std::uint32_t>(kImageBytes), static_cast<std::uint32_t>(kImageBytes), source.data(),
+                    false};
       frame.right = {static_cast<std::uint32_t>(kImageBytes), static_cast<std::uint32_t>(kImageBytes),
                      source.data() + kImageBytes, false};
       ret = dds_write(writer, &frame);
@@ -248,8 +249,8 @@ void publish_status(dds_entity_t writer, bool int_key) {
 int run_publisher(const std::string& name, int domain_id, std::size_t frames) {
   const CaseSpec spec = spec_of(name);
   Domain domain(domain_id, xml_of(name));
-  const dds_entity_t topic =
-      runtime::check_dds(dds_create_topic(domain.participant(), spec.descriptor, spec.topic, nullptr, nullptr), "topic");
+  const dds_entity_t topic = runtime::check_dds(
+      dds_create_topic(domain.participant(), spec.descriptor, spec.topic, nullptr, nullptr), "topic");
   const dds_entity_t writer =
       runtime::check_dds(dds_create_writer(domain.participant(), topic, spec.qos.get(), nullptr), "writer");
   std::cout << "PUB shm_available=" << dds_is_shared_memory_available(writer)
@@ -307,8 +308,8 @@ void receive(dds_entity_t participant, dds_entity_t reader, std::size_t expected
 int run_subscriber(const std::string& name, int domain_id, std::size_t frames) {
   const CaseSpec spec = spec_of(name);
   Domain domain(domain_id, xml_of(name));
-  const dds_entity_t topic =
-      runtime::check_dds(dds_create_topic(domain.participant(), spec.descriptor, spec.topic, nullptr, nullptr), "topic");
+  const dds_entity_t topic = runtime::check_dds(
+      dds_create_topic(domain.participant(), spec.descriptor, spec.topic, nullptr, nullptr), "topic");
   const dds_entity_t reader =
       runtime::check_dds(dds_create_reader(domain.participant(), topic, spec.qos.get(), nullptr), "reader");
   std::cout << "SUB shm_available=" << dds_is_shared_memory_available(reader) << std::endl;
@@ -464,8 +465,8 @@ void run_case(const std::string& self, const std::string& name, int domain_id, s
               std::chrono::seconds timeout) {
   const fs::path dir = fs::temp_directory_path();
   const std::string tag = std::to_string(getpid()) + "_" + name;
-  const std::vector<std::string> common = {"--case", name, "--domain", std::to_string(domain_id), "--frames",
-                                           std::to_string(frames)};
+  const std::vector<std::string> common = {
+      "--case", name, "--domain", std::to_string(domain_id), "--frames", std::to_string(frames)};
   std::vector<std::string> sub_args = {self, "--role", "sub"};
   sub_args.insert(sub_args.end(), common.begin(), common.end());
   std::vector<std::string> pub_args = {self, "--role", "pub"};
@@ -539,8 +540,9 @@ int run(int argc, char** argv) {
   std::string case_name;
   bool help = false;
   runtime::Flags flags("heslam-bench-shm [options]");
-  flags.integer("--frames", "N", &frames, std::size_t{1}, std::numeric_limits<std::size_t>::max(),
-                "frames per case (300)")
+  flags
+      .integer("--frames", "N", &frames, std::size_t{1}, std::numeric_limits<std::size_t>::max(),
+               "frames per case (300)")
       .integer("--domain", "D", &domain_id, 0, runtime::kMaxDomainId, "DDS domain (78)")
       .text("--cases", "a,b", &cases, "the cases to run (default: all)")
       .choice("--roudi", &roudi, {{"start", std::string("start")}, {"external", std::string("external")}},

@@ -18,10 +18,10 @@
 namespace heslam::bench {
 namespace {
 
-constexpr double kSearchWindowPx = 10.0;    // +- around the predicted position, level 0
-constexpr int kMaxHammingDistance = 50;     // ORB-SLAM2's TH_LOW
-constexpr double kRatio = 0.8;              // best < ratio x second best
-constexpr double kMaxResidualLevelPx = 3.0; // a farther match is a different point
+constexpr double kSearchWindowPx = 10.0;     // +- around the predicted position, level 0
+constexpr int kMaxHammingDistance = 50;      // ORB-SLAM2's TH_LOW
+constexpr double kRatio = 0.8;               // best < ratio x second best
+constexpr double kMaxResidualLevelPx = 3.0;  // a farther match is a different point
 constexpr double kCloseDepthM = 3.0;
 
 struct SlopeGroup {
@@ -53,7 +53,8 @@ std::vector<Pose3> ground_truth_at_frames(const EurocSequence& sequence) {
   std::vector<Pose3> poses;
   for (const EurocFrame& frame : sequence.frames) {
     if (!frame.T_WB_truth) {
-      throw std::runtime_error(path.string() + ": no ground truth row at frame stamp " + std::to_string(frame.stamp_ns));
+      throw std::runtime_error(path.string() + ": no ground truth row at frame stamp " +
+                               std::to_string(frame.stamp_ns));
     }
     poses.push_back(*frame.T_WB_truth);
   }
@@ -138,7 +139,8 @@ void print_feature_motion(const EurocSequence& sequence, const photometric::Ster
       const Eigen::Vector2d from(ka.u_px, ka.v_px);
       const Eigen::Vector2d predicted_motion = predicted - from;
       const Eigen::Vector2d measured_motion = Eigen::Vector2d(kb.u_px, kb.v_px) - from;
-      if ((measured_motion - predicted_motion).norm() > kMaxResidualLevelPx * a.pyramid.scale[static_cast<std::size_t>(ka.octave)]) {
+      if ((measured_motion - predicted_motion).norm() >
+          kMaxResidualLevelPx * a.pyramid.scale[static_cast<std::size_t>(ka.octave)]) {
         continue;
       }
       all.add(predicted_motion, measured_motion);

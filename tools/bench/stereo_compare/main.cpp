@@ -30,9 +30,9 @@
 #include "runtime/flags.hpp"
 #include "tools/bench/bench_util.hpp"
 #include "tools/bench/frontend_offline/euroc_sequence.hpp"
-#include "tools/photometric/photometric_variant.hpp"
 #include "tools/bench/stereo_compare/feature_motion.hpp"
 #include "tools/bench/stereo_compare/zncc_reference.hpp"
+#include "tools/photometric/photometric_variant.hpp"
 
 namespace {
 
@@ -58,9 +58,10 @@ struct Group {
     for (double d : v) a.push_back(std::abs(d));
     std::sort(a.begin(), a.end());
     const double n = static_cast<double>(v.size());
-    std::printf("  %-14s n %6zu  mean %+.3f  median %+.3f  median|d| %.3f  p90|d| %.3f  rms %.3f  >0.5px %.1f%%  >1px %.1f%%\n",
-                name, v.size(), sum / n, v[v.size() / 2], a[a.size() / 2], a[a.size() * 9 / 10], std::sqrt(sum2 / n),
-                100.0 * over_half / n, 100.0 * over_one / n);
+    std::printf(
+        "  %-14s n %6zu  mean %+.3f  median %+.3f  median|d| %.3f  p90|d| %.3f  rms %.3f  >0.5px %.1f%%  >1px %.1f%%\n",
+        name, v.size(), sum / n, v[v.size() / 2], a[a.size() / 2], a[a.size() * 9 / 10], std::sqrt(sum2 / n),
+        100.0 * over_half / n, 100.0 * over_one / n);
   }
 };
 
@@ -165,7 +166,8 @@ int run(int argc, char** argv) {
       if (!b.has_stereo(i)) continue;
       const auto& kb = b.keypoints[i];
       const float scale = b.pyramid.scale[static_cast<std::size_t>(kb.octave)];
-      const int half = std::max(options.stereo.sad_half_window_px, static_cast<int>(std::lround(options.stereo.sad_half_window_px * scale)));
+      const int half = std::max(options.stereo.sad_half_window_px,
+                                static_cast<int>(std::lround(options.stereo.sad_half_window_px * scale)));
       const double disparity = kb.u_px - b.u_right_px[i];
       const auto reference = heslam::bench::zncc_reference_disparity(lr, rr, kb.u_px, kb.v_px, half, disparity);
       if (!reference || std::abs(disparity - *reference) > heslam::bench::kMaxReferenceDiffPx) continue;
@@ -212,16 +214,19 @@ int run(int argc, char** argv) {
       (sat ? saturated : clear).add(d);
     }
   }
-  std::printf("gain %s vs reference %s: stereo points ref %ld, gain %ld of %ld features; common keypoints %ld "
-              "(stereo lost %ld, gained %ld)\n",
-              gain.describe().c_str(), reference.describe().c_str(), stereo_ref, stereo_gain, features_gain,
-              common_keypoints, lost, gained);
+  std::printf(
+      "gain %s vs reference %s: stereo points ref %ld, gain %ld of %ld features; common keypoints %ld "
+      "(stereo lost %ld, gained %ld)\n",
+      gain.describe().c_str(), reference.describe().c_str(), stereo_ref, stereo_gain, features_gain, common_keypoints,
+      lost, gained);
   std::printf("disparity(gain) - disparity(ref), px at level 0, common keypoints with stereo in both:\n");
   all.print("all");
   clear.print("right clear");
   saturated.print("right sat.");
-  std::printf("disparity(gain) - ZNCC reference at the same left pixel of the reference pair, every stereo keypoint "
-              "of the gain run (|difference| <= %.0f px):\n", heslam::bench::kMaxReferenceDiffPx);
+  std::printf(
+      "disparity(gain) - ZNCC reference at the same left pixel of the reference pair, every stereo keypoint "
+      "of the gain run (|difference| <= %.0f px):\n",
+      heslam::bench::kMaxReferenceDiffPx);
   reference_clear.print("not near a clip edge");
   reference_near_clip.print("near a clip edge");
   return 0;

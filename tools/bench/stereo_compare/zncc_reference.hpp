@@ -9,9 +9,9 @@
 namespace heslam::bench {
 
 // Kept where the reference is trustworthy: a textured left window, a clear ZNCC peak inside the search.
-inline constexpr double kMinWindowStdDev = 2.0;   // grey levels
+inline constexpr double kMinWindowStdDev = 2.0;  // grey levels
 inline constexpr double kMinPeakZncc = 0.9;
-inline constexpr int kReferenceSearchPx = 4;      // +- around the guess
+inline constexpr int kReferenceSearchPx = 4;  // +- around the guess
 // A stereo match further than this from its reference disagrees on the match, not on its position.
 inline constexpr double kMaxReferenceDiffPx = 3.0;
 

@@ -53,9 +53,11 @@ Summary measure(const fs::path& mav0, const heslam::StereoFeaturePipelineOptions
     cv::Mat left_rect, right_rect;
     rectifier.rectify(left, right, left_rect, right_rect);
     const heslam::StereoFeatures f = pipeline.process(left_rect, right_rect);
-    const auto matched = std::count_if(f.u_right_px.begin(), f.u_right_px.end(), [](float u) { return u != heslam::kNoStereo; });
+    const auto matched =
+        std::count_if(f.u_right_px.begin(), f.u_right_px.end(), [](float u) { return u != heslam::kNoStereo; });
     s.keypoints.push_back(static_cast<double>(f.keypoints.size()));
-    s.stereo_fraction.push_back(f.keypoints.empty() ? 0.0 : static_cast<double>(matched) / static_cast<double>(f.keypoints.size()));
+    s.stereo_fraction.push_back(
+        f.keypoints.empty() ? 0.0 : static_cast<double>(matched) / static_cast<double>(f.keypoints.size()));
     cv::Scalar m, sd;
     cv::meanStdDev(left, m, sd);
     s.mean_grey.push_back(m[0]);
@@ -83,12 +85,15 @@ int main(int argc, char** argv) {
     }
     const Summary syn = measure(synth_dir / "mav0", options, frames);
     const Summary rea = measure(real, options, frames);
-    std::printf("ORB (heslam StereoFeaturePipeline, %s settings) over %d frames\n", settings.filename().c_str(), frames);
+    std::printf("ORB (heslam StereoFeaturePipeline, %s settings) over %d frames\n", settings.filename().c_str(),
+                frames);
     std::printf("%-28s %12s %12s\n", "", "synth room", "EuRoC MH01");
     std::printf("%-28s %12.0f %12.0f\n", "keypoints/frame (median)", median(syn.keypoints), median(rea.keypoints));
-    std::printf("%-28s %12.0f %12.0f\n", "keypoints/frame (min)", *std::min_element(syn.keypoints.begin(), syn.keypoints.end()),
+    std::printf("%-28s %12.0f %12.0f\n", "keypoints/frame (min)",
+                *std::min_element(syn.keypoints.begin(), syn.keypoints.end()),
                 *std::min_element(rea.keypoints.begin(), rea.keypoints.end()));
-    std::printf("%-28s %12.2f %12.2f\n", "stereo-matched fraction (mean)", mean(syn.stereo_fraction), mean(rea.stereo_fraction));
+    std::printf("%-28s %12.2f %12.2f\n", "stereo-matched fraction (mean)", mean(syn.stereo_fraction),
+                mean(rea.stereo_fraction));
     std::printf("%-28s %12.2f %12.2f\n", "stereo-matched fraction (min)",
                 *std::min_element(syn.stereo_fraction.begin(), syn.stereo_fraction.end()),
                 *std::min_element(rea.stereo_fraction.begin(), rea.stereo_fraction.end()));

@@ -104,9 +104,8 @@ fs::path make_kitti_sequence(const StereoDataset& euroc, std::size_t frames) {
     times << static_cast<double>(i) * kFramePeriodS << "\n";
   }
   // KITTI 00's P0/P1 (718.856 px focal length, 0.537 m baseline).
-  std::ofstream(dir / "calib.txt")
-      << "P0: 718.856 0 607.1928 0 0 718.856 185.2157 0 0 0 1 0\n"
-         "P1: 718.856 0 607.1928 -386.1448 0 718.856 185.2157 0 0 0 1 0\n";
+  std::ofstream(dir / "calib.txt") << "P0: 718.856 0 607.1928 0 0 718.856 185.2157 0 0 0 1 0\n"
+                                      "P1: 718.856 0 607.1928 -386.1448 0 718.856 185.2157 0 0 0 1 0\n";
   return dir;
 }
 
@@ -151,9 +150,17 @@ Result measure(const std::string& name, const fs::path& dataset, const fs::path&
   runtime::WaitSet waitset(images.get());
   waitset.attach(reader);
 
-  std::vector<std::string> args{(bin_dir / "heslam-replay").string(), dataset.string(), "--rate", "1", "--loop",
-                                "--domain", std::to_string(domain), "--no-progress", "--no-keyboard",
-                                "--log-level", "error"};
+  std::vector<std::string> args{(bin_dir / "heslam-replay").string(),
+                                dataset.string(),
+                                "--rate",
+                                "1",
+                                "--loop",
+                                "--domain",
+                                std::to_string(domain),
+                                "--no-progress",
+                                "--no-keyboard",
+                                "--log-level",
+                                "error"};
   if (images.separate_domain()) {
     args.insert(args.end(), {"--image-transport", "shm", "--image-domain", std::to_string(image_domain)});
   }
@@ -202,10 +209,10 @@ Result measure(const std::string& name, const fs::path& dataset, const fs::path&
 void print(const Result& result) {
   const std::size_t expected = result.last_seq - result.first_seq + 1;
   std::printf("%-18s %8.0f KB %7zu %6zu %9.0f %9.0f %9.0f %9.0f %9.0f\n", result.name.c_str(),
-              static_cast<double>(result.bytes) / 1e3, result.latencies_us.size(), expected - result.latencies_us.size(),
-              percentile(result.latencies_us, 0.5), percentile(result.latencies_us, 0.9),
-              percentile(result.latencies_us, 0.99), percentile(result.latencies_us, 1.0),
-              percentile(result.wake_latencies_us, 0.5));
+              static_cast<double>(result.bytes) / 1e3, result.latencies_us.size(),
+              expected - result.latencies_us.size(), percentile(result.latencies_us, 0.5),
+              percentile(result.latencies_us, 0.9), percentile(result.latencies_us, 0.99),
+              percentile(result.latencies_us, 1.0), percentile(result.wake_latencies_us, 0.5));
   const std::vector<double>& first = result.first_pass_latencies_us;
   if (!first.empty()) {
     std::printf("  first pass (decoding) %7zu %6s %9.0f %9.0f %9.0f %9.0f\n", first.size(), "", percentile(first, 0.5),
@@ -258,7 +265,8 @@ int plain_c_publish(int domain, int width, int height, std::size_t frames, std::
       static_cast<std::uint32_t>(image_bytes);
   auto due = std::chrono::steady_clock::now();
   for (std::size_t i = 0; i < frames && !runtime::shutdown_requested(); ++i) {
-    due += std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(kFramePeriodS));
+    due +=
+        std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(kFramePeriodS));
     std::this_thread::sleep_until(due);
     std::uint8_t* pair = pixels.data() + (i % buffers) * 2 * image_bytes;
     frame.left._buffer = pair;
@@ -328,8 +336,8 @@ void run_ddsperf(const std::string& name, std::size_t bytes, int domain, int sec
   const fs::path pong_out = fs::temp_directory_path() / ("heslam_bench_pong_" + std::to_string(getpid()));
   const fs::path ping_out = fs::temp_directory_path() / ("heslam_bench_ping_" + std::to_string(getpid()));
   const std::string& config = runtime::default_dds_config();
-  const pid_t pong = spawn({"ddsperf", "-i", std::to_string(domain), "-D", std::to_string(seconds + 3), "pong"},
-                           pong_out, config);
+  const pid_t pong =
+      spawn({"ddsperf", "-i", std::to_string(domain), "-D", std::to_string(seconds + 3), "pong"}, pong_out, config);
   const pid_t ping = spawn({"ddsperf", "-i", std::to_string(domain), "-D", std::to_string(seconds), "ping", "20Hz",
                             "size", std::to_string(bytes)},
                            ping_out, config);
@@ -374,8 +382,9 @@ int run(int argc, char** argv) {
   fs::path euroc_dir = fs::path(HESLAM_SHARED_DATA) / "euroc_v101_head";
   std::vector<int> plain_c_child;  // the hidden child mode: W,H,FRAMES,BUFFERS
   runtime::Flags flags("heslam-bench-transport [options] [common options]");
-  flags.integer("--frames", "N", &frames, std::size_t{1}, std::numeric_limits<std::size_t>::max(),
-                "timed frames per row (200)")
+  flags
+      .integer("--frames", "N", &frames, std::size_t{1}, std::numeric_limits<std::size_t>::max(),
+               "timed frames per row (200)")
       .path("--bin", "DIR", &bin_dir, "where heslam-replay is (default: beside this executable)")
       .path("--euroc", "DIR", &euroc_dir, "the EuRoC recording replayed (euroc_v101_head)")
       .integer("--ddsperf-seconds", "S", &ddsperf_seconds, "length of the ddsperf reference run (10)")
@@ -401,18 +410,19 @@ int run(int argc, char** argv) {
   }
   const StereoDataset euroc = open_dataset(euroc_dir);
   const fs::path kitti = make_kitti_sequence(euroc, euroc.frames.size());
-  std::printf("one-way latency heslam-replay -> subscriber, %zu frames each after %zu warm-up, 20 Hz, domain %d, "
-              "take %s\n",
-              frames, kWarmupFrames, common.domain_id, reuse_buffers ? "reuse (take_into)" : "fresh sample per frame");
-  std::printf("%-18s %11s %7s %6s %9s %9s %9s %9s %9s\n", "stereo pair", "size", "frames", "lost", "median_us", "p90_us",
-              "p99_us", "max_us", "wake_p50");
+  std::printf(
+      "one-way latency heslam-replay -> subscriber, %zu frames each after %zu warm-up, 20 Hz, domain %d, "
+      "take %s\n",
+      frames, kWarmupFrames, common.domain_id, reuse_buffers ? "reuse (take_into)" : "fresh sample per frame");
+  std::printf("%-18s %11s %7s %6s %9s %9s %9s %9s %9s\n", "stereo pair", "size", "frames", "lost", "median_us",
+              "p90_us", "p99_us", "max_us", "wake_p50");
   std::fflush(stdout);
   try {
-    print(measure("EuRoC 752x480", euroc_dir, bin_dir, common.domain_id, frames, euroc.frames.size(), reuse_buffers, replay_via,
-                  common.image_transport, common.image_domain_id));
+    print(measure("EuRoC 752x480", euroc_dir, bin_dir, common.domain_id, frames, euroc.frames.size(), reuse_buffers,
+                  replay_via, common.image_transport, common.image_domain_id));
     std::fflush(stdout);
-    print(measure("KITTI 1241x376", kitti, bin_dir, common.domain_id, frames, euroc.frames.size(), reuse_buffers, replay_via,
-                  common.image_transport, common.image_domain_id));
+    print(measure("KITTI 1241x376", kitti, bin_dir, common.domain_id, frames, euroc.frames.size(), reuse_buffers,
+                  replay_via, common.image_transport, common.image_domain_id));
   } catch (...) {
     fs::remove_all(kitti);
     throw;
@@ -422,7 +432,8 @@ int run(int argc, char** argv) {
     std::fflush(stdout);
     print(measure_plain_c("plain C 752x480", 752, 480, common.domain_id, frames, euroc.frames.size()));
     std::fflush(stdout);
-    print(measure_plain_c("plain C 1241x376", kKittiWidth, kKittiHeight, common.domain_id, frames, euroc.frames.size()));
+    print(
+        measure_plain_c("plain C 1241x376", kKittiWidth, kKittiHeight, common.domain_id, frames, euroc.frames.size()));
   }
   if (ddsperf_seconds > 0) {
     std::fflush(stdout);

@@ -18,9 +18,9 @@
 
 #include "components/core/camera/stereo_calibration.hpp"
 #include "components/core/camera/stereo_rectifier.hpp"
-#include "components/core/feature/stereo_tone.hpp"
 #include "components/core/feature/orb_extractor.hpp"
 #include "components/core/feature/stereo_feature_pipeline.hpp"
+#include "components/core/feature/stereo_tone.hpp"
 #include "components/core/image/histogram_equalizer.hpp"
 #include "components/core/image/histogram_matching.hpp"
 #include "components/core/match/stereo_matcher.hpp"
@@ -80,7 +80,9 @@ const Data& data() {
 bool kitti(const benchmark::State& state) { return state.range(0) == 1; }
 const cv::Mat& left_image(const benchmark::State& state) { return kitti(state) ? data().kitti_left : data().left; }
 const cv::Mat& right_image(const benchmark::State& state) { return kitti(state) ? data().kitti_right : data().right; }
-const PinholeStereo& camera(const benchmark::State& state) { return kitti(state) ? data().kitti_camera : data().camera; }
+const PinholeStereo& camera(const benchmark::State& state) {
+  return kitti(state) ? data().kitti_camera : data().camera;
+}
 int features(const benchmark::State& state) { return kitti(state) ? kKittiFeatures : OrbOptions().features; }
 
 OrbOptions orb_options(const benchmark::State& state) {
@@ -110,9 +112,7 @@ void BM_HistogramEqualizationPair(benchmark::State& state) {
   for (auto _ : state) equalizer.equalize(left_image(state), right_image(state), l, r);
   state.SetLabel(std::string(to_string(o.mode)) + (kitti(state) ? " kitti" : " euroc"));
 }
-BENCHMARK(BM_HistogramEqualizationPair)
-    ->ArgsProduct({{0, 1}, {0, 1, 2, 3}})
-    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_HistogramEqualizationPair)->ArgsProduct({{0, 1}, {0, 1, 2, 3}})->Unit(benchmark::kMillisecond);
 
 // Clipped HE (the default) with the two images' mappings shared or matched (HE.stereo), on the EuRoC
 // pair (arg 0 = 0: EuRoC) as recorded (arg 2 = 0) and exposed apart: left x0.35, right x2 clipped

@@ -16,11 +16,12 @@ namespace {
 // The command line, declared once for the parser and the usage. times_both: --times, resolved
 // after parsing (it belongs to whichever side is a KITTI pose file).
 runtime::Flags eval_flags(CliOptions& options, std::filesystem::path& times_both, bool& command_given) {
-  runtime::Flags flags("heslam-eval <ape|rpe|kitti> --gt FILE --est FILE [options]",
-                       "  ape    absolute trajectory error after alignment (default --align se3)\n"
-                       "  rpe    relative pose error over --delta N --unit frames|m [--all-pairs] (default --align none)\n"
-                       "  kitti  KITTI devkit drift over 100..800 m, plus ATE and RPE (default --align none)\n"
-                       "options:");
+  runtime::Flags flags(
+      "heslam-eval <ape|rpe|kitti> --gt FILE --est FILE [options]",
+      "  ape    absolute trajectory error after alignment (default --align se3)\n"
+      "  rpe    relative pose error over --delta N --unit frames|m [--all-pairs] (default --align none)\n"
+      "  kitti  KITTI devkit drift over 100..800 m, plus ATE and RPE (default --align none)\n"
+      "options:");
   const auto format = [](std::optional<Format>& target, std::string flag) {
     return [&target, flag](const std::string& value) {
       target = parse_format(value);
@@ -72,11 +73,16 @@ runtime::Flags eval_flags(CliOptions& options, std::filesystem::path& times_both
       .toggle("--help", &options.help, "this help")
       .alias("-h")
       .positional("COMMAND", "", [&options, &command_given](const std::string& arg) {
-        if (command_given) throw std::runtime_error("unexpected argument '" + runtime::quote_value(arg) + "'; see --help");
-        if (arg == "ape") options.command = Command::ape;
-        else if (arg == "rpe") options.command = Command::rpe;
-        else if (arg == "kitti") options.command = Command::kitti;
-        else throw std::runtime_error("unknown command '" + runtime::quote_value(arg) + "' (expected ape, rpe or kitti)");
+        if (command_given)
+          throw std::runtime_error("unexpected argument '" + runtime::quote_value(arg) + "'; see --help");
+        if (arg == "ape")
+          options.command = Command::ape;
+        else if (arg == "rpe")
+          options.command = Command::rpe;
+        else if (arg == "kitti")
+          options.command = Command::kitti;
+        else
+          throw std::runtime_error("unknown command '" + runtime::quote_value(arg) + "' (expected ape, rpe or kitti)");
         command_given = true;
       });
   return flags;
@@ -111,7 +117,8 @@ CliOptions parse_cli(int argc, char** argv) {
   }
   // --times belongs to whichever side is a KITTI pose file.
   if (!times_both.empty()) {
-    for (auto [path, read] : {std::pair{&options.gt_path, &options.gt_read}, std::pair{&options.est_path, &options.est_read}}) {
+    for (auto [path, read] :
+         {std::pair{&options.gt_path, &options.gt_read}, std::pair{&options.est_path, &options.est_read}}) {
       const Format format = read->format ? *read->format : detect_format(*path);
       if (format == Format::kitti && read->times_path.empty()) read->times_path = times_both;
     }

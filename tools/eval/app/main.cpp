@@ -28,8 +28,10 @@ std::string plot_title(const app::CliOptions& options, const char* metric) {
 
 // The JSON document goes to its file, or alone on stdout.
 void emit_json(const app::CliOptions& options, const std::string& json) {
-  if (options.json_path == app::kStdout) std::cout << json;
-  else if (!options.json_path.empty()) write_text_file(options.json_path, json);
+  if (options.json_path == app::kStdout)
+    std::cout << json;
+  else if (!options.json_path.empty())
+    write_text_file(options.json_path, json);
 }
 
 int run(const app::CliOptions& options) {
@@ -56,14 +58,15 @@ int run(const app::CliOptions& options) {
     return 0;
   }
 
-  const AlignedPair pair =
-      associate(gt, est, AssociationOptions{.max_dt_s = options.max_dt_s, .est_offset_s = options.est_offset_s,
-                                            .interpolate_gt = options.interpolate_gt});
+  const AlignedPair pair = associate(gt, est,
+                                     AssociationOptions{.max_dt_s = options.max_dt_s,
+                                                        .est_offset_s = options.est_offset_s,
+                                                        .interpolate_gt = options.interpolate_gt});
   context.associated_by_time = pair.by_time;
   text << "associated " << pair.size() << " pairs by "
-            << (pair.by_time ? (options.interpolate_gt ? "time stamp, ground truth interpolated" : "time stamp")
-                             : "frame index")
-            << "\n";
+       << (pair.by_time ? (options.interpolate_gt ? "time stamp, ground truth interpolated" : "time stamp")
+                        : "frame index")
+       << "\n";
   if (options.command == app::Command::ape) {
     const ApeResult ape = compute_ape(pair, ApeOptions{.align = options.align.value_or(AlignMode::se3)});
     app::print_ape(text, ape, precision);

@@ -30,11 +30,12 @@ constexpr double kMillimetresPerMetre = 1e3;
 
 void print_stats(std::ostream& out, const ErrorStats& t, const ErrorStats& r, Precision precision) {
   const std::pair<const char*, std::pair<double, double>> rows[] = {
-      {"rmse", {t.rmse, r.rmse}}, {"mean", {t.mean, r.mean}}, {"median", {t.median, r.median}},
-      {"std", {t.std, r.std}},    {"min", {t.min, r.min}},    {"max", {t.max, r.max}},
-      {"sse", {t.sse, r.sse}}};
+      {"rmse", {t.rmse, r.rmse}}, {"mean", {t.mean, r.mean}}, {"median", {t.median, r.median}}, {"std", {t.std, r.std}},
+      {"min", {t.min, r.min}},    {"max", {t.max, r.max}},    {"sse", {t.sse, r.sse}}};
   if (precision == Precision::full) {
-    out << "          " << "   translation [m]" << "    rotation [deg]\n";
+    out << "          "
+        << "   translation [m]"
+        << "    rotation [deg]\n";
     for (const auto& [name, values] : rows) {
       char label[16];
       std::snprintf(label, sizeof label, "  %-8s", name);
@@ -45,7 +46,9 @@ void print_stats(std::ostream& out, const ErrorStats& t, const ErrorStats& r, Pr
   const bool millimetres = t.max < kMillimetreTableBelow_m;
   const double scale = millimetres ? kMillimetresPerMetre : 1.0;
   const char* unit = millimetres ? "mm" : "m";
-  out << "          " << "   translation" << "        rotation\n";
+  out << "          "
+      << "   translation"
+      << "        rotation\n";
   for (const auto& [name, values] : rows) {
     // sse is a sum of squares: its unit is the square of the table's.
     const bool squared = std::string_view(name) == "sse";
@@ -53,8 +56,8 @@ void print_stats(std::ostream& out, const ErrorStats& t, const ErrorStats& r, Pr
     std::snprintf(label, sizeof label, "  %-8s", name);
     const double translation = values.first * (squared ? scale * scale : scale);
     const std::string translation_unit = squared ? std::string(unit) + "^2" : std::string(unit) + "  ";
-    out << label << format("%11.3f ", translation) << translation_unit
-        << format("%12.3f ", values.second) << (squared ? "deg^2" : "deg") << "\n";
+    out << label << format("%11.3f ", translation) << translation_unit << format("%12.3f ", values.second)
+        << (squared ? "deg^2" : "deg") << "\n";
   }
 }
 
@@ -113,9 +116,8 @@ std::string ape_error_rows(const ApeResult& ape, const AlignedPair& pair) {
   char row[256];
   for (std::size_t i = 0; i < ape.translation_errors_m.size(); ++i) {
     const Eigen::Vector3d d = ape.est_aligned.position_m(i) - ape.gt.position_m(i);
-    std::snprintf(row, sizeof row, "%zu %.9f %.9g %.9g %.9g %.9g %.9g\n", pair.est_rows[i],
-                  stamp_or_id(pair.est, i), ape.translation_errors_m[i], d.x(), d.y(), d.z(),
-                  ape.rotation_errors_deg[i]);
+    std::snprintf(row, sizeof row, "%zu %.9f %.9g %.9g %.9g %.9g %.9g\n", pair.est_rows[i], stamp_or_id(pair.est, i),
+                  ape.translation_errors_m[i], d.x(), d.y(), d.z(), ape.rotation_errors_deg[i]);
     out += row;
   }
   return out;
