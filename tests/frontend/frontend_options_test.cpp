@@ -226,6 +226,34 @@ TEST(FrontendOptions, EurocAndSynthConfigsAreTheCoreDefaults) {
   }
 }
 
+// Every option the shipped settings files give, field by field: the core defaults but for the
+// few values each file is there to set (KITTI: 2000 features, a keyframe a second at 10 Hz; ORB-SLAM3's
+// EuRoC file: its ThDepth 60). Pins the files across changes of which keys the reader reads.
+TEST(FrontendOptions, ShippedSettingsFilesGiveExactlyTheirOptions) {
+  const std::filesystem::path camera = std::filesystem::path(HESLAM_SOURCE_DIR) / "config/camera";
+  const StereoFeaturePipelineOptions core_pipeline;
+  const TrackerOptions core_tracker;
+  StereoFeaturePipelineOptions kitti_pipeline;
+  kitti_pipeline.orb.features = 2000;
+  TrackerOptions kitti_tracker;
+  kitti_tracker.max_frames_between_keyframes = 10;
+  TrackerOptions orbslam3_tracker;
+  orbslam3_tracker.close_depth_baselines = 60.0;
+  const struct {
+    const char* file;
+    const StereoFeaturePipelineOptions& pipeline;
+    const TrackerOptions& tracker;
+  } shipped[] = {{"EuRoC.yaml", core_pipeline, core_tracker},       {"synth.yaml", core_pipeline, core_tracker},
+                 {"KITTI00-02.yaml", kitti_pipeline, kitti_tracker}, {"KITTI03.yaml", kitti_pipeline, kitti_tracker},
+                 {"KITTI04-12.yaml", kitti_pipeline, kitti_tracker}, {"EuRoC_ORB-SLAM3.yaml", core_pipeline, orbslam3_tracker}};
+  for (const auto& [file, pipeline, tracker] : shipped) {
+    const SettingsFile settings = load_settings_file(camera / file);
+    EXPECT_TRUE(settings.pipeline == pipeline) << file << ": " << describe_settings(settings.pipeline, settings.tracker);
+    EXPECT_TRUE(settings.tracker == tracker) << file << ": " << describe_settings(settings.pipeline, settings.tracker);
+    EXPECT_TRUE(settings.unused_keys.empty()) << file << ": " << settings.unused_keys.front();
+  }
+}
+
 TEST(FrontendOptions, ShippedConfigsLoad) {
   for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(HESLAM_SOURCE_DIR) / "config/frontend")) {
     const std::string name = entry.path().filename().string();

@@ -34,6 +34,7 @@ struct OrbOptions {
   // Reads ORBextractor.nFeatures, .scaleFactor, .nLevels, .iniThFAST, .minThFAST, .cellSize,
   // .featuresByArea (ORB-SLAM2 names where they exist).
   static OrbOptions from_yaml(const cv::FileNode& root, const std::string& source);
+  bool operator==(const OrbOptions&) const = default;
 };
 
 // Keypoints (level-0 coordinates), descriptors and the pyramid they came from.

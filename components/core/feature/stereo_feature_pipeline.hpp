@@ -62,6 +62,7 @@ struct StereoFeaturePipelineOptions {
   // Same, from a settings file (e.g. config/camera/EuRoC.yaml). Throws std::runtime_error naming the
   // file and key on bad input.
   static StereoFeaturePipelineOptions load(const std::filesystem::path& settings_yaml);
+  bool operator==(const StereoFeaturePipelineOptions&) const = default;
 };
 
 struct StereoFeatureTimings {

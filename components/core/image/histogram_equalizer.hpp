@@ -77,6 +77,7 @@ struct HistogramEqualizerOptions {
 
   // Reads HE.mode, HE.stereo, HE.saturationExcess, HE.matchShiftFrom, HE.matchShiftFull, HE.matchGainFrom, HE.globalClipLimit, HE.clipLimit, HE.tilesX, HE.tilesY, HE.adaptiveOnBelow, HE.adaptiveOffAbove.
   static HistogramEqualizerOptions from_yaml(const cv::FileNode& root, const std::string& source);
+  bool operator==(const HistogramEqualizerOptions&) const = default;
 };
 
 class HistogramEqualizer {

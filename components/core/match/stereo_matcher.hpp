@@ -41,6 +41,7 @@ struct StereoMatcherOptions {
   // Reads Stereo.maxDistance, .rowBand, .sadHalfWindow, .sadSearch, .minDepthBaselines,
   // .sadOutlierFactor, .relativeSadOutliers, .sadNormalization, .subpixelFit.
   static StereoMatcherOptions from_yaml(const cv::FileNode& root, const std::string& source);
+  bool operator==(const StereoMatcherOptions&) const = default;
 };
 
 // Where left keypoints were lost, for tuning and reports.

@@ -104,6 +104,8 @@ struct TrackerOptions {
   bool assume_mapper_idle = true;
   // Creator tag for keyframe and point ids (map.hpp).
   std::uint8_t id_tag = 1;
+
+  bool operator==(const TrackerOptions&) const = default;
 };
 
 }  // namespace heslam
