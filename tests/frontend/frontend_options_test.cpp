@@ -3,14 +3,19 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <set>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
+#include "components/core/image/yaml_option.hpp"
 #include "components/core/tracking/settings_file.hpp"
+#include "components/core/tracking/tracker_settings.hpp"
 #include "components/frontend/frontend_options.hpp"
 #include "runtime/config.hpp"
 
@@ -63,18 +68,19 @@ std::string reported(const FrontendOptions& options) { return describe_settings(
 TEST(FrontendOptions, SettingsFileReachesTheCoreOptions) {
   const SettingsScratch scratch;
   const FrontendOptions options = with_settings(
-      scratch.write("HE.mode: \"clahe\"\nHE.stereo: \"separate\"\nHE.matchShiftFrom: 10.0\nHE.matchShiftFull: 30.0\n"
+      scratch.write("HE.mode: \"clahe\"\nHE.stereo: \"separate\"\nHE.adaptiveOnBelow: 10.0\nHE.adaptiveOffAbove: 30.0\n"
                     "ORBextractor.nFeatures: 2000\n"
-                    "Camera.fps: 10.0\nThDepth: 40.0\nTracker.referenceNearClipWeight: 0.25\n"),
+                    "Camera.fps: 10.0\nThDepth: 40.0\nTracker.ransacSeed: 7\n"),
       "lockstep:\n  wait_for_mapper: true\n  mapper_timeout_s: 2.5\n");
   EXPECT_EQ(options.features.he.mode, HeMode::kClahe);
   EXPECT_EQ(options.features.he.stereo, StereoPhotometry::kSeparate);
-  EXPECT_EQ(options.features.he.match_shift_from, 10.0);
-  EXPECT_EQ(options.features.he.match_shift_full, 30.0);
+  EXPECT_EQ(options.features.he.adaptive_on_below, 10.0);
+  EXPECT_EQ(options.features.he.adaptive_off_above, 30.0);
   EXPECT_EQ(options.features.orb.features, 2000);
   EXPECT_EQ(options.tracker.max_frames_between_keyframes, 10);  // ORB-SLAM2: mMaxFrames = fps
   EXPECT_EQ(options.tracker.close_depth_baselines, 40.0);       // ORB-SLAM2: ThDepth
-  EXPECT_EQ(options.tracker.reference_near_clip_weight, 0.25);
+  EXPECT_EQ(options.tracker.ransac_seed, 7u);
+  EXPECT_EQ(options.tracker.reference_near_clip_weight, 0.0);  // the constant's value with a local mapper
   EXPECT_TRUE(options.settings_unused_keys.empty());
   EXPECT_TRUE(options.mapper_enabled);  // waiting for a mapper implies one
   EXPECT_TRUE(options.wait_for_mapper);
@@ -82,41 +88,152 @@ TEST(FrontendOptions, SettingsFileReachesTheCoreOptions) {
   EXPECT_EQ(options.mapper_timeout.count(), 2500);
 }
 
-// A user's edit of the settings file is never ignored. Each documented key, changed from
-// the value config/camera/EuRoC.yaml gives it, changes the settings the frontend reports at start.
+// The settings file's keys (docs/frontend.md, "Settings file keys": each with the reason a user would
+// change it). Every other option is a constant of its Options struct.
+const char* const kSettingsKeys[] = {"Camera.fps",
+                                     "ThDepth",
+                                     "Stereo.ThDepth",
+                                     "ORBextractor.nFeatures",
+                                     "ORBextractor.scaleFactor",
+                                     "ORBextractor.nLevels",
+                                     "ORBextractor.iniThFAST",
+                                     "ORBextractor.minThFAST",
+                                     "HE.mode",
+                                     "HE.stereo",
+                                     "HE.globalClipLimit",
+                                     "HE.clipLimit",
+                                     "HE.tilesX",
+                                     "HE.tilesY",
+                                     "HE.adaptiveOnBelow",
+                                     "HE.adaptiveOffAbove",
+                                     "Stereo.rowBand",
+                                     "Pipeline.parallel",
+                                     "Pipeline.pinThreads",
+                                     "Pipeline.leftOnlyFeatures",
+                                     "Tracker.stationaryTestChi2",
+                                     "Tracker.rotationOnlyTestChi2",
+                                     "Tracker.ransacSeed"};
+
+// The keys of the settings file before issue 33 that are constants now: a file still giving one (an
+// older copy of a shipped file) is told it is not used, never silently ignored.
+const char* const kFormerKeys[] = {"HE.saturationExcess",
+                                   "HE.matchShiftFrom",
+                                   "HE.matchShiftFull",
+                                   "HE.matchGainFrom",
+                                   "HE.toneFromMatches",
+                                   "ORBextractor.cellSize",
+                                   "ORBextractor.featuresByArea",
+                                   "Stereo.maxDistance",
+                                   "Stereo.sadHalfWindow",
+                                   "Stereo.sadSearch",
+                                   "Stereo.minDepthBaselines",
+                                   "Stereo.sadOutlierFactor",
+                                   "Stereo.relativeSadOutliers",
+                                   "Stereo.sadNormalization",
+                                   "Stereo.subpixelFit",
+                                   "Stereo.clipEdgeRadius",
+                                   "Stereo.clipEdgeMinFraction",
+                                   "Pipeline.rightFeaturesFactor",
+                                   "Tracker.minFeaturesToInitialize",
+                                   "Tracker.minStereoPointsToInitialize",
+                                   "Tracker.descriptorThresholdHigh",
+                                   "Tracker.descriptorThresholdLow",
+                                   "Tracker.checkOrientation",
+                                   "Tracker.motionSearchRadius",
+                                   "Tracker.minMotionMatches",
+                                   "Tracker.referenceSearchRadius",
+                                   "Tracker.referenceRatio",
+                                   "Tracker.minReferenceMatches",
+                                   "Tracker.minPoseInliers",
+                                   "Tracker.localSearchRadius",
+                                   "Tracker.localSearchRadiusRelocalized",
+                                   "Tracker.localRatio",
+                                   "Tracker.minViewCosine",
+                                   "Tracker.localMapMaxKeyframes",
+                                   "Tracker.localMapNeighboursPerKeyframe",
+                                   "Tracker.minLocalMapInliers",
+                                   "Tracker.minLocalMapInliersAfterRelocalization",
+                                   "Tracker.poseOptimizationRounds",
+                                   "Tracker.poseOptimizationIterations",
+                                   "Tracker.disparitySigmaRatio",
+                                   "Tracker.minFramesBetweenKeyframes",
+                                   "Tracker.closeTrackedNeeded",
+                                   "Tracker.closeUntrackedEnough",
+                                   "Tracker.closeUntrackedNearClipWeight",
+                                   "Tracker.referenceRatioStereo",
+                                   "Tracker.referenceNearClipWeight",
+                                   "Tracker.referenceRatioSingleKeyframe",
+                                   "Tracker.minKeyframeInliers",
+                                   "Tracker.newKeyframeMinPoints",
+                                   "Tracker.relocalizationKeyframes",
+                                   "Tracker.relocalizationRatio",
+                                   "Tracker.minRelocalizationMatches",
+                                   "Tracker.minRelocalizationInliers"};
+
+// The reader looks up exactly the settings keys, no more: a new key needs its line in docs/frontend.md
+// (and here), with the reason a user would change it.
+TEST(FrontendOptions, TheReaderLooksUpExactlyTheSettingsKeys) {
+  // What load_settings_file reads with (its own KeyLog would hide the lookups from one here).
+  cv::FileStorage empty("%YAML:1.0\nViewer.PointSize: 2\n", cv::FileStorage::READ | cv::FileStorage::MEMORY);
+  std::set<std::string> looked_up;
+  {
+    const yaml_option::KeyLog log;
+    StereoFeaturePipelineOptions::from_yaml(empty.root(), "empty.yaml");
+    TrackerOptions tracker;
+    read_tracker_settings(empty.root(), "empty.yaml", tracker);
+    looked_up = log.keys();
+  }
+  EXPECT_EQ(looked_up, std::set<std::string>(std::begin(kSettingsKeys), std::end(kSettingsKeys)));
+  std::ifstream doc(std::filesystem::path(HESLAM_SOURCE_DIR) / "docs/frontend.md");
+  const std::string text((std::istreambuf_iterator<char>(doc)), std::istreambuf_iterator<char>());
+  // The settings table: from its header to the former keys' table.
+  const std::size_t table = text.find("| Key | Default | Meaning | Change it when |");
+  const std::size_t former = text.find("Former keys", table);
+  ASSERT_NE(table, std::string::npos);
+  ASSERT_NE(former, std::string::npos);
+  const std::string rows = text.substr(table, former - table);
+  for (const char* key : kSettingsKeys) {
+    EXPECT_NE(rows.find(std::string("`") + key + "`"), std::string::npos) << key << ": its row in docs/frontend.md";
+  }
+}
+
+// A user's edit of the settings file is never ignored. Each settings key, changed from the value
+// config/camera/EuRoC.yaml gives it, changes the settings the frontend reports at start.
 TEST(FrontendOptions, EachDocumentedSettingsKeyChangesWhatTheFrontendReports) {
   const std::filesystem::path euroc = std::filesystem::path(HESLAM_SOURCE_DIR) / "config/camera/EuRoC.yaml";
   std::ifstream in(euroc);
   const std::string base((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::string baseline = reported(with_settings(euroc));
-  const std::pair<const char*, const char*> changes[] = {{"HE.mode", "\"global\""},
-                                                         {"HE.stereo", "\"shared\""},
-                                                         {"HE.globalClipLimit", "3.0"},
-                                                         {"HE.clipLimit", "4.0"},
-                                                         {"HE.tilesX", "4"},
-                                                         {"HE.tilesY", "4"},
-                                                         {"ORBextractor.nFeatures", "1500"},
-                                                         {"ORBextractor.scaleFactor", "1.3"},
-                                                         {"ORBextractor.nLevels", "6"},
-                                                         {"ORBextractor.iniThFAST", "25"},
-                                                         {"ORBextractor.minThFAST", "5"},
-                                                         {"ORBextractor.cellSize", "40.0"},
-                                                         {"Stereo.maxDistance", "80"},
-                                                         {"Stereo.rowBand", "3.0"},
-                                                         {"Stereo.sadHalfWindow", "4"},
-                                                         {"Stereo.sadSearch", "6"},
-                                                         {"Stereo.minDepthBaselines", "2.0"},
-                                                         {"Pipeline.parallel", "0"},
-                                                         {"Pipeline.rightFeaturesFactor", "1.5"},
-                                                         {"Pipeline.leftOnlyFeatures", "0.5"},
-                                                         {"ThDepth", "40.0"},
-                                                         {"Camera.fps", "30.0"},
-                                                         {"Tracker.referenceRatioStereo", "0.8"},
-                                                         {"Tracker.referenceNearClipWeight", "0.5"}};
-  for (const auto& [key, value] : changes) {
-    // The key's line replaced, or appended when the file does not set it.
+  // {key, value, the key whose line it replaces (ORB-SLAM3's Stereo.ThDepth replaces ThDepth)}
+  const std::tuple<const char*, const char*, const char*> changes[] = {{"Camera.fps", "30.0", nullptr},
+                                                                       {"ThDepth", "40.0", nullptr},
+                                                                       {"Stereo.ThDepth", "40.0", "ThDepth"},
+                                                                       {"ORBextractor.nFeatures", "1500", nullptr},
+                                                                       {"ORBextractor.scaleFactor", "1.3", nullptr},
+                                                                       {"ORBextractor.nLevels", "6", nullptr},
+                                                                       {"ORBextractor.iniThFAST", "25", nullptr},
+                                                                       {"ORBextractor.minThFAST", "5", nullptr},
+                                                                       {"HE.mode", "\"global\"", nullptr},
+                                                                       {"HE.stereo", "\"shared\"", nullptr},
+                                                                       {"HE.globalClipLimit", "3.0", nullptr},
+                                                                       {"HE.clipLimit", "4.0", nullptr},
+                                                                       {"HE.tilesX", "4", nullptr},
+                                                                       {"HE.tilesY", "4", nullptr},
+                                                                       {"HE.adaptiveOnBelow", "20.0", nullptr},
+                                                                       {"HE.adaptiveOffAbove", "40.0", nullptr},
+                                                                       {"Stereo.rowBand", "3.0", nullptr},
+                                                                       {"Pipeline.parallel", "0", nullptr},
+                                                                       {"Pipeline.pinThreads", "0", nullptr},
+                                                                       {"Pipeline.leftOnlyFeatures", "0.5", nullptr},
+                                                                       {"Tracker.stationaryTestChi2", "0", nullptr},
+                                                                       {"Tracker.rotationOnlyTestChi2", "0", nullptr},
+                                                                       {"Tracker.ransacSeed", "7", nullptr}};
+  std::set<std::string> changed;
+  for (const auto& [key, value, replaces] : changes) {
+    changed.insert(key);
+    // The key's line (or the line of the key it replaces) replaced, or appended when the file has none.
     std::string text = base;
-    const std::string prefix = std::string("\n") + key + ":";
+    const std::string prefix = std::string("\n") + (replaces != nullptr ? replaces : key) + ":";
     const std::size_t at = text.find(prefix);
     if (at == std::string::npos) {
       text += std::string(key) + ": " + value + "\n";
@@ -129,6 +246,25 @@ TEST(FrontendOptions, EachDocumentedSettingsKeyChangesWhatTheFrontendReports) {
     const FrontendOptions options = with_settings(file);
     EXPECT_NE(reported(options), baseline) << key << ": " << value;
     EXPECT_TRUE(options.settings_unused_keys.empty()) << key;
+  }
+  EXPECT_EQ(changed, std::set<std::string>(std::begin(kSettingsKeys), std::end(kSettingsKeys)));
+}
+
+// A former key (a constant now) in a settings file changes nothing and is named as not used.
+TEST(FrontendOptions, EachFormerSettingsKeyIsReportedAsUnused) {
+  const std::filesystem::path euroc = std::filesystem::path(HESLAM_SOURCE_DIR) / "config/camera/EuRoC.yaml";
+  const FrontendOptions baseline = with_settings(euroc);
+  std::ifstream in(euroc);
+  const std::string base((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const char* key : kFormerKeys) {
+    EXPECT_EQ(std::count(std::begin(kSettingsKeys), std::end(kSettingsKeys), std::string(key)), 0) << key;
+    EXPECT_EQ(base.find(std::string("\n") + key + ":"), std::string::npos) << key << " still in EuRoC.yaml";
+    const SettingsScratch scratch;
+    // A value the old reader would have refused or that differs from the constant: neither matters now.
+    const FrontendOptions options = with_settings(scratch.write(base.substr(base.find('\n') + 1) + key + ": 3\n"));
+    EXPECT_EQ(options.settings_unused_keys, std::vector<std::string>{key});
+    EXPECT_TRUE(options.features == baseline.features) << key;
+    EXPECT_TRUE(options.tracker == baseline.tracker) << key;
   }
 }
 
@@ -169,9 +305,9 @@ void expect_error_naming_key(const std::string& text, const std::string& key) {
 
 TEST(FrontendOptions, BadSettingIsOneLineNamingFileAndKey) {
   expect_error_naming_key("ORBextractor.nLevels: 40\n", "ORBextractor.nLevels");
-  expect_error_naming_key("Stereo.subpixelFit: \"spline\"\n", "Stereo.subpixelFit");
+  expect_error_naming_key("Stereo.rowBand: 0.0\n", "Stereo.rowBand");
   expect_error_naming_key("Camera.fps: -5.0\n", "Camera.fps");
-  expect_error_naming_key("Tracker.referenceRatioStereo: 2.0\n", "Tracker.referenceRatioStereo");
+  expect_error_naming_key("Tracker.stationaryTestChi2: -1.0\n", "Tracker.stationaryTestChi2");
   const auto typo = runtime::Config::parse("lockstep:\n  wait_for_mapr: true\n", "frontend.yaml");
   FrontendOptions::from_config(typo);
   EXPECT_THROW(typo.reject_unknown(), std::runtime_error);
@@ -239,6 +375,36 @@ TEST(FrontendOptions, EurocAndSynthConfigsAreTheCoreDefaults) {
     EXPECT_EQ(options.features.stereo.max_distance, defaults.features.stereo.max_distance) << name;
     EXPECT_EQ(options.tracker.max_frames_between_keyframes, defaults.tracker.max_frames_between_keyframes) << name;
     EXPECT_EQ(options.mapper_enabled, defaults.mapper_enabled) << name;
+  }
+}
+
+// Every option the shipped settings files give, field by field: the core defaults but for the
+// few values each file is there to set (KITTI: 2000 features, a keyframe a second at 10 Hz; ORB-SLAM3's
+// EuRoC file: its ThDepth 60). Pins the files across changes of which keys the reader reads.
+TEST(FrontendOptions, ShippedSettingsFilesGiveExactlyTheirOptions) {
+  const std::filesystem::path camera = std::filesystem::path(HESLAM_SOURCE_DIR) / "config/camera";
+  const StereoFeaturePipelineOptions core_pipeline;
+  const TrackerOptions core_tracker;
+  StereoFeaturePipelineOptions kitti_pipeline;
+  kitti_pipeline.orb.features = 2000;
+  TrackerOptions kitti_tracker;
+  kitti_tracker.max_frames_between_keyframes = 10;
+  TrackerOptions orbslam3_tracker;
+  orbslam3_tracker.close_depth_baselines = 60.0;
+  const struct {
+    const char* file;
+    const StereoFeaturePipelineOptions& pipeline;
+    const TrackerOptions& tracker;
+  } shipped[] = {
+      {"EuRoC.yaml", core_pipeline, core_tracker},        {"synth.yaml", core_pipeline, core_tracker},
+      {"KITTI00-02.yaml", kitti_pipeline, kitti_tracker}, {"KITTI03.yaml", kitti_pipeline, kitti_tracker},
+      {"KITTI04-12.yaml", kitti_pipeline, kitti_tracker}, {"EuRoC_ORB-SLAM3.yaml", core_pipeline, orbslam3_tracker}};
+  for (const auto& [file, pipeline, tracker] : shipped) {
+    const SettingsFile settings = load_settings_file(camera / file);
+    EXPECT_TRUE(settings.pipeline == pipeline)
+        << file << ": " << describe_settings(settings.pipeline, settings.tracker);
+    EXPECT_TRUE(settings.tracker == tracker) << file << ": " << describe_settings(settings.pipeline, settings.tracker);
+    EXPECT_TRUE(settings.unused_keys.empty()) << file << ": " << settings.unused_keys.front();
   }
 }
 

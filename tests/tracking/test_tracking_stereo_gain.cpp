@@ -88,8 +88,8 @@ TEST(TrackingStereoGain, Mh01LeftCameraClippedTracksLikeEqualExposure) {
 }
 
 // Dark images (the dark variant, x0.1 plus noise) from cameras exposed apart, left x0.5 / right x1.5:
-// the pair's difference is only ~12 grey levels, under HE.matchShiftFrom, so it is recognised by the
-// histograms' gain (HE.matchGainFrom). Before that: 66 mm and 61 keyframes (docs/vision.md).
+// the pair's difference is only ~12 grey levels, under match_shift_from, so it is recognised by the
+// histograms' gain (match_gain_from). Before that: 66 mm and 61 keyframes (docs/vision.md).
 TEST(TrackingStereoGain, Mh01DarkCamerasExposedApartTrackLikeDarkEqualExposure) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const auto sequence = bench::load_euroc_sequence(test::shared_dataset("euroc_mh01_handheld"));

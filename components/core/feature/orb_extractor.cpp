@@ -79,8 +79,6 @@ OrbOptions OrbOptions::from_yaml(const cv::FileNode& root, const std::string& so
   yaml_option::read(root, "ORBextractor.nLevels", source, o.levels);
   yaml_option::read(root, "ORBextractor.iniThFAST", source, o.fast_threshold_initial);
   yaml_option::read(root, "ORBextractor.minThFAST", source, o.fast_threshold_min);
-  yaml_option::read(root, "ORBextractor.cellSize", source, o.cell_size_px);
-  yaml_option::read(root, "ORBextractor.featuresByArea", source, o.features_by_area);
   // The upper bounds only catch typos: a value beyond them is certainly a mistake.
   if (o.features < 1 || o.features > 100000)
     yaml_option::fail(source, "ORBextractor.nFeatures", "an integer in [1, 100000]");
@@ -93,9 +91,6 @@ OrbOptions OrbOptions::from_yaml(const cv::FileNode& root, const std::string& so
   }
   if (o.fast_threshold_min < 1 || o.fast_threshold_min > o.fast_threshold_initial) {
     yaml_option::fail(source, "ORBextractor.minThFAST", "an integer in [1, iniThFAST]");
-  }
-  if (!(o.cell_size_px >= 8.f) || o.cell_size_px > 1000.f) {
-    yaml_option::fail(source, "ORBextractor.cellSize", "a number in [8, 1000]");
   }
   return o;
 }

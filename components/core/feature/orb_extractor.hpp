@@ -26,14 +26,15 @@ struct OrbOptions {
   int levels = 8;
   int fast_threshold_initial = 20;  // FAST threshold tried first in every grid cell
   int fast_threshold_min = 7;       // used in cells where the initial threshold finds nothing
-  float cell_size_px = 30.f;        // FAST grid cell (ORB-SLAM2's W = 30)
+  // Constants, not settings keys (tests and benchmarks may set them):
+  float cell_size_px = 30.f;  // FAST grid cell: ORB-SLAM2's W = 30, tuned with its FAST thresholds
   // Share of features per level proportional to the level's area (1/scale^2). false: proportional to
   // 1/scale, as ORB-SLAM2's code does.
   bool features_by_area = true;
 
-  // Reads ORBextractor.nFeatures, .scaleFactor, .nLevels, .iniThFAST, .minThFAST, .cellSize,
-  // .featuresByArea (ORB-SLAM2 names where they exist).
+  // Reads ORB-SLAM2's ORBextractor.nFeatures, .scaleFactor, .nLevels, .iniThFAST, .minThFAST.
   static OrbOptions from_yaml(const cv::FileNode& root, const std::string& source);
+  bool operator==(const OrbOptions&) const = default;
 };
 
 // Keypoints (level-0 coordinates), descriptors and the pyramid they came from.

@@ -57,21 +57,8 @@ StereoFeaturePipelineOptions StereoFeaturePipelineOptions::from_yaml(const cv::F
   o.he = HistogramEqualizerOptions::from_yaml(root, source);
   o.orb = OrbOptions::from_yaml(root, source);
   o.stereo = StereoMatcherOptions::from_yaml(root, source);
-  yaml_option::read(root, "Stereo.clipEdgeRadius", source, o.clip_edge.radius_px);
-  yaml_option::read(root, "Stereo.clipEdgeMinFraction", source, o.clip_edge.min_clipped_fraction);
-  if (o.clip_edge.radius_px < 0 || o.clip_edge.radius_px > 50) {
-    yaml_option::fail(source, "Stereo.clipEdgeRadius", "an integer in [0, 50] (pixels on the keypoint's level)");
-  }
-  if (!(o.clip_edge.min_clipped_fraction > 0.0) || o.clip_edge.min_clipped_fraction > 1.0) {
-    yaml_option::fail(source, "Stereo.clipEdgeMinFraction", "a fraction in (0, 1]");
-  }
-  yaml_option::read(root, "HE.toneFromMatches", source, o.tone_from_matches);
   yaml_option::read(root, "Pipeline.parallel", source, o.parallel);
   yaml_option::read(root, "Pipeline.pinThreads", source, o.pin_threads);
-  yaml_option::read(root, "Pipeline.rightFeaturesFactor", source, o.right_features_factor);
-  if (!(o.right_features_factor >= 1.f) || o.right_features_factor > 4.f) {
-    yaml_option::fail(source, "Pipeline.rightFeaturesFactor", "a number in [1, 4]");
-  }
   yaml_option::read(root, "Pipeline.leftOnlyFeatures", source, o.left_only_features);
   if (!(o.left_only_features >= 0.f) || o.left_only_features > 4.f) {
     yaml_option::fail(source, "Pipeline.leftOnlyFeatures", "a number in [0, 4]");

@@ -32,11 +32,13 @@ struct StereoFeaturePipelineOptions {
   StereoMatcherOptions stereo;
   // Stereo matches near a clip edge are marked (StereoFeatures::near_clip) only in pairs whose
   // cameras are exposed apart, i.e. where HE.stereo: matched applies a tone curve (its mean shift at
-  // least HE.matchShiftFrom): equally exposed pairs keep their features exactly.
+  // least HE.matchShiftFrom): equally exposed pairs keep their features exactly. A constant (measured
+  // once: clip_edge.hpp), not a settings key.
   ClipEdgeOptions clip_edge;
   // HE.stereo matched, cameras exposed apart: the right image's tone curve is the cameras' relation
   // measured on the previous pair's stereo matches (stereo_tone.hpp) instead of the quantile curve
-  // between the two histograms. HE.toneFromMatches; false: the quantile curve, as before.
+  // between the two histograms; false: the quantile curve, as before. A constant (measured better on
+  // every exposure pair, docs/vision.md), not a settings key.
   bool tone_from_matches = true;
   // Two threads: the pyramid levels of both images as jobs, then halves of stereo matching.
   bool parallel = true;
@@ -46,6 +48,7 @@ struct StereoFeaturePipelineOptions {
   // The right image keeps this many times orb.features (its keypoints serve only stereo matching):
   // the quadtree picks partly different corners in the two images, and a left keypoint whose
   // counterpart was not kept on the right cannot get a depth. See docs/vision.md for the measurement.
+  // A constant, not a settings key.
   float right_features_factor = 2.0f;
   // Cameras exposed apart, the left clipped to the right's range by the matched HE (the right
   // saturates where the left still sees): the left's own texture there, equalized on the left's
@@ -55,13 +58,13 @@ struct StereoFeaturePipelineOptions {
   // docs/vision.md for the measurement.
   float left_only_features = 1.0f;
 
-  // Reads the HE.*, ORBextractor.*, Stereo.* keys (Stereo.clipEdgeRadius, .clipEdgeMinFraction for
-  // clip_edge; HE.toneFromMatches), Pipeline.parallel, Pipeline.pinThreads, Pipeline.rightFeaturesFactor
-  // and Pipeline.leftOnlyFeatures.
+  // Reads the HE.*, ORBextractor.* and Stereo.* keys of its parts, Pipeline.parallel,
+  // Pipeline.pinThreads and Pipeline.leftOnlyFeatures (docs/frontend.md lists them all).
   static StereoFeaturePipelineOptions from_yaml(const cv::FileNode& root, const std::string& source);
   // Same, from a settings file (e.g. config/camera/EuRoC.yaml). Throws std::runtime_error naming the
   // file and key on bad input.
   static StereoFeaturePipelineOptions load(const std::filesystem::path& settings_yaml);
+  bool operator==(const StereoFeaturePipelineOptions&) const = default;
 };
 
 struct StereoFeatureTimings {

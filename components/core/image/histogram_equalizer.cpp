@@ -234,21 +234,6 @@ HistogramEqualizerOptions HistogramEqualizerOptions::from_yaml(const cv::FileNod
   } catch (const std::invalid_argument&) {
     yaml_option::fail(source, "HE.stereo", "shared | matched | separate, got '" + stereo + "'");
   }
-  yaml_option::read(root, "HE.saturationExcess", source, o.saturation_excess);
-  yaml_option::read(root, "HE.matchShiftFrom", source, o.match_shift_from);
-  yaml_option::read(root, "HE.matchShiftFull", source, o.match_shift_full);
-  yaml_option::read(root, "HE.matchGainFrom", source, o.match_gain_from);
-  if (!(o.match_gain_from > 1.0) || o.match_gain_from > 1000.0) {
-    yaml_option::fail(source, "HE.matchGainFrom", "a factor in (1, 1000]");
-  }
-  if (!(o.match_shift_from >= 0.0) || o.match_shift_from > 255.0) {
-    yaml_option::fail(source, "HE.matchShiftFrom", "a number in [0, 255]");
-  }
-  if (!(o.match_shift_full > o.match_shift_from) || o.match_shift_full > 255.0) {
-    yaml_option::fail(source, "HE.matchShiftFull", "a number in (HE.matchShiftFrom, 255]");
-  }
-  if (!(o.saturation_excess > 0.0) || o.saturation_excess > 1.0)
-    yaml_option::fail(source, "HE.saturationExcess", "a number in (0, 1]");
   yaml_option::read(root, "HE.clipLimit", source, o.clahe_clip_limit);
   yaml_option::read(root, "HE.globalClipLimit", source, o.global_clip_limit);
   yaml_option::read(root, "HE.tilesX", source, o.clahe_tiles_x);

@@ -58,6 +58,9 @@ struct HistogramEqualizerOptions {
   double adaptive_on_below = 25.0;
   double adaptive_off_above = 35.0;
   StereoPhotometry stereo = StereoPhotometry::kMatched;  // measured best with cameras exposed apart (docs/vision.md)
+
+  // Constants of the matched photometry below: measured once (docs/vision.md), not settings keys
+  // (a settings file giving one is told it is not used); tests and benchmarks may set them.
   // Matched: a right camera that saturates more than this fraction of its pixels beyond the left's
   // own saturated fraction has the left clipped to its range (histogram_matching.hpp). Equally
   // exposed EuRoC MH01 pairs differ by up to 7.5 % (3-6 % saturated in each camera; a lamp one
@@ -75,9 +78,10 @@ struct HistogramEqualizerOptions {
   // pairs fit 0.89-1.04 (dark or not).
   double match_gain_from = 1.5;
 
-  // Reads HE.mode, HE.stereo, HE.saturationExcess, HE.matchShiftFrom, HE.matchShiftFull, HE.matchGainFrom,
-  // HE.globalClipLimit, HE.clipLimit, HE.tilesX, HE.tilesY, HE.adaptiveOnBelow, HE.adaptiveOffAbove.
+  // Reads HE.mode, HE.stereo, HE.globalClipLimit, HE.clipLimit, HE.tilesX, HE.tilesY, HE.adaptiveOnBelow,
+  // HE.adaptiveOffAbove.
   static HistogramEqualizerOptions from_yaml(const cv::FileNode& root, const std::string& source);
+  bool operator==(const HistogramEqualizerOptions&) const = default;
 };
 
 class HistogramEqualizer {

@@ -19,6 +19,8 @@ struct ClipEdgeOptions {
   // An image counts as clipped when at least this fraction of it sits at its top (or bottom) grey
   // level: equally exposed EuRoC MH01 images saturate 3-6 %, right x1.5 17-35 %.
   double min_clipped_fraction = 0.01;
+
+  bool operator==(const ClipEdgeOptions&) const = default;
 };
 
 // The image's top grey level when at least min_clipped_fraction of its pixels sit there (its

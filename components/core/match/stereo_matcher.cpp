@@ -115,39 +115,9 @@ int window_sad(const std::uint8_t* left_center, int left_step, const std::uint8_
 
 StereoMatcherOptions StereoMatcherOptions::from_yaml(const cv::FileNode& root, const std::string& source) {
   StereoMatcherOptions o;
-  yaml_option::read(root, "Stereo.maxDistance", source, o.max_distance);
   yaml_option::read(root, "Stereo.rowBand", source, o.row_band_px);
-  yaml_option::read(root, "Stereo.sadHalfWindow", source, o.sad_half_window_px);
-  yaml_option::read(root, "Stereo.sadSearch", source, o.sad_search_px);
-  yaml_option::read(root, "Stereo.minDepthBaselines", source, o.min_depth_baselines);
-  yaml_option::read(root, "Stereo.sadOutlierFactor", source, o.sad_outlier_factor);
-  yaml_option::read(root, "Stereo.relativeSadOutliers", source, o.relative_sad_outliers);
-  using Options = StereoMatcherOptions;
-  yaml_option::read_choice(root, "Stereo.sadNormalization", source,
-                           {{"center", Options::SadNormalization::kCenter},
-                            {"mean", Options::SadNormalization::kMean},
-                            {"none", Options::SadNormalization::kNone}},
-                           o.sad_normalization);
-  yaml_option::read_choice(
-      root, "Stereo.subpixelFit", source,
-      {{"parabola", Options::SubpixelFit::kParabola}, {"equiangular", Options::SubpixelFit::kEquiangular}},
-      o.subpixel_fit);
-  if (o.max_distance < 0 || o.max_distance > 256)
-    yaml_option::fail(source, "Stereo.maxDistance", "an integer in [0, 256]");
   if (!(o.row_band_px > 0.f) || o.row_band_px > 1000.f)
     yaml_option::fail(source, "Stereo.rowBand", "a number in (0, 1000]");
-  if (o.sad_half_window_px < 1 || o.sad_half_window_px > kOrbBorderPx / 2) {
-    yaml_option::fail(source, "Stereo.sadHalfWindow", "an integer in [1, 9]");
-  }
-  if (o.sad_search_px < 2 || o.sad_search_px > kOrbBorderPx / 2) {
-    yaml_option::fail(source, "Stereo.sadSearch", "an integer in [2, 9]");
-  }
-  if (!(o.min_depth_baselines > 0.f) || o.min_depth_baselines > 1000.f) {
-    yaml_option::fail(source, "Stereo.minDepthBaselines", "a number in (0, 1000]");
-  }
-  if (!(o.sad_outlier_factor > 0.f) || o.sad_outlier_factor > 1000.f) {
-    yaml_option::fail(source, "Stereo.sadOutlierFactor", "a number in (0, 1000]");
-  }
   return o;
 }
 

@@ -16,6 +16,8 @@
 
 namespace heslam {
 
+// One settings key, Stereo.rowBand (a rig rectified less exactly needs a wider band); the other fields
+// are constants, ORB-SLAM2's or measured here (docs/vision.md), that tests and benchmarks may set.
 struct StereoMatcherOptions {
   // Hamming. ORB-SLAM2 uses (TH_HIGH + TH_LOW) / 2 = 75; TH_HIGH = 100 keeps more true matches and
   // the SAD refinement and outlier test remove the false ones (docs/vision.md).
@@ -38,9 +40,9 @@ struct StereoMatcherOptions {
   // pixels for SAD: 0.042 px median error vs 0.026 px with mean normalization).
   enum class SubpixelFit { kParabola, kEquiangular } subpixel_fit = SubpixelFit::kEquiangular;
 
-  // Reads Stereo.maxDistance, .rowBand, .sadHalfWindow, .sadSearch, .minDepthBaselines,
-  // .sadOutlierFactor, .relativeSadOutliers, .sadNormalization, .subpixelFit.
+  // Reads Stereo.rowBand.
   static StereoMatcherOptions from_yaml(const cv::FileNode& root, const std::string& source);
+  bool operator==(const StereoMatcherOptions&) const = default;
 };
 
 // Where left keypoints were lost, for tuning and reports.

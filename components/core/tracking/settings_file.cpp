@@ -86,19 +86,18 @@ SettingsFile load_settings_file(const std::filesystem::path& path, const Tracker
 }
 
 std::string describe_settings(const StereoFeaturePipelineOptions& p, const TrackerOptions& t) {
+  // Every settings key's value (docs/frontend.md), so that a user's edit shows in the start-up line.
   std::ostringstream line;
   line << "HE " << to_string(p.he.mode) << " (stereo " << to_string(p.he.stereo) << ", clip " << p.he.global_clip_limit
-       << ", CLAHE " << p.he.clahe_clip_limit << " on " << p.he.clahe_tiles_x << "x" << p.he.clahe_tiles_y << ")"
+       << ", CLAHE " << p.he.clahe_clip_limit << " on " << p.he.clahe_tiles_x << "x" << p.he.clahe_tiles_y
+       << ", adaptive on below " << p.he.adaptive_on_below << " off above " << p.he.adaptive_off_above << ")"
        << "; ORB " << p.orb.features << " features, scale " << p.orb.scale_factor << " x " << p.orb.levels
-       << " levels, FAST " << p.orb.fast_threshold_initial << "/" << p.orb.fast_threshold_min << ", cell "
-       << p.orb.cell_size_px << " px"
-       << "; stereo max distance " << p.stereo.max_distance << ", row band " << p.stereo.row_band_px << ", SAD window "
-       << p.stereo.sad_half_window_px << "/" << p.stereo.sad_search_px << ", min depth " << p.stereo.min_depth_baselines
-       << " baselines; pipeline " << (p.parallel ? "parallel" : "serial") << ", right features x"
-       << p.right_features_factor << ", left-only features " << p.left_only_features << "; tracker ThDepth "
-       << t.close_depth_baselines << " baselines, keyframe at least every " << t.max_frames_between_keyframes
-       << " frames, reference ratio " << t.reference_ratio_stereo << " (near-clip weight "
-       << t.reference_near_clip_weight << ")";
+       << " levels, FAST " << p.orb.fast_threshold_initial << "/" << p.orb.fast_threshold_min << "; stereo row band "
+       << p.stereo.row_band_px << "; pipeline "
+       << (p.parallel ? (p.pin_threads ? "parallel (pinned)" : "parallel (unpinned)") : "serial")
+       << ", left-only features " << p.left_only_features << "; tracker ThDepth " << t.close_depth_baselines
+       << " baselines, keyframe at least every " << t.max_frames_between_keyframes << " frames, stationary test "
+       << t.stationary_test_chi2 << "/" << t.rotation_only_test_chi2 << ", RANSAC seed " << t.ransac_seed;
   return line.str();
 }
 

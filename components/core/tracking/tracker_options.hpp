@@ -1,6 +1,9 @@
 // Tunables of the stereo frame tracker, with ORB-SLAM2's values as defaults and why each is what it is.
 //
-// The frontend reads these from its YAML config; tests and the offline harness use the defaults.
+// The settings file sets only close_depth_baselines (ThDepth), max_frames_between_keyframes
+// (Camera.fps), stationary_test_chi2, rotation_only_test_chi2 and ransac_seed (Tracker.*;
+// tracker_settings.hpp). Every other field is a constant: ORB-SLAM2's, or measured here as its
+// comment says; tests and benchmarks may set it in code.
 #pragma once
 
 #include <cstdint>
@@ -104,6 +107,8 @@ struct TrackerOptions {
   bool assume_mapper_idle = true;
   // Creator tag for keyframe and point ids (map.hpp).
   std::uint8_t id_tag = 1;
+
+  bool operator==(const TrackerOptions&) const = default;
 };
 
 }  // namespace heslam

@@ -151,8 +151,8 @@ void BM_AlignStereoTones(benchmark::State& state) {
 }
 BENCHMARK(BM_AlignStereoTones)->Arg(0)->Unit(benchmark::kMicrosecond);
 
-// What HE.toneFromMatches adds per pair exposed apart: the gain and offset from the pair's stereo
-// matches (feature/stereo_tone.hpp), here the EuRoC pair at left x0.35 / right x2.
+// What tone_from_matches (formerly HE.toneFromMatches) adds per pair exposed apart: the gain and offset from the pair's
+// stereo matches (feature/stereo_tone.hpp), here the EuRoC pair at left x0.35 / right x2.
 void BM_MeasureStereoTone(benchmark::State& state) {
   const Data& d = data();
   cv::Mat left, right;
