@@ -305,5 +305,29 @@ TEST(StereoMatcher, OnlyTheRowBandIsASettingsKey) {
   }
 }
 
+// The SAD window and search range are code-only options; a value that would read past the margin the
+// extractor keeps around each level is refused when the matcher is built, naming the field.
+TEST(StereoMatcher, RefusesSadWindowsOutsideTheLevelMargin) {
+  const ScalePyramid pyramid = ScalePyramid::make(8, 1.2f);
+  const auto error_of = [&](StereoMatcherOptions options) -> std::string {
+    try {
+      StereoMatcher matcher(euroc_rig(), pyramid, options);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(error_of({}), "");
+  StereoMatcherOptions wide;
+  wide.sad_half_window_px = 10;
+  EXPECT_NE(error_of(wide).find("sad_half_window_px"), std::string::npos);
+  StereoMatcherOptions none;
+  none.sad_half_window_px = 0;
+  EXPECT_NE(error_of(none).find("sad_half_window_px"), std::string::npos);
+  StereoMatcherOptions narrow_search;
+  narrow_search.sad_search_px = 1;
+  EXPECT_NE(error_of(narrow_search).find("sad_search_px"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace heslam

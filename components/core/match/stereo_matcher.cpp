@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 #include "components/core/image/yaml_option.hpp"
 
@@ -123,7 +125,19 @@ StereoMatcherOptions StereoMatcherOptions::from_yaml(const cv::FileNode& root, c
 
 StereoMatcher::StereoMatcher(const PinholeStereo& camera, const ScalePyramid& pyramid,
                              const StereoMatcherOptions& options)
-    : camera_(camera), pyramid_(pyramid), options_(options) {}
+    : camera_(camera), pyramid_(pyramid), options_(options) {
+  // The SAD window and its search range read pixels around a keypoint on its level: they must stay
+  // inside the kOrbBorderPx margin the extractor keeps readable around every level image.
+  if (options.sad_half_window_px < 1 || options.sad_half_window_px > kOrbBorderPx / 2) {
+    throw std::invalid_argument("StereoMatcherOptions.sad_half_window_px must be an integer in [1, " +
+                                std::to_string(kOrbBorderPx / 2) + "], got " +
+                                std::to_string(options.sad_half_window_px));
+  }
+  if (options.sad_search_px < 2 || options.sad_search_px > kOrbBorderPx / 2) {
+    throw std::invalid_argument("StereoMatcherOptions.sad_search_px must be an integer in [2, " +
+                                std::to_string(kOrbBorderPx / 2) + "], got " + std::to_string(options.sad_search_px));
+  }
+}
 
 void StereoMatcher::match(const OrbFeatures& left, const OrbFeatures& right, std::vector<float>& u_right_px,
                           std::vector<float>& depth_m, StereoMatchStats* stats) const {
