@@ -68,13 +68,16 @@ TEST(EvalCli, ApeOnSyntheticFilesWritesTableJsonAndPlots) {
   std::istringstream errors(slurp(dir / "ape_errors.txt"));
   std::string header;
   std::getline(errors, header);
-  EXPECT_EQ(header, "# est_row stamp_s translation_error_m dx_m dy_m dz_m rotation_error_deg");
+  EXPECT_EQ(header, "# est_row stamp_s translation_error_m dx_m dy_m dz_m rotation_error_deg gt_path_m");
   std::size_t rows = 0;
+  double gt_path_m = 0.0;  // the ground truth's path length up to the pair's pose
   for (std::string line; std::getline(errors, line); ++rows) {
     std::istringstream fields(line);
     std::size_t est_row = 0;
-    double stamp = 0, error = 0, dx = 0, dy = 0, dz = 0, rotation = 0;
-    ASSERT_TRUE(fields >> est_row >> stamp >> error >> dx >> dy >> dz >> rotation) << line;
+    double stamp = 0, error = 0, dx = 0, dy = 0, dz = 0, rotation = 0, path = 0;
+    ASSERT_TRUE(fields >> est_row >> stamp >> error >> dx >> dy >> dz >> rotation >> path) << line;
+    if (rows > 0) gt_path_m += (gt.position_m(rows) - gt.position_m(rows - 1)).norm();
+    EXPECT_NEAR(path, gt_path_m, 1e-5);
     EXPECT_EQ(est_row, rows);
     EXPECT_DOUBLE_EQ(stamp, gt.stamps_s[rows]);
     EXPECT_NEAR(error, 0.1, 1e-9);

@@ -72,7 +72,7 @@ int run(const app::CliOptions& options) {
     app::print_ape(text, ape, precision);
     emit_json(options, to_json(ape, context));
     if (!options.plot_path.empty()) write_plot(options.plot_path, ape_plot(ape, plot_title(options, "APE")));
-    if (!options.errors_path.empty()) write_text_file(options.errors_path, app::ape_error_rows(ape, pair));
+    if (!options.errors_path.empty()) write_text_file(options.errors_path, app::ape_error_rows(ape, pair, gt));
   } else {
     RpeOptions rpe_options = options.rpe;
     rpe_options.align = options.align.value_or(AlignMode::none);

@@ -7,6 +7,7 @@
 #include <ostream>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace heslam::eval::app {
 
@@ -111,13 +112,20 @@ void print_kitti(std::ostream& out, const KittiResult& kitti, Precision precisio
       << format("RPE:                %.3f m / %.4f deg\n", kitti.rpe_m, kitti.rpe_deg);
 }
 
-std::string ape_error_rows(const ApeResult& ape, const AlignedPair& pair) {
-  std::string out = "# est_row stamp_s translation_error_m dx_m dy_m dz_m rotation_error_deg\n";
+std::string ape_error_rows(const ApeResult& ape, const AlignedPair& pair, const Trajectory& gt) {
+  // The ground truth's path length up to each of its rows: where along the run an error was reached.
+  std::vector<double> gt_path_m(gt.size(), 0.0);
+  for (std::size_t i = 1; i < gt.size(); ++i) {
+    gt_path_m[i] = gt_path_m[i - 1] + (gt.position_m(i) - gt.position_m(i - 1)).norm();
+  }
+  std::string out = "# est_row stamp_s translation_error_m dx_m dy_m dz_m rotation_error_deg gt_path_m\n";
   char row[256];
   for (std::size_t i = 0; i < ape.translation_errors_m.size(); ++i) {
     const Eigen::Vector3d d = ape.est_aligned.position_m(i) - ape.gt.position_m(i);
-    std::snprintf(row, sizeof row, "%zu %.9f %.9g %.9g %.9g %.9g %.9g\n", pair.est_rows[i], stamp_or_id(pair.est, i),
-                  ape.translation_errors_m[i], d.x(), d.y(), d.z(), ape.rotation_errors_deg[i]);
+    const double path_m = pair.gt_rows[i] < gt_path_m.size() ? gt_path_m[pair.gt_rows[i]] : 0.0;
+    std::snprintf(row, sizeof row, "%zu %.9f %.9g %.9g %.9g %.9g %.9g %.6f\n", pair.est_rows[i],
+                  stamp_or_id(pair.est, i), ape.translation_errors_m[i], d.x(), d.y(), d.z(),
+                  ape.rotation_errors_deg[i], path_m);
     out += row;
   }
   return out;

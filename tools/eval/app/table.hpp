@@ -20,8 +20,10 @@ void print_rpe(std::ostream& out, const RpeResult& rpe, Precision precision = Pr
 void print_kitti(std::ostream& out, const KittiResult& kitti, Precision precision = Precision::readable);
 
 // APE: estimate row, stamp (s, or the frame id without stamps), translation error (m) and its x y z
-// in the ground truth's frame (aligned estimate - ground truth), rotation error (deg).
-std::string ape_error_rows(const ApeResult& ape, const AlignedPair& pair);
+// in the ground truth's frame (aligned estimate - ground truth), rotation error (deg), and the
+// ground truth's path length (m) from its first pose to the pair's (`gt`: the whole ground truth the
+// pair was associated from; an interpolated pair counts to the ground-truth pose before its stamp).
+std::string ape_error_rows(const ApeResult& ape, const AlignedPair& pair, const Trajectory& gt);
 // RPE: the two estimate rows of each pair, their stamps (or frame ids), translation (m) and rotation
 // (deg) errors.
 std::string rpe_error_rows(const RpeResult& rpe, const AlignedPair& pair);
