@@ -114,7 +114,8 @@ class Component {
   std::vector<std::unique_ptr<SubscriptionBase>> subscriptions_;
 };
 
-// Parses the common flags (prints usage for --help), constructs C(args), executes it; with --check
+// Parses the common flags (prints usage for --help, then C::help_notes() when C has one),
+// constructs C(args), executes it; with --check
 // only loads the config and calls C::check(args, config) when C has one. Any exception
 // becomes "<program>: <what>" on stderr and exit code 1.
 template <typename C>
@@ -124,6 +125,8 @@ int component_main(int argc, char** argv, std::string_view default_name) {
     const CommonArgs args = parse_common_args(argc, argv, default_name);
     if (args.help) {
       std::cout << "usage: " << args.program << " [options]\n" << common_args_usage();
+      // A component's own topics and config fields, when it lists them (static std::string help_notes()).
+      if constexpr (requires { C::help_notes(); }) std::cout << C::help_notes();
       return 0;
     }
     if (args.check) {

@@ -20,7 +20,8 @@ usage: tools/evaluate.sh [--kitti DIR] [--euroc DIR] [--runs N] [--he MODE] [--o
                      whether the runs were bit-identical
   --he MODE          histogram equalization: none, global (the paper), clipped, clahe, adaptive
                      (default: the frontend's default, clipped)
-  --out DIR          results (default: evaluation-YYYYmmdd-HHMMSS)
+  --out DIR          results (default: ${XDG_CACHE_HOME:-~/.cache}/heslam/evaluation-YYYYmmdd-HHMMSS,
+                     printed as the run starts; never the current folder, which may be the source tree)
   --loop-closer EXE  heslam-loop-closer (default), heslam-loop-closer-proximity or none
   --no-realtime      lockstep only (no real-time run, no dropped-frame count)
   --rate R           real-time run speed (default 1 = the recording's rate)
@@ -127,7 +128,11 @@ fi
 for tool in heslam-supervisor heslam-eval; do
   [[ -x $bin/$tool ]] || die "$bin/$tool not found (build first: tools/build.sh, or give --bin DIR)"
 done
-out=${out:-evaluation-$(date +%Y%m%d-%H%M%S)}
+if [[ -z $out ]]; then
+  cache=${XDG_CACHE_HOME:-${HOME:+$HOME/.cache}}
+  cache=${cache:-${TMPDIR:-/tmp}}
+  out=$cache/heslam/evaluation-$(date +%Y%m%d-%H%M%S)
+fi
 mkdir -p "$out" || die "$out: cannot create the results folder"
 out=$(cd "$out" && pwd)
 echo "evaluate.sh: ${#sequences[@]} sequence(s); lockstep x $runs$([[ $realtime -eq 1 ]] && echo ", real time x 1 at rate $rate"); results in $out"
@@ -151,11 +156,14 @@ run_pipeline() {  # $1 kind, $2 mode (lockstep|realtime), $3 dataset, $4 run dir
               --arg "settings=$settings")
   [[ $2 == realtime ]] && args+=(--arg "rate=$rate")
   mkdir -p "$4"
+  local started=$SECONDS
+  echo "evaluate.sh:   $(basename "$4") ($2) ..."
   if ! "$bin/heslam-supervisor" "$pipeline" --domain "$domain" --log-dir "$4/logs" "${args[@]}" \
        > "$4/supervisor.out" 2> "$4/supervisor.err"; then
     echo "evaluate.sh: $(basename "$3") $2 run failed: $(tail -n 1 "$4/supervisor.err")" >&2
     return 1
   fi
+  echo "evaluate.sh:   $(basename "$4") ($2): tracked $(tracked "$4") in $((SECONDS - started)) s"
 }
 
 # The frontend's end-of-run "stage total median X ms p90 Y ms" (its last 1000 frames).
@@ -206,9 +214,11 @@ csv=$out/results.csv
 md=$out/results.md
 echo "sequence,kind,frames,lockstep_runs,lockstep_identical,tracked_lockstep,ate_rmse_m,ate_rmse_min_m,ate_rmse_max_m,kitti_t_rel_pct,kitti_r_rel_deg_per_100m,frame_ms_median,frame_ms_p90,tracked_realtime,dropped_realtime,ate_rmse_realtime_m,frame_ms_median_realtime,frame_ms_p90_realtime,paper_he_slam_ate_m,paper_orb_slam2_ate_m,plot" > "$csv"
 failures=0
+index=0
 for entry in "${sequences[@]}"; do
   IFS='|' read -r kind name dataset gt key <<< "$entry"
-  echo "evaluate.sh: $name ($kind, $dataset)"
+  index=$((index + 1))
+  echo "evaluate.sh: [$index/${#sequences[@]}] $name ($kind, $dataset)"
   seq_out=$out/$name
   ates=() digests=() tracked_l="" time_l="- -"
   for ((r = 1; r <= runs; ++r)); do
@@ -255,6 +265,8 @@ for entry in "${sequences[@]}"; do
   read -r med p90 <<< "$time_l"; read -r med_r p90_r <<< "$time_r"
   he_paper="" orb_paper=""
   if [[ -n $key ]]; then he_paper=${paper_he[$key]}; orb_paper=${paper_orb[$key]}; fi
+  ate_line="ATE lockstep $ate_mean m"; [[ $realtime -eq 1 ]] && ate_line+=", real time $ate_r m"
+  echo "evaluate.sh: [$index/${#sequences[@]}] $name: $ate_line"
   echo "$name,$kind,${frames:-},$runs,$identical,${tracked_l:-},$ate_mean,$ate_min,$ate_max,$t_rel,$r_rel,$med,$p90,${tracked_r:-},$dropped,$ate_r,$med_r,$p90_r,$he_paper,$orb_paper,$name/trajectory.svg" >> "$csv"
 done
 
@@ -278,6 +290,7 @@ done
   done
 } > "$md"
 cat "$md"
+echo "evaluate.sh: results in $out (results.md, results.csv, a folder per sequence)"
 if [[ $failures -gt 0 ]]; then
   die "$failures run(s) failed (see */supervisor.err under $out)"
 fi

@@ -69,9 +69,14 @@ void LoopCloserNode::configure(const runtime::Config& config) {
   keyframe_done_writer_.emplace(participant(), topics().keyframe_done());
   correction_counter_ = clock_counter_start();
   load_state();
+  if (runtime::RunEndWatch::joined_by_hand()) run_end_.emplace(participant(), topics());
+  // Under a supervisor the pipeline file says --real-time exactly for real-time runs; joined by hand,
+  // the run's mode is not known here.
+  const char* inline_ba =
+      run_end_ ? "on (inline, each keyframe waits for it; --real-time for a real-time run)" : "on (lockstep)";
   log().info(
       "detector ", detector_->name(), ", global BA ",
-      options_.global_bundle_adjustment ? (options_.real_time ? "on (own thread, real time)" : "on (lockstep)") : "off",
+      options_.global_bundle_adjustment ? (options_.real_time ? "on (own thread, real time)" : inline_ba) : "off",
       options_.state_file.empty() ? ", no state file" : ", state file " + options_.state_file.string());
 }
 
@@ -82,6 +87,14 @@ void LoopCloserNode::run() {
     take_all();
     process_ready_keyframes();
     if (global_ba_.finished()) finish_global_ba();
+    if (const std::optional<std::string> ended = run_end_ ? run_end_->poll() : std::nullopt) {
+      log().info(*ended, "; exiting");
+      break;
+    }
+    if (run_end_ && !run_supervisor_seen_ && !run_end_->supervisor_name().empty()) {
+      run_supervisor_seen_ = true;
+      log().info("joined run ", runtime::process_run_id(), " of ", run_end_->supervisor_name(), ": exits when it ends");
+    }
   }
   if (global_ba_.abort()) stats().count("global_ba_aborted");
   log().flush_throttled();

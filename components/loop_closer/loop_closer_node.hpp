@@ -23,6 +23,7 @@
 #include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
 #include "runtime/role_binding.hpp"
+#include "runtime/run_end_watch.hpp"
 #include "runtime/run_journal.hpp"
 
 namespace heslam::loop_closer {
@@ -58,6 +59,9 @@ class LoopCloserNode : public runtime::Component {
 
   LoopCloserProcessOptions options_;
   std::unique_ptr<runtime::WaitSet> waitset_;
+  // Started by hand into a run (HESLAM_RUN_ID): ends when the run's supervisor ends it.
+  std::optional<runtime::RunEndWatch> run_end_;
+  bool run_supervisor_seen_ = false;  // said once: from then on the run's end ends this process
   // One writer each (runtime/checked_reader.hpp); the mirror checks the samples (messages::check).
   std::optional<runtime::CheckedReader<msg::Keyframe>> keyframe_reader_;
   std::optional<runtime::CheckedReader<msg::KeyframeState>> keyframe_state_reader_;

@@ -1,5 +1,5 @@
 // heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N|auto] [--namespace NAME]
-//                   [--log-dir DIR] [--log-level LEVEL] [--host NAME | --only a,b] [--no-progress]
+//                   [--log-dir DIR] [--log-level LEVEL] [--host NAME | --only a,b] [--no-progress] [--no-keyboard]
 //                   [--security DIR] [--image-transport udp|shm] [--image-domain N]
 #include <signal.h>
 #include <unistd.h>
@@ -46,6 +46,7 @@ struct Arguments {
   supervisor::PipelineOverrides overrides;
   bool check = false;
   bool progress = true;
+  bool keyboard = true;
   bool domain_auto = false;
   bool help = false;
   std::filesystem::path log_dir;
@@ -57,7 +58,8 @@ runtime::Flags supervisor_flags(Arguments& a) {
   runtime::Flags flags(
       "heslam-supervisor PIPELINE.yaml [--arg key=value ...] [--check] [--domain N|auto] [--namespace NAME]\n"
       "                         [--log-dir DIR] [--log-level debug|info|warn|error] [--host NAME | --only a,b]\n"
-      "                         [--no-progress] [--security DIR] [--image-transport udp|shm] [--image-domain N]");
+      "                         [--no-progress] [--no-keyboard] [--security DIR] [--image-transport udp|shm] "
+      "[--image-domain N]");
   flags
       .toggle("--check", &a.check,
               "validate the pipeline file, every file it references and each heslam program's\n"
@@ -106,6 +108,10 @@ runtime::Flags supervisor_flags(Arguments& a) {
               })
       .toggle("--no-progress", &a.progress,
               "no run progress (default: a line redrawn on a terminal, else a line per 10 %)", false)
+      .toggle("--no-keyboard", &a.keyboard,
+              "do not read the terminal (default: space pauses/resumes the components with\n"
+              "'pausable: true', e.g. the replay)",
+              false)
       .custom("--security", "DIR",
               "DDS Security: run every process with its identity from DIR (heslam-security init DIR;\n"
               "overrides the file's 'security'; docs/security.md)",
@@ -200,6 +206,7 @@ int run(int argc, char** argv) {
   options.self_executable = self;
   options.log_dir = arguments.log_dir.empty() ? default_log_dir(loaded.pipeline.name) : arguments.log_dir;
   options.log_level = arguments.log_level;
+  options.keyboard = arguments.keyboard;
   options.progress = !arguments.progress     ? supervisor::RunProgress::Mode::kOff
                      : isatty(STDERR_FILENO) ? supervisor::RunProgress::Mode::kLive
                                              : supervisor::RunProgress::Mode::kPlain;

@@ -67,6 +67,33 @@ std::optional<std::filesystem::path> resolve_executable(const std::string& text,
   return std::nullopt;
 }
 
+// An executable chosen by an argument (`executable: $(arg loop_closer)`) that was not found: the
+// choices this build offers, named like the file's default (heslam-loop-closer,
+// heslam-loop-closer-proximity, ...), and none. Empty when the field is not one argument or the
+// default names no executable.
+std::string executable_choices(const std::string& field_text, const std::map<std::string, std::string>& defaults,
+                               const std::filesystem::path& bin_dir) {
+  static const std::regex whole_arg(R"(^\$\(arg ([A-Za-z0-9_]+)\)$)");
+  std::smatch match;
+  if (!std::regex_match(field_text, match, whole_arg) || bin_dir.empty()) return "";
+  const auto declared = defaults.find(match[1].str());
+  if (declared == defaults.end() || declared->second.empty() || declared->second == kDisabledExecutable ||
+      declared->second.find('/') != std::string::npos) {
+    return "";
+  }
+  std::vector<std::string> choices;
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(bin_dir, error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.starts_with(declared->second) && is_executable(entry.path())) choices.push_back(name);
+  }
+  if (choices.empty()) return "";
+  std::sort(choices.begin(), choices.end());
+  std::string text = "; --arg " + match[1].str() + " takes ";
+  for (const std::string& choice : choices) text += choice + ", ";
+  return text + "or none";
+}
+
 std::string join_keys(const std::map<std::string, std::string>& map) {
   std::string out;
   for (const auto& [key, value] : map) out += (out.empty() ? "" : ", ") + key;
@@ -281,6 +308,7 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
   // Arguments: declared with defaults in the file, overridden by --arg.
   std::map<std::string, std::string> args;
   collect(problems, [&] { args = config->get_string_map("args"); });
+  const std::map<std::string, std::string> declared_args = args;  // the file's defaults
   for (const auto& [key, value] : overrides.args) {
     if (args.count(key) == 0) {
       problems.push_back(source + ": --arg " + key +
@@ -458,7 +486,8 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       if (!resolved) {
         throw std::runtime_error(source + ": " + label + ": executable '" + runtime::quote_value(text) +
                                  "' not found (looked in " +
-                                 (bin_dir.empty() ? std::string() : bin_dir.string() + " and ") + "$PATH)");
+                                 (bin_dir.empty() ? std::string() : bin_dir.string() + " and ") + "$PATH)" +
+                                 executable_choices(section.get_string("executable", ""), declared_args, bin_dir));
       }
       spec.executable = *resolved;
     });
@@ -527,6 +556,7 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
       spec.shutdown_on_exit = section.get_choice("on_exit", "none", {"none", "shutdown"}) == "shutdown";
     });
     collect(problems, [&] { spec.common_args = section.get_bool("common_args", true); });
+    collect(problems, [&] { spec.pausable = section.get_bool("pausable", false); });
     collect(problems, [&] { spec.nice = section.get_int("nice", 0, 0, kMaxNiceIncrement); });
     collect(problems, [&] {
       spec.identity = substitute(where + ".identity", section.get_string("identity", spec.name));

@@ -35,6 +35,9 @@ struct ComponentSpec {
   bool required = true;           // its failure fails the run (exit code 1)
   bool shutdown_on_exit = false;  // on_exit: shutdown — its end ends the run
   bool common_args = true;        // pass --domain --namespace --name [--config] --log-level --dds-config
+  // pausable: true — space on the supervisor's terminal pauses it (SIGUSR1) and resumes it (SIGUSR2),
+  // as heslam-replay's own keyboard would (docs/supervisor.md, Pause).
+  bool pausable = false;
   // Added to the supervisor's own niceness for this process and all its threads (0-19): a real-time
   // pipeline puts the mapper and the loop closer below the frontend, whose frames have a deadline.
   int nice = 0;

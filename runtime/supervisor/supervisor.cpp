@@ -192,6 +192,39 @@ std::vector<std::string> check_programs(const Pipeline& pipeline, const std::fil
   return problems;
 }
 
+std::string describe_run_mode(const Pipeline& pipeline) {
+  std::vector<std::string> parts;
+  for (const ComponentSpec& spec : pipeline.components) {
+    if (spec.executable.filename() != "heslam-replay") continue;
+    const auto flag = [&spec](const std::string& name) { return std::find(spec.args.begin(), spec.args.end(), name); };
+    if (flag("--lockstep") != spec.args.end()) {
+      parts.emplace_back("lockstep");
+    } else if (const auto rate = flag("--rate"); rate != spec.args.end() && rate + 1 != spec.args.end()) {
+      parts.push_back("real time (rate " + *(rate + 1) + ")");
+    } else {
+      parts.emplace_back("real time");
+    }
+    break;
+  }
+  parts.push_back(pipeline.security_dir.empty() ? "plain DDS (not secure)"
+                                                : "secure DDS (" + pipeline.security_dir.string() + ")");
+  if (!pipeline.split()) {
+    parts.emplace_back("every component on this host");
+  } else {
+    std::string here, elsewhere;
+    for (const ComponentSpec& spec : pipeline.components) {
+      std::string& list = spec.remote ? elsewhere : here;
+      list += (list.empty() ? "" : ", ") + spec.name;
+    }
+    parts.push_back((pipeline.host.empty() ? std::string("this host") : "host '" + pipeline.host + "'") + " runs " +
+                    (here.empty() ? std::string("none") : here) +
+                    "; elsewhere: " + (elsewhere.empty() ? std::string("none") : elsewhere));
+  }
+  std::string text;
+  for (const std::string& part : parts) text += (text.empty() ? "" : ", ") + part;
+  return text;
+}
+
 std::vector<std::string> Supervisor::child_args(const Managed& component) const {
   return component_args(pipeline_, component.spec, options_.log_level);
 }
@@ -292,6 +325,7 @@ void Supervisor::read_status() {
     }
   }
   follow_remote_hosts();
+  follow_remote_end_of_stream();
   for (auto& component : components_) {
     const auto it = dds_->seen.find(component->spec.name);
     if (it == dds_->seen.end()) continue;
@@ -370,6 +404,59 @@ void Supervisor::follow_remote_hosts() {
       end_requested_ = true;
       return;
     }
+  }
+}
+
+void Supervisor::follow_remote_end_of_stream() {
+  if (!pipeline_.split() || end_requested_) return;
+  // Another host's supervisor ends the run itself when its component ends (follow_remote_hosts).
+  const std::string prefix = std::string(kSupervisorName) + kHostSeparator;
+  for (const auto& [name, seen] : dds_->seen) {
+    if (name != dds_->status_name && name.rfind(prefix, 0) == 0 && seen.state == heslam_msg_STATE_RUNNING) return;
+  }
+  for (auto& component : components_) {
+    if (!component->spec.remote || !component->spec.shutdown_on_exit) continue;
+    const auto it = dds_->seen.find(component->spec.name);
+    if (it == dds_->seen.end()) continue;
+    const StatusSeen& seen = it->second;
+    if (seen.state != heslam_msg_STATE_SHUTTING_DOWN && seen.state != heslam_msg_STATE_FAILED) continue;
+    clear_progress();
+    if (seen.state == heslam_msg_STATE_FAILED) {
+      log_.error(component->spec.name,
+                 ", which ends the run (on_exit: shutdown), failed outside this supervisor: ", seen.message,
+                 "; stopping");
+      fail(component->spec.name + " failed outside this supervisor: " + seen.message);
+    } else {
+      log_.info(component->spec.name, ", which ends the run (on_exit: shutdown), ended outside this supervisor",
+                seen.message.empty() ? "" : ": " + seen.message, "; stopping");
+    }
+    remote_end_ = component->spec.name;
+    end_requested_ = true;
+    return;
+  }
+}
+
+void Supervisor::forward_pause_keys() {
+  if (!pause_keys_) return;
+  const int toggles = pause_keys_->take_toggles();
+  if (toggles % 2 == 0) return;
+  paused_ = !paused_;
+  std::string names;
+  for (auto& component : components_) {
+    // Not before a heslam program has set up its handlers: SIGUSR1's default action ends a process.
+    if (!component->spec.pausable || component->phase != Phase::kRunning ||
+        (component->process.said_starting() && !component->process.said_running())) {
+      continue;
+    }
+    kill(component->process.pid(), paused_ ? SIGUSR1 : SIGUSR2);
+    names += (names.empty() ? "" : ", ") + component->spec.name;
+  }
+  clear_progress();
+  if (names.empty()) {
+    log_.info("space: no pausable component is running here");
+    paused_ = false;
+  } else {
+    log_.info(paused_ ? "paused " : "resumed ", names, paused_ ? " (space resumes)" : "");
   }
 }
 
@@ -552,6 +639,7 @@ void Supervisor::pump(std::chrono::milliseconds timeout) {
   reap();
   read_status();
   watch_other_runs();
+  forward_pause_keys();
   report_progress();
   for (auto& component : components_) {
     if (component->phase == Phase::kRestartPending && Clock::now() >= component->restart_at && !end_requested_ &&
@@ -622,7 +710,27 @@ void Supervisor::stop_all() {
 
 int Supervisor::run() {
   log_.info("pipeline '", pipeline_.name, "' on domain ", pipeline_.domain_id, ", namespace '", pipeline_.ns, "', run ",
-            runtime::process_run_id(), "; logs in ", options_.log_dir.string());
+            runtime::process_run_id(), "; ", describe_run_mode(pipeline_), "; logs in ", options_.log_dir.string());
+  std::string pausable;  // the names of the local pausable components
+  for (const auto& component : components_) {
+    if (component->spec.pausable && !component->spec.remote) {
+      pausable += (pausable.empty() ? "" : ", ") + component->spec.name;
+    }
+  }
+  if (!pausable.empty() && options_.keyboard) {
+    // A replay told to start paused is paused: the first space resumes it.
+    paused_ = std::any_of(components_.begin(), components_.end(), [](const auto& component) {
+      const std::vector<std::string>& args = component->spec.args;
+      const auto mode = std::find(args.begin(), args.end(), "--start-paused-mode");
+      return component->spec.pausable && (std::find(args.begin(), args.end(), "--start-paused") != args.end() ||
+                                          (mode != args.end() && mode + 1 != args.end() && *(mode + 1) == "on"));
+    });
+    pause_keys_ = std::make_unique<PauseKeys>(true);
+    if (pause_keys_->active()) {
+      log_.info("space on this terminal ", paused_ ? "resumes and pauses " : "pauses and resumes ", pausable,
+                paused_ ? " (it starts paused)" : "");
+    }
+  }
   dds_->status.set_state(runtime::ComponentState::kRunning);
   if (dds_->watch) {
     if (const std::optional<std::string> other = other_run_alive(*dds_->watch, kDomainListen, kKilledRunLinger)) {
@@ -731,7 +839,9 @@ std::string Supervisor::outcome() const {
   if (failed_) return "pipeline failed: " + failure_ + other_runs_note();
   const std::string results = results_ + other_runs_note();
   const char* signal_name = sigabbrev_np(runtime::shutdown_signal());
-  const std::string text = remote_ended_                    ? "pipeline finished (ended by another host)"
+  const std::string text = remote_ended_ ? "pipeline finished (ended by another host)"
+                           : !remote_end_.empty()
+                               ? "pipeline finished (" + remote_end_ + " ended outside this supervisor)"
                            : !runtime::shutdown_requested() ? "pipeline finished"
                            : signal_name != nullptr         ? std::string("pipeline stopped by SIG") + signal_name
                                                             : "pipeline stopped";

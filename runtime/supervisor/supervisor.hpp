@@ -14,6 +14,7 @@
 
 #include "runtime/log.hpp"
 #include "runtime/supervisor/child_process.hpp"
+#include "runtime/supervisor/pause_keys.hpp"
 #include "runtime/supervisor/pipeline.hpp"
 #include "runtime/supervisor/roudi_process.hpp"
 #include "runtime/supervisor/run_progress.hpp"
@@ -26,7 +27,14 @@ struct SupervisorOptions {
   runtime::LogLevel log_level = runtime::LogLevel::kInfo;
   // The run's progress line (run_progress.hpp): kLive on a terminal, kPlain (a line per 10 %) otherwise.
   RunProgress::Mode progress = RunProgress::Mode::kOff;
+  // Space on the supervisor's terminal pauses / resumes the pausable components (--no-keyboard: off).
+  bool keyboard = true;
 };
+
+// The start line's account of how the run runs: "lockstep" or "real time" (from the replay's
+// arguments; nothing without a replay), "plain DDS" or "secure (DIR)", and which components this
+// host runs when others run elsewhere ("all on this host" otherwise).
+std::string describe_run_mode(const Pipeline& pipeline);
 
 // --check: runs each heslam program of the pipeline (on this host) with its arguments and --check,
 // which checks them (and its config, its inputs) as its start would; one problem per program that
@@ -104,6 +112,11 @@ class Supervisor {
   // output lacks what was produced.
   void judge();
   std::string other_runs_note() const;
+  // Space on the terminal: SIGUSR1 / SIGUSR2 to the pausable components (pause_keys.hpp).
+  void forward_pause_keys();
+  // A component that ends the run (on_exit: shutdown) but runs outside any supervisor (started by
+  // hand next to an --only run): its SHUTTING_DOWN status ends this run as its exit would.
+  void follow_remote_end_of_stream();
 
   Pipeline pipeline_;
   SupervisorOptions options_;
@@ -127,6 +140,9 @@ class Supervisor {
   // The first status with frames published: fps is measured from there.
   std::optional<std::pair<Clock::time_point, std::uint64_t>> first_published_;
   std::optional<std::pair<Clock::time_point, std::uint64_t>> latest_published_;  // the latest new count
+  std::unique_ptr<PauseKeys> pause_keys_;  // created by run(), so the terminal is restored as it returns
+  bool paused_ = false;                    // the pausable components were last told to pause
+  std::string remote_end_;                 // which remote component ended the run, and its result
 };
 
 }  // namespace heslam::supervisor

@@ -42,6 +42,22 @@ inline Trajectory straight_line(std::size_t poses, double step_m) {
   return t;
 }
 
+// A camera held still at (1, 2, 3): `poses` poses 0.05 s apart whose positions wobble by about
+// `wobble_m` (deterministic, different per axis), with a slowly nodding heading.
+inline Trajectory still_wobble(std::size_t poses, double wobble_m, double phase = 0.0) {
+  Trajectory t;
+  t.name = "still_wobble";
+  for (std::size_t k = 0; k < poses; ++k) {
+    const double a = 0.37 * static_cast<double>(k) + phase;
+    const Eigen::Vector3d p =
+        Eigen::Vector3d(1.0, 2.0, 3.0) + wobble_m * Eigen::Vector3d(std::sin(a), std::cos(1.7 * a), std::sin(2.3 * a));
+    const Eigen::Quaterniond q(
+        Eigen::AngleAxisd(0.02 * std::sin(0.1 * static_cast<double>(k)), Eigen::Vector3d::UnitZ()));
+    t.push_back(make_pose(p, q), static_cast<std::int64_t>(k), 10.0 + 0.05 * static_cast<double>(k));
+  }
+  return t;
+}
+
 // A fresh, empty scratch folder for the current test.
 inline std::filesystem::path scratch_dir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();

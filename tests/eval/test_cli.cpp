@@ -272,5 +272,20 @@ TEST(EvalCli, BadInputIsOneLineAndExitOne) {
   EXPECT_NE(help.out.find("usage: heslam-eval"), std::string::npos);
 }
 
+TEST(EvalCli, ApeWarnsWhenTheSe3FitOfAStillTrajectoryIsDegenerate) {
+  const auto dir = test::scratch_dir();
+  write_trajectory(dir / "gt.csv", test::still_wobble(200, 0.002), Format::euroc);
+  write_trajectory(dir / "est.txt", test::still_wobble(200, 0.002, 1.0), Format::heslam_default);
+  const std::string files = "ape --gt " + (dir / "gt.csv").string() + " --est " + (dir / "est.txt").string();
+  const ToolRun se3 = run_eval(files, dir);
+  ASSERT_EQ(se3.exit_code, 0) << se3.err;
+  EXPECT_NE(se3.err.find("heslam-eval: warning: the alignment's rotation is ill-determined"), std::string::npos)
+      << se3.err;
+  EXPECT_NE(se3.err.find("--align origin compares from the first pose instead"), std::string::npos) << se3.err;
+  const ToolRun origin = run_eval(files + " --align origin", dir);
+  ASSERT_EQ(origin.exit_code, 0) << origin.err;
+  EXPECT_EQ(origin.err.find("ill-determined"), std::string::npos) << origin.err;
+}
+
 }  // namespace
 }  // namespace heslam::eval

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -92,6 +93,41 @@ TEST_F(SupervisorHosts, AMissingHostIsWaitedForBoundedThenTheRunGoesOn) {
   ASSERT_EQ(a->wait(kRunBound), 0) << a->err();
   at(a->err(), "middle: no RUNNING status from another host within 1 s; starting the next components anyway");
   at(a->err(), "started last");
+}
+
+// The issue-39 hang: a run with --only (its replay started by hand, outside any supervisor) waited
+// for ever after the replay ended. The component that ends the run (on_exit: shutdown), run by hand,
+// now ends it with its SHUTTING_DOWN status, as its exit would under the supervisor.
+TEST_F(SupervisorHosts, AnEndingComponentStartedByHandEndsTheRun) {
+  const auto file = write_pipeline();  // 'last' by hand runs until stopped: its last.yaml is not used
+  auto supervisor = std::make_unique<test::ChildProcess>(
+      test::bin_dir() / "heslam-supervisor",
+      std::vector<std::string>{file.string(), "--only", "first,middle", "--log-dir", (dir_.path() / "logs").string()},
+      dir_.path(), "supervisor_only");
+  // Started once the supervisor listens for it (a status is volatile: one written before is not seen).
+  const auto listening_by = std::chrono::steady_clock::now() + kRunBound;
+  while (supervisor->err().find("waiting for last on another host") == std::string::npos &&
+         std::chrono::steady_clock::now() < listening_by && !supervisor->wait(std::chrono::milliseconds(50))) {
+  }
+  ASSERT_NE(supervisor->err().find("waiting for last on another host"), std::string::npos) << supervisor->err();
+  std::string ns = "h";  // write_pipeline's namespace (built in two steps: GCC 12 misreads "h" + string)
+  ns += std::to_string(getpid());
+  test::ChildProcess last(
+      test::bin_dir() / "heslam-test-talker",
+      {"--domain", std::to_string(test::exclusive_domain_id()), "--namespace", ns, "--name", "last"}, dir_.path(),
+      "last_by_hand");
+  const auto ready_by = std::chrono::steady_clock::now() + kRunBound;
+  while (supervisor->err().find("last (another host) is ready") == std::string::npos &&
+         std::chrono::steady_clock::now() < ready_by && !supervisor->wait(std::chrono::milliseconds(50))) {
+  }
+  ASSERT_NE(supervisor->err().find("last (another host) is ready"), std::string::npos) << supervisor->err();
+  last.signal(SIGTERM);  // ends cleanly, as a replay at its last frame (SHUTTING_DOWN, exit 0)
+  ASSERT_EQ(last.wait(kRunBound), 0) << last.err();
+  ASSERT_EQ(supervisor->wait(kRunBound), 0) << supervisor->err();
+  const std::string err = supervisor->err();
+  at(err, "this host runs first, middle; elsewhere: last");
+  at(err, "last, which ends the run (on_exit: shutdown), ended outside this supervisor; stopping");
+  at(err, "info: pipeline finished (last ended outside this supervisor)");
 }
 
 }  // namespace

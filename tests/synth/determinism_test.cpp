@@ -65,6 +65,23 @@ TEST(SynthDeterminism, CliWritesIdenticalFilesForOneSeed) {
   fs::remove_all(base);
 }
 
+// --list: a line per preset with its cost and purpose, not bare names (issue 39).
+TEST(SynthDeterminism, CliListsEachPresetWithItsLengthDurationAndPurpose) {
+  const auto out = std::filesystem::temp_directory_path() / "heslam_synth_list.txt";
+  const std::string exe = (::heslam::test::bin_dir() / "heslam-synth").string();
+  ASSERT_EQ(std::system((exe + " --list >" + out.string()).c_str()), 0);
+  const std::string text = file_bytes(out);
+  std::filesystem::remove(out);
+  const Preset room = load_preset(find_preset("room"));
+  const std::string room_line = "room             600 frames,   30.0 s at 20 Hz, ";
+  ASSERT_NE(text.find(room_line), std::string::npos) << text;
+  EXPECT_NE(text.find(" m travelled: " + room.purpose + "\n", text.find(room_line)), std::string::npos) << text;
+  std::size_t lines = 0;
+  for (const char c : text) lines += c == '\n' ? 1 : 0;
+  EXPECT_EQ(lines, known_presets().size()) << text;
+  EXPECT_EQ(text.find("(no purpose: field)"), std::string::npos) << text;
+}
+
 TEST(SynthDeterminism, CliRejectsUnknownPresetWithOneClearLine) {
   const std::string exe = (::heslam::test::bin_dir() / "heslam-synth").string();
   const auto out = std::filesystem::temp_directory_path() / "heslam_synth_bad_preset.txt";

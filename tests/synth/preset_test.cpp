@@ -36,6 +36,7 @@ Motion motion(const Trajectory& traj, double duration_s) {
 TEST(SynthPresets, ShippedPresetsLoad) {
   for (const char* name : {"room", "room_exposure", "corridor_loop", "street", "town"}) {
     EXPECT_NO_THROW(test::repo_preset(name)) << name;
+    EXPECT_FALSE(load_preset(find_preset(name)).purpose.empty()) << name << ": heslam-synth --list shows it";
   }
   const auto known = known_presets();
   EXPECT_NE(std::find(known.begin(), known.end(), "street"), known.end());

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -120,6 +121,17 @@ TEST(EvaluateScript, RunsSyntheticKittiAndEurocLayoutsEndToEnd) {
       EXPECT_NE(row.at("kitti_t_rel_pct"), "") << "KITTI drift column (- when shorter than 100 m)";
     }
   }
+  // Progress: a line per sequence, per run as it starts and ends, the sequence's ATE (issue 39).
+  EXPECT_NE(output.find("evaluate.sh: [1/2] kitti_00 (kitti, "), std::string::npos) << output;
+  EXPECT_NE(output.find("evaluate.sh: [2/2] room (euroc, "), std::string::npos) << output;
+  EXPECT_NE(output.find("evaluate.sh:   lockstep_2 (lockstep) ...\n"), std::string::npos) << output;
+  EXPECT_NE(output.find("evaluate.sh:   lockstep_1 (lockstep): tracked " + std::to_string(kRoomFrames) + "/" +
+                        std::to_string(kRoomFrames) + " in "),
+            std::string::npos)
+      << output;
+  EXPECT_NE(output.find("evaluate.sh:   realtime (realtime): tracked "), std::string::npos) << output;
+  EXPECT_NE(output.find("evaluate.sh: [2/2] room: ATE lockstep "), std::string::npos) << output;
+  EXPECT_NE(output.find("evaluate.sh: results in " + out.string() + " (results.md"), std::string::npos) << output;
   const std::string markdown = read_file(out / "results.md");
   EXPECT_NE(markdown.find("| kitti_00 | " + std::to_string(kStreetFrames) + " |"), std::string::npos) << markdown;
   EXPECT_NE(markdown.find("paper HE-SLAM (m)"), std::string::npos);
@@ -184,6 +196,52 @@ TEST(EvaluateScript, NoSequenceIsOneLineAndExitOne) {
                 dir.path(), "evaluate_runs", 30s, &output),
             1);
   EXPECT_NE(output.find("--runs: expected a positive integer, got '0'"), std::string::npos) << output;
+}
+
+// Without --out the results go under ~/.cache/heslam (XDG_CACHE_HOME when set), never into the
+// current folder (the source tree when run from there), and the script says where as it starts and
+// ends. A stand-in heslam-supervisor that fails at once: what is tested is the script's own output.
+TEST(EvaluateScript, DefaultOutIsUnderTheCacheAndSaidAloud) {
+  test::ScratchDir dir("evaluate_default_out");
+  const fs::path euroc = dir.path() / "euroc";
+  for (const std::string cam : {"cam0", "cam1"}) {
+    fs::create_directories(euroc / "flight" / "mav0" / cam);
+    std::ofstream(euroc / "flight" / "mav0" / cam / "data.csv") << "#timestamp [ns],filename\n";
+  }
+  const fs::path bin = dir.path() / "bin";
+  fs::create_directories(bin);
+  for (const std::string tool : {"heslam-supervisor", "heslam-eval"}) {
+    std::ofstream(bin / tool) << "#!/bin/sh\necho 'error: pipeline failed: a stand-in' >&2\nexit 1\n";
+    fs::permissions(bin / tool, fs::perms::owner_all);
+  }
+  const fs::path cwd = dir.path() / "cwd";
+  const fs::path home = dir.path() / "home";
+  fs::create_directories(cwd);
+  const std::string saved_home = std::getenv("HOME") != nullptr ? std::getenv("HOME") : "";
+  const char* saved_cache = std::getenv("XDG_CACHE_HOME");
+  const std::string saved_cache_value = saved_cache != nullptr ? saved_cache : "";
+  setenv("HOME", home.c_str(), 1);
+  unsetenv("XDG_CACHE_HOME");
+  std::string output;
+  // Run from `cwd`, as a user in the source tree would.
+  const int code = run(
+      "/bin/bash",
+      {"-c", "cd \"$0\" && exec /bin/bash \"$@\"", cwd.string(), (test::source_dir() / "tools/evaluate.sh").string(),
+       "--euroc", euroc.string(), "--no-realtime", "--bin", bin.string()},
+      dir.path(), "evaluate_default_out", 60s, &output);
+  setenv("HOME", saved_home.c_str(), 1);
+  if (saved_cache != nullptr) setenv("XDG_CACHE_HOME", saved_cache_value.c_str(), 1);
+  EXPECT_EQ(code, 1) << output;  // the stand-in's run failed
+  EXPECT_NE(output.find("flight lockstep run failed: error: pipeline failed: a stand-in"), std::string::npos) << output;
+  EXPECT_NE(output.find("evaluate.sh: [1/1] flight (euroc, "), std::string::npos) << output;
+  EXPECT_NE(output.find("evaluate.sh:   lockstep_1 (lockstep) ..."), std::string::npos) << output;
+  const std::string prefix = "results in " + (home / ".cache/heslam/evaluation-").string();
+  const std::size_t said = output.find(prefix);
+  ASSERT_NE(said, std::string::npos) << output;
+  const fs::path out = output.substr(said + 11, prefix.size() - 11 + 15);  // + YYYYmmdd-HHMMSS
+  EXPECT_TRUE(fs::exists(out / "results.csv")) << out;
+  EXPECT_NE(output.find("evaluate.sh: results in " + out.string() + " (results.md"), std::string::npos) << output;
+  EXPECT_TRUE(fs::is_empty(cwd)) << "nothing is written into the current folder";
 }
 
 }  // namespace

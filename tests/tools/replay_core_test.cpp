@@ -95,6 +95,17 @@ TEST(ReplayOptions, ParsesEveryOption) {
   EXPECT_DOUBLE_EQ(lockstep.ack_timeout_s, 3.0);
 }
 
+// Pipeline files give the toggles as values ($(arg loop), $(arg start_paused): on or off).
+TEST(ReplayOptions, TheTogglesAlsoTakeOnOrOff) {
+  const ReplayOptions on = parse_replay_options({"d", "--loop-mode", "on", "--start-paused-mode", "on"});
+  EXPECT_TRUE(on.loop);
+  EXPECT_TRUE(on.start_paused);
+  const ReplayOptions off = parse_replay_options({"d", "--loop-mode", "off", "--start-paused-mode", "off"});
+  EXPECT_FALSE(off.loop);
+  EXPECT_FALSE(off.start_paused);
+  EXPECT_EQ(option_error({"d", "--loop-mode", "yes"}), "--loop-mode: expected on or off, got 'yes'");
+}
+
 TEST(ReplayOptions, EachBadOptionHasItsMessage) {
   EXPECT_EQ(option_error({}), "missing DATASET argument (see --help)");
   EXPECT_EQ(option_error({"d", "--rate", "fast"}), "--rate: expected a number in [0, 100], got 'fast'");

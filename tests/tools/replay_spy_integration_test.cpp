@@ -18,6 +18,7 @@
 #include "child_process.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/reader.hpp"
+#include "runtime/security.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/topics.hpp"
 #include "runtime/waitset.hpp"
@@ -133,6 +134,20 @@ std::string ReplaySpy::replay_lockstep_and_compare(const std::vector<std::string
   EXPECT_GT(calib.rectified.fx_px, 0.0);
   EXPECT_NEAR(calib.rectified.baseline_m, 0.110, 0.002);  // EuRoC rig: 11 cm
   return replay->err();
+}
+
+// Nothing on the domain: the list says so and why a running secure run would not show (issue 39).
+TEST_F(ReplaySpy, ListOnAnEmptyDomainHintsAtSecurity) {
+  unsetenv(runtime::kSecurityEnv);  // a plain spy, as typed by hand
+  auto list = start("spy", {"list", "--wait", "0.5"}, "list_empty");
+  ASSERT_EQ(run(*list), 0) << list->err();
+  EXPECT_NE(list->out().find("no topics on domain " + std::to_string(domain_) + " (listened 0.5 s)\n"),
+            std::string::npos)
+      << list->out();
+  EXPECT_NE(list->out().find("hint: a secure run (DDS Security) is invisible to a plain spy; give the spy the run's "
+                             "identity: HESLAM_SECURITY=DIR/identities/spy heslam-spy list (docs/security.md)"),
+            std::string::npos)
+      << list->out();
 }
 
 TEST_F(ReplaySpy, LockstepDeliversEveryPairBitIdenticalToThePngs) {

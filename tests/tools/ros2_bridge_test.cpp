@@ -164,6 +164,26 @@ std::vector<unsigned char> encapsulation_header(const runtime::Participant& part
   return {};
 }
 
+// --help lists what the bridge reads and writes and its config fields, not only the common flags.
+TEST(Ros2BridgeProcess, HelpListsTopicsAndConfigFields) {
+  const test::ScratchDir dir("ros2_bridge_help");
+  test::ChildProcess help(test::bin_dir() / "heslam-ros2-bridge", {"--help"}, dir.path(), "bridge_help");
+  ASSERT_EQ(help.wait(seconds(30)), 0) << help.err();
+  const std::string text = help.out();
+  EXPECT_NE(text.find("--domain"), std::string::npos) << text;  // the common flags still come first
+  for (const char* line :
+       {"  odometry                -> rt/NS/odometry             nav_msgs/Odometry (each tracked frame)\n",
+        "                          -> rt/NS/pose                 geometry_msgs/PoseStamped\n",
+        "  map/keyframes + states  -> rt/NS/keyframe_trajectory  nav_msgs/Path (transient local)\n",
+        "  map/points              -> rt/NS/map_points           sensor_msgs/PointCloud2 (transient local)\n",
+        "  ros_namespace     ROS 2 namespace of the topics (default heslam)\n",
+        "  world_frame       frame_id of poses, path and cloud (default heslam_world)\n",
+        "  camera_frame      child_frame_id of the odometry (default heslam_camera)\n",
+        "  publish_period_s  how often a changed path / cloud is sent, s (default 1)\n"}) {
+    EXPECT_NE(text.find(line), std::string::npos) << "missing: " << line << "in:\n" << text;
+  }
+}
+
 TEST(Ros2BridgeProcess, RepublishesOdometryPathAndPointsOnRos2Topics) {
   const test::ScratchDir dir("ros2_bridge");
   const int domain = test::exclusive_domain_id();

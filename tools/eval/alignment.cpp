@@ -1,10 +1,13 @@
 // Umeyama (1991) least-squares similarity between two point sets, and the alignment modes.
 #include "tools/eval/alignment.hpp"
 
+#include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 
 namespace heslam::eval {
@@ -97,6 +100,36 @@ Sim3 compute_alignment(const Trajectory& gt, const Trajectory& est, AlignMode mo
     }
   }
   return Sim3{};
+}
+
+std::optional<std::string> alignment_degeneracy(const Trajectory& gt, const Trajectory& est, const Sim3& fit) {
+  const std::size_t n = std::min(gt.size(), est.size());
+  if (n == 0) return std::nullopt;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < n; ++i) mean += gt.poses_wc[i].translation();
+  mean /= static_cast<double>(n);
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  double squared_residuals = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = gt.poses_wc[i].translation();
+    covariance += (p - mean) * (p - mean).transpose();
+    const Eigen::Vector3d moved = fit.scale * (fit.R * est.poses_wc[i].translation()) + fit.t;
+    squared_residuals += (p - moved).squaredNorm();
+  }
+  covariance /= static_cast<double>(n);
+  const double residual_m = std::sqrt(squared_residuals / static_cast<double>(n));
+  // Ascending: the two smaller variances are the spread across the main axis.
+  const Eigen::Vector3d variances = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance).eigenvalues();
+  const double across_m = std::sqrt(std::max(0.0, variances(0)) + std::max(0.0, variances(1)));
+  const double uncertainty_rad = across_m > 0.0 ? residual_m / across_m : INFINITY;
+  if (uncertainty_rad <= kMaxAlignmentRotationUncertaintyRad) return std::nullopt;
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "the alignment's rotation is ill-determined: the ground truth spreads %.3g m across its main axis "
+                "(%.3g m along it) and the fit leaves %.3g m RMS, so the rotation is uncertain by about %.0f deg",
+                across_m, std::sqrt(std::max(0.0, variances(2))), residual_m,
+                std::min(180.0, uncertainty_rad * 180.0 / M_PI));
+  return std::string(text);
 }
 
 }  // namespace heslam::eval

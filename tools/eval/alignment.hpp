@@ -12,6 +12,7 @@
 
 #include <optional>
 #include <span>
+#include <string>
 #include <string_view>
 
 #include <Eigen/Core>
@@ -35,5 +36,14 @@ Sim3 umeyama(std::span<const Eigen::Vector3d> from, std::span<const Eigen::Vecto
 
 // The transform that maps the estimate onto the ground truth; `gt` and `est` are paired row by row.
 Sim3 compute_alignment(const Trajectory& gt, const Trajectory& est, AlignMode mode);
+
+// Why a fitted se3 / sim3 alignment (`fit`, from compute_alignment) leaves the rotation undetermined,
+// or nullopt when it does not. The positions fix the rotation about an axis only through their spread
+// across it: a near-still trajectory, or one along a straight line, gives a rotation chosen by the
+// noise. Its uncertainty is estimated as the fit's residual RMS over the ground truth's spread across
+// its main axis (sqrt of the covariance's two smaller eigenvalues summed); above
+// kMaxAlignmentRotationUncertaintyRad the reason is one line with both figures.
+inline constexpr double kMaxAlignmentRotationUncertaintyRad = 0.05;  // about 3 deg
+std::optional<std::string> alignment_degeneracy(const Trajectory& gt, const Trajectory& est, const Sim3& fit);
 
 }  // namespace heslam::eval

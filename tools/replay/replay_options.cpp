@@ -39,6 +39,9 @@ runtime::Flags replay_flags(ReplayOptions& options) {
               "skip the first S seconds of the recording (0-1e6)")
       .number("--duration", "S", &options.duration_s, 0.0, kMaxRecordingS, "replay only S seconds (0-1e6)")
       .toggle("--start-paused", &options.start_paused, "start paused (space on the TTY or SIGUSR2 resumes)")
+      // The toggles as values, for pipeline files whose $(arg) gives on or off (docs/tools/replay.md).
+      .on_off("--loop-mode", &options.loop, "on = --loop, off = no loop (default)")
+      .on_off("--start-paused-mode", &options.start_paused, "on = --start-paused, off = start playing (default)")
       .toggle("--strict", &options.strict, "stop at the first missing/corrupt image or unpaired row")
       .number("--preload", "MB", &options.preload_mb, 0.0, kMaxPreloadMb,
               "decode pairs before frame 0 while they fit in MB megabytes (0-1e6; 0 = off,\n"

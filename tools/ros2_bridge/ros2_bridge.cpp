@@ -1,6 +1,7 @@
 // heslam-ros2-bridge: heslam topics in, ROS 2 topics out (see ros2_bridge.hpp).
 #include "tools/ros2_bridge/ros2_bridge.hpp"
 
+#include <cstdio>
 #include <stdexcept>
 
 #include "runtime/wire_enum.hpp"
@@ -39,6 +40,29 @@ BridgeOptions BridgeOptions::from(const runtime::Config& config) {
 }
 
 Ros2Bridge::Ros2Bridge(const runtime::CommonArgs& args) : Component("ros2_bridge", args) {}
+
+std::string Ros2Bridge::help_notes() {
+  const BridgeOptions defaults;
+  char period[32];
+  std::snprintf(period, sizeof period, "%g", defaults.publish_period_s);
+  return "\nTopics (heslam, in the --namespace -> ROS 2, NS = ros_namespace; docs/ros2.md):\n"
+         "  odometry                -> rt/NS/odometry             nav_msgs/Odometry (each tracked frame)\n"
+         "                          -> rt/NS/pose                 geometry_msgs/PoseStamped\n"
+         "  map/keyframes + states  -> rt/NS/keyframe_trajectory  nav_msgs/Path (transient local)\n"
+         "  map/points              -> rt/NS/map_points           sensor_msgs/PointCloud2 (transient local)\n"
+         "Config fields (--config FILE, all optional):\n"
+         "  ros_namespace     ROS 2 namespace of the topics (default " +
+         defaults.ros_namespace +
+         ")\n"
+         "  world_frame       frame_id of poses, path and cloud (default " +
+         defaults.frames.world +
+         ")\n"
+         "  camera_frame      child_frame_id of the odometry (default " +
+         defaults.frames.camera +
+         ")\n"
+         "  publish_period_s  how often a changed path / cloud is sent, s (default " +
+         period + ")\n";
+}
 
 void Ros2Bridge::configure(const runtime::Config& config) {
   options_ = BridgeOptions::from(config);

@@ -36,6 +36,9 @@ class Ros2Bridge : public runtime::Component {
  public:
   explicit Ros2Bridge(const runtime::CommonArgs& args);
 
+  // --help after the common flags: the topics it reads and writes, and its config fields.
+  static std::string help_notes();
+
  private:
   void configure(const runtime::Config& config) override;
   void run() override;

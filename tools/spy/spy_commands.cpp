@@ -11,6 +11,7 @@
 
 #include "runtime/participant.hpp"
 #include "runtime/reader.hpp"
+#include "runtime/security.hpp"
 #include "runtime/shutdown.hpp"
 #include "runtime/waitset.hpp"
 #include "tools/spy/arrival_window.hpp"
@@ -82,6 +83,19 @@ class TimeoutGuard {
   Clock::time_point last_;
 };
 
+// Why a list may be empty although a run is up: DDS Security hides a secure run from a plain
+// participant entirely, and a plain run from a secure one (docs/security.md).
+std::string empty_domain_hint() {
+  const std::filesystem::path identity = runtime::security_identity_from_env();
+  if (identity.empty()) {
+    return "hint: a secure run (DDS Security) is invisible to a plain spy; give the spy the run's identity: " +
+           std::string(runtime::kSecurityEnv) + "=DIR/identities/spy heslam-spy list (docs/security.md)";
+  }
+  return "hint: this spy is secure (" + std::string(runtime::kSecurityEnv) + "=" + identity.string() +
+         "): it sees only runs made with that folder's certificates, never a plain run; unset " +
+         runtime::kSecurityEnv + " to look for one (docs/security.md)";
+}
+
 int run_list(const runtime::Participant& participant, const SpyOptions& options) {
   struct Row {
     std::set<std::string> types;
@@ -95,7 +109,8 @@ int run_list(const runtime::Participant& participant, const SpyOptions& options)
     (endpoint.is_writer ? row.writers : row.readers) += 1;
   }
   if (rows.empty()) {
-    std::cout << "no topics on domain " << participant.domain_id() << " (listened " << options.wait_s << " s)\n";
+    std::cout << "no topics on domain " << participant.domain_id() << " (listened " << options.wait_s << " s)\n"
+              << empty_domain_hint() << "\n";
     return 0;
   }
   std::size_t width = 5;

@@ -1,4 +1,5 @@
 // heslam-synth: renders a synthetic stereo sequence with exact ground truth to EuRoC or KITTI layout.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -12,6 +13,7 @@
 #include "runtime/flags.hpp"
 #include "tools/synth/preset.hpp"
 #include "tools/synth/progress_report.hpp"
+#include "tools/synth/scene_builders.hpp"
 #include "tools/synth/sequence.hpp"
 #include "tools/synth/writers.hpp"
 
@@ -48,10 +50,34 @@ heslam::runtime::Flags synth_flags(Arguments& a) {
       .toggle("--no-events", &a.options.events, "none of the preset's events", false)
       .toggle("--quiet", &a.quiet, "no progress and no summary line")
       .alias("-q")
-      .toggle("--list", &a.list, "the built-in presets, one a line")
+      .toggle("--list", &a.list, "the built-in presets, one a line: frames, duration, distance travelled, purpose")
       .toggle("--help", &a.help, "this help")
       .alias("-h");
   return flags;
+}
+
+// One line per built-in preset: what a run of it costs and what it is for.
+void print_presets(std::ostream& out) {
+  using namespace heslam::synth;
+  std::size_t width = 0;
+  for (const auto& name : known_presets()) width = std::max(width, name.size());
+  for (const auto& name : known_presets()) {
+    Preset preset = load_preset(find_preset(name));
+    preset.texture_size_px = 16;  // the path only: the textures' size does not move it
+    const Trajectory trajectory(build_scene(preset).path, preset.trajectory, RenderOptions{}.seed);
+    // Travelled over the frames (a closed path may be gone round more than once, or not finished).
+    double travelled_m = 0.0;
+    for (int k = 1; k < preset.frames; ++k) {
+      travelled_m += (trajectory.T_wb(k / preset.camera.rate_hz).translation() -
+                      trajectory.T_wb((k - 1) / preset.camera.rate_hz).translation())
+                         .norm();
+    }
+    char figures[128];
+    std::snprintf(figures, sizeof figures, "%5d frames, %6.1f s at %g Hz, %6.1f m travelled", preset.frames,
+                  preset.frames / preset.camera.rate_hz, preset.camera.rate_hz, travelled_m);
+    out << name << std::string(width - name.size() + 2, ' ') << figures << ": "
+        << (preset.purpose.empty() ? std::string("(no purpose: field)") : preset.purpose) << "\n";
+  }
 }
 
 }  // namespace
@@ -67,7 +93,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (arguments.list) {
-      for (const auto& n : known_presets()) std::cout << n << "\n";
+      print_presets(std::cout);
       return 0;
     }
     const std::string& preset_name = arguments.preset_name;

@@ -98,6 +98,10 @@ Preset load_preset(const fs::path& yaml_path) {
   p.source = yaml_path;
   p.name = yaml_path.stem().string();
   if (!root["name"].empty()) p.name = static_cast<std::string>(root["name"]);
+  if (!root["purpose"].empty()) {
+    if (!root["purpose"].isString()) fail(f, "purpose", "expected a string");
+    p.purpose = static_cast<std::string>(root["purpose"]);
+  }
   if (root["scene"].empty()) fail(f, "scene", "is missing (room, corridor_loop, street, town or marker_wall)");
   if (!root["scene"].isString()) fail(f, "scene", "expected a string");
   p.scene = parse_scene(static_cast<std::string>(root["scene"]), f);

@@ -78,6 +78,7 @@ struct ExposureEvent {
 
 struct Preset {
   std::string name;
+  std::string purpose;  // what the sequence tests, one line (heslam-synth --list)
   SceneKind scene = SceneKind::kRoom;
   int frames = 600;           // default sequence length (--frames overrides)
   int texture_size_px = 512;  // level-0 size of every texture (power of two)

@@ -69,6 +69,12 @@ int run(const app::CliOptions& options) {
        << "\n";
   if (options.command == app::Command::ape) {
     const ApeResult ape = compute_ape(pair, ApeOptions{.align = options.align.value_or(AlignMode::se3)});
+    if (ape.align == AlignMode::se3 || ape.align == AlignMode::sim3) {
+      if (const auto degenerate = alignment_degeneracy(ape.gt, pair.est, ape.alignment)) {
+        std::cerr << "heslam-eval: warning: " << *degenerate << " (a near-still or straight trajectory); "
+                  << "--align origin compares from the first pose instead\n";
+      }
+    }
     app::print_ape(text, ape, precision);
     emit_json(options, to_json(ape, context));
     if (!options.plot_path.empty()) write_plot(options.plot_path, ape_plot(ape, plot_title(options, "APE")));
