@@ -1,7 +1,12 @@
 // Loop-correction application on a chain of keyframes: exact propagation rule.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <iterator>
+#include <vector>
+
 #include "components/core/mapping/correction_application.hpp"
+#include "components/core/mapping/point_statistics.hpp"
 #include "tests/mapping/mapping_test_util.hpp"
 
 namespace heslam {
@@ -128,6 +133,76 @@ TEST(CorrectionApplication, UnknownKeyframesAreSkippedAndCounted) {
   MapChanges changes;
   EXPECT_EQ(apply_loop_correction(chain.truth.map, correction, chain.created_version, changes), 1);
   EXPECT_TRUE(changes.changed_keyframes.empty());
+}
+
+// The application updates a point's statistics through a keyframe hash table and moves points with a
+// per-keyframe transform computed once: bit for bit what a point-by-point update on the map gives.
+TEST(CorrectionApplication, MovedPointsAndStatisticsMatchAPointByPointUpdate) {
+  Chain chain = make_chain();
+  Map& map = chain.truth.map;
+  const Map before = map;
+  LoopCorrection correction;
+  correction.map_version = 6;
+  for (const auto& [id, kf] : map.keyframes) {
+    if (id == 1) continue;  // one keyframe stays: its points do not move
+    const double k = static_cast<double>(id);
+    correction.corrected_T_wc.emplace_back(id, make_pose(0.01 * k, Eigen::Vector3d(0.02 * k, -0.01, 0.03)) * kf.T_wc);
+  }
+  const PointId into = map.points.begin()->first;
+  const PointId from = std::next(map.points.begin(), 5)->first;
+  correction.point_merges = {{from, into}};
+  MapChanges changes;
+  ASSERT_EQ(apply_loop_correction(map, correction, chain.created_version, changes), 0);
+
+  Map expected = before;
+  std::map<KeyframeId, Pose3> new_T_wc;
+  for (const auto& [id, T_wc] : correction.corrected_T_wc) new_T_wc[id] = T_wc;
+  for (auto& [id, point] : expected.points) {
+    const auto moved = new_T_wc.find(point.reference_kf);
+    if (moved == new_T_wc.end()) continue;
+    point.p_w = moved->second * (before.keyframes.at(point.reference_kf).T_wc.inverse() * point.p_w);
+  }
+  for (const auto& [id, T_wc] : new_T_wc) expected.keyframes.at(id).T_wc = T_wc;
+  replace_point(expected, from, into);
+  for (const PointId id : changes.changed_points) update_point_statistics(expected, id);
+
+  ASSERT_EQ(map.points.size(), expected.points.size());
+  int moved = 0;
+  for (const auto& [id, point] : map.points) {
+    const MapPoint& want = expected.points.at(id);
+    EXPECT_EQ(point.p_w, want.p_w) << "point " << id;
+    EXPECT_EQ(point.normal, want.normal) << "point " << id;
+    EXPECT_EQ(point.min_distance_m, want.min_distance_m) << "point " << id;
+    EXPECT_EQ(point.max_distance_m, want.max_distance_m) << "point " << id;
+    EXPECT_EQ(point.descriptor, want.descriptor) << "point " << id;
+    EXPECT_EQ(point.reference_kf, want.reference_kf) << "point " << id;
+    if (point.p_w != before.points.at(id).p_w) ++moved;
+  }
+  EXPECT_GT(moved, 0);
+  EXPECT_LT(moved, static_cast<int>(map.points.size()));  // keyframe 1's points stay
+}
+
+TEST(CorrectionApplication, RepresentativeDescriptorIsTheLeastMedianDistanceOne) {
+  Chain chain = make_chain();
+  for (const auto& [id, point] : chain.truth.map.points) {
+    if (point.observations.size() < 3) continue;
+    std::vector<Descriptor> descriptors;
+    for (const auto& [kf_id, index] : point.observations) {
+      descriptors.push_back(chain.truth.map.keyframes.at(kf_id).features.descriptors[static_cast<std::size_t>(index)]);
+    }
+    std::size_t best = 0;
+    int best_median = 1 << 30;
+    for (std::size_t i = 0; i < descriptors.size(); ++i) {
+      std::vector<int> distances;
+      for (const Descriptor& other : descriptors) distances.push_back(hamming_distance(descriptors[i], other));
+      std::sort(distances.begin(), distances.end());
+      if (distances[(distances.size() - 1) / 2] < best_median) {
+        best_median = distances[(distances.size() - 1) / 2];
+        best = i;
+      }
+    }
+    EXPECT_EQ(representative_descriptor(chain.truth.map, point), descriptors[best]) << "point " << id;
+  }
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include "components/core/mapping/correction_application.hpp"
 
 #include <functional>
+#include <unordered_map>
 
 #include "components/core/mapping/map_editing.hpp"
 #include "components/core/mapping/point_statistics.hpp"
@@ -48,13 +49,22 @@ int apply_loop_correction(Map& map, const LoopCorrection& correction,
     if (T_new.matrix() != kf.T_wc.matrix()) changes.changed_keyframes.insert(id);
     kf.T_wc = T_new;
   }
+  // Per keyframe once: its old pose's inverse and new pose (a point moves as ref_new * (ref_old^-1 * p)).
+  struct Motion {
+    Pose3 old_inverse;
+    const Pose3* new_T_wc;
+  };
+  std::unordered_map<KeyframeId, Motion> motion_of;
+  motion_of.reserve(map.keyframes.size());
+  for (const auto& [id, T_old] : old_T_wc) {
+    const Pose3& T_new = new_T_wc.at(id);
+    if (T_new.matrix() != T_old.matrix()) motion_of.emplace(id, Motion{T_old.inverse(), &T_new});
+  }
   for (auto& [id, point] : map.points) {
-    const auto ref_old = old_T_wc.find(point.reference_kf);
-    if (ref_old == old_T_wc.end()) continue;
-    const Pose3& ref_new = new_T_wc.at(point.reference_kf);
-    if (ref_new.matrix() == ref_old->second.matrix()) continue;
-    point.p_w = ref_new * (ref_old->second.inverse() * point.p_w);
-    changes.changed_points.insert(id);
+    const auto motion = motion_of.find(point.reference_kf);
+    if (motion == motion_of.end()) continue;  // unknown or unmoved reference keyframe
+    point.p_w = *motion->second.new_T_wc * (motion->second.old_inverse * point.p_w);
+    changes.changed_points.insert(changes.changed_points.end(), id);  // ids ascend: a hint, not a search
   }
   for (const auto& [id, p_w] : correction.corrected_points) {
     MapPoint* point = map.point(id);
@@ -77,7 +87,13 @@ int apply_loop_correction(Map& map, const LoopCorrection& correction,
     changes.changed_points.erase(from);
     changes.changed_points.insert(into);
   }
-  for (const PointId id : changes.changed_points) update_point_statistics(map, id);
+  // Both in id order: one walk over the points instead of a search per changed point.
+  const KeyframeIndex keyframes(map);
+  auto point = map.points.begin();
+  for (const PointId id : changes.changed_points) {
+    while (point != map.points.end() && point->first < id) ++point;
+    if (point != map.points.end() && point->first == id) update_point_statistics(point->second, keyframes);
+  }
   return skipped;
 }
 

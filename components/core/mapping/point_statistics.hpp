@@ -3,12 +3,32 @@
 // ComputeDistinctiveDescriptors and UpdateNormalAndDepth).
 #pragma once
 
+#include <unordered_map>
+
 #include "components/core/map/map.hpp"
 
 namespace heslam {
 
 // Recomputes descriptor, normal and distance range; no-op for a point without observations.
 void update_point_statistics(Map& map, PointId point_id);
+
+// The map's keyframes by id in a hash table: for updating many points at once (a loop correction
+// moves every point) without a tree search per observation. Valid while no keyframe is added or
+// removed from the map.
+class KeyframeIndex {
+ public:
+  explicit KeyframeIndex(const Map& map);
+  const Keyframe* find(KeyframeId id) const {
+    const auto it = keyframes_.find(id);
+    return it == keyframes_.end() ? nullptr : it->second;
+  }
+
+ private:
+  std::unordered_map<KeyframeId, const Keyframe*> keyframes_;
+};
+
+// The same as update_point_statistics(map, id), with the keyframes looked up in `index`.
+void update_point_statistics(MapPoint& point, const KeyframeIndex& index);
 
 // The observation's descriptor with the least median Hamming distance to the others.
 Descriptor representative_descriptor(const Map& map, const MapPoint& point);

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -63,6 +64,8 @@ struct Args {
   int ba_max_points = 40000;  // global BA: beyond this, every k-th point only (the others culled)
   std::string vocabulary;     // empty: the build's default vocabulary
   std::string dataset = "../shared/data/euroc_mh01_handheld";  // descriptors for the world's points
+  std::string poses_out;  // non-empty: the corrected poses of each size written to PREFIX<N>.txt
+  bool global_ba = true;
 };
 
 Args parse(int argc, char** argv) {
@@ -79,6 +82,10 @@ Args parse(int argc, char** argv) {
                "global BA: beyond this, every k-th point only (40000)")
       .text("--vocabulary", "FILE", &args.vocabulary, "the vocabulary (default: the build's)")
       .text("--dataset", "DIR|none", &args.dataset, "descriptors for the world's points (MH01)")
+      .text("--poses-out", "PREFIX", &args.poses_out,
+            "write the corrected poses (LoopCorrectionBuilder) of size N to PREFIX<N>.txt and print a digest of "
+            "the map after apply_loop_correction, to compare builds")
+      .toggle("--no-global-ba", &args.global_ba, "skip the global BA", false)
       .toggle("--help", &help, "this help")
       .alias("-h");
   flags.parse(argc, argv);
@@ -198,6 +205,41 @@ std::vector<Se3Correspondence> ransac_problem(const test::LoopWorld& w, Keyframe
   return matches;
 }
 
+// FNV-1a over the bytes of what a correction changes (poses; point positions, normals, distance
+// ranges, descriptors, reference keyframes): equal digests, equal maps.
+std::uint64_t digest(const Map& map) {
+  std::uint64_t hash = 1469598103934665603ull;
+  const auto add = [&hash](const void* data, std::size_t size) {
+    const auto* bytes = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < size; ++i) hash = (hash ^ bytes[i]) * 1099511628211ull;
+  };
+  for (const auto& [id, kf] : map.keyframes) add(kf.T_wc.matrix().data(), sizeof(double) * 16);
+  for (const auto& [id, point] : map.points) {
+    add(&id, sizeof id);
+    add(point.p_w.data(), sizeof(double) * 3);
+    add(point.normal.data(), sizeof(double) * 3);
+    add(&point.min_distance_m, sizeof point.min_distance_m);
+    add(&point.max_distance_m, sizeof point.max_distance_m);
+    add(point.descriptor.data(), point.descriptor.size());
+    add(&point.reference_kf, sizeof point.reference_kf);
+  }
+  return hash;
+}
+
+// One line per keyframe: id, translation, quaternion (x y z w), 17 significant digits.
+void write_poses(const std::string& path, const LoopCorrection& correction) {
+  std::FILE* file = std::fopen(path.c_str(), "w");
+  if (file == nullptr) throw std::runtime_error("--poses-out: cannot write " + path);
+  for (const auto& [id, T_wc] : correction.corrected_T_wc) {
+    const Eigen::Quaterniond q(T_wc.rotation());
+    const Eigen::Vector3d& t = T_wc.translation();
+    std::fprintf(file, "%llu %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", static_cast<unsigned long long>(id), t.x(),
+                 t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+  }
+  if (std::fclose(file) != 0) throw std::runtime_error("--poses-out: cannot write " + path);
+  std::printf("corrected poses written to %s\n", path.c_str());
+}
+
 void bench_size(const Args& args, int keyframes, const std::vector<Descriptor>& pool,
                 const std::shared_ptr<const Vocabulary>& vocabulary) {
   const auto build_start = std::chrono::steady_clock::now();
@@ -312,16 +354,22 @@ void bench_size(const Args& args, int keyframes, const std::vector<Descriptor>& 
              stats.fusion_ms, stats.pose_graph.time_ms, stats.pose_graph.iterations, corrected_error_m));
   LoopCorrection correction = output.correction;
   correction.id = 1;
+  if (!args.poses_out.empty()) write_poses(args.poses_out + std::to_string(keyframes) + ".txt", correction);
 
   // The mapper's side: applying the correction to its own N-keyframe map (a fresh copy each time).
   Timings apply;
   MapChanges applied;
+  Map applied_map;
   for (int r = 0; r < args.repeats; ++r) {
     Map copy = map;
     applied = MapChanges{};
     apply.start();
     apply_loop_correction(copy, correction, {}, applied);
     apply.stop();
+    if (r + 1 == args.repeats) applied_map = std::move(copy);
+  }
+  if (!args.poses_out.empty()) {
+    std::printf("applied map digest %016llx\n", static_cast<unsigned long long>(digest(applied_map)));
   }
   apply.report("apply_loop_correction", map,
                format("%zu poses, %zu points changed, %zu merged away", correction.corrected_T_wc.size(),
@@ -340,6 +388,7 @@ void bench_size(const Args& args, int keyframes, const std::vector<Descriptor>& 
                              "%zu points changed",
                              applied.changed_keyframes.size(), applied.changed_points.size()));
 
+  if (!args.global_ba) return;
   // Global BA on the corrected map; beyond --ba-max-points every k-th point only.
   const std::size_t stride = (corrected_map.points.size() + static_cast<std::size_t>(args.ba_max_points) - 1) /
                              static_cast<std::size_t>(args.ba_max_points);
