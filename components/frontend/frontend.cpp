@@ -142,14 +142,16 @@ void Frontend::configure(const runtime::Config& config) {
   log().info("HE ", to_string(options_.features.he.mode), ", ", options_.features.orb.features, " ORB features, ",
              options_.mapper_enabled ? "mirroring the local mapper's map" : "no local mapper (own map)",
              options_.wait_for_mapper ? ", lockstep waits for the mapper" : "",
-             options_.loop_closers.empty() ? "" : " and " + options_.loop_closers.front());
+             options_.loop_closers.empty() ? "" : " and " + options_.loop_closers.front(),
+             options_.mapping ? "" : "; localization only: mapping off, no keyframe or point is created");
   std::error_code no_file;
   if (options_.localize && !std::filesystem::exists(options_.mapper_map_file, no_file)) {
     // The mapper (started before us) writes the saved map there at its start: without it there is
     // nothing to localize in, and tracking would silently start a new map.
-    throw std::runtime_error("--localize: no saved map: the local mapper's map file " +
-                             options_.mapper_map_file.string() +
-                             " does not exist (start the mapper with --load-map FILE)");
+    throw std::runtime_error(
+        "--localize: no saved map: the local mapper's map file " + options_.mapper_map_file.string() +
+        (options_.saved_map.empty() ? std::string() : " (its copy of " + options_.saved_map.string() + ")") +
+        " does not exist (start the mapper with --load-map FILE)");
   }
   if (options_.vocabulary) {
     log().info("vocabulary ", describe_vocabulary_setting(options_.vocabulary_file), ": ",
@@ -229,8 +231,7 @@ void Frontend::run() {
   log_stage_summary(log(), stats());
   if (options_.localize && !relocalized_at_seq_) {
     // A localization run that never found itself in the map has no pose at all: a failure.
-    throw std::runtime_error("never relocalized in the saved map (" + options_.mapper_map_file.string() +
-                             "): " + std::to_string(count("frames")) + " frames, none tracked");
+    throw std::runtime_error(never_relocalized_message(options_, count("frames")));
   }
 }
 
