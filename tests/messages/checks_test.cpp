@@ -136,7 +136,7 @@ TEST(MessageChecks, CorrectionsWithNanPosesOrZeroIdsAreRefused) {
   EXPECT_NE(problem(check(correction)).find("keyframe id 0"), std::string::npos);
   poses[0] = {make_id(kFrontendTag, 7), identity()};
   runtime::set_wire_value(correction.kind, 5);
-  EXPECT_EQ(problem(check(correction)), "correction 11: kind 5 is not a CorrectionKind");
+  EXPECT_EQ(problem(check(correction)), "correction lc:11: kind 5 is not a CorrectionKind");
 }
 
 TEST(MessageChecks, CalibrationWithANanFieldIsRefused) {

@@ -26,7 +26,7 @@ inline const cv::Scalar kText(30, 30, 30);
 // The top view's grid, scale bar and axis arrows: colours nothing else uses, so a picture can be
 // checked for them.
 inline const cv::Scalar kGrid(228, 228, 228);
-inline const cv::Scalar kScaleBar(70, 70, 70);
+inline const cv::Scalar kScaleBar(0, 0, 110);  // dark red: no anti-aliased grey text or line blends into it
 inline const cv::Scalar kAxisX(40, 40, 200);
 inline const cv::Scalar kAxisZ(40, 150, 40);
 
