@@ -3,6 +3,7 @@
 // what cannot work; the recorder writes a video or a PNG sequence.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include <opencv2/imgcodecs.hpp>
@@ -138,8 +139,7 @@ TEST(ViewerTopView, DrawsAGridAScaleBarOfOneGridStepAndTheAxes) {
   ASSERT_GT(bar.width, 0);
   EXPECT_LT(bar.x, kDefaultTopViewSize.width / 4);
   EXPECT_GT(bar.y, kDefaultTopViewSize.height - 40);
-  // Thick lines get round caps: a few pixels more than the length.
-  EXPECT_NEAR(bar.width, view.grid_step_m * view.scale_px_per_m, 4.0);
+  EXPECT_EQ(bar.width, std::lround(view.grid_step_m * view.scale_px_per_m) + 1);
   // The x / z arrows, bottom right.
   EXPECT_GT(box_of(view.image, colours::kAxisX).x, kDefaultTopViewSize.width * 3 / 4);
   EXPECT_GT(box_of(view.image, colours::kAxisZ).y, kDefaultTopViewSize.height * 3 / 4);

@@ -160,7 +160,9 @@ void draw_scale_bar(cv::Mat& image, double step_m, double scale_px_per_m) {
   const int length_px = static_cast<int>(std::lround(step_m * scale_px_per_m));
   const int row = image.rows - 10;
   const cv::Point start(kMarginPx, row), end(kMarginPx + length_px, row);
-  cv::line(image, start, end, colours::kScaleBar, kScaleBarThicknessPx, cv::LINE_8);
+  // A filled rectangle, not a thick line (whose round caps would lengthen it): exactly length_px + 1 wide.
+  cv::rectangle(image, start - cv::Point(0, kScaleBarThicknessPx / 2), end + cv::Point(0, kScaleBarThicknessPx / 2),
+                colours::kScaleBar, cv::FILLED, cv::LINE_8);
   cv::line(image, start - cv::Point(0, 5), start + cv::Point(0, 3), colours::kScaleBar, 1, cv::LINE_8);
   cv::line(image, end - cv::Point(0, 5), end + cv::Point(0, 3), colours::kScaleBar, 1, cv::LINE_8);
   cv::putText(image, format_length(step_m) + " (grid step)", {end.x + 8, row + 5}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
