@@ -11,6 +11,7 @@
 #include <thread>
 #include <utility>
 
+#include "components/core/map/ids.hpp"
 #include "components/core/mapping/map_file.hpp"
 #include "components/core/place/vocabulary_setting.hpp"
 #include "components/core/tracking/settings_file.hpp"
@@ -141,14 +142,16 @@ void Frontend::configure(const runtime::Config& config) {
   log().info("HE ", to_string(options_.features.he.mode), ", ", options_.features.orb.features, " ORB features, ",
              options_.mapper_enabled ? "mirroring the local mapper's map" : "no local mapper (own map)",
              options_.wait_for_mapper ? ", lockstep waits for the mapper" : "",
-             options_.loop_closers.empty() ? "" : " and " + options_.loop_closers.front());
+             options_.loop_closers.empty() ? "" : " and " + options_.loop_closers.front(),
+             options_.mapping ? "" : "; localization only: mapping off, no keyframe or point is created");
   std::error_code no_file;
   if (options_.localize && !std::filesystem::exists(options_.mapper_map_file, no_file)) {
     // The mapper (started before us) writes the saved map there at its start: without it there is
     // nothing to localize in, and tracking would silently start a new map.
-    throw std::runtime_error("--localize: no saved map: the local mapper's map file " +
-                             options_.mapper_map_file.string() +
-                             " does not exist (start the mapper with --load-map FILE)");
+    throw std::runtime_error(
+        "--localize: no saved map: the local mapper's map file " + options_.mapper_map_file.string() +
+        (options_.saved_map.empty() ? std::string() : " (its copy of " + options_.saved_map.string() + ")") +
+        " does not exist (start the mapper with --load-map FILE)");
   }
   if (options_.vocabulary) {
     log().info("vocabulary ", describe_vocabulary_setting(options_.vocabulary_file), ": ",
@@ -212,20 +215,23 @@ void Frontend::run() {
   log_rejections();
   const auto counters = stats().counters();
   const auto count = [&](const char* name) { return counters.count(name) != 0 ? counters.at(name) : 0; };
-  log().info("processed ", count("frames"), " frames (", count("lost"), " lost, ", count("bad_frames"), " bad), ",
-             count("keyframes"), " keyframes");
+  // The words of docs/outputs.md: untracked = processed without a pose (tracking lost or not
+  // initialized); missed = published but never processed here. The run's "lost" is both.
+  log().info("processed ", count("frames"), " frames (", count("untracked"), " untracked, of them ", count("lost"),
+             " with tracking lost; ", count("bad_frames"), " bad), ", count("keyframes"), " keyframes");
   if (count("frames_already_processed") > 0) {
     log().info(count("frames_already_processed"),
                " frames published again were acknowledged without tracking them twice");
   }
   if (count("frames_missed") > 0) {
-    log().warn(count("frames_missed"), " frames missed: published while this frontend was busy, only the newest kept");
+    log().warn(count("frames_missed"),
+               " frames missed: published while this frontend was busy, only the newest kept (no pose: the run "
+               "counts them as lost)");
   }
   log_stage_summary(log(), stats());
   if (options_.localize && !relocalized_at_seq_) {
     // A localization run that never found itself in the map has no pose at all: a failure.
-    throw std::runtime_error("never relocalized in the saved map (" + options_.mapper_map_file.string() +
-                             "): " + std::to_string(count("frames")) + " frames, none tracked");
+    throw std::runtime_error(never_relocalized_message(options_, count("frames")));
   }
 }
 
@@ -458,6 +464,7 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
     relocalized_at_seq_ = frame.seq;
     log().info("relocalized in the saved map at frame ", frame.seq);
   }
+  if (result.state != TrackingState::kOk) stats().count("untracked");
   if (result.state == TrackingState::kLost) stats().count("lost");
   if (result.motion == FrameMotion::kStill) stats().count("still_frames");
   if (result.motion == FrameMotion::kRotatingInPlace) stats().count("rotating_in_place_frames");
@@ -482,7 +489,8 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
 
   if (result.new_keyframe && options_.wait_for_mapper && !wait_for_keyframe_done(result.new_keyframe->id)) {
     stats().count("mapper_timeouts");
-    log().warn_throttled("mapper_timeouts", "keyframe ", result.new_keyframe->id, ": no KeyframeDone from the mapper",
+    log().warn_throttled("mapper_timeouts", "keyframe ", format_id(result.new_keyframe->id),
+                         ": no KeyframeDone from the mapper",
                          options_.loop_closers.empty() ? "" : " and the loop closer", " within ",
                          options_.mapper_timeout.count(), " ms; going on without it");
   }

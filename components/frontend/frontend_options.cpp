@@ -62,8 +62,17 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
       .path("--journal", "FILE", &options.journal_file, "the odometry journal (journal.file)")
       .text("--loop-closer", "EXECUTABLE|none", &loop_closer,
             "the loop closer of a lockstep run (lockstep.loop_closer)")
-      .toggle("--localize", &options.localize, "track against the saved map of --mapper-map-file");
+      .toggle("--localize", &options.localize, "track against the saved map of --mapper-map-file")
+      .custom("--mapping", "on|off", "off: localization only (with --localize): no keyframe or point is created",
+              [&options](const std::string& value) {
+                if (value != "on" && value != "off") runtime::throw_bad_flag_value("--mapping", "on or off", value);
+                options.mapping = value == "on";
+              })
+      .path("--saved-map", "FILE", &options.saved_map, "the saved map the mapper loaded (named in messages)");
   flags.parse(rest);
+  if (!options.mapping && !options.localize) {
+    throw std::runtime_error("--mapping off: localization only needs a saved map to localize in (--localize)");
+  }
   if (options.localize && (options.mapper_map_file.empty() || !options.mapper_enabled)) {
     throw std::runtime_error(
         "--localize: needs the local mapper (mapper.enabled) and its map file (--mapper-map-file FILE)");
@@ -90,7 +99,16 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
   // With a mapper the frontend mirrors the map instead of maintaining it; its ids stay the frontend's.
   options.tracker.maintain_map = !options.mapper_enabled;
   options.tracker.id_tag = kFrontendTag;
+  options.tracker.create_keyframes = options.mapping;
   return options;
+}
+
+std::string never_relocalized_message(const FrontendOptions& options, std::uint64_t frames) {
+  std::string map = options.saved_map.empty() ? options.mapper_map_file.string() : options.saved_map.string();
+  if (!options.saved_map.empty() && options.saved_map != options.mapper_map_file) {
+    map += ", loaded into " + options.mapper_map_file.string();
+  }
+  return "never relocalized in the saved map (" + map + "): " + std::to_string(frames) + " frames, none tracked";
 }
 
 }  // namespace heslam::frontend

@@ -60,6 +60,13 @@ struct FrontendOptions {
   // must exist at start (the mapper loaded the saved map into it), the first tracked frame is reported
   // ("relocalized in the saved map at frame N"), and a run that never relocalizes fails (exit 1).
   bool localize = false;
+  // --mapping on|off: off is localization only (TrackerOptions::create_keyframes = false, ORB-SLAM3's
+  // localization mode): with --localize, frames are tracked in the saved map and relocalized in it
+  // when lost, and no keyframe or point is created, so the map stays as saved. Needs --localize.
+  bool mapping = true;
+  // --saved-map FILE: the user's map the mapper loaded (--load-map), named in the messages of a
+  // localization run instead of the working copy (mapper_map_file). Empty: mapper_map_file.
+  std::filesystem::path saved_map;
   // journal.file / --journal FILE: every finished frame is appended here (OdometryJournal); a
   // restarted frontend of the same run resumes after its last seq and publishes the journaled
   // odometry again. Empty: a restarted frontend tracks every frame it is sent.
@@ -72,5 +79,9 @@ struct FrontendOptions {
   // --loop-closer EXECUTABLE, --localize), which win over the config.
   static FrontendOptions from_config(const runtime::Config& config, const std::vector<std::string>& rest = {});
 };
+
+// The failure of a localization run in which no frame was ever tracked in the saved map: names the
+// user's map (and the working copy when it is another file).
+std::string never_relocalized_message(const FrontendOptions& options, std::uint64_t frames);
 
 }  // namespace heslam::frontend

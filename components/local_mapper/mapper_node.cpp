@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "components/core/map/ids.hpp"
 #include "components/local_mapper/write_batch.hpp"
 #include "components/messages/camera.hpp"
 #include "components/messages/checks.hpp"
@@ -184,7 +185,7 @@ void MapperNode::take_keyframes() {
         throw std::runtime_error("topic '" + keyframe_reader_->name() + "': " + *problem);
       PendingKeyframe keyframe{messages::to_keyframe(message), messages::to_camera(message.camera)};
       if (!(keyframe.camera.fx_px > 0.0) || !(keyframe.camera.baseline_m > 0.0)) {
-        throw std::runtime_error("keyframe " + std::to_string(message.id) + ": camera fx " +
+        throw std::runtime_error("keyframe " + format_id(message.id) + ": camera fx " +
                                  std::to_string(keyframe.camera.fx_px) + " px, baseline " +
                                  std::to_string(keyframe.camera.baseline_m) + " m (expected both > 0)");
       }
@@ -253,15 +254,16 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
     // Keyframe ids only grow within a run (a restarted frontend continues past the map's), so this
     // one is not of this map: mapping it would mix two maps.
     stats().count("foreign_keyframes");
-    log().warn_throttled("foreign_keyframes", "keyframe ", id, ": not in the map and older than its newest keyframe ",
-                         map.keyframes.rbegin()->first, "; ignored");
+    log().warn_throttled("foreign_keyframes", "keyframe ", format_id(id),
+                         ": not in the map and older than its newest keyframe ",
+                         format_id(map.keyframes.rbegin()->first), "; ignored");
     acknowledge(id);
     return;
   }
   if (const Keyframe* known = map.keyframe(id); known != nullptr) {
     if (known->stamp_ns != keyframe.decoded.keyframe.stamp_ns) {
       stats().count("duplicate_keyframe_ids");
-      log().warn_throttled("duplicate_keyframe_ids", "keyframe ", id, ": id already in the map with stamp ",
+      log().warn_throttled("duplicate_keyframe_ids", "keyframe ", format_id(id), ": id already in the map with stamp ",
                            known->stamp_ns, " ns, received with ", keyframe.decoded.keyframe.stamp_ns, " ns; ignored");
       acknowledge(id);
     } else {
@@ -288,11 +290,11 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
   publish(changes);
   acknowledge(id);
   if (changes.counts.late_keyframes_moved > 0) {
-    log().info("keyframe ", id, " was tracked at map version ", keyframe.decoded.tracked_map_version,
+    log().info("keyframe ", format_id(id), " was tracked at map version ", keyframe.decoded.tracked_map_version,
                ", before a correction applied since: moved with its reference keyframe ",
-               keyframe.decoded.reference_kf);
+               format_id(keyframe.decoded.reference_kf));
   }
-  log().debug("keyframe ", id, ": ", changes.timings.total_ms, " ms, ", changes.counts.triangulated_points,
+  log().debug("keyframe ", format_id(id), ": ", changes.timings.total_ms, " ms, ", changes.counts.triangulated_points,
               " new points, ", changes.counts.culled_points, " culled points, ", changes.counts.culled_keyframes,
               " culled keyframes, ", changes.changed_points.size(), " points changed; local BA ",
               changes.counts.bundle_adjustment_free_keyframes, " free + ",
@@ -313,7 +315,10 @@ void MapperNode::apply_corrections() {
     remember_applied_correction(correction.id);
     publish(changes, correction.id);
     acknowledge(correction.loop_kf, correction.id);
-    log().info("loop correction ", correction.id, " (keyframe ", correction.loop_kf, " -> ", correction.matched_kf,
+    log().info("loop correction ", format_id(correction.id), " (",
+               correction.matched_kf == kNoId
+                   ? "global BA after the loop at keyframe " + format_id(correction.loop_kf)
+                   : "keyframe " + format_id(correction.loop_kf) + " -> " + format_id(correction.matched_kf),
                "): ", changes.changed_keyframes.size(), " keyframes and ", changes.changed_points.size(),
                " points moved, ", changes.removed_points.size(), " points merged");
   }

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "components/core/map/ids.hpp"
 #include "components/messages/checks.hpp"
 #include "components/messages/loop_correction.hpp"
 #include "components/messages/map_state.hpp"
@@ -225,11 +226,12 @@ void LoopCloserNode::process_keyframe(KeyframeId id) {
     stats().count("candidates", result.candidates.keyframes.size());
     stats().record_ms("verification", result.timings.verification_ms);
   } else {
-    log().debug("keyframe ", id, ": no loop candidate (", result.candidates.reason, ")");
+    log().debug("keyframe ", format_id(id), ": no loop candidate (", result.candidates.reason, ")");
   }
   for (const LoopRejection& rejection : result.rejected) {
     stats().count("loops_rejected");
-    log().debug("keyframe ", id, ": candidate ", rejection.candidate, " rejected: ", rejection.reason);
+    log().debug("keyframe ", format_id(id), ": candidate ", format_id(rejection.candidate),
+                " rejected: ", rejection.reason);
   }
   if (!result.correction) return;
   stats().count("loops_accepted");
@@ -237,11 +239,11 @@ void LoopCloserNode::process_keyframe(KeyframeId id) {
   // ORB-SLAM2: a new loop makes the running global BA stale; it restarts after this correction.
   if (global_ba_.abort()) {
     stats().count("global_ba_aborted");
-    log().info("global BA aborted: a newer loop at keyframe ", id);
+    log().info("global BA aborted: a newer loop at keyframe ", format_id(id));
   }
   LoopCorrection correction = std::move(*result.correction);
-  log().info("loop closed: keyframe ", id, " -> ", correction.matched_kf, " with ", result.loop_matches,
-             " matches; correcting ", correction.corrected_T_wc.size(), " keyframes, merging ",
+  log().info("loop closed: keyframe ", format_id(id), " -> ", format_id(correction.matched_kf), " with ",
+             result.loop_matches, " matches; correcting ", correction.corrected_T_wc.size(), " keyframes, merging ",
              correction.point_merges.size(), " points (map version ", mirror_.map().version, ", ", awaiting_state,
              " keyframes from the frontend left out: not mapped yet)");
   if (!publish_and_wait(std::move(correction)) || !options_.global_bundle_adjustment) return;
@@ -257,7 +259,7 @@ void LoopCloserNode::finish_global_ba() {
   if (!outcome.correction) return;
   stats().record_ms("global_ba", outcome.elapsed_ms);
   stats().count("global_bundle_adjustments");
-  log().info("global BA for the loop at keyframe ", outcome.correction->loop_kf, ": ",
+  log().info("global BA for the loop at keyframe ", format_id(outcome.correction->loop_kf), ": ",
              outcome.correction->corrected_T_wc.size(), " keyframes, ", outcome.correction->corrected_points.size(),
              " points in ", outcome.elapsed_ms, " ms");
   publish_and_wait(std::move(*outcome.correction));
@@ -270,7 +272,7 @@ bool LoopCloserNode::publish_and_wait(LoopCorrection correction) {
     const messages::LoopCorrectionMessage message(correction);
     if (correction_writer_->write(message.get()) == runtime::WriteResult::kTimeout) {
       stats().count("correction_write_timeouts");
-      log().warn("loop correction ", id, ": write timed out (is the local mapper alive?)");
+      log().warn("loop correction ", format_id(id), ": write timed out (is the local mapper alive?)");
     }
   }
   stats().count("corrections_published");
@@ -289,7 +291,7 @@ bool LoopCloserNode::publish_and_wait(LoopCorrection correction) {
   }
   if (!shutdown_requested()) {
     stats().count("correction_timeouts");
-    log().warn("loop correction ", id, ": the local mapper did not acknowledge it within ",
+    log().warn("loop correction ", format_id(id), ": the local mapper did not acknowledge it within ",
                options_.mapper_timeout.count(), " ms; going on");
   }
   return false;
@@ -348,7 +350,8 @@ void LoopCloserNode::load_state() {
   last_processed_ = last;
   correction_counter_ = std::max(correction_counter_, counter);
   restored_loops_ = std::move(loops);
-  log().info("resuming: keyframes up to ", last_processed_, " processed, ", restored_loops_.size(), " loops closed");
+  log().info("resuming: keyframes up to ", format_id(last_processed_), " processed, ", restored_loops_.size(),
+             " loops closed");
 }
 
 void LoopCloserNode::save_state() {

@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "components/core/map/ids.hpp"
 #include "components/messages/camera.hpp"
 #include "components/messages/checks.hpp"
 #include "components/messages/keyframe.hpp"
@@ -16,7 +17,7 @@ void MapMirror::add_keyframe(const msg::Keyframe& message) {
   if (auto problem = messages::check(message)) throw std::runtime_error(*problem);
   messages::DecodedKeyframe decoded = messages::to_keyframe(message);
   Keyframe& incoming = decoded.keyframe;
-  const std::string name = "keyframe " + std::to_string(message.id);
+  const std::string name = "keyframe " + format_id(message.id);
   const PinholeStereo camera = messages::to_camera(message.camera);
   if (!(camera.fx_px > 0.0) || !(camera.baseline_m > 0.0)) {
     throw std::runtime_error(name + ": camera fx " + std::to_string(camera.fx_px) + " px, baseline " +

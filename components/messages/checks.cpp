@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "components/core/camera/image_limits.hpp"
+#include "components/core/map/ids.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/wire_enum.hpp"
 
@@ -143,7 +144,7 @@ std::optional<std::string> check(const msg::Odometry& odometry) {
 
 std::optional<std::string> check(const msg::Keyframe& keyframe) {
   if (keyframe.id == 0) return std::string("id is 0 (no keyframe)");
-  const std::string name = text("keyframe ", keyframe.id, ": ");
+  const std::string name = text("keyframe ", format_id(keyframe.id), ": ");
   if (auto problem = check(keyframe.T_wc, "T_wc")) return name + *problem;
   if (auto problem = check_rectified(keyframe.camera, "camera")) return name + *problem;
   if (!(keyframe.camera.fx_px > 0.0) || !(keyframe.camera.fy_px > 0.0))
@@ -173,9 +174,11 @@ std::optional<std::string> check(const msg::Keyframe& keyframe) {
   for (const msg::NewStereoPoint& point : runtime::view(keyframe.new_points)) {
     if (point.id == 0) return name + "a new point has id 0";
     if (point.keypoint_index >= keypoints.size()) {
-      return text(name, "new point ", point.id, ": keypoint_index ", point.keypoint_index, " of ", keypoints.size());
+      return text(name, "new point ", format_id(point.id), ": keypoint_index ", point.keypoint_index, " of ",
+                  keypoints.size());
     }
-    if (auto problem = finite_coordinates(point.position_w_m, 3, text("new point ", point.id, " position_w_m"))) {
+    if (auto problem =
+            finite_coordinates(point.position_w_m, 3, text("new point ", format_id(point.id), " position_w_m"))) {
       return name + *problem;
     }
   }
@@ -184,7 +187,7 @@ std::optional<std::string> check(const msg::Keyframe& keyframe) {
 
 std::optional<std::string> check(const msg::KeyframeState& state) {
   if (state.id == 0) return std::nullopt;  // a version marker: only map_version is read
-  const std::string name = text("keyframe state ", state.id, ": ");
+  const std::string name = text("keyframe state ", format_id(state.id), ": ");
   if (auto problem = check(state.T_wc, "T_wc")) return name + *problem;
   for (const msg::CovisibleKeyframe& neighbour : runtime::view(state.covisible)) {
     if (neighbour.id == 0) return name + "a covisible keyframe has id 0";
@@ -194,7 +197,7 @@ std::optional<std::string> check(const msg::KeyframeState& state) {
 
 std::optional<std::string> check(const msg::MapPointState& point) {
   if (point.id == 0) return std::nullopt;  // a version marker
-  const std::string name = text("point ", point.id, ": ");
+  const std::string name = text("point ", format_id(point.id), ": ");
   if (auto problem = finite_coordinates(point.position_w_m, 3, "position_w_m")) return name + *problem;
   if (auto problem = finite_coordinates(point.normal_w, 3, "normal_w")) return name + *problem;
   const float distances[] = {point.min_distance_m, point.max_distance_m};
@@ -207,7 +210,7 @@ std::optional<std::string> check(const msg::MapPointState& point) {
 
 std::optional<std::string> check(const msg::LoopCorrection& correction) {
   if (correction.id == 0) return std::string("id is 0 (no correction)");
-  const std::string name = text("correction ", correction.id, ": ");
+  const std::string name = text("correction ", format_id(correction.id), ": ");
   if (!runtime::wire_value_is_one_of(correction.kind, heslam_msg_CORRECTION_LOOP, heslam_msg_CORRECTION_GLOBAL_BA)) {
     return text(name, "kind ", runtime::wire_value(correction.kind), " is not a CorrectionKind");
   }
@@ -215,14 +218,14 @@ std::optional<std::string> check(const msg::LoopCorrection& correction) {
   for (const msg::CorrectedKeyframePose& pose : runtime::view(correction.corrected_poses)) {
     if (pose.keyframe_id == 0) return name + "a corrected pose has keyframe id 0";
     if (auto problem = check(pose.T_wc, "corrected_poses.T_wc"))
-      return text(name, "keyframe ", pose.keyframe_id, ": ", *problem);
+      return text(name, "keyframe ", format_id(pose.keyframe_id), ": ", *problem);
   }
   for (const msg::PointMerge& merge : runtime::view(correction.point_merges)) {
     if (merge.from_id == 0 || merge.into_id == 0) return name + "a point merge has id 0";
   }
   for (const msg::CorrectedPointPosition& point : runtime::view(correction.corrected_points)) {
-    if (auto problem =
-            finite_coordinates(point.position_w_m, 3, text("corrected point ", point.point_id, " position_w_m"))) {
+    if (auto problem = finite_coordinates(point.position_w_m, 3,
+                                          text("corrected point ", format_id(point.point_id), " position_w_m"))) {
       return name + *problem;
     }
   }

@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "components/core/map/ids.hpp"
 #include "components/messages/pose.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/wire_enum.hpp"
@@ -30,7 +31,7 @@ LoopCorrectionMessage::LoopCorrectionMessage(const LoopCorrection& correction) {
 }
 
 LoopCorrection to_loop_correction(const msg::LoopCorrection& message) {
-  const std::string name = "loop correction " + std::to_string(message.id);
+  const std::string name = "loop correction " + format_id(message.id);
   LoopCorrection correction;
   correction.id = message.id;
   correction.map_version = message.map_version;
@@ -42,15 +43,15 @@ LoopCorrection to_loop_correction(const msg::LoopCorrection& message) {
   for (const msg::CorrectedKeyframePose& entry : runtime::view(message.corrected_poses)) {
     const Pose3 T_wc = to_pose(entry.T_wc);
     if (entry.keyframe_id == kNoId || !T_wc.matrix().allFinite()) {
-      throw std::runtime_error(name + ": corrected pose of keyframe " + std::to_string(entry.keyframe_id) +
+      throw std::runtime_error(name + ": corrected pose of keyframe " + format_id(entry.keyframe_id) +
                                " has id 0 or is not finite");
     }
     correction.corrected_T_wc.emplace_back(entry.keyframe_id, T_wc);
   }
   for (const msg::PointMerge& merge : runtime::view(message.point_merges)) {
     if (merge.from_id == kNoId || merge.into_id == kNoId || merge.from_id == merge.into_id) {
-      throw std::runtime_error(name + ": point merge " + std::to_string(merge.from_id) + " -> " +
-                               std::to_string(merge.into_id) + " is invalid");
+      throw std::runtime_error(name + ": point merge " + format_id(merge.from_id) + " -> " + format_id(merge.into_id) +
+                               " is invalid");
     }
     correction.point_merges.emplace_back(merge.from_id, merge.into_id);
   }
@@ -63,7 +64,7 @@ LoopCorrection to_loop_correction(const msg::LoopCorrection& message) {
   for (const msg::CorrectedPointPosition& entry : runtime::view(message.corrected_points)) {
     const Eigen::Vector3d p_w(entry.position_w_m[0], entry.position_w_m[1], entry.position_w_m[2]);
     if (entry.point_id == kNoId || !p_w.allFinite()) {
-      throw std::runtime_error(name + ": corrected position of point " + std::to_string(entry.point_id) +
+      throw std::runtime_error(name + ": corrected position of point " + format_id(entry.point_id) +
                                " has id 0 or is not finite");
     }
     correction.corrected_points.emplace_back(entry.point_id, p_w);

@@ -20,11 +20,15 @@ constexpr std::string_view kTrackedPrefix = "tracked ";
 
 std::string format_run_progress(const RunCounts& counts) {
   const double fps = counts.fps;
+  // The percent and the ETA count published frames; "tracked" (frames with a pose) stands apart.
+  char tracked[48] = "";
+  if (counts.tracked) {
+    std::snprintf(tracked, sizeof tracked, ", %llu tracked", static_cast<unsigned long long>(*counts.tracked));
+  }
   char line[200];
-  const char* what = counts.tracked ? "tracked" : "published";
-  const std::uint64_t done = counts.tracked.value_or(counts.published);
   if (counts.total == 0) {
-    std::snprintf(line, sizeof line, "%s %llu frames  %.1f fps", what, static_cast<unsigned long long>(done), fps);
+    std::snprintf(line, sizeof line, "published %llu frames%s  %.1f fps",
+                  static_cast<unsigned long long>(counts.published), tracked, fps);
     return line;
   }
   const double percent = 100.0 * static_cast<double>(counts.published) / static_cast<double>(counts.total);
@@ -32,9 +36,9 @@ std::string format_run_progress(const RunCounts& counts) {
   if (fps > 0.0 && counts.total >= counts.published) {
     std::snprintf(eta, sizeof eta, "ETA %.1f s", static_cast<double>(counts.total - counts.published) / fps);
   }
-  std::snprintf(line, sizeof line, "%s %llu/%llu frames %4.0f%%  %.1f fps  %s", what,
-                static_cast<unsigned long long>(done), static_cast<unsigned long long>(counts.total), percent, fps,
-                eta);
+  std::snprintf(line, sizeof line, "published %llu/%llu frames %4.0f%%%s  %.1f fps  %s",
+                static_cast<unsigned long long>(counts.published), static_cast<unsigned long long>(counts.total),
+                percent, tracked, fps, eta);
   return line;
 }
 

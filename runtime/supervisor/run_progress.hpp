@@ -1,4 +1,4 @@
-// The supervisor's one progress line for a whole run: frames tracked / total, fps and ETA, from the
+// The supervisor's one progress line for a whole run: frames published / total, tracked, fps and ETA, from the
 // components' status (the replay's frames_published / frames_total counters, the recorder's
 // "tracked N/M frames" message). On a terminal it is redrawn in place; in a log file or pipe a plain
 // line at every 10 % of the frames (the rule of heslam-synth's progress); nothing without a total.
@@ -18,8 +18,8 @@ struct RunCounts {
   double fps = 0.0;                      // published frames per second; 0: not measured yet
 };
 
-// "tracked 40/160 frames  26%  19.9 fps  ETA 5.9 s" (published/total for the %, fps and ETA);
-// "published 40/160 frames ..." without a recorder.
+// "published 42/160 frames   26%, 40 tracked  19.9 fps  ETA 5.9 s": the percent, fps and ETA count
+// published frames, "tracked" the frames with a pose so far (without a recorder: no tracked count).
 std::string format_run_progress(const RunCounts& counts);
 
 // The tracked count of a recorder status message "tracked N/M frames, ...", nullopt for others.

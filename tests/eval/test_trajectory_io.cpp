@@ -214,6 +214,25 @@ TEST(EvalTrajectoryIo, FrameHeaderRoundTripsInTumAndEuroc) {
   EXPECT_FALSE(pose_frame_from_header(std::string_view("# heslam frame: imu")).has_value());
 }
 
+// The TUM column header names the pose by its frame: T_wb for body poses, T_wc for a camera's.
+TEST(EvalTrajectoryIo, TumColumnHeaderNamesThePoseOfItsFrame) {
+  const std::filesystem::path dir = scratch_dir();
+  const auto first_line = [](const std::filesystem::path& path) {
+    std::ifstream in(path);
+    std::string line;
+    std::getline(in, line);
+    return line;
+  };
+  Trajectory trajectory = figure_eight(5);
+  trajectory.frame = PoseFrame::body;
+  write_trajectory(dir / "body.txt", trajectory, Format::tum);
+  EXPECT_EQ(first_line(dir / "body.txt"), "# timestamp tx ty tz qx qy qz qw (T_wb, heslam)");
+  trajectory.frame = PoseFrame::rectified;
+  write_trajectory(dir / "rectified.txt", trajectory, Format::tum);
+  EXPECT_EQ(first_line(dir / "rectified.txt"), "# timestamp tx ty tz qx qy qz qw (T_wc, heslam)");
+  EXPECT_EQ(read_trajectory(dir / "body.txt").frame, PoseFrame::body);
+}
+
 // --est-extrinsic on a body-frame file makes it camera poses, and says so.
 TEST(EvalTrajectoryIo, ExtrinsicOnABodyFileMakesItCam0) {
   const std::filesystem::path dir = scratch_dir();

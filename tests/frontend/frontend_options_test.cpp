@@ -365,6 +365,28 @@ TEST(FrontendOptions, VocabularyFileDefaultNoneAndBadFiles) {
 
 // The EuRoC and synth settings files must not pin values that the core's defaults have since
 // changed: they give exactly the options of no settings (the offline harness's chain).
+// --mapping off is localization only: the tracker creates no keyframe; it needs a saved map
+// (--localize), and the failure to relocalize names the user's map, not the working copy.
+TEST(FrontendOptions, MappingOffIsLocalizationOnlyInTheSavedMap) {
+  const runtime::Config config =
+      runtime::Config::parse("mapper:\n  enabled: true\nvocabulary:\n  file: none\n", "frontend.yaml");
+  EXPECT_TRUE(FrontendOptions::from_config(config, {"--mapper-map-file", "/run/x.map"}).tracker.create_keyframes);
+  const FrontendOptions localization = FrontendOptions::from_config(
+      config, {"--mapper-map-file", "/run/x.map", "--localize", "--mapping", "off", "--saved-map", "/maps/hall.map"});
+  EXPECT_FALSE(localization.mapping);
+  EXPECT_FALSE(localization.tracker.create_keyframes);
+  EXPECT_EQ(never_relocalized_message(localization, 95),
+            "never relocalized in the saved map (/maps/hall.map, loaded into /run/x.map): 95 frames, none tracked");
+  try {
+    FrontendOptions::from_config(config, {"--mapper-map-file", "/run/x.map", "--mapping", "off"});
+    FAIL() << "--mapping off without --localize was accepted";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("--mapping off"), std::string::npos) << error.what();
+  }
+  EXPECT_THROW(FrontendOptions::from_config(config, {"--localize", "--mapper-map-file", "/x", "--mapping", "maybe"}),
+               std::runtime_error);
+}
+
 TEST(FrontendOptions, EurocAndSynthConfigsAreTheCoreDefaults) {
   const FrontendOptions defaults = FrontendOptions::from_config(runtime::Config::empty());
   for (const char* name : {"euroc", "synth"}) {

@@ -79,7 +79,7 @@ TEST_F(LoopCloserJoinedRun, ExitsWhenTheRunItJoinedEnds) {
   supervisor_->signal(SIGINT);  // the user stops the run
   ASSERT_EQ(supervisor_->wait(kBound), 0) << supervisor_->err();
   ASSERT_EQ(loop_closer_->wait(kBound), 0) << loop_closer_->err();
-  EXPECT_NE((loop_closer_->err() + loop_closer_->out()).find("the run's supervisor is ending the run"),
+  EXPECT_NE((loop_closer_->err() + loop_closer_->out()).find("the supervisor (supervisor) is ending the run"),
             std::string::npos)
       << loop_closer_->err();
 }
@@ -89,7 +89,7 @@ TEST_F(LoopCloserJoinedRun, ExitsWhenTheRunsSupervisorIsKilled) {
   supervisor_->signal(SIGKILL);  // its talker dies with it (PR_SET_PDEATHSIG); its writers' lease expires
   ASSERT_TRUE(supervisor_->wait(kBound).has_value());
   ASSERT_EQ(loop_closer_->wait(kBound), 0) << loop_closer_->err();
-  EXPECT_NE((loop_closer_->err() + loop_closer_->out()).find("the run's supervisor is gone"), std::string::npos)
+  EXPECT_NE((loop_closer_->err() + loop_closer_->out()).find("the supervisor (supervisor) is gone"), std::string::npos)
       << loop_closer_->err();
 }
 

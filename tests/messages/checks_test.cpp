@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "components/core/map/ids.hpp"
 #include "components/messages/checks.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/wire_enum.hpp"
@@ -64,7 +65,7 @@ TEST(MessageChecks, KeyframeSizesIdsAndNumbers) {
   std::vector<std::uint8_t> descriptors(32, 0);
   std::vector<std::uint64_t> point_ids{0};
   msg::Keyframe keyframe{};
-  keyframe.id = 5;
+  keyframe.id = make_id(kFrontendTag, 5);
   keyframe.T_wc = identity();
   keyframe.camera.fx_px = keyframe.camera.fy_px = 450.0;
   keyframe.camera.baseline_m = 0.11;
@@ -76,7 +77,7 @@ TEST(MessageChecks, KeyframeSizesIdsAndNumbers) {
   EXPECT_FALSE(check(keyframe)) << problem(check(keyframe));
 
   keyframe.T_wc.position_m[0] = kNaN;
-  EXPECT_NE(problem(check(keyframe)).find("keyframe 5: T_wc.position_m[0] is nan"), std::string::npos);
+  EXPECT_NE(problem(check(keyframe)).find("keyframe fe:5: T_wc.position_m[0] is nan"), std::string::npos);
   keyframe.T_wc = identity();
   keypoints[0].depth_m = std::numeric_limits<float>::quiet_NaN();
   EXPECT_NE(problem(check(keyframe)).find("keypoints[0]"), std::string::npos);
@@ -100,41 +101,42 @@ TEST(MessageChecks, MapStateMarkersPassNanStatesDoNot) {
   msg::KeyframeState state{};
   state.map_version = 4;  // a version marker (id 0): only map_version is read
   EXPECT_FALSE(check(state));
-  state.id = 9;
+  state.id = make_id(kFrontendTag, 9);
   state.T_wc = identity();
   EXPECT_FALSE(check(state));
   state.T_wc.orientation_xyzw[2] = kNaN;
-  EXPECT_NE(problem(check(state)).find("keyframe state 9: T_wc.orientation_xyzw[2] is nan"), std::string::npos);
+  EXPECT_NE(problem(check(state)).find("keyframe state fe:9: T_wc.orientation_xyzw[2] is nan"), std::string::npos);
 
   msg::MapPointState point{};
   EXPECT_FALSE(check(point));  // marker
-  point.id = 3;
+  point.id = make_id(kMapperTag, 3);
   point.min_distance_m = 0.5f;
   point.max_distance_m = 5.f;
   EXPECT_FALSE(check(point));
   point.position_w_m[2] = kNaN;
-  EXPECT_NE(problem(check(point)).find("point 3: position_w_m[2] is nan"), std::string::npos);
+  EXPECT_NE(problem(check(point)).find("point lm:3: position_w_m[2] is nan"), std::string::npos);
   point.position_w_m[2] = 0.0;
   point.normal_w[0] = std::numeric_limits<float>::infinity();
   EXPECT_NE(problem(check(point)).find("normal_w[0] is inf"), std::string::npos);
 }
 
 TEST(MessageChecks, CorrectionsWithNanPosesOrZeroIdsAreRefused) {
-  std::vector<msg::CorrectedKeyframePose> poses{{7, identity()}};
+  std::vector<msg::CorrectedKeyframePose> poses{{make_id(kFrontendTag, 7), identity()}};
   msg::LoopCorrection correction{};
-  correction.id = 11;
+  correction.id = make_id(kLoopCloserTag, 11);
   correction.T_matched_loop = identity();
   correction.kind = heslam_msg_CORRECTION_LOOP;
   runtime::borrow(correction.corrected_poses, poses);
   EXPECT_FALSE(check(correction));
   poses[0].T_wc.position_m[0] = kNaN;
-  EXPECT_NE(problem(check(correction)).find("correction 11: keyframe 7: corrected_poses.T_wc.position_m[0] is nan"),
-            std::string::npos);
+  EXPECT_NE(
+      problem(check(correction)).find("correction lc:11: keyframe fe:7: corrected_poses.T_wc.position_m[0] is nan"),
+      std::string::npos);
   poses[0] = {0, identity()};
   EXPECT_NE(problem(check(correction)).find("keyframe id 0"), std::string::npos);
-  poses[0] = {7, identity()};
+  poses[0] = {make_id(kFrontendTag, 7), identity()};
   runtime::set_wire_value(correction.kind, 5);
-  EXPECT_EQ(problem(check(correction)), "correction 11: kind 5 is not a CorrectionKind");
+  EXPECT_EQ(problem(check(correction)), "correction lc:11: kind 5 is not a CorrectionKind");
 }
 
 TEST(MessageChecks, CalibrationWithANanFieldIsRefused) {

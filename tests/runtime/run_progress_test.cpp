@@ -23,12 +23,15 @@ RunCounts counts(std::uint64_t tracked, std::uint64_t published, std::uint64_t t
   return c;
 }
 
-TEST(RunProgress, LineShowsTrackedOfTotalPercentFpsAndEta) {
-  EXPECT_EQ(format_run_progress(counts(40, 42, 160, 20.0)), "tracked 40/160 frames   26%  20.0 fps  ETA 5.9 s");
+// The percent says what it counts: published frames; tracked frames (with a pose) stand apart.
+TEST(RunProgress, LineShowsPublishedOfTotalPercentTrackedFpsAndEta) {
+  EXPECT_EQ(format_run_progress(counts(40, 42, 160, 20.0)),
+            "published 42/160 frames   26%, 40 tracked  20.0 fps  ETA 5.9 s");
   RunCounts no_recorder = counts(0, 42, 160, 0.0);
   no_recorder.tracked.reset();
   EXPECT_EQ(format_run_progress(no_recorder), "published 42/160 frames   26%  0.0 fps  ETA -");
-  EXPECT_EQ(format_run_progress(counts(7, 8, 0, 10.0)), "tracked 7 frames  10.0 fps");  // a live camera: no total
+  // A live camera: no total.
+  EXPECT_EQ(format_run_progress(counts(7, 8, 0, 10.0)), "published 8 frames, 7 tracked  10.0 fps");
 }
 
 TEST(RunProgress, TrackedCountIsReadFromTheRecordersStatusMessage) {
@@ -48,8 +51,8 @@ TEST(RunProgress, PlainModePrintsOneLinePerTenPercent) {
     if (auto line = progress.update(counts(published, published, 160, 20.0), t0)) lines.push_back(*line);
   }
   ASSERT_EQ(lines.size(), 10u);
-  EXPECT_EQ(lines.front(), "tracked 16/160 frames   10%  20.0 fps  ETA 7.2 s");
-  EXPECT_EQ(lines.back(), "tracked 160/160 frames  100%  20.0 fps  ETA 0.0 s");
+  EXPECT_EQ(lines.front(), "published 16/160 frames   10%, 16 tracked  20.0 fps  ETA 7.2 s");
+  EXPECT_EQ(lines.back(), "published 160/160 frames  100%, 160 tracked  20.0 fps  ETA 0.0 s");
 
   RunProgress jumpy(RunProgress::Mode::kPlain);
   EXPECT_TRUE(jumpy.update(counts(70, 70, 100, 1.0), t0).has_value());  // 70 %: one line, not seven

@@ -165,12 +165,53 @@ TEST(MessageFormat, IdsShowCreatorAndCounter) {
   EXPECT_EQ(format_id(make_id(kLoopCloserTag, 2)), "lc:2");
   EXPECT_EQ(format_id(make_id(7, 5)), "0x0700000000000005");
   EXPECT_EQ(format_id(0), "0");
+  EXPECT_EQ(format_id(42), "42");  // no creator tag (the ids of tests): the plain number
   msg::KeyframeState state{};
   state.id = make_id(kFrontendTag, 9);
   state.parent_id = make_id(kFrontendTag, 8);
   const std::string text = format_message(state, {});
   EXPECT_NE(text.find("id: fe:9\nmap_version: 0\nT_wc: "), std::string::npos) << text;
   EXPECT_NE(text.find("parent_id: fe:8\n"), std::string::npos) << text;
+}
+
+// The issue's ids: the log lines and the spy print the same short form (format_id, ids.hpp).
+TEST(MessageFormat, TheIdsOfTheIssueReadAsCreatorAndCounter) {
+  EXPECT_EQ(format_id(72057594037928006ULL), "fe:70");
+  EXPECT_EQ(format_id(72057594037927938ULL), "fe:2");
+  EXPECT_EQ(format_id(216174495068772617ULL), "lc:1712954988809");
+}
+
+// The mapper's end-of-batch marker (id 0) is labelled as such, not shown as a keyframe or point of
+// id 0 with a zero pose.
+TEST(MessageFormat, VersionMarkersAreLabelled) {
+  msg::KeyframeState marker{};
+  marker.map_version = 12;
+  const std::string text = format_message(marker, {});
+  EXPECT_EQ(text,
+            "version_marker: end of the local mapper's batch of map version 12 (id 0: no keyframe or point)\n"
+            "map_version: 12\n");
+  msg::MapPointState point_marker{};
+  point_marker.map_version = 12;
+  EXPECT_EQ(format_message(point_marker, {}), text);
+}
+
+// A dispose names the instance by its key; odometry says the frame of its pose.
+TEST(MessageFormat, DisposalsPrintTheirKeyAndOdometryItsFrame) {
+  msg::KeyframeState culled{};
+  culled.id = make_id(kFrontendTag, 41);
+  EXPECT_EQ(format_instance_end(culled, true), "# disposed: id fe:41\n");
+  msg::MapPointState point{};
+  point.id = make_id(kMapperTag, 7);
+  EXPECT_EQ(format_instance_end(point, false), "# no writers any more: id lm:7\n");
+  msg::ComponentStatus status{};
+  char name[] = "frontend";
+  status.name = name;
+  EXPECT_EQ(format_instance_end(status, false), "# no writers any more: name frontend\n");
+  msg::Odometry odometry{};
+  EXPECT_EQ(format_instance_end(odometry, true), "# disposed\n");
+  const std::string text = format_message(odometry, {});
+  EXPECT_NE(text.find("T_wc_frame: rectified left camera (optical: x right, y down, z forward)"), std::string::npos)
+      << text;
 }
 
 std::string spy_error(const std::vector<std::string>& args) {

@@ -3,6 +3,7 @@
 // what cannot work; the recorder writes a video or a PNG sequence.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include <opencv2/imgcodecs.hpp>
@@ -71,6 +72,84 @@ TEST(ViewerTopView, FitsTheKeyframesInsideTheImage) {
   }
 }
 
+// The bounding box of the pixels of one colour (empty when there are none).
+cv::Rect box_of(const cv::Mat& image, const cv::Scalar& bgr) {
+  cv::Mat mask;
+  cv::inRange(image, bgr, bgr, mask);
+  std::vector<cv::Point> pixels;
+  cv::findNonZero(mask, pixels);
+  return pixels.empty() ? cv::Rect() : cv::boundingRect(pixels);
+}
+
+// A 1.2 m x 0.6 m loop (the camera path of a small room) inside a map whose points spread over
+// 14 m x 10 m (what made the trajectory a 30-pixel blob when the view fitted the map), with its
+// ground truth 5 cm beside it.
+Scene small_loop_in_a_large_map() {
+  Scene scene = circle_scene(4);
+  scene.keyframes_T_wc.clear();
+  scene.points.clear();
+  for (int i = 0; i <= 100; ++i) {
+    const double angle = 2.0 * M_PI * i / 100;
+    const Eigen::Vector3d p_w(0.6 * std::cos(angle), 0.0, 0.3 * std::sin(angle));
+    scene.trajectory_w.push_back(p_w);
+    scene.ground_truth_w.push_back(p_w + Eigen::Vector3d(0.05, 0.0, 0.0));
+  }
+  for (int i = 0; i < 400; ++i) {
+    scene.points.push_back({Eigen::Vector3d(-7.0 + 0.035 * i, 0.0, (i % 2 == 0 ? -5.0 : 5.0)), PointCategory::kMap});
+  }
+  scene.map_points = scene.points.size();
+  return scene;
+}
+
+TEST(ViewerTopView, FitsTheTrajectoryByDefaultAndTheMapOnRequest) {
+  const Scene scene = small_loop_in_a_large_map();
+  const TopView view = TopViewRenderer(kDefaultTopViewSize).render(scene, Layers{});
+  // The loop is twice as wide as deep: its width spans the picture but for the margins.
+  const cv::Rect trajectory = box_of(view.image, colours::kTrajectory);
+  EXPECT_GE(trajectory.width, 0.85 * kDefaultTopViewSize.width) << trajectory;
+  EXPECT_GE(trajectory.height, 0.4 * kDefaultTopViewSize.height) << trajectory;
+  // The ground truth is drawn wider, under the estimate: it shows beside it and where they overlap.
+  EXPECT_GE(box_of(view.image, colours::kGroundTruth).width, 0.85 * kDefaultTopViewSize.width);
+  EXPECT_GT(pixels_of(view.image, colours::kGroundTruth), 2 * pixels_of(view.image, colours::kTrajectory) / 3);
+
+  const TopView map = TopViewRenderer(kDefaultTopViewSize, TopViewFit::kMap).render(scene, Layers{});
+  const cv::Rect small = box_of(map.image, colours::kTrajectory);
+  EXPECT_GT(small.width, 0);
+  EXPECT_LT(small.width, 0.15 * kDefaultTopViewSize.width) << small;
+  EXPECT_EQ(map.points_drawn, 400u);
+}
+
+TEST(ViewerTopView, DrawsAGridAScaleBarOfOneGridStepAndTheAxes) {
+  const Scene scene = small_loop_in_a_large_map();
+  const TopView view = TopViewRenderer(kDefaultTopViewSize).render(scene, Layers{});
+  // 1.2 m over ~840 px: ~670 px/m; a round step with cells of at least 60 px is 0.1 m.
+  EXPECT_NEAR(view.scale_px_per_m, 840.0 / 1.25, 10.0);
+  EXPECT_DOUBLE_EQ(view.grid_step_m, 0.1);
+  // Grid lines across the picture: one every step (about 67 px), so at least 10 in each direction.
+  cv::Mat grid;
+  cv::inRange(view.image, colours::kGrid, colours::kGrid, grid);
+  int vertical_lines = 0;
+  const int row = kDefaultTopViewSize.height / 2;
+  for (int column = 1; column < grid.cols; ++column) {
+    if (grid.at<std::uint8_t>(row, column) != 0 && grid.at<std::uint8_t>(row, column - 1) == 0) ++vertical_lines;
+  }
+  EXPECT_GE(vertical_lines, 10);
+  // The scale bar, bottom left, is one grid step long.
+  const cv::Rect bar = box_of(view.image, colours::kScaleBar);
+  ASSERT_GT(bar.width, 0);
+  EXPECT_LT(bar.x, kDefaultTopViewSize.width / 4);
+  EXPECT_GT(bar.y, kDefaultTopViewSize.height - 40);
+  EXPECT_EQ(bar.width, std::lround(view.grid_step_m * view.scale_px_per_m) + 1);
+  // The x / z arrows, bottom right.
+  EXPECT_GT(box_of(view.image, colours::kAxisX).x, kDefaultTopViewSize.width * 3 / 4);
+  EXPECT_GT(box_of(view.image, colours::kAxisZ).y, kDefaultTopViewSize.height * 3 / 4);
+  // A map 1000 times larger: the step grows with it (1, 2 or 5 x 10^k).
+  Scene large = scene;
+  for (Eigen::Vector3d& p : large.trajectory_w) p *= 1000.0;
+  large.ground_truth_w.clear();
+  EXPECT_DOUBLE_EQ(TopViewRenderer(kDefaultTopViewSize).render(large, Layers{}).grid_step_m, 100.0);
+}
+
 TEST(ViewerTopView, EmptySceneGivesABlankPictureWithoutFailing) {
   const TopView view = TopViewRenderer(cv::Size(300, 300)).render(Scene{}, Layers{});
   EXPECT_EQ(view.frustums_drawn, 0u);
@@ -119,6 +198,9 @@ TEST(ViewerFrameView, RectifyingForTheRightHalfLeavesTheRawImageUntouched) {
 }
 
 TEST(ViewerOptions, ParsesFlagsAndRejectsWhatCannotWork) {
+  EXPECT_EQ(ViewerOptions::parse({}).fit, TopViewFit::kTrajectory);
+  EXPECT_EQ(ViewerOptions::parse({"--fit", "map"}).fit, TopViewFit::kMap);
+  EXPECT_THROW(ViewerOptions::parse({"--fit", "points"}), std::runtime_error);
   const ViewerOptions o =
       ViewerOptions::parse({"--headless", "--out", "/tmp/x", "--snapshot-every", "2.5", "--rate", "10"});
   EXPECT_TRUE(o.headless);

@@ -159,15 +159,22 @@ TEST(ViewerEndToEnd, JoinsAMh01RunDrawsEveryKeyframeAndLeavesTheOutputBitIdentic
                                        (dir.path() / "pictures").string(),
                                        "--snapshot-every",
                                        "2",
+                                       "--fit",
+                                       "map",
                                        "--record",
                                        (dir.path() / "frames.mp4").string()};
   if (!xvfb) viewer_args.push_back("--headless");
   ChildProcess viewer(test::bin_dir() / "heslam-viewer", viewer_args, dir.path(), "viewer");
   const int pipeline_code = test::finish(*viewed);
-  viewer.signal(SIGTERM);  // the map stays with the viewer after the pipeline's writers left
-  headless.signal(SIGTERM);
+  // Both viewers end with the run they watch (the supervisor's status says it is ending the run).
   const std::optional<int> viewer_code = viewer.wait(kViewerStop);
   const std::optional<int> headless_code = headless.wait(kViewerStop);
+  if (!viewer_code) viewer.signal(SIGTERM);
+  if (!headless_code) headless.signal(SIGTERM);
+  if (!viewer_code || !headless_code) {
+    viewer.wait(kViewerStop);
+    headless.wait(kViewerStop);
+  }
   unsetenv("DISPLAY");
   if (xvfb) {
     xvfb->signal(SIGTERM);  // a graceful end removes its socket and lock file
@@ -206,7 +213,15 @@ TEST(ViewerEndToEnd, JoinsAMh01RunDrawsEveryKeyframeAndLeavesTheOutputBitIdentic
   EXPECT_GE(std::stoi(headless_stats.at("ground_truth_points")), headless_trajectory) << headless_output;
   EXPECT_TRUE(fs::exists(dir.path() / "headless/map_final.png"));
 
-  // The top view: frustums (the only pure-blue pixels) and points on a white background.
+  // The headless viewer's top view is fitted to the trajectory (the default): the estimate and the
+  // ground truth under it both show.
+  const cv::Mat fitted = cv::imread((dir.path() / "headless/map_final.png").string());
+  ASSERT_FALSE(fitted.empty());
+  EXPECT_GT(pixels_of(fitted, viewer::colours::kTrajectory), 200);
+  EXPECT_GT(pixels_of(fitted, viewer::colours::kGroundTruth), 200);
+
+  // The top view fitted to the map (--fit map): frustums (the only pure-blue pixels) and points on a
+  // white background.
   const cv::Mat map = cv::imread((dir.path() / "pictures/map_final.png").string());
   ASSERT_FALSE(map.empty());
   EXPECT_GT(pixels_of(map, viewer::colours::kKeyframe), 10 * keyframes);

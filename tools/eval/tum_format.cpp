@@ -33,7 +33,9 @@ Trajectory read_tum(const std::filesystem::path& path) {
 void write_tum(const std::filesystem::path& path, const Trajectory& trajectory) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write " + path.string());
-  out << "# timestamp tx ty tz qx qy qz qw (T_wc, heslam)\n";
+  // The pose's name says its frame: T_wb for body poses (the recorder's default), T_wc for a camera's.
+  const bool body = trajectory.frame && *trajectory.frame == PoseFrame::body;
+  out << "# timestamp tx ty tz qx qy qz qw (" << (body ? "T_wb" : "T_wc") << ", heslam)\n";
   if (trajectory.frame) out << pose_frame_header(*trajectory.frame) << "\n";
   char line[512];
   for (std::size_t i = 0; i < trajectory.size(); ++i) {

@@ -141,7 +141,10 @@ void write_recording(const RecordedTrajectories& recording, const RecorderOption
   });
   write_output(options.lost_output, "list of untracked frames", [&](const std::filesystem::path& path) {
     std::ofstream lost(path);
-    lost << "# frames without a pose (not tracked; never interpolated): seq stamp_ns state\n";
+    // docs/outputs.md: the untracked frames (processed without a pose). Missed frames (never
+    // processed) have no odometry, so no line here; the summary's "lost" counts both.
+    lost << "# untracked frames (processed, no pose; never interpolated): seq stamp_ns state. Frames the frontend "
+            "missed are not listed (docs/outputs.md)\n";
     for (const LostFrame& frame : recording.lost)
       lost << frame.seq << " " << frame.stamp_ns << " " << frame.state << "\n";
     lost.flush();

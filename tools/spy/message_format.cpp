@@ -71,6 +71,25 @@ void bytes(Text& text, int indent, const std::string& key, std::span<const std::
   }
 }
 
+// The local mapper ends each batch of state samples with a sample of this id on both state topics
+// (kVersionMarkerId, components/messages/map_state.hpp; docs/topics.md): no keyframe or point.
+constexpr std::uint64_t kVersionMarkerId = 0;
+
+std::string version_marker(std::uint64_t map_version) {
+  Text text;
+  text.line(0, "version_marker",
+            "end of the local mapper's batch of map version " + std::to_string(map_version) +
+                " (id 0: no keyframe or point)");
+  text.line(0, "map_version", std::to_string(map_version));
+  return text.str();
+}
+
+// Odometry's T_wc is the tracker's: the rectified left camera, optical axes, in the map's world frame.
+// The recorder's trajectory file holds another frame by default (--frame body, docs/recorder.md).
+constexpr const char* kOdometryFrame =
+    "rectified left camera (optical: x right, y down, z forward) in the map's world frame; "
+    "the recorder's file holds --frame (default body: T_wb)";
+
 std::string pose(const msg::Pose& value) {
   return "{position_m: " + array(value.position_m) + ", orientation_xyzw: " + array(value.orientation_xyzw) + "}";
 }
@@ -163,6 +182,7 @@ std::string format_message(const msg::Odometry& odometry, const FormatOptions& o
   text.line(0, "stamp_ns", std::to_string(odometry.stamp_ns));
   text.line(0, "state", state);
   text.line(0, "T_wc", pose(odometry.T_wc));
+  text.line(0, "T_wc_frame", kOdometryFrame);
   text.line(0, "reference_keyframe_id", format_id(odometry.reference_keyframe_id));
   text.line(0, "T_ref_c", pose(odometry.T_ref_c));
   text.line(0, "keypoints", std::to_string(odometry.keypoints));
@@ -211,6 +231,7 @@ std::string format_message(const msg::Keyframe& keyframe, const FormatOptions& o
 
 std::string format_message(const msg::KeyframeState& state, const FormatOptions& options) {
   Text text;
+  if (state.id == kVersionMarkerId) return version_marker(state.map_version);
   text.line(0, "id", format_id(state.id));
   text.line(0, "map_version", std::to_string(state.map_version));
   text.line(0, "T_wc", pose(state.T_wc));
@@ -225,6 +246,7 @@ std::string format_message(const msg::KeyframeState& state, const FormatOptions&
 
 std::string format_message(const msg::MapPointState& point, const FormatOptions& options) {
   Text text;
+  if (point.id == kVersionMarkerId) return version_marker(point.map_version);
   text.line(0, "id", format_id(point.id));
   text.line(0, "map_version", std::to_string(point.map_version));
   text.line(0, "position_w_m", array(point.position_w_m));

@@ -5,7 +5,9 @@
 
 #include <string>
 
+#include "components/core/map/ids.hpp"
 #include "runtime/messages.hpp"
+#include "runtime/sequence.hpp"
 
 namespace heslam {
 
@@ -23,6 +25,20 @@ std::string format_message(const msg::LoopCorrection& correction, const FormatOp
 std::string format_message(const msg::FrameDone& done, const FormatOptions& options);
 std::string format_message(const msg::KeyframeDone& done, const FormatOptions& options);
 std::string format_message(const msg::ComponentStatus& status, const FormatOptions& options);
+
+// The line of a sample without data (its instance disposed, or its last writer gone), naming the
+// instance by its key: only the key fields of such a sample are set. "# disposed: id lm:12",
+// "# no writers any more: name frontend"; an unkeyed topic has one instance: no key.
+template <typename T>
+std::string format_instance_end(const T& sample, bool disposed) {
+  std::string line = disposed ? "# disposed" : "# no writers any more";
+  if constexpr (requires { sample.id; }) {
+    line += ": id " + format_id(sample.id);
+  } else if constexpr (requires { sample.name; }) {
+    line += ": name " + runtime::to_string(sample.name);
+  }
+  return line + "\n";
+}
 
 // Mean of all bytes (0 for none): the image summary's intensity.
 double mean_intensity(const msg::StereoFrame& frame, bool right);

@@ -220,7 +220,7 @@ int run_echo(const runtime::Participant& participant, const ResolvedTopic& topic
       if (received.info.valid_data) {
         std::cout << format_message(*received.sample, format);
       } else {
-        std::cout << (received.info.disposed ? "# instance disposed\n" : "# instance has no writers any more\n");
+        std::cout << format_instance_end(*received.sample, received.info.disposed);
       }
       std::cout << "---\n" << std::flush;
       if (options.count != 0 && ++printed >= options.count) break;

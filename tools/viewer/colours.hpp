@@ -18,11 +18,17 @@ inline const cv::Scalar kCurrentCamera(0, 190, 0);
 inline const cv::Scalar kCovisibility(120, 220, 120);
 inline const cv::Scalar kSpanningTree(0, 140, 255);
 inline const cv::Scalar kTrajectory(140, 90, 40);
-inline const cv::Scalar kGroundTruth(160, 0, 120);
+inline const cv::Scalar kGroundTruth(150, 170, 255);  // light orange-pink, under the estimate
 inline const cv::Scalar kMapMatch(0, 220, 0);
 inline const cv::Scalar kStereoOnly(255, 120, 0);
 inline const cv::Scalar kLoopFlash(0, 230, 255);
 inline const cv::Scalar kText(30, 30, 30);
+// The top view's grid, scale bar and axis arrows: colours nothing else uses, so a picture can be
+// checked for them.
+inline const cv::Scalar kGrid(228, 228, 228);
+inline const cv::Scalar kScaleBar(0, 0, 110);  // dark red: no anti-aliased grey text or line blends into it
+inline const cv::Scalar kAxisX(40, 40, 200);
+inline const cv::Scalar kAxisZ(40, 150, 40);
 
 inline cv::Scalar of(PointCategory category) {
   switch (category) {

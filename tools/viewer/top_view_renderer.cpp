@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -13,8 +14,8 @@
 namespace heslam::viewer {
 namespace {
 
-// The view fits the 2nd..98th percentile of the points (a few far outliers must not shrink the map
-// to a dot) and everything else entirely, plus a margin.
+// The map fit takes the 2nd..98th percentile of the points (a few far outliers must not shrink the
+// map to a dot) and everything else entirely, plus a margin.
 constexpr double kPointPercentile = 0.02;
 constexpr int kMarginPx = 30;
 // Smallest extent shown, so a still camera at the start is not magnified into noise.
@@ -22,47 +23,73 @@ constexpr double kMinExtentM = 0.5;
 // Frustum depth as a fraction of the shown extent (readable at any map size).
 constexpr double kFrustumFraction = 0.025;
 constexpr int kLegendTopPx = 18;
+// Room below the fitted area for the scale bar and its label.
+constexpr int kScaleBarRoomPx = 24;
+// The grid step is the smallest round step whose cells are at least this wide (about 6..15 cells
+// across the default 900-pixel picture).
+constexpr double kMinGridCellPx = 60.0;
+// Line widths readable at the default size: the ground truth wider, under the estimate, so both show
+// where they overlap.
+constexpr int kTrajectoryThicknessPx = 2;
+constexpr int kGroundTruthThicknessPx = 5;
+constexpr int kScaleBarThicknessPx = 3;
+constexpr int kAxisLengthPx = 36;
 
 class Projection {
  public:
   Projection(double min_x, double max_x, double min_z, double max_z, cv::Size size) {
     const double extent_x = std::max(max_x - min_x, kMinExtentM);
     const double extent_z = std::max(max_z - min_z, kMinExtentM);
-    scale_ =
-        std::min((size.width - 2.0 * kMarginPx) / extent_x, (size.height - 2.0 * kMarginPx - kLegendTopPx) / extent_z);
+    const double fitted_height = size.height - 2.0 * kMarginPx - kLegendTopPx - kScaleBarRoomPx;
+    scale_ = std::min((size.width - 2.0 * kMarginPx) / extent_x, fitted_height / extent_z);
     centre_x_ = 0.5 * (min_x + max_x);
     centre_z_ = 0.5 * (min_z + max_z);
+    centre_row_px_ = kLegendTopPx + kMarginPx + 0.5 * fitted_height;
     size_ = size;
     extent_m_ = std::max(extent_x, extent_z);
   }
-  cv::Point operator()(const Eigen::Vector3d& p_w) const {
-    return {static_cast<int>(std::lround(size_.width / 2.0 + (p_w.x() - centre_x_) * scale_)),
-            static_cast<int>(std::lround((size_.height + kLegendTopPx) / 2.0 - (p_w.z() - centre_z_) * scale_))};
+  cv::Point operator()(const Eigen::Vector3d& p_w) const { return pixel(p_w.x(), p_w.z()); }
+  cv::Point pixel(double x_m, double z_m) const {
+    return {static_cast<int>(std::lround(column(x_m))), static_cast<int>(std::lround(row(z_m)))};
   }
+  double column(double x_m) const { return size_.width / 2.0 + (x_m - centre_x_) * scale_; }
+  double row(double z_m) const { return centre_row_px_ - (z_m - centre_z_) * scale_; }
+  // The world x / z at a pixel column / row.
+  double x_at(double column_px) const { return centre_x_ + (column_px - size_.width / 2.0) / scale_; }
+  double z_at(double row_px) const { return centre_z_ - (row_px - centre_row_px_) / scale_; }
   double extent_m() const { return extent_m_; }
   double scale() const { return scale_; }
 
  private:
-  double scale_ = 1.0, centre_x_ = 0.0, centre_z_ = 0.0, extent_m_ = 1.0;
+  double scale_ = 1.0, centre_x_ = 0.0, centre_z_ = 0.0, centre_row_px_ = 0.0, extent_m_ = 1.0;
   cv::Size size_;
 };
 
-Projection fit(const Scene& scene, const Layers& layers, cv::Size size) {
+class Bounds {
+ public:
+  void include(double x, double z) {
+    if (!std::isfinite(x) || !std::isfinite(z)) return;
+    min_x_ = any_ ? std::min(min_x_, x) : x;
+    max_x_ = any_ ? std::max(max_x_, x) : x;
+    min_z_ = any_ ? std::min(min_z_, z) : z;
+    max_z_ = any_ ? std::max(max_z_, z) : z;
+    any_ = true;
+  }
+  void include(const Eigen::Vector3d& p_w) { include(p_w.x(), p_w.z()); }
+  bool any() const { return any_; }
+  Projection projection(cv::Size size) const { return Projection(min_x_, max_x_, min_z_, max_z_, size); }
+
+ private:
+  double min_x_ = 0.0, max_x_ = 0.0, min_z_ = 0.0, max_z_ = 0.0;
+  bool any_ = false;
+};
+
+void include_map(const Scene& scene, Bounds& bounds) {
   std::vector<double> xs, zs;
   for (const ScenePoint& point : scene.points) {
     xs.push_back(point.p_w.x());
     zs.push_back(point.p_w.z());
   }
-  double min_x = 0.0, max_x = 0.0, min_z = 0.0, max_z = 0.0;
-  bool any = false;
-  auto include = [&](double x, double z) {
-    if (!std::isfinite(x) || !std::isfinite(z)) return;
-    min_x = any ? std::min(min_x, x) : x;
-    max_x = any ? std::max(max_x, x) : x;
-    min_z = any ? std::min(min_z, z) : z;
-    max_z = any ? std::max(max_z, z) : z;
-    any = true;
-  };
   if (!xs.empty()) {
     const auto low = static_cast<std::ptrdiff_t>(kPointPercentile * static_cast<double>(xs.size()));
     const auto high = static_cast<std::ptrdiff_t>(xs.size()) - 1 - low;
@@ -74,16 +101,83 @@ Projection fit(const Scene& scene, const Layers& layers, cv::Size size) {
     const double z_low = zs[static_cast<std::size_t>(low)];
     std::nth_element(zs.begin(), zs.begin() + high, zs.end());
     const double z_high = zs[static_cast<std::size_t>(high)];
-    include(x_low, z_low);
-    include(x_high, z_high);
+    bounds.include(x_low, z_low);
+    bounds.include(x_high, z_high);
   }
-  for (const Pose3& T_wc : scene.keyframes_T_wc) include(T_wc.translation().x(), T_wc.translation().z());
-  for (const Eigen::Vector3d& p : scene.trajectory_w) include(p.x(), p.z());
+  for (const Pose3& T_wc : scene.keyframes_T_wc) bounds.include(T_wc.translation());
+}
+
+Projection fit(const Scene& scene, const Layers& layers, TopViewFit mode, cv::Size size) {
+  Bounds bounds;
+  for (const Eigen::Vector3d& p : scene.trajectory_w) bounds.include(p);
   if (layers.ground_truth) {
-    for (const Eigen::Vector3d& p : scene.ground_truth_w) include(p.x(), p.z());
+    for (const Eigen::Vector3d& p : scene.ground_truth_w) bounds.include(p);
   }
-  if (scene.has_camera) include(scene.current_T_wc.translation().x(), scene.current_T_wc.translation().z());
-  return Projection(min_x, max_x, min_z, max_z, size);
+  if (scene.has_camera) bounds.include(scene.current_T_wc.translation());
+  // Before any trajectory arrived (a viewer that joined a finished run), the map is all there is.
+  if (mode == TopViewFit::kMap || scene.trajectory_w.empty()) include_map(scene, bounds);
+  return bounds.projection(size);
+}
+
+// The smallest of 1, 2, 5 x 10^k m whose cells are at least kMinGridCellPx wide.
+double grid_step_m(double scale_px_per_m) {
+  const double min_step_m = kMinGridCellPx / scale_px_per_m;
+  const double decade = std::pow(10.0, std::floor(std::log10(min_step_m)));
+  for (const double factor : {1.0, 2.0, 5.0, 10.0}) {
+    if (factor * decade >= min_step_m) return factor * decade;
+  }
+  return 10.0 * decade;
+}
+
+std::string format_length(double metres) {
+  char text[32];
+  if (metres >= 1.0) {
+    std::snprintf(text, sizeof text, "%g m", metres);
+  } else if (metres >= 0.01) {
+    std::snprintf(text, sizeof text, "%g cm", metres * 100.0);
+  } else {
+    std::snprintf(text, sizeof text, "%g mm", metres * 1000.0);
+  }
+  return text;
+}
+
+// Grid lines at multiples of the step (world-anchored, so they stay put while the view grows).
+void draw_grid(cv::Mat& image, const Projection& project, double step_m) {
+  const double first_x = std::ceil(project.x_at(0) / step_m) * step_m;
+  for (double x = first_x; project.column(x) < image.cols; x += step_m) {
+    const int column = static_cast<int>(std::lround(project.column(x)));
+    cv::line(image, {column, kLegendTopPx + 4}, {column, image.rows - 1}, colours::kGrid, 1, cv::LINE_8);
+  }
+  const double first_z = std::ceil(project.z_at(image.rows - 1) / step_m) * step_m;
+  for (double z = first_z; project.row(z) > kLegendTopPx + 4; z += step_m) {
+    const int row = static_cast<int>(std::lround(project.row(z)));
+    cv::line(image, {0, row}, {image.cols - 1, row}, colours::kGrid, 1, cv::LINE_8);
+  }
+}
+
+// Bottom left: a bar one grid step long, labelled with its length.
+void draw_scale_bar(cv::Mat& image, double step_m, double scale_px_per_m) {
+  const int length_px = static_cast<int>(std::lround(step_m * scale_px_per_m));
+  const int row = image.rows - 10;
+  const cv::Point start(kMarginPx, row), end(kMarginPx + length_px, row);
+  // A filled rectangle, not a thick line (whose round caps would lengthen it): exactly length_px + 1 wide.
+  cv::rectangle(image, start - cv::Point(0, kScaleBarThicknessPx / 2), end + cv::Point(0, kScaleBarThicknessPx / 2),
+                colours::kScaleBar, cv::FILLED, cv::LINE_8);
+  cv::line(image, start - cv::Point(0, 5), start + cv::Point(0, 3), colours::kScaleBar, 1, cv::LINE_8);
+  cv::line(image, end - cv::Point(0, 5), end + cv::Point(0, 3), colours::kScaleBar, 1, cv::LINE_8);
+  cv::putText(image, format_length(step_m) + " (grid step)", {end.x + 8, row + 5}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
+              colours::kText, 1, cv::LINE_AA);
+}
+
+// Bottom right: the directions of the picture's axes.
+void draw_axes(cv::Mat& image) {
+  const cv::Point origin(image.cols - kMarginPx - kAxisLengthPx, image.rows - 10);
+  cv::arrowedLine(image, origin, origin + cv::Point(kAxisLengthPx, 0), colours::kAxisX, 2, cv::LINE_8, 0, 0.25);
+  cv::arrowedLine(image, origin, origin - cv::Point(0, kAxisLengthPx), colours::kAxisZ, 2, cv::LINE_8, 0, 0.25);
+  cv::putText(image, "x", origin + cv::Point(kAxisLengthPx - 8, -6), cv::FONT_HERSHEY_SIMPLEX, 0.45, colours::kAxisX, 1,
+              cv::LINE_AA);
+  cv::putText(image, "z", origin + cv::Point(6, -kAxisLengthPx + 8), cv::FONT_HERSHEY_SIMPLEX, 0.45, colours::kAxisZ, 1,
+              cv::LINE_AA);
 }
 
 // A camera frustum: centre to the four image corners at `depth_m`, and the image rectangle.
@@ -103,9 +197,10 @@ void draw_frustum(cv::Mat& image, const Projection& project, const Pose3& T_wc, 
 }
 
 void draw_polyline(cv::Mat& image, const Projection& project, const std::vector<Eigen::Vector3d>& points,
-                   const cv::Scalar& colour) {
+                   const cv::Scalar& colour, int thickness) {
   for (std::size_t i = 1; i < points.size(); ++i) {
-    cv::line(image, project(points[i - 1]), project(points[i]), colour, 1, cv::LINE_AA);
+    // LINE_8: the line's pixels keep its exact colour (a picture can be checked for it).
+    cv::line(image, project(points[i - 1]), project(points[i]), colour, thickness, cv::LINE_8);
   }
 }
 
@@ -115,8 +210,11 @@ TopView TopViewRenderer::render(const Scene& scene, const Layers& layers) const 
   TopView view;
   view.image = cv::Mat(size_, CV_8UC3, colours::kBackground);
   cv::Mat& image = view.image;
-  const Projection project = fit(scene, layers, size_);
+  const Projection project = fit(scene, layers, fit_, size_);
   const double frustum_m = kFrustumFraction * project.extent_m();
+  view.scale_px_per_m = project.scale();
+  view.grid_step_m = grid_step_m(project.scale());
+  draw_grid(image, project, view.grid_step_m);
 
   if (layers.points) {
     // Culled first, so live points are drawn over them.
@@ -141,8 +239,11 @@ TopView TopViewRenderer::render(const Scene& scene, const Layers& layers) const 
       cv::line(image, project(edge.from_w), project(edge.to_w), colours::kSpanningTree, 1, cv::LINE_AA);
     }
   }
-  if (layers.ground_truth) draw_polyline(image, project, scene.ground_truth_w, colours::kGroundTruth);
-  if (layers.trajectory) draw_polyline(image, project, scene.trajectory_w, colours::kTrajectory);
+  if (layers.ground_truth) {
+    draw_polyline(image, project, scene.ground_truth_w, colours::kGroundTruth, kGroundTruthThicknessPx);
+  }
+  if (layers.trajectory)
+    draw_polyline(image, project, scene.trajectory_w, colours::kTrajectory, kTrajectoryThicknessPx);
   if (layers.keyframes) {
     for (const Pose3& T_wc : scene.keyframes_T_wc) {
       draw_frustum(image, project, T_wc, scene.camera, frustum_m, colours::kKeyframe, 1);
@@ -152,9 +253,12 @@ TopView TopViewRenderer::render(const Scene& scene, const Layers& layers) const 
   if (scene.has_camera)
     draw_frustum(image, project, scene.current_T_wc, scene.camera, 2.0 * frustum_m, colours::kCurrentCamera, 2);
 
-  const std::string legend = "top view (x right, z up)  " + std::to_string(scene.map_keyframes) + " keyframes  " +
-                             std::to_string(scene.map_points) + " points  " + std::to_string(scene.loop_corrections) +
-                             " loop corrections  scale " + std::to_string(static_cast<int>(project.scale())) + " px/m";
+  draw_scale_bar(image, view.grid_step_m, project.scale());
+  draw_axes(image);
+  const std::string legend = std::string("top view, fit ") + (fit_ == TopViewFit::kMap ? "map" : "trajectory") + "  " +
+                             std::to_string(scene.map_keyframes) + " keyframes  " + std::to_string(scene.map_points) +
+                             " points  " + std::to_string(scene.loop_corrections) + " loop corrections  " +
+                             std::to_string(static_cast<int>(project.scale())) + " px/m";
   cv::putText(image, legend, {8, 16}, cv::FONT_HERSHEY_SIMPLEX, 0.45, colours::kText, 1, cv::LINE_AA);
   return view;
 }

@@ -36,7 +36,6 @@ constexpr std::chrono::milliseconds kNoFrontendWait{2000};
 constexpr int kCorrectionDepth = 100;
 // The 3D map widgets are rebuilt at most this often (VTK actors cost milliseconds each rebuild).
 constexpr std::chrono::milliseconds kMapRebuildPeriod{500};
-const cv::Size kTopViewSize(900, 900);
 const char* const kFrameWindow = "heslam frame";
 const char* const kTopWindow = "heslam map (top view)";
 
@@ -87,6 +86,8 @@ void ViewerNode::configure(const runtime::Config& /*config*/) {
   waitset_->attach(*keyframe_state_reader_);
   waitset_->attach(*point_state_reader_);
   waitset_->attach(*correction_reader_);
+  run_end_.emplace(participant(), topics());
+  waitset_->attach(run_end_->reader());
   std::ostringstream drawing;
   if (!headless_ || !options_.record_file.empty()) {
     drawing << ", drawing at " << options_.draw_rate_hz << " Hz";
@@ -105,6 +106,12 @@ void ViewerNode::run() {
     if (waitset_->wait(kWaitPeriod) == runtime::Wake::kShutdown) break;
     take_all();
     maybe_subscribe_frames();
+    // A viewer started by hand ends with the run it watches (one started by the supervisor is
+    // stopped by it anyway): the final pictures then show the finished map.
+    if (const std::optional<std::string> ended = run_end_->poll()) {
+      log().info(*ended, "; writing the final pictures");
+      break;
+    }
   }
   take_all();  // what arrived last, for the final pictures
   stop_drawing();
@@ -211,7 +218,7 @@ void ViewerNode::draw_loop() {
     const auto snapshot_period =
         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options_.snapshot_every_s));
     Layers layers;
-    const TopViewRenderer top_view(kTopViewSize);
+    const TopViewRenderer top_view(kDefaultTopViewSize, options_.fit);
     HistogramEqualizerOptions equalizer;
     equalizer.mode = options_.he_mode;
     FrameViewRenderer frame_view(equalizer);

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "runtime/component.hpp"
+#include "runtime/run_end_watch.hpp"
 #include "tools/viewer/viewer_model.hpp"
 #include "tools/viewer/viewer_options.hpp"
 
@@ -48,6 +49,7 @@ class ViewerNode final : public runtime::Component {
   std::optional<runtime::Reader<msg::KeyframeState>> keyframe_state_reader_;
   std::optional<runtime::Reader<msg::MapPointState>> point_state_reader_;
   std::optional<runtime::Reader<msg::LoopCorrection>> correction_reader_;
+  std::optional<runtime::RunEndWatch> run_end_;
 
   std::mutex stop_mutex_;
   std::condition_variable stop_signal_;

@@ -36,6 +36,18 @@ runtime::Flags viewer_flags(ViewerOptions& o) {
                "points of the N newest keyframes are 'recent' (default 5)")
       .integer("--covisibility-min-weight", "W", &o.covisibility_min_weight, 0, kMaxCovisibilityWeight,
                "covisibility edges with >= W shared points (default 100)")
+      .custom("--fit", "WHAT",
+              "top view fitted to the 'trajectory' (default: estimate, ground truth,\n"
+              "current camera) or the whole 'map' (points, keyframes)",
+              [&o](const std::string& what) {
+                if (what == "trajectory") {
+                  o.fit = TopViewFit::kTrajectory;
+                } else if (what == "map") {
+                  o.fit = TopViewFit::kMap;
+                } else {
+                  runtime::throw_bad_flag_value("--fit", "trajectory or map", what);
+                }
+              })
       .custom("--he-mode", "MODE", "equalization shown: none global clipped clahe adaptive (default clipped)",
               [&o](const std::string& mode) {
                 try {
@@ -52,7 +64,9 @@ runtime::Flags viewer_flags(ViewerOptions& o) {
       .note(
           "Colours: points black = map, red = recent, magenta = merged by a loop closure, grey = culled;\n"
           "keyframes blue, current camera green, covisibility green lines, spanning tree orange,\n"
-          "ground truth purple. 2D view: raw left | rectified + equalized left with features\n"
+          "trajectory dark blue over the ground truth (wide, light orange). Top view: grid of round\n"
+          "steps (1, 2, 5 x 10^k m), scale bar of one step bottom left, x / z arrows bottom right. 2D view: raw left | "
+          "rectified + equalized left with features\n"
           "(green = map point match, blue = stereo only) on keyframes, local map points projected at the\n"
           "tracked pose on other frames (green crosses).");
   return flags;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "components/core/image/histogram_equalizer.hpp"
+#include "tools/viewer/top_view_renderer.hpp"
 
 namespace heslam::viewer {
 
@@ -35,6 +36,8 @@ struct ViewerOptions {
   // --covisibility-min-weight W: covisibility edges drawn only between keyframes sharing >= W
   // points (ORB-SLAM2's viewer uses 100).
   int covisibility_min_weight = 100;
+  // --fit trajectory|map: what the top view (snapshots, the window without viz) is fitted to.
+  TopViewFit fit = TopViewFit::kTrajectory;
   // --he-mode MODE: the equalization shown beside the raw image (the frontend's default).
   HeMode he_mode = HistogramEqualizerOptions{}.mode;
 

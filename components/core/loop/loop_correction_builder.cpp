@@ -5,6 +5,7 @@
 #include <set>
 
 #include "components/core/loop/keyframe_projection.hpp"
+#include "components/core/map/ids.hpp"
 #include "components/core/mapping/point_statistics.hpp"
 #include "components/core/match/feature_grid.hpp"
 
@@ -150,8 +151,8 @@ LoopCorrectionOutput LoopCorrectionBuilder::compute(
   const auto start = Clock::now();
   LoopCorrectionOutput output;
   if (!live_keyframe(map, loop.loop_kf) || !live_keyframe(map, loop.matched_kf) || loop.loop_kf == loop.matched_kf) {
-    output.error = "loop correction: loop keyframe " + std::to_string(loop.loop_kf) + " and matched keyframe " +
-                   std::to_string(loop.matched_kf) + " must be two distinct live keyframes of the map";
+    output.error = "loop correction: loop keyframe " + format_id(loop.loop_kf) + " and matched keyframe " +
+                   format_id(loop.matched_kf) + " must be two distinct live keyframes of the map";
     return output;
   }
   LoopCorrection& correction = output.correction;

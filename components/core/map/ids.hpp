@@ -34,10 +34,12 @@ inline const char* creator_name(std::uint8_t tag) {
   }
 }
 
-// "fe:17" for the frontend's 17th id; "0" for no id; an unknown creator as hex
-// ("0x0700000000000005") so the tag stays visible.
+// The one form of a keyframe / point / correction id in every output (spy, log lines, errors):
+// "fe:17" for the frontend's 17th id; a creator-less id (tag 0: "0" for no id, the small ids of
+// tests) as its plain number; an unknown creator as hex ("0x0700000000000005") so the tag stays
+// visible. Files (maps, journals, trajectories) keep the full 64-bit number.
 inline std::string format_id(std::uint64_t id) {
-  if (id == 0) return "0";
+  if (creator_of(id) == 0) return std::to_string(id);
   if (const char* name = creator_name(creator_of(id)); name != nullptr) {
     return std::string(name) + ":" + std::to_string(counter_of(id));
   }

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "components/core/map/ids.hpp"
 #include "components/core/mapping/correction_application.hpp"
 #include "components/core/mapping/covisibility.hpp"
 #include "components/core/mapping/keyframe_culling.hpp"
@@ -41,7 +42,7 @@ double ms_since(Clock::time_point& start) {
 }
 
 void check_keyframe(const Map& map, const Keyframe& kf) {
-  const std::string name = "keyframe " + std::to_string(kf.id);
+  const std::string name = "keyframe " + format_id(kf.id);
   if (kf.id == kNoId) throw std::invalid_argument("keyframe: id 0 is reserved for 'no keyframe'");
   if (map.keyframe(kf.id) != nullptr) throw std::invalid_argument(name + ": already in the map");
   const std::size_t n = kf.features.keypoints.size();

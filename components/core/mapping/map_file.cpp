@@ -9,6 +9,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "components/core/map/ids.hpp"
 #include "runtime/atomic_file.hpp"
 
 namespace heslam {
@@ -289,7 +290,7 @@ void read_payload(Reader& r, std::uint32_t format, MapSnapshot& out) {
       const auto index = r.get<std::int32_t>();
       const Keyframe* kf = map.keyframe(kf_id);
       if (kf == nullptr || index < 0 || static_cast<std::size_t>(index) >= kf->point_ids.size()) {
-        r.fail("observation of unknown keyframe " + std::to_string(kf_id) + " keypoint " + std::to_string(index));
+        r.fail("observation of unknown keyframe " + format_id(kf_id) + " keypoint " + std::to_string(index));
       }
       p.observations.emplace_back(kf_id, index);
     }

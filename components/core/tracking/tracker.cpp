@@ -88,7 +88,9 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
   Frame frame(stamp_ns, seq, std::move(features), camera_);
 
   if (state_ == TrackingState::kNotInitialized) {
-    initialize(frame, result);
+    // Localization only: nothing to track against until a map is loaded (resume_in_map), and no
+    // first keyframe may start a new one.
+    if (options_.create_keyframes) initialize(frame, result);
     result.timings.total_ms = elapsed_ms(start);
     return result;
   }
@@ -304,6 +306,7 @@ bool Tracker::track_local_map(Frame& frame, int& inliers) {
 }
 
 void Tracker::maybe_insert_keyframe(Frame& frame, int inliers, TrackResult& result) {
+  if (!options_.create_keyframes) return;  // localization only
   const Keyframe* reference = map_.keyframe(reference_kf_);
   if (reference == nullptr) return;
   KeyframeDecisionInput input;

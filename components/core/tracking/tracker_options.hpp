@@ -88,6 +88,11 @@ struct TrackerOptions {
   // Points created for a new keyframe: all close untracked ones, then far ones until this many in all.
   int new_keyframe_min_points = 100;
 
+  // False: localization only (ORB-SLAM3's localization mode): no keyframe and no map point is ever
+  // created, not even the first keyframe of an empty map; frames are tracked against the map the
+  // tracker holds (a loaded one) and relocalized in it when lost.
+  bool create_keyframes = true;
+
   // --- relocalization ---
   int relocalization_keyframes = 8;    // most recent keyframes tried, newest first
   float relocalization_ratio = 0.75f;  // ORB-SLAM2 relocalization BoW ratio
