@@ -6,6 +6,7 @@
 
 #include "idl/camera.h"
 #include "idl/common.h"
+#include "idl/imu.h"
 #include "idl/lockstep.h"
 #include "idl/loop.h"
 #include "idl/map.h"
@@ -23,6 +24,9 @@ using StereoFrame = heslam_msg_StereoFrame;
 using CameraModel = heslam_msg_CameraModel;
 using ExplicitRectification = heslam_msg_ExplicitRectification;
 using StereoCalibration = heslam_msg_StereoCalibration;
+using ImuReading = heslam_msg_ImuReading;
+using ImuBatch = heslam_msg_ImuBatch;
+using ImuCalibration = heslam_msg_ImuCalibration;
 using StageTime = heslam_msg_StageTime;
 using Odometry = heslam_msg_Odometry;
 using KeyframeKeypoint = heslam_msg_KeyframeKeypoint;
@@ -59,6 +63,8 @@ struct MessageTraits;
 
 HESLAM_RUNTIME_MESSAGE(heslam_msg_StereoFrame, "StereoFrame");
 HESLAM_RUNTIME_MESSAGE(heslam_msg_StereoCalibration, "StereoCalibration");
+HESLAM_RUNTIME_MESSAGE(heslam_msg_ImuBatch, "ImuBatch");
+HESLAM_RUNTIME_MESSAGE(heslam_msg_ImuCalibration, "ImuCalibration");
 HESLAM_RUNTIME_MESSAGE(heslam_msg_Odometry, "Odometry");
 HESLAM_RUNTIME_MESSAGE(heslam_msg_Keyframe, "Keyframe");
 HESLAM_RUNTIME_MESSAGE(heslam_msg_KeyframeState, "KeyframeState");

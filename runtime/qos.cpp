@@ -27,6 +27,9 @@ constexpr milliseconds kCorrectionMaxBlocking{100};
 constexpr int32_t kCorrectionReplayDepth = 100;
 // Lockstep acks: tiny, one per frame; 64 covers any realistic backlog without KEEP_ALL blocking.
 constexpr int32_t kLockstepDepth = 64;
+// IMU batches: one per frame from the replay (10 readings at 200 Hz / 20 Hz), more from a driver that
+// publishes every reading; 256 batches is over 12 s of a replay and about 1 s of a 200 Hz driver.
+constexpr int32_t kImuDepth = 256;
 // Default blocking for other reliable writers (KEEP_LAST never blocks long; bounds pathological cases).
 constexpr milliseconds kDefaultMaxBlocking{100};
 // Status is published every second; the supervisor declares a writer gone after 2 missed periods.
@@ -77,6 +80,16 @@ void apply(dds_qos_t* qos, QosRole role) {
       dds_qset_durability_service(qos, 0, DDS_HISTORY_KEEP_LAST, kLockstepDepth, DDS_LENGTH_UNLIMITED,
                                   DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
       break;
+    case QosRole::kImu:
+      // Transient-local for the reason of kLockstep: a frontend whose IMU reader matches after the
+      // replay's first batch (discovery matches each topic on its own) still receives it. KEEP_LAST
+      // never blocks the source; a reader that falls 256 batches behind sees the gap in first_index.
+      dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(kDefaultMaxBlocking.count()));
+      dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
+      dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, kImuDepth);
+      dds_qset_durability_service(qos, 0, DDS_HISTORY_KEEP_LAST, kImuDepth, DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED,
+                                  DDS_LENGTH_UNLIMITED);
+      break;
     case QosRole::kStatus:
       // Reliable: a component's last sample before it exits carries its result (the recorder's
       // "tracked N/M frames ...") that the supervisor's last line reports; KEEP_LAST(1) never blocks.
@@ -103,6 +116,7 @@ std::string_view to_string(QosRole role) {
     case QosRole::kKeyframes: return "keyframes";
     case QosRole::kMapState: return "map-state";
     case QosRole::kCorrections: return "corrections";
+    case QosRole::kImu: return "imu";
     case QosRole::kLockstep: return "lockstep";
     case QosRole::kStatus: return "status";
     case QosRole::kSpy: return "spy";

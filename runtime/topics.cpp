@@ -14,6 +14,8 @@ bool valid_namespace_char(char c) {
 constexpr std::array kAllTopics{
     TopicEntry{topic_names::kStereo, "StereoFrame", QosRole::kImages},
     TopicEntry{topic_names::kCalibration, "StereoCalibration", QosRole::kCalibration},
+    TopicEntry{topic_names::kImu, "ImuBatch", QosRole::kImu},
+    TopicEntry{topic_names::kImuCalibration, "ImuCalibration", QosRole::kCalibration},
     TopicEntry{topic_names::kOdometry, "Odometry", QosRole::kOdometry},
     TopicEntry{topic_names::kKeyframes, "Keyframe", QosRole::kKeyframes},
     TopicEntry{topic_names::kKeyframeStates, "KeyframeState", QosRole::kMapState},

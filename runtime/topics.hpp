@@ -24,6 +24,8 @@ struct TopicSpec {
 namespace topic_names {
 inline constexpr std::string_view kStereo = "camera/stereo";
 inline constexpr std::string_view kCalibration = "camera/calibration";
+inline constexpr std::string_view kImu = "imu/readings";
+inline constexpr std::string_view kImuCalibration = "imu/calibration";
 inline constexpr std::string_view kOdometry = "odometry";
 inline constexpr std::string_view kKeyframes = "map/keyframes";
 inline constexpr std::string_view kKeyframeStates = "map/keyframe_states";
@@ -47,6 +49,11 @@ class Topics {
   TopicSpec<msg::StereoFrame> stereo() const { return {full_name(topic_names::kStereo), QosRole::kImages}; }
   TopicSpec<msg::StereoCalibration> calibration() const {
     return {full_name(topic_names::kCalibration), QosRole::kCalibration};
+  }
+  // IMU readings in batches; before a frame with stamp t, a batch with watermark_ns >= t (docs/topics.md).
+  TopicSpec<msg::ImuBatch> imu() const { return {full_name(topic_names::kImu), QosRole::kImu}; }
+  TopicSpec<msg::ImuCalibration> imu_calibration() const {
+    return {full_name(topic_names::kImuCalibration), QosRole::kCalibration};
   }
   TopicSpec<msg::Odometry> odometry() const { return {full_name(topic_names::kOdometry), QosRole::kOdometry}; }
   TopicSpec<msg::Keyframe> keyframes() const { return {full_name(topic_names::kKeyframes), QosRole::kKeyframes}; }

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include "tools/replay/replay_imu.hpp"
 #include "tools/replay/replay_options.hpp"
 #include "tools/replay/replay_pacer.hpp"
 #include "tools/replay/replay_progress.hpp"
@@ -62,6 +63,10 @@ TEST(ReplayProgress, LineAndSummary) {
   counts.unpaired_rows = 4;
   EXPECT_EQ(format_summary(counts),
             "published 40 frames in 2.00 s (20.0 fps) over 2 passes; skipped 1 images; 4 unpaired rows");
+  counts.imu_readings = 401;
+  EXPECT_EQ(format_summary(counts),
+            "published 40 frames in 2.00 s (20.0 fps) over 2 passes; skipped 1 images; 4 "
+            "unpaired rows; 401 IMU readings");
 }
 
 std::string option_error(const std::vector<std::string>& args) {
@@ -93,6 +98,10 @@ TEST(ReplayOptions, ParsesEveryOption) {
   const ReplayOptions lockstep = parse_replay_options({"d", "--lockstep", "--ack-timeout", "3"});
   EXPECT_TRUE(lockstep.lockstep);
   EXPECT_DOUBLE_EQ(lockstep.ack_timeout_s, 3.0);
+  EXPECT_TRUE(parse_replay_options({"d"}).imu);  // imu0/ published when present
+  EXPECT_TRUE(parse_replay_options({"d", "--imu", "auto"}).imu);
+  EXPECT_FALSE(parse_replay_options({"d", "--imu", "none"}).imu);
+  EXPECT_FALSE(parse_replay_options({"d", "--no-imu"}).imu);
 }
 
 // Pipeline files give the toggles as values ($(arg loop), $(arg start_paused): on or off).
@@ -114,6 +123,7 @@ TEST(ReplayOptions, EachBadOptionHasItsMessage) {
   EXPECT_EQ(option_error({"d", "--format", "bag"}), "--format: unknown format 'bag' (expected euroc, kitti or auto)");
   EXPECT_EQ(option_error({"d", "--lockstep", "--rate", "1"}),
             "--rate and --lockstep exclude each other (lockstep is paced by the consumer)");
+  EXPECT_EQ(option_error({"d", "--imu", "yes"}), "--imu: expected auto or none, got 'yes'");
   EXPECT_EQ(option_error({"d", "--bogus"}), "--bogus: unknown option (see --help)");
   EXPECT_EQ(option_error({"d", "e"}), "'e': unexpected second dataset argument (the first is 'd'; see --help)");
 }
@@ -147,6 +157,67 @@ TEST(ReplayProgress, ResultSaysWhatWasPublishedAndSkipped) {
   counts.published = 480;
   counts.pass = 3;
   EXPECT_EQ(format_result(counts, true, false), "published 480 frames over 3 passes");
+}
+
+}  // namespace
+}  // namespace heslam
+
+namespace heslam {
+namespace {
+
+// IMU readings every 5 ms from 0 to 100 ms; frames at 12.5, 37.5, 50 ms.
+std::vector<ImuSample> imu_recording() {
+  std::vector<ImuSample> samples;
+  for (std::int64_t stamp = 0; stamp <= 100'000'000; stamp += 5'000'000) {
+    ImuSample sample;
+    sample.stamp_ns = stamp;
+    samples.push_back(sample);
+  }
+  return samples;
+}
+
+TEST(ReplayImu, EachFrameGetsTheReadingsUpToTheFirstAtOrAfterIt) {
+  const std::vector<ImuSample> recording = imu_recording();
+  ReplayImu imu(recording);
+  imu.start_pass(12'500'000, 0);
+  const ImuBatchPlan first = imu.before_frame(12'500'000);
+  ASSERT_EQ(first.samples.size(), 2u);  // 10 ms (at or before the first frame), 15 ms (after it)
+  EXPECT_EQ(first.samples.front().stamp_ns, 10'000'000);
+  EXPECT_EQ(first.first_index, 0u);
+  EXPECT_EQ(first.watermark_ns, 15'000'000);
+  const ImuBatchPlan second = imu.before_frame(37'500'000);
+  ASSERT_EQ(second.samples.size(), 5u);  // 20 .. 40 ms
+  EXPECT_EQ(second.first_index, 2u);
+  EXPECT_EQ(second.watermark_ns, 40'000'000);
+  const ImuBatchPlan third = imu.before_frame(50'000'000);  // a frame on an IMU stamp
+  ASSERT_EQ(third.samples.size(), 2u);                      // 45, 50 ms
+  EXPECT_EQ(third.watermark_ns, 50'000'000);
+  // A frame after the recording ended (an IMU that stopped): no readings, the watermark still moves.
+  ReplayImu short_imu(std::span<const ImuSample>(recording).first(3));  // 0, 5, 10 ms
+  short_imu.start_pass(0, 0);
+  EXPECT_EQ(short_imu.before_frame(7'000'000).samples.size(), 3u);
+  const ImuBatchPlan after_end = short_imu.before_frame(30'000'000);
+  EXPECT_EQ(after_end.samples.size(), 0u);
+  EXPECT_EQ(after_end.watermark_ns, 30'000'000);
+  EXPECT_TRUE(short_imu.before_frame(60'000'000).samples.empty());
+  EXPECT_EQ(short_imu.watermark_ns(), 60'000'000);
+}
+
+TEST(ReplayImu, LoopPassesKeepStampsIncreasing) {
+  const std::vector<ImuSample> recording = imu_recording();
+  ReplayImu imu(recording);
+  imu.start_pass(0, 0);
+  imu.before_frame(0);
+  const ImuBatchPlan end = imu.before_frame(97'000'000);
+  EXPECT_EQ(end.samples.back().stamp_ns, 100'000'000);
+  imu.start_pass(0, 100'000'000);  // pass 2 starts at 100 ms: the 100 ms reading is not repeated
+  const ImuBatchPlan again = imu.before_frame(0);
+  ASSERT_EQ(again.samples.size(), 0u);
+  EXPECT_EQ(again.watermark_ns, 100'000'000);
+  const ImuBatchPlan next = imu.before_frame(10'000'000);
+  ASSERT_EQ(next.samples.size(), 2u);
+  EXPECT_EQ(next.samples.front().stamp_ns, 105'000'000);
+  EXPECT_EQ(next.first_index, end.first_index + end.samples.size());
 }
 
 }  // namespace

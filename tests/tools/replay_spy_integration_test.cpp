@@ -4,6 +4,7 @@
 // are one clear line.
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +17,7 @@
 #include <gtest/gtest.h>
 
 #include "child_process.hpp"
+#include "components/messages/imu.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/reader.hpp"
 #include "runtime/security.hpp"
@@ -24,6 +26,7 @@
 #include "runtime/waitset.hpp"
 #include "runtime/writer.hpp"
 #include "test_support.hpp"
+#include "tools/dataset/imu_reader.hpp"
 #include "tools/dataset/stereo_dataset.hpp"
 #include "tools/dataset/stereo_images.hpp"
 
@@ -148,6 +151,94 @@ TEST_F(ReplaySpy, ListOnAnEmptyDomainHintsAtSecurity) {
                              "identity: HESLAM_SECURITY=DIR/identities/spy heslam-spy list (docs/security.md)"),
             std::string::npos)
       << list->out();
+}
+
+// A heslam-synth --imu render replayed in lockstep: before each frame is acknowledged the reader holds
+// a watermark at or after the frame's stamp (waiting for it, as the contract says, not for a time), every
+// frame interval is complete in the ImuBuffer, and the readings are the data.csv's, bit for bit.
+TEST_F(ReplaySpy, LockstepImuOfASynthRenderCoversEveryFrame) {
+  const fs::path render = log_dir_ / "render";
+  auto synth = std::make_unique<test::ChildProcess>(
+      test::bin_dir() / "heslam-synth",
+      std::vector<std::string>{"--preset", "room", "--frames", "10", "--imu", "--imu-noise-free", "--out",
+                               render.string(), "--quiet"},
+      log_dir_, "synth");
+  ASSERT_EQ(run(*synth, seconds(120)), 0) << synth->err();
+  const ImuRecording recording = read_euroc_imu(render);
+  const StereoDataset dataset = open_dataset(render);
+  ASSERT_EQ(dataset.frames.size(), 10u);
+
+  runtime::Participant participant({.domain_id = domain_, .dds_config = ""});
+  const runtime::Topics topics;
+  runtime::Reader<msg::StereoFrame> frames(participant, topics.stereo());
+  runtime::Reader<msg::ImuBatch> imu(participant, topics.imu());
+  runtime::Reader<msg::ImuCalibration> imu_calibration(participant, topics.imu_calibration());
+  runtime::Writer<msg::FrameDone> acks(participant, topics.frame_done());
+  runtime::WaitSet waitset(participant);
+  waitset.attach(frames);
+  ImuBuffer buffer({.source = topics.imu().name});
+  messages::ImuStreamReader stream(buffer);
+  std::vector<ImuSample> received_readings;
+  const auto take_imu = [&] {
+    for (auto& batch : imu.take()) {
+      if (!batch.info.valid_data) continue;
+      const messages::ImuBatchReport report = stream.add(*batch.sample);
+      EXPECT_TRUE(report.warnings.empty()) << report.warnings.front();
+      for (const ImuSample& sample : messages::to_samples(*batch.sample)) received_readings.push_back(sample);
+    }
+  };
+
+  auto replay = start(
+      "replay", {render.string(), "--lockstep", "--ack-timeout", "20", "--no-progress", "--no-keyboard"}, "replay");
+  std::size_t received = 0;
+  std::int64_t previous_stamp_ns = 0;
+  const auto deadline = std::chrono::steady_clock::now() + seconds(60);
+  while (received < 10 && std::chrono::steady_clock::now() < deadline) {
+    if (waitset.wait(milliseconds(200)) != runtime::Wake::kData) continue;
+    for (auto& frame : frames.take()) {
+      if (!frame.info.valid_data) continue;
+      const std::int64_t stamp_ns = frame.sample->stamp_ns;
+      // DDS does not order topics against each other: wait for the watermark, not for a clock.
+      while (buffer.covered_until_ns() < stamp_ns && std::chrono::steady_clock::now() < deadline) {
+        take_imu();
+        if (buffer.covered_until_ns() < stamp_ns) std::this_thread::sleep_for(milliseconds(5));
+      }
+      EXPECT_GE(buffer.covered_until_ns(), stamp_ns);
+      if (received > 0) {
+        const ImuInterval interval = buffer.interval(previous_stamp_ns, stamp_ns);
+        EXPECT_EQ(interval.coverage, ImuCoverage::kComplete) << interval.message;
+      }
+      previous_stamp_ns = stamp_ns;
+      msg::FrameDone done{};
+      done.seq = frame.sample->seq;
+      done.stamp_ns = stamp_ns;
+      const std::string component = "test-consumer";
+      done.component = runtime::borrow(component);
+      acks.write(done);
+      ++received;
+    }
+  }
+  EXPECT_EQ(received, 10u);
+  EXPECT_EQ(run(*replay), 0) << replay->err();
+  take_imu();
+  // 10 frames 50 ms apart on IMU stamps: the readings from the first frame's to the last frame's, 91.
+  EXPECT_NE(replay->err().find("; 91 IMU readings"), std::string::npos) << replay->err();
+  ASSERT_EQ(received_readings.size(), 91u);
+  const auto first = std::find_if(recording.samples.begin(), recording.samples.end(), [&](const ImuSample& sample) {
+    return sample.stamp_ns == dataset.frames.front().stamp_ns;
+  });
+  ASSERT_NE(first, recording.samples.end());
+  for (std::size_t i = 0; i < received_readings.size(); ++i) {
+    EXPECT_EQ(received_readings[i].stamp_ns, first[static_cast<std::ptrdiff_t>(i)].stamp_ns);
+    EXPECT_EQ(received_readings[i].accel_m_s2, first[static_cast<std::ptrdiff_t>(i)].accel_m_s2);
+    EXPECT_EQ(received_readings[i].gyro_rad_s, first[static_cast<std::ptrdiff_t>(i)].gyro_rad_s);
+  }
+  EXPECT_TRUE(stream.ended());
+  const auto calibrations = imu_calibration.take();
+  ASSERT_FALSE(calibrations.empty());
+  const ImuCalibration calibration = messages::to_imu_calibration(*calibrations.back().sample);
+  EXPECT_EQ(calibration.rate_hz, 200.0);
+  EXPECT_EQ(calibration.noise.accel_random_walk, ImuNoise{}.accel_random_walk);
 }
 
 TEST_F(ReplaySpy, LockstepDeliversEveryPairBitIdenticalToThePngs) {

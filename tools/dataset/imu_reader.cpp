@@ -71,6 +71,12 @@ void read_sensor_yaml(const fs::path& file, ImuRecording& recording) {
 
 }  // namespace
 
+ImuRecording read_imu_sensor_yaml(const fs::path& file) {
+  ImuRecording recording;
+  read_sensor_yaml(file, recording);
+  return recording;
+}
+
 bool has_euroc_imu(const fs::path& dataset) { return fs::exists(imu_dir(dataset) / "data.csv"); }
 
 ImuRecording read_euroc_imu(const fs::path& dataset) {

@@ -22,6 +22,10 @@ struct ImuRecording {
 // True when the dataset folder (or its mav0/) has an imu0/data.csv.
 bool has_euroc_imu(const std::filesystem::path& dataset);
 
+// Reads an IMU sensor.yaml alone (T_BS, rate_hz, the noise model): samples and source stay empty.
+// Throws std::runtime_error with one line naming the file and the key.
+ImuRecording read_imu_sensor_yaml(const std::filesystem::path& file);
+
 // Reads imu0 of the dataset folder (or its mav0/). Throws std::runtime_error with one line naming the
 // file, the line or field, and what was expected (a malformed row, stamps that do not increase, a
 // missing noise figure, a non-finite value).

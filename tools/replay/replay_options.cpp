@@ -20,7 +20,7 @@ constexpr double kMaxPreloadMb = 1.0e6;   // a terabyte
 runtime::Flags replay_flags(ReplayOptions& options) {
   runtime::Flags flags("heslam-replay DATASET [options]",
                        "  Publishes an EuRoC ASL folder or a KITTI odometry sequence on camera/stereo and\n"
-                       "  camera/calibration.");
+                       "  camera/calibration (and an EuRoC imu0/ on imu/readings, imu/calibration).");
   flags
       .custom("--format", "euroc|kitti|auto", "dataset layout (default auto)",
               [&options](const std::string& value) { options.format = parse_dataset_format(value); })
@@ -42,6 +42,14 @@ runtime::Flags replay_flags(ReplayOptions& options) {
       // The toggles as values, for pipeline files whose $(arg) gives on or off (docs/tools/replay.md).
       .on_off("--loop-mode", &options.loop, "on = --loop, off = no loop (default)")
       .on_off("--start-paused-mode", &options.start_paused, "on = --start-paused, off = start playing (default)")
+      .custom("--imu", "auto|none", "auto (default): publish imu0/ on imu/readings when the dataset has it",
+              [&options](const std::string& value) {
+                if (value != "auto" && value != "none") {
+                  throw std::runtime_error("--imu: expected auto or none, got '" + runtime::quote_value(value) + "'");
+                }
+                options.imu = value == "auto";
+              })
+      .toggle("--no-imu", &options.imu, "the same as --imu none: publish no IMU readings", false)
       .toggle("--strict", &options.strict, "stop at the first missing/corrupt image or unpaired row")
       .number("--preload", "MB", &options.preload_mb, 0.0, kMaxPreloadMb,
               "decode pairs before frame 0 while they fit in MB megabytes (0-1e6; 0 = off,\n"

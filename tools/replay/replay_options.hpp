@@ -23,6 +23,9 @@ struct ReplayOptions {
   double start_offset_s = 0.0;
   double duration_s = 0.0;  // 0 = to the end
   bool start_paused = false;
+  // --imu auto|none, --no-imu: publish the EuRoC imu0/ (readings and calibration) when the dataset
+  // has one (auto, the default), or never.
+  bool imu = true;
   bool strict = false;             // --strict: a bad image or unpaired row stops the replay
   double ack_timeout_s = 10.0;     // --ack-timeout: lockstep wait for a consumer / a FrameDone
   double wait_subscriber_s = 2.0;  // --wait: before frame 0, wait this long for a frame reader

@@ -29,6 +29,7 @@ std::string format_progress_line(const ReplayCounts& counts) {
   std::snprintf(line, sizeof(line), "frame %zu/%zu %4.0f%%  %.1f fps  %s", counts.pass_published, counts.total, percent,
                 rate, eta);
   std::string text = line;
+  if (counts.imu_readings > 0) text += "  imu " + std::to_string(counts.imu_readings);
   if (counts.pass > 1) text += "  pass " + std::to_string(counts.pass);
   if (counts.skipped_images > 0) text += "  skipped " + std::to_string(counts.skipped_images);
   if (counts.paused) text += "  [paused]";
@@ -43,6 +44,7 @@ std::string format_summary(const ReplayCounts& counts) {
   if (counts.pass > 1) text += " over " + std::to_string(counts.pass) + " passes";
   text += "; skipped " + std::to_string(counts.skipped_images) + " images";
   text += "; " + std::to_string(counts.unpaired_rows) + " unpaired rows";
+  if (counts.imu_readings > 0) text += "; " + std::to_string(counts.imu_readings) + " IMU readings";
   return text;
 }
 

@@ -16,6 +16,7 @@
 #include <dds/ddsc/dds_loan_api.h>
 
 #include "components/core/camera/stereo_rectifier.hpp"
+#include "components/messages/imu.hpp"
 #include "runtime/image_transport.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/reader.hpp"
@@ -26,8 +27,10 @@
 #include "runtime/waitset.hpp"
 #include "runtime/writer.hpp"
 #include "runtime/writer_identity.hpp"
+#include "tools/dataset/imu_reader.hpp"
 #include "tools/dataset/stereo_images.hpp"
 #include "tools/replay/replay_controls.hpp"
+#include "tools/replay/replay_imu.hpp"
 #include "tools/replay/replay_messages.hpp"
 #include "tools/replay/replay_pacer.hpp"
 #include "tools/replay/replay_progress.hpp"
@@ -123,6 +126,22 @@ StereoDataset open_replay_dataset(const ReplayOptions& options) {
   return dataset;
 }
 
+// The dataset's imu0/ when it has one and --imu allows it (EuRoC only). A malformed data.csv or
+// sensor.yaml throws one line naming the file and the line or field.
+std::optional<ImuRecording> open_replay_imu(const ReplayOptions& options, const StereoDataset& dataset) {
+  if (!options.imu || dataset.format != DatasetFormat::kEuroc || !has_euroc_imu(dataset.root)) return std::nullopt;
+  return read_euroc_imu(dataset.root);
+}
+
+ImuCalibration imu_calibration(const ImuRecording& recording) {
+  ImuCalibration calibration;
+  calibration.noise = recording.noise;
+  calibration.rate_hz = recording.rate_hz;
+  calibration.T_BS = recording.T_BS;
+  calibration.source = (recording.source.parent_path() / "sensor.yaml").string();
+  return calibration;
+}
+
 class Replay {
  public:
   Replay(const runtime::CommonArgs& common, const ReplayOptions& options)
@@ -137,6 +156,7 @@ class Replay {
         topics_(common.ns),
         calibration_writer_(participant_, topics_.calibration()),
         frame_writer_(image_participant_.get(), topics_.stereo()),
+        imu_recording_(open_replay_imu(options, dataset_)),
         status_(participant_, topics_, common.name, stats_),
         progress_(options.progress),
         pacer_(options.rate) {
@@ -149,6 +169,11 @@ class Replay {
     // Frames per pass, for whoever shows the progress of the whole run (heslam-supervisor).
     stats_.count("frames_total", counts_.total);
     counts_.unpaired_rows = static_cast<std::size_t>(dataset_.skipped_rows);
+    if (imu_recording_) {
+      imu_.emplace(imu_recording_->samples);
+      imu_writer_.emplace(participant_, topics_.imu());
+      imu_calibration_writer_.emplace(participant_, topics_.imu_calibration());
+    }
   }
 
   // "" for UDP; for --image-transport shm the images' domain, and whether Cyclone really uses shared
@@ -164,6 +189,9 @@ class Replay {
   int run() {
     announce();
     calibration_writer_.write(calibration_message_.get());
+    if (imu_calibration_writer_) {
+      imu_calibration_writer_->write(messages::ImuCalibrationMessage(imu_calibration(*imu_recording_)).get());
+    }
     status_.set_state(runtime::ComponentState::kRunning);
     preload();
     if (!wait_for_consumer()) return finish();
@@ -180,6 +208,7 @@ class Replay {
     pacer_.start(first_stamp_ns, now_ns());
     for (;;) {
       counts_.pass_published = 0;
+      if (imu_) imu_->start_pass(first_stamp_ns, pass_offset_ns);
       for (std::size_t index = 0; index < dataset_.frames.size(); ++index) {
         const StereoFrameFiles& frame = dataset_.frames[index];
         // Decode shortly before the frame is due (in lockstep: once the previous one is acknowledged),
@@ -191,6 +220,9 @@ class Replay {
         }
         std::optional<StereoImages> images = load(index);
         if (!wait_until_due(frame.stamp_ns + pass_offset_ns)) return finish();
+        // The IMU readings up to this frame leave before it, also for a frame whose images are
+        // skipped: the watermark then still advances (docs/topics.md, imu/readings).
+        publish_imu(frame.stamp_ns);
         if (!images) continue;
         publish(*images, frame, pass_offset_ns);
         if (options_.lockstep &&
@@ -209,6 +241,19 @@ class Replay {
  private:
   static StereoDataset open(const ReplayOptions& options) { return open_replay_dataset(options); }
 
+  // The batch of readings that precede the frame with recording stamp frame_ns (replay_imu.hpp).
+  void publish_imu(std::int64_t frame_ns, bool end_of_stream = false) {
+    if (!imu_) return;
+    const ImuBatchPlan plan = imu_->before_frame(frame_ns);
+    const messages::ImuBatchMessage message(plan.samples, imu_seq_, plan.first_index, plan.watermark_ns, end_of_stream);
+    if (imu_writer_->write(message.get()) == runtime::WriteResult::kTimeout) {
+      log_.warn_throttled("imu_write_timeouts", "IMU batch ", imu_seq_, ": write timed out (reader too slow)");
+    }
+    ++imu_seq_;
+    counts_.imu_readings += plan.samples.size();
+    stats_.count("imu_readings_published", plan.samples.size());
+  }
+
   void announce() {
     for (std::size_t i = 0; i < dataset_.warnings.size() && i < kMaxListedWarnings; ++i) {
       log_.warn("skipped row: ", dataset_.warnings[i]);
@@ -220,6 +265,12 @@ class Replay {
     std::snprintf(span, sizeof(span), "%.2f", dataset_.duration_s());
     char rate[32];
     std::snprintf(rate, sizeof(rate), "rate %g", options_.rate);
+    if (imu_recording_) {
+      log_.info("IMU: ", imu_recording_->samples.size(), " readings at ", imu_recording_->rate_hz, " Hz from ",
+                imu_recording_->source.string(), " on '", imu_writer_->name(), "'");
+    } else if (options_.imu && dataset_.format == DatasetFormat::kEuroc) {
+      log_.info("IMU: none (no imu0/data.csv in ", dataset_.root.string(), ")");
+    }
     log_.info("replaying ", dataset_.root.string(), " (", to_string(dataset_.format), ", ", dataset_.frames.size(),
               " frames, ", span, " s) on domain ", participant_.domain_id(), " as '", frame_writer_.name(), "'",
               image_transport_note(), ", ", options_.lockstep ? "lockstep" : rate);
@@ -487,6 +538,13 @@ class Replay {
   }
 
   int finish() {
+    if (imu_ && !runtime::shutdown_requested() && !quit_) {
+      // The last batch says no reading follows; its watermark stays where the last frame left it.
+      const ImuBatchPlan plan{{}, imu_->published(), imu_->watermark_ns()};
+      const messages::ImuBatchMessage message(plan.samples, imu_seq_++, plan.first_index, plan.watermark_ns, true);
+      imu_writer_->write(message.get());
+      dds_wait_for_acks(imu_writer_->handle(), std::chrono::nanoseconds(kFinalAckTimeout).count());
+    }
     update_counts();
     progress_.finish();
     log_.flush_throttled();
@@ -514,6 +572,11 @@ class Replay {
   runtime::Topics topics_;
   runtime::Writer<msg::StereoCalibration> calibration_writer_;
   runtime::Writer<msg::StereoFrame> frame_writer_;
+  std::optional<ImuRecording> imu_recording_;
+  std::optional<ReplayImu> imu_;
+  std::optional<runtime::Writer<msg::ImuBatch>> imu_writer_;
+  std::optional<runtime::Writer<msg::ImuCalibration>> imu_calibration_writer_;
+  std::uint64_t imu_seq_ = 0;
   std::optional<runtime::Reader<msg::FrameDone>> acks_;
   std::optional<runtime::WaitSet> ack_waitset_;
   runtime::Stats stats_;
@@ -542,6 +605,7 @@ class Replay {
 int check_replay(const ReplayOptions& options) {
   const StereoDataset dataset = open_replay_dataset(options);
   const StereoRectifier rectifier(dataset.calibration);
+  open_replay_imu(options, dataset);
   return 0;
 }
 

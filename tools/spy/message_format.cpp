@@ -330,4 +330,31 @@ std::string format_message(const msg::ComponentStatus& status, const FormatOptio
   return text.str();
 }
 
+// The IMU topics: a batch shows its continuity fields, then its readings (summary: the first few).
+std::string format_message(const msg::ImuBatch& batch, const FormatOptions& options) {
+  Text text;
+  text.line(0, "seq", std::to_string(batch.seq));
+  text.line(0, "first_index", std::to_string(batch.first_index));
+  text.line(0, "watermark_ns", std::to_string(batch.watermark_ns));
+  text.line(0, "end_of_stream", batch.end_of_stream ? "true" : "false");
+  sequence<msg::ImuReading>(text, 0, "readings", runtime::view(batch.readings), options, [](const msg::ImuReading& r) {
+    return "{stamp_ns: " + std::to_string(r.stamp_ns) + ", gyro_rad_s: " + array(r.gyro_rad_s) +
+           ", accel_m_s2: " + array(r.accel_m_s2) + "}";
+  });
+  return text.str();
+}
+
+std::string format_message(const msg::ImuCalibration& calibration, const FormatOptions& /*options*/) {
+  Text text;
+  text.line(0, "T_BS", array(calibration.T_BS));
+  text.line(0, "rate_hz", number(calibration.rate_hz));
+  text.line(0, "gyroscope_noise_density", number(calibration.gyroscope_noise_density));
+  text.line(0, "gyroscope_random_walk", number(calibration.gyroscope_random_walk));
+  text.line(0, "accelerometer_noise_density", number(calibration.accelerometer_noise_density));
+  text.line(0, "accelerometer_random_walk", number(calibration.accelerometer_random_walk));
+  text.line(0, "time_offset_ns", std::to_string(calibration.time_offset_ns));
+  text.line(0, "source", runtime::to_string(calibration.source));
+  return text.str();
+}
+
 }  // namespace heslam

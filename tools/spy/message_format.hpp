@@ -17,6 +17,8 @@ struct FormatOptions {
 
 std::string format_message(const msg::StereoFrame& frame, const FormatOptions& options);
 std::string format_message(const msg::StereoCalibration& calibration, const FormatOptions& options);
+std::string format_message(const msg::ImuBatch& batch, const FormatOptions& options);
+std::string format_message(const msg::ImuCalibration& calibration, const FormatOptions& options);
 std::string format_message(const msg::Odometry& odometry, const FormatOptions& options);
 std::string format_message(const msg::Keyframe& keyframe, const FormatOptions& options);
 std::string format_message(const msg::KeyframeState& state, const FormatOptions& options);

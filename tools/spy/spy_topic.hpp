@@ -35,6 +35,8 @@ void with_message_type(std::string_view type_name, Fn&& fn) {
   };
   visit(std::type_identity<msg::StereoFrame>{});
   visit(std::type_identity<msg::StereoCalibration>{});
+  visit(std::type_identity<msg::ImuBatch>{});
+  visit(std::type_identity<msg::ImuCalibration>{});
   visit(std::type_identity<msg::Odometry>{});
   visit(std::type_identity<msg::Keyframe>{});
   visit(std::type_identity<msg::KeyframeState>{});

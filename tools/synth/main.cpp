@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <limits>
 #include <stdexcept>
@@ -11,6 +12,7 @@
 #include <unistd.h>
 
 #include "runtime/flags.hpp"
+#include "tools/dataset/imu_reader.hpp"
 #include "tools/synth/preset.hpp"
 #include "tools/synth/progress_report.hpp"
 #include "tools/synth/scene_builders.hpp"
@@ -27,6 +29,7 @@ struct Arguments {
   bool quiet = false;
   bool list = false;
   bool help = false;
+  std::filesystem::path imu_noise_file;
   heslam::synth::RenderOptions options;
 };
 
@@ -48,6 +51,13 @@ heslam::runtime::Flags synth_flags(Arguments& a) {
       .integer("--threads", "1|2", &a.options.threads, 1, 2,
                "left and right images rendered concurrently (the same bytes)")
       .toggle("--no-events", &a.options.events, "none of the preset's events", false)
+      .toggle("--imu", &a.options.imu,
+              "also write mav0/imu0/ (200 Hz readings, sensor.yaml) and the true velocity and\n"
+              "biases in the ground truth; the motion is then C2 (the images differ from a\n"
+              "render without --imu)")
+      .toggle("--imu-noise-free", &a.options.imu_noise_free, "--imu readings without noise or bias")
+      .path("--imu-noise", "FILE", &a.imu_noise_file,
+            "the noise model (and rate_hz) of this IMU sensor.yaml (default: EuRoC's ADIS16448)")
       .toggle("--quiet", &a.quiet, "no progress and no summary line")
       .alias("-q")
       .toggle("--list", &a.list, "the built-in presets, one a line: frames, duration, distance travelled, purpose")
@@ -104,6 +114,14 @@ int main(int argc, char** argv) {
     const std::string format = fmt == OutputFormat::kEuroc ? "euroc" : "kitti";
     if (preset_name.empty() || out_dir.empty())
       throw std::runtime_error("--preset and --out are required\n" + flags.usage());
+    if (!arguments.imu_noise_file.empty()) {
+      if (!options.imu) throw std::runtime_error("--imu-noise: only with --imu");
+      const heslam::ImuRecording model = heslam::read_imu_sensor_yaml(arguments.imu_noise_file);
+      options.imu_noise = model.noise;
+      options.imu_rate_hz = model.rate_hz;
+    }
+    if (options.imu_noise_free && !options.imu) throw std::runtime_error("--imu-noise-free: only with --imu");
+    if (options.imu && fmt != OutputFormat::kEuroc) throw std::runtime_error("--imu: only with --format euroc");
     // KITTI images are rectified by definition: render ideal pinhole images for it.
     if (fmt == OutputFormat::kKitti) options.apply_distortion = false;
 

@@ -29,7 +29,7 @@ SequenceRenderer::SequenceRenderer(const Preset& preset, const RenderOptions& op
     : preset_(preset),
       options_(options),
       built_(build_scene(preset)),
-      trajectory_(built_.path, preset.trajectory, options.seed),
+      trajectory_(built_.path, preset.trajectory, options.seed, options.imu),
       rays_(preset.camera, options.apply_distortion),
       sensor_(preset.photometry) {
   if (options.frames < 0) throw std::runtime_error("frames must be >= 0");

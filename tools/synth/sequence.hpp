@@ -15,6 +15,7 @@
 
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/geometry/pose.hpp"
+#include "components/core/imu/preintegration.hpp"
 #include "tools/synth/camera_rays.hpp"
 #include "tools/synth/photometry.hpp"
 #include "tools/synth/preset.hpp"
@@ -30,6 +31,12 @@ struct RenderOptions {
   bool apply_distortion = true;  // false renders ideal pinhole images even if the preset has distortion
   bool events = true;            // false switches the photometric events off (reference renders)
   int threads = 1;               // 1 or 2: left and right images rendered concurrently (same bytes)
+  // --imu: a C2 motion (Trajectory's smooth mode; the images differ from a render without it) and,
+  // in the EuRoC layout, mav0/imu0/ with the readings of an IMU at the body (imu_synth.hpp).
+  bool imu = false;
+  bool imu_noise_free = false;  // --imu-noise-free: exact readings (the sensor.yaml still names the model)
+  ImuNoise imu_noise{};         // --imu-noise FILE: a sensor.yaml's; default the EuRoC ADIS16448's
+  double imu_rate_hz = 200.0;
 };
 
 struct SynthFrame {

@@ -32,8 +32,8 @@ double signed_unit(std::mt19937_64& rng) { return 2.0 * static_cast<double>(rng(
 
 }  // namespace
 
-Trajectory::Trajectory(const PathSpec& path, const TrajectorySpec& spec, std::uint64_t seed)
-    : closed_(path.closed), spec_(spec) {
+Trajectory::Trajectory(const PathSpec& path, const TrajectorySpec& spec, std::uint64_t seed, bool smooth)
+    : closed_(path.closed), spec_(spec), smooth_(smooth) {
   const auto& cps = path.control_points_w;
   const int n = static_cast<int>(cps.size());
   if (n < 4) throw std::runtime_error("trajectory needs at least 4 control points");
@@ -131,6 +131,9 @@ void Trajectory::plan_stops() {
     speed_phases_.push_back({t, s, 0.0, a});
     speed_phases_.push_back({t + ta, s + ramp_m, v, 0.0});
   }
+  for (std::size_t i = 0; i + 1 < speed_phases_.size(); ++i) {
+    speed_phases_[i].duration_s = speed_phases_[i + 1].t0_s - speed_phases_[i].t0_s;
+  }
 }
 
 Eigen::Vector3d Trajectory::spline_point(double u) const {
@@ -151,7 +154,45 @@ Eigen::Vector3d Trajectory::spline_point(double u) const {
   return b0 * cp(base) + b1 * cp(base + 1) + b2 * cp(base + 2) + b3 * cp(base + 3);
 }
 
+// A speed change from v0 by a * T over T seconds as a smoothstep: v = v0 + a T (3 x^2 - 2 x^3), x = dt / T.
+// It covers the distance of the constant acceleration a (v0 T + a T^2 / 2) with an acceleration that
+// is 0 at both ends (6 a x (1 - x)), so the motion stays C2 across phases.
+Trajectory::Travel Trajectory::smooth_travel_at(double t_s) const {
+  const double v = spec_.speed_mps;
+  const double ta = std::max(spec_.accel_time_s, 1e-6);
+  double s0 = 0.0, v0 = 0.0, a = v / ta, T = ta, dt = std::max(0.0, t_s);
+  if (!speed_phases_.empty()) {
+    const auto after = std::upper_bound(speed_phases_.begin(), speed_phases_.end(), t_s,
+                                        [](double t, const SpeedPhase& phase) { return t < phase.t0_s; });
+    const SpeedPhase& phase = after == speed_phases_.begin() ? speed_phases_.front() : *std::prev(after);
+    s0 = phase.s0_m;
+    v0 = phase.v0_mps;
+    a = phase.a_mps2;
+    T = phase.duration_s;
+    dt = std::max(0.0, t_s - phase.t0_s);
+  }
+  Travel travel;
+  if (a == 0.0 || T <= 0.0) {
+    travel = {s0 + v0 * dt, v0, 0.0};
+  } else if (dt >= T) {  // the constant-speed profile after its ramp
+    travel = {s0 + v0 * T + 0.5 * a * T * T + (v0 + a * T) * (dt - T), v0 + a * T, 0.0};
+  } else {
+    const double x = dt / T;
+    travel = {s0 + v0 * dt + a * T * T * (x * x * x - 0.5 * x * x * x * x), v0 + a * T * (3 * x * x - 2 * x * x * x),
+              6.0 * a * x * (1.0 - x)};
+  }
+  const double length = length_m();
+  if (closed_) {
+    travel.s_m = std::fmod(travel.s_m, length);
+    if (travel.s_m < 0) travel.s_m += length;
+  } else if (travel.s_m >= length) {
+    travel = {length, 0.0, 0.0};
+  }
+  return travel;
+}
+
 double Trajectory::distance_at(double t_s) const {
+  if (smooth_) return smooth_travel_at(t_s).s_m;
   const double v = spec_.speed_mps;
   const double ta = std::max(spec_.accel_time_s, 1e-6);
   double s = t_s < ta ? v * t_s * t_s / (2 * ta) : v * (t_s - ta / 2);
@@ -173,6 +214,7 @@ double Trajectory::distance_at(double t_s) const {
 }
 
 double Trajectory::param_at_distance(double s_m) const {
+  if (smooth_) return std::clamp(s_m / length_m() * num_segments_, 0.0, num_segments_ - 1e-9);
   const auto it = std::upper_bound(arc_length_.begin(), arc_length_.end(), s_m);
   if (it == arc_length_.begin()) return 0.0;
   if (it == arc_length_.end()) return num_segments_ - 1e-9;
@@ -211,7 +253,55 @@ Pose3 Trajectory::T_wb(double t_s) const {
   return T;
 }
 
+Eigen::Vector3d Trajectory::spline_derivative(double u, int order) const {
+  const int n = static_cast<int>(points_.size());
+  int seg = static_cast<int>(std::floor(u));
+  seg = std::clamp(seg, 0, num_segments_ - 1);
+  const double t = u - seg;
+  auto cp = [&](int k) -> const Eigen::Vector3d& {
+    return points_[static_cast<std::size_t>(closed_ ? ((k % n) + n) % n : std::clamp(k, 0, n - 1))];
+  };
+  const int base = closed_ ? seg - 1 : seg;
+  double b[4];
+  if (order == 1) {
+    b[0] = (-3 + 6 * t - 3 * t * t) / 6.0;
+    b[1] = (-12 * t + 9 * t * t) / 6.0;
+    b[2] = (3 + 6 * t - 9 * t * t) / 6.0;
+    b[3] = 3 * t * t / 6.0;
+  } else {
+    b[0] = (6 - 6 * t) / 6.0;
+    b[1] = (-12 + 18 * t) / 6.0;
+    b[2] = (6 - 18 * t) / 6.0;
+    b[3] = 6 * t / 6.0;
+  }
+  return b[0] * cp(base) + b[1] * cp(base + 1) + b[2] * cp(base + 2) + b[3] * cp(base + 3);
+}
+
+Eigen::Vector3d Trajectory::acceleration_w(double t_s) const {
+  if (!smooth_) throw std::logic_error("Trajectory::acceleration_w: only defined for a smooth trajectory");
+  const Travel travel = smooth_travel_at(t_s);
+  const double k = num_segments_ / length_m();  // du/ds
+  const double u = param_at_distance(travel.s_m);
+  const double du = k * travel.speed_mps;
+  return spline_derivative(u, 2) * du * du + spline_derivative(u, 1) * k * travel.accel_mps2;
+}
+
+Eigen::Vector3d Trajectory::angular_velocity_b(double t_s) const {
+  if (!smooth_) throw std::logic_error("Trajectory::angular_velocity_b: only defined for a smooth trajectory");
+  // Log(R(t-h)^T R(t+h)) / 2h = w + O(h^2) with even powers only: Richardson over h and h/2 is O(h^4).
+  const auto central = [&](double h) {
+    const Eigen::AngleAxisd delta(T_wb(t_s - h).linear().transpose() * T_wb(t_s + h).linear());
+    return Eigen::Vector3d(delta.axis() * delta.angle() / (2.0 * h));
+  };
+  constexpr double kStepS = 2e-3;
+  return (4.0 * central(kStepS / 2) - central(kStepS)) / 3.0;
+}
+
 Eigen::Vector3d Trajectory::velocity_w(double t_s) const {
+  if (smooth_) {
+    const Travel travel = smooth_travel_at(t_s);
+    return spline_derivative(param_at_distance(travel.s_m), 1) * (num_segments_ / length_m()) * travel.speed_mps;
+  }
   const double t0 = std::max(0.0, t_s - kVelocityStepS);
   const double t1 = t_s + kVelocityStepS;
   return (T_wb(t1).translation() - T_wb(t0).translation()) / (t1 - t0);

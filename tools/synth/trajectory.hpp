@@ -22,15 +22,34 @@ struct PathSpec {
 
 class Trajectory {
  public:
-  Trajectory(const PathSpec& path, const TrajectorySpec& spec, std::uint64_t seed);
+  // smooth (heslam-synth --imu): the motion is C2 in time so that an IMU's readings are defined
+  // everywhere. The spline parameter then runs proportional to the distance (not through the
+  // piecewise-linear arc-length table, whose kinks make the acceleration a sum of impulses), so the
+  // speed varies a little with the control points' spacing, and each speed change follows a
+  // smoothstep instead of a constant acceleration (same durations and distances, continuous
+  // acceleration). Default false: the motion every existing render was made with, byte for byte.
+  Trajectory(const PathSpec& path, const TrajectorySpec& spec, std::uint64_t seed, bool smooth = false);
 
   Pose3 T_wb(double t_s) const;
-  Eigen::Vector3d velocity_w(double t_s) const;  // m/s, world frame
+  Eigen::Vector3d velocity_w(double t_s) const;  // m/s, world frame (smooth: exact)
+  // Smooth trajectories only (throw otherwise): the exact acceleration in the world, and the body's
+  // angular velocity in the body frame (a Richardson-extrapolated central difference, ~1e-9 rad/s).
+  Eigen::Vector3d acceleration_w(double t_s) const;
+  Eigen::Vector3d angular_velocity_b(double t_s) const;
+  bool smooth() const { return smooth_; }
   double length_m() const { return arc_length_.back(); }
 
  private:
-  Eigen::Vector3d spline_point(double u) const;  // u in [0, num_segments)
-  double distance_at(double t_s) const;          // travelled arc length at time t
+  // Travelled distance and its first two time derivatives.
+  struct Travel {
+    double s_m = 0.0;
+    double speed_mps = 0.0;
+    double accel_mps2 = 0.0;
+  };
+  Travel smooth_travel_at(double t_s) const;
+  Eigen::Vector3d spline_derivative(double u, int order) const;  // d^order P / du^order, order 1 or 2
+  Eigen::Vector3d spline_point(double u) const;                  // u in [0, num_segments)
+  double distance_at(double t_s) const;                          // travelled arc length at time t
   double param_at_distance(double s_m) const;
   Eigen::Vector3d position_at_distance(double s_m) const { return spline_point(param_at_distance(s_m)); }
 
@@ -45,9 +64,11 @@ class Trajectory {
     double s0_m = 0.0;
     double v0_mps = 0.0;
     double a_mps2 = 0.0;
+    double duration_s = 0.0;  // of an accelerating phase (its successor's start minus its own)
   };
   void plan_stops();
 
+  bool smooth_ = false;
   std::vector<SpeedPhase> speed_phases_;
   std::vector<double> arc_length_;  // cumulative length at each table sample
   double table_step_u_ = 0.0;

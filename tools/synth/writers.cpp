@@ -1,6 +1,7 @@
 // EuRoC / KITTI writers and metadata, in the exact text formats the datasets and ORB-SLAM2 use.
 #include "tools/synth/writers.hpp"
 
+#include <algorithm>
 #include <cinttypes>
 #include <cmath>
 #include <cstdarg>
@@ -12,6 +13,8 @@
 #include <Eigen/Geometry>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
+
+#include "tools/synth/imu_synth.hpp"
 
 namespace heslam::synth {
 namespace {
@@ -89,6 +92,42 @@ void write_euroc_sensor_yaml(const fs::path& file, const SequenceRenderer& r, in
         << fmt("%.9g, %.9g, %.9g, %.9g", c.distortion[0], c.distortion[1], c.distortion[2], c.distortion[3]) << "]\n";
   } else {
     out << "distortion_coefficients: [0.0, 0.0, 0.0, 0.0]\n";
+  }
+}
+
+// imu0/ as EuRoC has it: data.csv (stamp, w_RS_S [rad/s], a_RS_S [m/s^2]) and sensor.yaml (T_BS =
+// identity: the IMU is the body; rate; the noise model). Readings with 17 significant digits, so a
+// reader gets the doubles back exactly.
+void write_euroc_imu(const fs::path& dir, const SequenceRenderer& r, const SynthImu& imu) {
+  make_dirs(dir);
+  const RenderOptions& o = r.options();
+  {
+    auto out = open_out(dir / "sensor.yaml");
+    out << kYamlHeader << "# General sensor definitions.\n"
+        << "sensor_type: imu\n"
+        << "comment: heslam-synth IMU at the body (preset " << r.preset().name << ", seed " << o.seed << ")"
+        << (o.imu_noise_free ? ", noise-free readings; the figures below are the model" : "") << "\n\n"
+        << "# Sensor extrinsics wrt. the body-frame.\n"
+        << "T_BS:\n  cols: 4\n  rows: 4\n"
+        << matrix_rows(Pose3::Identity()) << "\n"
+        << "rate_hz: " << fmt("%g", o.imu_rate_hz) << "\n\n"
+        << "# inertial sensor noise model parameters (static)\n"
+        << "gyroscope_noise_density: " << fmt("%.9g", o.imu_noise.gyro_noise_density)
+        << "     # [ rad / s / sqrt(Hz) ]   ( gyro \"white noise\" )\n"
+        << "gyroscope_random_walk: " << fmt("%.9g", o.imu_noise.gyro_random_walk)
+        << "       # [ rad / s^2 / sqrt(Hz) ] ( gyro bias diffusion )\n"
+        << "accelerometer_noise_density: " << fmt("%.9g", o.imu_noise.accel_noise_density)
+        << "  # [ m / s^2 / sqrt(Hz) ]   ( accel \"white noise\" )\n"
+        << "accelerometer_random_walk: " << fmt("%.9g", o.imu_noise.accel_random_walk)
+        << "    # [ m / s^3 / sqrt(Hz) ].  ( accel bias diffusion )\n";
+  }
+  auto csv = open_out(dir / "data.csv");
+  csv << "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],"
+         "a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n";
+  for (const ImuSample& sample : imu.samples) {
+    csv << sample.stamp_ns
+        << fmt(",%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", sample.gyro_rad_s.x(), sample.gyro_rad_s.y(),
+               sample.gyro_rad_s.z(), sample.accel_m_s2.x(), sample.accel_m_s2.y(), sample.accel_m_s2.z());
   }
 }
 
@@ -215,6 +254,11 @@ void write_euroc(SequenceRenderer& r, const fs::path& out_dir, const Progress& p
         "v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], b_w_RS_S_x [rad s^-1], b_w_RS_S_y [rad s^-1], "
         "b_w_RS_S_z [rad s^-1], b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], b_a_RS_S_z [m s^-2]\n";
   auto times = open_out(out_dir / "timestamps.txt");
+  SynthImu imu;
+  if (r.options().imu) {
+    imu = synthesize_imu(r);
+    write_euroc_imu(mav0 / "imu0", r, imu);
+  }
   for (int i = 0; i < r.num_frames(); ++i) {
     const SynthFrame f = r.render_frame(i);
     const std::string name = std::to_string(f.stamp_ns) + ".png";
@@ -226,8 +270,18 @@ void write_euroc(SequenceRenderer& r, const fs::path& out_dir, const Progress& p
     const Eigen::Vector3d p = f.T_wb.translation();
     const Eigen::Vector3d v = r.trajectory().velocity_w(f.t_s);
     gt << f.stamp_ns
-       << fmt(",%.9f,%.9f,%.9f,%.12f,%.12f,%.12f,%.12f,%.9f,%.9f,%.9f,0,0,0,0,0,0\n", p.x(), p.y(), p.z(), q.w(), q.x(),
-              q.y(), q.z(), v.x(), v.y(), v.z());
+       << fmt(",%.9f,%.9f,%.9f,%.12f,%.12f,%.12f,%.12f,%.9f,%.9f,%.9f", p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z(),
+              v.x(), v.y(), v.z());
+    if (imu.samples.empty()) {
+      gt << ",0,0,0,0,0,0\n";
+    } else {  // the true bias at the frame (the reading at or just before its stamp)
+      const auto at = std::upper_bound(imu.samples.begin(), imu.samples.end(), f.stamp_ns,
+                                       [](std::int64_t stamp, const ImuSample& s) { return stamp < s.stamp_ns; });
+      const ImuBias& b =
+          imu.biases[static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, at - imu.samples.begin() - 1))];
+      gt << fmt(",%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n", b.gyro_rad_s.x(), b.gyro_rad_s.y(), b.gyro_rad_s.z(),
+                b.accel_m_s2.x(), b.accel_m_s2.y(), b.accel_m_s2.z());
+    }
     if (progress) progress(i + 1, r.num_frames());
   }
 }
