@@ -33,7 +33,10 @@ while [[ $# -gt 0 ]]; do
   esac
 done
 [[ $(id -u) -eq 0 ]] || { echo "fresh_machine.sh: needs root (debootstrap, chroot, mount)" >&2; exit 1; }
-command -v debootstrap >/dev/null || { echo "fresh_machine.sh: needs debootstrap (apt-get install debootstrap)" >&2; exit 1; }
+if ! command -v debootstrap >/dev/null; then
+  echo "fresh_machine.sh: needs debootstrap (apt-get install debootstrap)" >&2
+  exit 1
+fi
 commit=$(git -C "$root" rev-parse --verify "$ref^{commit}")
 
 base=$work/base
@@ -43,7 +46,8 @@ mounted=()
 cleanup() {
   local i
   for ((i = ${#mounted[@]} - 1; i >= 0; i--)); do
-    umount "${mounted[i]}" 2>/dev/null || umount -l "${mounted[i]}" || echo "fresh_machine.sh: could not unmount ${mounted[i]}" >&2
+    umount "${mounted[i]}" 2>/dev/null || umount -l "${mounted[i]}" ||
+      echo "fresh_machine.sh: could not unmount ${mounted[i]}" >&2
   done
   mounted=()
   if [[ -d $run/root ]]; then
@@ -108,7 +112,11 @@ cd /root/heslam
 TIMEFORMAT="%R %U %S"
 step() {  # step NAME COMMAND...: runs it, log in /root/NAME.log, "NAME wall user sys" to /root/times
   local t
-  { t=$( { time "${@:2}" >"/root/$1.log" 2>&1; } 2>&1 ); } || { echo "step $1 failed:"; tail -20 "/root/$1.log"; exit 1; }
+  if ! t=$( { time "${@:2}" >"/root/$1.log" 2>&1; } 2>&1 ); then
+    echo "step $1 failed:"
+    tail -20 "/root/$1.log"
+    exit 1
+  fi
   echo "$1 $t" >>/root/times
 }
 : >/root/times
