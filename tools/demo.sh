@@ -11,7 +11,7 @@ build_dir=${HESLAM_BUILD_DIR:-$root/build}
 frames=${HESLAM_DEMO_FRAMES:-300}
 bin=$build_dir/bin
 
-"$root/tools/build.sh" heslam-demo  # the programs below only; tools/test.sh builds the rest
+"$root/tools/build.sh" --demo  # the programs below only; tools/test.sh builds the rest
 
 # Rendering takes a while: reuse a finished sequence (the marker is written only after success).
 dataset=$build_dir/data/room_$frames
