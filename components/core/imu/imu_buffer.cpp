@@ -11,15 +11,6 @@ namespace {
 
 constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::min();
 
-ImuSample interpolated(const ImuSample& a, const ImuSample& b, std::int64_t stamp_ns) {
-  const double s = static_cast<double>(stamp_ns - a.stamp_ns) / static_cast<double>(b.stamp_ns - a.stamp_ns);
-  ImuSample sample;
-  sample.stamp_ns = stamp_ns;
-  sample.gyro_rad_s = (1.0 - s) * a.gyro_rad_s + s * b.gyro_rad_s;
-  sample.accel_m_s2 = (1.0 - s) * a.accel_m_s2 + s * b.accel_m_s2;
-  return sample;
-}
-
 std::string ms(std::int64_t ns) { return std::to_string(static_cast<double>(ns) * 1e-6) + " ms"; }
 
 }  // namespace
@@ -159,7 +150,7 @@ ImuInterval ImuBuffer::interval(std::int64_t t0_ns, std::int64_t t1_ns) const {
   for (auto it = first; it <= last; ++it) {
     if (it->stamp_ns <= t0_ns) {
       if (std::next(it) <= last && std::next(it)->stamp_ns > t0_ns) {
-        result.samples.push_back(interpolated(*it, *std::next(it), t0_ns));
+        result.samples.push_back(interpolate_imu(*it, *std::next(it), t0_ns));
       } else if (it->stamp_ns == t0_ns || std::next(it) > last) {
         ImuSample at_start = *it;
         at_start.stamp_ns = t0_ns;
@@ -168,7 +159,7 @@ ImuInterval ImuBuffer::interval(std::int64_t t0_ns, std::int64_t t1_ns) const {
       continue;
     }
     if (it->stamp_ns >= t1_ns) {
-      result.samples.push_back(interpolated(*std::prev(it), *it, t1_ns));
+      result.samples.push_back(interpolate_imu(*std::prev(it), *it, t1_ns));
       break;
     }
     result.samples.push_back(*it);

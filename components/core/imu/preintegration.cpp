@@ -12,7 +12,9 @@ namespace {
 
 constexpr double kNsPerS = 1e9;
 
-ImuSample interpolated(const ImuSample& a, const ImuSample& b, std::int64_t stamp_ns) {
+}  // namespace
+
+ImuSample interpolate_imu(const ImuSample& a, const ImuSample& b, std::int64_t stamp_ns) {
   const double s = static_cast<double>(stamp_ns - a.stamp_ns) / static_cast<double>(b.stamp_ns - a.stamp_ns);
   ImuSample sample;
   sample.stamp_ns = stamp_ns;
@@ -20,8 +22,6 @@ ImuSample interpolated(const ImuSample& a, const ImuSample& b, std::int64_t stam
   sample.accel_m_s2 = (1.0 - s) * a.accel_m_s2 + s * b.accel_m_s2;
   return sample;
 }
-
-}  // namespace
 
 ImuPreintegration::ImuPreintegration(const ImuBias& bias, const ImuNoise& noise) : bias_(bias), noise_(noise) {}
 
@@ -131,8 +131,8 @@ ImuPreintegration preintegrate(std::span<const ImuSample> samples, std::int64_t 
       throw std::invalid_argument("preintegrate: IMU stamps not increasing at " + std::to_string(next->stamp_ns) +
                                   " ns");
     }
-    const ImuSample from = it->stamp_ns < t0_ns ? interpolated(*it, *next, t0_ns) : *it;
-    const ImuSample to = next->stamp_ns > t1_ns ? interpolated(*it, *next, t1_ns) : *next;
+    const ImuSample from = it->stamp_ns < t0_ns ? interpolate_imu(*it, *next, t0_ns) : *it;
+    const ImuSample to = next->stamp_ns > t1_ns ? interpolate_imu(*it, *next, t1_ns) : *next;
     const double dt_s = static_cast<double>(to.stamp_ns - from.stamp_ns) / kNsPerS;
     if (dt_s <= 0.0) continue;
     preintegration.integrate(0.5 * (from.gyro_rad_s + to.gyro_rad_s), 0.5 * (from.accel_m_s2 + to.accel_m_s2), dt_s);

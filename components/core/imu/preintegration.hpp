@@ -102,6 +102,10 @@ class ImuPreintegration {
   Eigen::Matrix3d dp_dba_ = Eigen::Matrix3d::Zero();
 };
 
+// The reading at stamp_ns between readings a and b (a.stamp_ns < b.stamp_ns), linear in time: how a
+// frame stamp between two IMU stamps gets its reading.
+ImuSample interpolate_imu(const ImuSample& a, const ImuSample& b, std::int64_t stamp_ns);
+
 // Preintegrates the samples over [t0_ns, t1_ns]: each stretch between two consecutive samples with
 // their mean; at t0 and t1 the samples are interpolated linearly, so frames between IMU stamps get
 // exactly their interval. Samples must be in increasing stamp order and cover [t0_ns, t1_ns]; throws
