@@ -10,6 +10,8 @@
 # kitti: kitti_realtime.yaml against kitti.yaml (a KITTI sequence folder DIR/sequences/NN, e.g. heslam-synth --preset street --format kitti, 10 Hz; ATE against DIR/poses/NN.txt).
 # PRELOAD_MB=N (environment): real-time runs decode the images before frame 0 (replay --preload N), so
 # that PNG decoding (about a quarter of the pipeline's CPU on MH01) does not compete with the system.
+# LOCKSTEP_REFERENCE=0 (environment): no lockstep reference run (tools/bench/side_by_side.sh times the
+# real-time runs only).
 # Not repeatable run to run (real time depends on the machine's load): report the load with the figures.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)
@@ -90,7 +92,7 @@ header() {
 
 echo "# $(date -u '+%F %T') UTC, load average $(cut -d' ' -f1-3 /proc/loadavg), $kind, dataset $dataset, replay preload ${preload_mb} MB"
 header | tee "$out/table.txt"
-run_pipeline "${kind}.yaml" lockstep | tee -a "$out/table.txt"
+[[ ${LOCKSTEP_REFERENCE:-1} == 0 ]] || run_pipeline "${kind}.yaml" lockstep | tee -a "$out/table.txt"
 for run in $(seq 1 "$runs"); do
   run_pipeline "${kind}_realtime.yaml" "rt_$run" | tee -a "$out/table.txt"
 done
