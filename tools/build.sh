@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs missing packages, configures and builds heslam into build/ (Release unless BUILD_TYPE is set):
 #   tools/build.sh [TARGET...]   everything (tests and benchmarks too), or only the targets given
+#   tools/build.sh --tests       what tools/test.sh runs: everything but the benchmark executables
+#                                (no test runs them; HESLAM_BUILD_BENCHMARKS=OFF)
 #   tools/build.sh --demo        what tools/demo.sh runs: the demo's packages only, configured without
 #                                the tests and benchmarks, the heslam-demo target
 set -euo pipefail
@@ -12,6 +14,10 @@ if [[ ${1:-} == --demo ]]; then
   "$root/tools/install-deps.sh" demo
   configure=(-DHESLAM_BUILD_TESTS=OFF -DHESLAM_BUILD_BENCHMARKS=OFF)
   targets=(--target heslam-demo)
+elif [[ ${1:-} == --tests ]]; then
+  [[ $# -eq 1 ]] || { echo "build.sh: --tests takes no targets" >&2; exit 1; }
+  "$root/tools/install-deps.sh" all
+  configure=(-DHESLAM_BUILD_TESTS=ON -DHESLAM_BUILD_BENCHMARKS=OFF)
 else
   "$root/tools/install-deps.sh" all
   configure=(-DHESLAM_BUILD_TESTS=ON -DHESLAM_BUILD_BENCHMARKS=ON)

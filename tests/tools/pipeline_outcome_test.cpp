@@ -69,20 +69,9 @@ bool wait_until(Predicate predicate, std::chrono::milliseconds bound = kEventBou
 
 class PipelineOutcome : public ::testing::Test {
  protected:
-  // ctest runs each test in its own process: the dataset is rendered once into the build tree and
-  // reused (renamed into place only when complete).
-  static void SetUpTestSuite() {
-    dataset_ = test::bin_dir().parent_path() / "test_data" / ("outcome_room_" + std::to_string(kFrames));
-    if (fs::exists(dataset_)) return;
-    const test::ScratchDir render_dir("outcome_data");
-    render_error_ = test::render_synth("room", kFrames, render_dir.path() / "room", render_dir.path());
-    if (!render_error_.empty()) return;
-    const fs::path partial = dataset_.string() + ".partial";
-    fs::remove_all(partial);
-    fs::create_directories(partial.parent_path());
-    fs::copy(render_dir.path() / "room", partial, fs::copy_options::recursive);
-    fs::rename(partial, dataset_);
-  }
+  // ctest runs each test in its own process, several at once: the dataset is rendered once per build
+  // into the build tree and reused, under a lock (test::cached_synth).
+  static void SetUpTestSuite() { render_error_ = test::cached_synth("room", kFrames, dataset_); }
   void SetUp() override { ASSERT_EQ(render_error_, ""); }
 
   // The trajectory is complete up to the last frame it holds: every frame from the first on has a
