@@ -5,12 +5,13 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
+
+#include "tools/dataset/dataset_readers.hpp"
 
 namespace heslam {
 
@@ -107,33 +108,6 @@ struct FolderEntry {
   std::int64_t time_ns = 0;
 };
 
-// EuRoC camera folder: data.csv rows "stamp,filename" (in file order, as a driver delivered them),
-// the images in data/ (or beside data.csv).
-std::vector<FolderEntry> read_data_csv(const fs::path& folder) {
-  const fs::path csv = folder / "data.csv";
-  const fs::path images = fs::is_directory(folder / "data") ? folder / "data" : folder;
-  std::ifstream in(csv);
-  if (!in) throw std::runtime_error(csv.string() + ": cannot read");
-  std::vector<FolderEntry> entries;
-  int line_number = 0;
-  for (std::string line; std::getline(in, line);) {
-    ++line_number;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty() || line[0] == '#') continue;
-    const std::size_t comma = line.find(',');
-    const std::string stamp = comma == std::string::npos ? "" : line.substr(0, comma);
-    std::string name = comma == std::string::npos ? "" : line.substr(comma + 1);
-    name.erase(0, name.find_first_not_of(' '));
-    if (!all_digits(stamp) || name.empty() || stamp.size() > 19) {
-      throw std::runtime_error(csv.string() + ": line " + std::to_string(line_number) +
-                               ": expected '<timestamp ns>,<file name>', got '" + line.substr(0, 80) + "'");
-    }
-    entries.push_back({images / name, std::stoll(stamp)});
-  }
-  if (entries.empty()) throw std::runtime_error(csv.string() + ": no image rows");
-  return entries;
-}
-
 std::vector<FolderEntry> list_images(const fs::path& folder, double fps) {
   const fs::path images = fs::is_directory(folder / "data") ? folder / "data" : folder;
   std::vector<fs::path> files;
@@ -165,7 +139,15 @@ class FolderStream final : public ImageStream {
   FolderStream(const fs::path& folder, const StreamOptions& options, Warn warn)
       : folder_(folder), warn_(std::move(warn)) {
     stamped_ = fs::exists(folder / "data.csv");
-    entries_ = stamped_ ? read_data_csv(folder) : list_images(folder, options.fps);
+    if (stamped_) {
+      // The EuRoC frame list in file order, as a driver delivered the frames (backwards stamps are counted).
+      for (const dataset_detail::CsvRow& row :
+           dataset_detail::read_camera_csv(folder, dataset_detail::StampOrder::kAsListed)) {
+        entries_.push_back({row.image, row.stamp_ns});
+      }
+    } else {
+      entries_ = list_images(folder, options.fps);
+    }
   }
 
   std::optional<StreamImage> next() override {
@@ -199,13 +181,6 @@ class FolderStream final : public ImageStream {
   bool stamped_ = false;
 };
 
-// The EuRoC camera folders of `path` (path/cam0 or path/mav0/cam0), or nothing.
-std::optional<fs::path> euroc_mav0(const fs::path& path) {
-  if (fs::is_directory(path / "cam0") && fs::is_directory(path / "cam1")) return path;
-  if (fs::is_directory(path / "mav0" / "cam0") && fs::is_directory(path / "mav0" / "cam1")) return path / "mav0";
-  return std::nullopt;
-}
-
 std::vector<std::string> split_sources(const std::string& source) {
   std::vector<std::string> parts;
   std::stringstream in(source);
@@ -237,11 +212,11 @@ std::unique_ptr<ImageStream> open_stream(const std::string& source, const Stream
 
 SourceStreams open_source(const std::string& source, CameraLayout layout, const StreamOptions& options, Warn warn) {
   const std::vector<std::string> parts = split_sources(source);
-  const std::optional<fs::path> mav0 = parts.size() == 1 ? euroc_mav0(parts[0]) : std::nullopt;
+  const fs::path mav0 = parts.size() == 1 ? dataset_detail::find_euroc_mav0(parts[0]) : fs::path{};
   SourceStreams result;
-  result.layout = layout != CameraLayout::kAuto ? layout
-                  : (parts.size() == 2 || mav0) ? CameraLayout::kTwoDevices
-                                                : CameraLayout::kSideBySide;
+  result.layout = layout != CameraLayout::kAuto          ? layout
+                  : (parts.size() == 2 || !mav0.empty()) ? CameraLayout::kTwoDevices
+                                                         : CameraLayout::kSideBySide;
   if (parts.size() > 2) throw std::runtime_error("source '" + source + "': at most two sources (LEFT,RIGHT)");
   if (result.layout == CameraLayout::kSideBySide) {
     if (parts.size() != 1) {
@@ -255,9 +230,9 @@ SourceStreams open_source(const std::string& source, CameraLayout layout, const 
   if (parts.size() == 2) {
     result.streams.push_back(open_stream(parts[0], options, warn));
     result.streams.push_back(open_stream(parts[1], options, warn));
-  } else if (mav0) {
-    result.streams.push_back(open_stream((*mav0 / "cam0").string(), options, warn));
-    result.streams.push_back(open_stream((*mav0 / "cam1").string(), options, warn));
+  } else if (!mav0.empty()) {
+    result.streams.push_back(open_stream((mav0 / "cam0").string(), options, warn));
+    result.streams.push_back(open_stream((mav0 / "cam1").string(), options, warn));
   } else {
     throw std::runtime_error("source '" + source +
                              "': two-devices needs LEFT,RIGHT (two devices, files or folders) or an EuRoC folder "
