@@ -147,18 +147,28 @@ class Camera {
     }
   }
 
-  // The capture thread: reads and paces pairs until the source ends, a stop, or bad input.
+  // The capture thread: reads and paces pairs until the source ends, a stop, or bad input. A recording
+  // is read (decoded) shortly before its next pair is due, as the replay does, not right after the
+  // previous one left: then its decoding does not compete with the consumers' work on that one.
   void capture_loop() {
     StereoCapture& capture = opened_.capture;
     ReplayPacer pacer(options_.rate);
-    bool started = false;
+    DecodeLead decode_lead;
+    std::optional<std::int64_t> last_time_ns, period_ns;
     try {
       while (!stop_ && !runtime::shutdown_requested()) {
+        if (!capture.live() && last_time_ns && period_ns &&
+            !wait_until(pacer.due_ns(*last_time_ns + *period_ns) - decode_lead.lead_ns())) {
+          break;
+        }
+        const auto read_start = Clock::now();
         std::optional<CapturedFrame> frame = capture.next();
         if (!frame) break;
         if (!capture.live()) {
-          if (!started) pacer.start(frame->source_time_ns, now_ns());
-          started = true;
+          decode_lead.record(std::chrono::duration<double, std::milli>(Clock::now() - read_start).count());
+          if (!last_time_ns) pacer.start(frame->source_time_ns, now_ns());
+          if (last_time_ns) period_ns = frame->source_time_ns - *last_time_ns;
+          last_time_ns = frame->source_time_ns;
           if (!wait_until(pacer.due_ns(frame->source_time_ns))) break;
         }
         if (slot_.put(std::move(*frame))) stats_.count("frames_dropped");
