@@ -179,6 +179,19 @@ TEST(KalibrCamchain, RefusesFisheyeOtherModelsAndMissingExtrinsicByName) {
             "no error");
 }
 
+TEST(CameraCalibration, OrbSlamSettingsFilesGoThroughTheSettingsReader) {
+  for (const char* name : {"EuRoC.yaml", "EuRoC_ORB-SLAM3.yaml"}) {
+    SCOPED_TRACE(name);
+    const fs::path file = test::source_dir() / "config/camera" / name;
+    EXPECT_EQ(detect_calibration_format(file), CalibrationFormat::kOrbSlam);
+    const StereoCalibration calibration = load_camera_calibration(file);
+    EXPECT_EQ(calibration.left.width_px, 752);
+    EXPECT_EQ(calibration.left.height_px, 480);
+    EXPECT_NO_THROW(StereoRectifier{calibration});
+  }
+  EXPECT_NE(std::string(to_string(CalibrationFormat::kOrbSlam)).find("ORB-SLAM"), std::string::npos);
+}
+
 TEST(KalibrCamchain, YamlFixedForOpenCv) {
   EXPECT_EQ(kalibr_yaml_for_opencv("cam1:\n  T_cn_cnm1:\n  - [1, 0]\n  - [0, 1]\n  x: [1]\n"),
             "%YAML:1.0\n---\ncam1:\n  T_cn_cnm1:\n    - [1, 0]\n    - [0, 1]\n  x: [1]\n");
