@@ -217,6 +217,7 @@ struct Collected {
   std::vector<std::string> warnings;
   CaptureCounts counts;
   std::string error;
+  std::string end_reason;
 };
 
 Collected capture_all(const std::string& source, CameraLayout layout, cv::Size calibrated = kSize,
@@ -238,6 +239,7 @@ Collected capture_all(const std::string& source, CameraLayout layout, cv::Size c
       out.error = error.what();
     }
     out.counts = capture.counts();
+    out.end_reason = capture.end_reason();
   } catch (const std::exception& error) {
     out.error = error.what();
   }
@@ -276,6 +278,7 @@ TEST(StereoCapture, EurocFoldersPairByStampCountUnpairedAndBackwardsStamps) {
   EXPECT_EQ(out.counts.stamps_backwards, 1u);
   ASSERT_EQ(out.warnings.size(), 1u);
   EXPECT_EQ(out.warnings[0], "stamps going backwards: frame stamped 180000000 ns after 200000000 ns; skipped");
+  EXPECT_EQ(out.end_reason, "end of " + (mav0 / "cam0").string() + " after 5 images");  // the stream that ended
 }
 
 TEST(StereoCapture, PlainSideBySideFolderStampsFromTheFirstStampAndFps) {

@@ -256,12 +256,8 @@ std::string StereoCapture::describe() const {
 }
 
 std::string StereoCapture::end_reason() const {
-  for (const auto& stream : streams_) {
-    // The first stream that ended (with two, the pairing stops at the first end).
-    if (stream->live()) return stream->end_reason();
-  }
-  return streams_.size() == 2 ? streams_[0]->end_reason() + ", " + streams_[1]->end_reason()
-                              : streams_[0]->end_reason();
+  // With two sources the pairing stops at the first that ends: that one is named.
+  return ended_ ? ended_->end_reason() : streams_.front()->end_reason();
 }
 
 std::size_t StereoCapture::frame_count() const {
@@ -274,6 +270,7 @@ std::optional<StreamImage> StereoCapture::read(ImageStream& stream) {
   const std::size_t unreadable_before = stream.unreadable();
   std::optional<StreamImage> image = stream.next();
   counts_.unreadable += stream.unreadable() - unreadable_before;
+  if (!image && !ended_) ended_ = &stream;
   if (image) {
     image->image = to_mono8(image->image, stream);
     image->time_ns = stamp_of(stream, image->time_ns);

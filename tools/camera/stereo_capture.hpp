@@ -116,6 +116,7 @@ class StereoCapture {
   CaptureCounts counts_;
   std::optional<std::int64_t> stamp_base_ns_;
   std::optional<std::int64_t> last_stamp_ns_;
+  const ImageStream* ended_ = nullptr;  // the stream whose end ended the capture
   bool said_converted_ = false;
 };
 
