@@ -35,7 +35,7 @@ runtime::Flags camera_flags(CameraOptions& options) {
       .number("--fps", "F", &options.fps, 0.0, kMaxFps,
               "image folders without data.csv: their rate (0: the calibration's);\ndevices: the rate asked")
       .number("--pair-tolerance-ms", "MS", &options.pair_tolerance_ms, 0.0, kMaxToleranceMs,
-              "two sources: most a left and a right stamp may differ to pair (10)")
+              "two sources: how far a left and a right stamp may differ to pair (10)")
       .integer("--first-stamp-ns", "NS", &options.first_stamp_ns, std::int64_t{0},
                std::numeric_limits<std::int64_t>::max(),
                "video files, folders without data.csv: stamp of the first frame (0: steady clock)")
