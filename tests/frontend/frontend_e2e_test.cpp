@@ -286,6 +286,11 @@ TEST(FrontendProcess, ShippedPipelinesPassTheSupervisorCheck) {
     const std::string pipeline = entry.path().stem().string();
     const fs::path dataset = pipeline.rfind("kitti", 0) == 0 ? kitti : euroc;
     std::vector<std::string> args{entry.path().string(), "--check", "--arg", "dataset=" + dataset.string()};
+    // heslam-camera's pipeline plays the EuRoC folder as a camera, calibrated by its sensor.yaml files
+    if (pipeline.rfind("camera", 0) == 0) {
+      args = {entry.path().string(),      "--check", "--arg",
+              "source=" + euroc.string(), "--arg",   "calibration=" + euroc.string()};
+    }
     // replay_spy writes no trajectory; the localize pipeline refuses to start without a saved map
     if (pipeline != "replay_spy") args.insert(args.end(), {"--arg", "output=/tmp/x.txt"});
     if (pipeline == "euroc_localize") args.insert(args.end(), {"--arg", "map=/tmp/x.map"});

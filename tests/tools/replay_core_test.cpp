@@ -13,6 +13,13 @@ namespace {
 
 constexpr std::int64_t kMs = 1'000'000;
 
+TEST(DecodeLead, TwiceTheRunningEstimatePlusAMargin) {
+  DecodeLead lead;
+  EXPECT_EQ(lead.lead_ns(), 22 * kMs);  // 2 x 10 ms (the initial estimate) + 2 ms
+  lead.record(5.0);                     // 10 + 0.2 x (5 - 10) = 9 ms
+  EXPECT_EQ(lead.lead_ns(), 20 * kMs);
+}
+
 TEST(ReplayPacer, RealTimeDoubleSpeedAndFlatOut) {
   ReplayPacer real_time(1.0);
   real_time.start(5000 * kMs, 100 * kMs);

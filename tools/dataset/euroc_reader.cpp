@@ -14,12 +14,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct CsvRow {
-  std::int64_t stamp_ns = 0;
-  fs::path image;
-  int line = 0;
-};
-
 std::string trim(const std::string& text) {
   const auto first = text.find_first_not_of(" \t\r");
   if (first == std::string::npos) return {};
@@ -27,8 +21,14 @@ std::string trim(const std::string& text) {
   return text.substr(first, last - first + 1);
 }
 
-// Reads "#timestamp [ns],filename" rows; stamps must strictly increase.
-std::vector<CsvRow> read_camera_csv(const fs::path& camera_dir) {
+std::string unpaired_message(const fs::path& camera_dir, const CsvRow& row, const char* other) {
+  return (camera_dir / "data.csv").string() + " line " + std::to_string(row.line) + ": stamp " +
+         std::to_string(row.stamp_ns) + " has no " + other + " frame within the stereo tolerance";
+}
+
+}  // namespace
+
+std::vector<CsvRow> read_camera_csv(const fs::path& camera_dir, StampOrder order) {
   const fs::path csv = camera_dir / "data.csv";
   std::ifstream in(csv);
   if (!in) throw std::runtime_error(csv.string() + ": cannot be opened (expected the EuRoC frame list)");
@@ -49,7 +49,7 @@ std::vector<CsvRow> read_camera_csv(const fs::path& camera_dir) {
       throw std::runtime_error(csv.string() + " line " + std::to_string(line) +
                                ": expected '<timestamp ns>,<file name>', got '" + text + "'");
     }
-    if (!rows.empty() && row.stamp_ns <= rows.back().stamp_ns) {
+    if (order == StampOrder::kIncreasing && !rows.empty() && row.stamp_ns <= rows.back().stamp_ns) {
       throw std::runtime_error(csv.string() + " line " + std::to_string(line) + ": stamp " +
                                std::to_string(row.stamp_ns) + " is not after the previous stamp " +
                                std::to_string(rows.back().stamp_ns) + " (stamps must increase)");
@@ -61,13 +61,6 @@ std::vector<CsvRow> read_camera_csv(const fs::path& camera_dir) {
   return rows;
 }
 
-std::string unpaired_message(const fs::path& camera_dir, const CsvRow& row, const char* other) {
-  return (camera_dir / "data.csv").string() + " line " + std::to_string(row.line) + ": stamp " +
-         std::to_string(row.stamp_ns) + " has no " + other + " frame within the stereo tolerance";
-}
-
-}  // namespace
-
 fs::path find_euroc_mav0(const fs::path& path) {
   if (fs::exists(path / "mav0" / "cam0" / "data.csv")) return path / "mav0";
   if (fs::exists(path / "cam0" / "data.csv")) return path;
@@ -77,8 +70,8 @@ fs::path find_euroc_mav0(const fs::path& path) {
 StereoDataset read_euroc(const fs::path& mav0_dir, const DatasetOptions& options) {
   const fs::path left_dir = mav0_dir / "cam0";
   const fs::path right_dir = mav0_dir / "cam1";
-  const std::vector<CsvRow> left = read_camera_csv(left_dir);
-  const std::vector<CsvRow> right = read_camera_csv(right_dir);
+  const std::vector<CsvRow> left = read_camera_csv(left_dir, StampOrder::kIncreasing);
+  const std::vector<CsvRow> right = read_camera_csv(right_dir, StampOrder::kIncreasing);
 
   StereoDataset dataset;
   if (options.load_calibration) dataset.calibration = load_euroc_calibration(mav0_dir);

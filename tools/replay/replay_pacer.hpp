@@ -32,4 +32,20 @@ class ReplayPacer {
   bool paused_ = false;
 };
 
+// How long before a frame is due to start decoding it, so that it leaves at its due time and its
+// decoding does not compete with the consumers' work on the previous frame: twice a running estimate
+// of one decoding (an exponential average) plus a margin. The replay's pairs and heslam-camera's
+// recordings (video files, folders) use it.
+class DecodeLead {
+ public:
+  void record(double decode_ms) { estimate_ms_ += kNewestWeight * (decode_ms - estimate_ms_); }
+  std::int64_t lead_ns() const { return static_cast<std::int64_t>(kFactor * estimate_ms_ * 1e6) + kMarginNs; }
+
+ private:
+  static constexpr double kFactor = 2.0;
+  static constexpr std::int64_t kMarginNs = 2'000'000;
+  static constexpr double kNewestWeight = 0.2;  // weight of the newest decoding in the estimate
+  double estimate_ms_ = 10.0;                   // before the first decoding: a 752x480 PNG pair
+};
+
 }  // namespace heslam

@@ -57,12 +57,6 @@ constexpr std::size_t kMaxListedWarnings = 5;
 // --loop keeps decoded pairs in memory up to this size (the EuRoC clip: 69 MB), so later passes
 // cost only the transport; longer recordings are decoded again on every pass.
 constexpr std::size_t kMaxLoopCacheBytes = std::size_t{512} << 20;
-// In rate mode a pair is decoded this long before it is due: twice the running estimate of one
-// pair's decoding (weight of the newest: kDecodeEstimateWeight) plus a margin.
-constexpr double kDecodeLeadFactor = 2.0;
-constexpr std::int64_t kDecodeLeadMarginNs = 2'000'000;
-constexpr double kInitialDecodeEstimateMs = 10.0;
-constexpr double kDecodeEstimateWeight = 0.2;
 // --loop with a single-frame recording: gap between passes.
 constexpr std::int64_t kSingleFrameLoopGapNs = 100'000'000;
 
@@ -215,7 +209,7 @@ class Replay {
         // then wait: it leaves at its due time, not due time + PNG decoding, and the decoding does
         // not compete for the cores with the consumers' work on the previous frame.
         if (!options_.lockstep && !is_cached(index) &&
-            !wait_until_due(frame.stamp_ns + pass_offset_ns, decode_lead_ns())) {
+            !wait_until_due(frame.stamp_ns + pass_offset_ns, decode_lead_.lead_ns())) {
           return finish();
         }
         std::optional<StereoImages> images = load(index);
@@ -357,10 +351,6 @@ class Replay {
 
   bool is_cached(std::size_t index) const { return index < decoded_.size() && decoded_[index].has_value(); }
 
-  std::int64_t decode_lead_ns() const {
-    return static_cast<std::int64_t>(kDecodeLeadFactor * decode_estimate_ms_ * 1e6) + kDecodeLeadMarginNs;
-  }
-
   // Decodes pair `index` on a helper thread while this one waits. The publishing thread then does
   // no decoding: the scheduler does not charge it that CPU time, so a subscriber's wake-up does not
   // preempt it between the datagrams of a frame (measured: decoding on this thread made each 722 KB
@@ -426,7 +416,7 @@ class Replay {
       return std::nullopt;
     }
     stats_.record_ms("load", pair.decode_ms);
-    decode_estimate_ms_ += kDecodeEstimateWeight * (pair.decode_ms - decode_estimate_ms_);
+    decode_lead_.record(pair.decode_ms);
     const StereoImages& images = *pair.images;
     if (options_.loop && decoded_.empty()) {
       const std::size_t pair_bytes = images.left.total() * images.left.elemSize() * 2;
@@ -593,7 +583,7 @@ class Replay {
   std::vector<std::optional<StereoImages>> decoded_;  // --loop / --preload cache, empty when not caching
   std::vector<bool> preload_failed_;                  // --preload: pairs that could not be decoded
   std::uint64_t seq_ = 0;
-  double decode_estimate_ms_ = kInitialDecodeEstimateMs;
+  DecodeLead decode_lead_;  // rate mode: how long before its due time a pair is decoded
   std::int64_t start_ns_ = 0;
   std::int64_t paused_since_ns_ = 0;
   std::int64_t paused_total_ns_ = 0;
