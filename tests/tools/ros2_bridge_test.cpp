@@ -2,6 +2,8 @@
 // known values, and the real bridge process republishing odometry, the keyframe path and map points
 // to a subscriber that uses only the ROS 2 types and topic names (as a ROS 2 node would; ROS 2 itself
 // is not installable here).
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -110,6 +112,27 @@ TEST(Ros2Tf, TfMessageNamesParentAndChildAndCarriesTheTransform) {
   EXPECT_NEAR(first.transform.rotation.w, std::cos(0.15), 1e-12);
   EXPECT_EQ(std::string(tf.transforms._buffer[1].header.frame_id), "odom");
   EXPECT_EQ(std::string(tf.transforms._buffer[1].child_frame_id), "base_link");
+}
+
+// heslam's T_wc_covariance (upper triangle over rotation x y z, position x y z) -> ROS 2's full 6x6 over
+// x y z, rotation x y z: entry (i, j) of heslam's matrix is 10 i + j, so each ROS 2 entry names its source.
+TEST(Ros2Conversions, CovarianceIsReorderedToRos2sPositionFirstAndMirrored) {
+  double upper[21];
+  int k = 0;
+  for (int row = 0; row < 6; ++row) {
+    for (int col = row; col < 6; ++col) upper[k++] = 10.0 * row + col;
+  }
+  const std::array<double, 36> ros = ros_pose_covariance(upper);
+  const int heslam_index[6] = {3, 4, 5, 0, 1, 2};
+  for (int row = 0; row < 6; ++row) {
+    for (int col = 0; col < 6; ++col) {
+      const int a = std::min(heslam_index[row], heslam_index[col]), b = std::max(heslam_index[row], heslam_index[col]);
+      EXPECT_EQ(ros[static_cast<std::size_t>(6 * row + col)], 10.0 * a + b) << row << ", " << col;
+    }
+  }
+  EXPECT_EQ(ros[0], 33.0);  // var(x) = heslam's position x variance
+  EXPECT_EQ(ros[21], 0.0);  // var(rotation about X) = heslam's (0, 0)
+  EXPECT_EQ(ros[3], 3.0);   // cov(x, rotation about X)
 }
 
 TEST(Ros2Conversions, OdometryPathAndCloudCarryTheValues) {

@@ -2,6 +2,7 @@
 // images with an explicit rectification, or images already rectified), sensor_msgs/Image -> packed
 // MONO8 / BGR8, and every refusal one line naming the topic and the field.
 #include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -181,6 +182,44 @@ TEST(Ros2Input, BadImagesAreOneLineNamingTopicAndField) {
             "topic 'stereo/left/image_raw': field step: 6 is less than width x channels = 18");
   EXPECT_EQ(image_refusal(image_of(mono8, 6, 3, 6, data), 0, 0),
             "topic 'stereo/left/image_raw': field data: 12 bytes, expected step x height = 18");
+}
+
+PackedImage grey_image(std::uint8_t value) {
+  PackedImage image;
+  image.width_px = 1;
+  image.height_px = 1;
+  image.pixels = {value};
+  return image;
+}
+
+// Left and right meet by stamp in any order; an image whose partner never came is dropped and counted
+// once a later pair is made; a stamp not after the last pair's is refused with a line.
+TEST(Ros2Input, PairsByStampCountsUnpairedAndRefusesStampsGoingBackwards) {
+  using Side = StereoPairer::Side;
+  StereoPairer pairer;
+  EXPECT_FALSE(pairer.add(Side::kLeft, 100, grey_image(1)));
+  const std::optional<StereoPairer::Pair> first = pairer.add(Side::kRight, 100, grey_image(2));
+  ASSERT_TRUE(first);
+  EXPECT_EQ(first->stamp_ns, 100);
+  EXPECT_EQ(first->left.pixels[0], 1);
+  EXPECT_EQ(first->right.pixels[0], 2);
+  EXPECT_FALSE(pairer.add(Side::kLeft, 200, grey_image(3)));  // its right image is lost
+  EXPECT_FALSE(pairer.add(Side::kRight, 300, grey_image(4)));
+  const std::optional<StereoPairer::Pair> second = pairer.add(Side::kLeft, 300, grey_image(5));
+  ASSERT_TRUE(second);
+  EXPECT_EQ(second->left.pixels[0], 5);
+  EXPECT_EQ(second->right.pixels[0], 4);
+  EXPECT_EQ(pairer.unpaired(), 1u);
+  try {
+    pairer.add(Side::kRight, 250, grey_image(6));
+    ADD_FAILURE() << "a stamp before the last pair's was taken";
+  } catch (const std::exception& error) {
+    EXPECT_EQ(std::string(error.what()),
+              "stamp 250 ns is not after the last pair's 300 ns (stamps going backwards, or too late)");
+  }
+  // A side that runs ahead keeps at most kMaxPending images.
+  for (std::int64_t stamp = 400; stamp < 400 + 10 * 10; stamp += 10) pairer.add(Side::kLeft, stamp, grey_image(7));
+  EXPECT_EQ(pairer.unpaired(), 1u + 10u - StereoPairer::kMaxPending);
 }
 
 }  // namespace
