@@ -14,6 +14,8 @@
 #include "components/core/map/ids.hpp"
 #include "components/core/mapping/map_file.hpp"
 #include "components/core/place/vocabulary_setting.hpp"
+#include "components/core/tracking/optimize_frame.hpp"
+#include "components/core/tracking/pose_covariance.hpp"
 #include "components/core/tracking/settings_file.hpp"
 #include "components/messages/camera.hpp"
 #include "components/messages/checks.hpp"
@@ -91,6 +93,14 @@ void log_stage_summary(const runtime::Logger& log, const runtime::Stats& stats) 
     }
   }
   log.info("peak RSS ", peak_resident_bytes() / (1024 * 1024), " MiB");
+}
+
+// The covariance of the last tracked frame's pose from its inliers of the last pose optimization
+// (components/core/tracking/pose_covariance.hpp), for Odometry.T_wc_covariance; tracking does not use it.
+std::optional<PoseCovariance> tracked_pose_covariance(const Tracker& tracker) {
+  const Frame& frame = tracker.last_frame();
+  return pose_covariance(tracker.camera(), frame_observations(frame, tracker.local_map()), frame.T_cw(),
+                         tracker.options().disparity_sigma_ratio);
 }
 
 }  // namespace
@@ -479,7 +489,9 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
       mirror_.own_keyframe(result.new_keyframe->id, result.new_keyframe_reference, mirror_.version().complete());
     }
   }
-  const messages::OdometryMessage odometry(frame.stamp_ns, frame.seq, result, output.keypoints, output.timings);
+  const messages::OdometryMessage odometry(
+      frame.stamp_ns, frame.seq, result, output.keypoints, output.timings, T_wo_,
+      result.pose_valid() ? tracked_pose_covariance(processor_->tracker()) : std::nullopt);
   if (odometry_writer_->write(odometry.get()) == runtime::WriteResult::kTimeout) stats().count("odometry_timeouts");
   if (resumed_unfinished_seqs_.erase(frame.seq) == 0) stats().count(runtime::kOdometryFrames);
   if (journal_ && result.new_keyframe) journal_->append(odometry.get(), /*finished=*/false);
@@ -584,13 +596,21 @@ void Frontend::mirror_map_state() {
     // A loop correction's batch: keyframes we made meanwhile moved with their reference keyframe
     // (the mapper moves them alike), and the last frame follows its own (ORB-SLAM2's UpdateLastFrame),
     // so the motion model predicts the next frame in the corrected map.
-    processor_->tracker().follow_reference_keyframe();
+    follow_loop_correction();
     stats().count("corrections_followed");
     stats().count("keyframes_moved_by_corrections", static_cast<std::uint64_t>(applied.keyframes_moved));
     log().info("loop correction in the mirror at map version ", mirror_.version().complete(), ": ",
                applied.keyframe_states, " keyframe and ", applied.point_states, " point states, ",
                applied.keyframes_moved, " of our keyframes in flight moved with their reference keyframe");
   }
+}
+
+void Frontend::follow_loop_correction() {
+  Tracker& tracker = processor_->tracker();
+  const Pose3 T_wc_before = tracker.last_frame().T_wc;
+  tracker.follow_reference_keyframe();
+  // The last frame's jump goes into odom -> world, so Odometry.T_oc continues without it (REP 105).
+  T_wo_ = tracker.last_frame().T_wc * T_wc_before.inverse() * T_wo_;
 }
 
 void Frontend::use_keyframe_done(const HeldKeyframeDone& done) {
@@ -600,7 +620,7 @@ void Frontend::use_keyframe_done(const HeldKeyframeDone& done) {
     if (processor_ && !mirror_.correction_acknowledged(done.map_version)) {
       // Applied already as an ordinary batch: our keyframes in flight were not moved (the mapper
       // still moves them, and their states bring them here), the last frame can still follow.
-      processor_->tracker().follow_reference_keyframe();
+      follow_loop_correction();
       stats().count("corrections_seen_late");
     }
     return;

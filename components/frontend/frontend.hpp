@@ -49,6 +49,9 @@ class Frontend : public runtime::Component {
   void log_rejections();
   // Applies whatever map state the mapper published so far.
   void mirror_map_state();
+  // The tracker's last frame follows its reference keyframe after a loop correction (ORB-SLAM2's
+  // UpdateLastFrame); the jump is kept in T_wo_.
+  void follow_loop_correction();
   // With a mapper: mirror its stored map into a new processor's tracker and, when it holds
   // keyframes (this frontend was restarted), relocalize in it instead of starting a new map.
   void resume_in_mapper_map();
@@ -116,6 +119,8 @@ class Frontend : public runtime::Component {
   // map version this mirror holds (the tracker's own map.version also counts the keyframes it
   // inserted, so it cannot say that).
   BatchedMirror mirror_;
+  // odom -> world (REP 105 map -> odom): the loop corrections followed so far, left out of Odometry.T_oc.
+  Pose3 T_wo_ = Pose3::Identity();
   // --localize: the seq of the first frame tracked in the saved map, unset until then.
   std::optional<std::uint64_t> relocalized_at_seq_;
 };

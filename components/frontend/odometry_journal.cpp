@@ -43,6 +43,7 @@ bool read_record(const std::string& record, msg::Odometry& odometry, bool& finis
       state != heslam_msg_TRACKING_LOST) {
     return false;
   }
+  odometry.T_oc = odometry.T_wc;  // not journaled: a restarted frontend's odom starts again at the world
   odometry.seq = seq;
   odometry.stamp_ns = stamp_ns;
   odometry.state = static_cast<heslam_msg_TrackingState>(state);

@@ -27,7 +27,8 @@ heslam_msg_TrackingState to_message(TrackingState state) {
 }
 
 OdometryMessage::OdometryMessage(std::int64_t stamp_ns, std::uint64_t seq, const TrackResult& result,
-                                 std::uint32_t keypoints, const std::vector<StageTiming>& timings) {
+                                 std::uint32_t keypoints, const std::vector<StageTiming>& timings, const Pose3& T_wo,
+                                 const std::optional<PoseCovariance>& covariance) {
   message_.stamp_ns = stamp_ns;
   message_.seq = seq;
   message_.state = to_message(result.state);
@@ -35,6 +36,13 @@ OdometryMessage::OdometryMessage(std::int64_t stamp_ns, std::uint64_t seq, const
   message_.T_wc = to_message(result.pose_valid() ? result.T_wc : Pose3::Identity());
   message_.reference_keyframe_id = result.pose_valid() ? result.reference_kf : kNoId;
   message_.T_ref_c = to_message(result.pose_valid() ? result.T_ref_c : Pose3::Identity());
+  message_.T_oc = to_message(result.pose_valid() ? Pose3(T_wo.inverse() * result.T_wc) : Pose3::Identity());
+  if (result.pose_valid() && covariance) {
+    std::size_t k = 0;
+    for (int row = 0; row < 6; ++row) {
+      for (int col = row; col < 6; ++col) message_.T_wc_covariance[k++] = covariance->covariance_wc(row, col);
+    }
+  }
   message_.keypoints = keypoints;
   message_.tracked_points = static_cast<std::uint32_t>(std::max(0, result.tracked_points));
   message_.keyframe_created = result.new_keyframe.has_value();

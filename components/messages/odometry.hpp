@@ -3,9 +3,11 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "components/core/tracking/pose_covariance.hpp"
 #include "components/core/tracking/tracker.hpp"
 #include "runtime/messages.hpp"
 
@@ -18,8 +20,11 @@ struct StageTiming {
 
 class OdometryMessage {
  public:
+  // T_wo: odom -> world (the loop corrections followed so far); T_oc = T_wo^-1 T_wc. covariance: of T_wc
+  // (pose_covariance.hpp), zeros without one.
   OdometryMessage(std::int64_t stamp_ns, std::uint64_t seq, const TrackResult& result, std::uint32_t keypoints,
-                  const std::vector<StageTiming>& timings);
+                  const std::vector<StageTiming>& timings, const Pose3& T_wo = Pose3::Identity(),
+                  const std::optional<PoseCovariance>& covariance = std::nullopt);
   OdometryMessage(const OdometryMessage&) = delete;
   OdometryMessage& operator=(const OdometryMessage&) = delete;
   const msg::Odometry& get() const { return message_; }

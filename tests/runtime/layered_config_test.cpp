@@ -81,9 +81,11 @@ TEST_F(LayeredConfig, EveryShippedPipelineLaysTheUsersComponentConfigOverItsOwn)
     if (name == "replay_spy") continue;  // no component configs
     SCOPED_TRACE(name);
     supervisor::PipelineOverrides overrides;
-    // A camera pipeline's input is its source (heslam-camera), the others' a dataset.
-    const std::string input = name.rfind("camera", 0) == 0 ? "source" : "dataset";
-    overrides.args = {{input, dir_.path().string()}, {"frontend_config", user_frontend.string()}};
+    overrides.args = {{"frontend_config", user_frontend.string()}};
+    // A camera pipeline's input is its source (heslam-camera), ros2_input's a ROS 2 camera
+    // (heslam-ros2-input), the others' a dataset.
+    if (name.rfind("camera", 0) == 0) overrides.args["source"] = dir_.path().string();
+    if (name.rfind("camera", 0) != 0 && name != "ros2_input") overrides.args["dataset"] = dir_.path().string();
     const bool has_mapper = name.find("odometry") == std::string::npos;
     if (has_mapper) overrides.args["mapper_config"] = user_mapper.string();
     const supervisor::LoadResult result = supervisor::load_pipeline(entry.path(), overrides, test::bin_dir());

@@ -2,6 +2,8 @@
 // known values, and the real bridge process republishing odometry, the keyframe path and map points
 // to a subscriber that uses only the ROS 2 types and topic names (as a ROS 2 node would; ROS 2 itself
 // is not installable here).
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -11,6 +13,8 @@
 #include <thread>
 
 #include <dds/ddsi/ddsi_serdata.h>
+
+#include <Eigen/Geometry>
 
 #include <gtest/gtest.h>
 
@@ -22,6 +26,7 @@
 #include "runtime/writer.hpp"
 #include "test_support.hpp"
 #include "tools/ros2_bridge/ros2_conversions.hpp"
+#include "tools/ros2_bridge/tf_tree.hpp"
 
 namespace heslam::ros2 {
 namespace {
@@ -37,6 +42,8 @@ TEST(Ros2Types, TypeNamesAreRos2s) {
   EXPECT_STREQ(nav_msgs_msg_dds__Odometry__desc.m_typename, "nav_msgs::msg::dds_::Odometry_");
   EXPECT_STREQ(nav_msgs_msg_dds__Path__desc.m_typename, "nav_msgs::msg::dds_::Path_");
   EXPECT_STREQ(sensor_msgs_msg_dds__PointCloud2__desc.m_typename, "sensor_msgs::msg::dds_::PointCloud2_");
+  EXPECT_STREQ(geometry_msgs_msg_dds__TransformStamped__desc.m_typename, "geometry_msgs::msg::dds_::TransformStamped_");
+  EXPECT_STREQ(tf2_msgs_msg_dds__TFMessage__desc.m_typename, "tf2_msgs::msg::dds_::TFMessage_");
   EXPECT_EQ(ros2_topic("heslam/odometry"), "rt/heslam/odometry");
   // Field layout: sizes of the fixed parts as the ROS 2 definitions give them.
   EXPECT_EQ(sizeof(Odometry{}.pose.covariance) / sizeof(double), 36u);
@@ -60,6 +67,72 @@ msg::Pose test_pose(double x) {
   pose.orientation_xyzw[2] = std::sqrt(0.5);
   pose.orientation_xyzw[3] = std::sqrt(0.5);
   return pose;
+}
+
+Pose3 pose3(double angle_rad, const Eigen::Vector3d& axis, const Eigen::Vector3d& t) {
+  Pose3 T = Pose3::Identity();
+  T.linear() = Eigen::AngleAxisd(angle_rad, axis.normalized()).toRotationMatrix();
+  T.translation() = t;
+  return T;
+}
+
+double pose_difference(const Pose3& a, const Pose3& b) { return (a.matrix() - b.matrix()).cwiseAbs().maxCoeff(); }
+
+// map -> odom -> base_link composes to the body pose of the recorder (T_B_rect T_wc T_B_rect^-1), and a
+// loop correction (a jump of T_wc with the same T_oc) moves map -> odom only.
+TEST(Ros2Tf, Rep105TransformsComposeToTheBodyPoseAndCorrectionsStayInMapToOdom) {
+  const Pose3 T_B_rect = pose3(1.6, {0.2, -1.0, 0.3}, {-0.02, 0.07, 0.01});
+  const Pose3 T_oc = pose3(0.4, {0.0, 1.0, 0.1}, {1.0, 0.2, 3.0});
+  const Pose3 correction = pose3(0.05, {0.0, 1.0, 0.0}, {0.3, 0.0, -0.1});
+  for (const Pose3& T_wo : {Pose3(Pose3::Identity()), correction}) {
+    const Pose3 T_wc = T_wo * T_oc;
+    const Rep105Transforms tf = rep105_transforms(T_wc, T_oc, T_B_rect);
+    EXPECT_LT(pose_difference(tf.T_map_odom * tf.T_odom_base, T_B_rect * T_wc * T_B_rect.inverse()), 1e-12);
+    EXPECT_LT(pose_difference(tf.T_odom_base, T_B_rect * T_oc * T_B_rect.inverse()), 1e-12);
+    // base_link -> camera on /tf_static closes the chain to the tracked camera in map (= world moved by T_B_rect).
+    EXPECT_LT(pose_difference(tf.T_map_odom * tf.T_odom_base * base_to_camera(T_B_rect), map_to_world(T_B_rect) * T_wc),
+              1e-12);
+  }
+  EXPECT_LT(pose_difference(rep105_transforms(T_oc, T_oc, T_B_rect).T_map_odom, Pose3::Identity()), 1e-12);
+}
+
+TEST(Ros2Tf, TfMessageNamesParentAndChildAndCarriesTheTransform) {
+  const Frames frames;
+  const Pose3 T = pose3(0.3, {1.0, 0.0, 0.0}, {1.0, 2.0, 3.0});
+  const TfMessage message(1'500'000'000, {{frames.map, frames.odom, T}, {frames.odom, frames.base, T.inverse()}});
+  const TFMessage& tf = message.get();
+  ASSERT_EQ(tf.transforms._length, 2u);
+  const TransformStamped& first = tf.transforms._buffer[0];
+  EXPECT_EQ(std::string(first.header.frame_id), "map");
+  EXPECT_EQ(std::string(first.child_frame_id), "odom");
+  EXPECT_EQ(first.header.stamp.sec, 1);
+  EXPECT_EQ(first.header.stamp.nanosec, 500000000u);
+  EXPECT_DOUBLE_EQ(first.transform.translation.z, 3.0);
+  EXPECT_NEAR(first.transform.rotation.x, std::sin(0.15), 1e-12);
+  EXPECT_NEAR(first.transform.rotation.w, std::cos(0.15), 1e-12);
+  EXPECT_EQ(std::string(tf.transforms._buffer[1].header.frame_id), "odom");
+  EXPECT_EQ(std::string(tf.transforms._buffer[1].child_frame_id), "base_link");
+}
+
+// heslam's T_wc_covariance (upper triangle over rotation x y z, position x y z) -> ROS 2's full 6x6 over
+// x y z, rotation x y z: entry (i, j) of heslam's matrix is 10 i + j, so each ROS 2 entry names its source.
+TEST(Ros2Conversions, CovarianceIsReorderedToRos2sPositionFirstAndMirrored) {
+  double upper[21];
+  int k = 0;
+  for (int row = 0; row < 6; ++row) {
+    for (int col = row; col < 6; ++col) upper[k++] = 10.0 * row + col;
+  }
+  const std::array<double, 36> ros = ros_pose_covariance(upper);
+  const int heslam_index[6] = {3, 4, 5, 0, 1, 2};
+  for (int row = 0; row < 6; ++row) {
+    for (int col = 0; col < 6; ++col) {
+      const int a = std::min(heslam_index[row], heslam_index[col]), b = std::max(heslam_index[row], heslam_index[col]);
+      EXPECT_EQ(ros[static_cast<std::size_t>(6 * row + col)], 10.0 * a + b) << row << ", " << col;
+    }
+  }
+  EXPECT_EQ(ros[0], 33.0);  // var(x) = heslam's position x variance
+  EXPECT_EQ(ros[21], 0.0);  // var(rotation about X) = heslam's (0, 0)
+  EXPECT_EQ(ros[3], 3.0);   // cov(x, rotation about X)
 }
 
 TEST(Ros2Conversions, OdometryPathAndCloudCarryTheValues) {
@@ -178,10 +251,27 @@ TEST(Ros2BridgeProcess, HelpListsTopicsAndConfigFields) {
         "  map/points              -> rt/NS/map_points           sensor_msgs/PointCloud2 (transient local)\n",
         "  ros_namespace     ROS 2 namespace of the topics (default heslam)\n",
         "  world_frame       frame_id of poses, path and cloud (default heslam_world)\n",
-        "  camera_frame      child_frame_id of the odometry (default heslam_camera)\n",
+        "  camera_frame      child_frame_id of the odometry, child of base_frame (default heslam_camera)\n",
+        "  map_frame         REP 105 map: the body at the first keyframe (default map)\n",
+        "  odom_frame        REP 105 odom: continuous, without loop corrections (default odom)\n",
+        "  base_frame        the body (calibration T_BS; default base_link)\n",
+        "  odometry                -> rt/tf                      tf2_msgs/TFMessage: map -> odom -> base_link\n",
         "  publish_period_s  how often a changed path / cloud is sent, s (default 1)\n"}) {
     EXPECT_NE(text.find(line), std::string::npos) << "missing: " << line << "in:\n" << text;
   }
+}
+
+// heslam's world (the first rectified camera) is a child of map (the body at the first keyframe): one
+// name for both would make the TF tree lie, so it is refused with a line naming the fields.
+TEST(Ros2BridgeProcess, RefusesOneNameForTwoFrames) {
+  const test::ScratchDir dir("ros2_bridge_frames");
+  std::ofstream(dir.path() / "bridge.yaml") << "world_frame: map\n";
+  test::ChildProcess bridge(
+      test::bin_dir() / "heslam-ros2-bridge",
+      {"--domain", std::to_string(test::exclusive_domain_id()), "--config", (dir.path() / "bridge.yaml").string()},
+      dir.path(), "bridge_frames");
+  EXPECT_NE(bridge.wait(seconds(30)).value_or(0), 0);
+  EXPECT_NE(bridge.err().find("world_frame and map_frame are both 'map'"), std::string::npos) << bridge.err();
 }
 
 TEST(Ros2BridgeProcess, RepublishesOdometryPathAndPointsOnRos2Topics) {
@@ -199,7 +289,7 @@ TEST(Ros2BridgeProcess, RepublishesOdometryPathAndPointsOnRos2Topics) {
   Ros2Subscriber<PointCloud2> ros_cloud(participant, &sensor_msgs_msg_dds__PointCloud2__desc, "rt/heslam/map_points",
                                         true);
 
-  std::ofstream(dir.path() / "bridge.yaml") << "publish_period_s: 0.2\nworld_frame: map\n";
+  std::ofstream(dir.path() / "bridge.yaml") << "publish_period_s: 0.2\nworld_frame: slam_world\n";
   test::ChildProcess bridge(test::bin_dir() / "heslam-ros2-bridge",
                             {"--domain", std::to_string(domain), "--config", (dir.path() / "bridge.yaml").string()},
                             dir.path(), "bridge");
@@ -238,7 +328,7 @@ TEST(Ros2BridgeProcess, RepublishesOdometryPathAndPointsOnRos2Topics) {
     odometry_seen = ros_odometry.wait_for(
         [](const Odometry& o) {
           return o.header.stamp.sec == 2 && o.header.stamp.nanosec == 123u && o.pose.pose.position.x == 4.0 &&
-                 std::string(o.header.frame_id) == "map" && std::string(o.child_frame_id) == "heslam_camera";
+                 std::string(o.header.frame_id) == "slam_world" && std::string(o.child_frame_id) == "heslam_camera";
         },
         seconds(0));
     if (!odometry_seen) std::this_thread::sleep_for(milliseconds(100));
@@ -257,7 +347,7 @@ TEST(Ros2BridgeProcess, RepublishesOdometryPathAndPointsOnRos2Topics) {
         if (cloud.width != 2 || cloud.data._length != 24) return false;
         float first[3];
         std::memcpy(first, cloud.data._buffer, sizeof first);
-        return first[0] == 1.0f && first[1] == 10.0f && std::string(cloud.header.frame_id) == "map";
+        return first[0] == 1.0f && first[1] == 10.0f && std::string(cloud.header.frame_id) == "slam_world";
       },
       seconds(10)))
       << bridge.err();

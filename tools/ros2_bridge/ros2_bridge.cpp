@@ -1,10 +1,16 @@
 // heslam-ros2-bridge: heslam topics in, ROS 2 topics out (see ros2_bridge.hpp).
 #include "tools/ros2_bridge/ros2_bridge.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <stdexcept>
+#include <utility>
 
+#include "components/core/camera/stereo_rectifier.hpp"
+#include "components/messages/camera.hpp"
+#include "components/messages/pose.hpp"
 #include "runtime/wire_enum.hpp"
+#include "tools/ros2_bridge/tf_tree.hpp"
 
 namespace heslam::ros2 {
 
@@ -14,6 +20,8 @@ namespace {
 constexpr int kRosDefaultDepth = 10;
 constexpr double kMinPublishPeriod_s = 0.05;
 constexpr double kMaxPublishPeriod_s = 60.0;
+// Odometry.T_oc of a frontend is normalised; one zeroed or far off did not come from a frontend.
+constexpr double kUnitQuaternionTolerance = 1e-6;
 
 runtime::Qos stream_qos() {
   return runtime::Qos(runtime::QosRole::kOdometry).keep_last(kRosDefaultDepth).volatile_durability();
@@ -23,6 +31,40 @@ runtime::Qos stream_qos() {
 // cloud; volatile ROS 2 subscribers still match.
 runtime::Qos latched_qos() { return runtime::Qos(runtime::QosRole::kCalibration).keep_last(1).transient_local(1); }
 
+// As tf2_ros's broadcasters (tf2_ros/qos.hpp): /tf is DynamicBroadcasterQoS (reliable, volatile, keep last
+// 100), /tf_static StaticBroadcasterQoS (reliable, transient local, keep last 1: one message holding
+// every static transform, replayed to late joiners).
+constexpr int kTfDepth = 100;
+runtime::Qos tf_qos() { return runtime::Qos(runtime::QosRole::kOdometry).keep_last(kTfDepth).volatile_durability(); }
+runtime::Qos tf_static_qos() { return latched_qos(); }
+
+// tf2 refuses frame ids with a leading '/'; the TF tree needs one name per frame.
+void check_frame_names(const Frames& frames) {
+  const std::pair<const char*, const std::string*> names[] = {{"world_frame", &frames.world},
+                                                              {"camera_frame", &frames.camera},
+                                                              {"map_frame", &frames.map},
+                                                              {"odom_frame", &frames.odom},
+                                                              {"base_frame", &frames.base}};
+  for (const auto& [field, name] : names) {
+    if (name->empty() || name->front() == '/') {
+      throw std::runtime_error(std::string(field) + ": '" + *name +
+                               "': expected a tf2 frame id (not empty, no leading '/')");
+    }
+    for (const auto& [other_field, other] : names) {
+      if (field != other_field && *name == *other) {
+        throw std::runtime_error(std::string(field) + " and " + other_field + " are both '" + *name +
+                                 "': each frame of the TF tree needs its own name (docs/ros2.md, Frames)");
+      }
+    }
+  }
+}
+
+bool is_unit_quaternion(const msg::Pose& pose) {
+  const double* q = pose.orientation_xyzw;
+  const double norm2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+  return std::abs(norm2 - 1.0) < kUnitQuaternionTolerance;
+}
+
 }  // namespace
 
 BridgeOptions BridgeOptions::from(const runtime::Config& config) {
@@ -30,6 +72,10 @@ BridgeOptions BridgeOptions::from(const runtime::Config& config) {
   options.ros_namespace = config.get_string("ros_namespace", options.ros_namespace);
   options.frames.world = config.get_string("world_frame", options.frames.world);
   options.frames.camera = config.get_string("camera_frame", options.frames.camera);
+  options.frames.map = config.get_string("map_frame", options.frames.map);
+  options.frames.odom = config.get_string("odom_frame", options.frames.odom);
+  options.frames.base = config.get_string("base_frame", options.frames.base);
+  check_frame_names(options.frames);
   options.publish_period_s =
       config.get_double("publish_period_s", options.publish_period_s, kMinPublishPeriod_s, kMaxPublishPeriod_s);
   if (options.ros_namespace.empty() || options.ros_namespace.front() == '/' || options.ros_namespace.back() == '/') {
@@ -50,6 +96,9 @@ std::string Ros2Bridge::help_notes() {
          "                          -> rt/NS/pose                 geometry_msgs/PoseStamped\n"
          "  map/keyframes + states  -> rt/NS/keyframe_trajectory  nav_msgs/Path (transient local)\n"
          "  map/points              -> rt/NS/map_points           sensor_msgs/PointCloud2 (transient local)\n"
+         "  odometry                -> rt/tf                      tf2_msgs/TFMessage: map -> odom -> base_link\n"
+         "  camera/calibration      -> rt/tf_static               tf2_msgs/TFMessage: base_link -> camera_frame,\n"
+         "                                                        map -> world_frame (transient local)\n"
          "Config fields (--config FILE, all optional):\n"
          "  ros_namespace     ROS 2 namespace of the topics (default " +
          defaults.ros_namespace +
@@ -57,8 +106,17 @@ std::string Ros2Bridge::help_notes() {
          "  world_frame       frame_id of poses, path and cloud (default " +
          defaults.frames.world +
          ")\n"
-         "  camera_frame      child_frame_id of the odometry (default " +
+         "  camera_frame      child_frame_id of the odometry, child of base_frame (default " +
          defaults.frames.camera +
+         ")\n"
+         "  map_frame         REP 105 map: the body at the first keyframe (default " +
+         defaults.frames.map +
+         ")\n"
+         "  odom_frame        REP 105 odom: continuous, without loop corrections (default " +
+         defaults.frames.odom +
+         ")\n"
+         "  base_frame        the body (calibration T_BS; default " +
+         defaults.frames.base +
          ")\n"
          "  publish_period_s  how often a changed path / cloud is sent, s (default " +
          period + ")\n";
@@ -75,6 +133,14 @@ void Ros2Bridge::configure(const runtime::Config& config) {
                        latched_qos());
   cloud_writer_.emplace(participant(), &sensor_msgs_msg_dds__PointCloud2__desc, ros2_topic(prefix + "map_points"),
                         latched_qos());
+  // /tf and /tf_static are global ROS 2 names (tf2 listens there), not under the namespace.
+  tf_writer_.emplace(participant(), &tf2_msgs_msg_dds__TFMessage__desc, ros2_topic("tf"), tf_qos());
+  tf_static_writer_.emplace(participant(), &tf2_msgs_msg_dds__TFMessage__desc, ros2_topic("tf_static"),
+                            tf_static_qos());
+
+  subscribe(topics().calibration(), [this](runtime::Received<msg::StereoCalibration>& received) {
+    if (received.info.valid_data) on_calibration(*received.sample);
+  });
 
   subscribe(topics().odometry(), [this](runtime::Received<msg::Odometry>& received) {
     if (received.info.valid_data) on_odometry(*received.sample);
@@ -105,7 +171,8 @@ void Ros2Bridge::configure(const runtime::Config& config) {
     cloud_changed_ = true;
   });
   log().info("ROS 2 topics: rt/", prefix, "odometry, rt/", prefix, "pose, rt/", prefix, "keyframe_trajectory, rt/",
-             prefix, "map_points (frame '", options_.frames.world, "')");
+             prefix, "map_points (frame '", options_.frames.world, "'), rt/tf (", options_.frames.map, " -> ",
+             options_.frames.odom, " -> ", options_.frames.base, "), rt/tf_static");
 }
 
 void Ros2Bridge::on_odometry(const msg::Odometry& odometry) {
@@ -118,6 +185,47 @@ void Ros2Bridge::on_odometry(const msg::Odometry& odometry) {
   odometry_writer_->write(OdometryMessage(odometry, options_.frames).get());
   pose_writer_->write(PoseStampedMessage(odometry.stamp_ns, odometry.T_wc, options_.frames).get());
   stats().count("odometry_published");
+  publish_tf(odometry);
+}
+
+void Ros2Bridge::publish_tf(const msg::Odometry& odometry) {
+  if (!T_B_rect_) {
+    // The body frame comes with the calibration (transient local: it precedes the frames of a run).
+    stats().count("tf_skipped_without_calibration");
+    log().warn_throttled("tf_skipped_without_calibration", "frame ", odometry.seq, ": no calibration on ",
+                         topics().calibration().name, " yet: no TF for it (the body frame is unknown)");
+    return;
+  }
+  if (!is_unit_quaternion(odometry.T_oc)) {
+    stats().count("tf_skipped_bad_T_oc");
+    log().warn_throttled("tf_skipped_bad_T_oc", "topic ", topics().odometry().name, ": frame ", odometry.seq,
+                         ": field T_oc has no unit quaternion (not from a heslam frontend of this schema): no TF");
+    return;
+  }
+  const Rep105Transforms tf =
+      rep105_transforms(messages::to_pose(odometry.T_wc), messages::to_pose(odometry.T_oc), *T_B_rect_);
+  tf_writer_->write(TfMessage(odometry.stamp_ns, {{options_.frames.map, options_.frames.odom, tf.T_map_odom},
+                                                  {options_.frames.odom, options_.frames.base, tf.T_odom_base}})
+                        .get());
+  stats().count("tf_published");
+}
+
+void Ros2Bridge::on_calibration(const msg::StereoCalibration& calibration) {
+  Pose3 T_B_rect;
+  try {
+    // The frontend's own rectification of the same calibration, hence its rectified camera exactly.
+    T_B_rect = StereoRectifier(messages::to_calibration(calibration)).T_B_rect();
+  } catch (const std::exception& error) {
+    stats().count("bad_calibrations");
+    log().error("topic ", topics().calibration().name, ": ", error.what(), " (no TF until a good one arrives)");
+    return;
+  }
+  T_B_rect_ = T_B_rect;
+  // One message with every static transform, as tf2_ros's StaticTransformBroadcaster sends it.
+  tf_static_writer_->write(TfMessage(0, {{options_.frames.base, options_.frames.camera, base_to_camera(T_B_rect)},
+                                         {options_.frames.map, options_.frames.world, map_to_world(T_B_rect)}})
+                               .get());
+  stats().count("tf_static_published");
 }
 
 void Ros2Bridge::publish_map_if_changed() {

@@ -6,9 +6,12 @@
 //                            -> rt/<ros_namespace>/pose                 geometry_msgs/PoseStamped
 //   map/keyframes + states   -> rt/<ros_namespace>/keyframe_trajectory  nav_msgs/Path (transient local)
 //   map/points               -> rt/<ros_namespace>/map_points           sensor_msgs/PointCloud2 (transient local)
+//   odometry (T_wc, T_oc)    -> rt/tf         tf2_msgs/TFMessage: map -> odom -> base_link (REP 105, tf_tree.hpp)
+//   camera/calibration       -> rt/tf_static  tf2_msgs/TFMessage: base_link -> camera, map -> world (transient local)
 //
 // Config fields (all optional): ros_namespace ("heslam"), world_frame ("heslam_world"),
-// camera_frame ("heslam_camera"), publish_period_s (1.0: how often a changed path / cloud is sent).
+// camera_frame ("heslam_camera"), map_frame ("map"), odom_frame ("odom"), base_frame ("base_link"),
+// publish_period_s (1.0: how often a changed path / cloud is sent).
 #pragma once
 
 #include <array>
@@ -44,6 +47,8 @@ class Ros2Bridge : public runtime::Component {
   void run() override;
 
   void on_odometry(const msg::Odometry& odometry);
+  void on_calibration(const msg::StereoCalibration& calibration);
+  void publish_tf(const msg::Odometry& odometry);
   void publish_map_if_changed();
 
   struct KeyframeEntry {
@@ -57,6 +62,9 @@ class Ros2Bridge : public runtime::Component {
   std::optional<Ros2Writer<PoseStamped>> pose_writer_;
   std::optional<Ros2Writer<Path>> path_writer_;
   std::optional<Ros2Writer<PointCloud2>> cloud_writer_;
+  std::optional<Ros2Writer<TFMessage>> tf_writer_;
+  std::optional<Ros2Writer<TFMessage>> tf_static_writer_;
+  std::optional<Pose3> T_B_rect_;  // rectified left camera -> body, from the newest calibration
   std::map<std::uint64_t, KeyframeEntry> keyframes_;
   std::map<std::uint64_t, std::array<double, 3>> points_w_m_;
   std::int64_t newest_stamp_ns_ = 0;

@@ -5,6 +5,8 @@
 #include <bit>
 #include <cstring>
 
+#include <Eigen/Geometry>
+
 #include "runtime/sequence.hpp"
 
 namespace heslam::ros2 {
@@ -16,12 +18,14 @@ constexpr std::int64_t kNanosecondsPerSecond = 1'000'000'000;
 // PointCloud2 carries its byte order; heslam writes the host's, which must be little-endian to say so.
 static_assert(std::endian::native == std::endian::little, "PointCloudMessage writes is_bigendian = false");
 
-Header header(std::int64_t stamp_ns, const Frames& frames) {
+Header header(std::int64_t stamp_ns, const std::string& frame_id) {
   Header h{};
   h.stamp = to_time(stamp_ns);
-  h.frame_id = runtime::borrow(frames.world);
+  h.frame_id = runtime::borrow(frame_id);
   return h;
 }
+
+Header header(std::int64_t stamp_ns, const Frames& frames) { return header(stamp_ns, frames.world); }
 
 }  // namespace
 
@@ -43,10 +47,28 @@ Pose to_pose(const msg::Pose& pose) {
   return out;
 }
 
+std::array<double, 36> ros_pose_covariance(const double (&T_wc_covariance)[21]) {
+  // heslam's index of each ROS 2 index: ROS 2 x y z rx ry rz = heslam 3 4 5 0 1 2.
+  constexpr int kHeslamIndex[6] = {3, 4, 5, 0, 1, 2};
+  double full[6][6];
+  int k = 0;
+  for (int row = 0; row < 6; ++row) {
+    for (int col = row; col < 6; ++col) full[row][col] = full[col][row] = T_wc_covariance[k++];
+  }
+  std::array<double, 36> out{};
+  for (int row = 0; row < 6; ++row) {
+    for (int col = 0; col < 6; ++col)
+      out[static_cast<std::size_t>(6 * row + col)] = full[kHeslamIndex[row]][kHeslamIndex[col]];
+  }
+  return out;
+}
+
 OdometryMessage::OdometryMessage(const msg::Odometry& odometry, const Frames& frames) {
   message_.header = header(odometry.stamp_ns, frames);
   message_.child_frame_id = runtime::borrow(frames.camera);
   message_.pose.pose = to_pose(odometry.T_wc);
+  const std::array<double, 36> covariance = ros_pose_covariance(odometry.T_wc_covariance);
+  std::copy(covariance.begin(), covariance.end(), message_.pose.covariance);
 }
 
 PoseStampedMessage::PoseStampedMessage(std::int64_t stamp_ns, const msg::Pose& T_wc, const Frames& frames) {
@@ -89,6 +111,27 @@ PointCloudMessage::PointCloudMessage(std::int64_t stamp_ns, const std::vector<st
   message_.row_step = kPointStep * message_.width;
   runtime::borrow(message_.data, data_);
   message_.is_dense = true;  // map points are never NaN
+}
+
+Transform to_transform(const Pose3& T_parent_child) {
+  const Eigen::Vector3d t = T_parent_child.translation();
+  const Eigen::Quaterniond q(T_parent_child.rotation());
+  Transform out{};
+  out.translation = {t.x(), t.y(), t.z()};
+  out.rotation = {q.x(), q.y(), q.z(), q.w()};
+  return out;
+}
+
+TfMessage::TfMessage(std::int64_t stamp_ns, const std::vector<NamedTransform>& transforms) {
+  transforms_.reserve(transforms.size());
+  for (const NamedTransform& named : transforms) {
+    TransformStamped stamped{};
+    stamped.header = header(stamp_ns, named.parent);
+    stamped.child_frame_id = runtime::borrow(named.child);
+    stamped.transform = to_transform(named.T_parent_child);
+    transforms_.push_back(stamped);
+  }
+  runtime::borrow(message_.transforms, transforms_);
 }
 
 }  // namespace heslam::ros2

@@ -3,7 +3,8 @@
 //
 // Frames: poses stay heslam's T_wc (camera -> world) in heslam's world frame, which is the first
 // camera's optical frame (x right, y down, z forward), named `frames.world`; the camera frame is
-// `frames.camera`. Covariances and the twist are not estimated: all zeros.
+// `frames.camera`. The pose covariance is the tracker's (ros_pose_covariance); the twist is not
+// estimated: all zeros.
 //
 // Each *Message class holds the C struct and the storage its sequences point into; strings point
 // into `frames`, which must outlive the message. Build one, write get(), drop it.
@@ -15,15 +16,25 @@
 #include <string>
 #include <vector>
 
+#include "components/core/geometry/pose.hpp"
 #include "runtime/messages.hpp"
 #include "tools/ros2_bridge/ros2_messages.hpp"
 
 namespace heslam::ros2 {
 
 struct Frames {
-  std::string world = "heslam_world";    // header.frame_id of every message
-  std::string camera = "heslam_camera";  // Odometry.child_frame_id
+  std::string world = "heslam_world";    // header.frame_id of the odometry, pose, path and cloud
+  std::string camera = "heslam_camera";  // Odometry.child_frame_id; base -> camera on /tf_static
+  // REP 105 (tf_tree.hpp): map -> odom -> base on /tf; map -> world and base -> camera on /tf_static.
+  std::string map = "map";
+  std::string odom = "odom";
+  std::string base = "base_link";
 };
+
+// nav_msgs/Odometry's pose.covariance (row-major 6x6 over x, y, z, rotation about X, Y, Z, in the
+// header.frame_id's axes) from heslam's Odometry.T_wc_covariance (upper triangle over rotation, then
+// position, in the world's axes, idl/odometry.idl): the same numbers in ROS 2's order.
+std::array<double, 36> ros_pose_covariance(const double (&T_wc_covariance)[21]);
 
 // builtin_interfaces/Time of a stamp in ns (nanosec always in [0, 1e9), also for negative stamps).
 Time to_time(std::int64_t stamp_ns);
@@ -84,6 +95,28 @@ class PointCloudMessage {
   std::vector<PointField> fields_;
   std::vector<std::uint8_t> data_;
   PointCloud2 message_{};
+};
+
+// One geometry_msgs/TransformStamped: the child's pose in the parent. The names must outlive the message.
+struct NamedTransform {
+  const std::string& parent;
+  const std::string& child;
+  Pose3 T_parent_child;
+};
+
+Transform to_transform(const Pose3& T_parent_child);
+
+// tf2_msgs/TFMessage: the transforms, all stamped stamp_ns.
+class TfMessage {
+ public:
+  TfMessage(std::int64_t stamp_ns, const std::vector<NamedTransform>& transforms);
+  TfMessage(const TfMessage&) = delete;
+  TfMessage& operator=(const TfMessage&) = delete;
+  const TFMessage& get() const { return message_; }
+
+ private:
+  std::vector<TransformStamped> transforms_;
+  TFMessage message_{};
 };
 
 }  // namespace heslam::ros2

@@ -18,6 +18,11 @@ using Odometry = nav_msgs_msg_dds__Odometry_;
 using Path = nav_msgs_msg_dds__Path_;
 using PointField = sensor_msgs_msg_dds__PointField_;
 using PointCloud2 = sensor_msgs_msg_dds__PointCloud2_;
+using Transform = geometry_msgs_msg_dds__Transform_;
+using TransformStamped = geometry_msgs_msg_dds__TransformStamped_;
+using TFMessage = tf2_msgs_msg_dds__TFMessage_;
+using Image = sensor_msgs_msg_dds__Image_;
+using CameraInfo = sensor_msgs_msg_dds__CameraInfo_;
 
 // sensor_msgs/PointField datatype constant for float32.
 inline constexpr std::uint8_t kPointFieldFloat32 = 7;

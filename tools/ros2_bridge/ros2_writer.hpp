@@ -1,8 +1,10 @@
 // Ros2Writer<T>: a writer of one ROS 2 type (ros2_messages.hpp) on one DDS topic, over the C API.
 #pragma once
 
+#include <chrono>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "runtime/entity.hpp"
 #include "runtime/participant.hpp"
@@ -31,6 +33,19 @@ class Ros2Writer {
     // A reliable reader that keeps up never makes this time out; a dead one costs one sample.
     if (result < 0 && result != DDS_RETCODE_TIMEOUT) {
       throw std::runtime_error("topic '" + name_ + "': write failed: " + dds_strretcode(result));
+    }
+  }
+
+  // True once a reader matched, false after `timeout` without one.
+  bool wait_for_readers(std::chrono::duration<double> timeout) const {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    for (;;) {
+      dds_publication_matched_status_t status{};
+      if (dds_get_publication_matched_status(writer_.get(), &status) == DDS_RETCODE_OK && status.current_count > 0) {
+        return true;
+      }
+      if (std::chrono::steady_clock::now() >= deadline) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
   }
 

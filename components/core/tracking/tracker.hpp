@@ -115,6 +115,8 @@ class Tracker {
   Map& local_map() { return map_; }
   const Map& local_map() const { return map_; }
   TrackingState state() const { return state_; }
+  // The last frame processed: its pose (T_wc) and matches (outlier flags of its last pose optimization).
+  const Frame& last_frame() const { return last_frame_; }
   const PinholeStereo& camera() const { return camera_; }
   const TrackerOptions& options() const { return options_; }
 

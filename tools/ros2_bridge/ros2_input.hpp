@@ -1,0 +1,85 @@
+// heslam-ros2-input: a ROS 2 stereo camera as heslam's camera source. It reads a ROS 2 camera driver's
+// topics with ROS 2's wire types, without ROS code (docs/ros2.md, ROS 2 input):
+//
+//   rt/<left_image_topic>,  rt/<right_image_topic>   sensor_msgs/Image (mono8, bgr8, rgb8)
+//   rt/<left_info_topic>,   rt/<right_info_topic>    sensor_msgs/CameraInfo (plumb_bob, rational_polynomial)
+//     QoS as ROS 2's sensor data profile (best effort, volatile, keep last 5), which camera drivers use
+//
+// and publishes what heslam-replay publishes: camera/calibration (from the two CameraInfo, once they
+// arrived, again when they change) and camera/stereo (left and right paired by stamp, seq 0, 1, ...).
+// Real time only: a camera is never lockstep. Bad input (an encoding it does not take, a size that
+// disagrees with the CameraInfo, stamps going backwards, an unpaired image) is one line and a count.
+//
+// Config fields (all optional): left_image_topic ("stereo/left/image_raw"), right_image_topic
+// ("stereo/right/image_raw"), left_info_topic ("stereo/left/camera_info"), right_info_topic
+// ("stereo/right/camera_info"), images ("raw": rectified by heslam from K D R P; "rectified": already
+// rectified, P is their camera), end_after_idle_s (0: run until stopped).
+#pragma once
+
+#include <chrono>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "components/core/camera/stereo_calibration.hpp"
+#include "runtime/component.hpp"
+#include "runtime/writer.hpp"
+#include "tools/ros2_bridge/ros2_input_conversions.hpp"
+#include "tools/ros2_bridge/ros2_reader.hpp"
+
+namespace heslam::ros2 {
+
+struct InputOptions {
+  std::string left_image_topic = "stereo/left/image_raw";
+  std::string right_image_topic = "stereo/right/image_raw";
+  std::string left_info_topic = "stereo/left/camera_info";
+  std::string right_info_topic = "stereo/right/camera_info";
+  bool images_rectified = false;
+  // > 0: end (exit 0) once frames were published and no image came for this long, as a replay ends
+  // with its recording (a pipeline's run then ends); 0: run until stopped (a live camera).
+  double end_after_idle_s = 0.0;
+
+  // Throws std::runtime_error naming the field on a bad value.
+  static InputOptions from(const runtime::Config& config);
+};
+
+// A CameraInfo that owns its strings and sequences (a taken sample's die with the take).
+struct OwnedCameraInfo {
+  explicit OwnedCameraInfo(const CameraInfo& info);
+  OwnedCameraInfo(const OwnedCameraInfo&) = delete;
+  OwnedCameraInfo& operator=(const OwnedCameraInfo&) = delete;
+  bool same_calibration(const CameraInfo& other) const;
+
+  std::string distortion_model;
+  std::vector<double> d;
+  CameraInfo info{};
+};
+
+class Ros2Input : public runtime::Component {
+ public:
+  explicit Ros2Input(const runtime::CommonArgs& args);
+
+  static std::string help_notes();
+
+ private:
+  void configure(const runtime::Config& config) override;
+  void run() override;
+
+  void take_camera_info(StereoPairer::Side side, const CameraInfo& info);
+  void take_image(StereoPairer::Side side, const Image& image);
+  void publish(const StereoPairer::Pair& pair);
+
+  InputOptions options_;
+  std::optional<Ros2Reader<Image>> image_readers_[2];
+  std::optional<Ros2Reader<CameraInfo>> info_readers_[2];
+  std::optional<runtime::Writer<msg::StereoCalibration>> calibration_writer_;
+  std::optional<runtime::Writer<msg::StereoFrame>> frame_writer_;
+  std::optional<OwnedCameraInfo> infos_[2];
+  std::optional<StereoCalibration> calibration_;  // published; images are checked against its size
+  StereoPairer pairer_;
+  std::uint64_t next_seq_ = 0;
+  std::uint64_t unpaired_reported_ = 0;
+  std::chrono::steady_clock::time_point last_image_;
+};
+
+}  // namespace heslam::ros2

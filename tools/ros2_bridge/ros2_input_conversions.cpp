@@ -1,0 +1,198 @@
+// ROS 2 camera topics -> heslam camera input (see ros2_input_conversions.hpp).
+#include "tools/ros2_bridge/ros2_input_conversions.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <utility>
+
+namespace heslam::ros2 {
+namespace {
+
+constexpr double kRotationTolerance = 1e-6;  // R R^T = I to this, entry by entry (CameraInfo prints 1e-9)
+
+[[noreturn]] void fail(const std::string& topic, const std::string& field, const std::string& what) {
+  throw std::runtime_error("topic '" + topic + "': field " + field + ": " + what);
+}
+
+Eigen::Matrix3d matrix3(const double (&m)[9]) {
+  Eigen::Matrix3d out;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) out(r, c) = m[3 * r + c];
+  }
+  return out;
+}
+
+Eigen::Matrix<double, 3, 4> matrix34(const double (&m)[12]) {
+  Eigen::Matrix<double, 3, 4> out;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 4; ++c) out(r, c) = m[4 * r + c];
+  }
+  return out;
+}
+
+// K, D and size of one raw camera; R and P into `R` / `P`.
+CameraModel raw_camera(const CameraInfoSource& source, Eigen::Matrix3d& R, Eigen::Matrix<double, 3, 4>& P) {
+  const CameraInfo& info = source.info;
+  if (info.width == 0 || info.height == 0) fail(source.topic, "width/height", "expected the image size, got 0");
+  if (info.binning_x > 1 || info.binning_y > 1) fail(source.topic, "binning_x/binning_y", "binning is not supported");
+  CameraModel camera;
+  camera.width_px = static_cast<int>(info.width);
+  camera.height_px = static_cast<int>(info.height);
+  const Eigen::Matrix3d K = matrix3(info.k);
+  camera.fx_px = K(0, 0);
+  camera.fy_px = K(1, 1);
+  camera.cx_px = K(0, 2);
+  camera.cy_px = K(1, 2);
+  if (!(camera.fx_px > 0.0 && camera.fy_px > 0.0)) fail(source.topic, "k", "expected positive focal lengths");
+  const std::string model = info.distortion_model != nullptr ? info.distortion_model : "";
+  std::vector<double> d(info.d._buffer, info.d._buffer + info.d._length);
+  if (model == "rational_polynomial") {
+    // k1 k2 p1 p2 k3 k4 k5 k6: with k4..k6 zero it is plumb_bob exactly.
+    if (d.size() < 5 || d.size() > 8) fail(source.topic, "d", "expected 5 to 8 rational_polynomial coefficients");
+    for (std::size_t i = 5; i < d.size(); ++i) {
+      if (d[i] != 0.0) {
+        fail(source.topic, "d", "rational_polynomial k4..k6 must be 0: heslam models plumb_bob (k1 k2 p1 p2 k3) only");
+      }
+    }
+    d.resize(5);
+  } else if (model != "plumb_bob") {
+    fail(source.topic, "distortion_model",
+         "'" + model + "': expected plumb_bob or rational_polynomial (with k4..k6 = 0)");
+  } else if (d.size() != 4 && d.size() != 5) {
+    fail(source.topic, "d", "expected 4 or 5 plumb_bob coefficients k1 k2 p1 p2 [k3]");
+  }
+  camera.distortion = d;
+  camera.distortion_model = DistortionModel::kRadialTangential;
+  R = matrix3(info.r);
+  if (!((R * R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < kRotationTolerance) ||
+      !(R.determinant() > 0.0)) {
+    fail(source.topic, "r", "expected a rotation (the rectifying rotation; identity for a monocular camera)");
+  }
+  P = matrix34(info.p);
+  if (!(P(0, 0) > 0.0 && P(1, 1) > 0.0)) fail(source.topic, "p", "expected positive focal lengths P[0][0], P[1][1]");
+  return camera;
+}
+
+}  // namespace
+
+std::int64_t to_stamp_ns(const Time& time) { return std::int64_t{time.sec} * 1'000'000'000 + time.nanosec; }
+
+StereoCalibration to_stereo_calibration(const CameraInfoSource& left, const CameraInfoSource& right,
+                                        bool images_rectified) {
+  ExplicitRectification rect;
+  StereoCalibration calibration;
+  calibration.left = raw_camera(left, rect.R_left, rect.P_left);
+  calibration.right = raw_camera(right, rect.R_right, rect.P_right);
+  calibration.source = "ROS 2 CameraInfo on " + left.topic + " and " + right.topic;
+  if (calibration.left.width_px != calibration.right.width_px ||
+      calibration.left.height_px != calibration.right.height_px) {
+    fail(right.topic, "width/height", "expected the left camera's size");
+  }
+  const double baseline_m = -rect.P_right(0, 3) / rect.P_right(0, 0);
+  if (!(baseline_m > 0.0)) fail(right.topic, "p", "expected P[0][3] = -fx * baseline < 0 (the right camera)");
+  if ((rect.P_left.leftCols<3>() - rect.P_right.leftCols<3>()).cwiseAbs().maxCoeff() > 1e-6 * rect.P_left(0, 0)) {
+    fail(right.topic, "p", "expected the left camera's rectified intrinsics (P[0..2][0..2] of both equal)");
+  }
+  if (images_rectified) {
+    // The images are the rectified ones: P is their pinhole, no distortion, the right at +baseline.
+    calibration.input_rectified = true;
+    CameraModel rectified;
+    rectified.width_px = calibration.left.width_px;
+    rectified.height_px = calibration.left.height_px;
+    rectified.fx_px = rect.P_left(0, 0);
+    rectified.fy_px = rect.P_left(1, 1);
+    rectified.cx_px = rect.P_left(0, 2);
+    rectified.cy_px = rect.P_left(1, 2);
+    calibration.left = rectified;
+    calibration.right = rectified;
+    calibration.right.T_BS.translation() = Eigen::Vector3d(baseline_m, 0.0, 0.0);
+    return calibration;
+  }
+  // As load_orbslam_settings with LEFT/RIGHT.K/D/R/P: p_rect_l = R_left p_l, p_rect_r = R_right p_r,
+  // p_rect_r = p_rect_l - b e_x; the body is the left camera.
+  Pose3 T_rl = Pose3::Identity();
+  T_rl.linear() = rect.R_right.transpose() * rect.R_left;
+  T_rl.translation() = -rect.R_right.transpose() * Eigen::Vector3d(baseline_m, 0.0, 0.0);
+  calibration.right.T_BS = T_rl.inverse();
+  calibration.explicit_rectification = rect;
+  return calibration;
+}
+
+PackedImage to_packed_image(const Image& image, const std::string& topic, std::uint32_t expected_width_px,
+                            std::uint32_t expected_height_px) {
+  const std::string encoding = image.encoding != nullptr ? image.encoding : "";
+  PackedImage out;
+  std::uint32_t channels = 0;
+  if (encoding == "mono8") {
+    channels = 1;
+    out.encoding = heslam_msg_ENCODING_MONO8;
+  } else if (encoding == "bgr8" || encoding == "rgb8") {
+    channels = 3;
+    out.encoding = heslam_msg_ENCODING_BGR8;
+  } else {
+    fail(topic, "encoding", "'" + encoding + "': expected mono8, bgr8 or rgb8");
+  }
+  if (image.width == 0 || image.height == 0) fail(topic, "width/height", "empty image");
+  if ((expected_width_px != 0 && image.width != expected_width_px) ||
+      (expected_height_px != 0 && image.height != expected_height_px)) {
+    fail(topic, "width/height",
+         std::to_string(image.width) + "x" + std::to_string(image.height) + " differs from the CameraInfo's " +
+             std::to_string(expected_width_px) + "x" + std::to_string(expected_height_px));
+  }
+  const std::uint64_t row_bytes = std::uint64_t{image.width} * channels;
+  if (image.step < row_bytes) {
+    fail(topic, "step", std::to_string(image.step) + " is less than width x channels = " + std::to_string(row_bytes));
+  }
+  if (image.data._length != std::uint64_t{image.step} * image.height) {
+    fail(topic, "data",
+         std::to_string(image.data._length) +
+             " bytes, expected step x height = " + std::to_string(std::uint64_t{image.step} * image.height));
+  }
+  out.width_px = image.width;
+  out.height_px = image.height;
+  out.pixels.resize(row_bytes * image.height);
+  for (std::uint32_t row = 0; row < image.height; ++row) {
+    const std::uint8_t* from = image.data._buffer + std::uint64_t{row} * image.step;
+    std::uint8_t* to = out.pixels.data() + row * row_bytes;
+    std::memcpy(to, from, row_bytes);
+    if (encoding == "rgb8") {
+      for (std::uint64_t i = 0; i < row_bytes; i += 3) std::swap(to[i], to[i + 2]);
+    }
+  }
+  return out;
+}
+
+std::optional<StereoPairer::Pair> StereoPairer::add(Side side, std::int64_t stamp_ns, PackedImage image) {
+  if (last_pair_stamp_ns_ && stamp_ns <= *last_pair_stamp_ns_) {
+    throw std::runtime_error("stamp " + std::to_string(stamp_ns) + " ns is not after the last pair's " +
+                             std::to_string(*last_pair_stamp_ns_) + " ns (stamps going backwards, or too late)");
+  }
+  std::map<std::int64_t, PackedImage>& mine = pending_[static_cast<int>(side)];
+  std::map<std::int64_t, PackedImage>& other = pending_[1 - static_cast<int>(side)];
+  const auto partner = other.find(stamp_ns);
+  if (partner == other.end()) {
+    if (!mine.emplace(stamp_ns, std::move(image)).second) {
+      throw std::runtime_error("stamp " + std::to_string(stamp_ns) + " ns: a second image of the same side");
+    }
+    if (mine.size() > kMaxPending) {
+      mine.erase(mine.begin());
+      ++unpaired_;
+    }
+    return std::nullopt;
+  }
+  Pair pair;
+  pair.stamp_ns = stamp_ns;
+  PackedImage& partner_image = partner->second;
+  pair.left = side == Side::kLeft ? std::move(image) : std::move(partner_image);
+  pair.right = side == Side::kLeft ? std::move(partner_image) : std::move(image);
+  for (std::map<std::int64_t, PackedImage>& queue : pending_) {
+    const auto end = queue.upper_bound(stamp_ns);
+    for (auto it = queue.begin(); it != end; ++it) unpaired_ += it->first == stamp_ns ? 0 : 1;
+    queue.erase(queue.begin(), end);
+  }
+  last_pair_stamp_ns_ = stamp_ns;
+  return pair;
+}
+
+}  // namespace heslam::ros2
