@@ -1,11 +1,13 @@
-// SE(3) pose-graph optimization with Ceres: keyframe poses T_wc as vertices, measured relative poses
-// as edges, some vertices held fixed. The loop closer's essential-graph optimization (ORB-SLAM2's
-// OptimizeEssentialGraph, here SE(3) because stereo fixes the scale).
+// SE(3) pose-graph optimization: keyframe poses T_wc as vertices, measured relative poses as edges,
+// some vertices held fixed; Gauss-Newton with Levenberg-Marquardt damping on the block-sparse normal
+// equations (CHOLMOD), the convergence tests Ceres uses (relative cost change 1e-6). The loop closer's
+// essential-graph optimization (ORB-SLAM2's OptimizeEssentialGraph, here SE(3) because stereo fixes
+// the scale).
 //
 // Edge residual (6-vector, in the `from` keyframe's frame): translation of T_from_to estimated minus
 // measured, and 2 vec(q_measured^-1 q_estimated) for the rotation; scaled by sqrt(weight). With
 // weight 1 this matches ORB-SLAM2's identity information (rotation in radians, translation in m).
-// Single-threaded, parameters in id order: the same input gives the same poses bit for bit.
+// Single-threaded and deterministic: the same input gives the same poses bit for bit.
 #pragma once
 
 #include <map>
