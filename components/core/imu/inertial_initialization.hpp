@@ -33,16 +33,20 @@ struct InertialInitOptions {
   double gyro_bias_prior_stddev_rad_s = 0.1;
   double accel_bias_prior_stddev_m_s2 = 0.5;
   // Uncertainty of the vision poses (each pose, isotropic), added to the preintegration covariance of
-  // the rotation and position residuals: stereo keyframe poses are good to millimetres, far worse than
-  // the IMU over a fraction of a second, so without it the weights would trust them blindly.
+  // the residuals: stereo keyframe poses are good to a millimetre, worse than the IMU over a fraction of a
+  // second, so without it the weights would trust them blindly and the posterior would be overconfident.
   double pose_rotation_stddev_rad = 1e-3;
-  double pose_position_stddev_m = 2e-3;
+  double pose_position_stddev_m = 1e-3;
   // Ceres iterations of the inertial-only refinement.
   int max_iterations = 50;
-  // Refusal thresholds on the posterior (1-sigma) of the estimate and on its whitened residuals.
+  // Refusal thresholds: the posterior (1-sigma) of the gravity direction and of the accelerometer bias
+  // (worst direction); the whitened residual RMS per degree of freedom (about 1 when the noise model
+  // holds); and how many prior sigmas a bias may sit from prior_bias (a bias the data push far beyond its
+  // prior means poses and IMU disagree: scale, calibration, time offset).
   double max_gravity_stddev_deg = 0.5;
-  double max_accel_bias_stddev_m_s2 = 0.1;
-  double max_whitened_rms = 5.0;
+  double max_accel_bias_stddev_m_s2 = 0.2;
+  double max_whitened_rms = 3.0;
+  double max_bias_prior_sigmas = 5.0;
 };
 
 struct InertialInitInput {
@@ -75,8 +79,8 @@ struct InertialInitResult {
   // Velocity of the body at each input pose, in w.
   std::vector<Eigen::Vector3d> v_wb;
   ImuBias bias;
-  // RMS of the whitened inertial residuals (9 per interval) at the estimate: about 1 when the noise
-  // model and pose uncertainties are right.
+  // RMS of the whitened inertial residuals at the estimate, per degree of freedom (9 residuals per
+  // interval less the unknowns): about 1 when the noise model and pose uncertainties are right.
   double rms = 0.0;
   // Posterior 1-sigma of the gravity direction (degrees) and largest of the accelerometer bias (m/s^2).
   double gravity_stddev_deg = 0.0;
