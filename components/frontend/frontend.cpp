@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -64,6 +65,13 @@ bool same_camera(const PinholeStereo& a, const PinholeStereo& b) {
          a.height_px == b.height_px;
 }
 
+// CPU time of the calling thread, in ms.
+double thread_cpu_ms() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) * 1e3 + static_cast<double>(now.tv_nsec) * 1e-6;
+}
+
 // Peak resident set size of this process (VmHWM in /proc/self/status), in bytes; 0 if unknown.
 std::uint64_t peak_resident_bytes() {
   std::ifstream status("/proc/self/status");
@@ -78,7 +86,7 @@ std::uint64_t peak_resident_bytes() {
 void log_stage_summary(const runtime::Logger& log, const runtime::Stats& stats) {
   static const char* const kOrder[] = {
       "rectify",        "he",    "extract", "stereo", "features", "track_initial", "track_local_map",
-      "track_keyframe", "track", "cpu",     "total"};
+      "track_keyframe", "track", "imu",     "cpu",    "total"};
   const std::vector<runtime::StageSummary> stages = stats.stages();
   for (const char* name : kOrder) {
     for (const runtime::StageSummary& stage : stages) {
@@ -456,9 +464,12 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
   if (last_seq_ && frame.seq > *last_seq_ + 1) stats().count("frames_missed", frame.seq - *last_seq_ - 1);
   last_seq_ = frame.seq;
   FrameOutput output;
+  double imu_cpu_ms = 0.0;
   if (inertial_) {
     wait_for_imu(frame);
+    const double cpu_start_ms = thread_cpu_ms();
     predict_inertial(frame);
+    imu_cpu_ms = thread_cpu_ms() - cpu_start_ms;
   }
   try {
     output = processor_->process(frame.stamp_ns, frame.seq, images.left, images.right);
@@ -491,7 +502,12 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
     }
   }
   messages::OdometryMessage odometry(frame.stamp_ns, frame.seq, result, output.keypoints, output.timings);
-  if (inertial_) update_inertial(frame, result, odometry);
+  if (inertial_) {
+    // The IMU's work for this frame (prediction, velocity, initialization), CPU time of this thread.
+    const double cpu_start_ms = thread_cpu_ms();
+    update_inertial(frame, result, odometry);
+    stats().record_ms("imu", imu_cpu_ms + thread_cpu_ms() - cpu_start_ms);
+  }
   if (odometry_writer_->write(odometry.get()) == runtime::WriteResult::kTimeout) stats().count("odometry_timeouts");
   if (resumed_unfinished_seqs_.erase(frame.seq) == 0) stats().count(runtime::kOdometryFrames);
   if (journal_ && result.new_keyframe) journal_->append(odometry.get(), /*finished=*/false);
@@ -802,7 +818,7 @@ void Frontend::update_inertial(const msg::StereoFrame& frame, const TrackResult&
   if (const std::optional<std::string> line =
           inertial_->update(frame.stamp_ns, result, processor_->tracker().local_map())) {
     if (inertial_->state() == InertialInitState::kInitialized) {
-      inertial_initialized_at_seq_ = frame.seq;
+      if (!inertial_initialized_at_seq_) inertial_initialized_at_seq_ = frame.seq;
       log().info("frame ", frame.seq, ": ", *line);
     } else {
       log().warn_throttled("imu_init_failures", "frame ", frame.seq, ": ", *line);

@@ -36,9 +36,20 @@ const char* to_string(InertialInitState state) {
 InertialFrontend::InertialFrontend(const InertialOptions& options, const std::string& source)
     : options_(options), buffer_(ImuBufferOptions{.source = source}) {}
 
-void InertialFrontend::set_imu_calibration(const ImuCalibration& calibration) { calibration_ = calibration; }
+void InertialFrontend::set_imu_calibration(const ImuCalibration& calibration) {
+  calibration_ = calibration;
+  update_extrinsic();
+}
 
-void InertialFrontend::set_camera(const Pose3& T_B_rect) { T_cb_ = T_B_rect; }
+void InertialFrontend::set_camera(const Pose3& T_B_rect) {
+  T_B_rect_ = T_B_rect;
+  update_extrinsic();
+}
+
+void InertialFrontend::update_extrinsic() {
+  // The IMU in the rectified left camera: T_c_imu = T_B_rect^-1 T_BS(imu) (both into the body frame).
+  if (calibration_ && T_B_rect_) T_cb_ = T_B_rect_->inverse() * calibration_->T_BS;
+}
 
 std::int64_t InertialFrontend::imu_stamp(std::int64_t camera_stamp_ns) const {
   return camera_stamp_ns + (calibration_ ? calibration_->time_offset_ns : 0);
@@ -162,7 +173,10 @@ std::optional<std::string> InertialFrontend::update(std::int64_t stamp_ns, const
     frames_.clear();  // lost: no pose to predict from until vision tracks again
   }
   while (frames_.size() > kMaxFrames) frames_.pop_front();
-  if (state_ == InertialInitState::kInitialized) return std::nullopt;
+  if (state_ == InertialInitState::kInitialized &&
+      (!initialized_ns_ || seconds(t - *initialized_ns_) > options_.refine_until_s)) {
+    return std::nullopt;
+  }
   return try_initialize(t, map);
 }
 
@@ -217,6 +231,8 @@ std::optional<std::string> InertialFrontend::try_initialize(std::int64_t stamp_n
   InertialInitOptions init_options;
   init_options.min_duration_s = options_.init_min_duration_s;
   init_options.min_intervals = options_.init_min_keyframes - 1;
+  init_options.max_gravity_stddev_deg = options_.init_max_gravity_stddev_deg;
+  init_options.max_accel_bias_stddev_m_s2 = options_.init_max_accel_bias_stddev_m_s2;
   InertialInitResult result;
   try {
     result = initialize_inertial(input, init_options);
@@ -238,6 +254,12 @@ std::optional<std::string> InertialFrontend::try_initialize(std::int64_t stamp_n
   }
   const std::string over = std::to_string(input.T_wb.size()) + " keyframes over " +
                            std::to_string(seconds(input.stamps_ns.back() - input.stamps_ns.front())) + " s";
+  const bool refining = state_ == InertialInitState::kInitialized;
+  if (refining) {
+    next_init_ns_ = stamp_ns + static_cast<std::int64_t>(options_.refine_every_s * kNsPerS);
+    if (!result.ok || result.gravity_stddev_deg >= gravity_stddev_deg_) return std::nullopt;  // keeps the estimate
+    ++refinements_;
+  }
   if (!result.ok) {
     state_ = InertialInitState::kFailed;
     reason_ = result.reason;
@@ -247,13 +269,16 @@ std::optional<std::string> InertialFrontend::try_initialize(std::int64_t stamp_n
   }
   estimate_ = InertialEstimate{result.gravity_w(init_options.gravity_m_s2), result.bias};
   state_ = InertialInitState::kInitialized;
+  gravity_stddev_deg_ = result.gravity_stddev_deg;
   reason_.clear();
+  if (!initialized_ns_) initialized_ns_ = stamp_ns;
+  if (!refining) next_init_ns_ = stamp_ns + static_cast<std::int64_t>(options_.refine_every_s * kNsPerS);
   estimate_velocity(frames_.back());
   std::ostringstream line;
-  line << "inertial initialization over " << over << ": gravity (" << estimate_->gravity_w.transpose()
-       << ") m/s^2 in the tracker's world (stddev " << result.gravity_stddev_deg << " deg), gyro bias ("
-       << result.bias.gyro_rad_s.transpose() << ") rad/s, accel bias (" << result.bias.accel_m_s2.transpose()
-       << ") m/s^2, whitened rms " << result.rms;
+  line << (refining ? "inertial estimate refined over " : "inertial initialization over ") << over << ": gravity ("
+       << estimate_->gravity_w.transpose() << ") m/s^2 in the tracker's world (stddev " << result.gravity_stddev_deg
+       << " deg), gyro bias (" << result.bias.gyro_rad_s.transpose() << ") rad/s, accel bias ("
+       << result.bias.accel_m_s2.transpose() << ") m/s^2, whitened rms " << result.rms;
   return line.str();
 }
 

@@ -47,6 +47,17 @@ struct InertialOptions {
   double init_retry_s = 0.5;
   // imu.init_max_keyframes: the newest keyframes the initialization uses.
   int init_max_keyframes = 30;
+  // imu.init_max_gravity_stddev_deg / imu.init_max_accel_bias_stddev_m_s2: the initializer refuses an
+  // estimate less certain than this (InertialInitOptions). Looser than its defaults so that the first
+  // seconds of ordinary motion suffice: what a short prediction needs (gravity minus the accelerometer
+  // bias along the current attitude) is well observed before the two are separated.
+  double init_max_gravity_stddev_deg = 3.0;
+  double init_max_accel_bias_stddev_m_s2 = 0.5;
+  // imu.refine_every_s / imu.refine_until_s: once initialized, the initialization runs again over the
+  // newest keyframes this often, until this long after the first success; a more certain gravity
+  // replaces the estimate (ORB-SLAM3 refines its initialization at 5 s and 15 s).
+  double refine_every_s = 1.0;
+  double refine_until_s = 15.0;
   // imu.blackout_max_s: how long after the last frame tracked by vision the IMU alone may give the
   // pose of frames vision cannot track (TrackingState::kInertialOnly); beyond it frames are lost.
   double blackout_max_s = 3.0;
@@ -77,7 +88,7 @@ class InertialFrontend {
   // The rectified left camera -> body transform (StereoRectifier::T_B_rect()).
   void set_camera(const Pose3& T_B_rect);
   bool has_calibration() const { return calibration_.has_value(); }
-  bool has_camera() const { return T_cb_.has_value(); }
+  bool has_camera() const { return T_B_rect_.has_value(); }
   // The IMU stamp of a camera stamp (the calibration's time offset).
   std::int64_t imu_stamp(std::int64_t camera_stamp_ns) const;
 
@@ -110,6 +121,7 @@ class InertialFrontend {
   std::uint64_t init_attempts() const { return init_attempts_; }
   std::uint64_t predictions() const { return predictions_; }
   std::uint64_t gaps() const { return gaps_; }
+  std::uint64_t refinements() const { return refinements_; }
 
  private:
   struct FrameState {
@@ -127,7 +139,9 @@ class InertialFrontend {
   InertialOptions options_;
   ImuBuffer buffer_;
   std::optional<ImuCalibration> calibration_;
-  std::optional<Pose3> T_cb_;  // body (IMU) in the rectified left camera
+  void update_extrinsic();
+  std::optional<Pose3> T_B_rect_;  // the rectified left camera -> body
+  std::optional<Pose3> T_cb_;      // IMU (the inertial body b) -> rectified left camera, once both are known
   InertialInitState state_ = InertialInitState::kWaiting;
   std::string reason_;
   std::optional<InertialEstimate> estimate_;
@@ -136,6 +150,9 @@ class InertialFrontend {
   std::optional<Eigen::Vector3d> predicted_v_;  // of the last prediction (initialized)
   std::optional<std::int64_t> first_keyframe_ns_;
   std::optional<std::int64_t> next_init_ns_;
+  std::optional<std::int64_t> initialized_ns_;
+  double gravity_stddev_deg_ = 0.0;  // of the estimate in use
+  std::uint64_t refinements_ = 0;
   std::uint64_t init_attempts_ = 0;
   std::uint64_t predictions_ = 0;
   std::uint64_t gaps_ = 0;
