@@ -137,7 +137,8 @@ void validate(const InertialInitInput& input, const InertialInitOptions& options
   }
   if (!(options.gravity_m_s2 > 0.0) || !(options.gyro_bias_prior_stddev_rad_s > 0.0) ||
       !(options.accel_bias_prior_stddev_m_s2 > 0.0) || options.pose_rotation_stddev_rad < 0.0 ||
-      options.pose_position_stddev_m < 0.0 || options.max_iterations < 1) {
+      options.pose_position_stddev_m < 0.0 || options.max_iterations < 1 ||
+      !(options.max_gravity_stddev_of_prior > 0.0)) {
     throw std::invalid_argument(where +
                                 "options: expected gravity_m_s2, the bias prior stddevs and max_iterations positive, "
                                 "the pose stddevs non-negative");
@@ -303,13 +304,17 @@ InertialInitResult initialize_inertial(const InertialInitInput& input, const Ine
     return refuse(result, InertialInitStatus::kTooLittleExcitation,
                   "too little excitation: the inertial problem is singular (rotate and accelerate the sensor)");
   }
-  if (result.gravity_stddev_deg > options.max_gravity_stddev_deg ||
+  // Without rotation the tilt is only known through the accelerometer bias prior: accel prior / g radians.
+  const double prior_tilt_deg = options.accel_bias_prior_stddev_m_s2 / options.gravity_m_s2 * kRadToDeg;
+  const double gravity_limit_deg =
+      std::min(options.max_gravity_stddev_deg, options.max_gravity_stddev_of_prior * prior_tilt_deg);
+  if (result.gravity_stddev_deg > gravity_limit_deg ||
       result.accel_bias_stddev_m_s2 > options.max_accel_bias_stddev_m_s2) {
     return refuse(result, InertialInitStatus::kTooLittleExcitation,
                   format("too little excitation: gravity direction stddev %.2f deg (max %.2f), accelerometer bias "
                          "stddev %.3f m/s^2",
-                         result.gravity_stddev_deg, options.max_gravity_stddev_deg, result.accel_bias_stddev_m_s2) +
-                      format(" (max %.3f): rotate the sensor", options.max_accel_bias_stddev_m_s2));
+                         result.gravity_stddev_deg, gravity_limit_deg, result.accel_bias_stddev_m_s2) +
+                      format(" (max %.3f): rotate the sensor, or wait", options.max_accel_bias_stddev_m_s2));
   }
   const double gyro_sigmas =
       (bg - options.prior_bias.gyro_rad_s).lpNorm<Eigen::Infinity>() / options.gyro_bias_prior_stddev_rad_s;
