@@ -70,6 +70,8 @@ enum class InertialInitStatus {
   kResidualTooHigh,      // the IMU disagrees with the vision poses (wrong calibration, time offset, noise model)
 };
 
+// When a refusal comes after the refinement (too little excitation, residual too high, not converged), the
+// estimate fields hold the withheld answer, for diagnostics only.
 struct InertialInitResult {
   bool ok = false;
   InertialInitStatus status = InertialInitStatus::kTooShort;
