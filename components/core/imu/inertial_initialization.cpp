@@ -33,9 +33,10 @@ constexpr double kLinearBiasPriorWeight = 1e-3;
 // A linear gravity guess this far from the known magnitude means the poses and the IMU disagree.
 constexpr double kMaxGravityMagnitudeRatioError = 0.5;
 
-std::string format(const char* pattern, double a, double b = 0.0, double c = 0.0) {
-  char text[256];
-  std::snprintf(text, sizeof(text), pattern, a, b, c);
+template <typename... Args>
+std::string format(const char* pattern, Args... args) {
+  char text[320];
+  std::snprintf(text, sizeof(text), pattern, args...);
   return text;
 }
 
@@ -137,7 +138,8 @@ void validate(const InertialInitInput& input, const InertialInitOptions& options
   }
   if (!(options.gravity_m_s2 > 0.0) || !(options.gyro_bias_prior_stddev_rad_s > 0.0) ||
       !(options.accel_bias_prior_stddev_m_s2 > 0.0) || options.pose_rotation_stddev_rad < 0.0 ||
-      options.pose_position_stddev_m < 0.0 || options.max_iterations < 1) {
+      options.pose_position_stddev_m < 0.0 || options.max_iterations < 1 ||
+      !(options.max_gravity_stddev_of_prior > 0.0)) {
     throw std::invalid_argument(where +
                                 "options: expected gravity_m_s2, the bias prior stddevs and max_iterations positive, "
                                 "the pose stddevs non-negative");
@@ -164,9 +166,8 @@ InertialInitResult initialize_inertial(const InertialInitInput& input, const Ine
   const double duration_s = static_cast<double>(input.stamps_ns.back() - input.stamps_ns.front()) / kNsPerS;
   if (static_cast<int>(n) < options.min_intervals || duration_s < options.min_duration_s) {
     return refuse(result, InertialInitStatus::kTooShort,
-                  format("too short: %.0f intervals over %.2f s (need %.0f", static_cast<double>(n), duration_s,
-                         options.min_intervals) +
-                      format(" and %.2f s)", options.min_duration_s));
+                  format("too short: %zu intervals over %.2f s (need %d and %.2f s)", n, duration_s,
+                         options.min_intervals, options.min_duration_s));
   }
 
   // 1. The gyroscope bias from the vision rotations alone.
@@ -303,13 +304,17 @@ InertialInitResult initialize_inertial(const InertialInitInput& input, const Ine
     return refuse(result, InertialInitStatus::kTooLittleExcitation,
                   "too little excitation: the inertial problem is singular (rotate and accelerate the sensor)");
   }
-  if (result.gravity_stddev_deg > options.max_gravity_stddev_deg ||
+  // Without rotation the tilt is only known through the accelerometer bias prior: accel prior / g radians.
+  const double prior_tilt_deg = options.accel_bias_prior_stddev_m_s2 / options.gravity_m_s2 * kRadToDeg;
+  const double gravity_limit_deg =
+      std::min(options.max_gravity_stddev_deg, options.max_gravity_stddev_of_prior * prior_tilt_deg);
+  if (result.gravity_stddev_deg > gravity_limit_deg ||
       result.accel_bias_stddev_m_s2 > options.max_accel_bias_stddev_m_s2) {
     return refuse(result, InertialInitStatus::kTooLittleExcitation,
                   format("too little excitation: gravity direction stddev %.2f deg (max %.2f), accelerometer bias "
-                         "stddev %.3f m/s^2",
-                         result.gravity_stddev_deg, options.max_gravity_stddev_deg, result.accel_bias_stddev_m_s2) +
-                      format(" (max %.3f): rotate the sensor", options.max_accel_bias_stddev_m_s2));
+                         "stddev %.3f m/s^2 (max %.3f): rotate the sensor, or wait",
+                         result.gravity_stddev_deg, gravity_limit_deg, result.accel_bias_stddev_m_s2,
+                         options.max_accel_bias_stddev_m_s2));
   }
   const double gyro_sigmas =
       (bg - options.prior_bias.gyro_rad_s).lpNorm<Eigen::Infinity>() / options.gyro_bias_prior_stddev_rad_s;

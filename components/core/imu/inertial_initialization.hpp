@@ -31,7 +31,7 @@ struct InertialInitOptions {
   // through, tight enough to keep the problem well posed when an axis is weakly excited.
   ImuBias prior_bias;
   double gyro_bias_prior_stddev_rad_s = 0.1;
-  double accel_bias_prior_stddev_m_s2 = 0.5;
+  double accel_bias_prior_stddev_m_s2 = 0.2;
   // Uncertainty of the vision poses (each pose, isotropic), added to the preintegration covariance of
   // the residuals: stereo keyframe poses are good to a millimetre, worse than the IMU over a fraction of a
   // second, so without it the weights would trust them blindly and the posterior would be overconfident.
@@ -39,11 +39,14 @@ struct InertialInitOptions {
   double pose_position_stddev_m = 1e-3;
   // Ceres iterations of the inertial-only refinement.
   int max_iterations = 50;
-  // Refusal thresholds: the posterior (1-sigma) of the gravity direction and of the accelerometer bias
-  // (worst direction); the whitened residual RMS per degree of freedom (about 1 when the noise model
-  // holds); and how many prior sigmas a bias may sit from prior_bias (a bias the data push far beyond its
-  // prior means poses and IMU disagree: scale, calibration, time offset).
-  double max_gravity_stddev_deg = 0.5;
+  // Refusal thresholds: the posterior (1-sigma) of the gravity direction, also as a share of what the
+  // accelerometer bias prior alone leaves (accel_bias_prior_stddev / g: without rotation the data cannot
+  // tell a tilt from a bias, and the answer would be the prior's, not the data's), and of the
+  // accelerometer bias (worst direction); the whitened residual RMS per degree of freedom (about 1 when
+  // the noise model holds); and how many prior sigmas a bias may sit from prior_bias (a bias the data
+  // push far beyond its prior means poses and IMU disagree: scale, calibration, time offset).
+  double max_gravity_stddev_deg = 1.0;
+  double max_gravity_stddev_of_prior = 0.75;
   double max_accel_bias_stddev_m_s2 = 0.2;
   double max_whitened_rms = 3.0;
   double max_bias_prior_sigmas = 5.0;
@@ -67,6 +70,8 @@ enum class InertialInitStatus {
   kResidualTooHigh,      // the IMU disagrees with the vision poses (wrong calibration, time offset, noise model)
 };
 
+// When a refusal comes after the refinement (too little excitation, residual too high, not converged), the
+// estimate fields hold the withheld answer, for diagnostics only.
 struct InertialInitResult {
   bool ok = false;
   InertialInitStatus status = InertialInitStatus::kTooShort;
