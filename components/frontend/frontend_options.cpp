@@ -45,6 +45,7 @@ InertialOptions read_inertial(const runtime::Config& c) {
   read(c, "imu.init_retry_s", o.init_retry_s, 0.0, 60.0);
   read(c, "imu.init_max_gravity_stddev_deg", o.init_max_gravity_stddev_deg, 0.01, 90.0);
   read(c, "imu.init_max_accel_bias_stddev_m_s2", o.init_max_accel_bias_stddev_m_s2, 0.001, 100.0);
+  read(c, "imu.init_max_gravity_stddev_of_prior", o.init_max_gravity_stddev_of_prior, 0.01, 1000.0);
   read(c, "imu.refine_every_s", o.refine_every_s, 0.05, 60.0);
   read(c, "imu.refine_until_s", o.refine_until_s, 0.0, 3600.0);
   read(c, "imu.blackout_max_s", o.blackout_max_s, 0.0, 60.0);

@@ -233,6 +233,7 @@ std::optional<std::string> InertialFrontend::try_initialize(std::int64_t stamp_n
   init_options.min_intervals = options_.init_min_keyframes - 1;
   init_options.max_gravity_stddev_deg = options_.init_max_gravity_stddev_deg;
   init_options.max_accel_bias_stddev_m_s2 = options_.init_max_accel_bias_stddev_m_s2;
+  init_options.max_gravity_stddev_of_prior = options_.init_max_gravity_stddev_of_prior;
   InertialInitResult result;
   try {
     result = initialize_inertial(input, init_options);

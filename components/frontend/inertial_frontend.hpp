@@ -53,6 +53,9 @@ struct InertialOptions {
   // bias along the current attitude) is well observed before the two are separated.
   double init_max_gravity_stddev_deg = 3.0;
   double init_max_accel_bias_stddev_m_s2 = 0.5;
+  // imu.init_max_gravity_stddev_of_prior: the initializer's bound relative to what the accelerometer bias
+  // prior alone leaves (InertialInitOptions::max_gravity_stddev_of_prior); 10: not binding.
+  double init_max_gravity_stddev_of_prior = 10.0;
   // imu.refine_every_s / imu.refine_until_s: once initialized, the initialization runs again over the
   // newest keyframes this often, until this long after the first success; a more certain gravity
   // replaces the estimate (ORB-SLAM3 refines its initialization at 5 s and 15 s).
