@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -66,6 +67,13 @@ bool same_camera(const PinholeStereo& a, const PinholeStereo& b) {
          a.height_px == b.height_px;
 }
 
+// CPU time of the calling thread, in ms.
+double thread_cpu_ms() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) * 1e3 + static_cast<double>(now.tv_nsec) * 1e-6;
+}
+
 // Peak resident set size of this process (VmHWM in /proc/self/status), in bytes; 0 if unknown.
 std::uint64_t peak_resident_bytes() {
   std::ifstream status("/proc/self/status");
@@ -80,7 +88,7 @@ std::uint64_t peak_resident_bytes() {
 void log_stage_summary(const runtime::Logger& log, const runtime::Stats& stats) {
   static const char* const kOrder[] = {
       "rectify",        "he",    "extract", "stereo", "features", "track_initial", "track_local_map",
-      "track_keyframe", "track", "cpu",     "total"};
+      "track_keyframe", "track", "imu",     "cpu",    "total"};
   const std::vector<runtime::StageSummary> stages = stats.stages();
   for (const char* name : kOrder) {
     for (const runtime::StageSummary& stage : stages) {
@@ -123,6 +131,7 @@ void Frontend::configure(const runtime::Config& config) {
   frame_reader_.emplace(image_participant().get(), topics().stereo(), log(), stats(), nullptr, frame_options);
   waitset_->attach(*calibration_reader_);
   waitset_->attach(*frame_reader_);
+  if (options_.inertial.enabled) configure_inertial();
   if (options_.mapper_enabled) {
     keyframe_state_reader_.emplace(participant(), topics().keyframe_states(), log(), stats(),
                                    messages::sample_check<msg::KeyframeState>(),
@@ -212,6 +221,7 @@ void Frontend::run() {
     if (wake == runtime::Wake::kShutdown) break;
     log().flush_throttled(/*due_only=*/true);
     take_calibration();
+    take_imu();
     mirror_map_state();
     take_frames();
     // Map states wait in their readers until a calibration gives us a map to mirror them into;
@@ -229,6 +239,10 @@ void Frontend::run() {
   // initialized); missed = published but never processed here. The run's "lost" is both.
   log().info("processed ", count("frames"), " frames (", count("untracked"), " untracked, of them ", count("lost"),
              " with tracking lost; ", count("bad_frames"), " bad), ", count("keyframes"), " keyframes");
+  if (inertial_) {
+    report_inertial();
+    log().info(inertial_summary());
+  }
   if (count("frames_already_processed") > 0) {
     log().info(count("frames_already_processed"),
                " frames published again were acknowledged without tracking them twice");
@@ -270,6 +284,7 @@ void Frontend::take_calibration() {
       }
       if (processor_) log().warn("calibration changed: tracking restarts with an empty map");
       processor_ = std::move(processor);
+      if (inertial_) inertial_->set_camera(processor_->rectifier().T_B_rect());
       calibration_camera_ = announced;
       calibration_writer_ = received.info.publication_handle;
       if (options_.mapper_enabled) resume_in_mapper_map();
@@ -459,6 +474,13 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
   if (last_seq_ && frame.seq > *last_seq_ + 1) stats().count("frames_missed", frame.seq - *last_seq_ - 1);
   last_seq_ = frame.seq;
   FrameOutput output;
+  double imu_cpu_ms = 0.0;
+  if (inertial_) {
+    wait_for_imu(frame);
+    const double cpu_start_ms = thread_cpu_ms();
+    predict_inertial(frame);
+    imu_cpu_ms = thread_cpu_ms() - cpu_start_ms;
+  }
   try {
     output = processor_->process(frame.stamp_ns, frame.seq, images.left, images.right);
   } catch (const std::exception& error) {
@@ -474,7 +496,7 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
     relocalized_at_seq_ = frame.seq;
     log().info("relocalized in the saved map at frame ", frame.seq);
   }
-  if (result.state != TrackingState::kOk) stats().count("untracked");
+  if (!result.pose_valid()) stats().count("untracked");
   if (result.state == TrackingState::kLost) stats().count("lost");
   if (result.motion == FrameMotion::kStill) stats().count("still_frames");
   if (result.motion == FrameMotion::kRotatingInPlace) stats().count("rotating_in_place_frames");
@@ -489,9 +511,15 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
       mirror_.own_keyframe(result.new_keyframe->id, result.new_keyframe_reference, mirror_.version().complete());
     }
   }
-  const messages::OdometryMessage odometry(
+  messages::OdometryMessage odometry(
       frame.stamp_ns, frame.seq, result, output.keypoints, output.timings, T_wo_,
       result.pose_valid() ? tracked_pose_covariance(processor_->tracker()) : std::nullopt);
+  if (inertial_) {
+    // The IMU's work for this frame (prediction, velocity, initialization), CPU time of this thread.
+    const double cpu_start_ms = thread_cpu_ms();
+    update_inertial(frame, result, odometry);
+    stats().record_ms("imu", imu_cpu_ms + thread_cpu_ms() - cpu_start_ms);
+  }
   if (odometry_writer_->write(odometry.get()) == runtime::WriteResult::kTimeout) stats().count("odometry_timeouts");
   if (resumed_unfinished_seqs_.erase(frame.seq) == 0) stats().count(runtime::kOdometryFrames);
   if (journal_ && result.new_keyframe) journal_->append(odometry.get(), /*finished=*/false);
@@ -688,6 +716,172 @@ void Frontend::acknowledge(const msg::StereoFrame& frame, const FrameOutput* out
     done.keyframe_id = output->result.new_keyframe->id;
   }
   frame_done_writer_->write(done);
+}
+
+void Frontend::configure_inertial() {
+  runtime::CheckedReaderOptions batch_options;
+  batch_options.rejected_counter = "imu_rejected_batches";
+  imu_reader_.emplace(participant(), topics().imu(), log(), stats(), nullptr, batch_options);
+  runtime::CheckedReaderOptions calibration_options;
+  calibration_options.rejected_counter = "imu_rejected_calibrations";
+  imu_calibration_reader_.emplace(participant(), topics().imu_calibration(), log(), stats(), nullptr,
+                                  calibration_options);
+  imu_waitset_ = std::make_unique<runtime::WaitSet>(participant());
+  imu_waitset_->attach(*imu_reader_);
+  imu_waitset_->attach(*imu_calibration_reader_);
+  inertial_ = std::make_unique<InertialFrontend>(options_.inertial, imu_reader_->name());
+  imu_stream_ = std::make_unique<messages::ImuStreamReader>(inertial_->buffer());
+  const InertialOptions& o = options_.inertial;
+  log().info("inertial tracking: ", imu_reader_->name(), " and ", imu_calibration_reader_->name(), ", ",
+             o.lockstep
+                 ? "lockstep (each frame waits for the IMU to cover it, at most " + std::to_string(o.wait_s) + " s)"
+                 : std::string("real time (never waits for the IMU)"),
+             ", initialization after ", o.init_min_keyframes, " keyframes over ", o.init_min_duration_s,
+             " s, blackouts up to ", o.blackout_max_s, " s");
+  stats().count("imu_readings", 0);
+  stats().count("imu_bad_readings", 0);
+  stats().count("imu_gaps", 0);
+  stats().count("imu_initialized", 0);
+  report_inertial();
+}
+
+void Frontend::take_imu() {
+  if (!inertial_) return;
+  for (auto& received : imu_calibration_reader_->take()) {
+    if (!received.info.valid_data || inertial_->has_calibration()) continue;
+    try {
+      const ImuCalibration calibration = messages::to_imu_calibration(*received.sample);
+      inertial_->set_imu_calibration(calibration);
+      log().info("IMU calibration '", calibration.source, "': ", calibration.rate_hz, " Hz, time offset ",
+                 calibration.time_offset_ns, " ns");
+    } catch (const std::exception& error) {
+      stats().count("imu_bad_calibrations");
+      log().warn_throttled("imu_bad_calibrations", "topic '", imu_calibration_reader_->name(), "': ", error.what());
+    }
+  }
+  for (auto& received : imu_reader_->take()) {
+    if (!received.info.valid_data) continue;
+    const messages::ImuBatchReport report = imu_stream_->add(*received.sample);
+    if (report.lost_readings > 0) stats().count("imu_lost_readings", report.lost_readings);
+    for (const std::string& warning : report.warnings) log().warn_throttled("imu_readings", warning);
+  }
+}
+
+void Frontend::wait_for_imu(const msg::StereoFrame& frame) {
+  if (inertial_->off() || !options_.inertial.lockstep) return;
+  const auto covered = [&] {
+    return inertial_->has_calibration() &&
+           inertial_->buffer().covered_until_ns() >= inertial_->imu_stamp(frame.stamp_ns);
+  };
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                               std::chrono::duration<double>(options_.inertial.wait_s));
+  for (;;) {
+    take_imu();
+    if (covered()) return;
+    if (imu_stream_->ended()) {
+      turn_inertial_off("the IMU stream ended (end_of_stream) before frame " + std::to_string(frame.seq) + " at " +
+                        std::to_string(frame.stamp_ns) + " ns");
+      return;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= deadline || shutdown_requested()) {
+      turn_inertial_off(std::string(inertial_->has_calibration()
+                                        ? "no IMU readings on '" + imu_reader_->name() + "'"
+                                        : "no IMU calibration on '" + imu_calibration_reader_->name() + "'") +
+                        " up to frame " + std::to_string(frame.seq) + " (" + std::to_string(frame.stamp_ns) +
+                        " ns) within imu.wait_s " + std::to_string(options_.inertial.wait_s) + " s");
+      return;
+    }
+    imu_waitset_->wait(std::min<std::chrono::nanoseconds>(kWaitPeriod, deadline - now));
+  }
+}
+
+void Frontend::turn_inertial_off(const std::string& reason) {
+  if (inertial_->off()) return;
+  inertial_->turn_off(reason);
+  stats().count("imu_off");
+  log().warn("IMU off: ", reason, "; tracking goes on stereo-only");
+  report_inertial();
+}
+
+void Frontend::predict_inertial(const msg::StereoFrame& frame) {
+  take_imu();  // real time: whatever arrived (never waits)
+  if (inertial_->off()) return;
+  if (!inertial_->has_camera() || !inertial_->has_calibration()) return;
+  const std::int64_t t = inertial_->imu_stamp(frame.stamp_ns);
+  if (inertial_->buffer().dead_at(t)) {
+    turn_inertial_off("no IMU reading on '" + imu_reader_->name() + "' for " +
+                      std::to_string(inertial_->buffer().options().dead_after_ns / 1'000'000) + " ms before frame " +
+                      std::to_string(frame.seq) + " (" + std::to_string(frame.stamp_ns) + " ns): the IMU stopped");
+    return;
+  }
+  const InertialFrontend::Prediction prediction = inertial_->predict(frame.stamp_ns);
+  if (prediction.coverage == ImuCoverage::kDead) {
+    turn_inertial_off(prediction.message);
+    return;
+  }
+  if (!prediction.T_wc && !prediction.message.empty()) {
+    stats().count("imu_frames_without_prediction");
+    log().debug("frame ", frame.seq, ": no IMU prediction: ", prediction.message);
+  }
+  processor_->tracker().set_prediction(prediction.T_wc, prediction.fallback);
+}
+
+void Frontend::update_inertial(const msg::StereoFrame& frame, const TrackResult& result,
+                               messages::OdometryMessage& odometry) {
+  if (result.state == TrackingState::kInertialOnly) stats().count("inertial_only_frames");
+  if (inertial_->off()) {
+    report_inertial();
+    return;
+  }
+  const InertialInitState before = inertial_->state();
+  if (const std::optional<std::string> line =
+          inertial_->update(frame.stamp_ns, result, processor_->tracker().local_map())) {
+    if (inertial_->state() == InertialInitState::kInitialized) {
+      if (!inertial_initialized_at_seq_) inertial_initialized_at_seq_ = frame.seq;
+      log().info("frame ", frame.seq, ": ", *line);
+    } else {
+      log().warn_throttled("imu_init_failures", "frame ", frame.seq, ": ", *line);
+    }
+  }
+  if (before != InertialInitState::kInitialized && inertial_->state() == InertialInitState::kInitialized) {
+    stats().count("imu_initialized");
+  }
+  if (result.pose_valid()) {
+    if (const std::optional<Eigen::Vector3d> v = inertial_->velocity()) odometry.set_velocity(*v);
+  }
+  report_inertial();
+}
+
+void Frontend::report_inertial() {
+  const ImuBufferCounts& counts = inertial_->buffer().counts();
+  const std::map<std::string, std::uint64_t> now = {
+      {"imu_readings", counts.accepted},
+      {"imu_bad_readings", counts.skipped()},
+      {"imu_gaps", inertial_->gaps()},
+      {"imu_init_attempts", inertial_->init_attempts()},
+  };
+  for (const auto& [name, value] : now) {
+    std::uint64_t& reported = imu_counters_reported_[name];
+    if (value > reported) stats().count(name, value - reported);
+    reported = std::max(reported, value);
+  }
+  status().set_message(inertial_summary());
+}
+
+std::string Frontend::inertial_summary() {
+  const ImuBufferCounts& counts = inertial_->buffer().counts();
+  std::ostringstream line;
+  line << "IMU " << to_string(inertial_->state());
+  if (inertial_->state() == InertialInitState::kInitialized && inertial_initialized_at_seq_) {
+    line << " at frame " << *inertial_initialized_at_seq_;
+  }
+  if (!inertial_->reason().empty()) line << " (" << inertial_->reason() << ")";
+  const auto counters = stats().counters();
+  const auto count = [&](const char* name) { return counters.count(name) != 0 ? counters.at(name) : 0; };
+  line << ": " << counts.accepted << " readings, " << counts.skipped() << " bad, " << inertial_->gaps() << " gaps, "
+       << count("inertial_only_frames") << " inertial-only frames";
+  return line.str();
 }
 
 }  // namespace heslam::frontend

@@ -15,7 +15,10 @@
 #include "components/frontend/batched_mirror.hpp"
 #include "components/frontend/frame_processor.hpp"
 #include "components/frontend/frontend_options.hpp"
+#include "components/frontend/inertial_frontend.hpp"
 #include "components/frontend/odometry_journal.hpp"
+#include "components/messages/imu.hpp"
+#include "components/messages/odometry.hpp"
 #include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
 #include "runtime/role_binding.hpp"
@@ -77,6 +80,22 @@ class Frontend : public runtime::Component {
   void use_keyframe_done(const HeldKeyframeDone& done);
   void acknowledge(const msg::StereoFrame& frame, const FrameOutput* output);
 
+  // Inertial tracking (options_.inertial.enabled; docs/frontend.md, Inertial tracking).
+  void configure_inertial();
+  // Takes the IMU calibration and readings that arrived into inertial_ (never waits).
+  void take_imu();
+  // Lockstep: waits until the IMU covers the frame's stamp, its stream ended, or imu.wait_s passed
+  // (then the IMU is off: one warning, stereo-only).
+  void wait_for_imu(const msg::StereoFrame& frame);
+  // Before tracking the frame: the IMU's prediction into the tracker; a dead IMU turns it off.
+  void predict_inertial(const msg::StereoFrame& frame);
+  // After tracking it: the inertial state follows; the odometry gets the velocity when inertial.
+  void update_inertial(const msg::StereoFrame& frame, const TrackResult& result, messages::OdometryMessage& odometry);
+  void turn_inertial_off(const std::string& reason);
+  // The IMU's counters on the status topic, and its state as the status message (the run's last line).
+  void report_inertial();
+  std::string inertial_summary();
+
   FrontendOptions options_;
   // Checked, one writer each (runtime/checked_reader.hpp): a second replay or a stray participant on
   // the domain is ignored instead of mixed into the run.
@@ -121,6 +140,14 @@ class Frontend : public runtime::Component {
   BatchedMirror mirror_;
   // odom -> world (REP 105 map -> odom): the loop corrections followed so far, left out of Odometry.T_oc.
   Pose3 T_wo_ = Pose3::Identity();
+  // Inertial tracking: the readers, the stream's continuity, the state (null when off by option).
+  std::optional<runtime::CheckedReader<msg::ImuCalibration>> imu_calibration_reader_;
+  std::optional<runtime::CheckedReader<msg::ImuBatch>> imu_reader_;
+  std::unique_ptr<runtime::WaitSet> imu_waitset_;  // the IMU readers only: the lockstep wait
+  std::unique_ptr<InertialFrontend> inertial_;
+  std::unique_ptr<messages::ImuStreamReader> imu_stream_;
+  std::map<std::string, std::uint64_t> imu_counters_reported_;
+  std::optional<std::uint64_t> inertial_initialized_at_seq_;
   // --localize: the seq of the first frame tracked in the saved map, unset until then.
   std::optional<std::uint64_t> relocalized_at_seq_;
 };

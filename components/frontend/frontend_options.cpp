@@ -33,6 +33,30 @@ void refuse_moved_sections(const runtime::Config& c) {
   }
 }
 
+// imu.*: off unless imu.enabled (docs/frontend.md, Inertial tracking).
+InertialOptions read_inertial(const runtime::Config& c) {
+  InertialOptions o;
+  read(c, "imu.enabled", o.enabled);
+  read(c, "imu.lockstep", o.lockstep);
+  read(c, "imu.wait_s", o.wait_s, 0.01, kMaxTimeoutS);
+  read(c, "imu.init_min_duration_s", o.init_min_duration_s, 0.1, 60.0);
+  read(c, "imu.init_min_keyframes", o.init_min_keyframes, 3, 1000);
+  read(c, "imu.init_max_keyframes", o.init_max_keyframes, 3, 1000);
+  read(c, "imu.init_retry_s", o.init_retry_s, 0.0, 60.0);
+  read(c, "imu.init_max_gravity_stddev_deg", o.init_max_gravity_stddev_deg, 0.01, 90.0);
+  read(c, "imu.init_max_accel_bias_stddev_m_s2", o.init_max_accel_bias_stddev_m_s2, 0.001, 100.0);
+  read(c, "imu.init_max_gravity_stddev_of_prior", o.init_max_gravity_stddev_of_prior, 0.01, 1000.0);
+  read(c, "imu.refine_every_s", o.refine_every_s, 0.05, 60.0);
+  read(c, "imu.refine_until_s", o.refine_until_s, 0.0, 3600.0);
+  read(c, "imu.blackout_max_s", o.blackout_max_s, 0.0, 60.0);
+  read(c, "imu.velocity_window_s", o.velocity_window_s, 0.05, 10.0);
+  if (o.init_max_keyframes < o.init_min_keyframes) {
+    throw std::runtime_error(c.source() + ": field 'imu.init_max_keyframes': " + std::to_string(o.init_max_keyframes) +
+                             " is below imu.init_min_keyframes (" + std::to_string(o.init_min_keyframes) + ")");
+  }
+  return o;
+}
+
 }  // namespace
 
 FrontendOptions FrontendOptions::from_config(const runtime::Config& config, const std::vector<std::string>& rest) {
@@ -50,6 +74,8 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
   options.mapper_map_file = config.get_string("mapper.map_file", "");
   options.journal_file = config.get_string("journal.file", "");
   options.settings_file = config.get_path("settings.file", "");
+  options.inertial = read_inertial(config);
+  std::string imu = "auto";
   std::string loop_closer = config.get_string("lockstep.loop_closer", "none");
   const std::string loop_closer_name = config.get_string("lockstep.loop_closer_name", "loop_closer");
   runtime::Flags flags("heslam-frontend [options]");
@@ -68,8 +94,14 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
                 if (value != "on" && value != "off") runtime::throw_bad_flag_value("--mapping", "on or off", value);
                 options.mapping = value == "on";
               })
-      .path("--saved-map", "FILE", &options.saved_map, "the saved map the mapper loaded (named in messages)");
+      .path("--saved-map", "FILE", &options.saved_map, "the saved map the mapper loaded (named in messages)")
+      .custom("--imu", "auto|none", "none: no inertial tracking whatever imu.enabled says (auto: imu.enabled)",
+              [&imu](const std::string& value) {
+                if (value != "auto" && value != "none") runtime::throw_bad_flag_value("--imu", "auto or none", value);
+                imu = value;
+              });
   flags.parse(rest);
+  if (imu == "none") options.inertial.enabled = false;
   if (!options.mapping && !options.localize) {
     throw std::runtime_error("--mapping off: localization only needs a saved map to localize in (--localize)");
   }

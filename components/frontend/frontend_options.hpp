@@ -15,6 +15,7 @@
 #include "components/core/map/map.hpp"
 #include "components/core/place/vocabulary.hpp"
 #include "components/core/tracking/tracker_options.hpp"
+#include "components/frontend/inertial_frontend.hpp"
 #include "runtime/config.hpp"
 
 namespace heslam::frontend {
@@ -73,6 +74,8 @@ struct FrontendOptions {
   std::filesystem::path journal_file;
   // frames.max_pending: frames that arrive before the calibration are kept (oldest dropped beyond).
   int max_pending_frames = 8;
+  // imu.*: inertial tracking (docs/frontend.md, Inertial tracking); --imu auto|none (none wins: off).
+  InertialOptions inertial;
 
   // Throws std::runtime_error (one line: file, field, expectation) on a bad field.
   // `rest`: the command line's own arguments (--settings FILE, --mapper-map-file FILE, --journal FILE,

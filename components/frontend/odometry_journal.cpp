@@ -40,7 +40,7 @@ bool read_record(const std::string& record, msg::Odometry& odometry, bool& finis
   }
   // A state that is no TrackingState is a damaged line (casting it to the enum would be undefined).
   if (state != heslam_msg_TRACKING_NOT_INITIALIZED && state != heslam_msg_TRACKING_OK &&
-      state != heslam_msg_TRACKING_LOST) {
+      state != heslam_msg_TRACKING_LOST && state != heslam_msg_TRACKING_INERTIAL_ONLY) {
     return false;
   }
   odometry.T_oc = odometry.T_wc;  // not journaled: a restarted frontend's odom starts again at the world

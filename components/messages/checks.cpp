@@ -135,7 +135,7 @@ std::optional<std::string> check(const msg::StereoCalibration& calibration) {
 
 std::optional<std::string> check(const msg::Odometry& odometry) {
   if (!runtime::wire_value_is_one_of(odometry.state, heslam_msg_TRACKING_NOT_INITIALIZED, heslam_msg_TRACKING_OK,
-                                     heslam_msg_TRACKING_LOST)) {
+                                     heslam_msg_TRACKING_LOST, heslam_msg_TRACKING_INERTIAL_ONLY)) {
     return text("state ", runtime::wire_value(odometry.state), " is not a TrackingState");
   }
   if (auto problem = check(odometry.T_wc, "T_wc")) return problem;

@@ -21,6 +21,7 @@ heslam_msg_TrackingState to_message(TrackingState state) {
   switch (state) {
     case TrackingState::kOk: return heslam_msg_TRACKING_OK;
     case TrackingState::kLost: return heslam_msg_TRACKING_LOST;
+    case TrackingState::kInertialOnly: return heslam_msg_TRACKING_INERTIAL_ONLY;
     case TrackingState::kNotInitialized: break;
   }
   return heslam_msg_TRACKING_NOT_INITIALIZED;
@@ -55,6 +56,11 @@ OdometryMessage::OdometryMessage(std::int64_t stamp_ns, std::uint64_t seq, const
     entry.ms = static_cast<float>(timings[i].ms);
   }
   runtime::borrow(message_.stage_times, stage_times_);
+}
+
+void OdometryMessage::set_velocity(const Eigen::Vector3d& v_w) {
+  message_.velocity_valid = true;
+  for (int i = 0; i < 3; ++i) message_.v_w[i] = v_w[i];
 }
 
 }  // namespace heslam::messages

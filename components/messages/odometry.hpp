@@ -28,6 +28,8 @@ class OdometryMessage {
   OdometryMessage(const OdometryMessage&) = delete;
   OdometryMessage& operator=(const OdometryMessage&) = delete;
   const msg::Odometry& get() const { return message_; }
+  // Inertial tracking: the IMU body's velocity in the world (velocity_valid, v_w).
+  void set_velocity(const Eigen::Vector3d& v_w);
 
  private:
   std::vector<msg::StageTime> stage_times_;

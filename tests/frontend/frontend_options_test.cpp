@@ -442,3 +442,35 @@ TEST(FrontendOptions, ShippedConfigsLoad) {
 
 }  // namespace
 }  // namespace heslam::frontend
+
+namespace heslam::frontend {
+namespace {
+
+// imu.*: off by default (every stereo-only pipeline unchanged); the shipped inertial layer turns it on;
+// --imu none wins over the config; a bad field is one line naming it.
+TEST(FrontendOptions, InertialTrackingIsOffUnlessEnabledAndNoneWins) {
+  EXPECT_FALSE(FrontendOptions::from_config(runtime::Config::empty()).inertial.enabled);
+  const std::string yaml = "imu:\n  enabled: true\n  lockstep: false\n  blackout_max_s: 2.5\n  init_min_keyframes: 7\n";
+  const FrontendOptions on = FrontendOptions::from_config(runtime::Config::parse(yaml, "frontend.yaml"));
+  EXPECT_TRUE(on.inertial.enabled);
+  EXPECT_FALSE(on.inertial.lockstep);
+  EXPECT_DOUBLE_EQ(on.inertial.blackout_max_s, 2.5);
+  EXPECT_EQ(on.inertial.init_min_keyframes, 7);
+  const FrontendOptions none =
+      FrontendOptions::from_config(runtime::Config::parse(yaml, "frontend.yaml"), {"--imu", "none"});
+  EXPECT_FALSE(none.inertial.enabled);
+  const FrontendOptions shipped = FrontendOptions::from_config(
+      runtime::Config::load(std::filesystem::path(HESLAM_SOURCE_DIR) / "config/frontend/inertial.yaml"));
+  EXPECT_TRUE(shipped.inertial.enabled);
+  EXPECT_TRUE(shipped.inertial.lockstep);
+  EXPECT_THROW(FrontendOptions::from_config(runtime::Config::empty(), {"--imu", "maybe"}), std::runtime_error);
+  try {
+    FrontendOptions::from_config(runtime::Config::parse("imu:\n  blackout_max_s: -1\n", "frontend.yaml"));
+    FAIL() << "a negative blackout_max_s was accepted";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("imu.blackout_max_s"), std::string::npos) << error.what();
+  }
+}
+
+}  // namespace
+}  // namespace heslam::frontend

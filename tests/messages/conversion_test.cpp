@@ -8,6 +8,7 @@
 #include <string>
 
 #include "components/messages/camera.hpp"
+#include "components/messages/checks.hpp"
 #include "components/messages/keyframe.hpp"
 #include "components/messages/map_state.hpp"
 #include "components/messages/odometry.hpp"
@@ -174,6 +175,27 @@ TEST(MessageConversion, OdometryOfALostFrameCarriesNoPose) {
   EXPECT_STREQ(message.stage_times._buffer[0].stage, "rectify");
   EXPECT_EQ(std::strlen(message.stage_times._buffer[1].stage), 31u);
   EXPECT_FLOAT_EQ(message.stage_times._buffer[1].ms, 2.0f);
+}
+
+// Inertial tracking: a frame the IMU carried has a pose (state INERTIAL_ONLY), and odometry carries the
+// velocity only when it is set.
+TEST(MessageConversion, OdometryOfAnInertialOnlyFrameCarriesItsPoseAndVelocity) {
+  TrackResult result;
+  result.state = TrackingState::kInertialOnly;
+  result.T_wc = test_pose();
+  result.reference_kf = 5;
+  OdometryMessage odometry(100, 3, result, 0, {});
+  EXPECT_FALSE(odometry.get().velocity_valid);
+  odometry.set_velocity(Eigen::Vector3d(0.5, -1.0, 2.0));
+  const msg::Odometry& message = odometry.get();
+  EXPECT_EQ(message.state, heslam_msg_TRACKING_INERTIAL_ONLY);
+  EXPECT_TRUE(to_pose(message.T_wc).isApprox(test_pose()));
+  EXPECT_EQ(message.reference_keyframe_id, 5u);
+  EXPECT_TRUE(message.velocity_valid);
+  EXPECT_EQ(message.v_w[0], 0.5);
+  EXPECT_EQ(message.v_w[1], -1.0);
+  EXPECT_EQ(message.v_w[2], 2.0);
+  EXPECT_FALSE(check(message).has_value());
 }
 
 Keyframe make_keyframe(KeyframeId id, int keypoints) {

@@ -53,6 +53,7 @@ const char* state_name(const heslam_msg_TrackingState& field) {
   switch (runtime::wire_value(field)) {
     case heslam_msg_TRACKING_OK: return "OK";
     case heslam_msg_TRACKING_LOST: return "LOST";
+    case heslam_msg_TRACKING_INERTIAL_ONLY: return "INERTIAL_ONLY";
     case heslam_msg_TRACKING_NOT_INITIALIZED: return "NOT_INITIALIZED";
   }
   return "UNKNOWN";
@@ -294,7 +295,9 @@ std::size_t Recorder::drain() {
     RecordedFrame frame;
     frame.stamp_ns = odometry.stamp_ns;
     frame.seq = odometry.seq;
-    frame.tracked = runtime::wire_value(odometry.state) == heslam_msg_TRACKING_OK;
+    // An inertial-only frame has a pose (the IMU's, vision could not track it): written, not lost.
+    frame.tracked = runtime::wire_value(odometry.state) == heslam_msg_TRACKING_OK ||
+                    runtime::wire_value(odometry.state) == heslam_msg_TRACKING_INERTIAL_ONLY;
     frame.state = state_name(odometry.state);
     frame.reference = odometry.reference_keyframe_id;
     frame.T_ref_c = messages::to_pose(odometry.T_ref_c);
@@ -305,6 +308,7 @@ std::size_t Recorder::drain() {
     }
     journal_->append(frame);
     stats().count(frame.tracked ? "frames" : "frames_untracked");
+    if (runtime::wire_value(odometry.state) == heslam_msg_TRACKING_INERTIAL_ONLY) stats().count("frames_inertial_only");
   }
   return taken;
 }

@@ -20,7 +20,7 @@ namespace heslam::recorder {
 struct RecordedFrame {
   std::int64_t stamp_ns = 0;
   std::uint64_t seq = 0;
-  bool tracked = false;  // state OK: the pose fields are meaningful
+  bool tracked = false;  // state OK or INERTIAL_ONLY: the pose fields are meaningful
   std::string state;     // for the lost list: "LOST", "NOT_INITIALIZED"
   KeyframeId reference = kNoId;
   Pose3 T_ref_c = Pose3::Identity();

@@ -178,7 +178,8 @@ void Ros2Bridge::configure(const runtime::Config& config) {
 void Ros2Bridge::on_odometry(const msg::Odometry& odometry) {
   newest_stamp_ns_ = std::max(newest_stamp_ns_, odometry.stamp_ns);
   // A frame that is not tracked carries no pose (the identity): ROS 2 gets nothing for it.
-  if (runtime::wire_value(odometry.state) != heslam_msg_TRACKING_OK) {  // any value may come (runtime/wire_enum.hpp)
+  const std::int64_t state = runtime::wire_value(odometry.state);  // any value may come (runtime/wire_enum.hpp)
+  if (state != heslam_msg_TRACKING_OK && state != heslam_msg_TRACKING_INERTIAL_ONLY) {
     stats().count("untracked_frames_skipped");
     return;
   }

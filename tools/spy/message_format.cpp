@@ -176,6 +176,7 @@ std::string format_message(const msg::Odometry& odometry, const FormatOptions& o
   const std::int64_t tracking = runtime::wire_value(odometry.state);
   const char* state = tracking == heslam_msg_TRACKING_OK                ? "OK"
                       : tracking == heslam_msg_TRACKING_LOST            ? "LOST"
+                      : tracking == heslam_msg_TRACKING_INERTIAL_ONLY   ? "INERTIAL_ONLY"
                       : tracking == heslam_msg_TRACKING_NOT_INITIALIZED ? "NOT_INITIALIZED"
                                                                         : "unknown";
   text.line(0, "seq", std::to_string(odometry.seq));

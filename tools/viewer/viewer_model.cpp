@@ -98,6 +98,7 @@ void ViewerModel::add_odometry(const msg::Odometry& message, Clock::time_point n
   OdometryEntry entry;
   switch (runtime::wire_value(message.state)) {  // any value may come (runtime/wire_enum.hpp)
     case heslam_msg_TRACKING_OK: entry.status = TrackingStatus::kTracking; break;
+    case heslam_msg_TRACKING_INERTIAL_ONLY: entry.status = TrackingStatus::kTracking; break;  // the IMU's pose
     case heslam_msg_TRACKING_LOST: entry.status = TrackingStatus::kLost; break;
     default: entry.status = TrackingStatus::kNotInitialized; break;
   }

@@ -8,6 +8,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "components/core/tracking/keyframe_decision.hpp"
 #include "components/core/tracking/local_map.hpp"
@@ -58,6 +59,7 @@ const char* to_string(TrackingState state) {
     case TrackingState::kNotInitialized: return "NOT_INITIALIZED";
     case TrackingState::kOk: return "OK";
     case TrackingState::kLost: return "LOST";
+    case TrackingState::kInertialOnly: return "INERTIAL_ONLY";
   }
   return "UNKNOWN";
 }
@@ -69,6 +71,7 @@ const char* to_string(TrackingMethod method) {
     case TrackingMethod::kMotionModel: return "motion_model";
     case TrackingMethod::kReferenceKeyframe: return "reference_keyframe";
     case TrackingMethod::kRelocalization: return "relocalization";
+    case TrackingMethod::kInertial: return "inertial";
   }
   return "unknown";
 }
@@ -95,15 +98,19 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
     return result;
   }
 
+  const std::optional<Pose3> prediction = std::exchange(prediction_, std::nullopt);
+  const std::optional<Pose3> fallback = std::exchange(inertial_fallback_, std::nullopt);
   const bool last_frame_tracked = state_ == TrackingState::kOk;
   bool ok = false;
-  if (last_frame_tracked) {
+  if (prediction && (last_frame_tracked || state_ == TrackingState::kInertialOnly)) {
+    ok = track_predicted(frame, *prediction, result);
+  } else if (last_frame_tracked) {
     if (velocity_ && frames_since_relocalization_ >= kFramesWithoutMotionModelAfterRelocalization) {
-      ok = track_motion_model(frame);
+      ok = track_motion_model(frame, last_frame_.T_wc * *velocity_);
       if (ok) result.method = TrackingMethod::kMotionModel;
     }
     if (!ok) {
-      ok = track_reference_keyframe(frame);
+      ok = track_reference_keyframe(frame, last_frame_.T_wc);
       if (ok) result.method = TrackingMethod::kReferenceKeyframe;
     }
   } else {
@@ -151,6 +158,14 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
     } else {
       velocity_.reset();  // the last frame had no pose: no velocity until two frames in a row are tracked
     }
+    result.T_wc = frame.T_wc;
+  } else if (fallback) {
+    // Vision gave nothing usable: the IMU's pose, from which the next frame searches the map again.
+    state_ = TrackingState::kInertialOnly;
+    result.method = TrackingMethod::kInertial;
+    velocity_.reset();
+    frame.clear_matches();
+    frame.T_wc = *fallback;
     result.T_wc = frame.T_wc;
   } else {
     state_ = TrackingState::kLost;
@@ -243,8 +258,22 @@ bool Tracker::initialize(Frame& frame, TrackResult& result) {
   return true;
 }
 
-bool Tracker::track_motion_model(Frame& frame) {
-  frame.T_wc = last_frame_.T_wc * *velocity_;
+bool Tracker::track_predicted(Frame& frame, const Pose3& T_wc_predicted, TrackResult& result) {
+  // The last frame's matches (none after an inertial-only frame) guide the search as in the motion
+  // model; without enough, the reference keyframe's points are projected from the prediction.
+  if (state_ == TrackingState::kOk && track_motion_model(frame, T_wc_predicted)) {
+    result.method = TrackingMethod::kMotionModel;
+    return true;
+  }
+  if (track_reference_keyframe(frame, T_wc_predicted)) {
+    result.method = TrackingMethod::kReferenceKeyframe;
+    return true;
+  }
+  return false;
+}
+
+bool Tracker::track_motion_model(Frame& frame, const Pose3& T_wc_start) {
+  frame.T_wc = T_wc_start;
   frame.clear_matches();
   int matches = search_from_last_frame(frame, last_frame_, map_, camera_, options_.motion_search_radius_px, options_);
   if (matches < options_.min_motion_matches) {
@@ -260,10 +289,10 @@ bool Tracker::track_motion_model(Frame& frame) {
   return frame.discard_outliers() >= options_.min_pose_inliers;
 }
 
-bool Tracker::track_reference_keyframe(Frame& frame) {
+bool Tracker::track_reference_keyframe(Frame& frame, const Pose3& T_wc_start) {
   const Keyframe* reference = map_.keyframe(reference_kf_);
   if (reference == nullptr) return false;
-  frame.T_wc = last_frame_.T_wc;
+  frame.T_wc = T_wc_start;
   frame.clear_matches();
   int matches = search_keyframe_by_projection(frame, *reference, map_, camera_, options_.reference_search_radius_px,
                                               options_.reference_ratio, options_);

@@ -27,11 +27,13 @@
 
 namespace heslam {
 
-enum class TrackingState { kNotInitialized, kOk, kLost };
+// kInertialOnly: vision could not track the frame, the IMU's propagation gave its pose (a frame with a
+// pose, not lost: docs/outputs.md); only with a prediction (set_prediction) that allows it.
+enum class TrackingState { kNotInitialized, kOk, kLost, kInertialOnly };
 const char* to_string(TrackingState state);
 
 // How the frame's pose was first found, before the local map refinement.
-enum class TrackingMethod { kNone, kInitialization, kMotionModel, kReferenceKeyframe, kRelocalization };
+enum class TrackingMethod { kNone, kInitialization, kMotionModel, kReferenceKeyframe, kRelocalization, kInertial };
 const char* to_string(TrackingMethod method);
 
 struct TrackTimings {
@@ -44,7 +46,8 @@ struct TrackTimings {
 struct TrackResult {
   TrackingState state = TrackingState::kNotInitialized;
   TrackingMethod method = TrackingMethod::kNone;
-  // Published only when state == kOk; otherwise T_wc is the last good pose and must not be used.
+  // Published only when state == kOk or kInertialOnly; otherwise T_wc is the last good pose and must
+  // not be used.
   Pose3 T_wc = Pose3::Identity();
   KeyframeId reference_kf = kNoId;
   Pose3 T_ref_c = Pose3::Identity();  // current camera in the reference keyframe's frame
@@ -60,7 +63,7 @@ struct TrackResult {
   KeyframeId new_keyframe_reference = kNoId;
   TrackTimings timings;
 
-  bool pose_valid() const { return state == TrackingState::kOk; }
+  bool pose_valid() const { return state == TrackingState::kOk || state == TrackingState::kInertialOnly; }
 };
 
 // Where a previous tracker's last frame was: its reference keyframe and its pose in it, and in the
@@ -80,6 +83,16 @@ class Tracker {
   // Throws std::invalid_argument (one line naming the field) on inconsistent features; the tracker's
   // state is unchanged then, so the caller can skip the frame and count it.
   TrackResult track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatures features);
+
+  // For the next track() call only (an IMU's prediction, components/frontend/inertial_frontend.hpp):
+  // `T_wc` replaces the constant-velocity model as the frame's starting pose (also after a frame
+  // without velocity, e.g. after an inertial-only frame: the reference keyframe is then searched by
+  // projection from it); `fallback` becomes the frame's pose, state kInertialOnly, when vision cannot
+  // track it. Without a call, tracking is the stereo-only one, bit for bit.
+  void set_prediction(std::optional<Pose3> T_wc, std::optional<Pose3> fallback = std::nullopt) {
+    prediction_ = std::move(T_wc);
+    inertial_fallback_ = std::move(fallback);
+  }
 
   // Whether the local mapper can take a keyframe now (real-time mode); lockstep keeps it true.
   void set_mapper_idle(bool idle) { mapper_idle_ = idle; }
@@ -122,8 +135,11 @@ class Tracker {
 
  private:
   bool initialize(Frame& frame, TrackResult& result);
-  bool track_motion_model(Frame& frame);
-  bool track_reference_keyframe(Frame& frame);
+  bool track_motion_model(Frame& frame, const Pose3& T_wc_start);
+  bool track_reference_keyframe(Frame& frame, const Pose3& T_wc_start);
+  // The tracking of a frame that had a prediction (set_prediction): motion model search from it,
+  // else the reference keyframe's points projected from it.
+  bool track_predicted(Frame& frame, const Pose3& T_wc_predicted, TrackResult& result);
   bool track_local_map(Frame& frame, int& inliers);
   void maybe_insert_keyframe(Frame& frame, int inliers, TrackResult& result);
   KeyframeId next_keyframe_id() { return make_id(options_.id_tag, ++keyframe_counter_); }
@@ -143,6 +159,8 @@ class Tracker {
   int frames_since_keyframe_ = 0;
   int frames_since_relocalization_ = 1 << 30;
   bool mapper_idle_ = true;
+  std::optional<Pose3> prediction_;         // set_prediction, for the next frame only
+  std::optional<Pose3> inertial_fallback_;  // ... idem
 };
 
 }  // namespace heslam

@@ -1,0 +1,211 @@
+// Stereo-inertial heslam end to end (issue 34): config/pipelines/euroc_inertial.yaml and synth_inertial.yaml
+// as real processes under heslam-supervisor, in lockstep, each run on its own domain. Known answers: the
+// EuRoC ground truth of the shared MH01 clip (skipped when absent) and heslam-synth's exact trajectory.
+// Blackouts are copies of the data made here: every file a symlink but the blackened frames' PNGs.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "pipeline_runs.hpp"
+#include "synth_render.hpp"
+#include "test_support.hpp"
+
+namespace heslam {
+namespace {
+
+namespace fs = std::filesystem;
+
+using test::ate_rmse_m;
+using test::finish;
+using test::lost_entries;
+using test::start_pipeline;
+
+// The synthetic room with --imu: 20 s at 20 Hz, a 2 s blackout in the middle.
+constexpr int kSynthFrames = 400;
+constexpr int kSynthBlackFirst = 200;
+constexpr int kSynthBlackFrames = 40;
+
+// A copy of the EuRoC folder `source` in `dest`: symlinks, but frames [first, first + count) of cam0 and
+// cam1 (in stamp order) written black, same size. Returns the number of frames of cam0.
+std::size_t blackout_copy(const fs::path& source, const fs::path& dest, int first, int count) {
+  fs::create_directories(dest / "mav0");
+  std::size_t frames = 0;
+  for (const auto& entry : fs::directory_iterator(source / "mav0")) {
+    const std::string name = entry.path().filename().string();
+    if (name != "cam0" && name != "cam1") {
+      fs::create_symlink(fs::absolute(entry.path()), dest / "mav0" / name);
+      continue;
+    }
+    const fs::path camera = dest / "mav0" / name;
+    fs::create_directories(camera / "data");
+    for (const auto& file : fs::directory_iterator(entry.path())) {
+      if (file.path().filename() != "data")
+        fs::create_symlink(fs::absolute(file.path()), camera / file.path().filename());
+    }
+    std::vector<fs::path> images;
+    for (const auto& image : fs::directory_iterator(entry.path() / "data")) images.push_back(image.path());
+    std::sort(images.begin(), images.end());
+    for (std::size_t i = 0; i < images.size(); ++i) {
+      const fs::path target = camera / "data" / images[i].filename();
+      if (static_cast<int>(i) >= first && static_cast<int>(i) < first + count) {
+        const cv::Mat original = cv::imread(images[i].string(), cv::IMREAD_GRAYSCALE);
+        if (original.empty() || !cv::imwrite(target.string(), cv::Mat::zeros(original.size(), CV_8UC1))) {
+          throw std::runtime_error("cannot blacken " + images[i].string() + " into " + target.string());
+        }
+      } else {
+        fs::create_symlink(fs::absolute(images[i]), target);
+      }
+    }
+    if (name == "cam0") frames = images.size();
+  }
+  return frames;
+}
+
+// The number in the first match of `pattern`'s group 1 in `text`, -1 when none.
+long long first_number(const std::string& text, const std::string& pattern) {
+  std::smatch match;
+  return std::regex_search(text, match, std::regex(pattern)) ? std::stoll(match[1]) : -1;
+}
+
+std::size_t occurrences(const std::string& text, const std::string& needle) {
+  std::size_t count = 0;
+  for (std::size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) ++count;
+  return count;
+}
+
+struct PipelineRun {
+  int code = -1;
+  std::string output;
+  fs::path trajectory;
+  fs::path lost;
+};
+
+PipelineRun run_pipeline(const std::string& pipeline, const fs::path& dataset, const fs::path& dir,
+                         const std::string& label, const std::vector<std::string>& args = {}) {
+  auto supervisor = start_pipeline(pipeline, dataset, dir, label, test::exclusive_domain_id(), args);
+  PipelineRun run;
+  run.code = finish(*supervisor);
+  run.output = supervisor->out() + supervisor->err();
+  run.trajectory = dir / (label + ".txt");
+  run.lost = dir / (label + ".lost.txt");
+  return run;
+}
+
+std::size_t poses_in(const fs::path& trajectory) { return eval::read_trajectory(trajectory).size(); }
+
+TEST(InertialEndToEnd, EurocMh01InitializesWithin2sAndIsNoWorseThanStereoOnly) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
+  const test::ScratchDir dir("inertial_mh01");
+  const PipelineRun inertial = run_pipeline("euroc_inertial", dataset, dir.path(), "inertial");
+  ASSERT_EQ(inertial.code, 0) << inertial.output;
+  const PipelineRun stereo = run_pipeline("euroc_inertial", dataset, dir.path(), "stereo", {"imu=none"});
+  ASSERT_EQ(stereo.code, 0) << stereo.output;
+  EXPECT_EQ(poses_in(inertial.trajectory), 160u);
+  EXPECT_EQ(poses_in(stereo.trajectory), 160u);
+  // Initialized from the keyframes of the first 2 s (40 frames at 20 Hz, frame 0 the first).
+  const long long initialized_at = first_number(inertial.output, R"(IMU initialized at frame (\d+))");
+  ASSERT_GE(initialized_at, 0) << inertial.output;
+  EXPECT_LE(initialized_at, 40) << inertial.output;
+  EXPECT_EQ(occurrences(stereo.output, "inertial tracking:"), 0u) << "--arg imu=none must be stereo-only";
+  const double inertial_ate_m = ate_rmse_m(dataset, inertial.trajectory);
+  const double stereo_ate_m = ate_rmse_m(dataset, stereo.trajectory);
+  std::printf("MH01 ATE: stereo-inertial %.3f mm, stereo-only %.3f mm; IMU initialized at frame %lld\n",
+              inertial_ate_m * 1e3, stereo_ate_m * 1e3, initialized_at);
+  EXPECT_LE(inertial_ate_m, stereo_ate_m * 1.05);
+}
+
+TEST(InertialEndToEnd, EurocMh01BlackFrames60To79CarriedByTheImu) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const fs::path source = test::shared_dataset("euroc_mh01_handheld");
+  const test::ScratchDir dir("inertial_blackout");
+  const fs::path dataset = dir.path() / "mh01_black";
+  ASSERT_EQ(blackout_copy(source, dataset, 60, 20), 160u);
+  const PipelineRun inertial = run_pipeline("euroc_inertial", dataset, dir.path(), "inertial");
+  ASSERT_EQ(inertial.code, 0) << inertial.output;
+  EXPECT_EQ(poses_in(inertial.trajectory), 160u) << inertial.output;
+  EXPECT_EQ(lost_entries(inertial.lost), 0) << inertial.output;
+  EXPECT_NE(inertial.output.find("tracked 160/160 frames, 0 lost"), std::string::npos) << inertial.output;
+  const long long inertial_only = first_number(inertial.output, R"(, (\d+) inertial-only frames)");
+  EXPECT_GE(inertial_only, 20) << inertial.output;
+  const double ate_m = ate_rmse_m(source, inertial.trajectory);
+  // Stereo-only on the same copy has no pose for the black frames.
+  const PipelineRun stereo = run_pipeline("euroc_inertial", dataset, dir.path(), "stereo", {"imu=none"});
+  ASSERT_EQ(stereo.code, 0) << stereo.output;
+  std::printf(
+      "MH01 frames 60-79 black: stereo-inertial %zu poses, ATE %.3f mm (%lld inertial-only); stereo-only "
+      "%zu poses\n",
+      poses_in(inertial.trajectory), ate_m * 1e3, inertial_only, poses_in(stereo.trajectory));
+  EXPECT_LE(poses_in(stereo.trajectory), 140u);
+  EXPECT_LE(ate_m, 0.006);
+}
+
+TEST(InertialEndToEnd, EurocMh01ImuStoppingMidRunFallsBackToStereoOnlyWithOneWarning) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const fs::path source = test::shared_dataset("euroc_mh01_handheld");
+  const test::ScratchDir dir("inertial_imu_stops");
+  // The copy's imu0/data.csv ends 4 s into the clip (frame 80 of 160).
+  const fs::path dataset = dir.path() / "mh01_imu_stops";
+  fs::create_directories(dataset / "mav0" / "imu0");
+  for (const auto& entry : fs::directory_iterator(source / "mav0")) {
+    if (entry.path().filename() != "imu0") fs::create_symlink(entry.path(), dataset / "mav0" / entry.path().filename());
+  }
+  fs::create_symlink(source / "mav0/imu0/sensor.yaml", dataset / "mav0/imu0/sensor.yaml");
+  std::vector<fs::path> images;
+  for (const auto& image : fs::directory_iterator(source / "mav0/cam0/data")) images.push_back(image.path());
+  std::sort(images.begin(), images.end());
+  const long long stop_ns = std::stoll(images[80].stem().string());
+  std::ifstream in(source / "mav0/imu0/data.csv");
+  std::ofstream out(dataset / "mav0/imu0/data.csv");
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty() && line[0] != '#' && std::stoll(line.substr(0, line.find(','))) > stop_ns) break;
+    out << line << "\n";
+  }
+  out.close();
+  const PipelineRun run = run_pipeline("euroc_inertial", dataset, dir.path(), "stops");
+  ASSERT_EQ(run.code, 0) << run.output;
+  EXPECT_EQ(occurrences(run.output, "IMU off:"), 1u) << run.output;
+  EXPECT_EQ(poses_in(run.trajectory), 160u) << run.output;
+  const double ate_m = ate_rmse_m(source, run.trajectory);
+  std::printf("MH01, IMU stops at frame 80: ATE %.3f mm\n", ate_m * 1e3);
+  EXPECT_LE(ate_m, 0.0045);
+}
+
+TEST(InertialEndToEnd, SynthRoomTracksEveryFrameAndA2sBlackoutKeepsEveryPose) {
+  const test::ScratchDir dir("inertial_synth");
+  const fs::path rendered = dir.path() / "room_imu";
+  test::ChildProcess synth(test::bin_dir() / "heslam-synth",
+                           {"--preset", "room", "--frames", std::to_string(kSynthFrames), "--threads", "2",
+                            "--no-events", "--imu", "--out", rendered.string()},
+                           dir.path(), "synth");
+  ASSERT_EQ(synth.wait(std::chrono::seconds(600)).value_or(-1), 0) << synth.err();
+  const PipelineRun clear = run_pipeline("synth_inertial", rendered, dir.path(), "clear", {"loop_closer=none"});
+  ASSERT_EQ(clear.code, 0) << clear.output;
+  EXPECT_EQ(poses_in(clear.trajectory), static_cast<std::size_t>(kSynthFrames)) << clear.output;
+  EXPECT_EQ(first_number(clear.output, R"(, (\d+) inertial-only frames)"), 0) << clear.output;
+
+  const fs::path black = dir.path() / "room_imu_black";
+  ASSERT_EQ(blackout_copy(rendered, black, kSynthBlackFirst, kSynthBlackFrames),
+            static_cast<std::size_t>(kSynthFrames));
+  const PipelineRun blackout = run_pipeline("synth_inertial", black, dir.path(), "blackout", {"loop_closer=none"});
+  ASSERT_EQ(blackout.code, 0) << blackout.output;
+  EXPECT_EQ(poses_in(blackout.trajectory), static_cast<std::size_t>(kSynthFrames)) << blackout.output;
+  EXPECT_EQ(lost_entries(blackout.lost), 0) << blackout.output;
+  EXPECT_GE(first_number(blackout.output, R"(, (\d+) inertial-only frames)"), kSynthBlackFrames) << blackout.output;
+  const double clear_ate_m = ate_rmse_m(rendered, clear.trajectory);
+  const double blackout_ate_m = ate_rmse_m(rendered, blackout.trajectory);
+  std::printf("synthetic room with --imu, %d frames: ATE %.3f mm; with a 2 s blackout %.3f mm\n", kSynthFrames,
+              clear_ate_m * 1e3, blackout_ate_m * 1e3);
+  EXPECT_LE(blackout_ate_m, 2.0 * clear_ate_m);
+}
+
+}  // namespace
+}  // namespace heslam
