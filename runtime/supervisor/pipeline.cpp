@@ -543,6 +543,9 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
                                                : RestartPolicy::kNever;
     });
     collect(problems, [&] { spec.max_restarts = section.get_int("max_restarts", 3, 0, 1000); });
+    collect(problems, [&] {
+      if (section.has("stop_timeout_s")) spec.stop_timeout_s = section.get_double("stop_timeout_s", 5.0, 0.1, 600.0);
+    });
     collect(problems, [&] { spec.restart_backoff_s = section.get_double("restart_backoff_s", 0.1, 0.0, 600.0); });
     collect(problems,
             [&] { spec.restart_backoff_max_s = section.get_double("restart_backoff_max_s", 5.0, 0.0, 3600.0); });

@@ -32,6 +32,9 @@ struct ComponentSpec {
   double restart_backoff_max_s = 5.0;
   Readiness ready = Readiness::kStatus;  // status: the next component waits for this one's status
   double ready_timeout_s = 10.0;
+  // SIGTERM -> SIGKILL for this process; unset: the pipeline's stop_timeout_s (a process with long
+  // shutdown work, e.g. heslam-occupancy's final fusion, gets its own without slowing the others').
+  std::optional<double> stop_timeout_s;
   bool required = true;           // its failure fails the run (exit code 1)
   bool shutdown_on_exit = false;  // on_exit: shutdown — its end ends the run
   bool common_args = true;        // pass --domain --namespace --name [--config] --log-level --dds-config

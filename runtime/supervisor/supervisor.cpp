@@ -551,10 +551,12 @@ void Supervisor::on_exit(Managed& component, int wait_status) {
       log_.info(name, " stopped (", how, ")");
       return;
     }
-    const std::string reason = component.killed_at_stop
-                                   ? name + " did not stop within " + format_seconds(pipeline_.stop_timeout_s) +
-                                         " s and was killed; its shutdown did not finish"
-                                   : name + " failed while stopping (" + how + ")" + why;
+    const std::string reason =
+        component.killed_at_stop
+            ? name + " did not stop within " +
+                  format_seconds(component.spec.stop_timeout_s.value_or(pipeline_.stop_timeout_s)) +
+                  " s and was killed; its shutdown did not finish"
+            : name + " failed while stopping (" + how + ")" + why;
     if (component.spec.required) {
       log_.error(reason);
       fail(reason);
@@ -672,8 +674,8 @@ void Supervisor::stop(Managed& component) {
   if (component.phase != Phase::kRunning) return;
   component.stopping = true;
   component.process.signal_group(SIGTERM);
-  const auto stop_timeout =
-      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(pipeline_.stop_timeout_s));
+  const double stop_timeout_s = component.spec.stop_timeout_s.value_or(pipeline_.stop_timeout_s);
+  const auto stop_timeout = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(stop_timeout_s));
   const auto deadline = Clock::now() + stop_timeout;
   // A stopped process (SIGSTOP, a debugger, Ctrl-Z) holds SIGTERM: half-way to the timeout it is
   // resumed, so it still does its shutdown work (the recorder's files, the mapper's map) instead of
@@ -691,7 +693,7 @@ void Supervisor::stop(Managed& component) {
     }
   }
   if (component.phase == Phase::kRunning) {
-    log_.warn(component.spec.name, " did not stop within ", pipeline_.stop_timeout_s, " s; sending SIGKILL");
+    log_.warn(component.spec.name, " did not stop within ", stop_timeout_s, " s; sending SIGKILL");
     component.killed_at_stop = true;
     component.process.signal_group(SIGKILL);
     const auto kill_deadline = Clock::now() + kKillReapTimeout;

@@ -296,6 +296,19 @@ TEST_F(SupervisorTest, ComponentIgnoringSigtermIsKilledAndFailsTheRun) {
   EXPECT_TRUE(all_children_gone(kExitBound));
 }
 
+// A component's own stop_timeout_s overrides the pipeline's (3 s here): 1 s for this one.
+TEST_F(SupervisorTest, ComponentStopTimeoutOverridesThePipelines) {
+  write("stubborn.yaml", "ignore_sigterm: true\n");
+  start(pipeline(std::string(kTalker) + "    config: stubborn.yaml\n    stop_timeout_s: 1\n"));
+  ASSERT_TRUE(wait_for_output("talker is ready", kStartupBound)) << output();
+  kill(supervisor_pid_, SIGTERM);
+  EXPECT_EQ(wait_exit(kExitBound), 1) << output();
+  EXPECT_NE(output().find("talker did not stop within 1 s; sending SIGKILL"), std::string::npos) << output();
+  EXPECT_NE(output().find("pipeline failed: talker did not stop within 1 s and was killed"), std::string::npos)
+      << output();
+  EXPECT_TRUE(all_children_gone(kExitBound));
+}
+
 TEST_F(SupervisorTest, RequiredComponentFailureFailsTheRun) {
   write("fail.yaml", "exit_after_s: 0.2\nexit_code: 3\n");
   start(pipeline(std::string(kTalker) + "    config: fail.yaml\n" +
