@@ -25,9 +25,9 @@ struct DenseStereoOptions {
   double min_depth_m = 0.3;
   double max_depth_m = 5.0;
   // Every pixel_step-th pixel in both directions is turned into a point before thinning.
-  int pixel_step = 2;
+  int pixel_step = 4;
   // Thinning lattice (camera frame): one point (the mean) per cube of this side; 0: no thinning.
-  double thin_voxel_m = 0.025;
+  double thin_voxel_m = 0.05;
 
   // Throws std::runtime_error naming `source` and the field when a value is out of range.
   void check(const std::string& source) const;

@@ -86,7 +86,7 @@ void OccupancyGrid::write_map_server(const std::filesystem::path& stem) const {
   std::filesystem::path yaml_file = stem;
   yaml_file += ".yaml";
   std::ostringstream yaml;
-  yaml.precision(17);
+  yaml.precision(12);  // origins are multiples of the resolution: 12 digits print them exactly
   yaml << "image: " << pgm_file.filename().string() << "\n"
        << "mode: trinary\n"
        << "resolution: " << resolution_m_ << "\n"

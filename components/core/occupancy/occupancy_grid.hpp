@@ -21,8 +21,8 @@ enum class CellState : std::uint8_t { kUnknown, kFree, kOccupied };
 
 struct GridBand {
   // Voxels whose centre lies in [min_m, max_m] along z vote for their column.
-  double min_m = -0.5;
-  double max_m = 1.0;
+  double min_m = -0.7;
+  double max_m = 0.3;
 };
 
 class OccupancyGrid {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
-#include <unordered_set>
+#include <vector>
 
 namespace heslam {
 namespace {
@@ -62,18 +62,20 @@ float VoxelMap::log_odds(const VoxelIndex& v) const {
 
 bool VoxelMap::observed(const VoxelIndex& v) const { return cells_.count(key(v)) != 0; }
 
-void VoxelMap::traverse(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                        const std::function<bool(const VoxelIndex&)>& visit) const {
-  const double r = options_.resolution_m;
-  VoxelIndex current = index_of(a);
-  const VoxelIndex last = index_of(b);
-  if (!visit(current)) return;
+namespace {
+
+// Amanatides-Woo over voxels of side r from a to b; visit(x, y, z) returns false to stop.
+template <typename Visit>
+void walk(double r, const Eigen::Vector3d& a, const Eigen::Vector3d& b, Visit&& visit) {
+  int cur[3] = {static_cast<int>(std::floor(a.x() / r)), static_cast<int>(std::floor(a.y() / r)),
+                static_cast<int>(std::floor(a.z() / r))};
+  const int end[3] = {static_cast<int>(std::floor(b.x() / r)), static_cast<int>(std::floor(b.y() / r)),
+                      static_cast<int>(std::floor(b.z() / r))};
+  if (!visit(cur[0], cur[1], cur[2])) return;
   const Eigen::Vector3d direction = b - a;
   int step[3];
   double t_max[3];
   double t_delta[3];
-  int cur[3] = {current.x, current.y, current.z};
-  const int end[3] = {last.x, last.y, last.z};
   for (int axis = 0; axis < 3; ++axis) {
     const double d = direction[axis];
     if (d > 0.0) {
@@ -96,36 +98,51 @@ void VoxelMap::traverse(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
     int axis = 0;
     if (t_max[1] < t_max[axis]) axis = 1;
     if (t_max[2] < t_max[axis]) axis = 2;
-    if (t_max[axis] > 1.0) break;  // b reached (its voxel was the last counted step)
+    if (t_max[axis] > 1.0) break;  // rounding: b's voxel is visited below
     cur[axis] += step[axis];
     t_max[axis] += t_delta[axis];
-    if (!visit({cur[0], cur[1], cur[2]})) return;
+    if (!visit(cur[0], cur[1], cur[2])) return;
     if (cur[0] == end[0] && cur[1] == end[1] && cur[2] == end[2]) return;
   }
-  if (cur[0] != end[0] || cur[1] != end[1] || cur[2] != end[2]) visit(last);
+  if (cur[0] != end[0] || cur[1] != end[1] || cur[2] != end[2]) visit(end[0], end[1], end[2]);
+}
+
+}  // namespace
+
+void VoxelMap::traverse(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                        const std::function<bool(const VoxelIndex&)>& visit) const {
+  walk(options_.resolution_m, a, b, [&](int x, int y, int z) { return visit({x, y, z}); });
 }
 
 std::size_t VoxelMap::integrate(const Eigen::Vector3d& origin, std::span<const Eigen::Vector3f> points) {
-  std::unordered_set<std::uint64_t> hits;
-  std::unordered_set<std::uint64_t> misses;
-  std::size_t used = 0;
   if (!origin.allFinite()) return 0;
+  std::vector<std::uint64_t> hits;
+  std::vector<std::uint64_t> misses;
+  hits.reserve(points.size());
+  std::size_t used = 0;
   for (const Eigen::Vector3f& point_f : points) {
     const Eigen::Vector3d point = point_f.cast<double>();
     if (!point.allFinite()) continue;
     ++used;
     const std::uint64_t end_key = key(index_of(point));
-    hits.insert(end_key);
-    traverse(origin, point, [&](const VoxelIndex& v) {
-      const std::uint64_t k = key(v);
-      if (k != end_key) misses.insert(k);
+    hits.push_back(end_key);
+    walk(options_.resolution_m, origin, point, [&](int x, int y, int z) {
+      const std::uint64_t k = key({x, y, z});
+      if (k != end_key) misses.push_back(k);
       return true;
     });
   }
-  // Each key is updated once per image and updates of different keys commute: the result does not
-  // depend on the sets' iteration order.
+  // Each voxel once per image, a hit winning over a miss (sorted keys: the order of the updates
+  // within an image does not matter, as each key is updated once).
+  std::sort(hits.begin(), hits.end());
+  hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
+  std::sort(misses.begin(), misses.end());
+  misses.erase(std::unique(misses.begin(), misses.end()), misses.end());
+  auto hit = hits.begin();
   for (const std::uint64_t k : misses) {
-    if (!hits.count(k)) update(k, options_.miss_log_odds);
+    while (hit != hits.end() && *hit < k) ++hit;
+    if (hit != hits.end() && *hit == k) continue;
+    update(k, options_.miss_log_odds);
   }
   for (const std::uint64_t k : hits) update(k, options_.hit_log_odds);
   return used;
