@@ -6,11 +6,65 @@
 #include <limits>
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "components/core/occupancy/occupancy_grid.hpp"
 #include "runtime/flags.hpp"
+
+namespace {
+
+// A top view of a heslam-occupancy PLY (binary x y z float) in the grid frame of up = -y (x, z),
+// one pixel per `cell_m`, coloured by height (-y).
+void draw_top_view(const std::filesystem::path& ply, const std::filesystem::path& png, double cell_m) {
+  std::ifstream in(ply, std::ios::binary);
+  if (!in) throw std::runtime_error(ply.string() + ": cannot open");
+  std::size_t count = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("element vertex ", 0) == 0) count = std::stoul(line.substr(15));
+    if (line == "end_header") break;
+  }
+  std::vector<float> xyz(count * 3);
+  in.read(reinterpret_cast<char*>(xyz.data()), static_cast<std::streamsize>(xyz.size() * sizeof(float)));
+  if (!in || count == 0) throw std::runtime_error(ply.string() + ": no points or truncated");
+  float min_a = xyz[0], max_a = xyz[0], min_b = xyz[2], max_b = xyz[2], min_h = -xyz[1], max_h = -xyz[1];
+  for (std::size_t k = 0; k < count; ++k) {
+    min_a = std::min(min_a, xyz[3 * k]);
+    max_a = std::max(max_a, xyz[3 * k]);
+    min_b = std::min(min_b, xyz[3 * k + 2]);
+    max_b = std::max(max_b, xyz[3 * k + 2]);
+    min_h = std::min(min_h, -xyz[3 * k + 1]);
+    max_h = std::max(max_h, -xyz[3 * k + 1]);
+  }
+  const int width = static_cast<int>((max_a - min_a) / cell_m) + 1;
+  const int height = static_cast<int>((max_b - min_b) / cell_m) + 1;
+  cv::Mat heights(height, width, CV_32F, cv::Scalar(-1e9));
+  for (std::size_t k = 0; k < count; ++k) {
+    const int col = static_cast<int>((xyz[3 * k] - min_a) / cell_m);
+    const int row = height - 1 - static_cast<int>((xyz[3 * k + 2] - min_b) / cell_m);
+    float& h = heights.at<float>(row, col);
+    h = std::max(h, -xyz[3 * k + 1]);
+  }
+  cv::Mat grey(height, width, CV_8U, cv::Scalar(0));
+  for (int r = 0; r < height; ++r) {
+    for (int c = 0; c < width; ++c) {
+      const float h = heights.at<float>(r, c);
+      if (h > -1e8f)
+        grey.at<std::uint8_t>(r, c) = static_cast<std::uint8_t>(1 + 254 * (h - min_h) / (max_h - min_h + 1e-6f));
+    }
+  }
+  cv::Mat colour;
+  cv::applyColorMap(grey, colour, cv::COLORMAP_VIRIDIS);
+  colour.setTo(cv::Scalar(255, 255, 255), grey == 0);
+  if (!cv::imwrite(png.string(), colour)) throw std::runtime_error(png.string() + ": cannot write");
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace heslam;
@@ -19,7 +73,8 @@ int main(int argc, char** argv) {
     double min_iou = 0.0;
     int max_free_in_walls = std::numeric_limits<int>::max();
     bool help = false;
-    std::filesystem::path png;
+    std::filesystem::path png, ply, top_png;
+    double top_cell_m = 0.02;
     runtime::Flags flags(
         "heslam-occupancy-compare --grid STEM.yaml --truth GT.yaml [--min-iou X] [--max-free-in-walls N]");
     flags.path("--grid", "FILE", &grid_file, "the grid (map_server YAML)")
@@ -30,15 +85,21 @@ int main(int argc, char** argv) {
         .path("--png", "FILE", &png,
               "the two drawn over each other: grid occupied black, free white, unknown grey; truth\n"
               "occupied cells the grid has occupied green, free red, unknown blue")
+        .path("--ply", "FILE", &ply, "with --top-png: a heslam-occupancy cloud to draw from above (up = -y)")
+        .path("--top-png", "FILE", &top_png, "the cloud's top view, coloured by height")
+        .number("--top-cell", "M", &top_cell_m, 0.001, 1.0, "metres per pixel of the top view (0.02)")
         .toggle("--help", &help, "this help");
     flags.parse(argc, argv);
     if (help) {
       std::cout << flags.usage();
       return 0;
     }
-    if (grid_file.empty() || truth_file.empty()) throw std::runtime_error("--grid and --truth are required");
+    if (!ply.empty() && !top_png.empty()) draw_top_view(ply, top_png, top_cell_m);
+    if (grid_file.empty()) return 0;
     const OccupancyGrid grid = OccupancyGrid::read_map_server(grid_file);
-    const OccupancyGrid truth = OccupancyGrid::read_map_server(truth_file);
+    // Without --truth: the grid drawn alone (an empty truth).
+    const OccupancyGrid truth =
+        truth_file.empty() ? OccupancyGrid(grid.resolution_m()) : OccupancyGrid::read_map_server(truth_file);
     const GridAgreement a = compare(grid, truth);
     if (!png.empty()) {
       int min_i = 0, max_i = 0, min_j = 0, max_j = 0;

@@ -61,14 +61,15 @@ void OccupancyNode::configure(const runtime::Config& config) {
   waitset_->attach(*frame_reader_);
   waitset_->attach(*keyframe_reader_);
   waitset_->attach(*keyframe_state_reader_);
-  log().info("voxels ", options_.map.voxels.resolution_m, " m, grid band [", options_.map.band.min_m, ", ",
-             options_.map.band.max_m, "] m along ", to_string(options_.map.up), ", depth ", options_.stereo.min_depth_m,
-             "-", options_.stereo.max_depth_m, " m, HE ", to_string(options_.he.mode),
-             options_.settings_file.empty() ? std::string(" (no settings file)")
-                                            : " (" + options_.settings_file.string() + ")",
-             options_.output_stem.empty() ? std::string() : ", output " + options_.output_stem.string() + ".pgm/.yaml/.ply",
-             map_->clouds() ? ", " + std::to_string(map_->clouds()) + " keyframe clouds from the state folder"
-                            : std::string());
+  log().info(
+      "voxels ", options_.map.voxels.resolution_m, " m, grid band [", options_.map.band.min_m, ", ",
+      options_.map.band.max_m, "] m along ", to_string(options_.map.up), ", depth ", options_.stereo.min_depth_m, "-",
+      options_.stereo.max_depth_m, " m, HE ", to_string(options_.he.mode),
+      options_.settings_file.empty() ? std::string(" (no settings file)")
+                                     : " (" + options_.settings_file.string() + ")",
+      options_.output_stem.empty() ? std::string() : ", output " + options_.output_stem.string() + ".pgm/.yaml/.ply",
+      map_->clouds() ? ", " + std::to_string(map_->clouds()) + " keyframe clouds from the state folder"
+                     : std::string());
 }
 
 void OccupancyNode::load_state() {
@@ -200,7 +201,8 @@ void OccupancyNode::on_keyframe(const msg::Keyframe& message) {
 
 void OccupancyNode::match_pending() {
   for (auto it = pending_.begin(); it != pending_.end();) {
-    const auto frame = std::find_if(ring_.begin(), ring_.end(), [&](const Frame& f) { return f.stamp_ns == it->stamp_ns; });
+    const auto frame =
+        std::find_if(ring_.begin(), ring_.end(), [&](const Frame& f) { return f.stamp_ns == it->stamp_ns; });
     if (frame != ring_.end()) {
       Job job;
       job.kind = Job::Kind::kCloud;
@@ -231,8 +233,8 @@ void OccupancyNode::push(Job job) {
 
 void OccupancyNode::worker_loop() {
   try {
-    const auto period = std::chrono::duration_cast<Clock::duration>(
-        std::chrono::duration<double>(options_.rebuild_period_s));
+    const auto period =
+        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options_.rebuild_period_s));
     Clock::time_point last_rebuild = Clock::now();
     for (;;) {
       std::optional<Job> job;

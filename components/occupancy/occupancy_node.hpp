@@ -48,8 +48,8 @@ class OccupancyNode final : public runtime::Component {
   struct Job {
     enum class Kind { kCloud, kPose, kCull } kind = Kind::kCloud;
     std::uint64_t keyframe_id = 0;
-    Frame frame;                      // kCloud
-    Pose3 T_wc = Pose3::Identity();   // kPose
+    Frame frame;                     // kCloud
+    Pose3 T_wc = Pose3::Identity();  // kPose
   };
   struct PendingKeyframe {
     std::uint64_t id = 0;

@@ -258,6 +258,7 @@ TEST(DenseStereo, KnownDisparityGivesKnownDepth) {
   left.colRange(20, 320).copyTo(right.colRange(0, 300));
   DenseStereoOptions options;
   options.thin_voxel_m = 0.0;
+  options.pixel_step = 2;
   const DenseStereo stereo(camera, options);
   const cv::Mat disparity = stereo.disparity(left, right);
   EXPECT_NEAR(disparity.at<float>(120, 160), 20.0f, 0.1f);
@@ -267,6 +268,14 @@ TEST(DenseStereo, KnownDisparityGivesKnownDepth) {
   for (const auto& p : cloud) depths.push_back(p.z());
   std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
   EXPECT_NEAR(depths[depths.size() / 2], 2.0f, 0.01f);
+  // Thinned (the default): one finite point per 5 cm cube, at the same depth.
+  const DenseStereo thinned(camera, DenseStereoOptions{});
+  const std::vector<Eigen::Vector3f> thin_cloud = thinned.cloud(left, right);
+  ASSERT_FALSE(thin_cloud.empty());
+  for (const auto& p : thin_cloud) {
+    ASSERT_TRUE(p.allFinite());
+    EXPECT_NEAR(p.z(), 2.0f, 0.06f);
+  }
   // Wrong size: one clear error, no crash.
   EXPECT_THROW(stereo.disparity(left(cv::Rect(0, 0, 100, 100)), right), std::runtime_error);
 }

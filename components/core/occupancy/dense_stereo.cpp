@@ -84,8 +84,12 @@ std::vector<Eigen::Vector3f> DenseStereo::cloud_from_disparity(const cv::Mat& di
         continue;
       }
       const double r = options_.thin_voxel_m;
-      auto& cube = cubes[{static_cast<int>(std::floor(p.x() / r)), static_cast<int>(std::floor(p.y() / r)),
-                          static_cast<int>(std::floor(p.z() / r))}];
+      // Zero-initialised: Eigen's default constructor leaves the sum undefined.
+      auto& cube = cubes
+                       .try_emplace({static_cast<int>(std::floor(p.x() / r)), static_cast<int>(std::floor(p.y() / r)),
+                                     static_cast<int>(std::floor(p.z() / r))},
+                                    Eigen::Vector3d::Zero(), 0)
+                       .first->second;
       cube.first += p;
       ++cube.second;
     }

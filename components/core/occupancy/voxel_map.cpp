@@ -122,7 +122,7 @@ std::size_t VoxelMap::integrate(const Eigen::Vector3d& origin, std::span<const E
   std::size_t used = 0;
   for (const Eigen::Vector3f& point_f : points) {
     const Eigen::Vector3d point = point_f.cast<double>();
-    if (!point.allFinite()) continue;
+    if (!point.allFinite() || (point - origin).norm() > options_.max_ray_m) continue;
     ++used;
     const std::uint64_t end_key = key(index_of(point));
     hits.push_back(end_key);

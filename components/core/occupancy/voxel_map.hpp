@@ -24,6 +24,8 @@ struct VoxelMapOptions {
   float max_log_odds = 3.476f;
   // A voxel is occupied above this log-odds (p > 0.5) and free below -this.
   float occupied_log_odds = 0.0f;
+  // Points farther than this from the ray's origin are not used (a bound on the work per point).
+  double max_ray_m = 50.0;
 };
 
 struct VoxelIndex {
@@ -46,8 +48,8 @@ class VoxelMap {
 
   // One depth image's points (the same frame as the map) seen from `origin`: every voxel a ray from
   // the origin to a point crosses is updated once as a miss, every voxel holding a point once as a hit
-  // (a voxel both crossed and hit counts as hit only: OctoMap's computeUpdate). Non-finite points are
-  // skipped; returns how many points were used.
+  // (a voxel both crossed and hit counts as hit only: OctoMap's computeUpdate). Non-finite points and
+  // points beyond max_ray_m are skipped; returns how many points were used.
   std::size_t integrate(const Eigen::Vector3d& origin, std::span<const Eigen::Vector3f> points);
 
   // The voxels a segment from a to b crosses, in order, both ends' voxels included (Amanatides-Woo).
