@@ -13,6 +13,7 @@
 
 #include "runtime/flags.hpp"
 #include "tools/dataset/imu_reader.hpp"
+#include "tools/synth/occupancy_truth.hpp"
 #include "tools/synth/preset.hpp"
 #include "tools/synth/progress_report.hpp"
 #include "tools/synth/scene_builders.hpp"
@@ -31,6 +32,10 @@ struct Arguments {
   bool help = false;
   std::filesystem::path imu_noise_file;
   heslam::synth::RenderOptions options;
+  std::filesystem::path occupancy_gt;
+  double occupancy_resolution_m = 0.05;
+  double occupancy_band_min_m = -0.7;
+  double occupancy_band_max_m = 0.3;
 };
 
 heslam::runtime::Flags synth_flags(Arguments& a) {
@@ -58,6 +63,13 @@ heslam::runtime::Flags synth_flags(Arguments& a) {
       .toggle("--imu-noise-free", &a.options.imu_noise_free, "--imu readings without noise or bias")
       .path("--imu-noise", "FILE", &a.imu_noise_file,
             "the noise model (and rate_hz) of this IMU sensor.yaml (default: EuRoC's ADIS16448)")
+      .path("--occupancy-gt", "STEM", &a.occupancy_gt,
+            "also (or, without --out, only) the ground-truth 2D occupancy as STEM.pgm + STEM.yaml\n"
+            "(map_server), in heslam-occupancy's grid frame: the first left camera, -y up")
+      .number("--occupancy-resolution", "M", &a.occupancy_resolution_m, 0.001, 10.0, "its cell size (0.05)")
+      .number("--occupancy-band-min", "M", &a.occupancy_band_min_m, -1000.0, 1000.0,
+              "its height band, along -y of the first camera (-0.7, as heslam-occupancy's grid.band_min_m)")
+      .number("--occupancy-band-max", "M", &a.occupancy_band_max_m, -1000.0, 1000.0, "(0.3, grid.band_max_m)")
       .toggle("--quiet", &a.quiet, "no progress and no summary line")
       .alias("-q")
       .toggle("--list", &a.list, "the built-in presets, one a line: frames, duration, distance travelled, purpose")
@@ -112,8 +124,10 @@ int main(int argc, char** argv) {
     RenderOptions& options = arguments.options;
     const OutputFormat fmt = arguments.format;
     const std::string format = fmt == OutputFormat::kEuroc ? "euroc" : "kitti";
-    if (preset_name.empty() || out_dir.empty())
-      throw std::runtime_error("--preset and --out are required\n" + flags.usage());
+    if (preset_name.empty() || (out_dir.empty() && arguments.occupancy_gt.empty()))
+      throw std::runtime_error("--preset and --out (or --occupancy-gt) are required\n" + flags.usage());
+    if (!(arguments.occupancy_band_min_m < arguments.occupancy_band_max_m))
+      throw std::runtime_error("--occupancy-band-min must be below --occupancy-band-max");
     if (!arguments.imu_noise_file.empty()) {
       if (!options.imu) throw std::runtime_error("--imu-noise: only with --imu");
       const heslam::ImuRecording model = heslam::read_imu_sensor_yaml(arguments.imu_noise_file);
@@ -127,6 +141,17 @@ int main(int argc, char** argv) {
 
     const Preset preset = load_preset(find_preset(preset_name));
     SequenceRenderer renderer(preset, options);
+    if (!arguments.occupancy_gt.empty()) {
+      const heslam::GridBand band{arguments.occupancy_band_min_m, arguments.occupancy_band_max_m};
+      const heslam::OccupancyGrid truth =
+          occupancy_truth(renderer.scene(), renderer.T_wc_left(0), arguments.occupancy_resolution_m, band);
+      truth.write_map_server(arguments.occupancy_gt);
+      if (!quiet) {
+        std::fprintf(stderr, "heslam-synth: wrote %s.pgm/.yaml (%zu occupied cells)\n", arguments.occupancy_gt.c_str(),
+                     truth.count(heslam::CellState::kOccupied));
+      }
+      if (out_dir.empty()) return 0;
+    }
     const auto start = std::chrono::steady_clock::now();
     ProgressReport progress(std::cerr, ProgressReport::mode_for(quiet, isatty(STDERR_FILENO) == 1), preset.name);
     write_sequence(renderer, fmt, out_dir, [&](int done, int total) {

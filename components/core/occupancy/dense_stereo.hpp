@@ -1,0 +1,56 @@
+// Dense depth of a rectified, equalized stereo pair with OpenCV's semi-global block matching, as a
+// point cloud in the left camera's frame (x right, y down, z forward), thinned to one point per voxel
+// of a lattice so that a keyframe's cloud is small enough to keep, persist and ray-cast again.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "components/core/camera/pinhole_stereo.hpp"
+
+namespace heslam {
+
+struct DenseStereoOptions {
+  // cv::StereoSGBM: disparities searched (a multiple of 16), the matched block's side (odd), and the
+  // smoothness penalties P1 / P2 per block pixel (OpenCV's recommended 8 and 32 x block^2).
+  int num_disparities = 64;
+  int block_size = 5;
+  int uniqueness_ratio = 10;
+  int speckle_window = 100;
+  int speckle_range = 2;
+  // Depth range kept: stereo depth error grows with depth squared (z^2 / bf per pixel of disparity).
+  double min_depth_m = 0.3;
+  double max_depth_m = 5.0;
+  // Every pixel_step-th pixel in both directions is turned into a point before thinning.
+  int pixel_step = 4;
+  // Thinning lattice (camera frame): one point (the mean) per cube of this side; 0: no thinning.
+  double thin_voxel_m = 0.05;
+
+  // Throws std::runtime_error naming `source` and the field when a value is out of range.
+  void check(const std::string& source) const;
+};
+
+class DenseStereo {
+ public:
+  // Throws std::runtime_error when the options are unusable (check()).
+  DenseStereo(const PinholeStereo& camera, const DenseStereoOptions& options);
+
+  // The disparity image (CV_32F, pixels; < 0 where no match) of a rectified 8-bit pair of the camera's size.
+  // Throws std::runtime_error when an image has another size or type.
+  cv::Mat disparity(const cv::Mat& left, const cv::Mat& right) const;
+  // The pair's points in the left camera's frame (metres), thinned; see the header comment.
+  std::vector<Eigen::Vector3f> cloud(const cv::Mat& left, const cv::Mat& right) const;
+  // The points of a disparity image (as disparity() returns).
+  std::vector<Eigen::Vector3f> cloud_from_disparity(const cv::Mat& disparity) const;
+
+  const PinholeStereo& camera() const { return camera_; }
+
+ private:
+  PinholeStereo camera_;
+  DenseStereoOptions options_;
+};
+
+}  // namespace heslam

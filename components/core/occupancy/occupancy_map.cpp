@@ -1,0 +1,176 @@
+// The keyframe-anchored occupancy map (see occupancy_map.hpp).
+#include "components/core/occupancy/occupancy_map.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <stdexcept>
+
+#include <Eigen/Geometry>
+
+#include "runtime/atomic_file.hpp"
+
+namespace heslam {
+namespace {
+
+constexpr char kCloudMagic[8] = {'H', 'E', 'S', 'O', 'C', 'C', '0', '1'};
+
+Eigen::Matrix3d rotation_for(UpAxis up) {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  if (up == UpAxis::kMinusY) R << 1, 0, 0, 0, 0, 1, 0, -1, 0;  // grid (x, z, -y): right-handed
+  if (up == UpAxis::kY) R << 1, 0, 0, 0, 0, -1, 0, 1, 0;       // grid (x, -z, y)
+  return R;
+}
+
+template <typename T>
+void put(std::string& out, const T& value) {
+  out.append(reinterpret_cast<const char*>(&value), sizeof(T));
+}
+
+}  // namespace
+
+UpAxis parse_up_axis(const std::string& name) {
+  if (name == "-y") return UpAxis::kMinusY;
+  if (name == "y") return UpAxis::kY;
+  if (name == "z") return UpAxis::kZ;
+  throw std::invalid_argument("up axis '" + name + "': expected -y, y or z");
+}
+
+const char* to_string(UpAxis up) {
+  switch (up) {
+    case UpAxis::kMinusY: return "-y";
+    case UpAxis::kY: return "y";
+    case UpAxis::kZ: return "z";
+  }
+  return "?";
+}
+
+OccupancyMap::OccupancyMap(const OccupancyMapOptions& options)
+    : options_(options), R_gw_(rotation_for(options.up)), voxels_(options.voxels) {
+  if (!(options.band.min_m < options.band.max_m)) throw std::invalid_argument("occupancy: band min must be < max");
+}
+
+bool OccupancyMap::set_pose(std::uint64_t id, const Pose3& T_wc) {
+  if (!T_wc.matrix().allFinite()) return false;
+  poses_[id] = T_wc;
+  const auto fused = fused_.find(id);
+  if (fused != fused_.end()) {
+    const Pose3 delta = fused->second.inverse() * T_wc;
+    const double angle = Eigen::AngleAxisd(delta.rotation()).angle();
+    if (delta.translation().norm() > options_.stale_translation_m || angle > options_.stale_rotation_rad) {
+      stale_ = true;
+    }
+  }
+  return true;
+}
+
+void OccupancyMap::cull(std::uint64_t id) {
+  culled_[id] = true;
+  clouds_.erase(id);
+  if (fused_.erase(id) != 0) stale_ = true;
+}
+
+void OccupancyMap::add_cloud(std::uint64_t id, KeyframeCloud cloud) {
+  if (culled(id)) return;
+  clouds_[id] = std::move(cloud);
+  if (fused_.erase(id) != 0) stale_ = true;  // a cloud replaced: rebuild without the old one
+}
+
+void OccupancyMap::fuse(std::uint64_t id, const KeyframeCloud& cloud, const Pose3& T_wc) {
+  const Eigen::Matrix3f R = (R_gw_ * T_wc.rotation()).cast<float>();
+  const Eigen::Vector3f t = (R_gw_ * T_wc.translation()).cast<float>();
+  std::vector<Eigen::Vector3f> points_g;
+  points_g.reserve(cloud.points_c.size());
+  for (const Eigen::Vector3f& p : cloud.points_c) points_g.push_back(R * p + t);
+  voxels_.integrate((R_gw_ * T_wc.translation()), points_g);
+  fused_[id] = T_wc;
+}
+
+void OccupancyMap::fuse_pending() {
+  for (const auto& [id, cloud] : clouds_) {
+    if (fused_.count(id)) continue;
+    const auto pose = poses_.find(id);
+    if (pose != poses_.end()) fuse(id, cloud, pose->second);
+  }
+}
+
+void OccupancyMap::rebuild() {
+  voxels_.clear();
+  fused_.clear();
+  stale_ = false;
+  fuse_pending();
+}
+
+std::size_t OccupancyMap::cloud_points() const {
+  std::size_t n = 0;
+  for (const auto& [id, cloud] : clouds_) n += cloud.points_c.size();
+  return n;
+}
+
+std::size_t OccupancyMap::write_ply(const std::filesystem::path& file) const {
+  std::string body;
+  std::size_t count = 0;
+  for (const auto& [id, cloud] : clouds_) {
+    const auto pose = poses_.find(id);
+    if (pose == poses_.end()) continue;
+    const Eigen::Matrix3f R = pose->second.rotation().cast<float>();
+    const Eigen::Vector3f t = pose->second.translation().cast<float>();
+    for (const Eigen::Vector3f& p : cloud.points_c) {
+      const Eigen::Vector3f w = R * p + t;
+      put(body, w.x());
+      put(body, w.y());
+      put(body, w.z());
+      ++count;
+    }
+  }
+  const std::string header =
+      "ply\nformat binary_little_endian 1.0\ncomment heslam-occupancy dense cloud, world frame\n"
+      "element vertex " +
+      std::to_string(count) + "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  runtime::replace_file_contents(file, header + body, /*sync=*/false);
+  return count;
+}
+
+void write_cloud(const std::filesystem::path& file, std::uint64_t id, const KeyframeCloud& cloud) {
+  std::string out(kCloudMagic, sizeof(kCloudMagic));
+  put(out, id);
+  put(out, cloud.stamp_ns);
+  put(out, static_cast<std::uint64_t>(cloud.points_c.size()));
+  for (const Eigen::Vector3f& p : cloud.points_c) {
+    put(out, p.x());
+    put(out, p.y());
+    put(out, p.z());
+  }
+  runtime::replace_file_contents(file, out, /*sync=*/false);
+}
+
+KeyframeCloud read_cloud(const std::filesystem::path& file, std::uint64_t& id) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw std::runtime_error(file.string() + ": cannot open");
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  constexpr std::size_t kHeader = sizeof(kCloudMagic) + 3 * sizeof(std::uint64_t);
+  if (bytes.size() < kHeader || std::memcmp(bytes.data(), kCloudMagic, sizeof(kCloudMagic)) != 0) {
+    throw std::runtime_error(file.string() + ": not a heslam-occupancy keyframe cloud (magic HESOCC01)");
+  }
+  KeyframeCloud cloud;
+  std::uint64_t count = 0;
+  const char* at = bytes.data() + sizeof(kCloudMagic);
+  std::memcpy(&id, at, sizeof(id));
+  std::memcpy(&cloud.stamp_ns, at + 8, sizeof(cloud.stamp_ns));
+  std::memcpy(&count, at + 16, sizeof(count));
+  if (bytes.size() != kHeader + count * 3 * sizeof(float)) {
+    throw std::runtime_error(file.string() + ": " + std::to_string(bytes.size()) + " bytes, expected " +
+                             std::to_string(kHeader + count * 3 * sizeof(float)) + " for " + std::to_string(count) +
+                             " points");
+  }
+  cloud.points_c.resize(count);
+  const char* points = bytes.data() + kHeader;
+  for (std::uint64_t i = 0; i < count; ++i) {
+    float xyz[3];
+    std::memcpy(xyz, points + i * sizeof(xyz), sizeof(xyz));
+    cloud.points_c[i] = {xyz[0], xyz[1], xyz[2]};
+  }
+  return cloud;
+}
+
+}  // namespace heslam

@@ -1,0 +1,109 @@
+// The occupancy map of a run: one dense cloud per keyframe, kept in the keyframe's camera frame, and
+// fused into a VoxelMap at the keyframes' current poses. A refined pose or a loop correction moves a
+// keyframe's cloud with it (the fused map is rebuilt), a culled keyframe's cloud leaves the map.
+//
+// Frames: clouds are in their keyframe's camera frame; poses are T_wc in the SLAM world frame; the
+// voxel map and the grid are in the "grid frame", the world turned so that `up` is its z axis (the
+// first camera's -y without an IMU: x right, y down, z forward is the world then).
+//
+// Determinism: rebuild() fuses the clouds in keyframe id order, so the same clouds at the same poses
+// give the same voxels and grid whatever the order the keyframes, poses and clouds arrived in.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "components/core/geometry/pose.hpp"
+#include "components/core/occupancy/occupancy_grid.hpp"
+#include "components/core/occupancy/voxel_map.hpp"
+
+namespace heslam {
+
+// Which world axis points up: "-y" (the first camera's up, the SLAM world without an IMU), "y" or "z"
+// (a gravity-aligned world, z up).
+enum class UpAxis { kMinusY, kY, kZ };
+UpAxis parse_up_axis(const std::string& name);  // throws std::invalid_argument
+const char* to_string(UpAxis up);
+
+struct OccupancyMapOptions {
+  VoxelMapOptions voxels;
+  GridBand band;
+  UpAxis up = UpAxis::kMinusY;
+  // A fused keyframe whose pose moved more than this since it was fused makes the map stale (rebuilt
+  // by rebuild_if_stale): below it, a move is within a voxel's quantization.
+  double stale_translation_m = 0.01;
+  double stale_rotation_rad = 0.005;
+};
+
+struct KeyframeCloud {
+  std::int64_t stamp_ns = 0;
+  std::vector<Eigen::Vector3f> points_c;  // keyframe camera frame, metres
+};
+
+class OccupancyMap {
+ public:
+  explicit OccupancyMap(const OccupancyMapOptions& options = {});
+
+  const OccupancyMapOptions& options() const { return options_; }
+
+  // The keyframe's current pose (its first from the frontend, then the mapper's). Returns false (and
+  // changes nothing) for a non-finite pose.
+  bool set_pose(std::uint64_t id, const Pose3& T_wc);
+  // A keyframe the mapper culled: its cloud leaves the map and never comes back.
+  void cull(std::uint64_t id);
+  bool culled(std::uint64_t id) const { return culled_.count(id) != 0; }
+  // The dense cloud of a keyframe; fused at once when its pose is known.
+  void add_cloud(std::uint64_t id, KeyframeCloud cloud);
+  bool has_cloud(std::uint64_t id) const { return clouds_.count(id) != 0; }
+  bool has_pose(std::uint64_t id) const { return poses_.count(id) != 0; }
+
+  // Fuses clouds whose pose arrived since (incremental).
+  void fuse_pending();
+  // Whether a fused keyframe moved (stale thresholds) or left since it was fused.
+  bool stale() const { return stale_; }
+  // Fuses every cloud again at the current poses, in id order (see the header comment).
+  void rebuild();
+  void rebuild_if_stale() {
+    if (stale_) rebuild();
+  }
+
+  const VoxelMap& voxels() const { return voxels_; }
+  OccupancyGrid grid() const { return OccupancyGrid::from_voxels(voxels_, options_.band); }
+  // world -> grid frame rotation.
+  const Eigen::Matrix3d& R_gw() const { return R_gw_; }
+
+  std::size_t clouds() const { return clouds_.size(); }
+  std::size_t fused() const { return fused_.size(); }
+  std::size_t cloud_points() const;
+  const std::map<std::uint64_t, KeyframeCloud>& all_clouds() const { return clouds_; }
+
+  // Every fused cloud point in the world frame, as a binary little-endian PLY (x y z float), replaced
+  // atomically. Returns the points written. Throws std::runtime_error naming the file.
+  std::size_t write_ply(const std::filesystem::path& file) const;
+
+ private:
+  void fuse(std::uint64_t id, const KeyframeCloud& cloud, const Pose3& T_wc);
+
+  OccupancyMapOptions options_;
+  Eigen::Matrix3d R_gw_;
+  VoxelMap voxels_;
+  std::map<std::uint64_t, Pose3> poses_;
+  std::map<std::uint64_t, KeyframeCloud> clouds_;
+  std::map<std::uint64_t, Pose3> fused_;  // the pose each fused cloud was fused at
+  std::map<std::uint64_t, bool> culled_;
+  bool stale_ = false;
+};
+
+// A keyframe cloud as a file (binary: magic, id, stamp, count, x y z float per point), replaced
+// atomically; read back exactly. read_cloud throws std::runtime_error naming the file on a short or
+// foreign file.
+void write_cloud(const std::filesystem::path& file, std::uint64_t id, const KeyframeCloud& cloud);
+KeyframeCloud read_cloud(const std::filesystem::path& file, std::uint64_t& id);
+
+}  // namespace heslam

@@ -1,0 +1,355 @@
+// heslam-occupancy's component (see occupancy_node.hpp).
+#include "components/occupancy/occupancy_node.hpp"
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
+#include "components/messages/camera.hpp"
+#include "components/messages/checks.hpp"
+#include "components/messages/pose.hpp"
+#include "runtime/atomic_file.hpp"
+#include "runtime/run_id.hpp"
+
+namespace heslam::occupancy {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// The DDS thread re-checks for shutdown at least this often (the waitset also wakes on signals).
+constexpr std::chrono::milliseconds kWaitPeriod{200};
+// Frames are big (a raw pair): the reader keeps a few; the ring in this process keeps frame_ring.
+constexpr int kFrameReaderDepth = 8;
+const char* const kRunFile = "RUN";
+const char* const kCloudExtension = ".cloud";
+
+std::filesystem::path cloud_file(const std::filesystem::path& dir, std::uint64_t id) {
+  return dir / (std::to_string(id) + kCloudExtension);
+}
+
+}  // namespace
+
+OccupancyNode::OccupancyNode(const runtime::CommonArgs& args) : Component("occupancy", args) {}
+
+OccupancyNode::~OccupancyNode() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  wake_.notify_all();
+  if (worker_.joinable()) worker_.join();
+}
+
+void OccupancyNode::configure(const runtime::Config& config) {
+  options_ = OccupancyProcessOptions::from_config(config, args().rest);
+  map_ = std::make_unique<OccupancyMap>(options_.map);
+  equalizer_.emplace(options_.he);
+  load_state();
+  calibration_reader_.emplace(participant(), topics().calibration());
+  // Reliable like the frontend's reader, keep-last: a busy worker never slows the replay, and the DDS
+  // thread only copies frames into the ring.
+  frame_reader_.emplace(image_participant().get(), topics().stereo(),
+                        runtime::Qos(runtime::QosRole::kImages).keep_last(kFrameReaderDepth));
+  keyframe_reader_.emplace(participant(), topics().keyframes());
+  keyframe_state_reader_.emplace(participant(), topics().keyframe_states());
+  waitset_ = std::make_unique<runtime::WaitSet>(participant(), image_participant().separate_domain()
+                                                                   ? runtime::WaitScope::kAllDomains
+                                                                   : runtime::WaitScope::kParticipant);
+  waitset_->attach(*calibration_reader_);
+  waitset_->attach(*frame_reader_);
+  waitset_->attach(*keyframe_reader_);
+  waitset_->attach(*keyframe_state_reader_);
+  log().info(
+      "voxels ", options_.map.voxels.resolution_m, " m, grid band [", options_.map.band.min_m, ", ",
+      options_.map.band.max_m, "] m along ", to_string(options_.map.up), ", depth ", options_.stereo.min_depth_m, "-",
+      options_.stereo.max_depth_m, " m, HE ", to_string(options_.he.mode),
+      options_.settings_file.empty() ? std::string(" (no settings file)")
+                                     : " (" + options_.settings_file.string() + ")",
+      options_.output_stem.empty() ? std::string() : ", output " + options_.output_stem.string() + ".pgm/.yaml/.ply",
+      map_->clouds() ? ", " + std::to_string(map_->clouds()) + " keyframe clouds from the state folder"
+                     : std::string());
+}
+
+void OccupancyNode::load_state() {
+  if (options_.state_dir.empty()) return;
+  namespace fs = std::filesystem;
+  fs::create_directories(options_.state_dir);
+  const std::string run = runtime::supervisor_run_id();
+  std::string stored;
+  {
+    std::ifstream in(options_.state_dir / kRunFile);
+    std::getline(in, stored);
+  }
+  if (stored != run) {
+    // Another run's clouds (or none): start empty.
+    for (const auto& entry : fs::directory_iterator(options_.state_dir)) {
+      if (entry.path().extension() == kCloudExtension) fs::remove(entry.path());
+    }
+    runtime::replace_file_contents(options_.state_dir / kRunFile, run + "\n");
+    return;
+  }
+  for (const auto& entry : fs::directory_iterator(options_.state_dir)) {
+    if (entry.path().extension() != kCloudExtension) continue;
+    try {
+      std::uint64_t id = 0;
+      KeyframeCloud cloud = read_cloud(entry.path(), id);
+      seen_keyframes_[id] = true;
+      map_->add_cloud(id, std::move(cloud));
+      stats().count("clouds_loaded");
+    } catch (const std::exception& error) {
+      stats().count("bad_state_files");
+      log().warn(error.what(), "; removed (counted as bad_state_files)");
+      fs::remove(entry.path());
+    }
+  }
+}
+
+void OccupancyNode::run() {
+  worker_ = std::thread([this] { worker_loop(); });
+  while (!shutdown_requested()) {
+    if (waitset_->wait(kWaitPeriod) == runtime::Wake::kShutdown) break;
+    take_all();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (worker_error_) break;
+    }
+  }
+  take_all();
+  const std::size_t unmatched = pending_.size();
+  if (unmatched > 0) {
+    stats().count("keyframes_without_frame", unmatched);
+    log().warn(unmatched, " keyframe(s) still waiting for their frame at the end: skipped");
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  wake_.notify_all();
+  worker_.join();
+  if (worker_error_) std::rethrow_exception(worker_error_);
+  write_outputs();
+}
+
+void OccupancyNode::take_all() {
+  auto apply = [&](auto& reader, const char* counter, auto&& handle) {
+    for (auto& received : reader.take()) {
+      if (!received.info.valid_data) continue;
+      try {
+        if (auto problem = messages::check(*received.sample)) throw std::runtime_error(*problem);
+        handle(*received.sample);
+        stats().count(counter);
+      } catch (const std::exception& error) {
+        const std::string bad = std::string("bad_") + counter;
+        stats().count(bad);
+        log().warn_throttled(bad, "topic '", reader.name(), "': ", error.what(), "; skipped (counted as ", bad, ")");
+      }
+    }
+  };
+  apply(*calibration_reader_, "calibrations", [&](const msg::StereoCalibration& message) {
+    auto rectifier = std::make_shared<const StereoRectifier>(messages::to_calibration(message));
+    std::lock_guard<std::mutex> lock(mutex_);
+    rectifier_ = std::move(rectifier);
+  });
+  apply(*keyframe_state_reader_, "keyframe_states", [&](const msg::KeyframeState& message) {
+    if (message.id == 0) return;  // a version marker
+    Job job;
+    job.keyframe_id = message.id;
+    if (message.culled) {
+      job.kind = Job::Kind::kCull;
+    } else {
+      job.kind = Job::Kind::kPose;
+      job.T_wc = messages::to_pose(message.T_wc);
+      has_state_[message.id] = true;
+    }
+    push(std::move(job));
+  });
+  apply(*frame_reader_, "frames", [&](const msg::StereoFrame& message) { on_frame(message); });
+  apply(*keyframe_reader_, "keyframes", [&](const msg::Keyframe& message) { on_keyframe(message); });
+  match_pending();
+}
+
+void OccupancyNode::on_frame(const msg::StereoFrame& message) {
+  const messages::GreyPair images = messages::to_grey_images(message);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (rectifier_ && images.left.size() != rectifier_->raw_size()) {
+      throw std::runtime_error("frame seq " + std::to_string(message.seq) + ": " + std::to_string(images.left.cols) +
+                               "x" + std::to_string(images.left.rows) + " pixels, the calibration says " +
+                               std::to_string(rectifier_->raw_size().width) + "x" +
+                               std::to_string(rectifier_->raw_size().height));
+    }
+  }
+  ring_.push_back(Frame{message.stamp_ns, images.left.clone(), images.right.clone()});
+  while (static_cast<int>(ring_.size()) > options_.frame_ring) ring_.pop_front();
+}
+
+void OccupancyNode::on_keyframe(const msg::Keyframe& message) {
+  const std::uint64_t id = message.id;
+  if (!has_state_.count(id)) {
+    Job job;
+    job.kind = Job::Kind::kPose;
+    job.keyframe_id = id;
+    job.T_wc = messages::to_pose(message.T_wc);
+    push(std::move(job));
+  }
+  if (seen_keyframes_.count(id)) return;  // sent again (a restarted frontend), or its cloud was loaded
+  seen_keyframes_[id] = true;
+  pending_.push_back({id, message.stamp_ns});
+}
+
+void OccupancyNode::match_pending() {
+  for (auto it = pending_.begin(); it != pending_.end();) {
+    const auto frame =
+        std::find_if(ring_.begin(), ring_.end(), [&](const Frame& f) { return f.stamp_ns == it->stamp_ns; });
+    if (frame != ring_.end()) {
+      Job job;
+      job.kind = Job::Kind::kCloud;
+      job.keyframe_id = it->id;
+      job.frame = *frame;
+      push(std::move(job));
+      it = pending_.erase(it);
+    } else if (!ring_.empty() && ring_.back().stamp_ns > it->stamp_ns) {
+      // Newer frames arrived and its own is not among them: lost (dropped, or before a restart).
+      stats().count("keyframes_without_frame");
+      log().warn_throttled("keyframes_without_frame", "keyframe ", it->id, " (stamp ", it->stamp_ns,
+                           " ns): its frame is not among the frames received; skipped (counted as "
+                           "keyframes_without_frame)");
+      it = pending_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+void OccupancyNode::push(Job job) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    jobs_.push_back(std::move(job));
+  }
+  wake_.notify_all();
+}
+
+void OccupancyNode::worker_loop() {
+  try {
+    const auto period =
+        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options_.rebuild_period_s));
+    Clock::time_point last_rebuild = Clock::now();
+    for (;;) {
+      std::optional<Job> job;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        wake_.wait_for(lock, kWaitPeriod, [&] { return stop_ || !jobs_.empty(); });
+        if (!jobs_.empty()) {
+          job = std::move(jobs_.front());
+          jobs_.pop_front();
+        } else if (stop_) {
+          break;
+        }
+      }
+      if (job) {
+        switch (job->kind) {
+          case Job::Kind::kCloud: make_cloud(*job); break;
+          case Job::Kind::kPose:
+            if (!map_->set_pose(job->keyframe_id, job->T_wc)) {
+              stats().count("bad_poses");
+              log().warn_throttled("bad_poses", "keyframe ", job->keyframe_id,
+                                   ": non-finite pose; skipped (counted as bad_poses)");
+            }
+            break;
+          case Job::Kind::kCull:
+            map_->cull(job->keyframe_id);
+            if (!options_.state_dir.empty()) std::filesystem::remove(cloud_file(options_.state_dir, job->keyframe_id));
+            stats().count("keyframes_culled");
+            break;
+        }
+      }
+      bool idle = false;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        idle = jobs_.empty();
+      }
+      // Moved keyframes: fused again when no work waits (a cloud first), at most once a period.
+      if (idle && map_->stale() && Clock::now() - last_rebuild >= period) {
+        auto timer = stats().time("rebuild");
+        map_->rebuild();
+        last_rebuild = Clock::now();
+        stats().count("rebuilds");
+      }
+      {
+        auto timer = stats().time("fusion");
+        map_->fuse_pending();
+      }
+    }
+  } catch (...) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    worker_error_ = std::current_exception();
+    runtime::request_shutdown();
+  }
+}
+
+void OccupancyNode::make_cloud(const Job& job) {
+  std::shared_ptr<const StereoRectifier> rectifier;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    rectifier = rectifier_;
+  }
+  if (!rectifier) {
+    stats().count("keyframes_without_calibration");
+    log().warn_throttled("keyframes_without_calibration", "keyframe ", job.keyframe_id,
+                         ": no calibration received yet; skipped (counted as keyframes_without_calibration)");
+    return;
+  }
+  if (job.frame.left.size() != rectifier->raw_size() || job.frame.right.size() != rectifier->raw_size()) {
+    stats().count("bad_frame_size");
+    log().warn_throttled("bad_frame_size", "keyframe ", job.keyframe_id, ": frame of ", job.frame.left.cols, "x",
+                         job.frame.left.rows, " pixels, the calibration says ", rectifier->raw_size().width, "x",
+                         rectifier->raw_size().height, "; skipped (counted as bad_frame_size)");
+    return;
+  }
+  if (!stereo_ || stereo_->camera().width_px != rectifier->camera().width_px ||
+      stereo_->camera().fx_px != rectifier->camera().fx_px || stereo_->camera().bf() != rectifier->camera().bf()) {
+    stereo_.emplace(rectifier->camera(), options_.stereo);
+  }
+  KeyframeCloud cloud;
+  cloud.stamp_ns = job.frame.stamp_ns;
+  {
+    auto timer = stats().time("disparity");
+    cv::Mat left, right;
+    rectifier->rectify(job.frame.left, job.frame.right, left, right);
+    // HE as the frontend applies it (one mapping for the pair), so SGBM matches what ORB saw.
+    equalizer_->equalize(left, right, left, right);
+    cloud.points_c = stereo_->cloud(left, right);
+  }
+  stats().count("clouds");
+  if (!options_.state_dir.empty()) write_cloud(cloud_file(options_.state_dir, job.keyframe_id), job.keyframe_id, cloud);
+  map_->add_cloud(job.keyframe_id, std::move(cloud));
+}
+
+void OccupancyNode::write_outputs() {
+  {
+    auto timer = stats().time("final_rebuild");
+    map_->rebuild();
+  }
+  const OccupancyGrid grid = map_->grid();
+  const std::size_t occupied = grid.count(CellState::kOccupied);
+  const std::size_t free = grid.count(CellState::kFree);
+  const double area_m2 = static_cast<double>(occupied + free) * grid.resolution_m() * grid.resolution_m();
+  log().info("map: ", map_->fused(), " keyframe clouds fused (", map_->cloud_points(), " points), ",
+             map_->voxels().size(), " voxels (", map_->voxels().memory_bytes() / 1024, " KiB), grid ", occupied,
+             " occupied + ", free, " free cells (", area_m2, " m^2)");
+  if (map_->fused() == 0) {
+    throw std::runtime_error("no keyframe cloud was fused (keyframes received: " +
+                             std::to_string(seen_keyframes_.size()) + "); no map written");
+  }
+  if (options_.output_stem.empty()) return;
+  grid.write_map_server(options_.output_stem);
+  std::filesystem::path ply = options_.output_stem;
+  ply += ".ply";
+  const std::size_t points = map_->write_ply(ply);
+  log().info("wrote ", options_.output_stem.string(), ".pgm/.yaml (map_server) and ", ply.string(), " (", points,
+             " points)");
+}
+
+}  // namespace heslam::occupancy

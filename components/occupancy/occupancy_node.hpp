@@ -1,0 +1,105 @@
+// heslam-occupancy's component: a reader of the map like the loop closer, it never writes map state.
+//
+// DDS thread: raw frames (camera/stereo) go into a ring by stamp; a keyframe (map/keyframes) takes
+// the frame whose stamp equals its own and queues it for the worker; keyframe states
+// (map/keyframe_states: refined poses, loop corrections as the mapper applied them, culling) update
+// the poses. Worker thread: rectify, equalize as the frontend does, dense disparity, the keyframe's
+// cloud (its camera frame), fusion; a map made stale by moved keyframes is fused again at most every
+// rebuild_period_s. The frontend never waits for this process: frames are read from the replay's
+// topic, which the frontend reads too.
+//
+// At the end: every cloud fused again at the final poses in keyframe id order, STEM.pgm + STEM.yaml
+// (map_server) and STEM.ply written. Restarted, it loads the clouds of its state folder and takes
+// the keyframes and states again from DDS (transient-local), so its map is the one it had.
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include <opencv2/core.hpp>
+
+#include "components/core/camera/stereo_rectifier.hpp"
+#include "components/core/image/histogram_equalizer.hpp"
+#include "components/core/occupancy/dense_stereo.hpp"
+#include "components/core/occupancy/occupancy_map.hpp"
+#include "components/occupancy/occupancy_options.hpp"
+#include "runtime/component.hpp"
+
+namespace heslam::occupancy {
+
+class OccupancyNode final : public runtime::Component {
+ public:
+  explicit OccupancyNode(const runtime::CommonArgs& args);
+  ~OccupancyNode() override;
+
+ private:
+  struct Frame {
+    std::int64_t stamp_ns = 0;
+    cv::Mat left;  // raw 8-bit grey, owned
+    cv::Mat right;
+  };
+  // Work for the worker, in arrival order: a keyframe's frame to turn into a cloud, or a pose update.
+  struct Job {
+    enum class Kind { kCloud, kPose, kCull } kind = Kind::kCloud;
+    std::uint64_t keyframe_id = 0;
+    Frame frame;                     // kCloud
+    Pose3 T_wc = Pose3::Identity();  // kPose
+  };
+  struct PendingKeyframe {
+    std::uint64_t id = 0;
+    std::int64_t stamp_ns = 0;
+  };
+
+  void configure(const runtime::Config& config) override;
+  void run() override;
+  bool accepts_positional_args() const override { return true; }  // its own flags (OccupancyProcessOptions)
+
+  void take_all();
+  void on_frame(const msg::StereoFrame& message);
+  void on_keyframe(const msg::Keyframe& message);
+  void on_keyframe_state(const msg::KeyframeState& message);
+  // Pending keyframes whose frame is in the ring go to the worker; those older than the newest frame
+  // without theirs are skipped (counted).
+  void match_pending();
+  void worker_loop();
+  void make_cloud(const Job& job);
+  void push(Job job);
+  void load_state();
+  void write_outputs();
+
+  OccupancyProcessOptions options_;
+  std::optional<runtime::Reader<msg::StereoCalibration>> calibration_reader_;
+  std::optional<runtime::Reader<msg::StereoFrame>> frame_reader_;
+  std::optional<runtime::Reader<msg::Keyframe>> keyframe_reader_;
+  std::optional<runtime::Reader<msg::KeyframeState>> keyframe_state_reader_;
+  std::unique_ptr<runtime::WaitSet> waitset_;
+
+  // DDS thread only.
+  std::deque<Frame> ring_;
+  std::deque<PendingKeyframe> pending_;
+  std::map<std::uint64_t, bool> seen_keyframes_;  // ids whose cloud is queued, loaded or skipped
+  std::map<std::uint64_t, bool> has_state_;       // ids with a mapper state (their pose is the mapper's)
+
+  // Shared with the worker (mutex_).
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<Job> jobs_;
+  std::shared_ptr<const StereoRectifier> rectifier_;
+
+  // Worker thread only (and the DDS thread before the worker starts and after it stopped).
+  std::unique_ptr<OccupancyMap> map_;
+  std::optional<HistogramEqualizer> equalizer_;
+  std::optional<DenseStereo> stereo_;
+  bool stop_ = false;
+  bool busy_ = false;
+  std::thread worker_;
+  std::exception_ptr worker_error_;
+};
+
+}  // namespace heslam::occupancy

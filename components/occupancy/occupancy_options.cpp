@@ -1,0 +1,47 @@
+// Config and command-line reading of heslam-occupancy's options.
+#include "components/occupancy/occupancy_options.hpp"
+
+#include <stdexcept>
+
+#include "components/core/feature/stereo_feature_pipeline.hpp"
+#include "runtime/flags.hpp"
+
+namespace heslam::occupancy {
+
+OccupancyProcessOptions OccupancyProcessOptions::from_config(const runtime::Config& config,
+                                                             const std::vector<std::string>& rest) {
+  OccupancyProcessOptions o;
+  DenseStereoOptions& s = o.stereo;
+  s.num_disparities = config.get_int("stereo.num_disparities", s.num_disparities, 16, 512);
+  s.block_size = config.get_int("stereo.block_size", s.block_size, 1, 11);
+  s.uniqueness_ratio = config.get_int("stereo.uniqueness_ratio", s.uniqueness_ratio, 0, 100);
+  s.speckle_window = config.get_int("stereo.speckle_window", s.speckle_window, 0, 10000);
+  s.speckle_range = config.get_int("stereo.speckle_range", s.speckle_range, 0, 64);
+  s.min_depth_m = config.get_double("stereo.min_depth_m", s.min_depth_m, 0.01, 1000.0);
+  s.max_depth_m = config.get_double("stereo.max_depth_m", s.max_depth_m, 0.01, 1000.0);
+  s.pixel_step = config.get_int("stereo.pixel_step", s.pixel_step, 1, 64);
+  s.thin_voxel_m = config.get_double("stereo.thin_voxel_m", s.thin_voxel_m, 0.0, 10.0);
+  s.check(config.source() + ": stereo");
+  VoxelMapOptions& v = o.map.voxels;
+  v.resolution_m = config.get_double("voxel.resolution_m", v.resolution_m, 0.005, 10.0);
+  o.map.band.min_m = config.get_double("grid.band_min_m", o.map.band.min_m, -1000.0, 1000.0);
+  o.map.band.max_m = config.get_double("grid.band_max_m", o.map.band.max_m, -1000.0, 1000.0);
+  if (!(o.map.band.min_m < o.map.band.max_m)) {
+    throw std::runtime_error(config.source() + ": grid.band_min_m must be below grid.band_max_m");
+  }
+  o.map.up = parse_up_axis(config.get_choice("grid.up", "-y", {"-y", "y", "z"}));
+  o.frame_ring = config.get_int("frame_ring", o.frame_ring, 1, 1000);
+  o.rebuild_period_s = config.get_double("rebuild_period_s", o.rebuild_period_s, 0.0, 3600.0);
+  if (!config.get_string("settings.file", "").empty()) o.settings_file = config.get_path("settings.file", {});
+  std::filesystem::path settings_arg;
+  runtime::Flags flags("heslam-occupancy [options]");
+  flags.path("--settings", "FILE", &settings_arg, "the frontend's settings file, for its HE.* (empty: settings.file)")
+      .path("--output-stem", "STEM", &o.output_stem, "STEM.pgm / STEM.yaml (map_server) and STEM.ply at the end")
+      .path("--state-dir", "DIR", &o.state_dir, "keyframe clouds kept for a restart (empty: none)");
+  flags.parse(rest);
+  if (!settings_arg.empty()) o.settings_file = settings_arg;
+  if (!o.settings_file.empty()) o.he = StereoFeaturePipelineOptions::load(o.settings_file).he;
+  return o;
+}
+
+}  // namespace heslam::occupancy

@@ -1,0 +1,39 @@
+// Options of heslam-occupancy: the config file's fields (config/occupancy/*.yaml, docs/occupancy.md)
+// and its command line.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "components/core/image/histogram_equalizer.hpp"
+#include "components/core/occupancy/dense_stereo.hpp"
+#include "components/core/occupancy/occupancy_map.hpp"
+#include "runtime/config.hpp"
+
+namespace heslam::occupancy {
+
+struct OccupancyProcessOptions {
+  DenseStereoOptions stereo;  // stereo.*
+  OccupancyMapOptions map;    // voxel.*, grid.*
+  // HE.* of the settings file the frontend reads (settings.file / --settings FILE): the dense
+  // matcher sees the images as the frontend's ORB does, so it works where HE-SLAM works.
+  std::filesystem::path settings_file;
+  HistogramEqualizerOptions he;
+  // frame_ring: raw frames kept by stamp for the keyframes still to come (the keyframe of a frame is
+  // published after it, by another process).
+  int frame_ring = 30;
+  // rebuild_period_s: a map made stale by moved keyframes is fused again at most this often while
+  // running and idle (always at the end).
+  double rebuild_period_s = 10.0;
+  // --output-stem STEM: STEM.pgm, STEM.yaml (map_server), STEM.ply written at the end; empty: none.
+  std::filesystem::path output_stem;
+  // --state-dir DIR: one file per keyframe cloud (replaced atomically), so a restarted process
+  // rebuilds its map without the frames it can no longer see; empty: nothing persisted.
+  std::filesystem::path state_dir;
+
+  // Throws std::runtime_error (one line: file, field, expectation) on a bad field or argument.
+  static OccupancyProcessOptions from_config(const runtime::Config& config, const std::vector<std::string>& rest);
+};
+
+}  // namespace heslam::occupancy

@@ -1,0 +1,284 @@
+// The occupancy core with exact small geometry: voxel traversal, log-odds fusion with free space by
+// ray casting, the 2D grid's band and its map_server files, keyframe-anchored clouds that move with
+// their keyframe, and dense stereo depth of a pair with a known disparity.
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <vector>
+
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "components/core/occupancy/dense_stereo.hpp"
+#include "components/core/occupancy/occupancy_grid.hpp"
+#include "components/core/occupancy/occupancy_map.hpp"
+#include "components/core/occupancy/voxel_map.hpp"
+
+namespace heslam {
+namespace {
+
+std::filesystem::path temp_dir(const std::string& name) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("heslam_occupancy_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::vector<VoxelIndex> traversed(const VoxelMap& map, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  std::vector<VoxelIndex> out;
+  map.traverse(a, b, [&](const VoxelIndex& v) {
+    out.push_back(v);
+    return true;
+  });
+  return out;
+}
+
+TEST(VoxelMap, TraversesAnAxisRayVoxelByVoxel) {
+  const VoxelMap map;  // 5 cm
+  const auto voxels = traversed(map, {0.025, 0.025, 0.025}, {0.225, 0.025, 0.025});
+  ASSERT_EQ(voxels.size(), 5u);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(voxels[i], (VoxelIndex{i, 0, 0}));
+  // Negative direction, negative indices: voxel -1 is [-0.05, 0).
+  const auto back = traversed(map, {0.01, 0.01, 0.01}, {-0.11, 0.01, 0.01});
+  ASSERT_EQ(back.size(), 4u);
+  EXPECT_EQ(back.front(), (VoxelIndex{0, 0, 0}));
+  EXPECT_EQ(back.back(), (VoxelIndex{-3, 0, 0}));
+}
+
+TEST(VoxelMap, TraversesADiagonalRayThroughFaceNeighbours) {
+  const VoxelMap map;
+  // From voxel (0,0,0) to voxel (3,2,0): each step crosses one face, so |dx| + |dy| + 1 voxels, each a
+  // face neighbour of the previous one.
+  const auto voxels = traversed(map, {0.01, 0.02, 0.025}, {0.17, 0.12, 0.025});
+  ASSERT_EQ(voxels.size(), 6u);
+  EXPECT_EQ(voxels.back(), (VoxelIndex{3, 2, 0}));
+  for (std::size_t k = 1; k < voxels.size(); ++k) {
+    EXPECT_EQ(std::abs(voxels[k].x - voxels[k - 1].x) + std::abs(voxels[k].y - voxels[k - 1].y), 1);
+  }
+}
+
+TEST(VoxelMap, HitEndsTheRayFreeBeforeIt) {
+  VoxelMap map;
+  const std::vector<Eigen::Vector3f> point{{0.525f, 0.025f, 0.025f}};
+  EXPECT_EQ(map.integrate({0.025, 0.025, 0.025}, point), 1u);
+  for (int i = 0; i < 10; ++i) {
+    EXPECT_FLOAT_EQ(map.log_odds({i, 0, 0}), map.options().miss_log_odds) << i;
+    EXPECT_TRUE(map.free({i, 0, 0}));
+  }
+  EXPECT_FLOAT_EQ(map.log_odds({10, 0, 0}), map.options().hit_log_odds);
+  EXPECT_TRUE(map.occupied({10, 0, 0}));
+  EXPECT_FALSE(map.observed({11, 0, 0}));
+  EXPECT_EQ(map.size(), 11u);
+  // Clamped: many hits stop at max_log_odds; a NaN point is not used.
+  for (int k = 0; k < 10; ++k) map.integrate({0.025, 0.025, 0.025}, point);
+  EXPECT_FLOAT_EQ(map.log_odds({10, 0, 0}), map.options().max_log_odds);
+  const std::vector<Eigen::Vector3f> bad{{NAN, 0.f, 0.f}};
+  EXPECT_EQ(map.integrate({0, 0, 0}, bad), 0u);
+}
+
+TEST(VoxelMap, OneUpdatePerVoxelPerImage) {
+  VoxelMap map;
+  // Two points in one voxel, the second ray passing the first's voxel: one hit, no miss on it.
+  const std::vector<Eigen::Vector3f> points{{0.51f, 0.02f, 0.02f}, {0.52f, 0.03f, 0.03f}, {0.80f, 0.02f, 0.02f}};
+  map.integrate({0.025, 0.025, 0.025}, points);
+  EXPECT_FLOAT_EQ(map.log_odds({10, 0, 0}), map.options().hit_log_odds);
+  EXPECT_FLOAT_EQ(map.log_odds({5, 0, 0}), map.options().miss_log_odds);
+  EXPECT_FLOAT_EQ(map.log_odds({16, 0, 0}), map.options().hit_log_odds);
+}
+
+// A wall of points on the plane x = 1.02 seen from the origin (z is up in the voxel frame).
+std::vector<Eigen::Vector3f> wall_points(double x) {
+  std::vector<Eigen::Vector3f> points;
+  for (double y = -0.99; y < 1.0; y += 0.02) {
+    for (double z = -0.29; z < 0.3; z += 0.02) points.emplace_back(x, y, z);
+  }
+  return points;
+}
+
+TEST(OccupancyGrid, WallIsOccupiedSpaceBeforeItFree) {
+  VoxelMap map;
+  map.integrate({0.025, 0.025, 0.025}, wall_points(1.02));
+  const OccupancyGrid grid = OccupancyGrid::from_voxels(map, GridBand{-0.3, 0.3});
+  // Cells i = 20 (x in [1.0, 1.05)) for y in [-1, 1) are the wall: 40 of them, all occupied.
+  for (int j = -20; j < 20; ++j) EXPECT_EQ(grid.at(20, j), CellState::kOccupied) << j;
+  EXPECT_EQ(grid.count(CellState::kOccupied), 40u);
+  EXPECT_EQ(grid.at(21, 0), CellState::kUnknown);  // behind the wall
+  EXPECT_EQ(grid.at(10, 0), CellState::kFree);
+  EXPECT_EQ(grid.at(0, 0), CellState::kFree);
+  // A band above the points' heights sees only the rays' free space (z in [0.35, 0.5]: none reach it).
+  const OccupancyGrid above = OccupancyGrid::from_voxels(map, GridBand{0.35, 0.5});
+  EXPECT_EQ(above.count(CellState::kOccupied), 0u);
+}
+
+TEST(OccupancyGrid, MapServerFilesRoundTripCellByCell) {
+  OccupancyGrid grid(0.05);
+  grid.set(-3, 2, CellState::kOccupied);
+  grid.set(4, -1, CellState::kFree);
+  grid.set(0, 0, CellState::kOccupied);
+  const auto dir = temp_dir("roundtrip");
+  grid.write_map_server(dir / "map");
+  std::ifstream yaml(dir / "map.yaml");
+  const std::string text((std::istreambuf_iterator<char>(yaml)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("image: map.pgm"), std::string::npos);
+  EXPECT_NE(text.find("origin: [-0.15"), std::string::npos) << text;
+  EXPECT_NE(text.find("negate: 0"), std::string::npos);
+  EXPECT_NE(text.find("occupied_thresh: 0.65"), std::string::npos);
+  EXPECT_NE(text.find("free_thresh: 0.196"), std::string::npos);
+  // 8 x 4 pixels: i -3..4, j -1..2.
+  std::ifstream pgm(dir / "map.pgm", std::ios::binary);
+  std::string magic;
+  std::getline(pgm, magic);
+  EXPECT_EQ(magic, "P5");
+  const OccupancyGrid back = OccupancyGrid::read_map_server(dir / "map.yaml");
+  EXPECT_EQ(back.cells(), grid.cells());
+  std::filesystem::remove_all(dir);
+}
+
+TEST(OccupancyGrid, ComparesOccupiedCellsByIoU) {
+  OccupancyGrid truth(0.05);
+  OccupancyGrid grid(0.05);
+  for (int i = 0; i < 9; ++i) {
+    truth.set(i, 0, CellState::kOccupied);
+    grid.set(i, 0, CellState::kOccupied);
+  }
+  truth.set(9, 0, CellState::kOccupied);
+  grid.set(9, 0, CellState::kFree);  // a free cell inside a wall
+  grid.set(5, 5, CellState::kOccupied);
+  const GridAgreement a = compare(grid, truth);
+  EXPECT_EQ(a.truth_occupied, 10u);
+  EXPECT_EQ(a.grid_occupied, 10u);
+  EXPECT_EQ(a.both_occupied, 9u);
+  EXPECT_DOUBLE_EQ(a.occupied_iou, 9.0 / 11.0);
+  EXPECT_EQ(a.free_in_truth_occupied, 1u);
+  EXPECT_THROW(compare(grid, OccupancyGrid(0.1)), std::invalid_argument);
+}
+
+TEST(OccupancyMap, KeyframeCloudMovesWithItsKeyframe) {
+  OccupancyMapOptions options;
+  options.up = UpAxis::kZ;
+  options.band = {-0.3, 0.3};
+  OccupancyMap map(options);
+  map.add_cloud(7, KeyframeCloud{100, wall_points(1.02)});
+  EXPECT_EQ(map.fused(), 0u);  // no pose yet
+  Pose3 T_wc = Pose3::Identity();
+  T_wc.translation() = Eigen::Vector3d(0.025, 0.025, 0.025);
+  ASSERT_TRUE(map.set_pose(7, T_wc));
+  map.fuse_pending();
+  EXPECT_EQ(map.fused(), 1u);
+  EXPECT_EQ(map.grid().at(20, 0), CellState::kOccupied);  // x = 1.045
+  // The mapper refines the pose by +0.5 m in x: the wall follows, the old one is gone.
+  T_wc.translation().x() += 0.5;
+  ASSERT_TRUE(map.set_pose(7, T_wc));
+  EXPECT_TRUE(map.stale());
+  map.rebuild_if_stale();
+  const OccupancyGrid moved = map.grid();
+  EXPECT_EQ(moved.at(30, 0), CellState::kOccupied);
+  EXPECT_NE(moved.at(20, 0), CellState::kOccupied);
+  // A NaN pose is refused; a culled keyframe leaves the map.
+  Pose3 bad = T_wc;
+  bad.translation().x() = NAN;
+  EXPECT_FALSE(map.set_pose(7, bad));
+  map.cull(7);
+  map.rebuild_if_stale();
+  EXPECT_EQ(map.grid().count(CellState::kOccupied), 0u);
+  map.add_cloud(7, KeyframeCloud{100, wall_points(1.02)});
+  EXPECT_FALSE(map.has_cloud(7));
+}
+
+TEST(OccupancyMap, MinusYUpGridIsTheCamerasGroundPlane) {
+  // Camera convention (x right, y down, z forward): a wall 1 m ahead is the grid row y = 1 m.
+  OccupancyMap map(OccupancyMapOptions{});
+  std::vector<Eigen::Vector3f> points;
+  for (double x = -0.49; x < 0.5; x += 0.02) {
+    for (double y = -0.29; y < 0.3; y += 0.02) points.emplace_back(x, y, 1.02);
+  }
+  map.add_cloud(1, KeyframeCloud{0, points});
+  map.set_pose(1, Pose3::Identity());
+  map.fuse_pending();
+  const OccupancyGrid grid = map.grid();
+  for (int i = -10; i < 10; ++i) EXPECT_EQ(grid.at(i, 20), CellState::kOccupied) << i;
+  EXPECT_EQ(grid.at(0, 10), CellState::kFree);
+}
+
+TEST(OccupancyMap, RebuildIsIndependentOfArrivalOrder) {
+  auto build = [](bool reversed) {
+    OccupancyMapOptions options;
+    options.up = UpAxis::kZ;
+    OccupancyMap map(options);
+    std::vector<std::uint64_t> ids{1, 2, 3};
+    if (reversed) std::reverse(ids.begin(), ids.end());
+    for (const std::uint64_t id : ids) {
+      Pose3 T = Pose3::Identity();
+      T.translation() = Eigen::Vector3d(0.1 * id, 0.03 * id, 0.0);
+      map.set_pose(id, T);
+      map.add_cloud(id, KeyframeCloud{0, wall_points(1.0 + 0.01 * id)});
+      map.fuse_pending();
+    }
+    map.rebuild();
+    return map.grid().cells();
+  };
+  EXPECT_EQ(build(false), build(true));
+}
+
+TEST(OccupancyMap, CloudFilesRoundTripAndRefuseTruncation) {
+  const auto dir = temp_dir("cloud");
+  const KeyframeCloud cloud{123456789, wall_points(1.5)};
+  write_cloud(dir / "kf.cloud", 42, cloud);
+  std::uint64_t id = 0;
+  const KeyframeCloud back = read_cloud(dir / "kf.cloud", id);
+  EXPECT_EQ(id, 42u);
+  EXPECT_EQ(back.stamp_ns, cloud.stamp_ns);
+  ASSERT_EQ(back.points_c.size(), cloud.points_c.size());
+  EXPECT_EQ(back.points_c[17], cloud.points_c[17]);
+  std::filesystem::resize_file(dir / "kf.cloud", std::filesystem::file_size(dir / "kf.cloud") - 5);
+  EXPECT_THROW(read_cloud(dir / "kf.cloud", id), std::runtime_error);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(DenseStereo, KnownDisparityGivesKnownDepth) {
+  PinholeStereo camera;
+  camera.fx_px = camera.fy_px = 400.0;
+  camera.cx_px = 160.0;
+  camera.cy_px = 120.0;
+  camera.baseline_m = 0.1;
+  camera.width_px = 320;
+  camera.height_px = 240;
+  // A random texture; the right image is the left shifted 20 px left: disparity 20, depth 400 * 0.1 / 20 = 2 m.
+  cv::Mat left(240, 320, CV_8UC1);
+  cv::RNG rng(7);
+  cv::Mat coarse(60, 80, CV_8UC1);
+  rng.fill(coarse, cv::RNG::UNIFORM, 0, 256);
+  cv::resize(coarse, left, left.size(), 0, 0, cv::INTER_LINEAR);
+  cv::Mat right = cv::Mat::zeros(left.size(), CV_8UC1);
+  left.colRange(20, 320).copyTo(right.colRange(0, 300));
+  DenseStereoOptions options;
+  options.thin_voxel_m = 0.0;
+  options.pixel_step = 2;
+  const DenseStereo stereo(camera, options);
+  const cv::Mat disparity = stereo.disparity(left, right);
+  EXPECT_NEAR(disparity.at<float>(120, 160), 20.0f, 0.1f);
+  const std::vector<Eigen::Vector3f> cloud = stereo.cloud(left, right);
+  ASSERT_GT(cloud.size(), 5000u);
+  std::vector<float> depths;
+  for (const auto& p : cloud) depths.push_back(p.z());
+  std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
+  EXPECT_NEAR(depths[depths.size() / 2], 2.0f, 0.01f);
+  // Thinned (the default): one finite point per 5 cm cube, at the same depth.
+  const DenseStereo thinned(camera, DenseStereoOptions{});
+  const std::vector<Eigen::Vector3f> thin_cloud = thinned.cloud(left, right);
+  ASSERT_FALSE(thin_cloud.empty());
+  for (const auto& p : thin_cloud) {
+    ASSERT_TRUE(p.allFinite());
+    EXPECT_NEAR(p.z(), 2.0f, 0.06f);
+  }
+  // Wrong size: one clear error, no crash.
+  EXPECT_THROW(stereo.disparity(left(cv::Rect(0, 0, 100, 100)), right), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace heslam
