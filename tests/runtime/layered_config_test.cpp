@@ -87,12 +87,14 @@ TEST_F(LayeredConfig, EveryShippedPipelineLaysTheUsersComponentConfigOverItsOwn)
     if (name.rfind("camera", 0) == 0) overrides.args["source"] = dir_.path().string();
     if (name.rfind("camera", 0) != 0 && name != "ros2_input") overrides.args["dataset"] = dir_.path().string();
     const bool has_mapper = name.find("odometry") == std::string::npos;
+    const bool inertial = name.find("inertial") != std::string::npos;  // a shipped inertial layer
     if (has_mapper) overrides.args["mapper_config"] = user_mapper.string();
     const supervisor::LoadResult result = supervisor::load_pipeline(entry.path(), overrides, test::bin_dir());
     for (const std::string& problem : result.problems) ADD_FAILURE() << problem;
     for (const supervisor::ComponentSpec& spec : result.pipeline.components) {
       if (spec.name == "frontend") {
-        ASSERT_EQ(spec.configs.size(), 2u);
+        // The shipped config, the inertial layer in the inertial pipelines, the user's last.
+        ASSERT_EQ(spec.configs.size(), inertial ? 3u : 2u);
         EXPECT_EQ(spec.configs.back(), user_frontend);
         const Config frontend = Config::load(spec.configs);
         EXPECT_EQ(frontend.get_bool("mapper.enabled", false), has_mapper);
@@ -103,13 +105,15 @@ TEST_F(LayeredConfig, EveryShippedPipelineLaysTheUsersComponentConfigOverItsOwn)
         EXPECT_EQ(spec.configs.back(), user_mapper);
       }
     }
-    // Without the argument, the shipped file alone.
+    // Without the argument, the shipped files alone.
     overrides.args.erase("frontend_config");
     overrides.args.erase("mapper_config");
     for (const supervisor::ComponentSpec& spec :
          supervisor::load_pipeline(entry.path(), overrides, test::bin_dir()).pipeline.components) {
-      if (spec.name == "frontend" || spec.name == "local_mapper") {
-        EXPECT_EQ(spec.configs.size(), 1u) << spec.name;
+      if (spec.name == "frontend") {
+        EXPECT_EQ(spec.configs.size(), inertial ? 2u : 1u);
+      } else if (spec.name == "local_mapper") {
+        EXPECT_EQ(spec.configs.size(), 1u);
       }
     }
   }

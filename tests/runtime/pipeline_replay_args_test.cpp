@@ -82,7 +82,7 @@ TEST(PipelineReplayArgs, EveryReplayPipelineTakesTheReplaysControls) {
     EXPECT_TRUE(has_pair(plain->args, "--start-paused-mode", "off"));
     EXPECT_TRUE(has_pair(plain->args, "--loop-mode", "off"));
   }
-  EXPECT_EQ(replay_pipelines, 12);
+  EXPECT_EQ(replay_pipelines, 15);  // with euroc_inertial, euroc_inertial_realtime, synth_inertial
 }
 
 TEST(PipelineReplayArgs, TheStartLineNamesTheMode) {
