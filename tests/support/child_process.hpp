@@ -89,4 +89,15 @@ class ChildProcess {
   std::optional<int> exit_code_;
 };
 
+// Runs `program` to its end, bounded by `timeout`: its exit code, -1 when it did not end in time.
+// `output`, when given: its stderr, then its stdout.
+inline int run_to_end(const std::filesystem::path& program, const std::vector<std::string>& args,
+                      const std::filesystem::path& dir, const std::string& label, std::chrono::seconds timeout,
+                      std::string* output = nullptr) {
+  ChildProcess child(program, args, dir, label);
+  const std::optional<int> code = child.wait(timeout);
+  if (output != nullptr) *output = child.err() + child.out();
+  return code.value_or(-1);
+}
+
 }  // namespace heslam::test

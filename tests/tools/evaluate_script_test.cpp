@@ -59,39 +59,34 @@ std::vector<std::map<std::string, std::string>> read_csv(const fs::path& path) {
   return rows;
 }
 
-int run(const fs::path& program, const std::vector<std::string>& args, const fs::path& dir, const std::string& label,
-        std::chrono::seconds timeout, std::string* err = nullptr) {
-  test::ChildProcess child(program, args, dir, label);
-  const auto code = child.wait(timeout);
-  if (err != nullptr) *err = child.err() + child.out();
-  return code.value_or(-1);
-}
+using test::run_to_end;
 
 TEST(EvaluateScript, RunsSyntheticKittiAndEurocLayoutsEndToEnd) {
   test::ScratchDir dir("evaluate");
   const fs::path synth = test::bin_dir() / "heslam-synth";
   const fs::path kitti = dir.path() / "kitti";
-  ASSERT_EQ(run(synth,
-                {"--preset", "street", "--format", "kitti", "--frames", std::to_string(kStreetFrames), "--out",
-                 (kitti / "sequences/00").string()},
-                dir.path(), "synth_street", kSynthTimeout),
+  ASSERT_EQ(run_to_end(synth,
+                       {"--preset", "street", "--format", "kitti", "--frames", std::to_string(kStreetFrames), "--out",
+                        (kitti / "sequences/00").string()},
+                       dir.path(), "synth_street", kSynthTimeout),
             0);
   // The KITTI odometry layout keeps the ground truth beside the sequences: poses/NN.txt.
   fs::create_directories(kitti / "poses");
   fs::rename(kitti / "sequences/00/poses.txt", kitti / "poses/00.txt");
   const fs::path euroc = dir.path() / "euroc";
   ASSERT_EQ(
-      run(synth, {"--preset", "room", "--frames", std::to_string(kRoomFrames), "--out", (euroc / "room").string()},
-          dir.path(), "synth_room", kSynthTimeout),
+      run_to_end(synth,
+                 {"--preset", "room", "--frames", std::to_string(kRoomFrames), "--out", (euroc / "room").string()},
+                 dir.path(), "synth_room", kSynthTimeout),
       0);
 
   const fs::path out = dir.path() / "out";
   std::string output;
-  const int code = run("/bin/bash",
-                       {(test::source_dir() / "tools/evaluate.sh").string(), "--kitti", kitti.string(), "--euroc",
-                        euroc.string(), "--runs", "2", "--out", out.string(), "--domain",
-                        std::to_string(test::exclusive_domain_id()), "--bin", test::bin_dir().string()},
-                       dir.path(), "evaluate", kEvaluateTimeout, &output);
+  const int code = run_to_end("/bin/bash",
+                              {(test::source_dir() / "tools/evaluate.sh").string(), "--kitti", kitti.string(),
+                               "--euroc", euroc.string(), "--runs", "2", "--out", out.string(), "--domain",
+                               std::to_string(test::exclusive_domain_id()), "--bin", test::bin_dir().string()},
+                              dir.path(), "evaluate", kEvaluateTimeout, &output);
   ASSERT_EQ(code, 0) << output;
 
   const auto rows = read_csv(out / "results.csv");
@@ -161,10 +156,10 @@ TEST(EvaluateScript, PaperNumbersOnlyForThePapersSequences) {
     }
   }
   std::string output;
-  ASSERT_EQ(run("/bin/bash",
-                {(test::source_dir() / "tools/evaluate.sh").string(), "--kitti", kitti.string(), "--euroc",
-                 euroc.string(), "--list"},
-                dir.path(), "evaluate_list", 30s, &output),
+  ASSERT_EQ(run_to_end("/bin/bash",
+                       {(test::source_dir() / "tools/evaluate.sh").string(), "--kitti", kitti.string(), "--euroc",
+                        euroc.string(), "--list"},
+                       dir.path(), "evaluate_list", 30s, &output),
             0)
       << output;
   EXPECT_NE(output.find("kitti_04 " + (kitti / "sequences/04").string() + " gt=" + (kitti / "poses/04.txt").string() +
@@ -186,15 +181,17 @@ TEST(EvaluateScript, NoSequenceIsOneLineAndExitOne) {
   test::ScratchDir dir("evaluate_empty");
   fs::create_directories(dir.path() / "empty");
   std::string output;
-  const int code = run("/bin/bash",
-                       {(test::source_dir() / "tools/evaluate.sh").string(), "--euroc", (dir.path() / "empty").string(),
-                        "--out", (dir.path() / "out").string(), "--bin", test::bin_dir().string()},
-                       dir.path(), "evaluate", 30s, &output);
+  const int code =
+      run_to_end("/bin/bash",
+                 {(test::source_dir() / "tools/evaluate.sh").string(), "--euroc", (dir.path() / "empty").string(),
+                  "--out", (dir.path() / "out").string(), "--bin", test::bin_dir().string()},
+                 dir.path(), "evaluate", 30s, &output);
   EXPECT_EQ(code, 1);
   EXPECT_NE(output.find("no sequence (expected DIR/mav0 or DIR/*/mav0"), std::string::npos) << output;
-  EXPECT_EQ(run("/bin/bash", {(test::source_dir() / "tools/evaluate.sh").string(), "--runs", "0", "--euroc", "x"},
-                dir.path(), "evaluate_runs", 30s, &output),
-            1);
+  EXPECT_EQ(
+      run_to_end("/bin/bash", {(test::source_dir() / "tools/evaluate.sh").string(), "--runs", "0", "--euroc", "x"},
+                 dir.path(), "evaluate_runs", 30s, &output),
+      1);
   EXPECT_NE(output.find("--runs: expected a positive integer, got '0'"), std::string::npos) << output;
 }
 
@@ -224,7 +221,7 @@ TEST(EvaluateScript, DefaultOutIsUnderTheCacheAndSaidAloud) {
   unsetenv("XDG_CACHE_HOME");
   std::string output;
   // Run from `cwd`, as a user in the source tree would.
-  const int code = run(
+  const int code = run_to_end(
       "/bin/bash",
       {"-c", "cd \"$0\" && exec /bin/bash \"$@\"", cwd.string(), (test::source_dir() / "tools/evaluate.sh").string(),
        "--euroc", euroc.string(), "--no-realtime", "--bin", bin.string()},

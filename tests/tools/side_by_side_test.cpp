@@ -24,13 +24,7 @@ constexpr auto kSynthTimeout = 120s;
 constexpr auto kScriptTimeout = 300s;
 constexpr int kRoomFrames = 30;
 
-int run(const fs::path& program, const std::vector<std::string>& args, const fs::path& dir, const std::string& label,
-        std::chrono::seconds timeout, std::string* output = nullptr) {
-  test::ChildProcess child(program, args, dir, label);
-  const auto code = child.wait(timeout);
-  if (output != nullptr) *output = child.err() + child.out();
-  return code.value_or(-1);
-}
+using test::run_to_end;
 
 // An ORB-SLAM3 checkout as the script expects it. With stats, its stereo_euroc writes Total[ms] = 1, 2,
 // ..., one row per frame of the times file (median 15.5 ms, p90 27 ms for 30 frames), and the frame
@@ -75,9 +69,9 @@ std::vector<std::string> fields_of(const std::string& line) {
 class SideBySideScript : public ::testing::Test {
  protected:
   void render_room() {
-    ASSERT_EQ(run(test::bin_dir() / "heslam-synth",
-                  {"--preset", "room", "--frames", std::to_string(kRoomFrames), "--out", room_.string()}, dir_.path(),
-                  "synth_room", kSynthTimeout),
+    ASSERT_EQ(run_to_end(test::bin_dir() / "heslam-synth",
+                         {"--preset", "room", "--frames", std::to_string(kRoomFrames), "--out", room_.string()},
+                         dir_.path(), "synth_room", kSynthTimeout),
               0);
   }
 
@@ -91,7 +85,7 @@ class SideBySideScript : public ::testing::Test {
   int side_by_side(const std::vector<std::string>& args, std::string* output) {
     std::vector<std::string> full{(test::source_dir() / "tools/bench/side_by_side.sh").string()};
     full.insert(full.end(), args.begin(), args.end());
-    return run("/bin/bash", full, dir_.path(), "side_by_side", kScriptTimeout, output);
+    return run_to_end("/bin/bash", full, dir_.path(), "side_by_side", kScriptTimeout, output);
   }
 
   test::ScratchDir dir_{"side_by_side"};

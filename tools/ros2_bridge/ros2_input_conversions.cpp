@@ -109,13 +109,8 @@ StereoCalibration to_stereo_calibration(const CameraInfoSource& left, const Came
     calibration.right.T_BS.translation() = Eigen::Vector3d(baseline_m, 0.0, 0.0);
     return calibration;
   }
-  // As load_orbslam_settings with LEFT/RIGHT.K/D/R/P: p_rect_l = R_left p_l, p_rect_r = R_right p_r,
-  // p_rect_r = p_rect_l - b e_x; the body is the left camera.
-  Pose3 T_rl = Pose3::Identity();
-  T_rl.linear() = rect.R_right.transpose() * rect.R_left;
-  T_rl.translation() = -rect.R_right.transpose() * Eigen::Vector3d(baseline_m, 0.0, 0.0);
-  calibration.right.T_BS = T_rl.inverse();
-  calibration.explicit_rectification = rect;
+  // As load_orbslam_settings with LEFT/RIGHT.K/D/R/P; the body is the left camera.
+  calibration.set_explicit_rectification(rect, baseline_m);
   return calibration;
 }
 

@@ -396,13 +396,16 @@ StereoCalibration load_orbslam_settings(const std::filesystem::path& settings_ya
   if (std::abs(baseline_m * rect.P_left(0, 0) - bf) > kBfTolerance * bf) {
     fail(file, "Camera.bf", "expected -RIGHT.P[0][3] = " + std::to_string(-rect.P_right(0, 3)));
   }
-  // Rectified frames: p_rect_l = R_left p_l, p_rect_r = R_right p_r, p_rect_r = p_rect_l - b e_x.
+  calibration.set_explicit_rectification(rect, baseline_m);
+  return calibration;
+}
+
+void StereoCalibration::set_explicit_rectification(const ExplicitRectification& rect, double baseline_m) {
   Pose3 T_rl = Pose3::Identity();
   T_rl.linear() = rect.R_right.transpose() * rect.R_left;
   T_rl.translation() = -rect.R_right.transpose() * Eigen::Vector3d(baseline_m, 0.0, 0.0);
-  calibration.right.T_BS = T_rl.inverse();
-  calibration.explicit_rectification = rect;
-  return calibration;
+  right.T_BS = T_rl.inverse();
+  explicit_rectification = rect;
 }
 
 }  // namespace heslam

@@ -39,6 +39,10 @@ struct ExplicitRectification {
 };
 
 struct StereoCalibration {
+  // Uses `rect` (p_rect_l = R_left p_l, p_rect_r = R_right p_r, p_rect_r = p_rect_l - baseline e_x, the
+  // body the left camera): sets right.T_BS from it and keeps it as explicit_rectification.
+  void set_explicit_rectification(const ExplicitRectification& rect, double baseline_m);
+
   CameraModel left;
   CameraModel right;
   // True for KITTI calib.txt and ORB-SLAM2 settings without LEFT.*: the images are already rectified
