@@ -136,6 +136,24 @@ TEST(MessageFormat, UnknownEnumValuesAreShownAsUnknown) {
   EXPECT_NE(format_message(frame, {}).find("size: 0x0 unknown\n"), std::string::npos);
 }
 
+// Odometry shows the continuous pose, the covariance's diagonal and the velocity, or says they are unknown.
+TEST(MessageFormat, OdometryShowsContinuousPoseCovarianceAndVelocity) {
+  msg::Odometry odometry{};
+  odometry.T_wc.orientation_xyzw[3] = odometry.T_ref_c.orientation_xyzw[3] = odometry.T_oc.orientation_xyzw[3] = 1.0;
+  odometry.T_oc.position_m[2] = 2.5;
+  std::string text = format_message(odometry, {});
+  EXPECT_NE(text.find("T_oc: {position_m: [0, 0, 2.5], orientation_xyzw: [0, 0, 0, 1]}\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("T_wc_covariance_diagonal: unknown\nv_w: unknown\n"), std::string::npos) << text;
+  // Upper triangle row by row: diagonal entries at 0, 6, 11, 15, 18, 20.
+  const int diagonal[6] = {0, 6, 11, 15, 18, 20};
+  for (int row = 0; row < 6; ++row) odometry.T_wc_covariance[diagonal[row]] = row + 1;
+  odometry.T_wc_covariance[1] = 0.5;  // off the diagonal: not shown
+  odometry.velocity_valid = true;
+  odometry.v_w[0] = 0.25;
+  text = format_message(odometry, {});
+  EXPECT_NE(text.find("T_wc_covariance_diagonal: [1, 2, 3, 4, 5, 6]\nv_w: [0.25, 0, 0]\n"), std::string::npos) << text;
+}
+
 TEST(MessageFormat, KeyframeShowsIdPoseAndKeypointCount) {
   std::vector<msg::KeyframeKeypoint> keypoints(5);
   keypoints[0].u_px = 12.5f;

@@ -1,6 +1,8 @@
 // YAML-like text of the project messages for heslam-spy echo.
 #include "tools/spy/message_format.hpp"
 
+#include <algorithm>
+
 #include <cstdio>
 #include <functional>
 #include <span>
@@ -186,6 +188,24 @@ std::string format_message(const msg::Odometry& odometry, const FormatOptions& o
   text.line(0, "T_wc_frame", kOdometryFrame);
   text.line(0, "reference_keyframe_id", format_id(odometry.reference_keyframe_id));
   text.line(0, "T_ref_c", pose(odometry.T_ref_c));
+  text.line(0, "T_oc", pose(odometry.T_oc));
+  // The covariance's diagonal (rotation x y z in rad^2, position x y z in m^2); all zero: not known.
+  const double* covariance = odometry.T_wc_covariance;
+  const bool has_covariance = std::any_of(covariance, covariance + 21, [](double value) { return value != 0.0; });
+  if (has_covariance) {
+    // Upper triangle row by row: the diagonal of row r sits at r * 6 - r * (r - 1) / 2.
+    std::string diagonal = "[";
+    for (int row = 0; row < 6; ++row) {
+      diagonal += (row > 0 ? ", " : "") + number(covariance[row * 6 - row * (row - 1) / 2]);
+    }
+    text.line(0, "T_wc_covariance_diagonal", diagonal + "]");
+  } else {
+    text.line(0, "T_wc_covariance_diagonal", "unknown");
+  }
+  text.line(0, "v_w",
+            odometry.velocity_valid
+                ? "[" + number(odometry.v_w[0]) + ", " + number(odometry.v_w[1]) + ", " + number(odometry.v_w[2]) + "]"
+                : "unknown");
   text.line(0, "keypoints", std::to_string(odometry.keypoints));
   text.line(0, "tracked_points", std::to_string(odometry.tracked_points));
   text.line(0, "keyframe_created", odometry.keyframe_created ? "true" : "false");
