@@ -52,6 +52,13 @@ bool RunEndWatch::joined_by_hand() {
 RunEndWatch::RunEndWatch(const Participant& participant, const Topics& topics)
     : reader_(participant, topics.status()), joined_(joined_by_hand()) {}
 
+bool RunEndWatch::of_joined_run(dds_instance_handle_t writer) {
+  if (joined_run_writers_.contains(writer)) return true;
+  if (writer_run_id(reader_.handle(), writer).value_or("") != process_run_id()) return false;
+  joined_run_writers_.insert(writer);
+  return true;
+}
+
 std::optional<std::string> RunEndWatch::poll() {
   for (const auto& received : reader_.take()) {
     if (!received.info.valid_data) continue;
@@ -61,7 +68,7 @@ std::optional<std::string> RunEndWatch::poll() {
     const bool supervisor = RunEndRule::is_supervisor(name, executable);
     const dds_instance_handle_t writer = received.info.publication_handle;
     // Joined by hand: another run's supervisor (and its replay) on this domain is not ours.
-    if (joined_ && writer_run_id(reader_.handle(), writer).value_or("") != process_run_id()) continue;
+    if (joined_ && !of_joined_run(writer)) continue;
     if (supervisor) {
       supervisor_writer_ = writer;
       supervisor_name_ = name;

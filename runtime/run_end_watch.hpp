@@ -16,6 +16,7 @@
 #pragma once
 
 #include <optional>
+#include <set>
 #include <string>
 #include <string_view>
 
@@ -61,6 +62,10 @@ class RunEndWatch {
   Reader<msg::ComponentStatus> reader_;
   bool joined_ = false;
   RunEndRule rule_;
+  // Whether a writer is of the joined run, remembered: a supervisor's last sample ("ending the run")
+  // may be taken after its writer left, when the run it advertised can no longer be asked.
+  bool of_joined_run(dds_instance_handle_t writer);
+  std::set<dds_instance_handle_t> joined_run_writers_;
   std::optional<dds_instance_handle_t> supervisor_writer_;
   std::string supervisor_name_;
 };
