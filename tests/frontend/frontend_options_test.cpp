@@ -18,6 +18,7 @@
 #include "components/core/tracking/tracker_settings.hpp"
 #include "components/frontend/frontend_options.hpp"
 #include "runtime/config.hpp"
+#include "test_support.hpp"
 
 namespace heslam::frontend {
 namespace {
@@ -184,7 +185,7 @@ TEST(FrontendOptions, TheReaderLooksUpExactlyTheSettingsKeys) {
     looked_up = log.keys();
   }
   EXPECT_EQ(looked_up, std::set<std::string>(std::begin(kSettingsKeys), std::end(kSettingsKeys)));
-  std::ifstream doc(std::filesystem::path(HESLAM_SOURCE_DIR) / "docs/frontend.md");
+  std::ifstream doc(heslam::test::source_dir() / "docs/frontend.md");
   const std::string text((std::istreambuf_iterator<char>(doc)), std::istreambuf_iterator<char>());
   // The settings table: from its header to the former keys' table.
   const std::size_t table = text.find("| Key | Default | Meaning | Change it when |");
@@ -200,7 +201,7 @@ TEST(FrontendOptions, TheReaderLooksUpExactlyTheSettingsKeys) {
 // A user's edit of the settings file is never ignored. Each settings key, changed from the value
 // config/camera/EuRoC.yaml gives it, changes the settings the frontend reports at start.
 TEST(FrontendOptions, EachDocumentedSettingsKeyChangesWhatTheFrontendReports) {
-  const std::filesystem::path euroc = std::filesystem::path(HESLAM_SOURCE_DIR) / "config/camera/EuRoC.yaml";
+  const std::filesystem::path euroc = heslam::test::source_dir() / "config/camera/EuRoC.yaml";
   std::ifstream in(euroc);
   const std::string base((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::string baseline = reported(with_settings(euroc));
@@ -252,7 +253,7 @@ TEST(FrontendOptions, EachDocumentedSettingsKeyChangesWhatTheFrontendReports) {
 
 // A former key (a constant now) in a settings file changes nothing and is named as not used.
 TEST(FrontendOptions, EachFormerSettingsKeyIsReportedAsUnused) {
-  const std::filesystem::path euroc = std::filesystem::path(HESLAM_SOURCE_DIR) / "config/camera/EuRoC.yaml";
+  const std::filesystem::path euroc = heslam::test::source_dir() / "config/camera/EuRoC.yaml";
   const FrontendOptions baseline = with_settings(euroc);
   std::ifstream in(euroc);
   const std::string base((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -391,7 +392,7 @@ TEST(FrontendOptions, EurocAndSynthConfigsAreTheCoreDefaults) {
   const FrontendOptions defaults = FrontendOptions::from_config(runtime::Config::empty());
   for (const char* name : {"euroc", "synth"}) {
     const FrontendOptions options = FrontendOptions::from_config(runtime::Config::load(
-        std::filesystem::path(HESLAM_SOURCE_DIR) / "config/frontend" / (std::string(name) + ".yaml")));
+        heslam::test::source_dir() / "config/frontend" / (std::string(name) + ".yaml")));
     EXPECT_EQ(options.features.he.mode, defaults.features.he.mode) << name;
     EXPECT_EQ(options.features.orb.features, defaults.features.orb.features) << name;
     EXPECT_EQ(options.features.stereo.max_distance, defaults.features.stereo.max_distance) << name;
@@ -404,7 +405,7 @@ TEST(FrontendOptions, EurocAndSynthConfigsAreTheCoreDefaults) {
 // few values each file is there to set (KITTI: 2000 features, a keyframe a second at 10 Hz; ORB-SLAM3's
 // EuRoC file: its ThDepth 60). Pins the files across changes of which keys the reader reads.
 TEST(FrontendOptions, ShippedSettingsFilesGiveExactlyTheirOptions) {
-  const std::filesystem::path camera = std::filesystem::path(HESLAM_SOURCE_DIR) / "config/camera";
+  const std::filesystem::path camera = heslam::test::source_dir() / "config/camera";
   const StereoFeaturePipelineOptions core_pipeline;
   const TrackerOptions core_tracker;
   StereoFeaturePipelineOptions kitti_pipeline;
@@ -432,7 +433,7 @@ TEST(FrontendOptions, ShippedSettingsFilesGiveExactlyTheirOptions) {
 
 TEST(FrontendOptions, ShippedConfigsLoad) {
   for (const auto& entry :
-       std::filesystem::directory_iterator(std::filesystem::path(HESLAM_SOURCE_DIR) / "config/frontend")) {
+       std::filesystem::directory_iterator(heslam::test::source_dir() / "config/frontend")) {
     const std::string name = entry.path().filename().string();
     const auto config = runtime::Config::load(entry.path());
     EXPECT_NO_THROW(FrontendOptions::from_config(config)) << name;
@@ -460,7 +461,7 @@ TEST(FrontendOptions, InertialTrackingIsOffUnlessEnabledAndNoneWins) {
       FrontendOptions::from_config(runtime::Config::parse(yaml, "frontend.yaml"), {"--imu", "none"});
   EXPECT_FALSE(none.inertial.enabled);
   const FrontendOptions shipped = FrontendOptions::from_config(
-      runtime::Config::load(std::filesystem::path(HESLAM_SOURCE_DIR) / "config/frontend/inertial.yaml"));
+      runtime::Config::load(heslam::test::source_dir() / "config/frontend/inertial.yaml"));
   EXPECT_TRUE(shipped.inertial.enabled);
   EXPECT_TRUE(shipped.inertial.lockstep);
   EXPECT_THROW(FrontendOptions::from_config(runtime::Config::empty(), {"--imu", "maybe"}), std::runtime_error);

@@ -15,9 +15,11 @@
 
 namespace heslam::test {
 
-inline std::filesystem::path shared_data() { return HESLAM_SHARED_DATA; }
-inline std::filesystem::path bin_dir() { return HESLAM_BIN_DIR; }
-inline std::filesystem::path source_dir() { return HESLAM_SOURCE_DIR; }
+// The build's paths, compiled into one file (test_paths.cpp) so that no other test object depends on
+// where the checkout is: a second checkout's build reuses the compiler cache for every test.
+std::filesystem::path shared_data();
+std::filesystem::path bin_dir();
+std::filesystem::path source_dir();
 
 // The folder of a shared data set, e.g. "euroc_mh01_handheld", or empty when it is not there.
 inline std::filesystem::path shared_dataset(const std::string& name) {

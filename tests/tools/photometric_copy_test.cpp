@@ -247,7 +247,7 @@ TEST_F(PhotometricCopy, ErrorsNameTheFileAndLeaveNoHalfCopy) {
 }
 
 TEST(PhotometricCli, UsageErrorsExitTwoAndABadInputExitsOne) {
-  const std::string tool = std::string(HESLAM_BIN_DIR) + "/heslam-photometric";
+  const std::string tool = (test::bin_dir() / "heslam-photometric").string();
   const auto exit_code = [](const std::string& command) {
     const int status = std::system((command + " >/dev/null 2>&1").c_str());
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
