@@ -391,8 +391,8 @@ TEST(FrontendOptions, MappingOffIsLocalizationOnlyInTheSavedMap) {
 TEST(FrontendOptions, EurocAndSynthConfigsAreTheCoreDefaults) {
   const FrontendOptions defaults = FrontendOptions::from_config(runtime::Config::empty());
   for (const char* name : {"euroc", "synth"}) {
-    const FrontendOptions options = FrontendOptions::from_config(runtime::Config::load(
-        heslam::test::source_dir() / "config/frontend" / (std::string(name) + ".yaml")));
+    const FrontendOptions options = FrontendOptions::from_config(
+        runtime::Config::load(heslam::test::source_dir() / "config/frontend" / (std::string(name) + ".yaml")));
     EXPECT_EQ(options.features.he.mode, defaults.features.he.mode) << name;
     EXPECT_EQ(options.features.orb.features, defaults.features.orb.features) << name;
     EXPECT_EQ(options.features.stereo.max_distance, defaults.features.stereo.max_distance) << name;
@@ -432,8 +432,7 @@ TEST(FrontendOptions, ShippedSettingsFilesGiveExactlyTheirOptions) {
 }
 
 TEST(FrontendOptions, ShippedConfigsLoad) {
-  for (const auto& entry :
-       std::filesystem::directory_iterator(heslam::test::source_dir() / "config/frontend")) {
+  for (const auto& entry : std::filesystem::directory_iterator(heslam::test::source_dir() / "config/frontend")) {
     const std::string name = entry.path().filename().string();
     const auto config = runtime::Config::load(entry.path());
     EXPECT_NO_THROW(FrontendOptions::from_config(config)) << name;
@@ -460,8 +459,8 @@ TEST(FrontendOptions, InertialTrackingIsOffUnlessEnabledAndNoneWins) {
   const FrontendOptions none =
       FrontendOptions::from_config(runtime::Config::parse(yaml, "frontend.yaml"), {"--imu", "none"});
   EXPECT_FALSE(none.inertial.enabled);
-  const FrontendOptions shipped = FrontendOptions::from_config(
-      runtime::Config::load(heslam::test::source_dir() / "config/frontend/inertial.yaml"));
+  const FrontendOptions shipped =
+      FrontendOptions::from_config(runtime::Config::load(heslam::test::source_dir() / "config/frontend/inertial.yaml"));
   EXPECT_TRUE(shipped.inertial.enabled);
   EXPECT_TRUE(shipped.inertial.lockstep);
   EXPECT_THROW(FrontendOptions::from_config(runtime::Config::empty(), {"--imu", "maybe"}), std::runtime_error);
