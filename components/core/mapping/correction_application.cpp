@@ -2,6 +2,7 @@
 #include "components/core/mapping/correction_application.hpp"
 
 #include <functional>
+#include <set>
 #include <unordered_map>
 
 #include "components/core/mapping/map_editing.hpp"
@@ -12,6 +13,7 @@ namespace heslam {
 int apply_loop_correction(Map& map, const LoopCorrection& correction,
                           const std::map<KeyframeId, std::uint64_t>& created_version, MapChanges& changes) {
   int skipped = 0;
+  std::set<PointId> observations_changed = changes.changed_points;
   std::map<KeyframeId, Pose3> old_T_wc;
   for (const auto& [id, kf] : map.keyframes) old_T_wc.emplace(id, kf.T_wc);
 
@@ -83,16 +85,24 @@ int apply_loop_correction(Map& map, const LoopCorrection& correction,
       continue;
     }
     replace_point(map, from, into);
+    observations_changed.insert(into);
     changes.removed_points[from] = into;
     changes.changed_points.erase(from);
     changes.changed_points.insert(into);
   }
-  // Both in id order: one walk over the points instead of a search per changed point.
+  // Both in id order: one walk over the points instead of a search per changed point. A point this
+  // correction only moved keeps its observations, so only its normal and distance range change; a
+  // merge's target, and whatever the caller had changed before, get their descriptor chosen again.
   const KeyframeIndex keyframes(map);
   auto point = map.points.begin();
   for (const PointId id : changes.changed_points) {
     while (point != map.points.end() && point->first < id) ++point;
-    if (point != map.points.end() && point->first == id) update_point_statistics(point->second, keyframes);
+    if (point == map.points.end() || point->first != id) continue;
+    if (observations_changed.contains(id)) {
+      update_point_statistics(point->second, keyframes);
+    } else {
+      update_point_geometry(point->second, keyframes);
+    }
   }
   return skipped;
 }

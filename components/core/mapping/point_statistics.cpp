@@ -48,7 +48,7 @@ Descriptor representative_descriptor_of(const MapPoint& point, FindKeyframe keyf
 }
 
 template <typename FindKeyframe>
-void update_point_statistics_of(MapPoint& point, FindKeyframe keyframe) {
+void update_point_geometry_of(MapPoint& point, FindKeyframe keyframe) {
   if (point.observations.empty()) return;
   Eigen::Vector3d normal_sum = Eigen::Vector3d::Zero();
   int count = 0;
@@ -73,6 +73,12 @@ void update_point_statistics_of(MapPoint& point, FindKeyframe keyframe) {
   const double distance = (point.p_w - ref.T_wc.translation()).norm();
   point.max_distance_m = static_cast<float>(distance * pyramid.scale[static_cast<std::size_t>(level)]);
   point.min_distance_m = point.max_distance_m / pyramid.scale.back();
+}
+
+template <typename FindKeyframe>
+void update_point_statistics_of(MapPoint& point, FindKeyframe keyframe) {
+  if (point.observations.empty()) return;
+  update_point_geometry_of(point, keyframe);
   point.descriptor = representative_descriptor_of(point, keyframe);
 }
 
@@ -95,6 +101,10 @@ KeyframeIndex::KeyframeIndex(const Map& map) {
 
 void update_point_statistics(MapPoint& point, const KeyframeIndex& index) {
   update_point_statistics_of(point, [&index](KeyframeId id) { return index.find(id); });
+}
+
+void update_point_geometry(MapPoint& point, const KeyframeIndex& index) {
+  update_point_geometry_of(point, [&index](KeyframeId id) { return index.find(id); });
 }
 
 int predict_level(const MapPoint& point, double distance_m, const ScalePyramid& pyramid) {

@@ -30,6 +30,11 @@ class KeyframeIndex {
 // The same as update_point_statistics(map, id), with the keyframes looked up in `index`.
 void update_point_statistics(MapPoint& point, const KeyframeIndex& index);
 
+// Only the normal and the distance range, for a point that moved while its observations did not (a
+// loop correction): the descriptor depends on the observations alone (ORB-SLAM2's CorrectLoop calls
+// UpdateNormalAndDepth alone too).
+void update_point_geometry(MapPoint& point, const KeyframeIndex& index);
+
 // The observation's descriptor with the least median Hamming distance to the others.
 Descriptor representative_descriptor(const Map& map, const MapPoint& point);
 
