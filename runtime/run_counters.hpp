@@ -9,6 +9,9 @@ namespace heslam::runtime {
 inline constexpr const char* kFramesPublished = "frames_published";
 inline constexpr const char* kFramesTotal = "frames_total";
 inline constexpr const char* kImagesSkipped = "images_skipped";
+// A source with a finite input (a recording) that was stopped before its end: the frames it did not
+// play. The outputs then hold only a beginning of the run, so the run fails (a Ctrl-C included).
+inline constexpr const char* kFramesNotPlayed = "frames_not_played";
 // The frontend: frames it published odometry for, those of its journal included (the same frames
 // again after a restart count once).
 inline constexpr const char* kOdometryFrames = "odometry_frames";

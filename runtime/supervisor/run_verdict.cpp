@@ -52,12 +52,27 @@ std::optional<std::string> writer_conflicts(const std::vector<ProgramReport>& re
   return std::nullopt;
 }
 
+// "NAME was stopped before the end of its input..." for the first source that counted frames it did
+// not play (runtime/run_counters.hpp), nothing when none did.
+std::optional<std::string> input_cut_short(const std::vector<ProgramReport>& reports) {
+  for (const ProgramReport& report : reports) {
+    const std::optional<std::uint64_t> not_played = counter_of(report, runtime::kFramesNotPlayed);
+    if (!not_played || *not_played == 0) continue;
+    const std::optional<std::uint64_t> total = counter_of(report, runtime::kFramesTotal);
+    return report.name + " was stopped before the end of its input (" + std::to_string(*not_played) +
+           (total ? " of its " + std::to_string(*total) : std::string()) +
+           " frames not played): the outputs hold only the run's beginning";
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 RunVerdict judge_run(const std::vector<ProgramReport>& reports) {
   RunVerdict verdict;
   verdict.failure = writer_conflicts(reports);
   verdict.writer_conflict = verdict.failure.has_value();
+  if (!verdict.failure) verdict.failure = input_cut_short(reports);
   const std::optional<std::uint64_t> published = largest(reports, runtime::kFramesPublished);
   const std::optional<std::uint64_t> produced = largest(reports, runtime::kOdometryFrames);
   for (const ProgramReport& report : reports) {

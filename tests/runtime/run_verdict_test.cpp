@@ -79,6 +79,22 @@ TEST(RunVerdict, ASkippedPairIsOnTheLastLine) {
             "skipped (a missing or corrupt image)");
 }
 
+// A test harness's timeout (or a user's Ctrl-C) stopped a 720-frame replay at frame 601; everything
+// stopped cleanly. Before, the run ended with exit code 0 and a trajectory of 601 poses.
+TEST(RunVerdict, ARecordingStoppedBeforeItsEndFailsTheRun) {
+  ProgramReport cut = replay(601, 720, 0);
+  cut.counters[runtime::kFramesNotPlayed] = 119;
+  const RunVerdict verdict = judge_run({recorder(601, 601, 601), frontend(601), cut});
+  ASSERT_TRUE(verdict.failure);
+  EXPECT_EQ(*verdict.failure,
+            "replay was stopped before the end of its input (119 of its 720 frames not played): the outputs hold "
+            "only the run's beginning");
+  EXPECT_FALSE(verdict.writer_conflict);
+  // Every frame played (or a looping replay, which counts none): no verdict.
+  cut.counters[runtime::kFramesNotPlayed] = 0;
+  EXPECT_FALSE(judge_run({recorder(601, 601, 601), frontend(601), cut}).failure);
+}
+
 // Programs that report none of these counters (a talker, a pipeline without recorder) are judged by
 // their exit codes alone.
 TEST(RunVerdict, WithoutTheCountersOnlyTheResultsAreJoined) {

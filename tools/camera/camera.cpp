@@ -236,6 +236,12 @@ class Camera {
       return 1;
     }
     const bool stopped = !source_ended_;
+    if (stopped && !opened_.capture.live()) {
+      // A recording has an end: stopped before it, the run's outputs are a beginning only (its verdict).
+      const std::uint64_t used = seq_ + slot_.dropped() + counts.unreadable;
+      const std::uint64_t total = opened_.capture.frame_count();
+      stats_.count(runtime::kFramesNotPlayed, total > used ? total - used : 1);
+    }
     status_.set_state(runtime::ComponentState::kShuttingDown, result + (stopped ? " (stopped)" : ""));
     log_.info(stopped ? "stopped: " : opened_.capture.end_reason() + ": ", result);
     return 0;

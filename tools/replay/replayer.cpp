@@ -21,6 +21,7 @@
 #include "runtime/participant.hpp"
 #include "runtime/reader.hpp"
 #include "runtime/role_binding.hpp"
+#include "runtime/run_counters.hpp"
 #include "runtime/shutdown.hpp"
 #include "runtime/status.hpp"
 #include "runtime/topics.hpp"
@@ -540,6 +541,11 @@ class Replay {
     log_.flush_throttled();
     dds_wait_for_acks(frame_writer_.handle(), std::chrono::nanoseconds(kFinalAckTimeout).count());
     const bool stopped_early = runtime::shutdown_requested() || quit_;
+    // A recording has an end: stopped before it, the run's outputs are a beginning only (its verdict).
+    const std::size_t played = counts_.published + counts_.skipped_images;
+    if (stopped_early && !options_.loop && played < counts_.total) {
+      stats_.count(runtime::kFramesNotPlayed, counts_.total - played);
+    }
     status_.set_state(runtime::ComponentState::kShuttingDown, format_result(counts_, options_.loop, stopped_early));
     log_.info(format_summary(counts_), stopped_early ? " (stopped early)" : "");
     // An empty result is never a success: every pair of the sequence was unreadable.
