@@ -392,6 +392,16 @@ void compute_gauss_newton(const std::map<KeyframeId, Pose3>& initial_T_wc, const
 
 }  // namespace
 
+Eigen::Matrix3d yaw_about_gravity(const Eigen::Matrix3d& R, const Eigen::Vector3d& gravity_w) {
+  const Eigen::Vector3d axis = gravity_w.normalized();
+  const Eigen::Quaterniond q(R);
+  const double along = q.vec().dot(axis);
+  const double norm = std::hypot(q.w(), along);
+  if (!(norm > 0.0)) return Eigen::Matrix3d::Identity();  // a half turn about a horizontal axis: no yaw part
+  return Eigen::Quaterniond(q.w() / norm, along * axis.x() / norm, along * axis.y() / norm, along * axis.z() / norm)
+      .toRotationMatrix();
+}
+
 PoseGraphResult PoseGraph::compute(const std::map<KeyframeId, Pose3>& initial_T_wc,
                                    const std::vector<PoseGraphEdge>& edges, const std::set<KeyframeId>& fixed) const {
   if (options_.four_dof && (!options_.gravity_w.allFinite() || !(options_.gravity_w.norm() > 0.0))) {

@@ -57,6 +57,11 @@ struct PoseGraphResult {
   PoseGraphStats stats;
 };
 
+// The part of rotation R that turns about the direction of gravity_w (swing-twist decomposition: R =
+// twist * swing, swing turning about an axis orthogonal to gravity): what a 4-DoF graph may change of
+// a rotation. gravity_w: any length; not zero.
+Eigen::Matrix3d yaw_about_gravity(const Eigen::Matrix3d& R, const Eigen::Vector3d& gravity_w);
+
 class PoseGraph {
  public:
   explicit PoseGraph(const PoseGraphOptions& options = {}) : options_(options) {}
