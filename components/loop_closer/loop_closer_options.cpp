@@ -2,7 +2,9 @@
 #include "components/loop_closer/loop_closer_options.hpp"
 
 #include <climits>
+#include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "runtime/flags.hpp"
 
@@ -34,6 +36,15 @@ LoopCloserProcessOptions LoopCloserProcessOptions::from_config(const runtime::Co
       config.get_double("verification.min_rotation_allowance_deg", c.min_rotation_allowance_deg, 0.0, 180.0);
   c.ransac_seed = static_cast<std::uint64_t>(
       config.get_int("verification.ransac_seed", static_cast<int>(c.ransac_seed), 0, INT_MAX));
+  PoseGraphOptions& pose_graph = c.correction.pose_graph;
+  pose_graph.four_dof = config.get_bool("pose_graph.four_dof", pose_graph.four_dof);
+  const std::vector<double> gravity = config.get_doubles("pose_graph.gravity_w", {0.0, 0.0, -1.0});
+  if (gravity.size() != 3 || !std::isfinite(gravity[0]) || !std::isfinite(gravity[1]) || !std::isfinite(gravity[2]) ||
+      !(std::hypot(gravity[0], gravity[1], gravity[2]) > 0.0)) {
+    throw std::runtime_error(config.source() + ": pose_graph.gravity_w: expected 3 finite numbers, not all 0 (" +
+                             std::to_string(gravity.size()) + " given)");
+  }
+  pose_graph.gravity_w = Eigen::Vector3d(gravity[0], gravity[1], gravity[2]);
   o.global_bundle_adjustment = config.get_bool("global_ba.enabled", o.global_bundle_adjustment);
   o.real_time = config.get_bool("real_time", o.real_time);
   const double timeout_s = config.get_double("lockstep.mapper_timeout_s", 30.0, 0.1, kMaxTimeoutS);

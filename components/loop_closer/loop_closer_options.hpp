@@ -14,7 +14,7 @@
 namespace heslam::loop_closer {
 
 struct LoopCloserProcessOptions {
-  LoopClosingOptions closing;  // verification.*
+  LoopClosingOptions closing;  // verification.*; pose_graph.four_dof / pose_graph.gravity_w (correction.pose_graph)
   // global_ba.enabled: after a loop correction, bundle-adjust the whole map and publish the result as
   // a second correction (ORB-SLAM2 does, in a thread). Lockstep waits for it, so runs stay
   // deterministic.

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 
 #include "components/core/loop/loop_correction_builder.hpp"
 #include "components/core/mapping/correction_application.hpp"
@@ -111,6 +112,44 @@ TEST(LoopCorrectionBuilder, FixedLoopGroupKeepsTheVerifiedTransformExactly) {
                                       [&](const auto& entry) { return entry.first == loop.loop_kf; });
   ASSERT_NE(loop_pose, output.correction.corrected_T_wc.end());
   EXPECT_LT(test::max_abs_difference(loop_pose->second, expected), 1e-12);
+}
+
+// Largest change of gravity's direction in a keyframe (its roll and pitch) from the map to the correction.
+double largest_gravity_change(const test::LoopWorld& w, const LoopCorrection& correction,
+                              const Eigen::Vector3d& gravity_w) {
+  double largest = 0.0;
+  for (const auto& [id, T_wc] : correction.corrected_T_wc) {
+    const Eigen::Matrix3d& R_before = w.map.keyframes.at(id).T_wc.rotation();
+    largest = std::max(largest, (T_wc.rotation().transpose() * gravity_w - R_before.transpose() * gravity_w).norm());
+  }
+  return largest;
+}
+
+TEST(LoopCorrectionBuilder, FourDofCorrectionKeepsEveryKeyframesRollAndPitch) {
+  // The loop world turns about its y axis (the cameras' y, down): gravity along +y. Its odometry drifts
+  // in yaw and translation, so the 4-DoF graph can correct it as well as the 6-DoF one, without
+  // touching the roll and pitch the IMU would have fixed (the verified transform's own small roll and
+  // pitch errors included).
+  const test::LoopWorld w = test::make_loop_world();
+  const LoopCandidate loop = verified_loop(w);
+  const Eigen::Vector3d gravity_w = Eigen::Vector3d::UnitY();
+  LoopCorrectionBuilderOptions options;
+  options.pose_graph.four_dof = true;
+  options.pose_graph.gravity_w = 9.81 * gravity_w;
+  const LoopCorrectionOutput four = LoopCorrectionBuilder(options).compute(w.map, w.world.camera, loop, {});
+  const LoopCorrectionOutput six = LoopCorrectionBuilder().compute(w.map, w.world.camera, loop, {});
+  ASSERT_TRUE(four.error.empty()) << four.error;
+  ASSERT_EQ(four.correction.corrected_T_wc.size(), w.map.keyframes.size());
+  const double four_m = max_position_error_m(w, four.correction.corrected_T_wc);
+  const double six_m = max_position_error_m(w, six.correction.corrected_T_wc);
+  const double four_gravity = largest_gravity_change(w, four.correction, gravity_w);
+  const double six_gravity = largest_gravity_change(w, six.correction, gravity_w);
+  std::printf("4-DoF: %.4f m from the truth, gravity in the keyframes moved %.3g; 6-DoF: %.4f m, %.3g\n", four_m,
+              four_gravity, six_m, six_gravity);
+  EXPECT_LT(four_m, 0.05);
+  EXPECT_LT(four_gravity, 1e-12);
+  EXPECT_GT(six_gravity, 1e-6);
+  EXPECT_GT(four.correction.point_merges.size(), 100u);
 }
 
 TEST(LoopCorrectionBuilder, GivenPointMatchesAreMergedFirst) {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
@@ -270,6 +271,116 @@ TEST(LoopPoseGraph, UnknownVerticesAreSkippedAndIsolatedOnesKept) {
   EXPECT_EQ(result.stats.edges, 1);
   EXPECT_EQ(result.T_wc.at(3).matrix(), T_wc.at(3).matrix());
   EXPECT_LT((result.T_wc.at(2).translation() - true_pose(1).translation()).norm(), 1e-9);
+}
+
+// 4-DoF (inertial) graphs. Gravity along a tilted axis of the world: the variant must not assume a
+// gravity-aligned (z up) world.
+const Eigen::Vector3d kGravityDirectionW = Eigen::Vector3d(0.3, -1.0, 0.2).normalized();
+
+// The circle of true_pose with roll and pitch varying along it.
+Pose3 inertial_true_pose(int k) {
+  const double theta = 2.0 * M_PI * k / kVertices;
+  Pose3 T_wc = true_pose(k);
+  T_wc.linear() = T_wc.rotation() * Eigen::AngleAxisd(0.1 * std::sin(3 * theta), Eigen::Vector3d::UnitX()) *
+                  Eigen::AngleAxisd(0.05 * std::cos(theta), Eigen::Vector3d::UnitZ());
+  return T_wc;
+}
+
+// Gravity's direction in each camera: what roll and pitch are (yaw about gravity leaves it alone).
+std::map<KeyframeId, Eigen::Vector3d> gravity_in_cameras(const std::map<KeyframeId, Pose3>& T_wc) {
+  std::map<KeyframeId, Eigen::Vector3d> result;
+  for (const auto& [id, pose] : T_wc) result[id] = pose.rotation().transpose() * kGravityDirectionW;
+  return result;
+}
+
+double largest_gravity_change(const std::map<KeyframeId, Pose3>& a, const std::map<KeyframeId, Pose3>& b) {
+  const auto gravity_a = gravity_in_cameras(a), gravity_b = gravity_in_cameras(b);
+  double largest = 0.0;
+  for (const auto& [id, g] : gravity_a) largest = std::max(largest, (g - gravity_b.at(id)).norm());
+  return largest;
+}
+
+PoseGraphOptions four_dof_options() {
+  PoseGraphOptions options;
+  options.four_dof = true;
+  options.gravity_w = 9.81 * kGravityDirectionW;  // any length
+  return options;
+}
+
+TEST(LoopPoseGraph, FourDofRemovesYawAndTranslationDriftExactlyAndKeepsRollAndPitch) {
+  // Exact edges (odometry and the loop); the initial guess drifted by 0.3 deg of yaw about gravity and
+  // (1, -0.5, 0.7) cm per keyframe, i.e. 14 deg and 0.75 m at the end: what a visual-inertial odometry
+  // can drift. The 4-DoF optimum is the truth.
+  std::map<KeyframeId, Pose3> initial_T_wc;
+  std::vector<PoseGraphEdge> edges;
+  for (int k = 0; k < kVertices; ++k) {
+    Pose3 drift = Pose3::Identity();
+    drift.linear() = Eigen::AngleAxisd(0.3 * M_PI / 180.0 * k, kGravityDirectionW).toRotationMatrix();
+    drift.translation() = k * Eigen::Vector3d(0.01, -0.005, 0.007);
+    initial_T_wc[id_of(k)] = drift * inertial_true_pose(k);
+    if (k > 0) {
+      edges.push_back({id_of(k - 1), id_of(k), inertial_true_pose(k - 1).inverse() * inertial_true_pose(k), 1.0});
+    }
+  }
+  edges.push_back(
+      {id_of(kVertices - 1), id_of(0), inertial_true_pose(kVertices - 1).inverse() * inertial_true_pose(0), 1.0});
+  ASSERT_GT(
+      (initial_T_wc.at(id_of(kVertices - 1)).translation() - inertial_true_pose(kVertices - 1).translation()).norm(),
+      0.5);
+
+  const PoseGraphResult result = PoseGraph(four_dof_options()).compute(initial_T_wc, edges, {id_of(0)});
+  double position_m = 0.0, rotation_rad = 0.0;
+  for (int k = 0; k < kVertices; ++k) {
+    const Pose3& T_wc = result.T_wc.at(id_of(k));
+    position_m = std::max(position_m, (T_wc.translation() - inertial_true_pose(k).translation()).norm());
+    rotation_rad = std::max(rotation_rad,
+                            Eigen::AngleAxisd(T_wc.rotation().transpose() * inertial_true_pose(k).rotation()).angle());
+  }
+  const double gravity_change = largest_gravity_change(initial_T_wc, result.T_wc);
+  std::printf("4-DoF, exact edges: from the truth %.3g m %.3g rad; gravity in the cameras moved %.3g; %d iterations\n",
+              position_m, rotation_rad, gravity_change, result.stats.iterations);
+  EXPECT_LT(position_m, 1e-9);
+  EXPECT_LT(rotation_rad, 1e-9);
+  EXPECT_LT(gravity_change, 1e-12);
+  EXPECT_LT(result.stats.final_cost, 1e-20);
+  EXPECT_EQ(result.T_wc.at(id_of(0)).matrix(), initial_T_wc.at(id_of(0)).matrix());
+  EXPECT_EQ(result.stats.vertices, kVertices);
+  EXPECT_EQ(result.stats.edges, kVertices);
+}
+
+TEST(LoopPoseGraph, FourDofKeepsRollAndPitchWhereTheSixDofGraphMovesThem) {
+  // make_graph's odometry drifts in roll as well: the 6-DoF graph spreads that over the keyframes'
+  // roll and pitch, the 4-DoF graph leaves gravity where the IMU put it and still closes the loop.
+  const DriftedGraph graph = make_graph();
+  const PoseGraphResult six = PoseGraph().compute(graph.initial_T_wc, graph.edges, {id_of(0)});
+  const PoseGraphResult four = PoseGraph(four_dof_options()).compute(graph.initial_T_wc, graph.edges, {id_of(0)});
+  const double six_change = largest_gravity_change(graph.initial_T_wc, six.T_wc);
+  const double four_change = largest_gravity_change(graph.initial_T_wc, four.T_wc);
+  const KeyframeId last = id_of(kVertices - 1);
+  const Eigen::Vector3d true_end = true_pose(kVertices - 1).translation();
+  const double initial_end_error_m = (graph.initial_T_wc.at(last).translation() - true_end).norm();
+  const double four_end_error_m = (four.T_wc.at(last).translation() - true_end).norm();
+  std::printf("gravity in the cameras moved: 6-DoF %.3g, 4-DoF %.3g; end error %.3f m -> %.3f m (4-DoF)\n", six_change,
+              four_change, initial_end_error_m, four_end_error_m);
+  EXPECT_GT(six_change, 1e-3);
+  EXPECT_LT(four_change, 1e-12);
+  EXPECT_LT(four.stats.final_cost, 0.5 * four.stats.initial_cost);
+  EXPECT_LT(four_end_error_m * 5.0, initial_end_error_m);
+  // Same input, same poses bit for bit.
+  const PoseGraphResult again = PoseGraph(four_dof_options()).compute(graph.initial_T_wc, graph.edges, {id_of(0)});
+  for (const auto& [id, T_wc] : four.T_wc) EXPECT_EQ(T_wc.matrix(), again.T_wc.at(id).matrix());
+}
+
+TEST(LoopPoseGraph, FourDofWithoutAGravityDirectionIsAnError) {
+  const DriftedGraph graph = make_graph();
+  PoseGraphOptions options = four_dof_options();
+  options.gravity_w = Eigen::Vector3d::Zero();
+  try {
+    PoseGraph(options).compute(graph.initial_T_wc, graph.edges, {id_of(0)});
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("gravity_w"), std::string::npos) << error.what();
+  }
 }
 
 }  // namespace

@@ -192,7 +192,7 @@ LoopClosingResult LoopClosing::process_keyframe(const Map& map, KeyframeId query
   loop.matched_kf = accepted_kf;
   loop.T_matched_loop = accepted->T_matched_loop;
   loop.matched_points = accepted->matched_points;
-  LoopCorrectionOutput output = LoopCorrectionBuilder().compute(map, camera_, loop, loop_edges_);
+  LoopCorrectionOutput output = LoopCorrectionBuilder(options_.correction).compute(map, camera_, loop, loop_edges_);
   result.timings.correction_ms = ms_since(correction_start);
   if (!output.error.empty()) {
     result.rejected.push_back({accepted_kf, "correction: " + output.error});

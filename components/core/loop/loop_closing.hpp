@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/loop/loop_correction_builder.hpp"
 #include "components/core/loop/loop_detector.hpp"
 #include "components/core/map/map.hpp"
 #include "components/core/mapping/loop_correction.hpp"
@@ -41,7 +42,8 @@ struct LoopClosingOptions {
   double max_rotation_drift_deg_per_m = 0.2;
   double min_rotation_allowance_deg = 10.0;
   std::uint64_t ransac_seed = 0x100b;
-  TrackerOptions matching;  // descriptor thresholds, orientation check
+  TrackerOptions matching;                  // descriptor thresholds, orientation check
+  LoopCorrectionBuilderOptions correction;  // pose_graph.* (4-DoF in inertial runs)
 };
 
 struct LoopRejection {

@@ -164,7 +164,14 @@ LoopCorrectionOutput LoopCorrectionBuilder::compute(
   // (a) The loop group moves rigidly with the loop keyframe's corrected pose.
   const std::vector<KeyframeId> loop_group = group_of(map, loop.loop_kf);
   const Pose3& T_w_loop = map.keyframe(loop.loop_kf)->T_wc;
-  const Pose3 correction_w = map.keyframe(loop.matched_kf)->T_wc * loop.T_matched_loop * T_w_loop.inverse();
+  Pose3 correction_w = map.keyframe(loop.matched_kf)->T_wc * loop.T_matched_loop * T_w_loop.inverse();
+  if (options_.pose_graph.four_dof) {
+    // Inertial: the loop keyframe goes to the verified position, turned only about gravity (ORB-SLAM3
+    // zeroes the correction's roll and pitch), so the group's roll and pitch stay the IMU's.
+    const Eigen::Vector3d target = correction_w * T_w_loop.translation();
+    correction_w.linear() = yaw_about_gravity(correction_w.rotation(), options_.pose_graph.gravity_w);
+    correction_w.translation() = target - correction_w.rotation() * T_w_loop.translation();
+  }
   std::map<KeyframeId, Pose3> corrected_T_wc;
   for (const KeyframeId id : loop_group) corrected_T_wc[id] = correction_w * map.keyframe(id)->T_wc;
 

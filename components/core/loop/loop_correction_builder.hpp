@@ -41,6 +41,9 @@ struct LoopCorrectionBuilderOptions {
   // verified transform then is not spread into the loop side).
   bool fix_loop_group = false;
   EssentialGraphOptions essential_graph;
+  // pose_graph.four_dof (inertial runs): the essential graph moves keyframes only in yaw about
+  // pose_graph.gravity_w and in translation, and the loop group's rigid correction (a) is reduced to
+  // its yaw part too, so no keyframe's roll or pitch changes.
   PoseGraphOptions pose_graph;
 };
 

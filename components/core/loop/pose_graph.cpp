@@ -9,6 +9,8 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/OrderingMethods>
@@ -72,16 +74,23 @@ double robust_weight(double squared_norm, const PoseGraphOptions& options) {
 
 // Gauss-Newton with Levenberg-Marquardt damping on the block-sparse normal equations, the pattern
 // and its fill-reducing ordering analysed once (Eigen's simplicial LDL^T with AMD).
+// D = 6: SE(3) unknowns (phi, dt), R <- R Exp(phi). D = 4 (inertial, options.four_dof): (psi, dt), a yaw
+// psi about the world's gravity axis a, R <- Exp(psi a) R = R Exp(psi R^T a), so the 6-DoF Jacobians
+// times [R^T a, 0; 0, I3] are the 4-DoF ones, and the direction of gravity in every camera (roll and
+// pitch) never changes.
+template <int D>
 class GaussNewtonPoseGraph {
  public:
   GaussNewtonPoseGraph(std::vector<Eigen::Matrix3d> R, std::vector<Eigen::Vector3d> t, std::vector<int> unknown_of,
-                       int unknowns, std::vector<SolverEdge> edges, const PoseGraphOptions& options)
+                       int unknowns, std::vector<SolverEdge> edges, const PoseGraphOptions& options,
+                       const Eigen::Vector3d& yaw_axis_w)
       : R_(std::move(R)),
         t_(std::move(t)),
         unknown_of_(std::move(unknown_of)),
         unknowns_(unknowns),
         edges_(std::move(edges)),
-        options_(options) {
+        options_(options),
+        yaw_axis_w_(yaw_axis_w) {
     build_pattern();
   }
 
@@ -95,7 +104,7 @@ class GaussNewtonPoseGraph {
     solver.cholmod().nmethods = 1;
     solver.cholmod().method[0].ordering = CHOLMOD_NATURAL;
     solver.analyzePattern(H_);
-    Eigen::VectorXd gradient(6 * unknowns_);
+    Eigen::VectorXd gradient(D * unknowns_);
     int iterations = 0;
     while (iterations < options_.max_iterations) {
       linearize(gradient);
@@ -113,8 +122,12 @@ class GaussNewtonPoseGraph {
         for (std::size_t v = 0; v < R.size(); ++v) {
           const int u = unknown_of_[v];
           if (u < 0) continue;
-          R[v] = R[v] * so3::exp(step.segment<3>(6 * u));
-          t[v] += step.segment<3>(6 * u + 3);
+          if constexpr (D == 6) {
+            R[v] = R[v] * so3::exp(step.segment<3>(6 * u));
+          } else {
+            R[v] = so3::exp(step[D * u] * yaw_axis_w_) * R[v];
+          }
+          t[v] += step.segment<3>(D * u + D - 3);
         }
         const double new_cost = total_cost(R, t);
         if (new_cost < cost) {
@@ -170,6 +183,22 @@ class GaussNewtonPoseGraph {
   static constexpr double kLambdaDown = 3.0;
   static constexpr double kMinDiagonal = 1e-6;
 
+  using VectorDd = Eigen::Matrix<double, D, 1>;
+  using MatrixDd = Eigen::Matrix<double, D, D>;
+  using Matrix6Dd = Eigen::Matrix<double, 6, D>;
+
+  // The Jacobian with respect to this solver's unknowns of a vertex with rotation R.
+  Matrix6Dd reduce(const Matrix6d& J, const Eigen::Matrix3d& R) const {
+    if constexpr (D == 6) {
+      return J;
+    } else {
+      Matrix6Dd reduced;
+      reduced.col(0) = J.leftCols<3>() * (R.transpose() * yaw_axis_w_);
+      reduced.template rightCols<3>() = J.rightCols<3>();
+      return reduced;
+    }
+  }
+
   double total_cost(const std::vector<Eigen::Matrix3d>& R, const std::vector<Eigen::Vector3d>& t) const {
     double cost = 0.0;
     for (const SolverEdge& e : edges_) {
@@ -184,18 +213,20 @@ class GaussNewtonPoseGraph {
   void linearize(Eigen::VectorXd& gradient) {
     std::fill(H_.valuePtr(), H_.valuePtr() + H_.nonZeros(), 0.0);
     gradient.setZero();
-    Matrix6d J_f, J_t;
+    Matrix6d J_f6, J_t6;
     for (const SolverEdge& e : edges_) {
       const Vector6d r =
-          edge_residual(e, R_[e.from_vertex], t_[e.from_vertex], R_[e.to_vertex], t_[e.to_vertex], &J_f, &J_t);
+          edge_residual(e, R_[e.from_vertex], t_[e.from_vertex], R_[e.to_vertex], t_[e.to_vertex], &J_f6, &J_t6);
+      const Matrix6Dd J_f = reduce(J_f6, R_[e.from_vertex]);
+      const Matrix6Dd J_t = reduce(J_t6, R_[e.to_vertex]);
       const double w = robust_weight(r.squaredNorm(), options_);
       if (e.from_unknown >= 0) {
         add_block(e.offset_ff, w * J_f.transpose() * J_f);
-        gradient.segment<6>(6 * e.from_unknown) += w * J_f.transpose() * r;
+        gradient.template segment<D>(D * e.from_unknown) += w * J_f.transpose() * r;
       }
       if (e.to_unknown >= 0) {
         add_block(e.offset_tt, w * J_t.transpose() * J_t);
-        gradient.segment<6>(6 * e.to_unknown) += w * J_t.transpose() * r;
+        gradient.template segment<D>(D * e.to_unknown) += w * J_t.transpose() * r;
       }
       if (e.from_unknown >= 0 && e.to_unknown >= 0) {
         // The stored block is (smaller unknown, larger unknown).
@@ -208,14 +239,14 @@ class GaussNewtonPoseGraph {
     }
   }
 
-  void add_block(const std::array<int, 6>& column_offsets, const Matrix6d& block) {
+  void add_block(const std::array<int, 6>& column_offsets, const MatrixDd& block) {
     double* values = H_.valuePtr();
-    for (int c = 0; c < 6; ++c) {
-      for (int r = 0; r < 6; ++r) values[column_offsets[c] + r] += block(r, c);
+    for (int c = 0; c < D; ++c) {
+      for (int r = 0; r < D; ++r) values[column_offsets[c] + r] += block(r, c);
     }
   }
 
-  // The block pattern: a 6x6 block per unknown on the diagonal and per edge between two unknowns.
+  // The block pattern: a DxD block per unknown on the diagonal and per edge between two unknowns.
   void build_pattern() {
     std::vector<std::vector<int>> rows_of_column(unknowns_);  // block rows of each block column (upper)
     for (int u = 0; u < unknowns_; ++u) rows_of_column[u].push_back(u);
@@ -228,19 +259,19 @@ class GaussNewtonPoseGraph {
       std::sort(rows.begin(), rows.end());
       rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
     }
-    const int n = 6 * unknowns_;
+    const int n = D * unknowns_;
     std::vector<int> outer(n + 1, 0);
     for (int column = 0; column < unknowns_; ++column) {
-      for (int c = 0; c < 6; ++c) outer[6 * column + c + 1] = outer[6 * column + c] + 6 * rows_of_column[column].size();
+      for (int c = 0; c < D; ++c) outer[D * column + c + 1] = outer[D * column + c] + D * rows_of_column[column].size();
     }
     H_.resize(n, n);
     H_.resizeNonZeros(outer[n]);
     std::copy(outer.begin(), outer.end(), H_.outerIndexPtr());
     for (int column = 0; column < unknowns_; ++column) {
-      for (int c = 0; c < 6; ++c) {
-        int* inner = H_.innerIndexPtr() + outer[6 * column + c];
+      for (int c = 0; c < D; ++c) {
+        int* inner = H_.innerIndexPtr() + outer[D * column + c];
         for (const int row : rows_of_column[column]) {
-          for (int r = 0; r < 6; ++r) *inner++ = 6 * row + r;
+          for (int r = 0; r < D; ++r) *inner++ = D * row + r;
         }
       }
     }
@@ -248,7 +279,7 @@ class GaussNewtonPoseGraph {
       const auto& rows = rows_of_column[column];
       const int k = static_cast<int>(std::lower_bound(rows.begin(), rows.end(), row) - rows.begin());
       std::array<int, 6> result{};
-      for (int c = 0; c < 6; ++c) result[c] = outer[6 * column + c] + 6 * k;
+      for (int c = 0; c < D; ++c) result[c] = outer[D * column + c] + D * k;
       return result;
     };
     for (SolverEdge& e : edges_) {
@@ -266,6 +297,7 @@ class GaussNewtonPoseGraph {
   int unknowns_;
   std::vector<SolverEdge> edges_;
   PoseGraphOptions options_;
+  Eigen::Vector3d yaw_axis_w_;  // unit, along gravity (D = 4)
   Eigen::SparseMatrix<double> H_;
   bool factorized_ = false;
 };
@@ -337,21 +369,47 @@ void compute_gauss_newton(const std::map<KeyframeId, Pose3>& initial_T_wc, const
     e.from_unknown = unknown_of[e.from_vertex];
     e.to_unknown = unknown_of[e.to_vertex];
   }
-  GaussNewtonPoseGraph solver(std::move(R), std::move(t), unknown_of, unknowns, std::move(solver_edges), options);
-  solver.solve(result.stats);
-  for (std::size_t v = 0; v < ids.size(); ++v) {
-    if (unknown_of[v] < 0) continue;
-    Pose3 T_wc = Pose3::Identity();
-    T_wc.linear() = Eigen::Quaterniond(solver.R()[v]).normalized().toRotationMatrix();
-    T_wc.translation() = solver.t()[v];
-    result.T_wc[ids[v]] = T_wc;
+  const auto solve_and_store = [&](auto& solver) {
+    solver.solve(result.stats);
+    for (std::size_t v = 0; v < ids.size(); ++v) {
+      if (unknown_of[v] < 0) continue;
+      Pose3 T_wc = Pose3::Identity();
+      T_wc.linear() = Eigen::Quaterniond(solver.R()[v]).normalized().toRotationMatrix();
+      T_wc.translation() = solver.t()[v];
+      result.T_wc[ids[v]] = T_wc;
+    }
+  };
+  if (options.four_dof) {
+    GaussNewtonPoseGraph<4> solver(std::move(R), std::move(t), unknown_of, unknowns, std::move(solver_edges), options,
+                                   options.gravity_w.normalized());
+    solve_and_store(solver);
+  } else {
+    GaussNewtonPoseGraph<6> solver(std::move(R), std::move(t), unknown_of, unknowns, std::move(solver_edges), options,
+                                   Eigen::Vector3d::Zero());
+    solve_and_store(solver);
   }
 }
 
 }  // namespace
 
+Eigen::Matrix3d yaw_about_gravity(const Eigen::Matrix3d& R, const Eigen::Vector3d& gravity_w) {
+  const Eigen::Vector3d axis = gravity_w.normalized();
+  const Eigen::Quaterniond q(R);
+  const double along = q.vec().dot(axis);
+  const double norm = std::hypot(q.w(), along);
+  if (!(norm > 0.0)) return Eigen::Matrix3d::Identity();  // a half turn about a horizontal axis: no yaw part
+  return Eigen::Quaterniond(q.w() / norm, along * axis.x() / norm, along * axis.y() / norm, along * axis.z() / norm)
+      .toRotationMatrix();
+}
+
 PoseGraphResult PoseGraph::compute(const std::map<KeyframeId, Pose3>& initial_T_wc,
                                    const std::vector<PoseGraphEdge>& edges, const std::set<KeyframeId>& fixed) const {
+  if (options_.four_dof && (!options_.gravity_w.allFinite() || !(options_.gravity_w.norm() > 0.0))) {
+    throw std::invalid_argument(
+        "PoseGraph: gravity_w: expected a finite non-zero direction for the 4-DoF graph, got (" +
+        std::to_string(options_.gravity_w.x()) + ", " + std::to_string(options_.gravity_w.y()) + ", " +
+        std::to_string(options_.gravity_w.z()) + ")");
+  }
   const auto start = std::chrono::steady_clock::now();
   PoseGraphResult result;
   result.T_wc = initial_T_wc;

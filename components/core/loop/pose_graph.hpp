@@ -8,6 +8,11 @@
 // measured, and 2 vec(q_measured^-1 q_estimated) for the rotation; scaled by sqrt(weight). With
 // weight 1 this matches ORB-SLAM2's identity information (rotation in radians, translation in m).
 // Single-threaded and deterministic: the same input gives the same poses bit for bit.
+//
+// Inertial mode (options.four_dof, VINS-Mono's and ORB-SLAM3's 4-DoF pose graph): the IMU observes
+// gravity, so roll and pitch are not drift directions; each free vertex then moves only by a yaw about
+// the world's gravity axis (options.gravity_w, any world convention) and a translation. The residual is
+// the same 6-vector; the direction of gravity in every camera stays exactly as it was.
 #pragma once
 
 #include <map>
@@ -30,6 +35,10 @@ struct PoseGraphOptions {
   int max_iterations = 20;   // ORB-SLAM2: 20 Levenberg-Marquardt iterations
   bool robust = false;       // ORB-SLAM2 uses no robust kernel on the essential graph
   double huber_delta = 0.1;  // with `robust`: residual norm (rad / m) beyond which an edge counts linearly
+  // Inertial runs: optimize yaw about gravity and translation only (4 DoF per vertex); roll and pitch
+  // with respect to gravity_w (gravity's direction in the world frame, any length) are kept.
+  bool four_dof = false;
+  Eigen::Vector3d gravity_w = Eigen::Vector3d(0.0, 0.0, -1.0);
 };
 
 struct PoseGraphStats {
@@ -47,6 +56,11 @@ struct PoseGraphResult {
   std::map<KeyframeId, Pose3> T_wc;  // every input vertex; fixed and edge-less ones unchanged
   PoseGraphStats stats;
 };
+
+// The part of rotation R that turns about the direction of gravity_w (swing-twist decomposition: R =
+// twist * swing, swing turning about an axis orthogonal to gravity): what a 4-DoF graph may change of
+// a rotation. gravity_w: any length; not zero.
+Eigen::Matrix3d yaw_about_gravity(const Eigen::Matrix3d& R, const Eigen::Vector3d& gravity_w);
 
 class PoseGraph {
  public:

@@ -1,0 +1,56 @@
+// The loop closer's config: the 4-DoF pose graph's fields (pose_graph.four_dof, pose_graph.gravity_w).
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+#include <string>
+
+#include "components/loop_closer/loop_closer_options.hpp"
+#include "runtime/config.hpp"
+#include "test_support.hpp"
+
+namespace heslam::loop_closer {
+namespace {
+
+LoopCloserProcessOptions parse(const std::string& yaml) {
+  return LoopCloserProcessOptions::from_config(runtime::Config::parse("%YAML:1.0\n---\n" + yaml, "closer.yaml"), {});
+}
+
+TEST(LoopCloserOptions, PoseGraphIsSixDofByDefault) {
+  const LoopCloserProcessOptions options = parse("real_time: false\n");
+  EXPECT_FALSE(options.closing.correction.pose_graph.four_dof);
+  EXPECT_EQ(options.closing.correction.pose_graph.gravity_w, Eigen::Vector3d(0.0, 0.0, -1.0));
+}
+
+TEST(LoopCloserOptions, ShippedConfigsKeepTheSixDofGraph) {
+  for (const char* name : {"heslam-loop-closer.yaml", "heslam-loop-closer-proximity.yaml"}) {
+    SCOPED_TRACE(name);
+    const runtime::Config config = runtime::Config::load(test::source_dir() / "config/loop_closer" / name);
+    const LoopCloserProcessOptions options = LoopCloserProcessOptions::from_config(config, {});
+    EXPECT_FALSE(options.closing.correction.pose_graph.four_dof);
+    EXPECT_EQ(options.closing.correction.pose_graph.gravity_w, Eigen::Vector3d(0.0, 0.0, -1.0));
+  }
+}
+
+TEST(LoopCloserOptions, FourDofTakesTheGravityDirection) {
+  const LoopCloserProcessOptions options = parse("pose_graph:\n  four_dof: true\n  gravity_w: [0.0, 9.81, 0]\n");
+  EXPECT_TRUE(options.closing.correction.pose_graph.four_dof);
+  EXPECT_EQ(options.closing.correction.pose_graph.gravity_w, Eigen::Vector3d(0.0, 9.81, 0.0));
+}
+
+TEST(LoopCloserOptions, ABadGravityDirectionIsOneLineNamingFileAndField) {
+  for (const char* gravity : {"[0.0, -1.0]", "[0, 0, 0]", "[0, .nan, -1]"}) {
+    SCOPED_TRACE(gravity);
+    try {
+      parse(std::string("pose_graph:\n  four_dof: true\n  gravity_w: ") + gravity + "\n");
+      FAIL() << "expected an error";
+    } catch (const std::runtime_error& error) {
+      const std::string message = error.what();
+      EXPECT_NE(message.find("closer.yaml"), std::string::npos) << message;
+      EXPECT_NE(message.find("pose_graph.gravity_w"), std::string::npos) << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace heslam::loop_closer
