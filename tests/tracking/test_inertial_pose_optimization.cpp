@@ -139,9 +139,11 @@ TEST(InertialPoseOptimization, APreviousVelocityOffWithinItsPriorIsCorrectedTowa
   constraint.previous.v_wb += offset;
   const InertialPoseResult result = optimize_pose_inertial(camera, observations, T_cw, constraint);
   ASSERT_TRUE(result.ok);
-  // Exact vision holds the pose; the velocity propagated from the wrong one would be off by `offset`.
-  EXPECT_LT(position_error_m(result.T_cw, T_cw), 1e-4);
-  EXPECT_LT((result.state.v_wb - s.current.v_wb).norm(), 0.9 * offset.norm());
+  // The velocity propagated from the wrong one would be off by `offset` and the pose by offset x 50 ms
+  // (1.35 mm); the exact matches (200 at 2-10 m: about 1 mm of position information) share the difference
+  // with the IMU factor, whose velocity-position correlation moves the velocity towards the truth.
+  EXPECT_LT(position_error_m(result.T_cw, T_cw), 1e-3);
+  EXPECT_LT((result.state.v_wb - s.current.v_wb).norm(), 0.95 * offset.norm());
 }
 
 TEST(InertialPoseOptimization, NoObservationsLeaveTheGuess) {
