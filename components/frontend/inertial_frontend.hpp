@@ -72,7 +72,7 @@ struct InertialOptions {
   // inertial_pose_optimization.hpp): pose, velocity and biases with the IMU factor from that frame, whose
   // velocity and biases the next frame starts from. Off: the visual optimization, the velocity from
   // velocity_window_s.
-  bool pose_optimization = true;
+  bool pose_optimization = false;
   // imu.pose_prior_*: the standard deviations of the previous frame's state in that optimization.
   double pose_prior_rotation_rad = 1e-3;
   double pose_prior_position_m = 1e-3;

@@ -171,7 +171,7 @@ void write_recording(const RecordedTrajectories& recording, const RecorderOption
           << "g_w " << recording.gravity_w->x() << " " << recording.gravity_w->y() << " " << recording.gravity_w->z()
           << "\n";
     } else {
-      out << "# world: the map's (the IMU never initialized: no gravity)\n";
+      out << "# world: the trajectory files' (not gravity-aligned: no gravity recorded)\n";
     }
     out << "# seq stamp_s vx vy vz (m/s, in that world)\n";
     for (const FrameVelocity& v : recording.velocities) {
