@@ -825,6 +825,7 @@ void Frontend::predict_inertial(const msg::StereoFrame& frame) {
     log().debug("frame ", frame.seq, ": no IMU prediction: ", prediction.message);
   }
   processor_->tracker().set_prediction(prediction.T_wc, prediction.fallback);
+  processor_->tracker().set_inertial_constraint(prediction.constraint);
 }
 
 void Frontend::update_inertial(const msg::StereoFrame& frame, const TrackResult& result,
@@ -859,6 +860,7 @@ void Frontend::report_inertial() {
       {"imu_readings", counts.accepted},
       {"imu_bad_readings", counts.skipped()},
       {"imu_gaps", inertial_->gaps()},
+      {"imu_pose_optimizations", inertial_->pose_optimizations()},
       {"imu_init_attempts", inertial_->init_attempts()},
   };
   for (const auto& [name, value] : now) {

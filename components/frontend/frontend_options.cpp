@@ -50,6 +50,10 @@ InertialOptions read_inertial(const runtime::Config& c) {
   read(c, "imu.refine_until_s", o.refine_until_s, 0.0, 3600.0);
   read(c, "imu.blackout_max_s", o.blackout_max_s, 0.0, 60.0);
   read(c, "imu.velocity_window_s", o.velocity_window_s, 0.05, 10.0);
+  read(c, "imu.pose_optimization", o.pose_optimization);
+  read(c, "imu.pose_prior_rotation_rad", o.pose_prior_rotation_rad, 1e-9, 1.0);
+  read(c, "imu.pose_prior_position_m", o.pose_prior_position_m, 1e-9, 10.0);
+  read(c, "imu.pose_prior_velocity_m_s", o.pose_prior_velocity_m_s, 1e-9, 10.0);
   if (o.init_max_keyframes < o.init_min_keyframes) {
     throw std::runtime_error(c.source() + ": field 'imu.init_max_keyframes': " + std::to_string(o.init_max_keyframes) +
                              " is below imu.init_min_keyframes (" + std::to_string(o.init_min_keyframes) + ")");

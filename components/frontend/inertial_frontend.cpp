@@ -84,7 +84,7 @@ InertialFrontend::Prediction InertialFrontend::predict(std::int64_t stamp_ns) {
     prediction.message = interval.message;
     return prediction;
   }
-  const ImuBias bias = estimate_ ? estimate_->bias : ImuBias{};
+  const ImuBias bias = estimate_ ? bias_at(last) : ImuBias{};
   const ImuPreintegration pre = preintegrate(interval.samples, last.stamp_ns, t1, bias, calibration_->noise);
   ++predictions_;
   if (state_ == InertialInitState::kInitialized && last.v_wb) {
@@ -103,6 +103,18 @@ InertialFrontend::Prediction InertialFrontend::predict(std::int64_t stamp_ns) {
       prediction.v = end.v_wb;
     }
     predicted_v_ = end.v_wb;
+    if (options_.pose_optimization && last.visual && pre.duration_s() > 0.0) {
+      InertialPoseConstraint constraint;
+      constraint.preintegration = pre;
+      constraint.previous = start;
+      constraint.previous_bias = bias;
+      constraint.gravity_w = estimate_->gravity_w;
+      constraint.T_cb = *T_cb_;
+      constraint.prior_rotation_rad = options_.pose_prior_rotation_rad;
+      constraint.prior_position_m = options_.pose_prior_position_m;
+      constraint.prior_velocity_m_s = options_.pose_prior_velocity_m_s;
+      prediction.constraint = std::move(constraint);
+    }
     return prediction;
   }
   // Before the initialization: the gyroscope's rotation, the constant-velocity model's translation.
@@ -159,7 +171,15 @@ std::optional<std::string> InertialFrontend::update(std::int64_t stamp_ns, const
     frame.stamp_ns = t;
     frame.T_wb = body_pose(result.T_wc);
     frame.visual = true;
-    if (state_ == InertialInitState::kInitialized) estimate_velocity(frame);
+    if (state_ == InertialInitState::kInitialized) {
+      if (result.inertial_state) {
+        frame.v_wb = result.inertial_state->v_wb;
+        frame.bias = result.inertial_state->bias;
+        ++pose_optimizations_;
+      } else {
+        estimate_velocity(frame);
+      }
+    }
     frames_.push_back(frame);
     last_visual_ns_ = t;
     if (result.new_keyframe && !first_keyframe_ns_) first_keyframe_ns_ = t;
@@ -168,6 +188,7 @@ std::optional<std::string> InertialFrontend::update(std::int64_t stamp_ns, const
     frame.stamp_ns = t;
     frame.T_wb = body_pose(result.T_wc);
     frame.v_wb = predicted_v_;
+    if (!frames_.empty()) frame.bias = frames_.back().bias;  // the biases the prediction used
     frames_.push_back(frame);
   } else {
     frames_.clear();  // lost: no pose to predict from until vision tracks again
@@ -183,6 +204,11 @@ std::optional<std::string> InertialFrontend::update(std::int64_t stamp_ns, const
 std::optional<Eigen::Vector3d> InertialFrontend::velocity() const {
   if (frames_.empty()) return std::nullopt;
   return frames_.back().v_wb;
+}
+
+std::optional<ImuBias> InertialFrontend::bias() const {
+  if (frames_.empty() || !estimate_) return std::nullopt;
+  return bias_at(frames_.back());
 }
 
 }  // namespace heslam::frontend
@@ -273,6 +299,7 @@ std::optional<std::string> InertialFrontend::try_initialize(std::int64_t stamp_n
   gravity_stddev_deg_ = result.gravity_stddev_deg;
   reason_.clear();
   if (!initialized_ns_) initialized_ns_ = stamp_ns;
+  for (FrameState& frame : frames_) frame.bias.reset();  // the new estimate's biases from now on
   if (!refining) next_init_ns_ = stamp_ns + static_cast<std::int64_t>(options_.refine_every_s * kNsPerS);
   estimate_velocity(frames_.back());
   std::ostringstream line;

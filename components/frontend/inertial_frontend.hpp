@@ -67,6 +67,16 @@ struct InertialOptions {
   // imu.velocity_window_s: the velocity at a tracked frame comes from its pose and the pose of the
   // tracked frame about this long before it, with the preintegration between them.
   double velocity_window_s = 0.5;
+  // imu.pose_optimization: once initialized, the tracker's local-map pose optimization of a frame that
+  // follows a frame tracked by vision is the inertial one (components/core/tracking/
+  // inertial_pose_optimization.hpp): pose, velocity and biases with the IMU factor from that frame, whose
+  // velocity and biases the next frame starts from. Off: the visual optimization, the velocity from
+  // velocity_window_s.
+  bool pose_optimization = false;
+  // imu.pose_prior_*: the standard deviations of the previous frame's state in that optimization.
+  double pose_prior_rotation_rad = 1e-3;
+  double pose_prior_position_m = 1e-3;
+  double pose_prior_velocity_m_s = 1e-2;
 };
 
 enum class InertialInitState { kWaiting, kInitialized, kFailed, kOff };
@@ -106,6 +116,8 @@ class InertialFrontend {
     std::optional<Pose3> T_wc;         // the tracker's starting pose for this frame
     std::optional<Pose3> fallback;     // the pose of the frame if vision cannot track it (blackout)
     std::optional<Eigen::Vector3d> v;  // the body's velocity with `fallback`
+    // For Tracker::set_inertial_constraint (initialized, imu.pose_optimization, after a visual frame).
+    std::optional<InertialPoseConstraint> constraint;
     ImuCoverage coverage = ImuCoverage::kPending;
     std::string message;  // why there is no prediction (the interval's), else empty
   };
@@ -120,6 +132,9 @@ class InertialFrontend {
 
   // The body's velocity in the tracker's world at the last frame (initialized only).
   std::optional<Eigen::Vector3d> velocity() const;
+  // The biases at the last frame: its inertial pose optimization's, else the initialization's.
+  std::optional<ImuBias> bias() const;
+  std::uint64_t pose_optimizations() const { return pose_optimizations_; }
   const std::optional<InertialEstimate>& estimate() const { return estimate_; }
   std::uint64_t init_attempts() const { return init_attempts_; }
   std::uint64_t predictions() const { return predictions_; }
@@ -132,7 +147,9 @@ class InertialFrontend {
     Pose3 T_wb = Pose3::Identity();
     bool visual = false;  // tracked by vision (not inertial-only)
     std::optional<Eigen::Vector3d> v_wb;
+    std::optional<ImuBias> bias;  // of its inertial pose optimization; else the estimate's
   };
+  ImuBias bias_at(const FrameState& frame) const { return frame.bias ? *frame.bias : estimate_->bias; }
   Pose3 body_pose(const Pose3& T_wc) const { return T_wc * *T_cb_; }
   Pose3 camera_pose(const Pose3& T_wb) const { return T_wb * T_cb_->inverse(); }
   std::optional<ImuPreintegration> preintegrate_between(std::int64_t t0_ns, std::int64_t t1_ns);
@@ -159,6 +176,7 @@ class InertialFrontend {
   std::uint64_t init_attempts_ = 0;
   std::uint64_t predictions_ = 0;
   std::uint64_t gaps_ = 0;
+  std::uint64_t pose_optimizations_ = 0;
 };
 
 }  // namespace heslam::frontend

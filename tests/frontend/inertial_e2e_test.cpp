@@ -5,11 +5,17 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <optional>
 #include <regex>
+#include <sstream>
 #include <string>
 #include <vector>
+
+#include <Eigen/Geometry>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -101,6 +107,87 @@ PipelineRun run_pipeline(const std::string& pipeline, const fs::path& dataset, c
 
 std::size_t poses_in(const fs::path& trajectory) { return eval::read_trajectory(trajectory).size(); }
 
+// The recorder's STEM.inertial.txt (docs/outputs.md): R_gw and the velocities by stamp (ns).
+struct InertialFile {
+  std::optional<Eigen::Quaterniond> R_gw;
+  std::map<std::int64_t, Eigen::Vector3d> velocities;
+};
+
+InertialFile read_inertial_file(const fs::path& path) {
+  InertialFile file;
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    if (line.rfind("R_gw ", 0) == 0) {
+      std::string tag;
+      double x, y, z, w;
+      if (fields >> tag >> x >> y >> z >> w) file.R_gw = Eigen::Quaterniond(w, x, y, z);
+      continue;
+    }
+    if (line.rfind("g_w ", 0) == 0) continue;
+    std::uint64_t seq = 0;
+    double stamp_s = 0.0;
+    Eigen::Vector3d v;
+    if (fields >> seq >> stamp_s >> v.x() >> v.y() >> v.z()) {
+      file.velocities[static_cast<std::int64_t>(std::llround(stamp_s * 1e9))] = v;
+    }
+  }
+  return file;
+}
+
+// The ground truth's velocities (the IMU body's, in its world) by stamp (ns): EuRoC's v_RS_R columns when
+// the file has them (heslam-synth's), else central differences of its positions (the shared MH01 clip's
+// ground truth has positions only: 20 Hz, so the difference spans 0.1 s).
+std::map<std::int64_t, Eigen::Vector3d> ground_truth_velocities(const fs::path& dataset) {
+  std::map<std::int64_t, Eigen::Vector3d> velocities;
+  std::vector<std::pair<std::int64_t, Eigen::Vector3d>> positions;
+  std::ifstream in(dataset / "mav0/state_groundtruth_estimate0/data.csv");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream fields(line);
+    std::int64_t stamp = 0;
+    Eigen::Vector3d p;
+    double skip = 0.0;
+    Eigen::Vector3d v;
+    if (!(fields >> stamp >> p.x() >> p.y() >> p.z())) continue;
+    positions.emplace_back(stamp, p);
+    for (int k = 0; k < 4; ++k) fields >> skip;
+    if (fields >> v.x() >> v.y() >> v.z()) velocities[stamp] = v;
+  }
+  if (!velocities.empty()) return velocities;
+  for (std::size_t i = 1; i + 1 < positions.size(); ++i) {
+    const double dt_s = static_cast<double>(positions[i + 1].first - positions[i - 1].first) * 1e-9;
+    velocities[positions[i].first] = (positions[i + 1].second - positions[i - 1].second) / dt_s;
+  }
+  return velocities;
+}
+
+// The recorder's velocities against the ground truth's (within 3 ms of the frame): the rms error of the
+// speed, which does not depend on the worlds' orientations.
+struct VelocityCheck {
+  double speed_rms_m_s = -1.0;
+  std::size_t velocities = 0;
+};
+
+VelocityCheck check_velocities(const fs::path& dataset, const PipelineRun& run) {
+  VelocityCheck check;
+  const std::map<std::int64_t, Eigen::Vector3d> truth = ground_truth_velocities(dataset);
+  double speed = 0.0;
+  const fs::path file = fs::path(run.trajectory).replace_extension(".inertial.txt");
+  for (const auto& [stamp, v] : read_inertial_file(file).velocities) {
+    auto it = truth.lower_bound(stamp - 3'000'000);
+    if (it == truth.end() || it->first > stamp + 3'000'000) continue;
+    speed += (v.norm() - it->second.norm()) * (v.norm() - it->second.norm());
+    ++check.velocities;
+  }
+  if (check.velocities > 0) check.speed_rms_m_s = std::sqrt(speed / static_cast<double>(check.velocities));
+  return check;
+}
+
 TEST(InertialEndToEnd, EurocMh01InitializesWithin2sAndIsNoWorseThanStereoOnly) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
@@ -121,6 +208,12 @@ TEST(InertialEndToEnd, EurocMh01InitializesWithin2sAndIsNoWorseThanStereoOnly) {
   std::printf("MH01 ATE: stereo-inertial %.3f mm, stereo-only %.3f mm; IMU initialized at frame %lld\n",
               inertial_ate_m * 1e3, stereo_ate_m * 1e3, initialized_at);
   EXPECT_LE(inertial_ate_m, stereo_ate_m * 1.05);
+  // The recorder writes the velocities (inertial runs only).
+  const VelocityCheck velocity = check_velocities(dataset, inertial);
+  std::printf("MH01 velocity: speed rms %.4f m/s over %zu frames\n", velocity.speed_rms_m_s, velocity.velocities);
+  EXPECT_GE(velocity.velocities, 100u);
+  EXPECT_LT(velocity.speed_rms_m_s, 0.015);  // 0.0073 (the ground truth's own differences limit it)
+  EXPECT_FALSE(fs::exists(fs::path(stereo.trajectory).replace_extension(".inertial.txt")));
 }
 
 TEST(InertialEndToEnd, EurocMh01BlackFrames60To79CarriedByTheImu) {
@@ -191,6 +284,11 @@ TEST(InertialEndToEnd, SynthRoomTracksEveryFrameAndA2sBlackoutKeepsEveryPose) {
   ASSERT_EQ(clear.code, 0) << clear.output;
   EXPECT_EQ(poses_in(clear.trajectory), static_cast<std::size_t>(kSynthFrames)) << clear.output;
   EXPECT_EQ(first_number(clear.output, R"(, (\d+) inertial-only frames)"), 0) << clear.output;
+  const VelocityCheck velocity = check_velocities(rendered, clear);
+  std::printf("synthetic room velocity: speed rms %.4f m/s over %zu frames\n", velocity.speed_rms_m_s,
+              velocity.velocities);
+  EXPECT_GE(velocity.velocities, 300u);
+  EXPECT_LT(velocity.speed_rms_m_s, 0.02);
 
   const fs::path black = dir.path() / "room_imu_black";
   ASSERT_EQ(blackout_copy(rendered, black, kSynthBlackFirst, kSynthBlackFrames),

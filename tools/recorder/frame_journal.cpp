@@ -32,8 +32,14 @@ bool read_record(const std::string& record, RecordedFrame& frame) {
   int tracked = 0;
   std::string rest;
   if (!(fields >> frame.seq >> frame.stamp_ns >> tracked >> frame.state >> frame.reference) ||
-      !read_pose(fields, frame.T_ref_c) || !read_pose(fields, frame.T_wc) || fields >> rest) {
+      !read_pose(fields, frame.T_ref_c) || !read_pose(fields, frame.T_wc)) {
     return false;
+  }
+  // Inertial runs: optional "v x y z" (velocity) and "g x y z" (gravity) after the poses.
+  while (fields >> rest) {
+    Eigen::Vector3d value;
+    if ((rest != "v" && rest != "g") || !(fields >> value.x() >> value.y() >> value.z())) return false;
+    (rest == "v" ? frame.v_w : frame.g_w) = value;
   }
   frame.tracked = tracked != 0;
   return true;
@@ -67,6 +73,8 @@ void FrameJournal::append(const RecordedFrame& frame) {
          << (frame.state.empty() ? "-" : frame.state) << ' ' << frame.reference;
   write_pose(record, frame.T_ref_c);
   write_pose(record, frame.T_wc);
+  if (frame.v_w) record << " v " << frame.v_w->x() << ' ' << frame.v_w->y() << ' ' << frame.v_w->z();
+  if (frame.g_w) record << " g " << frame.g_w->x() << ' ' << frame.g_w->y() << ' ' << frame.g_w->z();
   journal_.append(record.str());
 }
 

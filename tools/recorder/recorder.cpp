@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include <Eigen/Geometry>
+
 #include "components/core/camera/stereo_rectifier.hpp"
 #include "components/messages/camera.hpp"
 #include "components/messages/checks.hpp"
@@ -83,6 +85,7 @@ RecorderOptions RecorderOptions::from(const runtime::Config& config, const std::
   options.format = parse_format_or_throw(config.get_choice("format", "tum", {"tum", "kitti", "euroc"}), "format");
   options.keyframe_output = config.get_path("keyframe_output", {});
   options.lost_output = config.get_path("lost_output", {});
+  options.inertial_output = config.get_path("inertial_output", {});
   if (config.has("frame")) {
     options.frame = parse_frame_or_throw(config.get_choice("frame", "body", {"body", "cam0", "rectified"}), "frame");
     options.frame_given = true;
@@ -97,12 +100,15 @@ RecorderOptions RecorderOptions::from(const runtime::Config& config, const std::
                 options.frame_given = true;
               })
       .path("--keyframes", "FILE", &options.keyframe_output, "the keyframe trajectory (the config's keyframe_output)")
-      .path("--lost", "FILE", &options.lost_output, "the stamps of lost frames (the config's lost_output)");
+      .path("--lost", "FILE", &options.lost_output, "the stamps of lost frames (the config's lost_output)")
+      .path("--inertial", "FILE", &options.inertial_output,
+            "inertial runs: the world's gravity alignment and the velocities (the config's inertial_output)");
   parser.parse(flags);
   if (options.output.empty()) throw std::runtime_error("--output: expected a file name");
   const std::string extension = options.format == eval::Format::euroc ? ".csv" : ".txt";
   if (options.keyframe_output.empty()) options.keyframe_output = sibling_path(options.output, ".keyframes" + extension);
   if (options.lost_output.empty()) options.lost_output = sibling_path(options.output, ".lost.txt");
+  if (options.inertial_output.empty()) options.inertial_output = sibling_path(options.output, ".inertial.txt");
   return options;
 }
 
@@ -150,6 +156,29 @@ void write_recording(const RecordedTrajectories& recording, const RecorderOption
       lost << frame.seq << " " << frame.stamp_ns << " " << frame.state << "\n";
     lost.flush();
     if (!lost) throw std::runtime_error("write error");
+  });
+  if (!recording.R_gw && recording.velocities.empty()) return;  // stereo-only: no such file
+  write_output(options.inertial_output, "inertial outputs", [&](const std::filesystem::path& path) {
+    std::ofstream out(path);
+    out.precision(9);
+    out << std::fixed;
+    out << "# heslam inertial outputs (docs/outputs.md): the trajectory files' world and the IMU body's velocities\n";
+    if (recording.R_gw) {
+      const Eigen::Quaterniond q(*recording.R_gw);
+      out << "# world: gravity-aligned (z up, the map's origin and heading); R_gw from the map's world, qx qy qz qw:\n"
+          << "R_gw " << q.x() << " " << q.y() << " " << q.z() << " " << q.w() << "\n"
+          << "# gravity in the map's world, m/s^2:\n"
+          << "g_w " << recording.gravity_w->x() << " " << recording.gravity_w->y() << " " << recording.gravity_w->z()
+          << "\n";
+    } else {
+      out << "# world: the trajectory files' (not gravity-aligned: no gravity recorded)\n";
+    }
+    out << "# seq stamp_s vx vy vz (m/s, in that world)\n";
+    for (const FrameVelocity& v : recording.velocities) {
+      out << v.seq << " " << v.stamp_s << " " << v.v_w.x() << " " << v.v_w.y() << " " << v.v_w.z() << "\n";
+    }
+    out.flush();
+    if (!out) throw std::runtime_error("write error");
   });
 }
 
@@ -227,6 +256,7 @@ FrameAccount Recorder::write_files() {
   RecordedTrajectories recording = recorder_.build();
   express_in_frame(recording, T_frame_rect_ ? options_.frame : eval::PoseFrame::rectified,
                    T_frame_rect_.value_or(Pose3::Identity()));
+  align_to_gravity(recording, T_frame_rect_.value_or(Pose3::Identity()));
   write_recording(recording, options_);
   const FrameAccount account = recorder_.account(frames_published_);
   status().set_message(summary_line(account, options_.output));
@@ -235,6 +265,20 @@ FrameAccount Recorder::write_files() {
   next_write_ = now + (now - start) * kRewriteSpacingFactor;
   stats().count("rewrites");
   return account;
+}
+
+void Recorder::take_inertial(const msg::Odometry& odometry, RecordedFrame& frame) {
+  // Inertial tracking's velocity; a non-finite one is skipped and counted, the frame's pose kept.
+  const auto vector = [](const double(&v)[3]) { return Eigen::Vector3d(v[0], v[1], v[2]); };
+  if (odometry.velocity_valid) {
+    const Eigen::Vector3d v_w = vector(odometry.v_w);
+    if (v_w.allFinite()) {
+      frame.v_w = v_w;
+    } else {
+      stats().count("rejected_velocities");
+      log().warn_throttled("rejected_velocities", "odometry frame ", odometry.seq, ": field 'v_w' is not finite");
+    }
+  }
 }
 
 void Recorder::take_calibration() {
@@ -302,6 +346,7 @@ std::size_t Recorder::drain() {
     frame.reference = odometry.reference_keyframe_id;
     frame.T_ref_c = messages::to_pose(odometry.T_ref_c);
     frame.T_wc = messages::to_pose(odometry.T_wc);
+    if (frame.tracked) take_inertial(odometry, frame);
     recorder_.add_frame(frame);
     if (odometry.keyframe_created && frame.tracked && frame.reference != kNoId) {
       recorder_.add_keyframe_frame(frame.reference, frame.stamp_ns, frame.seq, frame.T_wc);

@@ -28,6 +28,7 @@ struct RecorderOptions {
   eval::Format format = eval::Format::tum;
   std::filesystem::path keyframe_output;  // empty: <output stem>.keyframes<ext>
   std::filesystem::path lost_output;      // empty: <output stem>.lost.txt
+  std::filesystem::path inertial_output;  // empty: <output stem>.inertial.txt (written by inertial runs only)
   // The frame the poses are written in (tools/eval/pose_frame.hpp), named in the files' header.
   // body: the calibration's T_BS body frame, what EuRoC's ground truth is of (= cam0 when T_BS is
   // the identity, as for KITTI).
@@ -70,6 +71,7 @@ class Recorder : public runtime::Component {
   // Takes everything the readers hold; returns the number of samples taken.
   std::size_t drain();
   void take_calibration();
+  void take_inertial(const msg::Odometry& odometry, RecordedFrame& frame);
   // Rewrites the files from what is recorded and updates the status message with the summary.
   FrameAccount write_files();
   // How long the run loop may wait before the files are due again.

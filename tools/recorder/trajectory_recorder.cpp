@@ -3,7 +3,10 @@
 
 #include <algorithm>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+
+#include <Eigen/Geometry>
 
 namespace heslam::recorder {
 namespace {
@@ -86,7 +89,12 @@ RecordedTrajectories TrajectoryRecorder::build() const {
       // An unmoved reference keeps the tracker's own pose, bit for bit (same value up to rounding).
       T_wc = *reference * frame.T_ref_c;
     }
-    out.frames.push_back(T_wc, static_cast<std::int64_t>(seq), static_cast<double>(frame.stamp_ns) / kNsPerSecond);
+    const double stamp_s = static_cast<double>(frame.stamp_ns) / kNsPerSecond;
+    out.frames.push_back(T_wc, static_cast<std::int64_t>(seq), stamp_s);
+    // The velocity turns with the frame's pose when a correction moved it.
+    if (frame.v_w)
+      out.velocities.push_back({seq, stamp_s, T_wc.linear() * frame.T_wc.linear().transpose() * *frame.v_w});
+    if (frame.g_w) out.gravity_w = frame.g_w;  // the newest estimate
   }
   std::vector<std::pair<std::int64_t, KeyframeId>> by_stamp;
   for (const auto& [id, record] : keyframes_) {
@@ -133,6 +141,30 @@ FrameAccount TrajectoryRecorder::account(std::uint64_t frames_published) const {
   }
   if (account.published > next) account.never_received.emplace_back(next, account.published - 1);
   return account;
+}
+
+Eigen::Matrix3d gravity_alignment(const Eigen::Vector3d& gravity_w) {
+  if (!gravity_w.allFinite() || !(gravity_w.norm() > 0.0)) {
+    throw std::invalid_argument("gravity_alignment: gravity must be finite and non-zero");
+  }
+  // The smallest rotation taking gravity's direction to -z: about the horizontal axis g x -z, so that
+  // no rotation about the vertical is added (the map's heading kept).
+  return Eigen::Quaterniond::FromTwoVectors(gravity_w.normalized(), -Eigen::Vector3d::UnitZ()).toRotationMatrix();
+}
+
+void align_to_gravity(RecordedTrajectories& recording, const Pose3& T_x_r) {
+  const Eigen::Matrix3d R_x_r = T_x_r.linear();
+  for (FrameVelocity& velocity : recording.velocities) velocity.v_w = R_x_r * velocity.v_w;
+  if (!recording.gravity_w) return;
+  recording.gravity_w = R_x_r * *recording.gravity_w;
+  const Eigen::Matrix3d R_gw = gravity_alignment(*recording.gravity_w);
+  Pose3 T_gw = Pose3::Identity();
+  T_gw.linear() = R_gw;
+  for (eval::Trajectory* trajectory : {&recording.frames, &recording.keyframes}) {
+    for (Pose3& pose : trajectory->poses_wc) pose = T_gw * pose;
+  }
+  for (FrameVelocity& velocity : recording.velocities) velocity.v_w = R_gw * velocity.v_w;
+  recording.R_gw = R_gw;
 }
 
 }  // namespace heslam::recorder

@@ -25,6 +25,16 @@ struct RecordedFrame {
   KeyframeId reference = kNoId;
   Pose3 T_ref_c = Pose3::Identity();
   Pose3 T_wc = Pose3::Identity();  // as estimated at the time (fallback when the reference is unknown)
+  // Inertial tracking: the IMU body's velocity and gravity in the map's world, as estimated at the time.
+  std::optional<Eigen::Vector3d> v_w;
+  std::optional<Eigen::Vector3d> g_w;
+};
+
+// A tracked frame's velocity, in the world of the written trajectory.
+struct FrameVelocity {
+  std::uint64_t seq = 0;
+  double stamp_s = 0.0;
+  Eigen::Vector3d v_w = Eigen::Vector3d::Zero();
 };
 
 struct LostFrame {
@@ -38,7 +48,22 @@ struct RecordedTrajectories {
   eval::Trajectory keyframes;  // non-culled keyframes in stamp order; frame ids = their frame seq
   std::vector<LostFrame> lost;
   int frames_without_reference = 0;  // tracked frames whose keyframe never arrived (odometry pose used)
+  // Inertial tracking: the velocities of tracked frames that had one (rotated with their frame's pose
+  // when a correction moved it), and the newest frame's gravity in the map's world.
+  std::vector<FrameVelocity> velocities;
+  std::optional<Eigen::Vector3d> gravity_w;
+  // Set by align_to_gravity(): the rotation from the map's world to the gravity-aligned one.
+  std::optional<Eigen::Matrix3d> R_gw;
 };
+
+// The rotation R_gw of the world whose z is -gravity (up) from the map's world, the smallest that does it:
+// the origin and the heading of the map's world are kept. Throws std::invalid_argument on a zero or
+// non-finite gravity.
+Eigen::Matrix3d gravity_alignment(const Eigen::Vector3d& gravity_w);
+// With a gravity, expresses the recording's poses and velocities in the gravity-aligned world (R_gw). The
+// poses are already in the written frame's world (express_in_frame with T_x_r, rectified camera -> x): the
+// gravity and velocities, of the map's world, are first turned into it by R_x_r; gravity_w then is of it.
+void align_to_gravity(RecordedTrajectories& recording, const Pose3& T_x_r = Pose3::Identity());
 
 // What became of the published frames: the run's summary "tracked N/M frames, K lost".
 struct FrameAccount {

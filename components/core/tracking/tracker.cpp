@@ -100,6 +100,7 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
 
   const std::optional<Pose3> prediction = std::exchange(prediction_, std::nullopt);
   const std::optional<Pose3> fallback = std::exchange(inertial_fallback_, std::nullopt);
+  const std::optional<InertialPoseConstraint> constraint = std::exchange(inertial_constraint_, std::nullopt);
   const bool last_frame_tracked = state_ == TrackingState::kOk;
   bool ok = false;
   if (prediction && (last_frame_tracked || state_ == TrackingState::kInertialOnly)) {
@@ -129,7 +130,8 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
   int inliers = 0;
   if (ok) {
     const auto local_start = std::chrono::steady_clock::now();
-    ok = track_local_map(frame, inliers);
+    ok = track_local_map(frame, inliers, constraint ? &*constraint : nullptr, result.inertial_state);
+    if (!ok) result.inertial_state.reset();
     result.timings.local_map_ms = elapsed_ms(local_start);
   }
 
@@ -308,7 +310,8 @@ bool Tracker::track_reference_keyframe(Frame& frame, const Pose3& T_wc_start) {
   return frame.discard_outliers() >= options_.min_pose_inliers;
 }
 
-bool Tracker::track_local_map(Frame& frame, int& inliers) {
+bool Tracker::track_local_map(Frame& frame, int& inliers, const InertialPoseConstraint* constraint,
+                              std::optional<InertialFrameState>& state) {
   const LocalMapSelection local = select_local_map(frame, map_, options_);
   if (local.reference != kNoId) reference_kf_ = local.reference;
   for (std::size_t i = 0; i < frame.size(); ++i) {
@@ -318,7 +321,11 @@ bool Tracker::track_local_map(Frame& frame, int& inliers) {
   const float radius =
       recently_relocalized ? options_.local_search_radius_relocalized_px : options_.local_search_radius_px;
   search_local_points(frame, local.points, map_, camera_, radius, options_);
-  optimize_frame_pose(frame, map_, camera_, options_);
+  if (constraint != nullptr) {
+    optimize_frame_pose_inertial(frame, map_, camera_, options_, *constraint, state);
+  } else {
+    optimize_frame_pose(frame, map_, camera_, options_);
+  }
   inliers = 0;
   for (std::size_t i = 0; i < frame.size(); ++i) {
     if (frame.point_ids[i] == kNoId || frame.outlier[i]) continue;

@@ -22,6 +22,7 @@
 #include "components/core/place/keyframe_database.hpp"
 #include "components/core/place/vocabulary.hpp"
 #include "components/core/tracking/frame.hpp"
+#include "components/core/tracking/inertial_pose_optimization.hpp"
 #include "components/core/tracking/stationary_test.hpp"
 #include "components/core/tracking/tracker_options.hpp"
 
@@ -62,6 +63,9 @@ struct TrackResult {
   // correction with this keyframe.
   KeyframeId new_keyframe_reference = kNoId;
   TrackTimings timings;
+  // The velocity and biases of the motion-only optimization with IMU factors (set_inertial_constraint),
+  // when it ran for this frame and the frame was tracked.
+  std::optional<InertialFrameState> inertial_state;
 
   bool pose_valid() const { return state == TrackingState::kOk || state == TrackingState::kInertialOnly; }
 };
@@ -92,6 +96,13 @@ class Tracker {
   void set_prediction(std::optional<Pose3> T_wc, std::optional<Pose3> fallback = std::nullopt) {
     prediction_ = std::move(T_wc);
     inertial_fallback_ = std::move(fallback);
+  }
+
+  // For the next track() call only: the local map's motion-only optimization also estimates the frame's
+  // velocity and biases with the IMU factor from the previous frame (inertial_pose_optimization.hpp);
+  // TrackResult::inertial_state receives them. Without a call, the visual optimization, bit for bit.
+  void set_inertial_constraint(std::optional<InertialPoseConstraint> constraint) {
+    inertial_constraint_ = std::move(constraint);
   }
 
   // Whether the local mapper can take a keyframe now (real-time mode); lockstep keeps it true.
@@ -140,7 +151,9 @@ class Tracker {
   // The tracking of a frame that had a prediction (set_prediction): motion model search from it,
   // else the reference keyframe's points projected from it.
   bool track_predicted(Frame& frame, const Pose3& T_wc_predicted, TrackResult& result);
-  bool track_local_map(Frame& frame, int& inliers);
+  // With `constraint`, the pose optimization is the inertial one and `state` receives its velocity and biases.
+  bool track_local_map(Frame& frame, int& inliers, const InertialPoseConstraint* constraint,
+                       std::optional<InertialFrameState>& state);
   void maybe_insert_keyframe(Frame& frame, int inliers, TrackResult& result);
   KeyframeId next_keyframe_id() { return make_id(options_.id_tag, ++keyframe_counter_); }
 
@@ -159,8 +172,9 @@ class Tracker {
   int frames_since_keyframe_ = 0;
   int frames_since_relocalization_ = 1 << 30;
   bool mapper_idle_ = true;
-  std::optional<Pose3> prediction_;         // set_prediction, for the next frame only
-  std::optional<Pose3> inertial_fallback_;  // ... idem
+  std::optional<Pose3> prediction_;                            // set_prediction, for the next frame only
+  std::optional<Pose3> inertial_fallback_;                     // ... idem
+  std::optional<InertialPoseConstraint> inertial_constraint_;  // set_inertial_constraint, idem
 };
 
 }  // namespace heslam
