@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -299,6 +300,15 @@ TEST(FrontendProcess, ShippedPipelinesPassTheSupervisorCheck) {
     test::ChildProcess check(test::bin_dir() / "heslam-supervisor", args, dir.path(), "check_" + pipeline);
     EXPECT_EQ(check.wait(std::chrono::seconds(30)).value_or(-1), 0) << pipeline << ": " << check.out() << check.err();
     ++checked;
+    // Its optional components switched on pass too (each must be in a host group, its files exist).
+    std::ifstream file(entry.path());
+    const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+    if (text.find("$(arg occupancy)") != std::string::npos) {
+      args.insert(args.end(), {"--arg", "occupancy=heslam-occupancy"});
+      test::ChildProcess on(test::bin_dir() / "heslam-supervisor", args, dir.path(), "check_occupancy_" + pipeline);
+      EXPECT_EQ(on.wait(std::chrono::seconds(30)).value_or(-1), 0)
+          << pipeline << " with occupancy: " << on.out() << on.err();
+    }
   }
   EXPECT_GE(checked, 9);
 }
