@@ -112,8 +112,9 @@ std::pair<GridAgreement, GridAgreement> fuse_room(const Room& room, const DenseS
 constexpr int kStride = 24;
 
 // The fusion, the grid and the truth alone: exact depth at exact poses finds the seen walls and box
-// tops (seen-truth IoU 0.978, 2713 of 2773 cells, none outside the truth; 43 seen-truth cells free
-// where a box top or wall is only ever seen at a grazing angle), where every 4th pixel found 0.79.
+// tops (seen-truth IoU 0.965, 2676 of 2773 cells, none outside the truth; 51 seen cells free where a
+// box top or wall is only seen at grazing angles), where every 4th pixel found 0.79. The whole truth
+// (IoU 0.70) also counts the table no keyframe looks at.
 TEST(OccupancyQuality, RoomFromTrueDepthAtTruePoses) {
   const OccupancyMapOptions map_options;
   const Room room = render_room(DepthSource::kTruth, kStride, {}, map_options.band, map_options.voxels.resolution_m);
@@ -123,12 +124,15 @@ TEST(OccupancyQuality, RoomFromTrueDepthAtTruePoses) {
   EXPECT_LE(seen.free_in_truth_occupied, 60u);
 }
 
-// SGBM's noise added (still at the true poses): the figure the pipeline cannot beat.
+// SGBM's noise added (still at the true poses): seen-truth IoU 0.302 (2501 of 2773 seen cells found,
+// but 7999 grid cells: a fringe of false hits 0.1-0.5 m in front of the walls), 228 seen wall cells
+// free. This is the stage that misses the target (0.85); the floor here guards against it getting worse.
 TEST(OccupancyQuality, RoomFromStereoAtTruePoses) {
   const OccupancyMapOptions map_options;
   const Room room = render_room(DepthSource::kStereo, kStride, {}, map_options.band, map_options.voxels.resolution_m);
   const GridAgreement seen = fuse_room(room, {}, map_options, "room_sgbm").second;
-  EXPECT_GE(seen.occupied_iou, 0.0);
+  EXPECT_GE(seen.occupied_iou, 0.28);
+  EXPECT_GE(seen.both_occupied, 2400u);
 }
 
 }  // namespace
