@@ -5,6 +5,7 @@
 // by heslam-occupancy-compare in docs/occupancy.md.
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <string>
 #include <utility>
 #include <vector>
@@ -33,8 +34,11 @@ struct Room {
   PinholeStereo camera;
   std::vector<Keyframe> keyframes;
   OccupancyGrid truth;
-  OccupancyGrid seen;  // the part of the truth the keyframes see within max_depth_m
+  OccupancyGrid seen;            // the part of the truth the keyframes see within max_depth_m
+  double disparity_cpu_s = 0.0;  // SGBM's process CPU time over the keyframes (printed, never asserted)
 };
+
+double cpu_s() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
 // Every `stride`-th frame of the room as a keyframe at its true pose (world = the first left camera),
 // with its disparity: the renderer's depth, or SGBM of the rendered ideal pinhole pair.
@@ -68,7 +72,9 @@ Room render_room(DepthSource source, int stride, const DenseStereoOptions& stere
       }
     } else {
       const synth::SynthFrame frame = renderer.render_frame(index);
+      const double start = cpu_s();
       keyframe.disparity = stereo.disparity(frame.left, frame.right);
+      room.disparity_cpu_s += cpu_s() - start;
     }
     room.keyframes.push_back(std::move(keyframe));
   }
@@ -83,12 +89,22 @@ std::pair<GridAgreement, GridAgreement> fuse_room(const Room& room, const DenseS
   const DenseStereo stereo(room.camera, stereo_options);
   OccupancyMap map(map_options);
   std::uint64_t id = 0;
+  double cloud_cpu_s = 0.0, fusion_cpu_s = 0.0;
   for (const Keyframe& keyframe : room.keyframes) {
     map.set_pose(id, keyframe.T_c0c);
-    map.add_cloud(id, KeyframeCloud{0, stereo.cloud_from_disparity(keyframe.disparity)});
+    const double start = cpu_s();
+    KeyframeCloud cloud{0, stereo.cloud_from_disparity(keyframe.disparity)};
+    const double fusion_start = cpu_s();
+    map.add_cloud(id, std::move(cloud));
     map.fuse_pending();
+    cloud_cpu_s += fusion_start - start;
+    fusion_cpu_s += cpu_s() - fusion_start;
     ++id;
   }
+  const double n = static_cast<double>(room.keyframes.size());
+  std::printf("%s: CPU per keyframe: disparity %.1f ms, cloud %.1f ms (%.0f points), fusion %.1f ms\n", label.c_str(),
+              1e3 * room.disparity_cpu_s / n, 1e3 * cloud_cpu_s / n, static_cast<double>(map.cloud_points()) / n,
+              1e3 * fusion_cpu_s / n);
   const OccupancyGrid grid = map.grid();
   const GridAgreement a = compare(grid, room.truth);
   const GridAgreement b = compare(grid, room.seen);
