@@ -63,7 +63,9 @@ TEST(VoxelMap, TraversesADiagonalRayThroughFaceNeighbours) {
 }
 
 TEST(VoxelMap, HitEndsTheRayFreeBeforeIt) {
-  VoxelMap map;
+  VoxelMapOptions options;
+  options.free_margin_m = 0.0;  // OctoMap's rays: free up to the hit's voxel
+  VoxelMap map(options);
   const std::vector<Eigen::Vector3f> point{{0.525f, 0.025f, 0.025f}};
   EXPECT_EQ(map.integrate({0.025, 0.025, 0.025}, point), 1u);
   for (int i = 0; i < 10; ++i) {
@@ -79,6 +81,21 @@ TEST(VoxelMap, HitEndsTheRayFreeBeforeIt) {
   EXPECT_FLOAT_EQ(map.log_odds({10, 0, 0}), map.options().max_log_odds);
   const std::vector<Eigen::Vector3f> bad{{NAN, 0.f, 0.f}};
   EXPECT_EQ(map.integrate({0, 0, 0}, bad), 0u);
+}
+
+TEST(VoxelMap, FreeSpaceEndsTheMarginBeforeTheHit) {
+  VoxelMap map;  // free_margin_m 0.2: a ray to x = 0.525 is free up to x = 0.325 (voxel 6), voxels 7..9 untouched
+  ASSERT_DOUBLE_EQ(map.options().free_margin_m, 0.2);
+  const std::vector<Eigen::Vector3f> point{{0.525f, 0.025f, 0.025f}};
+  EXPECT_EQ(map.integrate({0.025, 0.025, 0.025}, point), 1u);
+  for (int i = 0; i <= 6; ++i) EXPECT_TRUE(map.free({i, 0, 0})) << i;
+  for (int i = 7; i <= 9; ++i) EXPECT_FALSE(map.observed({i, 0, 0})) << i;
+  EXPECT_TRUE(map.occupied({10, 0, 0}));
+  // A point nearer than the margin: its hit only.
+  VoxelMap near;
+  EXPECT_EQ(near.integrate({0.025, 0.025, 0.025}, std::vector<Eigen::Vector3f>{{0.175f, 0.025f, 0.025f}}), 1u);
+  EXPECT_EQ(near.size(), 1u);
+  EXPECT_TRUE(near.occupied({3, 0, 0}));
 }
 
 TEST(VoxelMap, OneUpdatePerVoxelPerImage) {
@@ -268,8 +285,11 @@ TEST(DenseStereo, KnownDisparityGivesKnownDepth) {
   for (const auto& p : cloud) depths.push_back(p.z());
   std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
   EXPECT_NEAR(depths[depths.size() / 2], 2.0f, 0.01f);
-  // Thinned (the default): one finite point per 5 cm cube, at the same depth.
-  const DenseStereo thinned(camera, DenseStereoOptions{});
+  // Thinned (the default 5 cm): one finite point per cube, at the same depth (every 4th pixel: this
+  // smooth texture leaves single pixels ~1 px off, 0.1 m at 2 m, that a cube of few pixels would show).
+  DenseStereoOptions thin_options;
+  thin_options.pixel_step = 4;
+  const DenseStereo thinned(camera, thin_options);
   const std::vector<Eigen::Vector3f> thin_cloud = thinned.cloud(left, right);
   ASSERT_FALSE(thin_cloud.empty());
   for (const auto& p : thin_cloud) {

@@ -36,6 +36,9 @@ struct Arguments {
   double occupancy_resolution_m = 0.05;
   double occupancy_band_min_m = -0.7;
   double occupancy_band_max_m = 0.3;
+  bool occupancy_seen = false;
+  double occupancy_max_depth_m = 5.0;
+  int occupancy_seen_stride = 2;
 };
 
 heslam::runtime::Flags synth_flags(Arguments& a) {
@@ -70,6 +73,12 @@ heslam::runtime::Flags synth_flags(Arguments& a) {
       .number("--occupancy-band-min", "M", &a.occupancy_band_min_m, -1000.0, 1000.0,
               "its height band, along -y of the first camera (-0.7, as heslam-occupancy's grid.band_min_m)")
       .number("--occupancy-band-max", "M", &a.occupancy_band_max_m, -1000.0, 1000.0, "(0.3, grid.band_max_m)")
+      .toggle("--occupancy-seen", &a.occupancy_seen,
+              "the truth is only what the left camera sees within --occupancy-max-depth on the path\n"
+              "(every --occupancy-seen-stride-th frame): the cells a mapper can find at best")
+      .number("--occupancy-max-depth", "M", &a.occupancy_max_depth_m, 0.01, 1000.0,
+              "with --occupancy-seen (5, as heslam-occupancy's stereo.max_depth_m)")
+      .integer("--occupancy-seen-stride", "N", &a.occupancy_seen_stride, 1, 1000, "with --occupancy-seen (2)")
       .toggle("--quiet", &a.quiet, "no progress and no summary line")
       .alias("-q")
       .toggle("--list", &a.list, "the built-in presets, one a line: frames, duration, distance travelled, purpose")
@@ -144,7 +153,10 @@ int main(int argc, char** argv) {
     if (!arguments.occupancy_gt.empty()) {
       const heslam::GridBand band{arguments.occupancy_band_min_m, arguments.occupancy_band_max_m};
       const heslam::OccupancyGrid truth =
-          occupancy_truth(renderer.scene(), renderer.T_wc_left(0), arguments.occupancy_resolution_m, band);
+          arguments.occupancy_seen
+              ? occupancy_truth_seen(renderer, arguments.occupancy_seen_stride, arguments.occupancy_max_depth_m,
+                                     arguments.occupancy_resolution_m, band)
+              : occupancy_truth(renderer.scene(), renderer.T_wc_left(0), arguments.occupancy_resolution_m, band);
       truth.write_map_server(arguments.occupancy_gt);
       if (!quiet) {
         std::fprintf(stderr, "heslam-synth: wrote %s.pgm/.yaml (%zu occupied cells)\n", arguments.occupancy_gt.c_str(),

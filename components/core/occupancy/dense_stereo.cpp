@@ -1,10 +1,11 @@
 // Dense stereo depth (see dense_stereo.hpp).
 #include "components/core/occupancy/dense_stereo.hpp"
 
+#include <algorithm>
 #include <cmath>
-#include <map>
+#include <cstdint>
 #include <stdexcept>
-#include <tuple>
+#include <utility>
 
 #include <opencv2/calib3d.hpp>
 
@@ -16,6 +17,10 @@ constexpr int kP1PerPixel = 8;
 constexpr int kP2PerPixel = 32;
 // StereoSGBM returns fixed-point disparities with 4 fractional bits.
 constexpr double kDisparityScale = 16.0;
+// Thinning cubes packed 21 bits per axis (+-2^20 cubes: +-52 km at 5 cm).
+constexpr int kCubeBits = 21;
+constexpr double kCubeOffset = static_cast<double>(1 << (kCubeBits - 1));
+constexpr std::uint64_t kCubeMask = (std::uint64_t{1} << kCubeBits) - 1;
 
 [[noreturn]] void fail(const std::string& source, const std::string& field, const std::string& expected) {
   throw std::runtime_error(source + ": " + field + " must be " + expected);
@@ -68,35 +73,39 @@ cv::Mat DenseStereo::disparity(const cv::Mat& left, const cv::Mat& right) const 
 std::vector<Eigen::Vector3f> DenseStereo::cloud_from_disparity(const cv::Mat& disparity) const {
   const double bf = camera_.bf();
   const int step = options_.pixel_step;
-  // Thinning: mean of the points per lattice cube, in a sorted map so the output order is fixed.
-  std::map<std::tuple<int, int, int>, std::pair<Eigen::Vector3d, int>> cubes;
+  const double r = options_.thin_voxel_m;
+  // Thinning: the points keyed by their lattice cube (x, y, z packed most significant first, so the
+  // key order is the cubes' lexicographic order and the output order is fixed), sorted, one mean per cube.
+  std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> keyed;
   std::vector<Eigen::Vector3f> points;
+  auto axis = [](double value) { return static_cast<std::uint64_t>(std::floor(value) + kCubeOffset) & kCubeMask; };
+  // The left num_disparities columns: their match may lie left of the right image, where SGBM
+  // still answers with a smaller (wrong) disparity, i.e. a point too far.
+  const int first_column = options_.num_disparities;
   for (int v = 0; v < disparity.rows; v += step) {
     const float* row = disparity.ptr<float>(v);
-    for (int u = 0; u < disparity.cols; u += step) {
+    for (int u = first_column; u < disparity.cols; u += step) {
       const double d = row[u];
       if (!(d > 0.0)) continue;
       const double z = bf / d;
       if (z < options_.min_depth_m || z > options_.max_depth_m) continue;
       const Eigen::Vector3d p = camera_.unproject(u, v, z);
-      if (options_.thin_voxel_m <= 0.0) {
+      if (r <= 0.0) {
         points.push_back(p.cast<float>());
         continue;
       }
-      const double r = options_.thin_voxel_m;
-      // Zero-initialised: Eigen's default constructor leaves the sum undefined.
-      auto& cube = cubes
-                       .try_emplace({static_cast<int>(std::floor(p.x() / r)), static_cast<int>(std::floor(p.y() / r)),
-                                     static_cast<int>(std::floor(p.z() / r))},
-                                    Eigen::Vector3d::Zero(), 0)
-                       .first->second;
-      cube.first += p;
-      ++cube.second;
+      keyed.emplace_back((axis(p.x() / r) << (2 * kCubeBits)) | (axis(p.y() / r) << kCubeBits) | axis(p.z() / r), p);
     }
   }
-  if (options_.thin_voxel_m <= 0.0) return points;
-  points.reserve(cubes.size());
-  for (const auto& [index, sum] : cubes) points.push_back((sum.first / sum.second).cast<float>());
+  if (r <= 0.0) return points;
+  std::stable_sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (std::size_t begin = 0; begin < keyed.size();) {
+    std::size_t end = begin;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (; end < keyed.size() && keyed[end].first == keyed[begin].first; ++end) sum += keyed[end].second;
+    points.push_back((sum / static_cast<double>(end - begin)).cast<float>());
+    begin = end;
+  }
   return points;
 }
 

@@ -126,7 +126,10 @@ std::size_t VoxelMap::integrate(const Eigen::Vector3d& origin, std::span<const E
     ++used;
     const std::uint64_t end_key = key(index_of(point));
     hits.push_back(end_key);
-    walk(options_.resolution_m, origin, point, [&](int x, int y, int z) {
+    const double length = (point - origin).norm();
+    if (length <= options_.free_margin_m) continue;
+    const Eigen::Vector3d free_end = origin + (point - origin) * ((length - options_.free_margin_m) / length);
+    walk(options_.resolution_m, origin, free_end, [&](int x, int y, int z) {
       const std::uint64_t k = key({x, y, z});
       if (k != end_key) misses.push_back(k);
       return true;

@@ -24,6 +24,10 @@ struct VoxelMapOptions {
   float max_log_odds = 3.476f;
   // A voxel is occupied above this log-odds (p > 0.5) and free below -this.
   float occupied_log_odds = 0.0f;
+  // Free space ends this far before each point: the voxels a ray crosses just before its hit often
+  // hold the same surface (a ray at a grazing angle runs through the surface's voxel layer for
+  // resolution / sin(angle)), and marking them free carves the surface away. 0: OctoMap's rays.
+  double free_margin_m = 0.2;
   // Points farther than this from the ray's origin are not used (a bound on the work per point).
   double max_ray_m = 50.0;
 };

@@ -1,0 +1,155 @@
+// The occupancy map's quality on the synthetic room with exact geometry, each stage on its own so that a
+// low IoU can be pinned on one of them: the ground-truth depth the renderer knows (the fusion, the grid
+// and the truth's convention alone), then the dense stereo of the rendered pair (SGBM's noise added),
+// both at the ground-truth poses (no SLAM pose error). The full pipeline (poses from SLAM) is scored
+// by heslam-occupancy-compare in docs/occupancy.md.
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+#include "components/core/occupancy/dense_stereo.hpp"
+#include "components/core/occupancy/occupancy_grid.hpp"
+#include "components/core/occupancy/occupancy_map.hpp"
+#include "tools/synth/occupancy_truth.hpp"
+#include "tools/synth/preset.hpp"
+#include "tools/synth/sequence.hpp"
+
+namespace heslam {
+namespace {
+
+enum class DepthSource { kTruth, kStereo };
+
+struct Keyframe {
+  Pose3 T_c0c;
+  cv::Mat disparity;
+};
+
+struct Room {
+  PinholeStereo camera;
+  std::vector<Keyframe> keyframes;
+  OccupancyGrid truth;
+  OccupancyGrid seen;            // the part of the truth the keyframes see within max_depth_m
+  double disparity_cpu_s = 0.0;  // SGBM's process CPU time over the keyframes (printed, never asserted)
+};
+
+double cpu_s() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+
+// Every `stride`-th frame of the room as a keyframe at its true pose (world = the first left camera),
+// with its disparity: the renderer's depth, or SGBM of the rendered ideal pinhole pair.
+Room render_room(DepthSource source, int stride, const DenseStereoOptions& stereo_options, const GridBand& band,
+                 double resolution_m) {
+  synth::RenderOptions render;
+  render.apply_distortion = false;  // ideal pinhole pairs: rectified as the process sees them
+  synth::SequenceRenderer renderer(synth::load_preset(synth::find_preset("room")), render);
+  const synth::CameraSpec& spec = renderer.preset().camera;
+  Room room;
+  room.camera.fx_px = spec.fx_px;
+  room.camera.fy_px = spec.fy_px;
+  room.camera.cx_px = spec.cx_px;
+  room.camera.cy_px = spec.cy_px;
+  room.camera.baseline_m = spec.baseline_m;
+  room.camera.width_px = spec.width_px;
+  room.camera.height_px = spec.height_px;
+  const DenseStereo stereo(room.camera, stereo_options);
+  const Pose3 T_c0w = renderer.T_wc_left(0).inverse();
+  for (int index = 0; index < renderer.num_frames(); index += stride) {
+    Keyframe keyframe{T_c0w * renderer.T_wc_left(index), {}};
+    if (source == DepthSource::kTruth) {
+      cv::Mat radiance, depth;
+      renderer.render_radiance_left(index, radiance, &depth);
+      keyframe.disparity = cv::Mat(depth.size(), CV_32F, cv::Scalar(-1.f));
+      for (int v = 0; v < depth.rows; ++v) {
+        for (int u = 0; u < depth.cols; ++u) {
+          const float z = depth.at<float>(v, u);
+          if (z > 0.f) keyframe.disparity.at<float>(v, u) = static_cast<float>(room.camera.bf() / z);
+        }
+      }
+    } else {
+      const synth::SynthFrame frame = renderer.render_frame(index);
+      const double start = cpu_s();
+      keyframe.disparity = stereo.disparity(frame.left, frame.right);
+      room.disparity_cpu_s += cpu_s() - start;
+    }
+    room.keyframes.push_back(std::move(keyframe));
+  }
+  room.truth = synth::occupancy_truth(renderer.scene(), renderer.T_wc_left(0), resolution_m, band);
+  room.seen = synth::occupancy_truth_seen(renderer, stride, stereo_options.max_depth_m, resolution_m, band);
+  return room;
+}
+
+// The grid's agreement with the whole truth and with the seen truth.
+std::pair<GridAgreement, GridAgreement> fuse_room(const Room& room, const DenseStereoOptions& stereo_options,
+                                                  const OccupancyMapOptions& map_options, const std::string& label) {
+  const DenseStereo stereo(room.camera, stereo_options);
+  OccupancyMap map(map_options);
+  std::uint64_t id = 0;
+  double cloud_cpu_s = 0.0, fusion_cpu_s = 0.0;
+  for (const Keyframe& keyframe : room.keyframes) {
+    map.set_pose(id, keyframe.T_c0c);
+    const double start = cpu_s();
+    KeyframeCloud cloud{0, stereo.cloud_from_disparity(keyframe.disparity)};
+    const double fusion_start = cpu_s();
+    map.add_cloud(id, std::move(cloud));
+    map.fuse_pending();
+    cloud_cpu_s += fusion_start - start;
+    fusion_cpu_s += cpu_s() - fusion_start;
+    ++id;
+  }
+  const double n = static_cast<double>(room.keyframes.size());
+  std::printf("%s: CPU per keyframe: disparity %.1f ms, cloud %.1f ms (%.0f points), fusion %.1f ms\n", label.c_str(),
+              1e3 * room.disparity_cpu_s / n, 1e3 * cloud_cpu_s / n, static_cast<double>(map.cloud_points()) / n,
+              1e3 * fusion_cpu_s / n);
+  const OccupancyGrid grid = map.grid();
+  const GridAgreement a = compare(grid, room.truth);
+  const GridAgreement b = compare(grid, room.seen);
+  if (const char* dir = std::getenv("HESLAM_OCCUPANCY_DIAG_DIR")) {
+    grid.write_map_server(std::string(dir) + "/" + label);
+    room.truth.write_map_server(std::string(dir) + "/room_gt");
+    room.seen.write_map_server(std::string(dir) + "/room_gt_seen");
+  }
+  std::printf(
+      "%s, %zu keyframes at true poses: occupied IoU %.4f (%zu of %zu truth cells, %zu grid cells), "
+      "truth-occupied free %zu, unknown %zu\n",
+      label.c_str(), room.keyframes.size(), a.occupied_iou, a.both_occupied, a.truth_occupied, a.grid_occupied,
+      a.free_in_truth_occupied, a.truth_occupied_unknown);
+  std::printf("%s against the seen truth: occupied IoU %.4f (%zu of %zu), free %zu, unknown %zu\n", label.c_str(),
+              b.occupied_iou, b.both_occupied, b.truth_occupied, b.free_in_truth_occupied, b.truth_occupied_unknown);
+  std::fflush(stdout);
+  return {a, b};
+}
+
+// 25 keyframes (every 24th frame of 600): enough views of every wall, and the test stays short.
+constexpr int kStride = 24;
+
+// The fusion, the grid and the truth alone: exact depth at exact poses finds the seen walls and box
+// tops (seen-truth IoU 0.965, 2676 of 2773 cells, none outside the truth; 51 seen cells free where a
+// box top or wall is only seen at grazing angles), where every 4th pixel found 0.79. The whole truth
+// (IoU 0.70) also counts the table no keyframe looks at.
+TEST(OccupancyQuality, RoomFromTrueDepthAtTruePoses) {
+  const OccupancyMapOptions map_options;
+  const Room room = render_room(DepthSource::kTruth, kStride, {}, map_options.band, map_options.voxels.resolution_m);
+  const GridAgreement seen = fuse_room(room, {}, map_options, "room_truth_depth").second;
+  EXPECT_GE(seen.occupied_iou, 0.95);
+  EXPECT_EQ(seen.grid_occupied, seen.both_occupied) << "true depth marks no cell outside the truth";
+  EXPECT_LE(seen.free_in_truth_occupied, 60u);
+}
+
+// SGBM's noise added (still at the true poses): seen-truth IoU 0.302 (2501 of 2773 seen cells found,
+// but 7999 grid cells: a fringe of false hits 0.1-0.5 m in front of the walls), 228 seen wall cells
+// free. This is the stage that misses the target (0.85); the floor here guards against it getting worse.
+TEST(OccupancyQuality, RoomFromStereoAtTruePoses) {
+  const OccupancyMapOptions map_options;
+  const Room room = render_room(DepthSource::kStereo, kStride, {}, map_options.band, map_options.voxels.resolution_m);
+  const GridAgreement seen = fuse_room(room, {}, map_options, "room_sgbm").second;
+  EXPECT_GE(seen.occupied_iou, 0.28);
+  EXPECT_GE(seen.both_occupied, 2400u);
+}
+
+}  // namespace
+}  // namespace heslam
