@@ -65,9 +65,8 @@ map_file=$out/trajectory.map
 rm -rf "$out/logs" "$trajectory" "$out"/trajectory.* "$out/status.csv" "$out/laps.csv" "$out/long_run.svg"
 
 # The status stream as CSV rows; the spy's own status is left out.
-collect() {
-  "$bin/heslam-spy" echo system/status --domain "$domain" --name long_run_spy --log-level warn |
-    awk -v start="$(date +%s.%N)" -v map_file="$map_file" -v OFS=, '
+parse_status() {
+  awk -v start="$(date +%s.%N)" -v map_file="$map_file" -v OFS=, '
       function flush(   bytes, line) {
         if (name == "" || name == "long_run_spy") return
         bytes = ""
@@ -100,7 +99,8 @@ collect() {
       }
       END { flush() }' >"$out/status.csv"
 }
-collect &
+# The spy's own pid, so that it is the one stopped (it holds whatever the caller holds, e.g. a domain lock).
+"$bin/heslam-spy" echo system/status --domain "$domain" --name long_run_spy --log-level warn > >(parse_status) &
 collector=$!
 trap 'kill "$collector" 2>/dev/null || true' EXIT
 
@@ -112,6 +112,7 @@ status=0
 sleep 2  # the last status samples
 kill "$collector" 2>/dev/null || true
 wait "$collector" 2>/dev/null || true
+sleep 1  # the parser writes its last rows
 trap - EXIT
 wall=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
 echo "# wall ${wall} s, load average at the end $(cut -d' ' -f1-3 /proc/loadavg)"
