@@ -17,7 +17,8 @@
 # local mapper, the map's keyframes and points (counters map_*_added - map_*_removed), its time per
 # keyframe (stage mapping_total, p50) and its map save (stage map_save, p50), with the size of the map
 # file it keeps (STEM.map, saved after every keyframe). Then:
-#   OUT_DIR/laps.csv   per lap (at the frontend's frame count k * lap_frames): map keyframes, points,
+#   OUT_DIR/laps.csv   per lap (at the frontend's frame count k * lap_frames; in real time the frames it
+#                      missed are not counted, so there a lap row comes a little late): map keyframes, points,
 #                      map file size, map save p50, RSS of every process
 #   OUT_DIR/long_run.svg  the same against elapsed time (tools/bench/long_run_plot.sh)
 # and a growth line per further lap (lap k against lap k-1, from lap 2 on; the bounds of issue 41:
@@ -47,14 +48,17 @@ for value in "$frames" "$domain" "$lap_frames"; do
   [[ $value =~ ^[0-9]+$ ]] || { echo "long_run.sh: '$value' is not a non-negative integer" >&2; exit 2; }
 done
 [[ $lap_frames -gt 0 ]] || { echo "long_run.sh: --lap-frames must be positive" >&2; exit 2; }
-[[ -d $dataset/mav0/cam0 ]] || { echo "long_run.sh: dataset '$dataset' is not a EuRoC-layout folder (mav0/cam0)" >&2; exit 2; }
+[[ -d $dataset/mav0/cam0 ]] ||
+  { echo "long_run.sh: dataset '$dataset' is not a EuRoC-layout folder (mav0/cam0)" >&2; exit 2; }
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
 rate_hz=$(awk '/^rate_hz:/ { print $2 }' "$dataset/mav0/cam0/sensor.yaml")
 [[ -n $rate_hz ]] || { echo "long_run.sh: $dataset/mav0/cam0/sensor.yaml: no rate_hz" >&2; exit 2; }
 
 duration=()
-[[ $frames -gt 0 ]] && duration=(--arg duration_s="$(awk -v n="$frames" -v r="$rate_hz" 'BEGIN { printf "%.3f", (n - 0.5) / r }')")
+if [[ $frames -gt 0 ]]; then
+  duration=(--arg duration_s="$(awk -v n="$frames" -v r="$rate_hz" 'BEGIN { printf "%.3f", (n - 0.5) / r }')")
+fi
 if [[ $lockstep == 1 ]]; then
   pipeline=(config/pipelines/synth.yaml)
 else
@@ -104,7 +108,9 @@ parse_status() {
 collector=$!
 trap 'kill "$collector" 2>/dev/null || true' EXIT
 
-echo "# $(date -u '+%F %T') UTC, load average $(cut -d' ' -f1-3 /proc/loadavg), $( [[ $lockstep == 1 ]] && echo lockstep || echo real time), dataset $dataset, frames ${frames:-all}"
+mode=$( [[ $lockstep == 1 ]] && echo lockstep || echo "real time")
+echo "# $(date -u '+%F %T') UTC, load average $(cut -d' ' -f1-3 /proc/loadavg), $mode"
+echo "# dataset $dataset, frames $frames (0: all)"
 start=$(date +%s.%N)
 status=0
 (cd "$root" && "$bin/heslam-supervisor" "${pipeline[@]}" --domain "$domain" --log-dir "$out/logs" \

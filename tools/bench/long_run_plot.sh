@@ -28,7 +28,8 @@ awk -F, '
     split("map keyframes|map points|RSS (MiB)|time (ms)", title, "|")
     split("#1f77b4 #d62728 #2ca02c #ff7f0e #9467bd #8c564b #e377c2 #7f7f7f #17becf", colour, " ")
     if (xmax <= 0) xmax = 1
-    printf "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" font-family=\"sans-serif\" font-size=\"12\">\n", W, 4 * H
+    printf "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\"", W, 4 * H
+    printf " font-family=\"sans-serif\" font-size=\"12\">\n"
     printf "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n"
     for (p = 1; p <= 4; ++p) {
       y0 = (p - 1) * H; pw = W - L - R; ph = H - T - B
@@ -50,5 +51,6 @@ awk -F, '
         printf "<text x=\"%d\" y=\"%d\" fill=\"%s\">%s</text>\n", L + pw + 10, y0 + T + 14 * s, c, label
       }
     }
-    printf "<text x=\"%d\" y=\"%d\" text-anchor=\"middle\">elapsed wall time</text>\n</svg>\n", L + (W - L - R) / 2, 4 * H - 6
+    printf "<text x=\"%d\" y=\"%d\" text-anchor=\"middle\">elapsed wall time</text>\n", L + (W - L - R) / 2, 4 * H - 6
+    printf "</svg>\n"
   }' "$csv"
