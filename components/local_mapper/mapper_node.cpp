@@ -344,6 +344,18 @@ void MapperNode::record(const MapChanges& changes) {
   if (c.bundle_adjustment_aborted) stats().count("ba_stopped_early");
   stats().count("late_keyframes_moved", static_cast<std::uint64_t>(c.late_keyframes_moved));
   stats().count("rejected_observations", static_cast<std::uint64_t>(c.rejected_observations));
+  // The map's size (keyframes not culled, points) as two monotonic counters each, X_added - X_removed:
+  // a status reader (tools/bench/long_run.sh) follows the map's growth on long runs.
+  std::uint64_t keyframes = 0;
+  for (const auto& [id, keyframe] : mapper_->map().keyframes) keyframes += keyframe.culled ? 0 : 1;
+  report_size("map_keyframes", keyframes, reported_keyframes_);
+  report_size("map_points", mapper_->map().points.size(), reported_points_);
+}
+
+void MapperNode::report_size(const std::string& name, std::uint64_t now, std::uint64_t& reported) {
+  if (now > reported) stats().count(name + "_added", now - reported);
+  if (now < reported) stats().count(name + "_removed", reported - now);
+  reported = now;
 }
 
 void MapperNode::save() {

@@ -53,6 +53,7 @@ class MapperNode : public runtime::Component {
   void apply_corrections();
 
   void record(const MapChanges& changes);
+  void report_size(const std::string& name, std::uint64_t now, std::uint64_t& reported);
   void save();
   // `correction_id`: the changes are that loop correction's (marked on the version marker).
   void publish(const MapChanges& changes, std::uint64_t correction_id = 0);
@@ -91,6 +92,9 @@ class MapperNode : public runtime::Component {
   int unsaved_keyframes_ = 0;
   bool reader_wait_done_ = false;
   MapFileWriteStats last_save_;
+  // The map's size as last reported in the status (record(): counters MAP_added / MAP_removed).
+  std::uint64_t reported_keyframes_ = 0;
+  std::uint64_t reported_points_ = 0;
 
   std::vector<msg::CovisibleKeyframe> covisible_buffer_;
   std::vector<msg::PointObservation> observation_buffer_;

@@ -47,7 +47,11 @@ TEST(KeyframeCulling, CullsSequentiallyUntilPointsNeedTheRest) {
     const Keyframe& kf = truth.map.keyframes.at(id);
     EXPECT_TRUE(kf.culled);
     EXPECT_TRUE(kf.covisible.empty());
-    EXPECT_TRUE(std::all_of(kf.point_ids.begin(), kf.point_ids.end(), [](PointId p) { return p == kNoId; }));
+    // Its features are released (issue 41): only the pose and parent of a culled keyframe are used.
+    EXPECT_TRUE(kf.point_ids.empty());
+    EXPECT_EQ(kf.features.size(), 0u);
+    EXPECT_TRUE(kf.features.descriptors.empty() && kf.features.depth_m.empty() && kf.features.u_right_px.empty());
+    EXPECT_EQ(kf.features.pyramid.levels, truth.map.keyframes.at(8).features.pyramid.levels);
   }
   // Survivors' parents are live keyframes.
   for (KeyframeId id = 2; id <= 8; ++id) {

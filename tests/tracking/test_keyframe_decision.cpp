@@ -1,11 +1,17 @@
 // Keyframe decision: ORB-SLAM2's stereo rules on hand-made counts.
 #include <gtest/gtest.h>
 
+#include <cstdint>
+
+#include <Eigen/Geometry>
+
 #include "components/core/tracking/keyframe_decision.hpp"
 #include "synthetic_scene.hpp"
 
 namespace heslam {
 namespace {
+
+constexpr double kPi = 3.14159265358979323846;
 
 // A frame with `tracked` close tracked stereo points, `untracked` close untracked ones.
 Frame make_counted_frame(const PinholeStereo& camera, int tracked, int untracked) {
@@ -164,6 +170,56 @@ TEST(KeyframeDecision, ReferencePointsCountedByObservationWeightWithAMapper) {
   EXPECT_EQ(count_reference_points(reference, map, 3, ObservationCount::weighted), 2);
   EXPECT_EQ(count_reference_points(reference, map, 3, ObservationCount::keyframes), 0);
   EXPECT_EQ(count_reference_points(reference, map, 2, ObservationCount::keyframes), 2);
+}
+
+// Revisits (issue 41): a keyframe made long before, near the frame's pose and looking the same way,
+// covers it; recent keyframes, far ones, ones looking elsewhere and culled ones do not.
+TEST(KeyframeDecision, RevisitCoveredByAnOldNearKeyframeOnly) {
+  const PinholeStereo camera = test::synthetic_camera();  // baseline 0.11 m: covered within 0.33 m
+  TrackerOptions options;                                 // 10 s, 3 baselines, 15 degrees
+  Frame frame = make_counted_frame(camera, 60, 200);
+  frame.stamp_ns = 60'000'000'000;
+  frame.T_wc.translation() = Eigen::Vector3d(1.0, 2.0, 0.5);
+  Map map;
+  auto add = [&](KeyframeId id, double age_s, const Eigen::Vector3d& offset, double yaw_deg) {
+    Keyframe& kf = map.keyframes[id];
+    kf.id = id;
+    kf.stamp_ns = frame.stamp_ns - static_cast<std::int64_t>(age_s * 1e9);
+    kf.T_wc = frame.T_wc;
+    kf.T_wc.translation() += offset;
+    kf.T_wc.linear() =
+        frame.T_wc.linear() * Eigen::AngleAxisd(yaw_deg * kPi / 180.0, Eigen::Vector3d::UnitY()).matrix();
+    return &kf;
+  };
+  add(1, 5.0, Eigen::Vector3d(0.1, 0, 0), 0.0);    // too recent
+  add(2, 30.0, Eigen::Vector3d(0.4, 0, 0), 0.0);   // too far (0.4 > 0.33 m)
+  add(3, 30.0, Eigen::Vector3d(0.1, 0, 0), 20.0);  // looks 20 degrees away
+  add(4, 30.0, Eigen::Vector3d(0, 0.2, 0), 5.0)->culled = true;
+  EXPECT_FALSE(revisit_covered(frame, map, camera, options));
+  add(5, 10.5, Eigen::Vector3d(0, 0.3, 0), 12.0);  // old enough, 0.3 m, 12 degrees
+  EXPECT_TRUE(revisit_covered(frame, map, camera, options));
+  options.revisit_min_age_s = 0.0;  // off
+  EXPECT_FALSE(revisit_covered(frame, map, camera, options));
+}
+
+// A covered frame makes no keyframe where the close-point rule would make one, but weak tracking
+// (under a quarter of the reference keyframe's points) still does.
+TEST(KeyframeDecision, RevisitSuppressesAKeyframeUnlessTrackingIsWeak) {
+  const PinholeStereo camera = test::synthetic_camera();
+  const Frame frame = make_counted_frame(camera, 60, 200);
+  KeyframeDecisionInput input;
+  input.frames_since_keyframe = 3;
+  input.tracked_inliers = 60;
+  input.keyframes_in_map = 5;
+  input.reference_tracked_points = 70;
+  input.revisit_covered = true;
+  KeyframeDecision decision = decide_keyframe(frame, camera, input, TrackerOptions{});
+  EXPECT_FALSE(decision.insert);
+  EXPECT_TRUE(decision.covered);
+  input.reference_tracked_points = 300;  // 60 < 0.25 * 300: weak
+  decision = decide_keyframe(frame, camera, input, TrackerOptions{});
+  EXPECT_TRUE(decision.insert);
+  EXPECT_FALSE(decision.covered);
 }
 
 }  // namespace

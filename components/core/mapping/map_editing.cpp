@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace heslam {
 
@@ -130,6 +131,13 @@ void cull_keyframe(Map& map, KeyframeId kf_id, MapChanges& changes) {
 
   kf->covisible.clear();
   kf->culled = true;
+  // Only its pose and parent are used from now on (the trajectory of the frames that referenced it,
+  // correction of its pose): its features would otherwise grow the mapper's memory and map file with
+  // every keyframe ever made instead of every keyframe kept (issue 41, docs/mapping.md).
+  StereoFeatures released;
+  released.pyramid = kf->features.pyramid;
+  kf->features = std::move(released);
+  kf->point_ids = {};
   changed_keyframes.insert(kf_id);
 }
 

@@ -1,12 +1,16 @@
 // ORB-SLAM2's stereo keyframe rules.
 #include "components/core/tracking/keyframe_decision.hpp"
 
+#include <cmath>
+#include <cstdint>
+
 namespace heslam {
 namespace {
 
 // Stereo: insert also when tracking is thin, below this fraction of the reference keyframe's points.
 constexpr float kWeakTrackingRatio = 0.25f;
 constexpr int kTinyMapKeyframes = 2;
+constexpr double kPi = 3.14159265358979323846;
 
 // A reference point's observations in the given unit.
 int observations(const Map& map, const MapPoint& point, ObservationCount unit) {
@@ -46,6 +50,20 @@ int count_tracked_near_clip(const Frame& frame) {
   return count;
 }
 
+bool revisit_covered(const Frame& frame, const Map& map, const PinholeStereo& camera, const TrackerOptions& options) {
+  if (options.revisit_min_age_s <= 0.0) return false;
+  const auto newest_ns = frame.stamp_ns - static_cast<std::int64_t>(options.revisit_min_age_s * 1e9);
+  const double max_distance_m = options.revisit_max_distance_baselines * camera.baseline_m;
+  const double min_cos = std::cos(options.revisit_max_angle_deg * kPi / 180.0);
+  const Eigen::Vector3d axis = frame.T_wc.linear().col(2);
+  for (const auto& [id, keyframe] : map.keyframes) {
+    if (keyframe.culled || keyframe.stamp_ns > newest_ns) continue;
+    if ((keyframe.T_wc.translation() - frame.T_wc.translation()).norm() > max_distance_m) continue;
+    if (keyframe.T_wc.linear().col(2).dot(axis) >= min_cos) return true;
+  }
+  return false;
+}
+
 KeyframeDecision decide_keyframe(const Frame& frame, const PinholeStereo& camera, const KeyframeDecisionInput& input,
                                  const TrackerOptions& options) {
   KeyframeDecision decision;
@@ -82,6 +100,11 @@ KeyframeDecision decide_keyframe(const Frame& frame, const PinholeStereo& camera
   // A busy mapper would be interrupted in ORB-SLAM2; stereo still inserts (its queue is short), so the
   // mapper state only gates c1b here.
   decision.insert = (c1a || c1b || c1c) && c2;
+  // A place mapped before: the map has its keyframes; only weak tracking still asks for one.
+  if (decision.insert && input.revisit_covered && !(tracked < reference * kWeakTrackingRatio)) {
+    decision.insert = false;
+    decision.covered = true;
+  }
   return decision;
 }
 

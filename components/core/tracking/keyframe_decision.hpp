@@ -19,12 +19,15 @@ struct KeyframeDecisionInput {
   int tracked_inliers_near_clip = 0;
   int reference_points_near_clip = 0;
   bool mapper_idle = true;
+  // The frame is near a keyframe made long before it (TrackerOptions::revisit_*; revisit_covered()).
+  bool revisit_covered = false;
 };
 
 struct KeyframeDecision {
   bool insert = false;
   int tracked_close = 0;    // close stereo features matched to map points
   int untracked_close = 0;  // close stereo features that would become new points
+  bool covered = false;     // the rules asked for a keyframe, but the place is mapped (revisit_covered)
 };
 
 // How a reference keyframe's point is counted against reference_min_observations.
@@ -48,6 +51,10 @@ int count_reference_points_near_clip(const Keyframe& reference, const Map& map, 
                                      ObservationCount unit);
 // The frame's matched map points whose feature is near a clip edge.
 int count_tracked_near_clip(const Frame& frame);
+
+// Whether a keyframe (not culled) made at least options.revisit_min_age_s before the frame is within
+// options.revisit_max_distance_baselines baselines and options.revisit_max_angle_deg of its pose.
+bool revisit_covered(const Frame& frame, const Map& map, const PinholeStereo& camera, const TrackerOptions& options);
 
 KeyframeDecision decide_keyframe(const Frame& frame, const PinholeStereo& camera, const KeyframeDecisionInput& input,
                                  const TrackerOptions& options);

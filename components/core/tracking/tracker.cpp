@@ -358,6 +358,7 @@ void Tracker::maybe_insert_keyframe(Frame& frame, int inliers, TrackResult& resu
     input.tracked_inliers_near_clip = count_tracked_near_clip(frame);
   }
   input.mapper_idle = mapper_idle_ || options_.assume_mapper_idle;
+  input.revisit_covered = revisit_covered(frame, map_, camera_, options_);
   if (!decide_keyframe(frame, camera_, input, options_).insert) return;
 
   KeyframeCandidate candidate = make_keyframe(frame, camera_, map_, next_keyframe_id(), point_counter_, options_);

@@ -85,6 +85,14 @@ struct TrackerOptions {
   double reference_near_clip_weight = 1.0;
   float reference_ratio_single_keyframe = 0.4f;
   int min_keyframe_inliers = 15;
+  // Revisits (issue 41; not in ORB-SLAM2): a frame whose camera is within revisit_max_distance_baselines
+  // baselines and revisit_max_angle_deg (optical axes) of a keyframe made at least revisit_min_age_s
+  // earlier (a place mapped before, not the keyframes just made) makes no keyframe, unless its tracking
+  // is weak (fewer than a quarter of the reference keyframe's points): laps over mapped places then
+  // re-use the map instead of growing it with time. revisit_min_age_s 0: off.
+  double revisit_min_age_s = 10.0;
+  double revisit_max_distance_baselines = 3.0;
+  double revisit_max_angle_deg = 15.0;
   // Points created for a new keyframe: all close untracked ones, then far ones until this many in all.
   int new_keyframe_min_points = 100;
 
