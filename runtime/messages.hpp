@@ -10,6 +10,7 @@
 #include "idl/lockstep.h"
 #include "idl/loop.h"
 #include "idl/map.h"
+#include "idl/occupancy.h"
 #include "idl/odometry.h"
 #include "idl/status.h"
 
@@ -45,6 +46,8 @@ using KeyframeDone = heslam_msg_KeyframeDone;
 using StageStats = heslam_msg_StageStats;
 using Counter = heslam_msg_Counter;
 using ComponentStatus = heslam_msg_ComponentStatus;
+using OccupancyGrid2D = heslam_msg_OccupancyGrid2D;
+using DenseCloud = heslam_msg_DenseCloud;
 
 }  // namespace heslam::msg
 
@@ -73,6 +76,8 @@ HESLAM_RUNTIME_MESSAGE(heslam_msg_LoopCorrection, "LoopCorrection");
 HESLAM_RUNTIME_MESSAGE(heslam_msg_FrameDone, "FrameDone");
 HESLAM_RUNTIME_MESSAGE(heslam_msg_KeyframeDone, "KeyframeDone");
 HESLAM_RUNTIME_MESSAGE(heslam_msg_ComponentStatus, "ComponentStatus");
+HESLAM_RUNTIME_MESSAGE(heslam_msg_OccupancyGrid2D, "OccupancyGrid2D");
+HESLAM_RUNTIME_MESSAGE(heslam_msg_DenseCloud, "DenseCloud");
 
 #undef HESLAM_RUNTIME_MESSAGE
 

@@ -25,6 +25,8 @@ constexpr std::array kAllTopics{
     TopicEntry{topic_names::kFrameDone, "FrameDone", QosRole::kLockstep},
     TopicEntry{topic_names::kKeyframeDone, "KeyframeDone", QosRole::kLockstep},
     TopicEntry{topic_names::kStatus, "ComponentStatus", QosRole::kStatus},
+    TopicEntry{topic_names::kOccupancyGrid, "OccupancyGrid2D", QosRole::kCalibration},
+    TopicEntry{topic_names::kDenseCloud, "DenseCloud", QosRole::kCalibration},
 };
 
 }  // namespace

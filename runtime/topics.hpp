@@ -35,6 +35,8 @@ inline constexpr std::string_view kLoopCorrections = "loop/corrections";
 inline constexpr std::string_view kFrameDone = "lockstep/frame_done";
 inline constexpr std::string_view kKeyframeDone = "lockstep/keyframe_done";
 inline constexpr std::string_view kStatus = "system/status";
+inline constexpr std::string_view kOccupancyGrid = "map/occupancy_grid";
+inline constexpr std::string_view kDenseCloud = "map/dense_cloud";
 }  // namespace topic_names
 
 // All topics under one namespace: Topics("robot1").stereo().name == "robot1/camera/stereo".
@@ -75,6 +77,14 @@ class Topics {
     return {full_name(topic_names::kKeyframeDone), QosRole::kLockstep};
   }
   TopicSpec<msg::ComponentStatus> status() const { return {full_name(topic_names::kStatus), QosRole::kStatus}; }
+  // heslam-occupancy's 2D grid and dense cloud: latched (the calibration's profile: reliable,
+  // transient-local, KEEP_LAST(1)), so a late viewer or bridge gets the newest at once.
+  TopicSpec<msg::OccupancyGrid2D> occupancy_grid() const {
+    return {full_name(topic_names::kOccupancyGrid), QosRole::kCalibration};
+  }
+  TopicSpec<msg::DenseCloud> dense_cloud() const {
+    return {full_name(topic_names::kDenseCloud), QosRole::kCalibration};
+  }
 
  private:
   std::string ns_;

@@ -1,15 +1,18 @@
 // heslam-occupancy's component (see occupancy_node.hpp).
 #include "components/occupancy/occupancy_node.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "components/messages/camera.hpp"
 #include "components/messages/checks.hpp"
 #include "components/messages/pose.hpp"
+#include "components/occupancy/occupancy_messages.hpp"
 #include "runtime/atomic_file.hpp"
 #include "runtime/run_id.hpp"
 
@@ -54,6 +57,8 @@ void OccupancyNode::configure(const runtime::Config& config) {
                         runtime::Qos(runtime::QosRole::kImages).keep_last(kFrameReaderDepth));
   keyframe_reader_.emplace(participant(), topics().keyframes());
   keyframe_state_reader_.emplace(participant(), topics().keyframe_states());
+  grid_writer_.emplace(participant(), topics().occupancy_grid());
+  if (options_.cloud_max_points > 0) cloud_writer_.emplace(participant(), topics().dense_cloud());
   waitset_ = std::make_unique<runtime::WaitSet>(participant(), image_participant().separate_domain()
                                                                    ? runtime::WaitScope::kAllDomains
                                                                    : runtime::WaitScope::kParticipant);
@@ -117,6 +122,16 @@ void OccupancyNode::run() {
     }
   }
   take_all();
+  // Poses or culls of keyframes this process never received (states may come before their keyframe,
+  // so only the end can tell): counted, they moved nothing.
+  std::size_t unknown = 0;
+  for (const auto& [id, state] : has_state_) unknown += seen_keyframes_.count(id) == 0;
+  for (const std::uint64_t id : culled_ids_) unknown += seen_keyframes_.count(id) == 0 && has_state_.count(id) == 0;
+  if (unknown > 0) {
+    stats().count("states_of_unknown_keyframes", unknown);
+    log().warn(unknown, " keyframe state(s) (pose, correction or cull) of keyframes never received on ",
+               topics().keyframes().name, ": skipped (counted as states_of_unknown_keyframes)");
+  }
   const std::size_t unmatched = pending_.size();
   if (unmatched > 0) {
     stats().count("keyframes_without_frame", unmatched);
@@ -149,6 +164,8 @@ void OccupancyNode::take_all() {
   };
   apply(*calibration_reader_, "calibrations", [&](const msg::StereoCalibration& message) {
     auto rectifier = std::make_shared<const StereoRectifier>(messages::to_calibration(message));
+    log().info("calibration: raw ", rectifier->raw_size().width, "x", rectifier->raw_size().height,
+               " pixels, rectified bf ", rectifier->camera().bf(), " px m");
     std::lock_guard<std::mutex> lock(mutex_);
     rectifier_ = std::move(rectifier);
   });
@@ -158,6 +175,7 @@ void OccupancyNode::take_all() {
     job.keyframe_id = message.id;
     if (message.culled) {
       job.kind = Job::Kind::kCull;
+      culled_ids_.insert(message.id);
     } else {
       job.kind = Job::Kind::kPose;
       job.T_wc = messages::to_pose(message.T_wc);
@@ -259,6 +277,7 @@ void OccupancyNode::worker_loop() {
             }
             break;
           case Job::Kind::kCull:
+            if (map_->has_cloud(job->keyframe_id)) grid_dirty_ = cloud_dirty_ = true;
             map_->cull(job->keyframe_id);
             if (!options_.state_dir.empty()) std::filesystem::remove(cloud_file(options_.state_dir, job->keyframe_id));
             stats().count("keyframes_culled");
@@ -276,11 +295,15 @@ void OccupancyNode::worker_loop() {
         map_->rebuild();
         last_rebuild = Clock::now();
         stats().count("rebuilds");
+        grid_dirty_ = cloud_dirty_ = true;
       }
       {
+        const std::size_t fused_before = map_->fused();
         auto timer = stats().time("fusion");
         map_->fuse_pending();
+        if (map_->fused() != fused_before) grid_dirty_ = cloud_dirty_ = true;
       }
+      if (idle) publish_live(/*final=*/false);
     }
   } catch (...) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -322,8 +345,9 @@ void OccupancyNode::make_cloud(const Job& job) {
     equalizer_->equalize(left, right, left, right);
     cloud.points_c = stereo_->cloud(left, right);
   }
-  stats().count("clouds");
+  // Persisted before it is counted: a process whose status shows N clouds has N clouds on disk.
   if (!options_.state_dir.empty()) write_cloud(cloud_file(options_.state_dir, job.keyframe_id), job.keyframe_id, cloud);
+  stats().count("clouds");
   map_->add_cloud(job.keyframe_id, std::move(cloud));
 }
 
@@ -343,6 +367,8 @@ void OccupancyNode::write_outputs() {
     throw std::runtime_error("no keyframe cloud was fused (keyframes received: " +
                              std::to_string(seen_keyframes_.size()) + "); no map written");
   }
+  grid_dirty_ = cloud_dirty_ = true;
+  publish_live(/*final=*/true);
   if (options_.output_stem.empty()) return;
   grid.write_map_server(options_.output_stem);
   std::filesystem::path ply = options_.output_stem;
@@ -350,6 +376,58 @@ void OccupancyNode::write_outputs() {
   const std::size_t points = map_->write_ply(ply);
   log().info("wrote ", options_.output_stem.string(), ".pgm/.yaml (map_server) and ", ply.string(), " (", points,
              " points)");
+}
+
+void OccupancyNode::publish_live(bool final) {
+  const Clock::time_point now = Clock::now();
+  auto due = [&](Clock::time_point sent, double period_s) {
+    return final || now - sent >= std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(period_s));
+  };
+  if (map_->fused() == 0) return;
+  std::int64_t newest_stamp_ns = 0;
+  for (const auto& [id, cloud] : map_->all_clouds()) newest_stamp_ns = std::max(newest_stamp_ns, cloud.stamp_ns);
+  const auto keyframes = static_cast<std::uint32_t>(map_->fused());
+  Pose3 T_wg = Pose3::Identity();
+  T_wg.linear() = map_->R_gw().transpose();
+  if (grid_dirty_ && due(grid_sent_, options_.grid_period_s)) {
+    auto timer = stats().time("grid_publish");
+    OccupancyGrid grid = map_->grid();
+    grid_dirty_ = false;
+    grid_sent_ = now;
+    // Republished when it changed (a rebuild at the same poses often gives the same cells); the final
+    // one always, so a reader that saw every revision ends on the saved grid.
+    if (final || !published_grid_ || published_grid_->cells() != grid.cells()) {
+      grid_writer_->write(GridMessage(grid, T_wg, ++grid_revision_, newest_stamp_ns, keyframes).get());
+      stats().count("grids_published");
+      published_grid_ = std::move(grid);
+    }
+  }
+  if (cloud_writer_ && cloud_dirty_ && due(cloud_sent_, options_.cloud_period_s)) {
+    auto timer = stats().time("cloud_publish");
+    cloud_dirty_ = false;
+    cloud_sent_ = now;
+    std::vector<Eigen::Vector3f> points_w;
+    points_w.reserve(map_->cloud_points());
+    for (const auto& [id, cloud] : map_->all_clouds()) {
+      const auto pose = map_->poses().find(id);
+      if (pose == map_->poses().end()) continue;
+      const Eigen::Matrix3f R = pose->second.rotation().cast<float>();
+      const Eigen::Vector3f t = pose->second.translation().cast<float>();
+      for (const Eigen::Vector3f& p : cloud.points_c) points_w.push_back(R * p + t);
+    }
+    const auto total = static_cast<std::uint32_t>(points_w.size());
+    cloud_writer_->write(CloudMessage(decimate(points_w, static_cast<std::size_t>(options_.cloud_max_points)), total,
+                                      ++cloud_revision_, newest_stamp_ns, keyframes)
+                             .get());
+    stats().count("clouds_published");
+  }
+  if (final) {
+    // Latched, but this process is about to exit: give matched readers (the bridge, the viewer) a
+    // bounded moment to acknowledge the final map.
+    constexpr dds_duration_t kFinalAckTimeout = DDS_SECS(2);
+    dds_wait_for_acks(grid_writer_->handle(), kFinalAckTimeout);
+    if (cloud_writer_) dds_wait_for_acks(cloud_writer_->handle(), kFinalAckTimeout);
+  }
 }
 
 }  // namespace heslam::occupancy

@@ -13,6 +13,7 @@
 // the keyframes and states again from DDS (transient-local), so its map is the one it had.
 #pragma once
 
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -20,6 +21,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <thread>
 
 #include <opencv2/core.hpp>
@@ -30,6 +32,7 @@
 #include "components/core/occupancy/occupancy_map.hpp"
 #include "components/occupancy/occupancy_options.hpp"
 #include "runtime/component.hpp"
+#include "runtime/writer.hpp"
 
 namespace heslam::occupancy {
 
@@ -72,6 +75,9 @@ class OccupancyNode final : public runtime::Component {
   void push(Job job);
   void load_state();
   void write_outputs();
+  // Worker thread (the DDS thread at the end): the grid when it changed and its period passed, the
+  // cloud when its period passed; final: both, whatever the periods.
+  void publish_live(bool final);
 
   OccupancyProcessOptions options_;
   std::optional<runtime::Reader<msg::StereoCalibration>> calibration_reader_;
@@ -79,12 +85,15 @@ class OccupancyNode final : public runtime::Component {
   std::optional<runtime::Reader<msg::Keyframe>> keyframe_reader_;
   std::optional<runtime::Reader<msg::KeyframeState>> keyframe_state_reader_;
   std::unique_ptr<runtime::WaitSet> waitset_;
+  std::optional<runtime::Writer<msg::OccupancyGrid2D>> grid_writer_;
+  std::optional<runtime::Writer<msg::DenseCloud>> cloud_writer_;
 
   // DDS thread only.
   std::deque<Frame> ring_;
   std::deque<PendingKeyframe> pending_;
   std::map<std::uint64_t, bool> seen_keyframes_;  // ids whose cloud is queued, loaded or skipped
   std::map<std::uint64_t, bool> has_state_;       // ids with a mapper state (their pose is the mapper's)
+  std::set<std::uint64_t> culled_ids_;            // ids the mapper culled
 
   // Shared with the worker (mutex_).
   std::mutex mutex_;
@@ -97,6 +106,14 @@ class OccupancyNode final : public runtime::Component {
   std::optional<HistogramEqualizer> equalizer_;
   std::optional<DenseStereo> stereo_;
   bool stop_ = false;
+  // Live outputs (worker thread): whether the map changed since the last grid / cloud, when they went.
+  bool grid_dirty_ = false;
+  bool cloud_dirty_ = false;
+  std::optional<OccupancyGrid> published_grid_;
+  std::chrono::steady_clock::time_point grid_sent_{};
+  std::chrono::steady_clock::time_point cloud_sent_{};
+  std::uint64_t grid_revision_ = 0;
+  std::uint64_t cloud_revision_ = 0;
   bool busy_ = false;
   std::thread worker_;
   std::exception_ptr worker_error_;

@@ -32,6 +32,9 @@ OccupancyProcessOptions OccupancyProcessOptions::from_config(const runtime::Conf
   o.map.up = parse_up_axis(config.get_choice("grid.up", "-y", {"-y", "y", "z"}));
   o.frame_ring = config.get_int("frame_ring", o.frame_ring, 1, 1000);
   o.rebuild_period_s = config.get_double("rebuild_period_s", o.rebuild_period_s, 0.0, 3600.0);
+  o.grid_period_s = config.get_double("live.grid_period_s", o.grid_period_s, 0.0, 3600.0);
+  o.cloud_period_s = config.get_double("live.cloud_period_s", o.cloud_period_s, 0.0, 3600.0);
+  o.cloud_max_points = config.get_int("live.cloud_max_points", o.cloud_max_points, 0, 10000000);
   if (!config.get_string("settings.file", "").empty()) o.settings_file = config.get_path("settings.file", {});
   std::filesystem::path settings_arg;
   runtime::Flags flags("heslam-occupancy [options]");

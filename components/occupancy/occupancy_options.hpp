@@ -26,6 +26,12 @@ struct OccupancyProcessOptions {
   // rebuild_period_s: a map made stale by moved keyframes is fused again at most this often while
   // running and idle (always at the end).
   double rebuild_period_s = 10.0;
+  // live.*: the grid (map/occupancy_grid) is published when it changed, at most every grid_period_s
+  // (0: at every change); the dense cloud (map/dense_cloud) at most every cloud_period_s, decimated to
+  // cloud_max_points (0: no cloud topic). Both once more, final, at the end.
+  double grid_period_s = 2.0;
+  double cloud_period_s = 10.0;
+  int cloud_max_points = 200000;
   // --output-stem STEM: STEM.pgm, STEM.yaml (map_server), STEM.ply written at the end; empty: none.
   std::filesystem::path output_stem;
   // --state-dir DIR: one file per keyframe cloud (replaced atomically), so a restarted process

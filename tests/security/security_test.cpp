@@ -102,8 +102,8 @@ TEST(SecurityInit, GrantsEachTopicOnlyToTheComponentsThatNeedIt) {
   const test::ScratchDir dir("security_init");
   const fs::path security = test::make_security_folder(dir.path() / "sec", dir.path());
   const auto grants = read_grants(security);
-  const std::set<std::string> expected{"replay",   "frontend", "local_mapper", "loop_closer",
-                                       "recorder", "viewer",   "supervisor",   "spy"};
+  const std::set<std::string> expected{"replay",   "frontend", "local_mapper", "loop_closer", "occupancy",
+                                       "recorder", "viewer",   "ros2_bridge",  "supervisor",  "spy"};
   std::set<std::string> names;
   for (const auto& [name, grant] : grants) names.insert(name);
   EXPECT_EQ(names, expected);
@@ -123,7 +123,9 @@ TEST(SecurityInit, GrantsEachTopicOnlyToTheComponentsThatNeedIt) {
       {"map/mapper_keyframes", {"local_mapper"}},
       {"loop/corrections", {"loop_closer"}},
       {"lockstep/frame_done", {"frontend"}},
-      {"lockstep/keyframe_done", {"local_mapper", "loop_closer"}}};
+      {"lockstep/keyframe_done", {"local_mapper", "loop_closer"}},
+      {"map/occupancy_grid", {"occupancy"}},
+      {"map/dense_cloud", {"occupancy"}}};
   for (const runtime::TopicEntry& topic : runtime::all_topics()) {
     const std::string pattern = "*/" + std::string(topic.relative_name);
     std::set<std::string> writers, readers;

@@ -9,6 +9,8 @@
 #include "components/core/camera/stereo_rectifier.hpp"
 #include "components/messages/camera.hpp"
 #include "components/messages/pose.hpp"
+#include "components/occupancy/occupancy_messages.hpp"
+#include "runtime/sequence.hpp"
 #include "runtime/wire_enum.hpp"
 #include "tools/ros2_bridge/tf_tree.hpp"
 
@@ -99,6 +101,10 @@ std::string Ros2Bridge::help_notes() {
          "  odometry                -> rt/tf                      tf2_msgs/TFMessage: map -> odom -> base_link\n"
          "  camera/calibration      -> rt/tf_static               tf2_msgs/TFMessage: base_link -> camera_frame,\n"
          "                                                        map -> world_frame (transient local)\n"
+         "  map/occupancy_grid      -> rt/map                     nav_msgs/OccupancyGrid in map_frame (transient "
+         "local)\n"
+         "  map/dense_cloud         -> rt/NS/dense_cloud          sensor_msgs/PointCloud2 in map_frame (transient "
+         "local)\n"
          "Config fields (--config FILE, all optional):\n"
          "  ros_namespace     ROS 2 namespace of the topics (default " +
          defaults.ros_namespace +
@@ -138,6 +144,46 @@ void Ros2Bridge::configure(const runtime::Config& config) {
   tf_static_writer_.emplace(participant(), &tf2_msgs_msg_dds__TFMessage__desc, ros2_topic("tf_static"),
                             tf_static_qos());
 
+  // /map is a global ROS 2 name (nav2's map_server publishes there), not under the namespace.
+  occupancy_grid_writer_.emplace(participant(), &nav_msgs_msg_dds__OccupancyGrid__desc, ros2_topic("map"),
+                                 latched_qos());
+  dense_cloud_writer_.emplace(participant(), &sensor_msgs_msg_dds__PointCloud2__desc,
+                              ros2_topic(prefix + "dense_cloud"), latched_qos());
+  subscribe(topics().occupancy_grid(), [this](runtime::Received<msg::OccupancyGrid2D>& received) {
+    if (!received.info.valid_data) return;
+    const msg::OccupancyGrid2D& grid = *received.sample;
+    if (const std::string problem = occupancy::check_grid(grid); !problem.empty()) {
+      stats().count("bad_occupancy_grids");
+      log().warn_throttled("bad_occupancy_grids", "topic ", topics().occupancy_grid().name, ": ", problem,
+                           "; skipped (counted as bad_occupancy_grids)");
+      return;
+    }
+    PendingGrid pending{grid, {}};
+    const auto cells = runtime::view(grid.cells);
+    pending.cells.assign(cells.begin(), cells.end());
+    pending.header.cells = {};
+    pending_grid_ = std::move(pending);
+    publish_occupancy();
+  });
+  subscribe(topics().dense_cloud(), [this](runtime::Received<msg::DenseCloud>& received) {
+    if (!received.info.valid_data) return;
+    const auto xyz = runtime::view(received.sample->xyz_w_m);
+    std::vector<std::array<double, 3>> points;
+    points.reserve(xyz.size() / 3);
+    bool finite = xyz.size() % 3 == 0;
+    for (std::size_t i = 0; finite && i + 2 < xyz.size(); i += 3) {
+      finite = std::isfinite(xyz[i]) && std::isfinite(xyz[i + 1]) && std::isfinite(xyz[i + 2]);
+      points.push_back({xyz[i], xyz[i + 1], xyz[i + 2]});
+    }
+    if (!finite) {
+      stats().count("bad_dense_clouds");
+      log().warn_throttled("bad_dense_clouds", "topic ", topics().dense_cloud().name, ": field xyz_w_m: ", xyz.size(),
+                           " values, not finite x, y, z triples; skipped (counted as bad_dense_clouds)");
+      return;
+    }
+    pending_dense_cloud_.emplace(received.sample->stamp_ns, std::move(points));
+    publish_occupancy();
+  });
   subscribe(topics().calibration(), [this](runtime::Received<msg::StereoCalibration>& received) {
     if (received.info.valid_data) on_calibration(*received.sample);
   });
@@ -172,7 +218,8 @@ void Ros2Bridge::configure(const runtime::Config& config) {
   });
   log().info("ROS 2 topics: rt/", prefix, "odometry, rt/", prefix, "pose, rt/", prefix, "keyframe_trajectory, rt/",
              prefix, "map_points (frame '", options_.frames.world, "'), rt/tf (", options_.frames.map, " -> ",
-             options_.frames.odom, " -> ", options_.frames.base, "), rt/tf_static");
+             options_.frames.odom, " -> ", options_.frames.base, "), rt/tf_static, rt/map and rt/", prefix,
+             "dense_cloud (frame '", options_.frames.map, "')");
 }
 
 void Ros2Bridge::on_odometry(const msg::Odometry& odometry) {
@@ -227,6 +274,32 @@ void Ros2Bridge::on_calibration(const msg::StereoCalibration& calibration) {
                                          {options_.frames.map, options_.frames.world, map_to_world(T_B_rect)}})
                                .get());
   stats().count("tf_static_published");
+  publish_occupancy();
+}
+
+void Ros2Bridge::publish_occupancy() {
+  if (!T_B_rect_) {
+    if (pending_grid_ || pending_dense_cloud_) stats().count("occupancy_waiting_for_calibration");
+    return;  // the map frame comes with the calibration (transient local): published when it arrives
+  }
+  const Pose3 T_map_world = map_to_world(*T_B_rect_);
+  if (pending_grid_) {
+    msg::OccupancyGrid2D grid = pending_grid_->header;
+    runtime::borrow(grid.cells, pending_grid_->cells);
+    occupancy_grid_writer_->write(OccupancyGridMessage(grid, T_map_world, options_.frames).get());
+    stats().count("occupancy_grids_published");
+    pending_grid_.reset();
+  }
+  if (pending_dense_cloud_) {
+    std::vector<std::array<double, 3>>& points = pending_dense_cloud_->second;
+    for (auto& p : points) {
+      const Eigen::Vector3d m = T_map_world * Eigen::Vector3d(p[0], p[1], p[2]);
+      p = {m.x(), m.y(), m.z()};
+    }
+    dense_cloud_writer_->write(PointCloudMessage(pending_dense_cloud_->first, points, options_.frames.map).get());
+    stats().count("dense_clouds_published");
+    pending_dense_cloud_.reset();
+  }
 }
 
 void Ros2Bridge::publish_map_if_changed() {

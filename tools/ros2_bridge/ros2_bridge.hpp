@@ -8,6 +8,8 @@
 //   map/points               -> rt/<ros_namespace>/map_points           sensor_msgs/PointCloud2 (transient local)
 //   odometry (T_wc, T_oc)    -> rt/tf         tf2_msgs/TFMessage: map -> odom -> base_link (REP 105, tf_tree.hpp)
 //   camera/calibration       -> rt/tf_static  tf2_msgs/TFMessage: base_link -> camera, map -> world (transient local)
+//   map/occupancy_grid       -> rt/map        nav_msgs/OccupancyGrid in map_frame (transient local, as map_server)
+//   map/dense_cloud          -> rt/<ros_namespace>/dense_cloud  sensor_msgs/PointCloud2 in map_frame (transient local)
 //
 // Config fields (all optional): ros_namespace ("heslam"), world_frame ("heslam_world"),
 // camera_frame ("heslam_camera"), map_frame ("map"), odom_frame ("odom"), base_frame ("base_link"),
@@ -19,6 +21,8 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "runtime/component.hpp"
 #include "tools/ros2_bridge/ros2_conversions.hpp"
@@ -50,6 +54,8 @@ class Ros2Bridge : public runtime::Component {
   void on_calibration(const msg::StereoCalibration& calibration);
   void publish_tf(const msg::Odometry& odometry);
   void publish_map_if_changed();
+  // heslam-occupancy's grid and cloud, in the map frame: held until a calibration gave T_map_world.
+  void publish_occupancy();
 
   struct KeyframeEntry {
     std::optional<std::int64_t> stamp_ns;  // from map/keyframes
@@ -64,12 +70,21 @@ class Ros2Bridge : public runtime::Component {
   std::optional<Ros2Writer<PointCloud2>> cloud_writer_;
   std::optional<Ros2Writer<TFMessage>> tf_writer_;
   std::optional<Ros2Writer<TFMessage>> tf_static_writer_;
+  std::optional<Ros2Writer<OccupancyGrid>> occupancy_grid_writer_;
+  std::optional<Ros2Writer<PointCloud2>> dense_cloud_writer_;
   std::optional<Pose3> T_B_rect_;  // rectified left camera -> body, from the newest calibration
   std::map<std::uint64_t, KeyframeEntry> keyframes_;
   std::map<std::uint64_t, std::array<double, 3>> points_w_m_;
   std::int64_t newest_stamp_ns_ = 0;
   bool path_changed_ = false;
   bool cloud_changed_ = false;
+  // The newest occupancy grid / dense cloud not republished yet (copied out of the DDS sample).
+  struct PendingGrid {
+    msg::OccupancyGrid2D header{};  // every field but cells
+    std::vector<std::uint8_t> cells;
+  };
+  std::optional<PendingGrid> pending_grid_;
+  std::optional<std::pair<std::int64_t, std::vector<std::array<double, 3>>>> pending_dense_cloud_;
 };
 
 }  // namespace heslam::ros2

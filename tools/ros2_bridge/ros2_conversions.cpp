@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "components/messages/pose.hpp"
 #include "runtime/sequence.hpp"
 
 namespace heslam::ros2 {
@@ -91,7 +92,11 @@ PathMessage::PathMessage(std::vector<KeyframePose> keyframes, const Frames& fram
 }
 
 PointCloudMessage::PointCloudMessage(std::int64_t stamp_ns, const std::vector<std::array<double, 3>>& points_w_m,
-                                     const Frames& frames) {
+                                     const Frames& frames)
+    : PointCloudMessage(stamp_ns, points_w_m, frames.world) {}
+
+PointCloudMessage::PointCloudMessage(std::int64_t stamp_ns, const std::vector<std::array<double, 3>>& points_w_m,
+                                     const std::string& frame_id) {
   static const std::string kNames[3] = {"x", "y", "z"};
   for (std::uint32_t k = 0; k < 3; ++k) {
     fields_.push_back(PointField{runtime::borrow(kNames[k]), 4 * k, kPointFieldFloat32, 1});
@@ -102,7 +107,7 @@ PointCloudMessage::PointCloudMessage(std::int64_t stamp_ns, const std::vector<st
                           static_cast<float>(points_w_m[i][2])};
     std::memcpy(data_.data() + i * kPointStep, xyz, sizeof xyz);
   }
-  message_.header = header(stamp_ns, frames);
+  message_.header = header(stamp_ns, frame_id);
   message_.height = 1;
   message_.width = static_cast<std::uint32_t>(points_w_m.size());
   runtime::borrow(message_.fields, fields_);
@@ -111,6 +116,27 @@ PointCloudMessage::PointCloudMessage(std::int64_t stamp_ns, const std::vector<st
   message_.row_step = kPointStep * message_.width;
   runtime::borrow(message_.data, data_);
   message_.is_dense = true;  // map points are never NaN
+}
+
+OccupancyGridMessage::OccupancyGridMessage(const msg::OccupancyGrid2D& grid, const Pose3& T_map_world,
+                                           const Frames& frames) {
+  const auto cells = runtime::view(grid.cells);
+  data_.resize(cells.size());
+  // The wire values are nav_msgs' already (255 is -1 as int8).
+  std::memcpy(data_.data(), cells.data(), cells.size());
+  Pose3 T_grid_origin = Pose3::Identity();
+  T_grid_origin.translation() = Eigen::Vector3d(grid.origin_i, grid.origin_j, 0.0) * grid.resolution_m;
+  const Pose3 T_map_origin = T_map_world * messages::to_pose(grid.T_wg) * T_grid_origin;
+  message_.header = header(grid.stamp_ns, frames.map);
+  message_.info.map_load_time = to_time(grid.stamp_ns);
+  message_.info.resolution = static_cast<float>(grid.resolution_m);
+  message_.info.width = grid.width;
+  message_.info.height = grid.height;
+  const Eigen::Vector3d t = T_map_origin.translation();
+  const Eigen::Quaterniond q(T_map_origin.rotation());
+  message_.info.origin.position = {t.x(), t.y(), t.z()};
+  message_.info.origin.orientation = {q.x(), q.y(), q.z(), q.w()};
+  runtime::borrow(message_.data, data_);
 }
 
 Transform to_transform(const Pose3& T_parent_child) {

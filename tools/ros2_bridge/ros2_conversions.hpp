@@ -85,6 +85,9 @@ class PathMessage {
 class PointCloudMessage {
  public:
   PointCloudMessage(std::int64_t stamp_ns, const std::vector<std::array<double, 3>>& points_w_m, const Frames& frames);
+  // Points already in `frame_id` (which must outlive the message).
+  PointCloudMessage(std::int64_t stamp_ns, const std::vector<std::array<double, 3>>& points,
+                    const std::string& frame_id);
   PointCloudMessage(const PointCloudMessage&) = delete;
   PointCloudMessage& operator=(const PointCloudMessage&) = delete;
   const PointCloud2& get() const { return message_; }
@@ -95,6 +98,21 @@ class PointCloudMessage {
   std::vector<PointField> fields_;
   std::vector<std::uint8_t> data_;
   PointCloud2 message_{};
+};
+
+// nav_msgs/OccupancyGrid of heslam-occupancy's grid (validated: occupancy::check_grid) in frames.map:
+// info.origin = T_map_world T_wg (origin_i, origin_j, 0) x resolution, data as the grid's cells (free 0,
+// occupied 100, unknown -1), header and map_load_time stamped with the grid's newest keyframe.
+class OccupancyGridMessage {
+ public:
+  OccupancyGridMessage(const msg::OccupancyGrid2D& grid, const Pose3& T_map_world, const Frames& frames);
+  OccupancyGridMessage(const OccupancyGridMessage&) = delete;
+  OccupancyGridMessage& operator=(const OccupancyGridMessage&) = delete;
+  const OccupancyGrid& get() const { return message_; }
+
+ private:
+  std::vector<std::int8_t> data_;
+  OccupancyGrid message_{};
 };
 
 // One geometry_msgs/TransformStamped: the child's pose in the parent. The names must outlive the message.

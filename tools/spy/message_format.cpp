@@ -378,4 +378,34 @@ std::string format_message(const msg::ImuCalibration& calibration, const FormatO
   return text.str();
 }
 
+std::string format_message(const msg::OccupancyGrid2D& grid, const FormatOptions& /*options*/) {
+  std::size_t occupied = 0, free = 0;
+  for (std::uint32_t i = 0; i < grid.cells._length; ++i) {
+    occupied += grid.cells._buffer[i] == heslam_msg_OCCUPANCY_OCCUPIED;
+    free += grid.cells._buffer[i] == heslam_msg_OCCUPANCY_FREE;
+  }
+  Text text;
+  text.line(0, "revision", std::to_string(grid.revision));
+  text.line(0, "stamp_ns", std::to_string(grid.stamp_ns));
+  text.line(0, "keyframes", std::to_string(grid.keyframes));
+  text.line(0, "resolution_m", std::to_string(grid.resolution_m));
+  text.line(0, "T_wg", pose(grid.T_wg));
+  text.line(0, "origin", "[" + std::to_string(grid.origin_i) + ", " + std::to_string(grid.origin_j) + "]");
+  text.line(0, "size", std::to_string(grid.width) + " x " + std::to_string(grid.height));
+  text.line(0, "cells",
+            std::to_string(grid.cells._length) + " (" + std::to_string(occupied) + " occupied, " +
+                std::to_string(free) + " free)");
+  return text.str();
+}
+
+std::string format_message(const msg::DenseCloud& cloud, const FormatOptions& /*options*/) {
+  Text text;
+  text.line(0, "revision", std::to_string(cloud.revision));
+  text.line(0, "stamp_ns", std::to_string(cloud.stamp_ns));
+  text.line(0, "keyframes", std::to_string(cloud.keyframes));
+  text.line(0, "total_points", std::to_string(cloud.total_points));
+  text.line(0, "points", std::to_string(cloud.xyz_w_m._length / 3));
+  return text.str();
+}
+
 }  // namespace heslam

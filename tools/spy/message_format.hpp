@@ -27,6 +27,8 @@ std::string format_message(const msg::LoopCorrection& correction, const FormatOp
 std::string format_message(const msg::FrameDone& done, const FormatOptions& options);
 std::string format_message(const msg::KeyframeDone& done, const FormatOptions& options);
 std::string format_message(const msg::ComponentStatus& status, const FormatOptions& options);
+std::string format_message(const msg::OccupancyGrid2D& grid, const FormatOptions& options);
+std::string format_message(const msg::DenseCloud& cloud, const FormatOptions& options);
 
 // The line of a sample without data (its instance disposed, or its last writer gone), naming the
 // instance by its key: only the key fields of such a sample are set. "# disposed: id lm:12",

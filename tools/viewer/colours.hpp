@@ -29,6 +29,10 @@ inline const cv::Scalar kGrid(228, 228, 228);
 inline const cv::Scalar kScaleBar(0, 0, 110);  // dark red: no anti-aliased grey text or line blends into it
 inline const cv::Scalar kAxisX(40, 40, 200);
 inline const cv::Scalar kAxisZ(40, 150, 40);
+// heslam-occupancy's grid under the top view: occupied cells dark slate, free cells pale green
+// (colours nothing else uses, so a picture can be checked for them); unknown cells are not drawn.
+inline const cv::Scalar kOccupiedCell(90, 70, 60);
+inline const cv::Scalar kFreeCell(215, 240, 215);
 
 inline cv::Scalar of(PointCategory category) {
   switch (category) {

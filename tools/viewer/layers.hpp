@@ -12,6 +12,7 @@ struct Layers {
   bool spanning_tree = true;
   bool ground_truth = true;
   bool trajectory = true;
+  bool occupancy = true;      // heslam-occupancy's 2D grid under the top view
   bool follow_camera = true;  // false: free camera (mouse)
 
   // Applies a key; returns false when the key means nothing to the layers.
@@ -24,6 +25,7 @@ struct Layers {
       case 't': spanning_tree = !spanning_tree; return true;
       case 'g': ground_truth = !ground_truth; return true;
       case 'j': trajectory = !trajectory; return true;
+      case 'o': occupancy = !occupancy; return true;
       case 'f': follow_camera = !follow_camera; return true;
       default: return false;
     }

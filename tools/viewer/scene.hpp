@@ -14,6 +14,7 @@
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/camera/stereo_rectifier.hpp"
 #include "components/core/geometry/pose.hpp"
+#include "components/core/occupancy/occupancy_grid.hpp"
 
 namespace heslam::viewer {
 
@@ -49,6 +50,10 @@ struct Scene {
   std::vector<std::int64_t> trajectory_stamps_ns;  // their frame stamps
   std::vector<Eigen::Vector3d> ground_truth_w;     // aligned to the estimate; empty without --gt
   PinholeStereo camera;                            // rectified model (frustum shape); zero until known
+  // heslam-occupancy's newest 2D grid (map/occupancy_grid), drawn under the map in the top view; null
+  // until one arrives. T_wg: its grid frame (z up) -> world.
+  std::shared_ptr<const OccupancyGrid> occupancy;
+  Pose3 occupancy_T_wg = Pose3::Identity();
 
   // The 2D view.
   bool has_frame = false;

@@ -204,6 +204,27 @@ void draw_polyline(cv::Mat& image, const Projection& project, const std::vector<
   }
 }
 
+// Each known cell of the grid as the quadrilateral its corners project to (a square when the grid's
+// up is the world's -y, as without an IMU). Returns the cells drawn.
+std::size_t draw_occupancy(cv::Mat& image, const Projection& project, const OccupancyGrid& grid, const Pose3& T_wg) {
+  const double r = grid.resolution_m();
+  const cv::Rect frame(0, 0, image.cols, image.rows);
+  std::size_t drawn = 0;
+  for (const auto& [index, state] : grid.cells()) {
+    if (state == CellState::kUnknown) continue;
+    const double x = index.first * r, y = index.second * r;
+    cv::Point corners[4] = {project(T_wg * Eigen::Vector3d(x, y, 0.0)), project(T_wg * Eigen::Vector3d(x + r, y, 0.0)),
+                            project(T_wg * Eigen::Vector3d(x + r, y + r, 0.0)),
+                            project(T_wg * Eigen::Vector3d(x, y + r, 0.0))};
+    const cv::Rect box = cv::boundingRect(std::vector<cv::Point>(corners, corners + 4));
+    if ((box & frame).empty() && !frame.contains(corners[0])) continue;
+    cv::fillConvexPoly(image, corners, 4, state == CellState::kOccupied ? colours::kOccupiedCell : colours::kFreeCell,
+                       cv::LINE_8);
+    ++drawn;
+  }
+  return drawn;
+}
+
 }  // namespace
 
 TopView TopViewRenderer::render(const Scene& scene, const Layers& layers) const {
@@ -214,6 +235,9 @@ TopView TopViewRenderer::render(const Scene& scene, const Layers& layers) const 
   const double frustum_m = kFrustumFraction * project.extent_m();
   view.scale_px_per_m = project.scale();
   view.grid_step_m = grid_step_m(project.scale());
+  if (layers.occupancy && scene.occupancy) {
+    view.occupancy_cells_drawn = draw_occupancy(image, project, *scene.occupancy, scene.occupancy_T_wg);
+  }
   draw_grid(image, project, view.grid_step_m);
 
   if (layers.points) {

@@ -4,7 +4,8 @@
 // (forward) up. By default the view fits the trajectory (the estimate, the ground truth and the
 // current camera), so a 1 m path inside a 14 m map is not a 30-pixel blob; TopViewFit::kMap fits the
 // map (points, keyframes and all). A grid at a round step (1, 2 or 5 x 10^k m), a scale bar of one
-// grid step and an axis cross tell the size and the directions.
+// grid step and an axis cross tell the size and the directions. heslam-occupancy's 2D grid, when one
+// arrived, is drawn first (under everything): each known cell as its square, through the grid's T_wg.
 #pragma once
 
 #include <cstddef>
@@ -28,8 +29,9 @@ struct TopView {
   cv::Mat image;                   // BGR
   std::size_t frustums_drawn = 0;  // keyframe frustums (== scene.keyframes_T_wc.size() with the layer on)
   std::size_t points_drawn = 0;
-  double scale_px_per_m = 0.0;  // the projection's scale
-  double grid_step_m = 0.0;     // the grid's step, also the scale bar's length
+  std::size_t occupancy_cells_drawn = 0;  // occupied + free cells of scene.occupancy inside the picture
+  double scale_px_per_m = 0.0;            // the projection's scale
+  double grid_step_m = 0.0;               // the grid's step, also the scale bar's length
 };
 
 class TopViewRenderer {

@@ -129,9 +129,17 @@ Pose3 ViewerModel::corrected_T_wc(const OdometryEntry& odometry) const {
   return odometry.T_wc;
 }
 
+void ViewerModel::set_occupancy(OccupancyGrid grid, const Pose3& T_wg) {
+  occupancy_ = std::make_shared<const OccupancyGrid>(std::move(grid));
+  occupancy_T_wg_ = T_wg;
+  changed_ = true;
+}
+
 Scene ViewerModel::scene(Clock::time_point now) {
   changed_ = false;
   Scene scene;
+  scene.occupancy = occupancy_;
+  scene.occupancy_T_wg = occupancy_T_wg_;
   const Map& map = mirror_.map();
 
   // Keyframes, the recent ones (newest ids: the frontend allocates them in creation order), graph.

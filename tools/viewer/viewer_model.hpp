@@ -54,6 +54,8 @@ class ViewerModel {
   // Throws std::runtime_error naming the frame when the image bytes do not match its size.
   void add_frame(const msg::StereoFrame& message);
   void add_odometry(const msg::Odometry& message, Clock::time_point now);
+  // heslam-occupancy's newest 2D grid (replaces the previous one); T_wg: grid frame -> world.
+  void set_occupancy(OccupancyGrid grid, const Pose3& T_wg);
 
   // Everything one drawing shows; marks the chosen frame drawn.
   Scene scene(Clock::time_point now);
@@ -108,6 +110,8 @@ class ViewerModel {
   Clock::time_point loop_at_{};
   std::uint64_t loop_corrections_ = 0;
   FrameCounts frames_;
+  std::shared_ptr<const OccupancyGrid> occupancy_;  // immutable once made: shared with drawings
+  Pose3 occupancy_T_wg_ = Pose3::Identity();
   bool changed_ = false;
 };
 

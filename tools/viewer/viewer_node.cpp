@@ -12,6 +12,7 @@
 #include <opencv2/highgui.hpp>
 
 #include "components/messages/checks.hpp"
+#include "components/occupancy/occupancy_messages.hpp"
 #include "tools/viewer/frame_view_renderer.hpp"
 #include "tools/viewer/ground_truth_overlay.hpp"
 #include "tools/viewer/map_window.hpp"
@@ -76,6 +77,7 @@ void ViewerNode::configure(const runtime::Config& /*config*/) {
   point_state_reader_.emplace(participant(), topics().map_points());
   correction_reader_.emplace(participant(), topics().loop_corrections(),
                              runtime::Qos(runtime::QosRole::kCorrections).keep_last(kCorrectionDepth));
+  occupancy_reader_.emplace(participant(), topics().occupancy_grid());
   // Frames on a shared-memory domain of their own (--image-transport shm) need a waitset across domains.
   waitset_ = std::make_unique<runtime::WaitSet>(participant(), image_participant().separate_domain()
                                                                    ? runtime::WaitScope::kAllDomains
@@ -86,6 +88,7 @@ void ViewerNode::configure(const runtime::Config& /*config*/) {
   waitset_->attach(*keyframe_state_reader_);
   waitset_->attach(*point_state_reader_);
   waitset_->attach(*correction_reader_);
+  waitset_->attach(*occupancy_reader_);
   run_end_.emplace(participant(), topics());
   waitset_->attach(run_end_->reader());
   std::ostringstream drawing;
@@ -197,6 +200,21 @@ std::size_t ViewerNode::take_all() {
     if (r.info.valid_data) model_->apply_correction(*r.sample, now);
     return r.info.valid_data;
   });
+  // heslam-occupancy's grid (idl/occupancy.idl has its own check: sizes and cell values).
+  for (auto& received : occupancy_reader_->take()) {
+    ++taken;
+    if (!received.info.valid_data) continue;
+    try {
+      occupancy::ReceivedGrid grid = occupancy::from_message(*received.sample);
+      std::lock_guard<std::mutex> lock(model_mutex_);
+      model_->set_occupancy(std::move(grid.grid), grid.T_wg);
+      stats().count("occupancy_grids");
+    } catch (const std::exception& error) {
+      stats().count("bad_occupancy_grids");
+      log().warn_throttled("bad_occupancy_grids", "topic '", occupancy_reader_->name(), "': ", error.what(),
+                           "; skipped (counted as bad_occupancy_grids)");
+    }
+  }
   if (frame_reader_) {
     apply(*frame_reader_, "frames", [&](auto& r) {
       if (r.info.valid_data) model_->add_frame(*r.sample);

@@ -49,6 +49,7 @@ class ViewerNode final : public runtime::Component {
   std::optional<runtime::Reader<msg::KeyframeState>> keyframe_state_reader_;
   std::optional<runtime::Reader<msg::MapPointState>> point_state_reader_;
   std::optional<runtime::Reader<msg::LoopCorrection>> correction_reader_;
+  std::optional<runtime::Reader<msg::OccupancyGrid2D>> occupancy_reader_;
   std::optional<runtime::RunEndWatch> run_end_;
 
   std::mutex stop_mutex_;

@@ -59,13 +59,15 @@ runtime::Flags viewer_flags(ViewerOptions& o) {
       .note("Keys (3D window or 2D window):")
       .note("p  map points       u  culled points      k  keyframe frustums")
       .note("c  covisibility     t  spanning tree      g  ground truth     j  trajectory")
+      .note("o  occupancy grid (heslam-occupancy's map/occupancy_grid, under the top view)")
       .note("f  follow camera / free camera (mouse)    s  write a snapshot now (needs --out)")
       .note("q  close the viewer (the pipeline goes on)")
       .note(
           "Colours: points black = map, red = recent, magenta = merged by a loop closure, grey = culled;\n"
           "keyframes blue, current camera green, covisibility green lines, spanning tree orange,\n"
           "trajectory dark blue over the ground truth (wide, light orange). Top view: grid of round\n"
-          "steps (1, 2, 5 x 10^k m), scale bar of one step bottom left, x / z arrows bottom right. 2D view: raw left | "
+          "steps (1, 2, 5 x 10^k m), scale bar of one step bottom left, x / z arrows bottom right; under it the\n"
+          "occupancy grid (occupied cells dark slate, free cells pale green). 2D view: raw left | "
           "rectified + equalized left with features\n"
           "(green = map point match, blue = stereo only) on keyframes, local map points projected at the\n"
           "tracked pose on other frames (green crosses).");

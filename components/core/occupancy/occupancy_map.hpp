@@ -82,6 +82,7 @@ class OccupancyMap {
   std::size_t fused() const { return fused_.size(); }
   std::size_t cloud_points() const;
   const std::map<std::uint64_t, KeyframeCloud>& all_clouds() const { return clouds_; }
+  const std::map<std::uint64_t, Pose3>& poses() const { return poses_; }  // T_wc of every keyframe known
 
   // Every fused cloud point in the world frame, as a binary little-endian PLY (x y z float), replaced
   // atomically. Returns the points written. Throws std::runtime_error naming the file.
