@@ -18,8 +18,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kFrames = 300;  // half the room's lap, 11.4 m
-// Lockstep runs are deterministic: the figure measured on this run is 7.4 mm (docs/tools/synth.md,
+constexpr int kFrames = 300;  // the first half of the room preset's 600 frames
+// Lockstep runs are deterministic: this run measured 8.80 mm (the 600-frame figure is in docs/tools/synth.md,
 // Fisheye camera); the bound leaves room for another machine's floating point, not for a failure.
 constexpr double kMaxAteM = 0.015;
 
