@@ -41,6 +41,7 @@ CameraModel to_camera_model(const msg::CameraModel& message, const std::string& 
   switch (runtime::wire_value(message.distortion_model)) {  // any value may come (runtime/wire_enum.hpp)
     case heslam_msg_DISTORTION_NONE: camera.distortion_model = DistortionModel::kNone; break;
     case heslam_msg_DISTORTION_RADIAL_TANGENTIAL: camera.distortion_model = DistortionModel::kRadialTangential; break;
+    case heslam_msg_DISTORTION_EQUIDISTANT: camera.distortion_model = DistortionModel::kEquidistant; break;
     default:
       throw std::runtime_error("calibration '" + source + "': " + which + ".distortion_model: unknown value " +
                                std::to_string(runtime::wire_value(message.distortion_model)));

@@ -330,7 +330,7 @@ TEST(FrontendOptions, OrbSlam3SettingsFileIsHonoured) {
   EXPECT_EQ(options.settings_unused_keys, (std::vector<std::string>{"ORBextractor.nFeaturess", "Viewer.KeyFrameSize"}));
   EXPECT_DOUBLE_EQ(options.settings_camera_fx, 400.0);
   EXPECT_NEAR(options.settings_camera_bf, 40.0, 1e-9);
-  expect_error_naming_key("File.version: \"1.0\"\nCamera.type: \"KannalaBrandt8\"\n", "Camera.type");
+  expect_error_naming_key("File.version: \"1.0\"\nCamera.type: \"Rectified\"\n", "Camera.type");
   expect_error_naming_key("ThDepth: 40.0\nStereo.ThDepth: 60.0\n", "Stereo.ThDepth");
 }
 

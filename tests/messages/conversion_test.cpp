@@ -73,6 +73,22 @@ TEST(MessageConversion, CalibrationRoundTripIsExact) {
   EXPECT_FALSE(calibration.explicit_rectification.has_value());
 }
 
+// A fisheye (equidistant) camera keeps its model and its four coefficients on the wire.
+TEST(MessageConversion, EquidistantCalibrationRoundTripIsExact) {
+  msg::StereoCalibration message{};
+  message.left = {752, 480, 330.0, 331.0, 375.5, 239.5, heslam_msg_DISTORTION_EQUIDISTANT, {}, {}};
+  message.right = message.left;
+  std::vector<double> distortion{0.003482389402, 0.000715034845, -0.002053236141, 0.000202936736};
+  runtime::borrow(message.left.distortion, distortion);
+  runtime::borrow(message.right.distortion, distortion);
+  std::string source = "tum_vi.yaml";
+  message.source = runtime::borrow(source);
+  const StereoCalibration calibration = to_calibration(message);
+  EXPECT_EQ(calibration.left.distortion_model, DistortionModel::kEquidistant);
+  EXPECT_EQ(calibration.right.distortion_model, DistortionModel::kEquidistant);
+  EXPECT_EQ(calibration.left.distortion, distortion);
+}
+
 TEST(MessageConversion, CalibrationWithoutFocalLengthNamesTheSource) {
   msg::StereoCalibration message{};
   std::string source = "bad.yaml";

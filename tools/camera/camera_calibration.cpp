@@ -96,11 +96,14 @@ CameraModel kalibr_camera(const cv::FileNode& node, const std::string& where) {
   if (distortion == "radtan") {
     camera.distortion_model = DistortionModel::kRadialTangential;
     camera.distortion = numbers(node["distortion_coeffs"], where + ".distortion_coeffs", 4);
+  } else if (distortion == "equidistant") {
+    camera.distortion_model = DistortionModel::kEquidistant;
+    camera.distortion = numbers(node["distortion_coeffs"], where + ".distortion_coeffs", 4);
   } else if (distortion == "none") {
     camera.distortion_model = DistortionModel::kNone;
   } else {
-    throw std::runtime_error(where + ".distortion_model: '" + distortion +
-                             "' is not supported (radtan or none; equidistant fisheye is not implemented yet)");
+    throw std::runtime_error(where + ".distortion_model: '" + distortion.substr(0, 40) +
+                             "' is not supported (radtan, equidistant or none)");
   }
   return camera;
 }

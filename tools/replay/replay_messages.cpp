@@ -24,9 +24,11 @@ void fill_camera(const CameraModel& camera, std::vector<double>& distortion, msg
   out.fy_px = camera.fy_px;
   out.cx_px = camera.cx_px;
   out.cy_px = camera.cy_px;
-  out.distortion_model = camera.distortion_model == DistortionModel::kRadialTangential
-                             ? heslam_msg_DISTORTION_RADIAL_TANGENTIAL
-                             : heslam_msg_DISTORTION_NONE;
+  switch (camera.distortion_model) {
+    case DistortionModel::kNone: out.distortion_model = heslam_msg_DISTORTION_NONE; break;
+    case DistortionModel::kRadialTangential: out.distortion_model = heslam_msg_DISTORTION_RADIAL_TANGENTIAL; break;
+    case DistortionModel::kEquidistant: out.distortion_model = heslam_msg_DISTORTION_EQUIDISTANT; break;
+  }
   distortion = camera.distortion;
   runtime::borrow(out.distortion, distortion);
   row_major(camera.T_BS.matrix(), out.T_BS);

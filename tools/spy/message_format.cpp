@@ -112,6 +112,15 @@ const char* encoding_name(const heslam_msg_ImageEncoding& field) {
   return "unknown";
 }
 
+std::string distortion_name(std::int64_t value) {
+  switch (value) {
+    case heslam_msg_DISTORTION_NONE: return "none";
+    case heslam_msg_DISTORTION_RADIAL_TANGENTIAL: return "radtan";
+    case heslam_msg_DISTORTION_EQUIDISTANT: return "equidistant";
+    default: return "unknown(" + std::to_string(value) + ")";
+  }
+}
+
 std::string raw_camera(const msg::CameraModel& value) {
   std::string distortion = "[";
   const auto coefficients = runtime::view(value.distortion);
@@ -119,10 +128,9 @@ std::string raw_camera(const msg::CameraModel& value) {
   distortion += "]";
   return "{size: " + std::to_string(value.width_px) + "x" + std::to_string(value.height_px) +
          ", fx_px: " + number(value.fx_px) + ", fy_px: " + number(value.fy_px) + ", cx_px: " + number(value.cx_px) +
-         ", cy_px: " + number(value.cy_px) + ", distortion: " +
-         (runtime::wire_value(value.distortion_model) == heslam_msg_DISTORTION_RADIAL_TANGENTIAL ? "radtan "
-                                                                                                 : "none ") +
-         distortion + ", T_BS: " + array(value.T_BS) + "}";
+         ", cy_px: " + number(value.cy_px) +
+         ", distortion: " + distortion_name(runtime::wire_value(value.distortion_model)) + " " + distortion +
+         ", T_BS: " + array(value.T_BS) + "}";
 }
 
 }  // namespace

@@ -4,13 +4,47 @@
 #include <algorithm>
 #include <cmath>
 
+#include <stdexcept>
+#include <string>
+
 #include <Eigen/Dense>
+
+#include "components/core/camera/equidistant.hpp"
 
 namespace heslam::synth {
 namespace {
 
 constexpr int kNewtonIterations = 20;
 constexpr double kNewtonTolerance = 1e-14;
+
+// Every pixel of an equidistant lens looks less than kMaxFisheyeRayDeg off the axis, and theta_d grows
+// with theta up to there (else two rays would share a pixel): checked at the farthest pixel's radius.
+void check_fisheye_field_of_view(const CameraSpec& camera) {
+  double theta_d_max = 0.0;
+  for (const double c : {0.0, camera.width_px - 1.0}) {
+    for (const double r : {0.0, camera.height_px - 1.0}) {
+      theta_d_max =
+          std::max(theta_d_max, std::hypot((c - camera.cx_px) / camera.fx_px, (r - camera.cy_px) / camera.fy_px));
+    }
+  }
+  const std::vector<double>& k = camera.distortion;
+  const double theta_max = CameraRays::kMaxFisheyeRayDeg * M_PI / 180.0;
+  constexpr int kSteps = 1000;
+  double previous = 0.0;
+  for (int i = 1; i <= kSteps; ++i) {
+    const double theta_d = heslam::equidistant_theta_d(theta_max * i / kSteps, k);
+    if (theta_d <= previous) {
+      throw std::runtime_error("camera.distortion: the equidistant lens is not monotonic below " +
+                               std::to_string(CameraRays::kMaxFisheyeRayDeg) + " deg");
+    }
+    previous = theta_d;
+  }
+  if (theta_d_max >= previous) {
+    throw std::runtime_error("camera: the equidistant lens sees " + std::to_string(CameraRays::kMaxFisheyeRayDeg) +
+                             " deg or more off its axis in the image corners; the renderer needs less (a longer fx, "
+                             "or a smaller image)");
+  }
+}
 
 }  // namespace
 
@@ -52,10 +86,18 @@ CameraRays::CameraRays(const CameraSpec& camera, bool apply_distortion)
   vignette_.assign(n, 1.0f);
   std::vector<double> no_distortion;
   const std::vector<double>& k = distorted_ ? camera.distortion : no_distortion;
+  const bool fisheye = distorted_ && camera.lens == LensModel::kEquidistant;
+  if (fisheye) check_fisheye_field_of_view(camera);
   for (int r = 0; r < height_; ++r) {
     for (int c = 0; c < width_; ++c) {
       const Eigen::Vector2d xd((c - camera.cx_px) / camera.fx_px, (r - camera.cy_px) / camera.fy_px);
-      const Eigen::Vector2d xu = undistort_radtan(xd, k);
+      Eigen::Vector2d xu;
+      if (fisheye) {
+        const Eigen::Vector3d ray = equidistant_undistort_ray(xd, camera.distortion);
+        xu = ray.head<2>() / ray.z();
+      } else {
+        xu = undistort_radtan(xd, k);
+      }
       const std::size_t i =
           static_cast<std::size_t>(r) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(c);
       x_[i] = static_cast<float>(xu.x());

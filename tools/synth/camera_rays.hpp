@@ -1,6 +1,7 @@
 // Per-pixel viewing rays of one raw camera, precomputed once: pixel (c, r) (OpenCV convention, integer
 // = pixel centre) maps to the undistorted normalized ray (x, y, 1). With radial-tangential distortion
-// the rendered image is the distorted one: each distorted pixel looks along its undistorted ray.
+// the rendered image is the distorted one: each distorted pixel looks along its undistorted ray; so with
+// an equidistant (fisheye) lens, whose every pixel must look less than kMaxFisheyeRayDeg off the axis.
 #pragma once
 
 #include <vector>
@@ -18,6 +19,9 @@ Eigen::Vector2d undistort_radtan(const Eigen::Vector2d& xy_distorted, const std:
 
 class CameraRays {
  public:
+  // The renderer intersects rays (x, y, 1): a fisheye pixel must see in front of the camera.
+  static constexpr double kMaxFisheyeRayDeg = 85.0;
+
   static constexpr int kTileSize = 16;  // pixels; quads are culled against tiles' ray bounds
 
   struct Tile {
@@ -25,6 +29,8 @@ class CameraRays {
     float x_min, x_max, y_min, y_max;  // bounds of the normalized rays inside
   };
 
+  // Throws std::runtime_error (one line) when an equidistant lens sees kMaxFisheyeRayDeg or more off its
+  // axis, or is not monotonic, in some pixel.
   CameraRays(const CameraSpec& camera, bool apply_distortion);
 
   int width_px() const { return width_; }

@@ -25,6 +25,7 @@ namespace {
 // The command line, declared once for the parser and the usage.
 struct Arguments {
   std::string preset_name;
+  std::string camera_name;
   std::string out_dir;
   heslam::synth::OutputFormat format = heslam::synth::OutputFormat::kEuroc;
   bool quiet = false;
@@ -44,12 +45,16 @@ struct Arguments {
 heslam::runtime::Flags synth_flags(Arguments& a) {
   using heslam::synth::OutputFormat;
   heslam::runtime::Flags flags(
-      "heslam-synth --preset NAME|FILE.yaml --out DIR [--seed N] [--frames N] [--format euroc|kitti]\n"
+      "heslam-synth --preset NAME|FILE.yaml --out DIR [--camera NAME|FILE.yaml] [--seed N] [--frames N]\n"
+      "                    [--format euroc|kitti]\n"
       "                    [--threads 1|2] [--no-events] [--quiet]\n"
       "       heslam-synth --list",
       "  progress on stderr: a live line on a terminal, a line per 10 % otherwise, none with --quiet");
   flags.text("--preset", "NAME|FILE.yaml", &a.preset_name, "a built-in preset (--list) or a preset file")
       .text("--out", "DIR", &a.out_dir, "where the sequence is written")
+      .text("--camera", "NAME|FILE.yaml", &a.camera_name,
+            "the preset seen through this camera instead (config/synth/cameras/NAME.yaml, e.g.\n"
+            "fisheye: an equidistant stereo pair; its camera: fields replace the preset's)")
       .integer("--seed", "N", &a.options.seed, std::uint64_t{0}, std::numeric_limits<std::uint64_t>::max(),
                "trajectory jitter, oscillation phases and sensor noise (1)")
       .integer("--frames", "N", &a.options.frames, 0, std::numeric_limits<int>::max(),
@@ -148,7 +153,8 @@ int main(int argc, char** argv) {
     // KITTI images are rectified by definition: render ideal pinhole images for it.
     if (fmt == OutputFormat::kKitti) options.apply_distortion = false;
 
-    const Preset preset = load_preset(find_preset(preset_name));
+    Preset preset = load_preset(find_preset(preset_name));
+    if (!arguments.camera_name.empty()) apply_camera_file(find_camera(arguments.camera_name), preset);
     SequenceRenderer renderer(preset, options);
     if (!arguments.occupancy_gt.empty()) {
       const heslam::GridBand band{arguments.occupancy_band_min_m, arguments.occupancy_band_max_m};

@@ -58,6 +58,52 @@ EventKind parse_event(const std::string& s, const std::string& field, const fs::
   fail(file, field, "is '" + s + "', expected overexposure, darkness, haze, drift or stereo_gain");
 }
 
+// The camera: map of a preset or a camera file over `camera` (the fields given), then checked.
+void read_camera(const cv::FileNode& cam, const fs::path& f, CameraSpec& camera) {
+  if (!cam.empty()) {
+    if (!cam.isMap()) fail(f, "camera", "expected a map");
+    read_int(cam, "width", "camera.", f, camera.width_px);
+    read_int(cam, "height", "camera.", f, camera.height_px);
+    read_number(cam, "fx", "camera.", f, camera.fx_px);
+    read_number(cam, "fy", "camera.", f, camera.fy_px);
+    read_number(cam, "cx", "camera.", f, camera.cx_px);
+    read_number(cam, "cy", "camera.", f, camera.cy_px);
+    read_number(cam, "baseline_m", "camera.", f, camera.baseline_m);
+    read_number(cam, "rate_hz", "camera.", f, camera.rate_hz);
+    const cv::FileNode model = cam["distortion_model"];
+    if (!model.empty() && !model.isNone()) {
+      const std::string name = model.isString() ? static_cast<std::string>(model) : "";
+      if (name == "equidistant") {
+        camera.lens = LensModel::kEquidistant;
+      } else if (name == "radial-tangential" || name == "radtan") {
+        camera.lens = LensModel::kRadialTangential;
+      } else {
+        fail(f, "camera.distortion_model",
+             "is '" + name.substr(0, 40) + "', expected radial-tangential or equidistant");
+      }
+    }
+    const bool fisheye = camera.lens == LensModel::kEquidistant;
+    const char* expected_coefficients = fisheye ? "expected [k1, k2, k3, k4]" : "expected [k1, k2, p1, p2]";
+    const cv::FileNode d = cam["distortion"];
+    if (fisheye && (d.empty() || d.isNone() || !d.isSeq() || d.size() != 4)) {
+      fail(f, "camera.distortion", std::string(expected_coefficients) + " (an equidistant lens has 4 coefficients)");
+    }
+    if (!d.empty() && !d.isNone()) {
+      if (!d.isSeq() || (d.size() != 4 && d.size() != 0)) fail(f, "camera.distortion", expected_coefficients);
+      camera.distortion.clear();
+      for (const auto& v : d) {
+        if (!v.isReal() && !v.isInt()) fail(f, "camera.distortion", "expected numbers");
+        camera.distortion.push_back(static_cast<double>(v));
+      }
+    }
+  }
+  if (camera.width_px < 32 || camera.height_px < 32) fail(f, "camera.width/height", "must be >= 32");
+  require_positive(camera.fx_px, "camera.fx", f);
+  require_positive(camera.fy_px, "camera.fy", f);
+  require_positive(camera.baseline_m, "camera.baseline_m", f);
+  require_positive(camera.rate_hz, "camera.rate_hz", f);
+}
+
 }  // namespace
 
 std::string to_string(SceneKind kind) {
@@ -112,32 +158,7 @@ Preset load_preset(const fs::path& yaml_path) {
     fail(f, "texture_size_px", "must be a power of two >= 16");
   if (!root["photo_dir"].empty()) p.photo_dir = static_cast<std::string>(root["photo_dir"]);
 
-  const cv::FileNode cam = root["camera"];
-  if (!cam.empty()) {
-    if (!cam.isMap()) fail(f, "camera", "expected a map");
-    read_int(cam, "width", "camera.", f, p.camera.width_px);
-    read_int(cam, "height", "camera.", f, p.camera.height_px);
-    read_number(cam, "fx", "camera.", f, p.camera.fx_px);
-    read_number(cam, "fy", "camera.", f, p.camera.fy_px);
-    read_number(cam, "cx", "camera.", f, p.camera.cx_px);
-    read_number(cam, "cy", "camera.", f, p.camera.cy_px);
-    read_number(cam, "baseline_m", "camera.", f, p.camera.baseline_m);
-    read_number(cam, "rate_hz", "camera.", f, p.camera.rate_hz);
-    const cv::FileNode d = cam["distortion"];
-    if (!d.empty() && !d.isNone()) {
-      if (!d.isSeq() || (d.size() != 4 && d.size() != 0)) fail(f, "camera.distortion", "expected [k1, k2, p1, p2]");
-      p.camera.distortion.clear();
-      for (const auto& v : d) {
-        if (!v.isReal() && !v.isInt()) fail(f, "camera.distortion", "expected numbers");
-        p.camera.distortion.push_back(static_cast<double>(v));
-      }
-    }
-  }
-  if (p.camera.width_px < 32 || p.camera.height_px < 32) fail(f, "camera.width/height", "must be >= 32");
-  require_positive(p.camera.fx_px, "camera.fx", f);
-  require_positive(p.camera.fy_px, "camera.fy", f);
-  require_positive(p.camera.baseline_m, "camera.baseline_m", f);
-  require_positive(p.camera.rate_hz, "camera.rate_hz", f);
+  read_camera(root["camera"], f, p.camera);
 
   const cv::FileNode tr = root["trajectory"];
   if (!tr.empty()) {
@@ -240,6 +261,41 @@ std::vector<std::string> known_presets() {
   }
   std::sort(names.begin(), names.end());
   return names;
+}
+
+void apply_camera_file(const fs::path& yaml_path, Preset& preset) {
+  if (!fs::exists(yaml_path)) throw std::runtime_error(yaml_path.string() + ": camera file does not exist");
+  cv::FileStorage fs_in;
+  try {
+    fs_in.open(yaml_path.string(), cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {
+    throw std::runtime_error(yaml_path.string() + ": not readable as YAML (" + e.err + ")");
+  }
+  if (!fs_in.isOpened()) throw std::runtime_error(yaml_path.string() + ": cannot be opened as YAML");
+  const cv::FileNode camera = fs_in.root()["camera"];
+  if (camera.empty() || !camera.isMap()) fail(yaml_path, "camera", "is missing (a map of a preset's camera fields)");
+  read_camera(camera, yaml_path, preset.camera);
+}
+
+fs::path find_camera(const std::string& name_or_path) {
+  const fs::path as_path = name_or_path;
+  if (as_path.extension() == ".yaml" || as_path.extension() == ".yml") {
+    if (!fs::exists(as_path)) throw std::runtime_error(as_path.string() + ": camera file does not exist");
+    return as_path;
+  }
+  const fs::path dir = fs::path(HESLAM_SYNTH_PRESET_DIR) / "cameras";
+  if (fs::exists(dir / (name_or_path + ".yaml"))) return dir / (name_or_path + ".yaml");
+  std::vector<std::string> names;
+  if (fs::is_directory(dir)) {
+    for (const auto& entry : fs::directory_iterator(dir)) {
+      if (entry.path().extension() == ".yaml") names.push_back(entry.path().stem().string());
+    }
+  }
+  std::sort(names.begin(), names.end());
+  std::string list;
+  for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+  throw std::runtime_error("unknown camera '" + name_or_path + "' (known: " + (list.empty() ? "none found" : list) +
+                           "; or pass a path to a .yaml file)");
 }
 
 fs::path find_preset(const std::string& name_or_path) {

@@ -10,6 +10,10 @@ namespace heslam::synth {
 
 enum class SceneKind { kRoom, kCorridorLoop, kStreet, kTown, kMarkerWall };
 
+// The raw camera's lens: pinhole with radial-tangential distortion (k1 k2 p1 p2), or equidistant
+// (Kannala-Brandt) fisheye (k1 k2 k3 k4, components/core/camera/equidistant.hpp).
+enum class LensModel { kRadialTangential, kEquidistant };
+
 struct CameraSpec {
   int width_px = 752;
   int height_px = 480;
@@ -17,8 +21,10 @@ struct CameraSpec {
   double fy_px = 457.296;
   double cx_px = 367.215;
   double cy_px = 248.375;
-  std::vector<double> distortion;  // radial-tangential k1 k2 p1 p2; empty = ideal pinhole
-  double baseline_m = 0.11;        // right camera sits baseline_m along +x of the left camera
+  LensModel lens = LensModel::kRadialTangential;
+  // radial-tangential k1 k2 p1 p2, or equidistant k1 k2 k3 k4; empty = ideal pinhole (radtan only)
+  std::vector<double> distortion;
+  double baseline_m = 0.11;  // right camera sits baseline_m along +x of the left camera
   double rate_hz = 20.0;
 };
 
@@ -99,6 +105,12 @@ Preset load_preset(const std::filesystem::path& yaml_path);
 // Finds a preset by name (config/synth/<name>.yaml in the source tree or next to the executable's
 // share folder) or by path; throws listing the known presets when it does not exist.
 std::filesystem::path find_preset(const std::string& name_or_path);
+
+// A camera file (config/synth/cameras/NAME.yaml, e.g. fisheye): its camera: map, a preset's camera
+// fields, laid over `preset`'s camera (heslam-synth --camera). Throws one line naming file and field.
+void apply_camera_file(const std::filesystem::path& yaml_path, Preset& preset);
+// NAME (config/synth/cameras/NAME.yaml) or a path to a .yaml file.
+std::filesystem::path find_camera(const std::string& name_or_path);
 std::vector<std::string> known_presets();
 
 }  // namespace heslam::synth

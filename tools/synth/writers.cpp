@@ -86,10 +86,15 @@ void write_euroc_sensor_yaml(const fs::path& file, const SequenceRenderer& r, in
       << "resolution: [" << c.width_px << ", " << c.height_px << "]\n"
       << "camera_model: pinhole\n"
       << "intrinsics: [" << fmt("%.9g, %.9g, %.9g, %.9g", c.fx_px, c.fy_px, c.cx_px, c.cy_px) << "] #fu, fv, cu, cv\n"
-      << "distortion_model: radial-tangential\n";
+      << "distortion_model: " << (distorted && c.lens == LensModel::kEquidistant ? "equidistant" : "radial-tangential")
+      << "\n";
   if (distorted) {
+    // A fisheye's with 17 significant digits: the reader gets the lens the images were rendered with.
+    const std::vector<double>& k = c.distortion;
     out << "distortion_coefficients: ["
-        << fmt("%.9g, %.9g, %.9g, %.9g", c.distortion[0], c.distortion[1], c.distortion[2], c.distortion[3]) << "]\n";
+        << (c.lens == LensModel::kEquidistant ? fmt("%.17g, %.17g, %.17g, %.17g", k[0], k[1], k[2], k[3])
+                                              : fmt("%.9g, %.9g, %.9g, %.9g", k[0], k[1], k[2], k[3]))
+        << "]\n";
   } else {
     out << "distortion_coefficients: [0.0, 0.0, 0.0, 0.0]\n";
   }
@@ -190,6 +195,32 @@ void write_orbslam_settings(const fs::path& file, const SequenceRenderer& r) {
       << "Viewer.KeyFrameSize: 0.05\nViewer.KeyFrameLineWidth: 1\nViewer.GraphLineWidth: 0.9\nViewer.PointSize: 2\n"
       << "Viewer.CameraSize: 0.08\nViewer.CameraLineWidth: 3\nViewer.ViewpointX: 0\nViewer.ViewpointY: -0.7\n"
       << "Viewer.ViewpointZ: -1.8\nViewer.ViewpointF: 500\n";
+}
+
+// ORB-SLAM3 stereo settings (File.version "1.0") for a fisheye sequence: ORB-SLAM2's format has no
+// fisheye lens, ORB-SLAM3's "KannalaBrandt8" has (its TUM-VI examples): Camera1/2 with k1..k4 and
+// Stereo.T_c1_c2 (camera 2 -> camera 1: the right camera baseline_m along +x).
+void write_orbslam3_fisheye_settings(const fs::path& file, const SequenceRenderer& r) {
+  const CameraSpec& c = r.preset().camera;
+  auto out = open_out(file);
+  out << "%YAML:1.0\n\n# ORB-SLAM3 stereo fisheye settings for a heslam-synth sequence (preset " << r.preset().name
+      << ").\n# stereo_euroc VOC THIS_FILE SEQ/mav0/cam0/data SEQ/mav0/cam1/data SEQ/timestamps.txt\n"
+      << "File.version: \"1.0\"\nCamera.type: \"KannalaBrandt8\"\n\n";
+  for (const char* camera : {"Camera1", "Camera2"}) {
+    out << fmt("%s.fx: %.17g\n%s.fy: %.17g\n%s.cx: %.17g\n%s.cy: %.17g\n", camera, c.fx_px, camera, c.fy_px, camera,
+               c.cx_px, camera, c.cy_px)
+        << fmt("%s.k1: %.17g\n%s.k2: %.17g\n%s.k3: %.17g\n%s.k4: %.17g\n", camera, c.distortion[0], camera,
+               c.distortion[1], camera, c.distortion[2], camera, c.distortion[3])
+        << fmt("%s.overlappingBegin: 0\n%s.overlappingEnd: %d\n\n", camera, camera, c.width_px - 1);
+  }
+  out << "Camera.width: " << c.width_px << "\nCamera.height: " << c.height_px << "\n"
+      << fmt("Camera.fps: %g\nCamera.RGB: 1\n\n", c.rate_hz)
+      << "Stereo.ThDepth: 35.0\nStereo.T_c1_c2: !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: d\n"
+      << fmt("   data: [1.0, 0.0, 0.0, %.17g, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]\n\n",
+             c.baseline_m)
+      << "ORBextractor.nFeatures: " << kOrbslam2FeaturesEuroc
+      << "\nORBextractor.scaleFactor: 1.2\nORBextractor.nLevels: 8\n"
+      << "ORBextractor.iniThFAST: 20\nORBextractor.minThFAST: 7\n";
 }
 
 void write_metadata(const fs::path& file, const SequenceRenderer& r, OutputFormat format) {
@@ -340,7 +371,11 @@ void write_sequence(SequenceRenderer& renderer, OutputFormat format, const fs::p
     write_kitti(renderer, out_dir, progress);
   }
   write_metadata(out_dir / "synth.yaml", renderer, format);
-  write_orbslam_settings(out_dir / "orbslam2_settings.yaml", renderer);
+  if (renderer.distortion_applied() && renderer.preset().camera.lens == LensModel::kEquidistant) {
+    write_orbslam3_fisheye_settings(out_dir / "orbslam3_settings.yaml", renderer);
+  } else {
+    write_orbslam_settings(out_dir / "orbslam2_settings.yaml", renderer);
+  }
 }
 
 }  // namespace heslam::synth

@@ -143,10 +143,14 @@ CameraModel read_euroc_camera(const std::filesystem::path& file, double* rate_hz
   if (distortion == "radial-tangential" || distortion == "radtan") {
     camera.distortion_model = DistortionModel::kRadialTangential;
     camera.distortion = read_sequence(fs["distortion_coefficients"], file, "distortion_coefficients", {4, 5});
+  } else if (distortion == "equidistant") {
+    camera.distortion_model = DistortionModel::kEquidistant;
+    camera.distortion = read_sequence(fs["distortion_coefficients"], file, "distortion_coefficients", {4});
   } else if (distortion == "none" || distortion.empty()) {
     camera.distortion_model = DistortionModel::kNone;
   } else {
-    fail(file, "distortion_model", "expected 'radial-tangential' or 'none', got '" + distortion + "'");
+    fail(file, "distortion_model",
+         "expected 'radial-tangential', 'equidistant' or 'none', got '" + distortion.substr(0, 40) + "'");
   }
 
   const cv::FileNode t_bs = fs["T_BS"];
@@ -162,6 +166,15 @@ CameraModel read_euroc_camera(const std::filesystem::path& file, double* rate_hz
 }
 
 }  // namespace
+
+const char* to_string(DistortionModel model) {
+  switch (model) {
+    case DistortionModel::kNone: return "none";
+    case DistortionModel::kRadialTangential: return "radial-tangential";
+    case DistortionModel::kEquidistant: return "equidistant";
+  }
+  return "?";
+}
 
 StereoCalibration load_euroc_calibration(const std::filesystem::path& mav0_dir) {
   const std::filesystem::path left_file = mav0_dir / "cam0" / "sensor.yaml";
@@ -236,10 +249,13 @@ namespace {
 // pair, Camera1.* with Stereo.b for a rectified one; IMU.T_b_c1 (when given) places the rig on the body.
 StereoCalibration load_orbslam3_settings(const cv::FileStorage& fs, const std::filesystem::path& file) {
   const std::string type = fs["Camera.type"].isString() ? static_cast<std::string>(fs["Camera.type"]) : "";
-  if (type != "PinHole") {
+  if (type != "PinHole" && type != "KannalaBrandt8") {
     fail(file, "Camera.type",
-         "expected \"PinHole\" (heslam rectifies pinhole radial-tangential cameras; got '" + type.substr(0, 40) + "')");
+         "expected \"PinHole\" or \"KannalaBrandt8\" (heslam rectifies pinhole radial-tangential and equidistant "
+         "fisheye cameras; got '" +
+             type.substr(0, 40) + "')");
   }
+  const bool fisheye = type == "KannalaBrandt8";
   for (const char* key : {"Camera.newWidth", "Camera.newHeight"}) {
     if (!fs[key].empty()) fail(file, key, "not supported: give the calibration of the images as they are published");
   }
@@ -257,6 +273,17 @@ StereoCalibration load_orbslam3_settings(const cv::FileStorage& fs, const std::f
     camera.fy_px = read_positive(fs[name + ".fy"], file, name + ".fy");
     camera.cx_px = read_number(fs[name + ".cx"], file, name + ".cx");
     camera.cy_px = read_number(fs[name + ".cy"], file, name + ".cy");
+    if (fisheye) {
+      // Kannala-Brandt: k1 k2 k3 k4, all four required (ORB-SLAM3 reads all four).
+      for (const char* k : {".k1", ".k2", ".k3", ".k4"}) {
+        camera.distortion.push_back(read_number(fs[name + k], file, name + k));
+      }
+      for (const char* k : {".p1", ".p2"}) {
+        if (!fs[name + k].empty()) fail(file, name + k, "not a KannalaBrandt8 coefficient (k1 k2 k3 k4)");
+      }
+      camera.distortion_model = DistortionModel::kEquidistant;
+      return camera;
+    }
     // Radial-tangential k1 k2 p1 p2 [k3] when any of them is given (then the first four are required).
     const std::array<std::string, 4> required{name + ".k1", name + ".k2", name + ".p1", name + ".p2"};
     if (std::none_of(required.begin(), required.end(), [&](const std::string& key) { return !fs[key].empty(); })) {
@@ -284,6 +311,7 @@ StereoCalibration load_orbslam3_settings(const cv::FileStorage& fs, const std::f
   calibration.left = read_camera("Camera1");
   calibration.left.T_BS = T_b_c1;
   if (fs["Camera2.fx"].empty()) {
+    if (fisheye) fail(file, "Camera2.fx", "missing: a KannalaBrandt8 pair is raw (give Camera2.* and Stereo.T_c1_c2)");
     // Rectified pair (ORB-SLAM3's KITTI files): Camera1 is the rectified model, Stereo.b the baseline.
     if (calibration.left.distortion_model != DistortionModel::kNone &&
         std::any_of(calibration.left.distortion.begin(), calibration.left.distortion.end(),

@@ -1,5 +1,6 @@
 // Raw (unrectified) stereo calibration and its loaders for the formats users already have:
-// EuRoC ASL sensor.yaml pairs, KITTI odometry calib.txt, and ORB-SLAM2 stereo settings files.
+// EuRoC ASL sensor.yaml pairs, KITTI odometry calib.txt, and ORB-SLAM2 / ORB-SLAM3 stereo settings files.
+// Lenses: pinhole with radial-tangential distortion, or equidistant (Kannala-Brandt) fisheye.
 //
 // Every loader throws std::runtime_error whose what() is one line naming the file and the field.
 #pragma once
@@ -15,7 +16,11 @@
 
 namespace heslam {
 
-enum class DistortionModel { kNone, kRadialTangential };  // radtan: k1 k2 p1 p2 [k3]
+// radtan: k1 k2 p1 p2 [k3]; equidistant (Kannala-Brandt fisheye, camera/equidistant.hpp): k1 k2 k3 k4.
+enum class DistortionModel { kNone, kRadialTangential, kEquidistant };
+
+// "none", "radial-tangential" or "equidistant" (the EuRoC / Kalibr spelling).
+const char* to_string(DistortionModel model);
 
 // One raw camera of the rig.
 struct CameraModel {
@@ -26,7 +31,7 @@ struct CameraModel {
   double cx_px = 0;
   double cy_px = 0;
   DistortionModel distortion_model = DistortionModel::kNone;
-  std::vector<double> distortion;  // k1 k2 p1 p2 [k3]
+  std::vector<double> distortion;  // k1 k2 p1 p2 [k3] (radtan) or k1 k2 k3 k4 (equidistant)
   Pose3 T_BS = Pose3::Identity();  // sensor (this camera) -> body
 };
 
@@ -56,7 +61,8 @@ struct StereoCalibration {
   Pose3 T_rl() const { return right.T_BS.inverse() * left.T_BS; }
 };
 
-// EuRoC ASL layout: reads mav0_dir/cam0/sensor.yaml (left) and mav0_dir/cam1/sensor.yaml (right).
+// EuRoC ASL layout: reads mav0_dir/cam0/sensor.yaml (left) and mav0_dir/cam1/sensor.yaml (right);
+// distortion_model radial-tangential (radtan), equidistant (4 coefficients, as TUM-VI) or none.
 StereoCalibration load_euroc_calibration(const std::filesystem::path& mav0_dir);
 
 // KITTI odometry calib.txt: rectified projections P0 (left) and P1 (right); the image size is not in
@@ -68,6 +74,9 @@ StereoCalibration load_kitti_calibration(const std::filesystem::path& calib_txt,
 // ORB-SLAM3 stereo settings (File.version "1.0", Camera.type "PinHole"): Camera1.fx/fy/cx/cy[/k1 k2 p1
 // p2 [k3]], Camera.width/height (+ Camera.fps), and either Camera2.* + Stereo.T_c1_c2 (raw pair, camera
 // 2 -> camera 1) or Stereo.b (rectified pair); IMU.T_b_c1, when present, is the left camera's T_BS.
+// Camera.type "KannalaBrandt8" (fisheye, as its TUM-VI files): Camera1/2.k1 k2 k3 k4 are required, the
+// pair is raw (Camera2.* + Stereo.T_c1_c2); Camera1/2.overlappingBegin/End are ORB-SLAM3's own and
+// ignored (heslam rectifies the whole pair).
 StereoCalibration load_orbslam_settings(const std::filesystem::path& settings_yaml);
 
 }  // namespace heslam

@@ -16,6 +16,10 @@ namespace {
 
 // alpha 0: the rectified image holds only valid pixels (no black borders), as ORB-SLAM2's EuRoC.yaml.
 constexpr double kRectifyAlpha = 0.0;
+// Fisheye pairs: balance 0 picks the larger of OpenCV's two focal lengths (the undistorted image's edge
+// midpoints inside the raw image), the fisheye counterpart of alpha 0; fov_scale 1 keeps it.
+constexpr double kFisheyeBalance = 0.0;
+constexpr double kFisheyeFovScale = 1.0;
 
 cv::Mat camera_matrix(const CameraModel& c) {
   return (cv::Mat_<double>(3, 3) << c.fx_px, 0.0, c.cx_px, 0.0, c.fy_px, c.cy_px, 0.0, 0.0, 1.0);
@@ -66,6 +70,10 @@ void check_finite(const StereoCalibration& calibration) {
       check(name + " distortion coefficient " + std::to_string(i), std::isfinite(camera->distortion[i]));
     }
     check(name + " T_BS", camera->T_BS.matrix().allFinite());
+    if (camera->distortion_model == DistortionModel::kEquidistant && camera->distortion.size() != 4) {
+      throw std::runtime_error(calibration.source + ": " + name + " distortion: expected 4 equidistant coefficients " +
+                               "k1 k2 k3 k4, got " + std::to_string(camera->distortion.size()));
+    }
   }
   if (const auto& e = calibration.explicit_rectification) {
     check("rectification R_left", e->R_left.allFinite());
@@ -125,6 +133,12 @@ StereoRectifier::StereoRectifier(const StereoCalibration& calibration) {
 void StereoRectifier::compute_rectification(const StereoCalibration& calibration) {
   const CameraModel& left = calibration.left;
   const CameraModel& right = calibration.right;
+  const bool fisheye = left.distortion_model == DistortionModel::kEquidistant;
+  if (fisheye != (right.distortion_model == DistortionModel::kEquidistant)) {
+    throw std::runtime_error(calibration.source + ": left camera " + to_string(left.distortion_model) +
+                             ", right camera " + to_string(right.distortion_model) +
+                             ": expected both equidistant (fisheye) or neither");
+  }
   {
     cv::Mat R1, R2, P1, P2;
     if (calibration.explicit_rectification) {
@@ -133,6 +147,14 @@ void StereoRectifier::compute_rectification(const StereoCalibration& calibration
       R2 = to_cv(e.R_right);
       P1 = to_cv(e.P_left);
       P2 = to_cv(e.P_right);
+    } else if (fisheye) {
+      const Pose3 T_rl = calibration.T_rl();
+      const cv::Mat R = to_cv(Eigen::Matrix3d(T_rl.linear()));
+      const cv::Mat T = to_cv(Eigen::Matrix<double, 3, 1>(T_rl.translation()));
+      cv::Mat Q;
+      cv::fisheye::stereoRectify(camera_matrix(left), distortion_vector(left), camera_matrix(right),
+                                 distortion_vector(right), raw_size_, R, T, R1, R2, P1, P2, Q, cv::CALIB_ZERO_DISPARITY,
+                                 raw_size_, kFisheyeBalance, kFisheyeFovScale);
     } else {
       const Pose3 T_rl = calibration.T_rl();
       const cv::Mat R = to_cv(Eigen::Matrix3d(T_rl.linear()));
@@ -150,10 +172,18 @@ void StereoRectifier::compute_rectification(const StereoCalibration& calibration
     Pose3 T_cam0_rect = Pose3::Identity();
     T_cam0_rect.linear() = to_eigen3(R1).transpose();
     T_B_rect_ = left.T_BS * T_cam0_rect;
-    cv::initUndistortRectifyMap(camera_matrix(left), distortion_vector(left), R1, P1.colRange(0, 3), raw_size_,
-                                CV_16SC2, left_map_xy_, left_map_frac_);
-    cv::initUndistortRectifyMap(camera_matrix(right), distortion_vector(right), R2, P2.colRange(0, 3),
-                                cv::Size(right.width_px, right.height_px), CV_16SC2, right_map_xy_, right_map_frac_);
+    if (fisheye) {
+      cv::fisheye::initUndistortRectifyMap(camera_matrix(left), distortion_vector(left), R1, P1.colRange(0, 3),
+                                           raw_size_, CV_16SC2, left_map_xy_, left_map_frac_);
+      cv::fisheye::initUndistortRectifyMap(camera_matrix(right), distortion_vector(right), R2, P2.colRange(0, 3),
+                                           cv::Size(right.width_px, right.height_px), CV_16SC2, right_map_xy_,
+                                           right_map_frac_);
+    } else {
+      cv::initUndistortRectifyMap(camera_matrix(left), distortion_vector(left), R1, P1.colRange(0, 3), raw_size_,
+                                  CV_16SC2, left_map_xy_, left_map_frac_);
+      cv::initUndistortRectifyMap(camera_matrix(right), distortion_vector(right), R2, P2.colRange(0, 3),
+                                  cv::Size(right.width_px, right.height_px), CV_16SC2, right_map_xy_, right_map_frac_);
+    }
   }
   left_remap_ = BilinearRemap(left_map_xy_, left_map_frac_, raw_size_);
   right_remap_ = BilinearRemap(right_map_xy_, right_map_frac_, cv::Size(right.width_px, right.height_px));

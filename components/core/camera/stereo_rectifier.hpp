@@ -3,6 +3,9 @@
 // The rectified model comes from cv::stereoRectify with alpha 0 (only valid pixels, as ORB-SLAM2's
 // EuRoC settings), or from explicit LEFT/RIGHT R/P (ORB-SLAM2 settings), or is the input model when
 // the calibration says the images are already rectified (KITTI), in which case rectify() is a no-op.
+// An equidistant (fisheye) pair is rectified to a pinhole pair by cv::fisheye::stereoRectify with
+// balance 0 (the focal length that keeps only valid pixels along the image's edges) and
+// cv::fisheye::initUndistortRectifyMap: the same CV_16SC2 tables, remapped alike.
 #pragma once
 
 #include <opencv2/core.hpp>

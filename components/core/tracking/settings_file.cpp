@@ -31,7 +31,9 @@ bool calibration_key(const std::string& key) {
   for (const std::string_view camera : {"Camera1.", "Camera2."}) {
     if (key.rfind(camera, 0) != 0) continue;
     const std::string_view field = std::string_view(key).substr(camera.size());
-    for (const std::string_view known : {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"}) {
+    // k4: KannalaBrandt8; overlapping*: ORB-SLAM3's fisheye overlap, read and ignored by the loader.
+    for (const std::string_view known :
+         {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "overlappingBegin", "overlappingEnd"}) {
       if (field == known) return true;
     }
   }
