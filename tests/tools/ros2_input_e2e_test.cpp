@@ -3,6 +3,8 @@
 // ROS 2 input and the full system (config/pipelines/ros2_input.yaml). Real time, so only what does not
 // depend on the machine's speed is asserted: the run succeeds and every frame the camera sent has a pose,
 // is counted lost, or was counted unpaired by the input. The ATE is printed next to the replay's.
+// Stereo-inertial: the same with MH01's imu0 as sensor_msgs/Imu (config/pipelines/ros2_input_inertial.yaml),
+// heslam-ros2-bridge beside it, and the TF latency (image published -> its TF received) printed.
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -21,6 +23,20 @@ namespace fs = std::filesystem;
 using std::chrono::seconds;
 
 constexpr int kClipFrames = 160;  // euroc_mh01_handheld (/work/shared/data/README.md)
+
+// The input did not publish a frame the camera sent only with a count of the images it dropped (without
+// a partner, before the CameraInfo pair, or bad), each also one line of its own.
+void expect_every_frame_counted(const std::string& output, int published) {
+  static const std::regex counts(R"(published (\d+) stereo frames; (\d+) images unpaired, (\d+) before a usable )"
+                                 R"(CameraInfo pair, (\d+) bad)");
+  std::smatch match;
+  ASSERT_TRUE(std::regex_search(output, match, counts)) << output;
+  EXPECT_EQ(std::stoi(match[1]), published);
+  const int dropped = std::stoi(match[2]) + std::stoi(match[3]) + std::stoi(match[4]);
+  if (published < kClipFrames) {
+    EXPECT_GT(dropped, 0) << output;
+  }
+}
 
 TEST(Ros2InputEndToEnd, Mh01PlayedAsRos2TopicsIsTrackedByTheFullSystem) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
@@ -50,9 +66,7 @@ TEST(Ros2InputEndToEnd, Mh01PlayedAsRos2TopicsIsTrackedByTheFullSystem) {
   EXPECT_EQ(tracked + lost, published);
   EXPECT_LE(published, kClipFrames);
   // A frame the input did not publish was counted by it (a best-effort reader may lose an image).
-  if (published < kClipFrames) {
-    EXPECT_NE(output.find("unpaired"), std::string::npos) << output;
-  }
+  expect_every_frame_counted(output, published);
   EXPECT_EQ(eval::read_trajectory(dir.path() / "ros2.txt").size(), static_cast<std::size_t>(tracked));
   // CameraInfo carries no IMU extrinsic, so the input's body is the left camera: the trajectory is
   // scored against EuRoC's ground truth moved to cam0 (scored against the IMU body's, the lever arm and
@@ -63,6 +77,60 @@ TEST(Ros2InputEndToEnd, Mh01PlayedAsRos2TopicsIsTrackedByTheFullSystem) {
       "[ figures  ] MH01 through heslam-ros2-input, real time rate 1: tracked %d/%d (camera sent %d), ATE "
       "rmse %.2f mm\n",
       tracked, published, kClipFrames, ate_m * 1e3);
+}
+
+TEST(Ros2InputEndToEnd, Mh01WithImuPlayedAsRos2TopicsIsTrackedByTheStereoInertialSystem) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
+  const test::ScratchDir dir("ros2_input_inertial_mh01");
+  const int domain = test::exclusive_domain_id();
+  std::ofstream(dir.path() / "input.yaml") << "%YAML:1.0\n---\nend_after_idle_s: 3\n";
+  test::ChildProcess supervisor(
+      test::bin_dir() / "heslam-supervisor",
+      {(test::source_dir() / "config/pipelines/ros2_input_inertial.yaml").string(), "--domain", std::to_string(domain),
+       "--log-dir", (dir.path() / "logs").string(), "--arg", "output=" + (dir.path() / "ros2.txt").string(), "--arg",
+       "input_config=" + (dir.path() / "input.yaml").string(), "--arg", "imu_topic=imu0", "--arg",
+       "imu_calibration=" + (dataset / "mav0/imu0/sensor.yaml").string(), "--arg",
+       "imu_extrinsic=" + (dataset / "mav0/cam0/sensor.yaml").string(), "--arg", "ros2_bridge=heslam-ros2-bridge"},
+      dir.path(), "supervisor_ros2_input_inertial");
+  test::ChildProcess camera(test::bin_dir() / "heslam-test-ros2-camera",
+                            {"--domain", std::to_string(domain), "--dataset", dataset.string(), "--rate", "1",
+                             "--wait-readers-s", "120", "--imu-topic", "imu0", "--tf-latency", "on"},
+                            dir.path(), "ros2_camera_imu");
+  EXPECT_EQ(camera.wait(test::kPipelineTimeout).value_or(-1), 0) << camera.err();
+  const int code = test::finish(supervisor);
+  const std::string output = supervisor.out() + supervisor.err();
+  ASSERT_EQ(code, 0) << output;
+
+  static const std::regex summary(R"(tracked (\d+)/(\d+) frames, (\d+) lost)");
+  std::smatch match;
+  ASSERT_TRUE(std::regex_search(output, match, summary)) << output;
+  const int tracked = std::stoi(match[1]), published = std::stoi(match[2]), lost = std::stoi(match[3]);
+  EXPECT_EQ(tracked + lost, published);
+  EXPECT_LE(published, kClipFrames);
+  expect_every_frame_counted(output, published);
+  // The IMU went through: the input read the calibration's files and forwarded every reading it took;
+  // none was refused on the way (a refused reading is counted and named: "N dropped").
+  EXPECT_NE(output.find("IMU at (0.0652229, -0.0207064, -0.0080546) m in the left camera"), std::string::npos)
+      << output;
+  static const std::regex forwarded(R"(IMU: (\d+) readings forwarded, 0 dropped)");
+  ASSERT_TRUE(std::regex_search(output, match, forwarded)) << output;
+  EXPECT_GT(std::stoi(match[1]), 0);
+  EXPECT_NE(output.find("0 bad, 0 gaps"), std::string::npos) << output;
+  const eval::Trajectory estimate = eval::read_trajectory(dir.path() / "ros2.txt");
+  EXPECT_EQ(estimate.size(), static_cast<std::size_t>(tracked));
+  const double ate_m = eval::compute_ape(test::camera_ground_truth(dataset), estimate).translation_m.rmse;
+  static const std::regex initialized(R"(IMU initialized at frame (\d+))");
+  const bool imu_initialized = std::regex_search(output, match, initialized);
+  std::printf(
+      "[ figures  ] MH01 + imu0 through heslam-ros2-input, stereo-inertial, real time rate 1: tracked %d/%d (camera "
+      "sent %d), IMU %s, ATE rmse %.2f mm\n",
+      tracked, published, kClipFrames,
+      imu_initialized ? ("initialized at frame " + match[1].str()).c_str() : "not initialized", ate_m * 1e3);
+  const std::string camera_out = camera.out();
+  const std::size_t latency = camera_out.find("TF latency");
+  EXPECT_NE(latency, std::string::npos) << camera_out;
+  if (latency != std::string::npos) std::printf("[ figures  ] %s", camera_out.substr(latency).c_str());
 }
 
 }  // namespace

@@ -23,6 +23,7 @@ using TransformStamped = geometry_msgs_msg_dds__TransformStamped_;
 using TFMessage = tf2_msgs_msg_dds__TFMessage_;
 using Image = sensor_msgs_msg_dds__Image_;
 using CameraInfo = sensor_msgs_msg_dds__CameraInfo_;
+using Imu = sensor_msgs_msg_dds__Imu_;
 
 // sensor_msgs/PointField datatype constant for float32.
 inline constexpr std::uint8_t kPointFieldFloat32 = 7;
