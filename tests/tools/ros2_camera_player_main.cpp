@@ -8,7 +8,9 @@
 // latency from each left image's publication to the reception of the TF of its stamp: p50 / p99 / max
 // over the frames that got one, and how many did not (its TF reader is polled every ms: +-1 ms).
 //   heslam-test-ros2-camera --domain N --dataset DIR [--rate R] [--wait-readers-s S] [--imu-topic NAME]
-//                           [--tf-latency on]
+//                           [--tf-latency on] [--pause-after N --pause-s S] [--right-encoding bgr8]
+// Bad input on purpose: --pause-after N --pause-s S stops sending for S s after N frames (a camera
+// unplugged and plugged again); --right-encoding bgr8 sends the right images in colour (a mono/colour mixup).
 // Exit 0 when every frame was sent, 1 with one line on an unusable dataset or no reader.
 #include <algorithm>
 #include <atomic>
@@ -24,6 +26,7 @@
 #include <vector>
 
 #include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "runtime/participant.hpp"
 #include "runtime/qos.hpp"
@@ -136,6 +139,9 @@ int run(int argc, char** argv) {
   double wait_readers_s = 30.0;
   std::string imu_topic;
   bool tf_latency = false;
+  long pause_after = -1;  // frames
+  double pause_s = 0.0;
+  std::string right_encoding = "mono8";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--domain") domain = std::atoi(argv[i + 1]);
@@ -144,11 +150,14 @@ int run(int argc, char** argv) {
     if (flag == "--wait-readers-s") wait_readers_s = std::atof(argv[i + 1]);
     if (flag == "--imu-topic") imu_topic = argv[i + 1];
     if (flag == "--tf-latency") tf_latency = std::string(argv[i + 1]) == "on";
+    if (flag == "--pause-after") pause_after = std::atol(argv[i + 1]);
+    if (flag == "--pause-s") pause_s = std::atof(argv[i + 1]);
+    if (flag == "--right-encoding") right_encoding = argv[i + 1];
   }
   if (domain < 0 || dataset_path.empty() || !(rate > 0.0)) {
     std::fprintf(stderr,
                  "usage: heslam-test-ros2-camera --domain N --dataset DIR [--rate R] [--wait-readers-s S] "
-                 "[--imu-topic NAME] [--tf-latency on]\n");
+                 "[--imu-topic NAME] [--tf-latency on] [--pause-after N --pause-s S] [--right-encoding bgr8]\n");
     return 2;
   }
   const StereoDataset dataset = open_dataset(dataset_path);
@@ -209,7 +218,7 @@ int run(int argc, char** argv) {
   std::optional<TfLatency> latency;
   if (tf_latency) latency.emplace(participant);
   const std::string imu_frame_id = "imu_link";
-  const auto start = std::chrono::steady_clock::now();
+  auto start = std::chrono::steady_clock::now();
   const std::int64_t first_stamp = dataset.frames.front().stamp_ns;
   const auto at = [&](std::int64_t stamp_ns) {
     return start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
@@ -233,23 +242,30 @@ int run(int argc, char** argv) {
       ++readings_sent;
     }
   };
+  long sent = 0;
   for (const StereoFrameFiles& frame : dataset.frames) {
+    if (sent++ == pause_after) {
+      std::this_thread::sleep_for(std::chrono::duration<double>(pause_s));
+      start += std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(pause_s));
+    }
     const StereoImages pair = load_stereo_images(frame, size);
     if (pair.encoding != "mono8") throw std::runtime_error(frame.left.string() + ": expected grey (mono8) images");
     send_imu_until(frame.stamp_ns);
     std::this_thread::sleep_until(at(frame.stamp_ns));
-    const cv::Mat* mats[2] = {&pair.left, &pair.right};
+    cv::Mat right_colour;
+    if (right_encoding == "bgr8") cv::cvtColor(pair.right, right_colour, cv::COLOR_GRAY2BGR);
+    const cv::Mat* mats[2] = {&pair.left, right_colour.empty() ? &pair.right : &right_colour};
     for (int side = 0; side < 2; ++side) {
       infos[side].info.header.stamp = to_time(frame.stamp_ns);
       info_writers[side]->write(infos[side].info);
-      const std::string encoding = "mono8";
+      const std::string encoding = side == 1 ? right_encoding : "mono8";
       Image image{};
       image.header.stamp = to_time(frame.stamp_ns);  // both images of a pair stamped alike, as drivers do
       image.header.frame_id = runtime::borrow(infos[side].frame_id);
       image.width = static_cast<std::uint32_t>(mats[side]->cols);
       image.height = static_cast<std::uint32_t>(mats[side]->rows);
       image.encoding = runtime::borrow(encoding);
-      image.step = image.width;
+      image.step = static_cast<std::uint32_t>(mats[side]->step[0]);
       runtime::borrow(image.data,
                       std::span<const std::uint8_t>(mats[side]->data, mats[side]->total() * mats[side]->elemSize()));
       images[side]->write(image);

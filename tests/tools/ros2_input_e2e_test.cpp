@@ -5,11 +5,14 @@
 // is counted lost, or was counted unpaired by the input. The ATE is printed next to the replay's.
 // Stereo-inertial: the same with MH01's imu0 as sensor_msgs/Imu (config/pipelines/ros2_input_inertial.yaml),
 // heslam-ros2-bridge beside it, and the TF latency (image published -> its TF received) printed.
+// Bad input (issue 35), heslam-ros2-input alone: a camera that stops mid-run and comes back (said, counted,
+// the run goes on), a mono/colour mixup (every pair refused by name; no frame: exit 1 with a verdict).
 #include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <regex>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -131,6 +134,71 @@ TEST(Ros2InputEndToEnd, Mh01WithImuPlayedAsRos2TopicsIsTrackedByTheStereoInertia
   const std::size_t latency = camera_out.find("TF latency");
   EXPECT_NE(latency, std::string::npos) << camera_out;
   if (latency != std::string::npos) std::printf("[ figures  ] %s", camera_out.substr(latency).c_str());
+}
+
+struct InputRun {
+  int exit_code = -1;
+  std::string output;
+};
+
+// heslam-ros2-input alone (nothing reads its frames) fed by heslam-test-ros2-camera with camera_args.
+InputRun run_input_alone(const fs::path& dir, const std::string& config_text, std::vector<std::string> camera_args) {
+  const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
+  const int domain = test::exclusive_domain_id();
+  std::ofstream(dir / "input.yaml") << "%YAML:1.0\n---\n" << config_text;
+  test::ChildProcess input(test::bin_dir() / "heslam-ros2-input",
+                           {"--domain", std::to_string(domain), "--config", (dir / "input.yaml").string()}, dir,
+                           "ros2_input");
+  camera_args.insert(camera_args.end(),
+                     {"--domain", std::to_string(domain), "--dataset", dataset.string(), "--wait-readers-s", "60"});
+  test::ChildProcess camera(test::bin_dir() / "heslam-test-ros2-camera", camera_args, dir, "ros2_camera");
+  EXPECT_EQ(camera.wait(test::kPipelineTimeout).value_or(-1), 0) << camera.err();
+  InputRun run;
+  run.exit_code = input.wait(test::kPipelineTimeout).value_or(-1);
+  run.output = input.out() + input.err();
+  return run;
+}
+
+TEST(Ros2InputProcess, CameraStoppingMidRunIsSaidCountedAndTheRunGoesOn) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const test::ScratchDir dir("ros2_input_outage");
+  // 40 frames, 2.5 s of nothing (outage_after_s 1), the other 120; the run ends 4 s after the last image.
+  const InputRun run = run_input_alone(dir.path(), "end_after_idle_s: 4\noutage_after_s: 1\n",
+                                       {"--rate", "4", "--pause-after", "40", "--pause-s", "2.5"});
+  EXPECT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("for 1 s after"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("the camera stopped (unplugged, or its driver ended); waiting for it (camera outage 1)"),
+            std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("images again after"), std::string::npos) << run.output;
+  // The recording's end is an outage too (the second) until end_after_idle_s ends the run.
+  EXPECT_NE(run.output.find("published 160 stereo frames") == std::string::npos
+                ? run.output.find(" camera outages")
+                : run.output.find(" bad; 2 camera outages"),
+            std::string::npos)
+      << run.output;
+  // Frames came after the outage: more were published than before it (all 160 unless DDS lost one).
+  static const std::regex published(R"(published (\d+) stereo frames)");
+  std::smatch match;
+  ASSERT_TRUE(std::regex_search(run.output, match, published)) << run.output;
+  EXPECT_GT(std::stoi(match[1]), 40);
+}
+
+TEST(Ros2InputProcess, MonoColourMixupIsRefusedByNameAndNoFrameEndsTheRunWithAVerdict) {
+  HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
+  const test::ScratchDir dir("ros2_input_mixup");
+  const InputRun run =
+      run_input_alone(dir.path(), "end_after_idle_s: 2\n", {"--rate", "4", "--right-encoding", "bgr8"});
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("topics 'rt/stereo/left/image_raw' and 'rt/stereo/right/image_raw': field encoding: the "
+                            "pair at stamp "),
+            std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("mixes mono8 (left) and bgr8 (right): pair dropped"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("published 0 stereo frames"), std::string::npos) << run.output;
+  EXPECT_NE(test::last_line(run.output).find("images but published no stereo frame (each drop counted and said above)"),
+            std::string::npos)
+      << run.output;
 }
 
 }  // namespace

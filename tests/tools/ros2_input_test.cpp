@@ -229,6 +229,24 @@ TEST(Ros2Input, PairsByStampCountsUnpairedAndRefusesStampsGoingBackwards) {
   EXPECT_EQ(pairer.unpaired(), 1u + 10u - StereoPairer::kMaxPending);
 }
 
+// A left driver in mono8 and a right one in colour: the pair is refused naming both topics.
+TEST(Ros2Input, PairMixingMonoAndColourIsOneLineNamingBothTopics) {
+  StereoPairer::Pair pair;
+  pair.stamp_ns = 42;
+  pair.left.encoding = heslam_msg_ENCODING_MONO8;
+  pair.right.encoding = heslam_msg_ENCODING_BGR8;
+  try {
+    check_same_encoding(pair, "rt/left", "rt/right");
+    ADD_FAILURE() << "a mixed pair was taken";
+  } catch (const std::exception& error) {
+    EXPECT_EQ(std::string(error.what()),
+              "topics 'rt/left' and 'rt/right': field encoding: the pair at stamp 42 ns mixes mono8 (left) and bgr8 "
+              "(right): pair dropped");
+  }
+  pair.right.encoding = heslam_msg_ENCODING_MONO8;
+  EXPECT_NO_THROW(check_same_encoding(pair, "rt/left", "rt/right"));
+}
+
 const std::string kImuTopic = "rt/imu/data";
 
 Imu imu_message(std::int32_t sec, std::uint32_t nanosec) {

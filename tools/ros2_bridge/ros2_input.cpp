@@ -58,6 +58,7 @@ InputOptions InputOptions::from(const runtime::Config& config, const std::vector
   check_topic_name(options.left_info_topic, "left_info_topic");
   check_topic_name(options.right_info_topic, "right_info_topic");
   options.imu_wait_s = config.get_double("imu_wait_s", options.imu_wait_s, 0.0, kMaxImuWait_s);
+  options.outage_after_s = config.get_double("outage_after_s", options.outage_after_s, 0.0, kMaxIdle_s);
   runtime::Flags parser("heslam-ros2-input [options]");
   parser.text("--imu-topic", "NAME", &options.imu_topic, "sensor_msgs/Imu topic (empty: no IMU)")
       .path("--imu-calibration", "FILE", &options.imu_calibration, "IMU sensor.yaml (EuRoC) or imu.yaml (Kalibr)")
@@ -111,6 +112,7 @@ std::string Ros2Input::help_notes() {
          "  images             raw (rectified by heslam from K D R P) or rectified (P is their camera; default raw)\n"
          "  end_after_idle_s   end once no image came for this long, s (default 0: run until stopped)\n"
          "  imu_wait_s         the most a frame waits for the IMU to cover its stamp, s (default 0.5)\n"
+         "  outage_after_s     no image for this long mid-run: a camera outage, said and counted (default 1; 0: off)\n"
          "IMU (flags, all three or none):\n"
          "  --imu-topic NAME         rt/NAME sensor_msgs/Imu -> imu/readings (best effort, keep last 200)\n"
          "  --imu-calibration FILE   the noise model and rate: EuRoC imu0/sensor.yaml or Kalibr imu.yaml\n"
@@ -185,11 +187,7 @@ void Ros2Input::take_image(StereoPairer::Side side, const Image& image) {
                                          static_cast<std::uint32_t>(calibration_->left.height_px));
     std::optional<StereoPairer::Pair> pair = pairer_.add(side, to_stamp_ns(image.header.stamp), std::move(packed));
     if (pair) {
-      if (pair->left.encoding != pair->right.encoding) {
-        throw std::runtime_error("topics '" + options_.left_image_topic + "' and '" + options_.right_image_topic +
-                                 "': field encoding: the pair at stamp " + std::to_string(pair->stamp_ns) +
-                                 " ns mixes mono8 and colour");
-      }
+      check_same_encoding(*pair, image_readers_[0]->name(), image_readers_[1]->name());
       held_.push_back({std::move(*pair), std::chrono::steady_clock::now()});
     }
   } catch (const std::exception& error) {
@@ -275,12 +273,33 @@ void Ros2Input::run() {
     }
     for (int side = 0; side < 2; ++side) {
       const auto s = static_cast<StereoPairer::Side>(side);
-      if (image_readers_[side]->take_all([&](const Image& image) { take_image(s, image); }) > 0) {
-        last_image_ = std::chrono::steady_clock::now();
+      if (const int taken = image_readers_[side]->take_all([&](const Image& image) { take_image(s, image); });
+          taken > 0) {
+        images_received_ += static_cast<std::uint64_t>(taken);
+        const auto now = std::chrono::steady_clock::now();
+        if (in_outage_) {
+          log().info("images again after ", std::chrono::duration<double>(now - last_image_).count(),
+                     " s without any (camera outage ", camera_outages_, ")");
+          in_outage_ = false;
+        }
+        last_image_ = now;
       }
     }
     release_frames(false);
-    if (options_.end_after_idle_s > 0.0 && next_seq_ > 0 &&
+    // A camera that stops mid-run (unplugged, its driver died): said once per outage, counted; the input
+    // waits for it (a restarted driver publishes again), or ends with end_after_idle_s.
+    if (images_received_ > 0 && !in_outage_ && options_.outage_after_s > 0.0 &&
+        std::chrono::steady_clock::now() - last_image_ > std::chrono::duration<double>(options_.outage_after_s)) {
+      in_outage_ = true;
+      ++camera_outages_;
+      stats().count("camera_outages");
+      log().warn(
+          "no image on rt/", options_.left_image_topic, " or rt/", options_.right_image_topic, " for ",
+          options_.outage_after_s, " s after ", images_received_, " images (", next_seq_,
+          " frames published): the camera stopped (unplugged, or its driver ended); waiting for it (camera outage ",
+          camera_outages_, ")");
+    }
+    if (options_.end_after_idle_s > 0.0 && images_received_ > 0 &&
         std::chrono::steady_clock::now() - last_image_ > std::chrono::duration<double>(options_.end_after_idle_s)) {
       log().info("no image for ", options_.end_after_idle_s, " s: the camera's stream ended");
       break;
@@ -297,7 +316,12 @@ void Ros2Input::run() {
                " frames went out without the IMU covering them");
   }
   log().info("published ", next_seq_, " stereo frames; ", pairer_.unpaired(), " images unpaired, ",
-             images_before_calibration_, " before a usable CameraInfo pair, ", bad_images_, " bad");
+             images_before_calibration_, " before a usable CameraInfo pair, ", bad_images_, " bad; ", camera_outages_,
+             " camera outages");
+  if (images_received_ > 0 && next_seq_ == 0) {
+    throw std::runtime_error("received " + std::to_string(images_received_) +
+                             " images but published no stereo frame (each drop counted and said above)");
+  }
 }
 
 }  // namespace heslam::ros2

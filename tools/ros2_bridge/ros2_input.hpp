@@ -19,7 +19,8 @@
 // Config fields (all optional): left_image_topic ("stereo/left/image_raw"), right_image_topic
 // ("stereo/right/image_raw"), left_info_topic ("stereo/left/camera_info"), right_info_topic
 // ("stereo/right/camera_info"), images ("raw": rectified by heslam from K D R P; "rectified": already
-// rectified, P is their camera), end_after_idle_s (0: run until stopped), imu_wait_s (0.5).
+// rectified, P is their camera), end_after_idle_s (0: run until stopped), imu_wait_s (0.5),
+// outage_after_s (1).
 // Flags: --imu-topic NAME, --imu-calibration FILE, --imu-extrinsic FILE (all three or none).
 #pragma once
 
@@ -53,6 +54,8 @@ struct InputOptions {
   std::filesystem::path imu_calibration;
   std::filesystem::path imu_extrinsic;
   double imu_wait_s = 0.5;
+  // No image for this long after frames went out: a camera outage, one line and counted (0: not watched).
+  double outage_after_s = 1.0;
 
   // Throws std::runtime_error naming the field or flag on a bad value.
   static InputOptions from(const runtime::Config& config, const std::vector<std::string>& flags = {});
@@ -102,6 +105,9 @@ class Ros2Input : public runtime::Component {
   std::uint64_t unpaired_reported_ = 0;
   std::uint64_t images_before_calibration_ = 0;
   std::uint64_t bad_images_ = 0;
+  std::uint64_t camera_outages_ = 0;
+  std::uint64_t images_received_ = 0;
+  bool in_outage_ = false;
   std::chrono::steady_clock::time_point last_image_;
   // IMU
   std::optional<Ros2Reader<Imu>> imu_reader_;

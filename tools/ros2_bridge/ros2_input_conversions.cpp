@@ -280,6 +280,17 @@ Pose3 kalibr_matrix(const cv::FileNode& node, const std::string& where) {
 
 }  // namespace
 
+void check_same_encoding(const StereoPairer::Pair& pair, const std::string& left_topic,
+                         const std::string& right_topic) {
+  if (pair.left.encoding == pair.right.encoding) return;
+  const auto name = [](heslam_msg_ImageEncoding encoding) {
+    return encoding == heslam_msg_ENCODING_MONO8 ? "mono8" : "bgr8";
+  };
+  throw std::runtime_error("topics '" + left_topic + "' and '" + right_topic + "': field encoding: the pair at stamp " +
+                           std::to_string(pair.stamp_ns) + " ns mixes " + name(pair.left.encoding) + " (left) and " +
+                           name(pair.right.encoding) + " (right): pair dropped");
+}
+
 ImuSample to_imu_sample(const Imu& imu, const std::string& topic) {
   if (imu.linear_acceleration_covariance[0] == -1.0) {
     throw UnusableImu("topic '" + topic +

@@ -77,6 +77,10 @@ class StereoPairer {
   std::uint64_t unpaired_ = 0;
 };
 
+// Throws std::runtime_error naming both topics when the pair mixes mono8 and colour (a left and a right
+// driver configured differently).
+void check_same_encoding(const StereoPairer::Pair& pair, const std::string& left_topic, const std::string& right_topic);
+
 // An IMU that gives no linear acceleration or no angular velocity (covariance[0] == -1, REP 145): an
 // orientation-only IMU, which heslam's inertial tracking cannot use. Not a bad reading: a wrong sensor.
 struct UnusableImu : std::runtime_error {
