@@ -14,7 +14,9 @@
 // out only once the IMU's watermark reached its stamp (the ordering contract of docs/topics.md), or
 // after imu_wait_s without it (counted: the IMU is then declared silent up to the frame's stamp).
 // Real time only: a camera is never lockstep. Bad input (an encoding it does not take, a size that
-// disagrees with the CameraInfo, stamps going backwards, an unpaired image) is one line and a count.
+// disagrees with the CameraInfo, a mono/colour pair, stamps going backwards, an unpaired image, a camera
+// that stops mid-run, a bad IMU reading) is one line and a count; an orientation-only IMU, or images
+// received but no frame published, end the input with exit 1 and one line.
 //
 // Config fields (all optional): left_image_topic ("stereo/left/image_raw"), right_image_topic
 // ("stereo/right/image_raw"), left_info_topic ("stereo/left/camera_info"), right_info_topic
