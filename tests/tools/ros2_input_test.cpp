@@ -1,7 +1,11 @@
 // heslam-ros2-input's conversions on known values: two ROS 2 CameraInfo -> heslam's calibration (raw
 // images with an explicit rectification, or images already rectified), sensor_msgs/Image -> packed
-// MONO8 / BGR8, and every refusal one line naming the topic and the field.
+// MONO8 / BGR8, sensor_msgs/Imu -> readings (orientation-only IMUs refused by name, stamps going
+// backwards refused), the IMU calibration from EuRoC and Kalibr files, and every refusal one line naming
+// the topic (or file) and the field.
 #include <cmath>
+#include <fstream>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -11,7 +15,10 @@
 #include <gtest/gtest.h>
 
 #include "components/core/camera/stereo_rectifier.hpp"
+#include "runtime/config.hpp"
 #include "runtime/sequence.hpp"
+#include "test_support.hpp"
+#include "tools/ros2_bridge/ros2_input.hpp"
 #include "tools/ros2_bridge/ros2_input_conversions.hpp"
 
 namespace heslam::ros2 {
@@ -220,6 +227,258 @@ TEST(Ros2Input, PairsByStampCountsUnpairedAndRefusesStampsGoingBackwards) {
   // A side that runs ahead keeps at most kMaxPending images.
   for (std::int64_t stamp = 400; stamp < 400 + 10 * 10; stamp += 10) pairer.add(Side::kLeft, stamp, grey_image(7));
   EXPECT_EQ(pairer.unpaired(), 1u + 10u - StereoPairer::kMaxPending);
+}
+
+// A left driver in mono8 and a right one in colour: the pair is refused naming both topics.
+TEST(Ros2Input, PairMixingMonoAndColourIsOneLineNamingBothTopics) {
+  StereoPairer::Pair pair;
+  pair.stamp_ns = 42;
+  pair.left.encoding = heslam_msg_ENCODING_MONO8;
+  pair.right.encoding = heslam_msg_ENCODING_BGR8;
+  try {
+    check_same_encoding(pair, "rt/left", "rt/right");
+    ADD_FAILURE() << "a mixed pair was taken";
+  } catch (const std::exception& error) {
+    EXPECT_EQ(std::string(error.what()),
+              "topics 'rt/left' and 'rt/right': field encoding: the pair at stamp 42 ns mixes mono8 (left) and bgr8 "
+              "(right): pair dropped");
+  }
+  pair.right.encoding = heslam_msg_ENCODING_MONO8;
+  EXPECT_NO_THROW(check_same_encoding(pair, "rt/left", "rt/right"));
+}
+
+const std::string kImuTopic = "rt/imu/data";
+
+Imu imu_message(std::int32_t sec, std::uint32_t nanosec) {
+  Imu imu{};
+  imu.header.stamp.sec = sec;
+  imu.header.stamp.nanosec = nanosec;
+  imu.orientation.w = 1.0;
+  imu.orientation_covariance[0] = -1.0;  // no orientation: fine, heslam does not use it
+  imu.angular_velocity = {0.1, -0.2, 0.3};
+  imu.linear_acceleration = {0.5, 9.7, -0.25};
+  return imu;
+}
+
+template <typename Error = std::runtime_error, typename F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const Error& error) {
+    return error.what();
+  }
+  return "(no error)";
+}
+
+TEST(Ros2InputImu, ImuMessageBecomesAReading) {
+  const ImuSample sample = to_imu_sample(imu_message(12, 345), kImuTopic);
+  EXPECT_EQ(sample.stamp_ns, 12'000'000'345);
+  EXPECT_EQ(sample.gyro_rad_s, Eigen::Vector3d(0.1, -0.2, 0.3));
+  EXPECT_EQ(sample.accel_m_s2, Eigen::Vector3d(0.5, 9.7, -0.25));
+}
+
+// REP 145: covariance[0] = -1 says the field is not given. Without linear acceleration (or angular
+// velocity) the IMU cannot serve inertial tracking: refused by name, as a sensor, not as a reading.
+TEST(Ros2InputImu, OrientationOnlyImuIsRefusedByName) {
+  Imu imu = imu_message(1, 0);
+  imu.linear_acceleration_covariance[0] = -1.0;
+  EXPECT_EQ(error_of<UnusableImu>([&] { to_imu_sample(imu, kImuTopic); }),
+            "topic 'rt/imu/data': field linear_acceleration_covariance[0] is -1: the IMU gives no linear "
+            "acceleration (an orientation-only IMU); heslam's inertial tracking needs angular velocity and "
+            "linear acceleration");
+  imu = imu_message(1, 0);
+  imu.angular_velocity_covariance[0] = -1.0;
+  EXPECT_NE(
+      error_of<UnusableImu>([&] { to_imu_sample(imu, kImuTopic); }).find("field angular_velocity_covariance[0] is -1"),
+      std::string::npos);
+}
+
+TEST(Ros2InputImu, BadReadingsAreOneLineNamingTopicAndField) {
+  Imu imu = imu_message(1, 0);
+  imu.linear_acceleration.y = std::numeric_limits<double>::quiet_NaN();
+  const std::string nan_line = error_of([&] { to_imu_sample(imu, kImuTopic); });
+  EXPECT_EQ(nan_line.rfind("topic 'rt/imu/data': field linear_acceleration: not a finite number", 0), 0u) << nan_line;
+  imu = imu_message(1, 0);
+  imu.angular_velocity.x = std::numeric_limits<double>::infinity();
+  EXPECT_NE(error_of([&] { to_imu_sample(imu, kImuTopic); }).find("field angular_velocity: not a finite"),
+            std::string::npos);
+  imu = imu_message(-3, 0);
+  EXPECT_EQ(error_of([&] { to_imu_sample(imu, kImuTopic); }),
+            "topic 'rt/imu/data': field header.stamp: negative (-3 s): reading dropped");
+}
+
+// Batches carry the readings since the last one, watermark = their last stamp; a stamp going backwards,
+// a repeat, or a reading older than a frame already let go without it is refused, nothing changed.
+TEST(Ros2InputImu, ForwarderWatermarksAndRefusesStampsGoingBackwards) {
+  ImuForwarder forwarder;
+  EXPECT_FALSE(forwarder.take_batch());
+  ImuSample sample;
+  sample.stamp_ns = 10;
+  forwarder.add(sample);
+  sample.stamp_ns = 20;
+  forwarder.add(sample);
+  std::optional<ImuForwarder::Batch> batch = forwarder.take_batch();
+  ASSERT_TRUE(batch);
+  EXPECT_EQ(batch->samples.size(), 2u);
+  EXPECT_EQ(batch->first_index, 0u);
+  EXPECT_EQ(batch->watermark_ns, 20);
+  sample.stamp_ns = 15;
+  EXPECT_EQ(error_of([&] { forwarder.add(sample); }),
+            "stamp 15 ns goes backwards (last reading 20 ns): reading dropped");
+  sample.stamp_ns = 20;
+  EXPECT_EQ(error_of([&] { forwarder.add(sample); }), "stamp 20 ns repeats the last reading's: reading dropped");
+  EXPECT_FALSE(forwarder.take_batch());
+  // A frame at 50 waited too long: the IMU is declared silent up to it.
+  const ImuForwarder::Batch silent = forwarder.silent_until(50);
+  EXPECT_TRUE(silent.samples.empty());
+  EXPECT_EQ(silent.first_index, 2u);
+  EXPECT_EQ(silent.watermark_ns, 50);
+  sample.stamp_ns = 40;
+  EXPECT_EQ(error_of([&] { forwarder.add(sample); }),
+            "stamp 40 ns is at or before 50 ns, up to which frames already went out: reading dropped");
+  sample.stamp_ns = 60;
+  forwarder.add(sample);
+  batch = forwarder.take_batch();
+  ASSERT_TRUE(batch);
+  EXPECT_EQ(batch->first_index, 2u);
+  EXPECT_EQ(batch->watermark_ns, 60);
+  EXPECT_EQ(forwarder.taken(), 3u);
+}
+
+// Known files: the IMU 0.1 m ahead of and rotated 90 deg about z from the left camera.
+struct ImuFiles {
+  test::ScratchDir dir{"ros2_input_imu_files"};
+  std::filesystem::path write(const std::string& name, const std::string& text) const {
+    std::ofstream(dir.path() / name) << text;
+    return dir.path() / name;
+  }
+};
+
+constexpr const char* kEurocImu = R"(%YAML:1.0
+sensor_type: imu
+T_BS:
+  cols: 4
+  rows: 4
+  data: [1.0, 0.0, 0.0, 0.0,
+         0.0, 1.0, 0.0, 0.0,
+         0.0, 0.0, 1.0, 0.0,
+         0.0, 0.0, 0.0, 1.0]
+rate_hz: 200
+gyroscope_noise_density: 1.6968e-04
+gyroscope_random_walk: 1.9393e-05
+accelerometer_noise_density: 2.0000e-3
+accelerometer_random_walk: 3.0000e-3
+)";
+
+// cam0 -> body (the IMU): camera x = body y, camera y = -body x, at (0.1, 0, 0) in the body.
+constexpr const char* kEurocCam0 = R"(%YAML:1.0
+sensor_type: camera
+T_BS:
+  cols: 4
+  rows: 4
+  data: [0.0, -1.0, 0.0, 0.1,
+         1.0, 0.0, 0.0, 0.0,
+         0.0, 0.0, 1.0, 0.0,
+         0.0, 0.0, 0.0, 1.0]
+rate_hz: 20
+)";
+
+TEST(Ros2InputImu, CalibrationFromEurocSensorFiles) {
+  const ImuFiles files;
+  const ImuCalibration calibration =
+      load_ros2_imu_calibration(files.write("imu.yaml", kEurocImu), files.write("cam0.yaml", kEurocCam0));
+  EXPECT_EQ(calibration.rate_hz, 200.0);
+  EXPECT_EQ(calibration.noise.gyro_noise_density, 1.6968e-04);
+  EXPECT_EQ(calibration.noise.gyro_random_walk, 1.9393e-05);
+  EXPECT_EQ(calibration.noise.accel_noise_density, 2.0e-3);
+  EXPECT_EQ(calibration.noise.accel_random_walk, 3.0e-3);
+  EXPECT_EQ(calibration.time_offset_ns, 0);
+  // T_BS (IMU -> the input's body, the left camera) = T_BS(cam0)^-1 = [R^T, -R^T t]: the IMU's origin
+  // is at (0, 0.1, 0) in the camera and its x axis is the camera's -y.
+  EXPECT_LT((calibration.T_BS.translation() - Eigen::Vector3d(0.0, 0.1, 0.0)).norm(), 1e-12);
+  EXPECT_LT((calibration.T_BS.linear() * Eigen::Vector3d::UnitX() - Eigen::Vector3d(0.0, -1.0, 0.0)).norm(), 1e-12);
+}
+
+TEST(Ros2InputImu, CalibrationFromKalibrFiles) {
+  const ImuFiles files;
+  const auto imu = files.write("imu.yaml", R"(#Accelerometers
+accelerometer_noise_density: 1.86e-03
+accelerometer_random_walk: 4.33e-04
+#Gyroscopes
+gyroscope_noise_density: 1.87e-04
+gyroscope_random_walk: 2.66e-05
+rostopic: /imu0
+update_rate: 400.0
+)");
+  const auto camchain = files.write("camchain-imucam.yaml", R"(cam0:
+  T_cam_imu:
+  - [0.0, 1.0, 0.0, 0.02]
+  - [-1.0, 0.0, 0.0, -0.03]
+  - [0.0, 0.0, 1.0, 0.04]
+  - [0.0, 0.0, 0.0, 1.0]
+  camera_model: pinhole
+  intrinsics: [458.654, 457.296, 367.215, 248.375]
+  timeshift_cam_imu: 0.0021
+cam1:
+  camera_model: pinhole
+)");
+  const ImuCalibration calibration = load_ros2_imu_calibration(imu, camchain);
+  EXPECT_EQ(calibration.rate_hz, 400.0);
+  EXPECT_EQ(calibration.noise.accel_noise_density, 1.86e-03);
+  EXPECT_EQ(calibration.noise.gyro_random_walk, 2.66e-05);
+  EXPECT_EQ(calibration.time_offset_ns, 2'100'000);
+  EXPECT_EQ(calibration.T_BS.translation(), Eigen::Vector3d(0.02, -0.03, 0.04));
+  EXPECT_EQ(calibration.T_BS.linear() * Eigen::Vector3d::UnitX(), Eigen::Vector3d(0.0, -1.0, 0.0));
+}
+
+TEST(Ros2InputImu, BadCalibrationFilesAreOneLineNamingFileAndField) {
+  const ImuFiles files;
+  const auto cam0 = files.write("cam0.yaml", kEurocCam0);
+  std::string no_noise = kEurocImu;
+  no_noise.replace(no_noise.find("gyroscope_random_walk"), 4, "gyrX");
+  const auto imu = files.write("imu.yaml", no_noise);
+  EXPECT_EQ(error_of([&] { load_ros2_imu_calibration(imu, cam0); }),
+            imu.string() + ": gyroscope_random_walk: missing (expected a positive number)");
+  std::string no_rate = kEurocImu;
+  no_rate.replace(no_rate.find("rate_hz"), 7, "rate_xx");
+  const auto imu_no_rate = files.write("imu_no_rate.yaml", no_rate);
+  EXPECT_EQ(error_of([&] { load_ros2_imu_calibration(imu_no_rate, cam0); }),
+            imu_no_rate.string() + ": rate_hz (EuRoC) or update_rate (Kalibr): missing");
+  const auto good_imu = files.write("good_imu.yaml", kEurocImu);
+  const auto camchain =
+      files.write("camchain.yaml", "cam0:\n  camera_model: pinhole\ncam1:\n  camera_model: pinhole\n");
+  EXPECT_EQ(error_of([&] { load_ros2_imu_calibration(good_imu, camchain); }),
+            camchain.string() + ": cam0.T_cam_imu: missing (a camchain of kalibr_calibrate_imu_camera has it)");
+  std::string sheared = kEurocCam0;
+  sheared.replace(sheared.find("[0.0, -1.0"), 10, "[0.5, -1.0");
+  const auto bad_cam0 = files.write("bad_cam0.yaml", sheared);
+  EXPECT_EQ(error_of([&] { load_ros2_imu_calibration(good_imu, bad_cam0); }),
+            bad_cam0.string() + ": T_BS: expected a rigid transform (a rotation and a translation)");
+  const auto missing = files.dir.path() / "missing.yaml";
+  EXPECT_EQ(error_of([&] { load_ros2_imu_calibration(missing, cam0); }),
+            missing.string() + ": cannot open (expected an IMU sensor.yaml (EuRoC) or imu.yaml (Kalibr))");
+}
+
+TEST(Ros2InputImu, ImuFlagsComeTogether) {
+  const runtime::Config none = runtime::Config::empty();
+  EXPECT_TRUE(InputOptions::from(none, {}).imu_topic.empty());
+  const InputOptions options = InputOptions::from(
+      none, {"--imu-topic", "imu0", "--imu-calibration", "imu.yaml", "--imu-extrinsic", "camchain.yaml"});
+  EXPECT_EQ(options.imu_topic, "imu0");
+  EXPECT_EQ(options.imu_calibration, "imu.yaml");
+  EXPECT_EQ(error_of([&] {
+              InputOptions::from(none, {"--imu-topic", "imu0", "--imu-calibration", "imu.yaml"});
+            }),
+            "--imu-topic imu0: needs --imu-calibration FILE (the noise model) and --imu-extrinsic FILE (camera "
+            "<- IMU), which sensor_msgs/Imu does not carry (docs/ros2.md)");
+  EXPECT_EQ(error_of([&] {
+              InputOptions::from(none, {"--imu-calibration", "imu.yaml"});
+            }),
+            "--imu-calibration / --imu-extrinsic: given without --imu-topic");
+  EXPECT_NE(error_of([&] {
+              InputOptions::from(none, {"--imu-topic", "/imu0/", "--imu-calibration", "a", "--imu-extrinsic", "b"});
+            }).find("--imu-topic: '/imu0/'"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -5,18 +5,30 @@
 //   rt/<left_info_topic>,   rt/<right_info_topic>    sensor_msgs/CameraInfo (plumb_bob, rational_polynomial)
 //     QoS as ROS 2's sensor data profile (best effort, volatile, keep last 5), which camera drivers use
 //
+//   rt/<imu_topic>                                    sensor_msgs/Imu (with --imu-topic; best effort, keep last 200)
+//
 // and publishes what heslam-replay publishes: camera/calibration (from the two CameraInfo, once they
-// arrived, again when they change) and camera/stereo (left and right paired by stamp, seq 0, 1, ...).
+// arrived, again when they change) and camera/stereo (left and right paired by stamp, seq 0, 1, ...);
+// with an IMU, imu/readings (a batch per poll, watermark its last stamp) and imu/calibration (from the
+// files of --imu-calibration and --imu-extrinsic, as sensor_msgs/Imu carries neither), and a frame goes
+// out only once the IMU's watermark reached its stamp (the ordering contract of docs/topics.md), or
+// after imu_wait_s without it (counted: the IMU is then declared silent up to the frame's stamp).
 // Real time only: a camera is never lockstep. Bad input (an encoding it does not take, a size that
-// disagrees with the CameraInfo, stamps going backwards, an unpaired image) is one line and a count.
+// disagrees with the CameraInfo, a mono/colour pair, stamps going backwards, an unpaired image, a camera
+// that stops mid-run, a bad IMU reading) is one line and a count; an orientation-only IMU, or images
+// received but no frame published, end the input with exit 1 and one line.
 //
 // Config fields (all optional): left_image_topic ("stereo/left/image_raw"), right_image_topic
 // ("stereo/right/image_raw"), left_info_topic ("stereo/left/camera_info"), right_info_topic
 // ("stereo/right/camera_info"), images ("raw": rectified by heslam from K D R P; "rectified": already
-// rectified, P is their camera), end_after_idle_s (0: run until stopped).
+// rectified, P is their camera), end_after_idle_s (0: run until stopped), imu_wait_s (0.5),
+// outage_after_s (1).
+// Flags: --imu-topic NAME, --imu-calibration FILE, --imu-extrinsic FILE (all three or none).
 #pragma once
 
 #include <chrono>
+#include <deque>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -38,9 +50,17 @@ struct InputOptions {
   // > 0: end (exit 0) once frames were published and no image came for this long, as a replay ends
   // with its recording (a pipeline's run then ends); 0: run until stopped (a live camera).
   double end_after_idle_s = 0.0;
+  // IMU (flags; empty topic: no IMU): the ROS 2 topic and the files of the calibration it lacks
+  // (load_ros2_imu_calibration); a frame waits at most imu_wait_s for the IMU to cover its stamp.
+  std::string imu_topic;
+  std::filesystem::path imu_calibration;
+  std::filesystem::path imu_extrinsic;
+  double imu_wait_s = 0.5;
+  // No image for this long after frames went out: a camera outage, one line and counted (0: not watched).
+  double outage_after_s = 1.0;
 
-  // Throws std::runtime_error naming the field on a bad value.
-  static InputOptions from(const runtime::Config& config);
+  // Throws std::runtime_error naming the field or flag on a bad value.
+  static InputOptions from(const runtime::Config& config, const std::vector<std::string>& flags = {});
 };
 
 // A CameraInfo that owns its strings and sequences (a taken sample's die with the take).
@@ -62,12 +82,18 @@ class Ros2Input : public runtime::Component {
   static std::string help_notes();
 
  private:
+  bool accepts_positional_args() const override { return true; }  // --imu-topic NAME, ... (InputOptions::from)
   void configure(const runtime::Config& config) override;
   void run() override;
 
   void take_camera_info(StereoPairer::Side side, const CameraInfo& info);
   void take_image(StereoPairer::Side side, const Image& image);
   void publish(const StereoPairer::Pair& pair);
+  void take_imu(const Imu& imu);
+  void publish_imu(const ImuForwarder::Batch& batch, bool end_of_stream = false);
+  // Publishes the held frames the IMU covers (all of them without an IMU); with flush, all of them, and in any
+  // case those held longer than imu_wait_s (after declaring the IMU silent up to their stamps).
+  void release_frames(bool flush);
 
   InputOptions options_;
   std::optional<Ros2Reader<Image>> image_readers_[2];
@@ -79,7 +105,26 @@ class Ros2Input : public runtime::Component {
   StereoPairer pairer_;
   std::uint64_t next_seq_ = 0;
   std::uint64_t unpaired_reported_ = 0;
+  std::uint64_t images_before_calibration_ = 0;
+  std::uint64_t bad_images_ = 0;
+  std::uint64_t camera_outages_ = 0;
+  std::uint64_t images_received_ = 0;
+  bool in_outage_ = false;
   std::chrono::steady_clock::time_point last_image_;
+  // IMU
+  std::optional<Ros2Reader<Imu>> imu_reader_;
+  std::optional<runtime::Writer<msg::ImuBatch>> imu_writer_;
+  std::optional<runtime::Writer<msg::ImuCalibration>> imu_calibration_writer_;
+  std::optional<ImuCalibration> imu_calibration_;
+  ImuForwarder imu_;
+  std::uint64_t imu_seq_ = 0;
+  std::uint64_t bad_imu_readings_ = 0;
+  std::uint64_t frames_without_imu_ = 0;
+  struct HeldFrame {
+    StereoPairer::Pair pair;
+    std::chrono::steady_clock::time_point since;
+  };
+  std::deque<HeldFrame> held_;  // paired frames waiting for the IMU's watermark
 };
 
 }  // namespace heslam::ros2

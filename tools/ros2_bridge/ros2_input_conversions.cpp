@@ -3,8 +3,14 @@
 
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <utility>
+
+#include <opencv2/core.hpp>
+
+#include "tools/camera/camera_calibration.hpp"
 
 namespace heslam::ros2 {
 namespace {
@@ -188,6 +194,207 @@ std::optional<StereoPairer::Pair> StereoPairer::add(Side side, std::int64_t stam
   }
   last_pair_stamp_ns_ = stamp_ns;
   return pair;
+}
+
+namespace {
+
+void check_vector(const geometry_msgs_msg_dds__Vector3_& v, const std::string& topic, const char* field) {
+  if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
+    throw std::runtime_error("topic '" + topic + "': field " + field + ": not a finite number (" + std::to_string(v.x) +
+                             ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + "): reading dropped");
+  }
+}
+
+// A YAML file of either dialect (EuRoC's %YAML:1.0 with OpenCV maps, Kalibr's plain PyYAML output).
+cv::FileStorage open_yaml(const std::filesystem::path& file, const char* expected) {
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error(file.string() + ": cannot open (expected " + expected + ")");
+  std::stringstream text;
+  text << in.rdbuf();
+  cv::FileStorage storage;
+  try {
+    storage.open(kalibr_yaml_for_opencv(text.str()),
+                 cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+  } catch (const cv::Exception& error) {
+    throw std::runtime_error(file.string() + ": not a YAML file cv::FileStorage can read (" + error.err + ")");
+  }
+  if (!storage.isOpened()) throw std::runtime_error(file.string() + ": not a YAML file cv::FileStorage can read");
+  return storage;
+}
+
+double positive(const cv::FileNode& node, const std::filesystem::path& file, const char* key) {
+  if (node.empty() || (!node.isReal() && !node.isInt())) {
+    throw std::runtime_error(file.string() + ": " + key + ": missing (expected a positive number)");
+  }
+  const double value = node.real();
+  if (!std::isfinite(value) || !(value > 0.0)) {
+    throw std::runtime_error(file.string() + ": " + key + ": expected a positive number, got " + std::to_string(value));
+  }
+  return value;
+}
+
+Pose3 rigid(const Eigen::Matrix4d& matrix, const std::string& where) {
+  const Eigen::Matrix3d R = matrix.topLeftCorner<3, 3>();
+  const bool finite = matrix.allFinite();
+  if (!finite || (R * R.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-6 || R.determinant() < 0.0 ||
+      (matrix.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9) {
+    throw std::runtime_error(where + ": expected a rigid transform (a rotation and a translation)");
+  }
+  Pose3 pose = Pose3::Identity();
+  pose.linear() = R;
+  pose.translation() = matrix.topRightCorner<3, 1>();
+  return pose;
+}
+
+// EuRoC: {rows: 4, cols: 4, data: [16 numbers]}.
+Pose3 euroc_matrix(const cv::FileNode& node, const std::string& where) {
+  const cv::FileNode data = node["data"];
+  if (!data.isSeq() || data.size() != 16)
+    throw std::runtime_error(where + ": expected {rows: 4, cols: 4, data: [16 numbers]}");
+  Eigen::Matrix4d matrix;
+  int i = 0;
+  for (const cv::FileNode& item : data) {
+    if (!item.isReal() && !item.isInt()) throw std::runtime_error(where + ".data: expected 16 numbers");
+    matrix(i / 4, i % 4) = item.real();
+    ++i;
+  }
+  return rigid(matrix, where);
+}
+
+// Kalibr: 4 rows of 4 numbers.
+Pose3 kalibr_matrix(const cv::FileNode& node, const std::string& where) {
+  if (!node.isSeq() || node.size() != 4) throw std::runtime_error(where + ": expected 4 rows of 4 numbers");
+  Eigen::Matrix4d matrix;
+  int r = 0;
+  for (const cv::FileNode& row : node) {
+    if (!row.isSeq() || row.size() != 4) throw std::runtime_error(where + ": expected 4 rows of 4 numbers");
+    int c = 0;
+    for (const cv::FileNode& item : row) {
+      if (!item.isReal() && !item.isInt()) throw std::runtime_error(where + ": expected 4 rows of 4 numbers");
+      matrix(r, c++) = item.real();
+    }
+    ++r;
+  }
+  return rigid(matrix, where);
+}
+
+}  // namespace
+
+void check_same_encoding(const StereoPairer::Pair& pair, const std::string& left_topic,
+                         const std::string& right_topic) {
+  if (pair.left.encoding == pair.right.encoding) return;
+  const auto name = [](heslam_msg_ImageEncoding encoding) {
+    return encoding == heslam_msg_ENCODING_MONO8 ? "mono8" : "bgr8";
+  };
+  throw std::runtime_error("topics '" + left_topic + "' and '" + right_topic + "': field encoding: the pair at stamp " +
+                           std::to_string(pair.stamp_ns) + " ns mixes " + name(pair.left.encoding) + " (left) and " +
+                           name(pair.right.encoding) + " (right): pair dropped");
+}
+
+ImuSample to_imu_sample(const Imu& imu, const std::string& topic) {
+  if (imu.linear_acceleration_covariance[0] == -1.0) {
+    throw UnusableImu("topic '" + topic +
+                      "': field linear_acceleration_covariance[0] is -1: the IMU gives no linear acceleration "
+                      "(an orientation-only IMU); heslam's inertial tracking needs angular velocity and linear "
+                      "acceleration");
+  }
+  if (imu.angular_velocity_covariance[0] == -1.0) {
+    throw UnusableImu("topic '" + topic +
+                      "': field angular_velocity_covariance[0] is -1: the IMU gives no angular velocity; heslam's "
+                      "inertial tracking needs angular velocity and linear acceleration");
+  }
+  if (imu.header.stamp.sec < 0) {
+    throw std::runtime_error("topic '" + topic + "': field header.stamp: negative (" +
+                             std::to_string(imu.header.stamp.sec) + " s): reading dropped");
+  }
+  check_vector(imu.angular_velocity, topic, "angular_velocity");
+  check_vector(imu.linear_acceleration, topic, "linear_acceleration");
+  ImuSample sample;
+  sample.stamp_ns = to_stamp_ns(imu.header.stamp);
+  sample.gyro_rad_s = Eigen::Vector3d(imu.angular_velocity.x, imu.angular_velocity.y, imu.angular_velocity.z);
+  sample.accel_m_s2 = Eigen::Vector3d(imu.linear_acceleration.x, imu.linear_acceleration.y, imu.linear_acceleration.z);
+  return sample;
+}
+
+ImuCalibration load_ros2_imu_calibration(const std::filesystem::path& imu_file,
+                                         const std::filesystem::path& extrinsic_file) {
+  ImuCalibration calibration;
+  const cv::FileStorage imu = open_yaml(imu_file, "an IMU sensor.yaml (EuRoC) or imu.yaml (Kalibr)");
+  calibration.noise.gyro_noise_density = positive(imu["gyroscope_noise_density"], imu_file, "gyroscope_noise_density");
+  calibration.noise.gyro_random_walk = positive(imu["gyroscope_random_walk"], imu_file, "gyroscope_random_walk");
+  calibration.noise.accel_noise_density =
+      positive(imu["accelerometer_noise_density"], imu_file, "accelerometer_noise_density");
+  calibration.noise.accel_random_walk =
+      positive(imu["accelerometer_random_walk"], imu_file, "accelerometer_random_walk");
+  if (!imu["rate_hz"].empty()) {
+    calibration.rate_hz = positive(imu["rate_hz"], imu_file, "rate_hz");
+  } else if (!imu["update_rate"].empty()) {
+    calibration.rate_hz = positive(imu["update_rate"], imu_file, "update_rate");
+  } else {
+    throw std::runtime_error(imu_file.string() + ": rate_hz (EuRoC) or update_rate (Kalibr): missing");
+  }
+  const Pose3 T_body_imu =
+      imu["T_BS"].empty() ? Pose3::Identity() : euroc_matrix(imu["T_BS"], imu_file.string() + ": T_BS");
+
+  const cv::FileStorage extrinsic =
+      open_yaml(extrinsic_file, "a Kalibr camchain (cam0.T_cam_imu) or the left camera's EuRoC sensor.yaml (T_BS)");
+  if (!extrinsic["cam0"].empty()) {
+    const cv::FileNode cam0 = extrinsic["cam0"];
+    if (cam0["T_cam_imu"].empty()) {
+      throw std::runtime_error(extrinsic_file.string() +
+                               ": cam0.T_cam_imu: missing (a camchain of kalibr_calibrate_imu_camera has it)");
+    }
+    calibration.T_BS = kalibr_matrix(cam0["T_cam_imu"], extrinsic_file.string() + ": cam0.T_cam_imu");
+    const cv::FileNode shift = cam0["timeshift_cam_imu"];
+    if (!shift.empty()) {
+      if ((!shift.isReal() && !shift.isInt()) || !std::isfinite(shift.real()) || std::abs(shift.real()) > 1.0) {
+        throw std::runtime_error(extrinsic_file.string() + ": cam0.timeshift_cam_imu: expected seconds in [-1, 1]");
+      }
+      calibration.time_offset_ns = std::llround(shift.real() * 1e9);
+    }
+  } else if (!extrinsic["T_BS"].empty()) {
+    const Pose3 T_body_cam = euroc_matrix(extrinsic["T_BS"], extrinsic_file.string() + ": T_BS");
+    calibration.T_BS = T_body_cam.inverse() * T_body_imu;
+  } else {
+    throw std::runtime_error(extrinsic_file.string() +
+                             ": neither cam0.T_cam_imu (Kalibr camchain) nor T_BS (EuRoC camera sensor.yaml)");
+  }
+  calibration.source = imu_file.string() + " + " + extrinsic_file.string();
+  return calibration;
+}
+
+void ImuForwarder::add(const ImuSample& sample) {
+  if (sample.stamp_ns <= last_stamp_ns_ || sample.stamp_ns <= watermark_ns_) {
+    const bool repeated = sample.stamp_ns == last_stamp_ns_;
+    throw std::runtime_error(
+        "stamp " + std::to_string(sample.stamp_ns) + " ns " +
+        (repeated ? std::string("repeats the last reading's")
+         : sample.stamp_ns <= last_stamp_ns_
+             ? "goes backwards (last reading " + std::to_string(last_stamp_ns_) + " ns)"
+             : "is at or before " + std::to_string(watermark_ns_) + " ns, up to which frames already went out") +
+        ": reading dropped");
+  }
+  last_stamp_ns_ = sample.stamp_ns;
+  pending_.push_back(sample);
+}
+
+std::optional<ImuForwarder::Batch> ImuForwarder::take_batch() {
+  if (pending_.empty()) return std::nullopt;
+  Batch batch;
+  batch.samples = std::move(pending_);
+  pending_.clear();
+  batch.first_index = next_index_;
+  batch.watermark_ns = std::max(watermark_ns_, batch.samples.back().stamp_ns);
+  next_index_ += batch.samples.size();
+  watermark_ns_ = batch.watermark_ns;
+  return batch;
+}
+
+ImuForwarder::Batch ImuForwarder::silent_until(std::int64_t stamp_ns) {
+  Batch batch = take_batch().value_or(Batch{{}, next_index_, watermark_ns_});
+  batch.watermark_ns = std::max(batch.watermark_ns, stamp_ns);
+  watermark_ns_ = batch.watermark_ns;
+  return batch;
 }
 
 }  // namespace heslam::ros2

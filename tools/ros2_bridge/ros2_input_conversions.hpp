@@ -7,16 +7,24 @@
 //   LEFT.K/D/R/P); for images already rectified (image_proc's image_rect) the rectified pinhole P.
 // - sensor_msgs/Image mono8 / bgr8 / rgb8 -> packed MONO8 or BGR8 pixels (rgb8 reordered), refusing
 //   every other encoding, a step or data size that disagrees, or a size that is not the CameraInfo's.
+// - sensor_msgs/Imu -> an ImuSample (angular_velocity, linear_acceleration in the IMU's frame), and the
+//   IMU calibration sensor_msgs/Imu does not carry (noise model, rate, camera <- IMU extrinsic, time
+//   offset) from the files a user has: an IMU sensor.yaml (EuRoC) or imu.yaml (Kalibr) plus a Kalibr
+//   camchain (cam0.T_cam_imu, timeshift_cam_imu) or the left camera's EuRoC sensor.yaml (T_BS).
 // Every refusal is a std::runtime_error whose what() is one line naming the topic and the field.
 #pragma once
 
+#include <climits>
 #include <cstdint>
+#include <filesystem>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "components/core/camera/stereo_calibration.hpp"
+#include "components/core/imu/imu_buffer.hpp"
 #include "runtime/messages.hpp"
 #include "tools/ros2_bridge/ros2_messages.hpp"
 
@@ -67,6 +75,61 @@ class StereoPairer {
   std::map<std::int64_t, PackedImage> pending_[2];
   std::optional<std::int64_t> last_pair_stamp_ns_;
   std::uint64_t unpaired_ = 0;
+};
+
+// Throws std::runtime_error naming both topics when the pair mixes mono8 and colour (a left and a right
+// driver configured differently).
+void check_same_encoding(const StereoPairer::Pair& pair, const std::string& left_topic, const std::string& right_topic);
+
+// An IMU that gives no linear acceleration or no angular velocity (covariance[0] == -1, REP 145): an
+// orientation-only IMU, which heslam's inertial tracking cannot use. Not a bad reading: a wrong sensor.
+struct UnusableImu : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// The reading of one sensor_msgs/Imu. Throws UnusableImu for an orientation-only IMU, std::runtime_error
+// naming the topic and the field for a non-finite value or a negative stamp.
+ImuSample to_imu_sample(const Imu& imu, const std::string& topic);
+
+// The IMU's calibration for imu/calibration, in the frame of heslam-ros2-input's body (the left camera,
+// whose T_BS is the identity): T_BS = T_cam_imu.
+//   imu_file: an EuRoC imu0/sensor.yaml (rate_hz, T_BS: IMU -> EuRoC body) or a Kalibr imu.yaml
+//     (update_rate; no T_BS: the IMU is its own frame), with the four noise figures (*_noise_density,
+//     *_random_walk) of either.
+//   extrinsic_file: a Kalibr camchain (cam0.T_cam_imu; timeshift_cam_imu in s, t_imu = t_cam + shift,
+//     optional) -> T_BS = cam0.T_cam_imu; or the left camera's EuRoC sensor.yaml (T_BS: cam0 -> EuRoC
+//     body) -> T_BS = T_BS(cam0)^-1 T_BS(imu), time offset 0.
+// Throws std::runtime_error with one line naming the file and the field.
+ImuCalibration load_ros2_imu_calibration(const std::filesystem::path& imu_file,
+                                         const std::filesystem::path& extrinsic_file);
+
+// The readings of a ROS 2 IMU topic as imu/readings batches under the ordering contract (docs/topics.md):
+// a batch's watermark is its last reading's stamp, and a frame with stamp t may go out once
+// watermark_ns() >= t. Readings come one message each, in stamp order.
+class ImuForwarder {
+ public:
+  struct Batch {
+    std::vector<ImuSample> samples;
+    std::uint64_t first_index = 0;  // stream index of samples[0]
+    std::int64_t watermark_ns = 0;
+  };
+
+  // Throws std::runtime_error (nothing changed) for a stamp at or before the watermark: a stamp going
+  // backwards, a repeated reading, or one that came after a frame was let go without it (silent_until).
+  void add(const ImuSample& sample);
+  // The readings added since the last batch; nullopt when there are none.
+  std::optional<Batch> take_batch();
+  // No reading will be taken at or before stamp_ns (a frame waited too long for the IMU): the batch that
+  // says so (empty, watermark stamp_ns), which first carries the readings not yet taken.
+  Batch silent_until(std::int64_t stamp_ns);
+  std::int64_t watermark_ns() const { return watermark_ns_; }
+  std::uint64_t taken() const { return next_index_; }
+
+ private:
+  std::vector<ImuSample> pending_;
+  std::int64_t last_stamp_ns_ = INT64_MIN;
+  std::int64_t watermark_ns_ = INT64_MIN;
+  std::uint64_t next_index_ = 0;
 };
 
 }  // namespace heslam::ros2

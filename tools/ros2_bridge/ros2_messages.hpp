@@ -25,6 +25,7 @@ using Image = sensor_msgs_msg_dds__Image_;
 using CameraInfo = sensor_msgs_msg_dds__CameraInfo_;
 using MapMetaData = nav_msgs_msg_dds__MapMetaData_;
 using OccupancyGrid = nav_msgs_msg_dds__OccupancyGrid_;
+using Imu = sensor_msgs_msg_dds__Imu_;
 
 // sensor_msgs/PointField datatype constant for float32.
 inline constexpr std::uint8_t kPointFieldFloat32 = 7;
