@@ -115,14 +115,37 @@ TEST(Ros2Input, RationalPolynomialWithZeroHigherTermsIsPlumbBob) {
             "plumb_bob (k1 k2 p1 p2 k3) only");
 }
 
+// A fisheye pair (camera_calibration --fisheye): the equidistant model, rectified with ROS 2's R and P.
+TEST(Ros2Input, EquidistantCameraInfoIsAFisheyePairRectifiedByItsProjection) {
+  CameraInfos infos;
+  const std::string equidistant = "equidistant";
+  std::vector<double> left_k{-0.012, 0.004, -0.0008, 0.0001};
+  std::vector<double> right_k{-0.011, 0.003, -0.0007, 0.0001};
+  infos.left.distortion_model = runtime::borrow(equidistant);
+  infos.right.distortion_model = runtime::borrow(equidistant);
+  runtime::borrow(infos.left.d, left_k);
+  runtime::borrow(infos.right.d, right_k);
+  const StereoCalibration calibration =
+      to_stereo_calibration({infos.left, kLeftTopic}, {infos.right, kRightTopic}, false);
+  EXPECT_EQ(calibration.left.distortion_model, DistortionModel::kEquidistant);
+  EXPECT_EQ(calibration.right.distortion, right_k);
+  const StereoRectifier rectifier(calibration);
+  EXPECT_NEAR(rectifier.camera().fx_px, 435.0, 1e-9);
+  EXPECT_NEAR(rectifier.camera().baseline_m, kBaselineM, 1e-9);
+  std::vector<double> five{-0.012, 0.004, -0.0008, 0.0001, 0.0};
+  runtime::borrow(infos.left.d, five);
+  EXPECT_EQ(refusal(infos, false),
+            "topic 'stereo/left/camera_info': field d: expected 4 equidistant coefficients k1 k2 k3 k4");
+}
+
 TEST(Ros2Input, BadCameraInfoIsOneLineNamingTopicAndField) {
   {
     CameraInfos infos;
-    const std::string equidistant = "equidistant";
-    infos.right.distortion_model = runtime::borrow(equidistant);
+    const std::string fov = "fov";
+    infos.right.distortion_model = runtime::borrow(fov);
     EXPECT_EQ(refusal(infos, false),
-              "topic 'stereo/right/camera_info': field distortion_model: 'equidistant': expected plumb_bob or "
-              "rational_polynomial (with k4..k6 = 0)");
+              "topic 'stereo/right/camera_info': field distortion_model: 'fov': expected plumb_bob, "
+              "rational_polynomial (with k4..k6 = 0) or equidistant");
   }
   {
     CameraInfos infos;

@@ -62,14 +62,17 @@ CameraModel raw_camera(const CameraInfoSource& source, Eigen::Matrix3d& R, Eigen
       }
     }
     d.resize(5);
+  } else if (model == "equidistant") {
+    // image_geometry's fisheye (Kannala-Brandt) model, as camera_calibration --fisheye writes it
+    if (d.size() != 4) fail(source.topic, "d", "expected 4 equidistant coefficients k1 k2 k3 k4");
   } else if (model != "plumb_bob") {
     fail(source.topic, "distortion_model",
-         "'" + model + "': expected plumb_bob or rational_polynomial (with k4..k6 = 0)");
+         "'" + model + "': expected plumb_bob, rational_polynomial (with k4..k6 = 0) or equidistant");
   } else if (d.size() != 4 && d.size() != 5) {
     fail(source.topic, "d", "expected 4 or 5 plumb_bob coefficients k1 k2 p1 p2 [k3]");
   }
   camera.distortion = d;
-  camera.distortion_model = DistortionModel::kRadialTangential;
+  camera.distortion_model = model == "equidistant" ? DistortionModel::kEquidistant : DistortionModel::kRadialTangential;
   R = matrix3(info.r);
   if (!((R * R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < kRotationTolerance) ||
       !(R.determinant() > 0.0)) {
