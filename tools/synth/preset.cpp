@@ -128,8 +128,11 @@ std::string to_string(EventKind kind) {
   return "?";
 }
 
-Preset load_preset(const fs::path& yaml_path) {
-  if (!fs::exists(yaml_path)) throw std::runtime_error(yaml_path.string() + ": preset file does not exist");
+namespace {
+
+// A preset or camera file opened for reading; `what` names it in the error ("preset file").
+cv::FileStorage open_yaml(const fs::path& yaml_path, const std::string& what) {
+  if (!fs::exists(yaml_path)) throw std::runtime_error(yaml_path.string() + ": " + what + " does not exist");
   cv::FileStorage fs_in;
   try {
     fs_in.open(yaml_path.string(), cv::FileStorage::READ);
@@ -137,6 +140,13 @@ Preset load_preset(const fs::path& yaml_path) {
     throw std::runtime_error(yaml_path.string() + ": not readable as YAML (" + e.err + ")");
   }
   if (!fs_in.isOpened()) throw std::runtime_error(yaml_path.string() + ": cannot be opened as YAML");
+  return fs_in;
+}
+
+}  // namespace
+
+Preset load_preset(const fs::path& yaml_path) {
+  const cv::FileStorage fs_in = open_yaml(yaml_path, "preset file");
   const cv::FileNode root = fs_in.root();
   const fs::path& f = yaml_path;
 
@@ -264,14 +274,7 @@ std::vector<std::string> known_presets() {
 }
 
 void apply_camera_file(const fs::path& yaml_path, Preset& preset) {
-  if (!fs::exists(yaml_path)) throw std::runtime_error(yaml_path.string() + ": camera file does not exist");
-  cv::FileStorage fs_in;
-  try {
-    fs_in.open(yaml_path.string(), cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw std::runtime_error(yaml_path.string() + ": not readable as YAML (" + e.err + ")");
-  }
-  if (!fs_in.isOpened()) throw std::runtime_error(yaml_path.string() + ": cannot be opened as YAML");
+  const cv::FileStorage fs_in = open_yaml(yaml_path, "camera file");
   const cv::FileNode camera = fs_in.root()["camera"];
   if (camera.empty() || !camera.isMap()) fail(yaml_path, "camera", "is missing (a map of a preset's camera fields)");
   read_camera(camera, yaml_path, preset.camera);
