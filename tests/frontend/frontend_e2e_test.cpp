@@ -290,8 +290,8 @@ TEST(FrontendProcess, ShippedPipelinesPassTheSupervisorCheck) {
     if (pipeline.rfind("camera", 0) == 0) {
       // heslam-camera's pipeline plays the EuRoC folder as a camera, calibrated by its sensor.yaml files
       args.insert(args.end(), {"--arg", "source=" + euroc.string(), "--arg", "calibration=" + euroc.string()});
-    } else if (pipeline != "ros2_input") {
-      // ros2_input's source is a ROS 2 camera (heslam-ros2-input), not a dataset folder
+    } else if (!pipeline.starts_with("ros2_input")) {
+      // ros2_input*: the source is a ROS 2 camera (heslam-ros2-input), not a dataset folder
       args.insert(args.end(), {"--arg", "dataset=" + dataset.string()});
     }
     // replay_spy writes no trajectory; the localize pipeline refuses to start without a saved map

@@ -82,10 +82,11 @@ TEST_F(LayeredConfig, EveryShippedPipelineLaysTheUsersComponentConfigOverItsOwn)
     SCOPED_TRACE(name);
     supervisor::PipelineOverrides overrides;
     overrides.args = {{"frontend_config", user_frontend.string()}};
-    // A camera pipeline's input is its source (heslam-camera), ros2_input's a ROS 2 camera
+    // A camera pipeline's input is its source (heslam-camera), ros2_input*'s a ROS 2 camera
     // (heslam-ros2-input), the others' a dataset.
     if (name.rfind("camera", 0) == 0) overrides.args["source"] = dir_.path().string();
-    if (name.rfind("camera", 0) != 0 && name != "ros2_input") overrides.args["dataset"] = dir_.path().string();
+    if (name.rfind("camera", 0) != 0 && !name.starts_with("ros2_input"))
+      overrides.args["dataset"] = dir_.path().string();
     const bool has_mapper = name.find("odometry") == std::string::npos;
     const bool inertial = name.find("inertial") != std::string::npos;  // a shipped inertial layer
     if (has_mapper) overrides.args["mapper_config"] = user_mapper.string();

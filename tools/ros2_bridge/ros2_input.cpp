@@ -31,6 +31,8 @@ constexpr double kMaxIdle_s = 3600.0;
 // 200 Hz IMU over a second of a stalled poll loop. The frames that wait for the IMU: at most this many.
 constexpr int kImuDepth = 200;
 constexpr std::size_t kMaxHeldFrames = 20;
+// Images held while the CameraInfo pair is not yet usable (both sides together: a second of a 5 Hz pair).
+constexpr std::size_t kEarlyImagesHeld = 10;
 constexpr double kMaxImuWait_s = 10.0;
 
 const char* side_name(StereoPairer::Side side) { return side == StereoPairer::Side::kLeft ? "left" : "right"; }
@@ -166,6 +168,9 @@ void Ros2Input::take_camera_info(StereoPairer::Side side, const CameraInfo& info
                rectifier.camera().baseline_m, " m");
     calibration_ = std::move(calibration);
     stats().count("calibrations_published");
+    std::deque<EarlyImage> early = std::move(early_images_);
+    early_images_.clear();
+    for (EarlyImage& image : early) pair_image(image.side, image.stamp_ns, std::move(image.packed));
   } catch (const std::exception& error) {
     calibration_.reset();  // images wait for a good one
     stats().count("bad_camera_infos");
@@ -173,19 +178,46 @@ void Ros2Input::take_camera_info(StereoPairer::Side side, const CameraInfo& info
   }
 }
 
-void Ros2Input::take_image(StereoPairer::Side side, const Image& image) {
-  const std::string& topic = image_readers_[static_cast<int>(side)]->name();
-  if (!calibration_) {
+void Ros2Input::drop_early_images(std::size_t keep) {
+  while (early_images_.size() > keep) {
+    const int side = static_cast<int>(early_images_.front().side);
+    early_images_.pop_front();
     stats().count("images_before_calibration");
     ++images_before_calibration_;
-    log().warn_throttled("images_before_calibration", "topic '", topic,
+    log().warn_throttled("images_before_calibration", "topic '", image_readers_[side]->name(),
                          "': image before a usable CameraInfo pair: dropped");
-    return;
   }
+}
+
+void Ros2Input::take_image(StereoPairer::Side side, const Image& image) {
+  const std::string& topic = image_readers_[static_cast<int>(side)]->name();
   try {
-    PackedImage packed = to_packed_image(image, topic, static_cast<std::uint32_t>(calibration_->left.width_px),
-                                         static_cast<std::uint32_t>(calibration_->left.height_px));
-    std::optional<StereoPairer::Pair> pair = pairer_.add(side, to_stamp_ns(image.header.stamp), std::move(packed));
+    // Without a calibration the size cannot be checked yet (0 x 0: any); pair_image checks it.
+    PackedImage packed = to_packed_image(image, topic, 0, 0);
+    if (!calibration_) {
+      early_images_.push_back({side, to_stamp_ns(image.header.stamp), std::move(packed)});
+      drop_early_images(kEarlyImagesHeld);
+      return;
+    }
+    pair_image(side, to_stamp_ns(image.header.stamp), std::move(packed));
+  } catch (const std::exception& error) {
+    stats().count("bad_images");
+    ++bad_images_;
+    log().warn_throttled("bad_images", error.what());
+  }
+}
+
+void Ros2Input::pair_image(StereoPairer::Side side, std::int64_t stamp_ns, PackedImage packed) {
+  const std::string& topic = image_readers_[static_cast<int>(side)]->name();
+  try {
+    const auto width = static_cast<std::uint32_t>(calibration_->left.width_px);
+    const auto height = static_cast<std::uint32_t>(calibration_->left.height_px);
+    if (packed.width_px != width || packed.height_px != height) {
+      throw std::runtime_error("topic '" + topic + "': field width/height: " + std::to_string(packed.width_px) + "x" +
+                               std::to_string(packed.height_px) + " differs from the CameraInfo's " +
+                               std::to_string(width) + "x" + std::to_string(height));
+    }
+    std::optional<StereoPairer::Pair> pair = pairer_.add(side, stamp_ns, std::move(packed));
     if (pair) {
       check_same_encoding(*pair, image_readers_[0]->name(), image_readers_[1]->name());
       held_.push_back({std::move(*pair), std::chrono::steady_clock::now()});
@@ -309,6 +341,7 @@ void Ros2Input::run() {
     imu_reader_->take_all([&](const Imu& imu) { take_imu(imu); });
     if (const std::optional<ImuForwarder::Batch> batch = imu_.take_batch()) publish_imu(*batch);
   }
+  drop_early_images(0);  // the calibration never came: each counted
   release_frames(true);
   if (imu_reader_) {
     publish_imu(ImuForwarder::Batch{{}, imu_.taken(), imu_.watermark_ns()}, true);

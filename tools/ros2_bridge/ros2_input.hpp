@@ -102,6 +102,19 @@ class Ros2Input : public runtime::Component {
   std::optional<runtime::Writer<msg::StereoFrame>> frame_writer_;
   std::optional<OwnedCameraInfo> infos_[2];
   std::optional<StereoCalibration> calibration_;  // published; images are checked against its size
+  // Images that came before a usable CameraInfo pair (a driver publishes both at once, and the two
+  // CameraInfos may arrive a poll apart): held, a few per side, until the calibration is there.
+  struct EarlyImage {
+    StereoPairer::Side side;
+    std::int64_t stamp_ns;
+    PackedImage packed;
+  };
+  std::deque<EarlyImage> early_images_;
+  // The image into the pairer (and a pair to the frames held for the IMU), checked against the
+  // calibration's size; a bad one counted and said.
+  void pair_image(StereoPairer::Side side, std::int64_t stamp_ns, PackedImage packed);
+  // Drops early images beyond `keep`, counting each as an image before a usable CameraInfo pair.
+  void drop_early_images(std::size_t keep);
   StereoPairer pairer_;
   std::uint64_t next_seq_ = 0;
   std::uint64_t unpaired_reported_ = 0;
