@@ -2,8 +2,11 @@
 #include "runtime/writer_identity.hpp"
 
 #include <cstdio>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <string_view>
+#include <vector>
 
 #include "runtime/run_id.hpp"
 
@@ -17,6 +20,25 @@ using Endpoint = std::unique_ptr<dds_builtintopic_endpoint_t, FreeEndpoint>;
 
 Endpoint matched_endpoint(dds_entity_t reader, dds_instance_handle_t publication) {
   return Endpoint(dds_get_matched_publication_data(reader, publication));
+}
+
+// writer_of_this_run's answers, remembered per publication (instance handles are unique within a
+// process): a writer asked while it was matched stays known after it left, so the samples it wrote
+// just before leaving are still used.
+std::mutex g_run_writers_mutex;
+std::map<dds_instance_handle_t, bool> g_run_writers;
+
+std::vector<dds_instance_handle_t> matched_publications(dds_entity_t reader) {
+  std::vector<dds_instance_handle_t> handles(16);
+  for (;;) {
+    const dds_return_t n = dds_get_matched_publications(reader, handles.data(), handles.size());
+    if (n < 0) return {};
+    if (static_cast<size_t>(n) <= handles.size()) {
+      handles.resize(static_cast<size_t>(n));
+      return handles;
+    }
+    handles.resize(static_cast<size_t>(n));
+  }
 }
 
 }  // namespace
@@ -72,8 +94,15 @@ std::optional<std::string> writer_run_id(dds_entity_t reader, dds_instance_handl
 
 bool writer_of_this_run(dds_entity_t reader, dds_instance_handle_t publication) {
   if (!run_on_one_host()) return true;
-  const std::optional<std::string> run = writer_run_id(reader, publication);
-  return run && *run == process_run_id();
+  const std::lock_guard lock(g_run_writers_mutex);
+  // Every writer matched now is asked while it still can be, not only the one of this sample.
+  for (const dds_instance_handle_t matched : matched_publications(reader)) {
+    if (g_run_writers.contains(matched)) continue;
+    const std::optional<std::string> run = writer_run_id(reader, matched);
+    if (run) g_run_writers[matched] = *run == process_run_id();
+  }
+  const auto known = g_run_writers.find(publication);
+  return known != g_run_writers.end() && known->second;
 }
 
 }  // namespace heslam::runtime

@@ -32,7 +32,10 @@ std::optional<std::string> writer_participant(dds_entity_t reader, dds_instance_
 
 // Whether a sample of `publication` may be used by a reader of a topic with several legitimate
 // writers (lockstep/frame_done, lockstep/keyframe_done): always, unless this run is on one host
-// (run_on_one_host()) and the writer is of another run or left before it could be asked.
+// (run_on_one_host()) and the writer is of another run or left before it could be asked. Each call
+// asks every writer matched at that moment and remembers the answers, so a writer that was matched
+// at any earlier call is still known after it left (its last samples, written just before it
+// exited, are used); only a writer that matched, wrote and left between two calls is unknown.
 bool writer_of_this_run(dds_entity_t reader, dds_instance_handle_t publication);
 
 }  // namespace heslam::runtime

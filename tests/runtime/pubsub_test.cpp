@@ -9,10 +9,12 @@
 
 #include "runtime/participant.hpp"
 #include "runtime/reader.hpp"
+#include "runtime/run_id.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/topics.hpp"
 #include "runtime/waitset.hpp"
 #include "runtime/writer.hpp"
+#include "runtime/writer_identity.hpp"
 #include "test_domain.hpp"
 
 namespace heslam::runtime {
@@ -336,6 +338,42 @@ TEST(Participant, BadDomainIsOneLine) {
   } catch (const std::runtime_error& error) {
     EXPECT_STREQ(error.what(), "DDS domain 300: expected an id in [0, 232]");
   }
+}
+
+// The last acknowledgement of a process that exits (lockstep/frame_done, .../keyframe_done) is
+// taken after its writer left, when the run it advertised can no longer be asked: a writer known
+// while it was matched is still of this run then (writer_identity.hpp).
+TEST_F(PubSub, AWriterKnownWhileMatchedStaysOfThisRunAfterItLeft) {
+  setenv(kRunOnOneHostVariable, "1", 1);
+  Reader<msg::FrameDone> reader(participant, topics.frame_done());
+  std::optional<Writer<msg::FrameDone>> writer(std::in_place, participant, topics.frame_done());
+  ASSERT_TRUE(writer->wait_for_readers(1, kDeadline));
+  msg::FrameDone done{};
+  done.seq = 1;
+  std::string component = "test";
+  done.component = borrow(component);
+  writer->write(done);
+  const auto first = take_within(reader, participant);
+  ASSERT_TRUE(first);
+  const dds_instance_handle_t publication = first->info.publication_handle;
+  EXPECT_TRUE(writer_of_this_run(reader.handle(), publication));
+
+  done.seq = 2;
+  writer->write(done);
+  writer.reset();
+  const auto deadline = std::chrono::steady_clock::now() + kDeadline;
+  while (writer_matched(reader.handle(), publication) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(10ms);
+  ASSERT_FALSE(writer_matched(reader.handle(), publication)) << "the writer never left";
+  std::optional<Received<msg::FrameDone>> second;
+  while (!second && std::chrono::steady_clock::now() < deadline) {
+    second = take_within(reader, participant);
+    if (second && !second->info.valid_data) second.reset();
+  }
+  ASSERT_TRUE(second) << "the sample written before the writer left was not delivered";
+  EXPECT_EQ(second->sample->seq, 2u);
+  EXPECT_TRUE(writer_of_this_run(reader.handle(), second->info.publication_handle));
+  unsetenv(kRunOnOneHostVariable);
 }
 
 }  // namespace
