@@ -88,7 +88,7 @@ std::uint64_t peak_resident_bytes() {
 void log_stage_summary(const runtime::Logger& log, const runtime::Stats& stats) {
   static const char* const kOrder[] = {
       "rectify",        "he",    "extract", "stereo", "features", "track_initial", "track_local_map",
-      "track_keyframe", "track", "imu",     "cpu",    "total"};
+      "track_keyframe", "track", "imu",     "cpu",    "total",    "keyframe_wait"};
   const std::vector<runtime::StageSummary> stages = stats.stages();
   for (const char* name : kOrder) {
     for (const runtime::StageSummary& stage : stages) {
@@ -96,7 +96,8 @@ void log_stage_summary(const runtime::Logger& log, const runtime::Stats& stats) 
       std::ostringstream line;
       line << std::fixed << std::setprecision(2) << "stage " << std::left << std::setw(16) << stage.name << " median "
            << std::right << std::setw(7) << stage.p50_ms << " ms  p90 " << std::setw(7) << stage.p90_ms << " ms  max "
-           << std::setw(7) << stage.max_ms << " ms  (" << stage.count << " frames)";
+           << std::setw(7) << stage.max_ms << " ms  (" << stage.count
+           << (stage.name == "keyframe_wait" ? " keyframes)" : " frames)");
       log.info(line.str());
     }
   }
@@ -527,7 +528,7 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
               result.tracked_points, " points, ", output.keypoints, " keypoints (", output.stereo_keypoints,
               " stereo), ", output.timings.back().ms, " ms");
 
-  if (result.new_keyframe && options_.wait_for_mapper && !wait_for_keyframe_done(result.new_keyframe->id)) {
+  if (result.new_keyframe && options_.wait_for_mapper && !timed_wait_for_keyframe_done(result.new_keyframe->id)) {
     stats().count("mapper_timeouts");
     log().warn_throttled("mapper_timeouts", "keyframe ", format_id(result.new_keyframe->id),
                          ": no KeyframeDone from the mapper",
@@ -655,6 +656,12 @@ void Frontend::use_keyframe_done(const HeldKeyframeDone& done) {
   }
   keyframes_done_[done.keyframe_id].insert(done.component);
   acknowledged_map_version_ = std::max(acknowledged_map_version_, done.map_version);
+}
+
+bool Frontend::timed_wait_for_keyframe_done(KeyframeId id) {
+  // The lockstep handshake's wait per keyframe (the mapper's and the loop closers' work), wall time.
+  auto timer = stats().time("keyframe_wait");
+  return wait_for_keyframe_done(id);
 }
 
 bool Frontend::wait_for_keyframe_done(KeyframeId id) {

@@ -66,6 +66,8 @@ class Frontend : public runtime::Component {
   // state meanwhile, until the mirror holds the map version they acknowledged. False on timeout or
   // shutdown.
   bool wait_for_keyframe_done(KeyframeId id);
+  // The same, timed: the `keyframe_wait` stage.
+  bool timed_wait_for_keyframe_done(KeyframeId id);
   bool keyframe_acknowledged(KeyframeId id) const;
   // One KeyframeDone as taken: who wrote it, the role it claims (runtime/role_binding.hpp), its fields.
   struct HeldKeyframeDone {

@@ -220,9 +220,15 @@ class Replay {
         publish_imu(frame.stamp_ns);
         if (!images) continue;
         publish(*images, frame, pass_offset_ns);
-        if (options_.lockstep &&
-            !wait_for_ack(seq_ - 1, [&] { republish(*images, frame, pass_offset_ns, seq_ - 1); })) {
-          return finish();
+        if (acked_at_) record_handshake("lockstep_gap", Clock::now() - *acked_at_, gap_total_);
+        // Lockstep: the next pair is decoded on the helper thread while the consumers work on this
+        // one (the decoding is then off the handshake's critical path; the bytes are the same).
+        if (options_.lockstep && index + 1 < dataset_.frames.size()) prefetch(index + 1);
+        if (options_.lockstep) {
+          const auto waiting_since = Clock::now();
+          if (!wait_for_ack(seq_ - 1, [&] { republish(*images, frame, pass_offset_ns, seq_ - 1); })) return finish();
+          acked_at_ = Clock::now();
+          record_handshake("ack_wait", *acked_at_ - waiting_since, ack_wait_total_);
         }
         if (quit_) return finish();
       }
@@ -371,6 +377,12 @@ class Replay {
     });
   }
 
+  // Starts decoding pair `index` on the helper thread; load(index) then takes it from there.
+  void prefetch(std::size_t index) {
+    if (is_cached(index) || (index < preload_failed_.size() && preload_failed_[index])) return;
+    prefetched_.emplace(Prefetched{index, decode_on_helper(index)});
+  }
+
   // --preload: decodes pairs from the first on, before frame 0, while the decoded pairs fit in the
   // budget (the rest are decoded during the run as usual). Pairs that fail are counted and skipped by
   // load() as they would be during the run.
@@ -407,7 +419,9 @@ class Replay {
   std::optional<StereoImages> load(std::size_t index) {
     if (is_cached(index)) return decoded_[index];
     if (index < preload_failed_.size() && preload_failed_[index]) return std::nullopt;
-    DecodedPair pair = decode_on_helper(index).get();
+    DecodedPair pair =
+        prefetched_ && prefetched_->index == index ? prefetched_->pair.get() : decode_on_helper(index).get();
+    prefetched_.reset();  // a pair prefetched for another index (none today) is dropped
     if (!pair.images) {
       if (options_.strict) throw std::runtime_error(pair.error + " (--strict)");
       ++counts_.skipped_images;
@@ -460,7 +474,6 @@ class Replay {
   // frame was lost with the old process) gets the frame again through `republish`; consumers
   // acknowledge a seq they already processed without processing it again.
   bool wait_for_ack(std::uint64_t seq, const std::function<void()>& republish_frame) {
-    auto timer = stats_.time("ack_wait");
     const auto deadline = Clock::now() + to_ms(options_.ack_timeout_s);
     std::vector<dds_instance_handle_t> readers = frame_writer_.matched_reader_handles();
     std::sort(readers.begin(), readers.end());
@@ -521,6 +534,33 @@ class Replay {
     }
   }
 
+  // Lockstep: a stage time of the handshake, and its sum over the run (the summary line's figures).
+  void record_handshake(const char* stage, Clock::duration took, Clock::duration& total) {
+    stats_.record_ms(stage, std::chrono::duration<double, std::milli>(took).count());
+    total += took;
+  }
+
+  // Lockstep: where the wall time went, from the replay's side of the handshake: waiting for the
+  // consumer's FrameDone (its work, and the mapper's per keyframe), and from a FrameDone to the next
+  // frame written (what the consumers wait for the replay: decoding the pair, unless prefetched, and
+  // the write).
+  void log_handshake() const {
+    if (!options_.lockstep || counts_.published == 0) return;
+    const auto seconds = [](Clock::duration d) { return std::chrono::duration<double>(d).count(); };
+    double ack_median_ms = 0.0;
+    double gap_median_ms = 0.0;
+    for (const runtime::StageSummary& stage : stats_.stages()) {
+      if (stage.name == "ack_wait") ack_median_ms = stage.p50_ms;
+      if (stage.name == "lockstep_gap") gap_median_ms = stage.p50_ms;
+    }
+    char line[200];
+    std::snprintf(line, sizeof(line),
+                  "lockstep: %.2f s waiting for FrameDone (median %.2f ms), %.2f s from a FrameDone to the "
+                  "next frame written (median %.2f ms)",
+                  seconds(ack_wait_total_), ack_median_ms, seconds(gap_total_), gap_median_ms);
+    log_.info(line);
+  }
+
   void update_counts() {
     const std::int64_t now = now_ns();
     counts_.paused = pacer_.paused();
@@ -548,6 +588,7 @@ class Replay {
     }
     status_.set_state(runtime::ComponentState::kShuttingDown, format_result(counts_, options_.loop, stopped_early));
     log_.info(format_summary(counts_), stopped_early ? " (stopped early)" : "");
+    log_handshake();
     // An empty result is never a success: every pair of the sequence was unreadable.
     if (counts_.published == 0 && counts_.skipped_images > 0 && !stopped_early) {
       log_.error("published no frame: all ", counts_.skipped_images,
@@ -589,7 +630,15 @@ class Replay {
   std::vector<std::optional<StereoImages>> decoded_;  // --loop / --preload cache, empty when not caching
   std::vector<bool> preload_failed_;                  // --preload: pairs that could not be decoded
   std::uint64_t seq_ = 0;
-  DecodeLead decode_lead_;  // rate mode: how long before its due time a pair is decoded
+  struct Prefetched {
+    std::size_t index;
+    std::future<DecodedPair> pair;
+  };
+  std::optional<Clock::time_point> acked_at_;  // lockstep: when the last FrameDone arrived
+  Clock::duration ack_wait_total_{};
+  Clock::duration gap_total_{};
+  std::optional<Prefetched> prefetched_;  // lockstep: the next pair, decoding while the consumers work
+  DecodeLead decode_lead_;                // rate mode: how long before its due time a pair is decoded
   std::int64_t start_ns_ = 0;
   std::int64_t paused_since_ns_ = 0;
   std::int64_t paused_total_ns_ = 0;
