@@ -36,7 +36,7 @@ std::size_t lines_without_hash(const fs::path& file) {
   return lines;
 }
 
-TEST(LoadShedding, RealTimeBehindTheCameraShedsStaleFramesAndCountsThem) {
+TEST(LoadSheddingEndToEnd, RealTimeBehindTheCameraShedsStaleFramesAndCountsThem) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
   const test::ScratchDir dir("shedding");
@@ -71,7 +71,7 @@ TEST(LoadShedding, RealTimeBehindTheCameraShedsStaleFramesAndCountsThem) {
 
 // Without shedding the same slow frontend tracks frames in order however late they are (the image
 // reader's keep-last queue drops the oldest): nothing shed, every frame still accounted for.
-TEST(LoadShedding, RealTimeWithoutSheddingCountsEveryFrameToo) {
+TEST(LoadSheddingEndToEnd, RealTimeWithoutSheddingCountsEveryFrameToo) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
   const test::ScratchDir dir("no_shedding");

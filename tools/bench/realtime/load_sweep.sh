@@ -61,16 +61,20 @@ rm -rf "$lock.txt"* "$out/logs_lockstep"
   { echo "load_sweep.sh: the lockstep run failed; see $lock.supervisor.log" >&2; exit 1; }
 lock_kf=$(grep -h -E 'processed [0-9]+ frames' "$out/logs_lockstep/frontend.log" | tail -n 1 |
   sed -E 's/.*, ([0-9]+) keyframes.*/\1/')
-lock_ate=$("$bin/heslam-eval" ape --gt "$dataset/mav0/state_groundtruth_estimate0/data.csv" --est "$lock.txt" 2>/dev/null |
-  grep -m1 -E '^ *rmse' | awk '{ s = $3 == "m" ? 1000 : $3 == "cm" ? 10 : $3 == "mm" ? 1 : -1; if (s > 0) printf "%.2f", $2 * s }')
+lock_ate=$("$bin/heslam-eval" ape --gt "$dataset/mav0/state_groundtruth_estimate0/data.csv" --est "$lock.txt" \
+  2>/dev/null | grep -m1 -E '^ *rmse' |
+  awk '{ s = $3 == "m" ? 1000 : $3 == "cm" ? 10 : $3 == "mm" ? 1 : -1; if (s > 0) printf "%.2f", $2 * s }')
 echo "# lockstep (euroc.yaml): ATE ${lock_ate:-?} mm, ${lock_kf:-?} keyframes"
 
 IFS=, read -r -a level_list <<<"$levels"
+failures=0
 for level in "${level_list[@]}"; do
   [[ $level == io || $level =~ ^[0-9]+$ ]] || { echo "load_sweep.sh: level '$level': a number or io" >&2; exit 2; }
   start_load "$level"
   sleep 1
   echo "## level $level ($( [[ $level == io ]] && echo 'I/O load' || echo "$level busy processes"))"
-  LABEL=load_$level "$here/latency_cpu.sh" "$dataset" "$out/level_$level" "$runs" "$domain" -- "${extra[@]}"
+  LABEL=load_$level "$here/latency_cpu.sh" "$dataset" "$out/level_$level" "$runs" "$domain" -- "${extra[@]}" ||
+    failures=$((failures + 1))
   stop_load
 done
+((failures == 0)) || { echo "load_sweep.sh: runs failed at $failures levels (rows above)" >&2; exit 1; }
