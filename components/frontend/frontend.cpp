@@ -74,6 +74,13 @@ double thread_cpu_ms() {
   return static_cast<double>(now.tv_sec) * 1e3 + static_cast<double>(now.tv_nsec) * 1e-6;
 }
 
+// The wall clock DDS stamps samples with (SampleInfo::source_stamp_ns), in ns.
+std::int64_t realtime_ns() {
+  timespec now{};
+  clock_gettime(CLOCK_REALTIME, &now);
+  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
+
 // Peak resident set size of this process (VmHWM in /proc/self/status), in bytes; 0 if unknown.
 std::uint64_t peak_resident_bytes() {
   std::ifstream status("/proc/self/status");
@@ -100,6 +107,13 @@ void log_stage_summary(const runtime::Logger& log, const runtime::Stats& stats) 
            << (stage.name == "keyframe_wait" ? " keyframes)" : " frames)");
       log.info(line.str());
     }
+  }
+  for (const runtime::StageSummary& stage : stages) {
+    if (stage.name != "latency") continue;
+    std::ostringstream line;
+    line << std::fixed << std::setprecision(2) << "latency (frame published -> odometry) median " << stage.p50_ms
+         << " ms  p99 " << stage.p99_ms << " ms  max " << stage.max_ms << " ms  (" << stage.count << " frames)";
+    log.info(line.str());
   }
   log.info("peak RSS ", peak_resident_bytes() / (1024 * 1024), " MiB");
 }
@@ -252,6 +266,11 @@ void Frontend::run() {
     log().warn(count("frames_missed"),
                " frames missed: published while this frontend was busy, only the newest kept (no pose: the run "
                "counts them as lost)");
+  }
+  if (count("frames_shed") > 0) {
+    log().warn(count("frames_shed"), " frames shed: of the missed, skipped as older than ",
+               options_.shedding.shed_after_ms, " ms with a newer frame waiting (realtime.shed_frames_after_ms); ",
+               count("gap_predictions"), " frames after a gap started from the motion scaled to it");
   }
   log_stage_summary(log(), stats());
   if (options_.localize && !relocalized_at_seq_) {
@@ -418,7 +437,7 @@ void Frontend::take_frames() {
   while (processor_ && !pending_.empty()) {  // frames that arrived before the calibration
     runtime::Received<msg::StereoFrame> frame = std::move(pending_.front());
     pending_.pop_front();
-    process_frame(*frame.sample);
+    process_frame(*frame.sample, frame.info.source_stamp_ns);
   }
   // Into one reused sample: a 722 KB pair per frame without an allocation (Reader::take_into).
   while (frame_reader_->take_into(frame_)) {
@@ -435,9 +454,25 @@ void Frontend::take_frames() {
     // next frame waiting every time and would otherwise never mirror the map while frames come (a
     // loop correction reached it only at the end of a loaded real-time run).
     mirror_map_state();
-    process_frame(*frame_.sample);
+    if (shed_stale_frame()) continue;
+    process_frame(*frame_.sample, frame_.info.source_stamp_ns);
     if (shutdown_requested()) return;
   }
+}
+
+bool Frontend::shed_stale_frame() {
+  // Never the first frame: it starts the map, and a gap is counted as missed from the frame before it.
+  if (options_.shedding.shed_after_ms <= 0.0 || !last_seq_ || frame_.info.source_stamp_ns <= 0 ||
+      frame_.sample->seq <= *last_seq_) {
+    return false;
+  }
+  const double age_ms = static_cast<double>(realtime_ns() - frame_.info.source_stamp_ns) * 1e-6;
+  if (!shed_frame(options_.shedding, age_ms, frame_reader_->has_unread())) return false;
+  // No pose: the next frame tracked counts it as missed by its seq jump (so processed + missed =
+  // published still holds); shed says why (docs/outputs.md).
+  stats().count("frames_shed");
+  log().debug("frame ", frame_.sample->seq, ": shed (", age_ms, " ms old, a newer frame waiting)");
+  return true;
 }
 
 void Frontend::count_frames_left() {
@@ -453,7 +488,7 @@ void Frontend::count_frames_left() {
   }
 }
 
-void Frontend::process_frame(const msg::StereoFrame& frame) {
+void Frontend::process_frame(const msg::StereoFrame& frame, std::int64_t published_ns) {
   if (last_seq_ && frame.seq <= *last_seq_) {
     // Published again (a publisher that restarted, or one re-sending for a restarted consumer): it
     // was tracked already; acknowledge so a lockstep publisher goes on, do not track it twice.
@@ -473,6 +508,9 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
     return;
   }
   if (last_seq_ && frame.seq > *last_seq_ + 1) stats().count("frames_missed", frame.seq - *last_seq_ - 1);
+  // The source numbers its frames from 0: those before our first one were published while we were
+  // not taking them yet (a loaded machine: start-up, or dropped before the calibration arrived).
+  if (!last_seq_ && frame.seq > 0) stats().count("frames_missed", frame.seq);
   last_seq_ = frame.seq;
   FrameOutput output;
   double imu_cpu_ms = 0.0;
@@ -482,6 +520,10 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
     predict_inertial(frame);
     imu_cpu_ms = thread_cpu_ms() - cpu_start_ms;
   }
+  if (options_.shedding.frame_delay_ms > 0.0) {
+    std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(options_.shedding.frame_delay_ms));
+  }
+  predict_over_gap(frame.seq);
   try {
     output = processor_->process(frame.stamp_ns, frame.seq, images.left, images.right);
   } catch (const std::exception& error) {
@@ -492,6 +534,7 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
     return;
   }
   const TrackResult& result = output.result;
+  gap_prediction_.record(frame.seq, result.state == TrackingState::kOk, result.T_wc);
   stats().count("frames");
   if (options_.localize && !relocalized_at_seq_ && result.state == TrackingState::kOk) {
     relocalized_at_seq_ = frame.seq;
@@ -521,6 +564,9 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
     update_inertial(frame, result, odometry);
     stats().record_ms("imu", imu_cpu_ms + thread_cpu_ms() - cpu_start_ms);
   }
+  // From the frame's publication (its writer's write time) to its odometry sample: the real-time
+  // latency (docs/frontend.md, "Latency"); in lockstep it includes the replay's wait for the ack.
+  if (published_ns > 0) stats().record_ms("latency", static_cast<double>(realtime_ns() - published_ns) * 1e-6);
   if (odometry_writer_->write(odometry.get()) == runtime::WriteResult::kTimeout) stats().count("odometry_timeouts");
   if (resumed_unfinished_seqs_.erase(frame.seq) == 0) stats().count(runtime::kOdometryFrames);
   if (journal_ && result.new_keyframe) journal_->append(odometry.get(), /*finished=*/false);
@@ -539,6 +585,16 @@ void Frontend::process_frame(const msg::StereoFrame& frame) {
   // the frame the replay sends again instead of tracking it twice.
   if (journal_) journal_->append(odometry.get(), /*finished=*/true);
   acknowledge(frame, &output);
+}
+
+void Frontend::predict_over_gap(std::uint64_t seq) {
+  // With an IMU its own prediction is better than a scaled motion model.
+  if (!options_.shedding.predict_over_gaps || inertial_) return;
+  Tracker& tracker = processor_->tracker();
+  if (const std::optional<Pose3> T_wc = gap_prediction_.predict(seq, tracker.last_frame().T_wc)) {
+    tracker.set_prediction(*T_wc);
+    stats().count("gap_predictions");
+  }
 }
 
 void Frontend::log_rejections() {

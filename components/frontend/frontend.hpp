@@ -47,7 +47,13 @@ class Frontend : public runtime::Component {
   // are not tracked but counted as missed, so every published frame is processed or missed.
   void count_frames_left();
   void take_frames();
-  void process_frame(const msg::StereoFrame& frame);
+  // Real time, behind the camera: skips the frame just taken when it is stale and a newer one waits
+  // (realtime.shed_frames_after_ms), counted as shed. True when skipped.
+  bool shed_stale_frame();
+  // After missed or shed frames: the tracker starts from the last motion scaled to the gap.
+  void predict_over_gap(std::uint64_t seq);
+  // published_ns: the frame's write time by its publisher (0: unknown), for the latency stage.
+  void process_frame(const msg::StereoFrame& frame, std::int64_t published_ns);
   // One line with the samples refused from other participants (invalid, second writers), if any.
   void log_rejections();
   // Applies whatever map state the mapper published so far.
@@ -140,6 +146,7 @@ class Frontend : public runtime::Component {
   // map version this mirror holds (the tracker's own map.version also counts the keyframes it
   // inserted, so it cannot say that).
   BatchedMirror mirror_;
+  GapPrediction gap_prediction_;  // the last motion, for a frame after a gap (realtime.predict_over_gaps)
   // odom -> world (REP 105 map -> odom): the loop corrections followed so far, left out of Odometry.T_oc.
   Pose3 T_wo_ = Pose3::Identity();
   // Inertial tracking: the readers, the stream's continuity, the state (null when off by option).

@@ -73,6 +73,7 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
   read(config, "lockstep.mapper_timeout_s", timeout_s, 0.1, kMaxTimeoutS);
   options.mapper_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));
   read(config, "frames.max_pending", options.max_pending_frames, 1, 1000);
+  options.shedding = LoadSheddingOptions::from_config(config, options.wait_for_mapper);
   options.vocabulary_file = config.get_string("vocabulary.file", "");
   options.vocabulary = load_vocabulary_setting(options.vocabulary_file);
   options.mapper_map_file = config.get_string("mapper.map_file", "");

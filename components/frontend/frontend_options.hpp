@@ -16,6 +16,7 @@
 #include "components/core/place/vocabulary.hpp"
 #include "components/core/tracking/tracker_options.hpp"
 #include "components/frontend/inertial_frontend.hpp"
+#include "components/frontend/load_shedding.hpp"
 #include "runtime/config.hpp"
 
 namespace heslam::frontend {
@@ -76,6 +77,8 @@ struct FrontendOptions {
   int max_pending_frames = 8;
   // imu.*: inertial tracking (docs/frontend.md, Inertial tracking); --imu auto|none (none wins: off).
   InertialOptions inertial;
+  // realtime.*, debug.frame_delay_ms: load shedding of a real-time frontend (load_shedding.hpp).
+  LoadSheddingOptions shedding;
 
   // Throws std::runtime_error (one line: file, field, expectation) on a bad field.
   // `rest`: the command line's own arguments (--settings FILE, --mapper-map-file FILE, --journal FILE,
