@@ -23,6 +23,7 @@
 #include "pipeline_runs.hpp"
 #include "synth_render.hpp"
 #include "test_support.hpp"
+#include "tools/eval/association.hpp"
 
 namespace heslam {
 namespace {
@@ -188,6 +189,22 @@ VelocityCheck check_velocities(const fs::path& dataset, const PipelineRun& run) 
   return check;
 }
 
+// The median tilt between the recorder's world z and the ground truth's (z vertical), over every pose:
+// the recorder writes gravity-aligned files.
+double median_world_tilt_deg(const fs::path& dataset, const PipelineRun& run) {
+  const eval::Trajectory estimate = eval::read_trajectory(run.trajectory);
+  const eval::AlignedPair pairs = eval::associate(test::ground_truth_for(dataset, estimate), estimate);
+  std::vector<double> tilts;
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const Eigen::Matrix3d R_rel = pairs.est.poses_wc[i].linear() * pairs.gt.poses_wc[i].linear().transpose();
+    const Eigen::Vector3d z = R_rel * Eigen::Vector3d::UnitZ();
+    tilts.push_back(std::atan2(z.head<2>().norm(), z.z()) * 180.0 / M_PI);
+  }
+  if (tilts.empty()) return 180.0;
+  std::nth_element(tilts.begin(), tilts.begin() + static_cast<std::ptrdiff_t>(tilts.size() / 2), tilts.end());
+  return tilts[tilts.size() / 2];
+}
+
 TEST(InertialEndToEnd, EurocMh01InitializesWithin2sAndIsNoWorseThanStereoOnly) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path dataset = test::shared_dataset("euroc_mh01_handheld");
@@ -213,6 +230,9 @@ TEST(InertialEndToEnd, EurocMh01InitializesWithin2sAndIsNoWorseThanStereoOnly) {
   std::printf("MH01 velocity: speed rms %.4f m/s over %zu frames\n", velocity.speed_rms_m_s, velocity.velocities);
   EXPECT_GE(velocity.velocities, 100u);
   EXPECT_LT(velocity.speed_rms_m_s, 0.015);  // 0.0073 (the ground truth's own differences limit it)
+  const double tilt_deg = median_world_tilt_deg(dataset, inertial);
+  std::printf("MH01 world tilt %.3f deg (median)\n", tilt_deg);
+  EXPECT_LT(tilt_deg, 1.0);
   EXPECT_FALSE(fs::exists(fs::path(stereo.trajectory).replace_extension(".inertial.txt")));
 }
 
@@ -289,6 +309,9 @@ TEST(InertialEndToEnd, SynthRoomTracksEveryFrameAndA2sBlackoutKeepsEveryPose) {
               velocity.velocities);
   EXPECT_GE(velocity.velocities, 300u);
   EXPECT_LT(velocity.speed_rms_m_s, 0.02);
+  const double tilt_deg = median_world_tilt_deg(rendered, clear);
+  std::printf("synthetic room world tilt %.3f deg (median)\n", tilt_deg);
+  EXPECT_LT(tilt_deg, 0.5);  // exact gravity
 
   const fs::path black = dir.path() / "room_imu_black";
   ASSERT_EQ(blackout_copy(rendered, black, kSynthBlackFirst, kSynthBlackFrames),
