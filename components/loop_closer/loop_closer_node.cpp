@@ -449,6 +449,13 @@ void LoopCloserNode::log_summary() {
              count("loops_accepted"), " loops accepted, ", count("loops_rejected"), " rejected, ",
              count("global_bundle_adjustments"), " global BAs (", count("global_ba_aborted"), " aborted), ",
              count("correction_timeouts"), " corrections unacknowledged");
+  if (count("four_dof_corrections") > 0) {
+    log().info(count("four_dof_corrections"), " of the loops corrected with the 4-DoF pose graph (inertial run)");
+  }
+  if (count("bad_gravities") + count("odometry_wait_timeouts") > 0) {
+    log().warn("odometry: ", count("bad_gravities"), " gravities refused, ", count("odometry_wait_timeouts"),
+               " keyframes gone on without their frame's odometry");
+  }
   if (count(runtime::kSecondWriterSamples) + count("bad_keyframes") + count("bad_keyframe_states") +
           count("bad_point_states") >
       0) {
