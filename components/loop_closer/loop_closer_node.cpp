@@ -97,8 +97,8 @@ void LoopCloserNode::configure(const runtime::Config& config) {
       options_.global_bundle_adjustment ? (options_.real_time ? "on (own thread, real time)" : inline_ba) : "off",
       options_.state_file.empty() ? ", no state file" : ", state file " + options_.state_file.string(),
       options_.closing.correction.pose_graph.four_dof ? ", 4-DoF pose graph"
-      : options_.gravity_from_odometry               ? ", 4-DoF pose graph once the odometry carries gravity"
-                                                     : "");
+      : options_.gravity_from_odometry                ? ", 4-DoF pose graph once the odometry carries gravity"
+                                                      : "");
 }
 
 void LoopCloserNode::run() {
@@ -326,8 +326,8 @@ void LoopCloserNode::choose_pose_graph(KeyframeId id) {
   closing_->use_four_dof_pose_graph(gravity_w);
   if (!four_dof_announced_) {
     four_dof_announced_ = true;
-    log().info("inertial run: loop corrections use the 4-DoF pose graph about the odometry's gravity (",
-               gravity_w.x(), ", ", gravity_w.y(), ", ", gravity_w.z(), ") m/s^2 from keyframe ", format_id(id));
+    log().info("inertial run: loop corrections use the 4-DoF pose graph about the odometry's gravity (", gravity_w.x(),
+               ", ", gravity_w.y(), ", ", gravity_w.z(), ") m/s^2 from keyframe ", format_id(id));
   }
 }
 

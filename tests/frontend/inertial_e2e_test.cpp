@@ -360,10 +360,9 @@ TEST(InertialEndToEnd, CorridorLoopClosedWithTheFourDofPoseGraphKeepsRollAndPitc
   const PipelineRun four = run_pipeline("synth_inertial", rendered, dir.path(), "four_dof",
                                         {"loop_closer=heslam-loop-closer"}, std::chrono::seconds(900));
   ASSERT_EQ(four.code, 0) << four.output;
-  const PipelineRun six =
-      run_pipeline("synth_inertial", rendered, dir.path(), "six_dof",
-                   {"loop_closer=heslam-loop-closer", "loop_closer_config=" + six_dof_config.string()},
-                   std::chrono::seconds(900));
+  const PipelineRun six = run_pipeline(
+      "synth_inertial", rendered, dir.path(), "six_dof",
+      {"loop_closer=heslam-loop-closer", "loop_closer_config=" + six_dof_config.string()}, std::chrono::seconds(900));
   ASSERT_EQ(six.code, 0) << six.output;
 
   EXPECT_EQ(poses_in(four.trajectory), static_cast<std::size_t>(kCorridorFrames)) << four.output;

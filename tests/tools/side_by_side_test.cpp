@@ -184,9 +184,10 @@ TEST_F(SideBySideScript, SaysWhatIsMissingInOneLine) {
                         "/Examples/Stereo-Inertial/stereo_inertial_euroc (build ORB-SLAM3 first: its build.sh)\n");
   // --inertial on a folder without imu0/: the ORB-SLAM3 example is there, the IMU is not.
   const fs::path inertial = fake_orbslam3(dir_.path() / "ORB_SLAM3_inertial", true, /*inertial=*/true);
-  EXPECT_EQ(side_by_side({"--orbslam3", inertial.string(), "--inertial", room_.string(), (dir_.path() / "out").string()},
-                         &output),
-            2);
+  EXPECT_EQ(
+      side_by_side({"--orbslam3", inertial.string(), "--inertial", room_.string(), (dir_.path() / "out").string()},
+                   &output),
+      2);
   EXPECT_EQ(output, "side_by_side.sh: " + (room_ / "mav0/imu0/data.csv").string() +
                         ": missing (--inertial needs the IMU: EuRoC's imu0/)\n");
 

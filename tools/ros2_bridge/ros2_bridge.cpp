@@ -306,8 +306,7 @@ void Ros2Bridge::take_gravity(const msg::Odometry& odometry) {
   }
   // The initialization's gravity is refined for a while after it: map turns with it only when it moved
   // noticeably, so tf_static is sent again a few times, not at every frame.
-  if (gravity_w_ && std::acos(std::clamp(gravity_w_->normalized().dot(g_w.normalized()), -1.0, 1.0)) <
-                        kRealignRad) {
+  if (gravity_w_ && std::acos(std::clamp(gravity_w_->normalized().dot(g_w.normalized()), -1.0, 1.0)) < kRealignRad) {
     return;
   }
   if (!gravity_w_) log().info("inertial run: map is gravity-aligned from frame ", odometry.seq, " on (z up)");

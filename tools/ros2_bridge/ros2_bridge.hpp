@@ -77,7 +77,7 @@ class Ros2Bridge : public runtime::Component {
   std::optional<Ros2Writer<TFMessage>> tf_static_writer_;
   std::optional<Ros2Writer<OccupancyGrid>> occupancy_grid_writer_;
   std::optional<Ros2Writer<PointCloud2>> dense_cloud_writer_;
-  std::optional<Pose3> T_B_rect_;  // rectified left camera -> body, from the newest calibration
+  std::optional<Pose3> T_B_rect_;             // rectified left camera -> body, from the newest calibration
   std::optional<Eigen::Vector3d> gravity_w_;  // inertial runs: the gravity map is aligned with (world)
   std::map<std::uint64_t, KeyframeEntry> keyframes_;
   std::map<std::uint64_t, std::array<double, 3>> points_w_m_;

@@ -7,8 +7,7 @@
 
 namespace heslam::ros2 {
 
-Rep105Transforms rep105_transforms(const Pose3& T_wc, const Pose3& T_oc, const Pose3& T_B_rect,
-                                   const Pose3& T_map_b0) {
+Rep105Transforms rep105_transforms(const Pose3& T_wc, const Pose3& T_oc, const Pose3& T_B_rect, const Pose3& T_map_b0) {
   const Pose3 T_rect_B = T_B_rect.inverse();
   Rep105Transforms out;
   out.T_odom_base = T_B_rect * T_oc * T_rect_B;
@@ -23,7 +22,8 @@ Pose3 gravity_aligned_map(const Eigen::Vector3d& g_w, const Pose3& T_B_rect) {
   const Eigen::Vector3d g_b0 = T_B_rect.linear() * g_w;
   // The smallest rotation taking gravity's direction to -z (as the recorder's gravity_alignment).
   Pose3 T_map_b0 = Pose3::Identity();
-  T_map_b0.linear() = Eigen::Quaterniond::FromTwoVectors(g_b0.normalized(), -Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T_map_b0.linear() =
+      Eigen::Quaterniond::FromTwoVectors(g_b0.normalized(), -Eigen::Vector3d::UnitZ()).toRotationMatrix();
   return T_map_b0;
 }
 
