@@ -131,7 +131,9 @@ TEST_F(SideBySideScript, InertialTablesTheStereoInertialExampleBesideHeslamsIner
   // The fake wrote the ground truth's body poses: ORB-SLAM3's inertial trajectory is compared as body poses.
   for (const auto& line : lines_of(output)) {
     const auto fields = fields_of(line);
-    if (fields.size() == 6 && fields[1] == "ORB-SLAM3") EXPECT_LT(std::stod(fields[5]), 0.01) << line;
+    if (fields.size() == 6 && fields[1] == "ORB-SLAM3") {
+      EXPECT_LT(std::stod(fields[5]), 0.01) << line;
+    }
   }
 }
 
