@@ -54,7 +54,8 @@ else
   heslam_kind=euroc
 fi
 vocabulary=$orbslam3/Vocabulary/ORBvoc.txt
-[[ -x $example ]] || fail "ORB-SLAM3 is missing: no $(basename "$example") at $example (build ORB-SLAM3 first: its build.sh)"
+[[ -x $example ]] ||
+  fail "ORB-SLAM3 is missing: no $(basename "$example") at $example (build ORB-SLAM3 first: its build.sh)"
 [[ -f $vocabulary ]] || fail "no ORB-SLAM3 vocabulary at $vocabulary (its build.sh unpacks ORBvoc.txt.tar.gz)"
 [[ -f $settings ]] || fail "--settings: no file $settings"
 [[ $rounds =~ ^[1-9][0-9]*$ ]] || fail "--rounds '$rounds': expected a positive integer"
