@@ -913,6 +913,7 @@ void Frontend::update_inertial(const msg::StereoFrame& frame, const TrackResult&
   }
   if (result.pose_valid()) {
     if (const std::optional<Eigen::Vector3d> v = inertial_->velocity()) odometry.set_velocity(*v);
+    if (inertial_->estimate()) odometry.set_gravity(inertial_->estimate()->gravity_w);
   }
   report_inertial();
 }

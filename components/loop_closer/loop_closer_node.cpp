@@ -37,6 +37,17 @@ constexpr int kClockShiftBits = 20;
 constexpr std::size_t kHeldKeyframes = 64;
 // What the state file holds; a file of another format is not resumed from.
 constexpr const char* kStateFileFormat = "heslam-loop-closer-state 2";
+// Inertial runs: how long a keyframe waits for the odometry of its frame (the frontend writes it right
+// after the keyframe, so it is there long before the mapper's acknowledgement); then it goes on with
+// the newest gravity before it (counted).
+constexpr std::chrono::milliseconds kOdometryWait{2000};
+// A gravity outside this range (m/s^2) is not one (the Earth's is 9.78..9.83).
+constexpr double kMinGravityM_S2 = 5.0;
+constexpr double kMaxGravityM_S2 = 15.0;
+// Gravity samples kept by stamp (those before the last processed keyframe's are dropped as it goes).
+constexpr std::size_t kMaxGravitySamples = 4096;
+// Odometry samples of a second writer kept in case it takes over (a restarted frontend).
+constexpr std::size_t kHeldOdometry = 64;
 
 std::uint64_t clock_counter_start() {
   timespec now{};
@@ -61,11 +72,17 @@ void LoopCloserNode::configure(const runtime::Config& config) {
   point_state_reader_.emplace(participant(), topics().map_points(), log(), stats(), nullptr,
                               messages::checked_options<msg::MapPointState>(messages::kMapStateHeld));
   keyframe_done_reader_.emplace(participant(), topics().keyframe_done());
+  if (options_.gravity_from_odometry) {
+    odometry_reader_.emplace(participant(), topics().odometry(), log(), stats(),
+                             messages::sample_check<msg::Odometry>(),
+                             messages::checked_options<msg::Odometry>(kHeldOdometry));
+  }
   keyframe_done_roles_.emplace(log(), stats(), keyframe_done_reader_->name());
   waitset_->attach(*keyframe_reader_);
   waitset_->attach(*keyframe_state_reader_);
   waitset_->attach(*point_state_reader_);
   waitset_->attach(*keyframe_done_reader_);
+  if (odometry_reader_) waitset_->attach(*odometry_reader_);
   correction_writer_.emplace(participant(), topics().loop_corrections());
   keyframe_done_writer_.emplace(participant(), topics().keyframe_done());
   correction_counter_ = clock_counter_start();
@@ -78,7 +95,10 @@ void LoopCloserNode::configure(const runtime::Config& config) {
   log().info(
       "detector ", detector_->name(), ", global BA ",
       options_.global_bundle_adjustment ? (options_.real_time ? "on (own thread, real time)" : inline_ba) : "off",
-      options_.state_file.empty() ? ", no state file" : ", state file " + options_.state_file.string());
+      options_.state_file.empty() ? ", no state file" : ", state file " + options_.state_file.string(),
+      options_.closing.correction.pose_graph.four_dof ? ", 4-DoF pose graph"
+      : options_.gravity_from_odometry                ? ", 4-DoF pose graph once the odometry carries gravity"
+                                                      : "");
 }
 
 void LoopCloserNode::run() {
@@ -157,6 +177,7 @@ std::size_t LoopCloserNode::take_all() {
     taken += batch;
   }
   mirror_.count_markers(markers);
+  take_odometry();
   for (auto& received : keyframe_done_reader_->take()) {
     ++taken;
     if (!received.info.valid_data) continue;
@@ -203,6 +224,7 @@ void LoopCloserNode::process_ready_keyframes() {
       continue;
     }
     if (mirror_.map().keyframe(id) == nullptr || mirror_.map().version < version) return;  // in flight
+    if (!odometry_covers(*mirror_.map().keyframe(id))) return;
     mapped_.erase(mapped_.begin());
     keyframe_done_roles_->done(id);
     process_keyframe(id);
@@ -219,6 +241,7 @@ void LoopCloserNode::process_keyframe(KeyframeId id) {
     closing_ = std::make_unique<LoopClosing>(*mirror_.camera(), std::move(detector_), options_.closing);
     for (const auto& [loop_kf, matched_kf] : restored_loops_) closing_->add_loop_edge(loop_kf, matched_kf);
   }
+  choose_pose_graph(id);
   const std::size_t awaiting_state = mirror_.keyframes_awaiting_state();
   LoopClosingResult result = closing_->process_keyframe(mirror_.map(), id);
   stats().record_ms("detection", result.timings.detection_ms);
@@ -235,6 +258,7 @@ void LoopCloserNode::process_keyframe(KeyframeId id) {
   }
   if (!result.correction) return;
   stats().count("loops_accepted");
+  if (closing_->pose_graph_options().four_dof) stats().count("four_dof_corrections");
   stats().record_ms("correction", result.timings.correction_ms);
   // ORB-SLAM2: a new loop makes the running global BA stale; it restarts after this correction.
   if (global_ba_.abort()) {
@@ -252,6 +276,59 @@ void LoopCloserNode::process_keyframe(KeyframeId id) {
              " keyframes (", mirror_.keyframes_awaiting_state(), " more from the frontend left out: not mapped yet)");
   global_ba_.start(*closing_, mirror_.map(), id);
   if (!options_.real_time) finish_global_ba();
+}
+
+void LoopCloserNode::take_odometry() {
+  if (!odometry_reader_) return;
+  for (auto& received : odometry_reader_->take()) {
+    if (!received.info.valid_data) continue;
+    const msg::Odometry& odometry = *received.sample;
+    newest_odometry_stamp_ = std::max(newest_odometry_stamp_, odometry.stamp_ns);
+    if (!odometry.gravity_valid) continue;
+    const Eigen::Vector3d g_w(odometry.g_w[0], odometry.g_w[1], odometry.g_w[2]);
+    if (!g_w.allFinite() || !(g_w.norm() > kMinGravityM_S2 && g_w.norm() < kMaxGravityM_S2)) {
+      stats().count("bad_gravities");
+      log().warn_throttled("bad_gravities", "topic '", topics().odometry().name, "': frame ", odometry.seq,
+                           ": field 'g_w' is not a gravity (finite, ", kMinGravityM_S2, "..", kMaxGravityM_S2,
+                           " m/s^2); skipped");
+      continue;
+    }
+    gravity_by_stamp_[odometry.stamp_ns] = g_w;
+  }
+  while (gravity_by_stamp_.size() > kMaxGravitySamples) gravity_by_stamp_.erase(gravity_by_stamp_.begin());
+}
+
+bool LoopCloserNode::odometry_covers(const Keyframe& keyframe) {
+  // Only once the run is known to be inertial: stereo-only runs (and runs without a frontend) never wait.
+  if (gravity_by_stamp_.empty() || newest_odometry_stamp_ >= keyframe.stamp_ns) {
+    odometry_wait_since_.reset();
+    return true;
+  }
+  const auto now = std::chrono::steady_clock::now();
+  if (!odometry_wait_since_) odometry_wait_since_ = now;
+  if (now - *odometry_wait_since_ < kOdometryWait && !shutdown_requested()) return false;
+  odometry_wait_since_.reset();
+  stats().count("odometry_wait_timeouts");
+  log().warn_throttled("odometry_wait_timeouts", "keyframe ", format_id(keyframe.id), ": no odometry of its frame on '",
+                       topics().odometry().name, "' within ", kOdometryWait.count(),
+                       " ms; the pose graph uses the newest gravity before it");
+  return true;
+}
+
+void LoopCloserNode::choose_pose_graph(KeyframeId id) {
+  const Keyframe* keyframe = mirror_.map().keyframe(id);
+  if (gravity_by_stamp_.empty() || keyframe == nullptr || !closing_) return;
+  // The gravity of the keyframe's frame (or the newest before it): a lockstep run repeats.
+  auto after = gravity_by_stamp_.upper_bound(keyframe->stamp_ns);
+  if (after == gravity_by_stamp_.begin()) return;  // initialized after this keyframe's frame
+  const Eigen::Vector3d gravity_w = std::prev(after)->second;
+  gravity_by_stamp_.erase(gravity_by_stamp_.begin(), std::prev(after));  // keeps the one used
+  closing_->use_four_dof_pose_graph(gravity_w);
+  if (!four_dof_announced_) {
+    four_dof_announced_ = true;
+    log().info("inertial run: loop corrections use the 4-DoF pose graph about the odometry's gravity (", gravity_w.x(),
+               ", ", gravity_w.y(), ", ", gravity_w.z(), ") m/s^2 from keyframe ", format_id(id));
+  }
 }
 
 void LoopCloserNode::finish_global_ba() {
@@ -372,6 +449,13 @@ void LoopCloserNode::log_summary() {
              count("loops_accepted"), " loops accepted, ", count("loops_rejected"), " rejected, ",
              count("global_bundle_adjustments"), " global BAs (", count("global_ba_aborted"), " aborted), ",
              count("correction_timeouts"), " corrections unacknowledged");
+  if (count("four_dof_corrections") > 0) {
+    log().info(count("four_dof_corrections"), " of the loops corrected with the 4-DoF pose graph (inertial run)");
+  }
+  if (count("bad_gravities") + count("odometry_wait_timeouts") > 0) {
+    log().warn("odometry: ", count("bad_gravities"), " gravities refused, ", count("odometry_wait_timeouts"),
+               " keyframes gone on without their frame's odometry");
+  }
   if (count(runtime::kSecondWriterSamples) + count("bad_keyframes") + count("bad_keyframe_states") +
           count("bad_point_states") >
       0) {

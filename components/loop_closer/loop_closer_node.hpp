@@ -8,6 +8,7 @@
 // acknowledged again, a lockstep frontend may wait for it) and the loops closed are restored.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -15,6 +16,8 @@
 #include <set>
 #include <string>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "components/core/loop/loop_closing.hpp"
 #include "components/loop_closer/background_global_ba.hpp"
@@ -53,6 +56,12 @@ class LoopCloserNode : public runtime::Component {
   // Publishes the correction and waits until the mapper applied it and the mirror holds the result.
   bool publish_and_wait(LoopCorrection correction);
   void acknowledge(KeyframeId id);
+  // Inertial runs (options_.gravity_from_odometry): the odometry's gravity by frame stamp.
+  void take_odometry();
+  // False while the keyframe should wait for the odometry of its frame (an inertial run, bounded).
+  bool odometry_covers(const Keyframe& keyframe);
+  // Before processing keyframe `id`: the 4-DoF pose graph about the gravity of its frame, if there is one.
+  void choose_pose_graph(KeyframeId id);
   void load_state();
   void save_state();
   void log_summary();
@@ -80,6 +89,13 @@ class LoopCloserNode : public runtime::Component {
     bool held = false;  // asked about before (runtime::RoleBinding::claim's `again`)
   };
   std::vector<HeldKeyframeDone> held_keyframe_done_;
+  // The frontend's odometry, for its gravity (inertial runs): gravity_valid samples by stamp, the newest
+  // stamp taken, and since when (steady clock) the next keyframe has been waiting for its frame's sample.
+  std::optional<runtime::CheckedReader<msg::Odometry>> odometry_reader_;
+  std::map<std::int64_t, Eigen::Vector3d> gravity_by_stamp_;
+  std::int64_t newest_odometry_stamp_ = 0;
+  std::optional<std::chrono::steady_clock::time_point> odometry_wait_since_;
+  bool four_dof_announced_ = false;
   std::optional<runtime::Writer<msg::LoopCorrection>> correction_writer_;
   std::optional<runtime::Writer<msg::KeyframeDone>> keyframe_done_writer_;
 

@@ -45,6 +45,7 @@ LoopCloserProcessOptions LoopCloserProcessOptions::from_config(const runtime::Co
                              std::to_string(gravity.size()) + " given)");
   }
   pose_graph.gravity_w = Eigen::Vector3d(gravity[0], gravity[1], gravity[2]);
+  o.gravity_from_odometry = config.get_bool("pose_graph.gravity_from_odometry", o.gravity_from_odometry);
   o.global_bundle_adjustment = config.get_bool("global_ba.enabled", o.global_bundle_adjustment);
   o.real_time = config.get_bool("real_time", o.real_time);
   const double timeout_s = config.get_double("lockstep.mapper_timeout_s", 30.0, 0.1, kMaxTimeoutS);

@@ -15,6 +15,10 @@ namespace heslam::loop_closer {
 
 struct LoopCloserProcessOptions {
   LoopClosingOptions closing;  // verification.*; pose_graph.four_dof / pose_graph.gravity_w (correction.pose_graph)
+  // pose_graph.gravity_from_odometry: once the odometry carries a gravity (gravity_valid: an inertial run
+  // whose IMU is initialized), loop corrections use the 4-DoF pose graph about that gravity (the one of
+  // the loop keyframe's frame), whatever pose_graph.four_dof says. Stereo-only runs never carry one.
+  bool gravity_from_odometry = true;
   // global_ba.enabled: after a loop correction, bundle-adjust the whole map and publish the result as
   // a second correction (ORB-SLAM2 does, in a thread). Lockstep waits for it, so runs stay
   // deterministic.

@@ -63,4 +63,9 @@ void OdometryMessage::set_velocity(const Eigen::Vector3d& v_w) {
   for (int i = 0; i < 3; ++i) message_.v_w[i] = v_w[i];
 }
 
+void OdometryMessage::set_gravity(const Eigen::Vector3d& g_w) {
+  message_.gravity_valid = true;
+  for (int i = 0; i < 3; ++i) message_.g_w[i] = g_w[i];
+}
+
 }  // namespace heslam::messages

@@ -30,6 +30,8 @@ class OdometryMessage {
   const msg::Odometry& get() const { return message_; }
   // Inertial tracking: the IMU body's velocity in the world (velocity_valid, v_w).
   void set_velocity(const Eigen::Vector3d& v_w);
+  // Inertial tracking, initialized: gravity in the world (gravity_valid, g_w).
+  void set_gravity(const Eigen::Vector3d& g_w);
 
  private:
   std::vector<msg::StageTime> stage_times_;

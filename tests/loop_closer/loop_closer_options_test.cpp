@@ -1,4 +1,5 @@
-// The loop closer's config: the 4-DoF pose graph's fields (pose_graph.four_dof, pose_graph.gravity_w).
+// The loop closer's config: the 4-DoF pose graph's fields (pose_graph.four_dof, pose_graph.gravity_w,
+// pose_graph.gravity_from_odometry).
 #include <gtest/gtest.h>
 
 #include <stdexcept>
@@ -19,8 +20,11 @@ TEST(LoopCloserOptions, PoseGraphIsSixDofByDefault) {
   const LoopCloserProcessOptions options = parse("real_time: false\n");
   EXPECT_FALSE(options.closing.correction.pose_graph.four_dof);
   EXPECT_EQ(options.closing.correction.pose_graph.gravity_w, Eigen::Vector3d(0.0, 0.0, -1.0));
+  EXPECT_TRUE(options.gravity_from_odometry);  // 4-DoF only once the odometry carries a gravity
+  EXPECT_FALSE(parse("pose_graph:\n  gravity_from_odometry: false\n").gravity_from_odometry);
 }
 
+// Stereo runs: 6-DoF (no gravity ever comes); inertial runs: 4-DoF about the odometry's gravity.
 TEST(LoopCloserOptions, ShippedConfigsKeepTheSixDofGraph) {
   for (const char* name : {"heslam-loop-closer.yaml", "heslam-loop-closer-proximity.yaml"}) {
     SCOPED_TRACE(name);
@@ -28,6 +32,7 @@ TEST(LoopCloserOptions, ShippedConfigsKeepTheSixDofGraph) {
     const LoopCloserProcessOptions options = LoopCloserProcessOptions::from_config(config, {});
     EXPECT_FALSE(options.closing.correction.pose_graph.four_dof);
     EXPECT_EQ(options.closing.correction.pose_graph.gravity_w, Eigen::Vector3d(0.0, 0.0, -1.0));
+    EXPECT_TRUE(options.gravity_from_odometry);
   }
 }
 

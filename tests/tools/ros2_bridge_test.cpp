@@ -10,6 +10,7 @@
 #include <cstring>
 #include <fstream>
 #include <optional>
+#include <stdexcept>
 #include <thread>
 
 #include <dds/ddsi/ddsi_serdata.h>
@@ -94,6 +95,31 @@ TEST(Ros2Tf, Rep105TransformsComposeToTheBodyPoseAndCorrectionsStayInMapToOdom) 
               1e-12);
   }
   EXPECT_LT(pose_difference(rep105_transforms(T_oc, T_oc, T_B_rect).T_map_odom, Pose3::Identity()), 1e-12);
+}
+
+// Inertial runs: with gravity from the odometry, map is z up (gravity along -z of map) with the origin and
+// heading of the body at the first keyframe, and the chain map -> odom -> base_link -> camera still
+// equals map -> heslam_world times the tracked pose; odom -> base_link is not changed by it.
+TEST(Ros2Tf, GravityAlignedMapIsZUpAndKeepsTheChainAndTheHeading) {
+  const Pose3 T_B_rect = pose3(1.6, {0.2, -1.0, 0.3}, {-0.02, 0.07, 0.01});
+  // The world (rectified camera at the first keyframe) is tilted: gravity in it is not along an axis.
+  const Pose3 T_true_w = pose3(0.3, {1.0, 0.4, -0.2}, {0.0, 0.0, 0.0});  // world -> a z-up frame
+  const Eigen::Vector3d g_w = T_true_w.linear().transpose() * Eigen::Vector3d(0.0, 0.0, -9.81);
+  const Pose3 T_map_b0 = gravity_aligned_map(g_w, T_B_rect);
+  EXPECT_LT(T_map_b0.translation().norm(), 1e-15);  // the same origin
+  const Eigen::Vector3d g_map = map_to_world(T_B_rect, T_map_b0).linear() * g_w;
+  EXPECT_LT((g_map.normalized() - Eigen::Vector3d(0.0, 0.0, -1.0)).norm(), 1e-12);
+  // The smallest rotation: its axis is horizontal in map (no rotation about the vertical added).
+  const Eigen::AngleAxisd turn(T_map_b0.linear());
+  EXPECT_LT(std::abs(turn.axis().z()) * std::sin(turn.angle()), 1e-12);
+  const Pose3 T_oc = pose3(0.4, {0.0, 1.0, 0.1}, {1.0, 0.2, 3.0});
+  const Pose3 T_wc = pose3(0.02, {0.0, 0.0, 1.0}, {0.1, 0.0, 0.0}) * T_oc;
+  const Rep105Transforms tf = rep105_transforms(T_wc, T_oc, T_B_rect, T_map_b0);
+  EXPECT_LT(pose_difference(tf.T_map_odom * tf.T_odom_base * base_to_camera(T_B_rect),
+                            map_to_world(T_B_rect, T_map_b0) * T_wc),
+            1e-12);
+  EXPECT_LT(pose_difference(tf.T_odom_base, rep105_transforms(T_wc, T_oc, T_B_rect).T_odom_base), 1e-15);
+  EXPECT_THROW(gravity_aligned_map(Eigen::Vector3d::Zero(), T_B_rect), std::invalid_argument);
 }
 
 TEST(Ros2Tf, TfMessageNamesParentAndChildAndCarriesTheTransform) {

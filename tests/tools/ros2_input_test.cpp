@@ -18,6 +18,7 @@
 #include "runtime/config.hpp"
 #include "runtime/sequence.hpp"
 #include "test_support.hpp"
+#include "tools/dataset/imu_reader.hpp"
 #include "tools/ros2_bridge/ros2_input.hpp"
 #include "tools/ros2_bridge/ros2_input_conversions.hpp"
 
@@ -480,6 +481,19 @@ TEST(Ros2InputImu, BadCalibrationFilesAreOneLineNamingFileAndField) {
   const auto missing = files.dir.path() / "missing.yaml";
   EXPECT_EQ(error_of([&] { load_ros2_imu_calibration(missing, cam0); }),
             missing.string() + ": cannot open (expected an IMU sensor.yaml (EuRoC) or imu.yaml (Kalibr))");
+}
+
+// One reader of the noise model (tools/dataset/imu_reader.hpp): heslam-ros2-input and the replay's
+// sensor.yaml reader give the same line for the same bad file.
+TEST(Ros2InputImu, NoiseModelErrorsAreTheReplaysOwn) {
+  const ImuFiles files;
+  const auto cam0 = files.write("cam0.yaml", kEurocCam0);
+  std::string negative = kEurocImu;
+  negative.replace(negative.find("1.9393e-05"), 10, "-1.0");
+  const auto imu = files.write("imu.yaml", negative);
+  const std::string expected = imu.string() + ": gyroscope_random_walk: expected a positive number, got -1.000000";
+  EXPECT_EQ(error_of([&] { load_ros2_imu_calibration(imu, cam0); }), expected);
+  EXPECT_EQ(error_of([&] { read_imu_sensor_yaml(imu); }), expected);
 }
 
 TEST(Ros2InputImu, ImuFlagsComeTogether) {

@@ -29,16 +29,20 @@ using test::run_to_end;
 // An ORB-SLAM3 checkout as the script expects it. With stats, its stereo_euroc writes Total[ms] = 1, 2,
 // ..., one row per frame of the times file (median 15.5 ms, p90 27 ms for 30 frames), and the frame
 // trajectory from the ground truth (EuRoC-format stamps in ns).
-fs::path fake_orbslam3(const fs::path& root, bool writes_stats) {
-  fs::create_directories(root / "Examples/Stereo");
+// inertial: the stereo-inertial example instead (Examples/Stereo-Inertial/stereo_inertial_euroc), which
+// also reads mav0/imu0/data.csv (it fails without one) and writes body poses (the ground truth's).
+fs::path fake_orbslam3(const fs::path& root, bool writes_stats, bool inertial = false) {
+  const std::string examples = inertial ? "Examples/Stereo-Inertial" : "Examples/Stereo";
+  fs::create_directories(root / examples);
   fs::create_directories(root / "Vocabulary");
   std::ofstream(root / "Vocabulary/ORBvoc.txt") << "fake\n";
-  std::ofstream(root / "Examples/Stereo/EuRoC.yaml") << "%YAML:1.0\n";
-  const fs::path example = root / "Examples/Stereo/stereo_euroc";
+  std::ofstream(root / examples / "EuRoC.yaml") << "%YAML:1.0\n";
+  const fs::path example = root / examples / (inertial ? "stereo_inertial_euroc" : "stereo_euroc");
   std::ofstream script(example);
   script << "#!/usr/bin/env bash\n"
          << "# args: vocabulary settings sequence times trajectory\n"
          << "set -e\n";
+  if (inertial) script << "test -s \"$3/mav0/imu0/data.csv\"\n";
   if (writes_stats) {
     script << "echo '#Image Rect[ms], Image Resize[ms], ORB ext[ms], Stereo match[ms], IMU preint[ms], "
               "Pose pred[ms], LM track[ms], KF dec[ms], Total[ms]' > TrackingTimeStats.txt\n"
@@ -68,11 +72,10 @@ std::vector<std::string> fields_of(const std::string& line) {
 
 class SideBySideScript : public ::testing::Test {
  protected:
-  void render_room() {
-    ASSERT_EQ(run_to_end(test::bin_dir() / "heslam-synth",
-                         {"--preset", "room", "--frames", std::to_string(kRoomFrames), "--out", room_.string()},
-                         dir_.path(), "synth_room", kSynthTimeout),
-              0);
+  void render_room(bool imu = false) {
+    std::vector<std::string> args{"--preset", "room", "--frames", std::to_string(kRoomFrames), "--out", room_.string()};
+    if (imu) args.push_back("--imu");
+    ASSERT_EQ(run_to_end(test::bin_dir() / "heslam-synth", args, dir_.path(), "synth_room", kSynthTimeout), 0);
   }
 
   // The frame list alone: enough for every check that ends before a pipeline runs.
@@ -92,6 +95,10 @@ class SideBySideScript : public ::testing::Test {
   fs::path room_ = dir_.path() / "room";
 };
 
+// Both tables: stereo (stereo_euroc beside euroc_realtime.yaml) and --inertial (stereo_inertial_euroc
+// beside euroc_inertial_realtime.yaml on a room rendered with --imu).
+void expect_table(const std::string& output);
+
 TEST_F(SideBySideScript, TablesBothSystemsPerRoundWithTheirPerFrameTimes) {
   render_room();
   const fs::path orbslam3 = fake_orbslam3(dir_.path() / "ORB_SLAM3", true);
@@ -103,6 +110,34 @@ TEST_F(SideBySideScript, TablesBothSystemsPerRoundWithTheirPerFrameTimes) {
                          &output),
             0)
       << output;
+  expect_table(output);
+}
+
+TEST_F(SideBySideScript, InertialTablesTheStereoInertialExampleBesideHeslamsInertialPipeline) {
+  render_room(/*imu=*/true);
+  const fs::path orbslam3 = fake_orbslam3(dir_.path() / "ORB_SLAM3", true, /*inertial=*/true);
+  const fs::path out = dir_.path() / "out";
+  std::string output;
+  ::setenv("HESLAM_BUILD_DIR", test::bin_dir().parent_path().string().c_str(), 1);
+  ASSERT_EQ(side_by_side({"--orbslam3", orbslam3.string(), "--inertial", "--rounds", "1", "--domain",
+                          std::to_string(test::exclusive_domain_id()), room_.string(), out.string()},
+                         &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("stereo-inertial, ORB-SLAM3 " + orbslam3.string() + " (EuRoC.yaml)"), std::string::npos)
+      << output;
+  EXPECT_NE(fs::file_size(out / "times.txt"), 0u);  // the frame-stamps file ORB-SLAM3 reads, written by the script
+  expect_table(output);
+  // The fake wrote the ground truth's body poses: ORB-SLAM3's inertial trajectory is compared as body poses.
+  for (const auto& line : lines_of(output)) {
+    const auto fields = fields_of(line);
+    if (fields.size() == 6 && fields[1] == "ORB-SLAM3") {
+      EXPECT_LT(std::stod(fields[5]), 0.01) << line;
+    }
+  }
+}
+
+void expect_table(const std::string& output) {
   bool orbslam3_row = false, heslam_row = false, ratio = false;
   for (const auto& line : lines_of(output)) {
     const auto fields = fields_of(line);
@@ -132,13 +167,31 @@ TEST_F(SideBySideScript, SaysWhatIsMissingInOneLine) {
   frame_list_only();
   std::string output;
   EXPECT_EQ(side_by_side({room_.string(), (dir_.path() / "out").string()}, &output), 2);
-  EXPECT_EQ(output, "side_by_side.sh: --orbslam3 DIR is required (an ORB-SLAM3 checkout built with REGISTER_TIMES)\n");
+  const std::string required =
+      "side_by_side.sh: ORB-SLAM3 is missing: --orbslam3 DIR is required (an ORB-SLAM3 checkout built with its "
+      "build.sh and REGISTER_TIMES; heslam does not ship or build it: docs/imu.md, Running ORB-SLAM3 beside heslam)\n";
+  EXPECT_EQ(output, required);
+  EXPECT_EQ(side_by_side({"--inertial", room_.string(), (dir_.path() / "out").string()}, &output), 2);
+  EXPECT_EQ(output, required);
 
   const fs::path empty = dir_.path() / "empty";
   fs::create_directories(empty);
   EXPECT_EQ(side_by_side({"--orbslam3", empty.string(), room_.string(), (dir_.path() / "out").string()}, &output), 2);
-  EXPECT_EQ(output, "side_by_side.sh: no ORB-SLAM3 stereo example at " + empty.string() +
+  EXPECT_EQ(output, "side_by_side.sh: ORB-SLAM3 is missing: no stereo_euroc at " + empty.string() +
                         "/Examples/Stereo/stereo_euroc (build ORB-SLAM3 first: its build.sh)\n");
+  EXPECT_EQ(side_by_side({"--orbslam3", empty.string(), "--inertial", room_.string(), (dir_.path() / "out").string()},
+                         &output),
+            2);
+  EXPECT_EQ(output, "side_by_side.sh: ORB-SLAM3 is missing: no stereo_inertial_euroc at " + empty.string() +
+                        "/Examples/Stereo-Inertial/stereo_inertial_euroc (build ORB-SLAM3 first: its build.sh)\n");
+  // --inertial on a folder without imu0/: the ORB-SLAM3 example is there, the IMU is not.
+  const fs::path inertial = fake_orbslam3(dir_.path() / "ORB_SLAM3_inertial", true, /*inertial=*/true);
+  EXPECT_EQ(
+      side_by_side({"--orbslam3", inertial.string(), "--inertial", room_.string(), (dir_.path() / "out").string()},
+                   &output),
+      2);
+  EXPECT_EQ(output, "side_by_side.sh: " + (room_ / "mav0/imu0/data.csv").string() +
+                        ": missing (--inertial needs the IMU: EuRoC's imu0/)\n");
 
   const fs::path no_stats = fake_orbslam3(dir_.path() / "ORB_SLAM3_plain", false);
   EXPECT_EQ(side_by_side({"--orbslam3", no_stats.string(), room_.string(), (dir_.path() / "out2").string()}, &output),

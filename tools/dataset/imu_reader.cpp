@@ -26,13 +26,6 @@ fs::path imu_dir(const fs::path& dataset) {
   throw std::runtime_error(file.string() + ": " + where + ": " + what);
 }
 
-double positive_number(const cv::FileNode& node, const fs::path& file, const char* key) {
-  if (node.empty() || (!node.isReal() && !node.isInt())) fail(file, key, "missing (expected a positive number)");
-  const double value = static_cast<double>(node);
-  if (!std::isfinite(value) || !(value > 0.0)) fail(file, key, "expected a positive number");
-  return value;
-}
-
 void read_sensor_yaml(const fs::path& file, ImuRecording& recording) {
   std::ifstream in(file);
   if (!in) throw std::runtime_error(file.string() + ": cannot open (expected the IMU's sensor.yaml)");
@@ -46,13 +39,8 @@ void read_sensor_yaml(const fs::path& file, ImuRecording& recording) {
   } catch (const cv::Exception& error) {
     throw std::runtime_error(file.string() + ": not valid YAML (" + error.err + ")");
   }
-  recording.rate_hz = positive_number(fs["rate_hz"], file, "rate_hz");
-  recording.noise.gyro_noise_density = positive_number(fs["gyroscope_noise_density"], file, "gyroscope_noise_density");
-  recording.noise.gyro_random_walk = positive_number(fs["gyroscope_random_walk"], file, "gyroscope_random_walk");
-  recording.noise.accel_noise_density =
-      positive_number(fs["accelerometer_noise_density"], file, "accelerometer_noise_density");
-  recording.noise.accel_random_walk =
-      positive_number(fs["accelerometer_random_walk"], file, "accelerometer_random_walk");
+  recording.rate_hz = read_positive_number(fs["rate_hz"], file, "rate_hz");
+  recording.noise = read_imu_noise_model(fs.root(), file);
   const cv::FileNode data = fs["T_BS"]["data"];
   if (!data.isSeq() || data.size() != 16) fail(file, "T_BS", "expected {rows: 4, cols: 4, data: [16 numbers]}");
   Eigen::Matrix4d T;
@@ -70,6 +58,25 @@ void read_sensor_yaml(const fs::path& file, ImuRecording& recording) {
 }
 
 }  // namespace
+
+double read_positive_number(const cv::FileNode& node, const fs::path& file, const char* key) {
+  if (node.empty() || (!node.isReal() && !node.isInt())) fail(file, key, "missing (expected a positive number)");
+  const double value = static_cast<double>(node);
+  if (!std::isfinite(value) || !(value > 0.0)) {
+    fail(file, key, "expected a positive number, got " + std::to_string(value));
+  }
+  return value;
+}
+
+ImuNoise read_imu_noise_model(const cv::FileNode& root, const fs::path& file) {
+  ImuNoise noise;
+  noise.gyro_noise_density = read_positive_number(root["gyroscope_noise_density"], file, "gyroscope_noise_density");
+  noise.gyro_random_walk = read_positive_number(root["gyroscope_random_walk"], file, "gyroscope_random_walk");
+  noise.accel_noise_density =
+      read_positive_number(root["accelerometer_noise_density"], file, "accelerometer_noise_density");
+  noise.accel_random_walk = read_positive_number(root["accelerometer_random_walk"], file, "accelerometer_random_walk");
+  return noise;
+}
 
 ImuRecording read_imu_sensor_yaml(const fs::path& file) {
   ImuRecording recording;

@@ -75,6 +75,10 @@ eval::PoseFrame parse_frame_or_throw(const std::string& text, const std::string&
 
 }  // namespace
 
+// A gravity estimate outside this range (m/s^2) is not one (the Earth's is 9.78..9.83).
+constexpr double kMinGravityM_S2 = 5.0;
+constexpr double kMaxGravityM_S2 = 15.0;
+
 std::filesystem::path sibling_path(const std::filesystem::path& output, const std::string& suffix) {
   return output.parent_path() / (output.stem().string() + suffix);
 }
@@ -268,7 +272,8 @@ FrameAccount Recorder::write_files() {
 }
 
 void Recorder::take_inertial(const msg::Odometry& odometry, RecordedFrame& frame) {
-  // Inertial tracking's velocity; a non-finite one is skipped and counted, the frame's pose kept.
+  // Inertial tracking's velocity and gravity; a non-finite one (or a gravity far from the Earth's) is
+  // skipped and counted, the frame's pose kept.
   const auto vector = [](const double(&v)[3]) { return Eigen::Vector3d(v[0], v[1], v[2]); };
   if (odometry.velocity_valid) {
     const Eigen::Vector3d v_w = vector(odometry.v_w);
@@ -277,6 +282,16 @@ void Recorder::take_inertial(const msg::Odometry& odometry, RecordedFrame& frame
     } else {
       stats().count("rejected_velocities");
       log().warn_throttled("rejected_velocities", "odometry frame ", odometry.seq, ": field 'v_w' is not finite");
+    }
+  }
+  if (odometry.gravity_valid) {
+    const Eigen::Vector3d g_w = vector(odometry.g_w);
+    if (g_w.allFinite() && g_w.norm() > kMinGravityM_S2 && g_w.norm() < kMaxGravityM_S2) {
+      frame.g_w = g_w;
+    } else {
+      stats().count("rejected_gravities");
+      log().warn_throttled("rejected_gravities", "odometry frame ", odometry.seq, ": field 'g_w' (", g_w.transpose(),
+                           ") is not a gravity (finite, ", kMinGravityM_S2, "..", kMaxGravityM_S2, " m/s^2)");
     }
   }
 }

@@ -1,6 +1,7 @@
 // heslam-ros2-bridge: heslam topics in, ROS 2 topics out (see ros2_bridge.hpp).
 #include "tools/ros2_bridge/ros2_bridge.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -24,6 +25,11 @@ constexpr double kMinPublishPeriod_s = 0.05;
 constexpr double kMaxPublishPeriod_s = 60.0;
 // Odometry.T_oc of a frontend is normalised; one zeroed or far off did not come from a frontend.
 constexpr double kUnitQuaternionTolerance = 1e-6;
+// Inertial runs: a gravity outside this range (m/s^2) is not one (the Earth's is 9.78..9.83); map turns
+// again when the gravity estimate moved more than this from the one it is aligned with (0.1 deg).
+constexpr double kMinGravityM_S2 = 5.0;
+constexpr double kMaxGravityM_S2 = 15.0;
+constexpr double kRealignRad = 0.1 * M_PI / 180.0;
 
 runtime::Qos stream_qos() {
   return runtime::Qos(runtime::QosRole::kOdometry).keep_last(kRosDefaultDepth).volatile_durability();
@@ -230,6 +236,7 @@ void Ros2Bridge::on_odometry(const msg::Odometry& odometry) {
     stats().count("untracked_frames_skipped");
     return;
   }
+  take_gravity(odometry);
   odometry_writer_->write(OdometryMessage(odometry, options_.frames).get());
   pose_writer_->write(PoseStampedMessage(odometry.stamp_ns, odometry.T_wc, options_.frames).get());
   stats().count("odometry_published");
@@ -251,7 +258,7 @@ void Ros2Bridge::publish_tf(const msg::Odometry& odometry) {
     return;
   }
   const Rep105Transforms tf =
-      rep105_transforms(messages::to_pose(odometry.T_wc), messages::to_pose(odometry.T_oc), *T_B_rect_);
+      rep105_transforms(messages::to_pose(odometry.T_wc), messages::to_pose(odometry.T_oc), *T_B_rect_, T_map_b0());
   tf_writer_->write(TfMessage(odometry.stamp_ns, {{options_.frames.map, options_.frames.odom, tf.T_map_odom},
                                                   {options_.frames.odom, options_.frames.base, tf.T_odom_base}})
                         .get());
@@ -269,12 +276,43 @@ void Ros2Bridge::on_calibration(const msg::StereoCalibration& calibration) {
     return;
   }
   T_B_rect_ = T_B_rect;
-  // One message with every static transform, as tf2_ros's StaticTransformBroadcaster sends it.
-  tf_static_writer_->write(TfMessage(0, {{options_.frames.base, options_.frames.camera, base_to_camera(T_B_rect)},
-                                         {options_.frames.map, options_.frames.world, map_to_world(T_B_rect)}})
-                               .get());
-  stats().count("tf_static_published");
+  publish_static_tf();
   publish_occupancy();
+}
+
+void Ros2Bridge::publish_static_tf() {
+  if (!T_B_rect_) return;
+  // One message with every static transform, as tf2_ros's StaticTransformBroadcaster sends it.
+  tf_static_writer_->write(
+      TfMessage(0, {{options_.frames.base, options_.frames.camera, base_to_camera(*T_B_rect_)},
+                    {options_.frames.map, options_.frames.world, map_to_world(*T_B_rect_, T_map_b0())}})
+          .get());
+  stats().count("tf_static_published");
+}
+
+Pose3 Ros2Bridge::T_map_b0() const {
+  return gravity_w_ && T_B_rect_ ? gravity_aligned_map(*gravity_w_, *T_B_rect_) : Pose3::Identity();
+}
+
+void Ros2Bridge::take_gravity(const msg::Odometry& odometry) {
+  if (!odometry.gravity_valid) return;
+  const Eigen::Vector3d g_w(odometry.g_w[0], odometry.g_w[1], odometry.g_w[2]);
+  if (!g_w.allFinite() || !(g_w.norm() > kMinGravityM_S2 && g_w.norm() < kMaxGravityM_S2)) {
+    stats().count("bad_gravities");
+    log().warn_throttled("bad_gravities", "topic ", topics().odometry().name, ": frame ", odometry.seq,
+                         ": field g_w is not a gravity (finite, ", kMinGravityM_S2, "..", kMaxGravityM_S2,
+                         " m/s^2): map keeps its alignment");
+    return;
+  }
+  // The initialization's gravity is refined for a while after it: map turns with it only when it moved
+  // noticeably, so tf_static is sent again a few times, not at every frame.
+  if (gravity_w_ && std::acos(std::clamp(gravity_w_->normalized().dot(g_w.normalized()), -1.0, 1.0)) < kRealignRad) {
+    return;
+  }
+  if (!gravity_w_) log().info("inertial run: map is gravity-aligned from frame ", odometry.seq, " on (z up)");
+  gravity_w_ = g_w;
+  stats().count("map_alignments");
+  publish_static_tf();
 }
 
 void Ros2Bridge::publish_occupancy() {
@@ -282,7 +320,7 @@ void Ros2Bridge::publish_occupancy() {
     if (pending_grid_ || pending_dense_cloud_) stats().count("occupancy_waiting_for_calibration");
     return;  // the map frame comes with the calibration (transient local): published when it arrives
   }
-  const Pose3 T_map_world = map_to_world(*T_B_rect_);
+  const Pose3 T_map_world = map_to_world(*T_B_rect_, T_map_b0());
   if (pending_grid_) {
     msg::OccupancyGrid2D grid = pending_grid_->header;
     runtime::borrow(grid.cells, pending_grid_->cells);

@@ -53,6 +53,11 @@ class Ros2Bridge : public runtime::Component {
   void on_odometry(const msg::Odometry& odometry);
   void on_calibration(const msg::StereoCalibration& calibration);
   void publish_tf(const msg::Odometry& odometry);
+  void publish_static_tf();
+  // Inertial runs: takes the odometry's gravity; map turns (tf_static again) when it moved noticeably.
+  void take_gravity(const msg::Odometry& odometry);
+  // map from the body at the first keyframe: the gravity alignment once there is a gravity, else identity.
+  Pose3 T_map_b0() const;
   void publish_map_if_changed();
   // heslam-occupancy's grid and cloud, in the map frame: held until a calibration gave T_map_world.
   void publish_occupancy();
@@ -72,7 +77,8 @@ class Ros2Bridge : public runtime::Component {
   std::optional<Ros2Writer<TFMessage>> tf_static_writer_;
   std::optional<Ros2Writer<OccupancyGrid>> occupancy_grid_writer_;
   std::optional<Ros2Writer<PointCloud2>> dense_cloud_writer_;
-  std::optional<Pose3> T_B_rect_;  // rectified left camera -> body, from the newest calibration
+  std::optional<Pose3> T_B_rect_;             // rectified left camera -> body, from the newest calibration
+  std::optional<Eigen::Vector3d> gravity_w_;  // inertial runs: the gravity map is aligned with (world)
   std::map<std::uint64_t, KeyframeEntry> keyframes_;
   std::map<std::uint64_t, std::array<double, 3>> points_w_m_;
   std::int64_t newest_stamp_ns_ = 0;

@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 
 #include "tools/camera/camera_calibration.hpp"
+#include "tools/dataset/imu_reader.hpp"
 
 namespace heslam::ros2 {
 namespace {
@@ -225,17 +226,6 @@ cv::FileStorage open_yaml(const std::filesystem::path& file, const char* expecte
   return storage;
 }
 
-double positive(const cv::FileNode& node, const std::filesystem::path& file, const char* key) {
-  if (node.empty() || (!node.isReal() && !node.isInt())) {
-    throw std::runtime_error(file.string() + ": " + key + ": missing (expected a positive number)");
-  }
-  const double value = node.real();
-  if (!std::isfinite(value) || !(value > 0.0)) {
-    throw std::runtime_error(file.string() + ": " + key + ": expected a positive number, got " + std::to_string(value));
-  }
-  return value;
-}
-
 Pose3 rigid(const Eigen::Matrix4d& matrix, const std::string& where) {
   const Eigen::Matrix3d R = matrix.topLeftCorner<3, 3>();
   const bool finite = matrix.allFinite();
@@ -323,16 +313,12 @@ ImuCalibration load_ros2_imu_calibration(const std::filesystem::path& imu_file,
                                          const std::filesystem::path& extrinsic_file) {
   ImuCalibration calibration;
   const cv::FileStorage imu = open_yaml(imu_file, "an IMU sensor.yaml (EuRoC) or imu.yaml (Kalibr)");
-  calibration.noise.gyro_noise_density = positive(imu["gyroscope_noise_density"], imu_file, "gyroscope_noise_density");
-  calibration.noise.gyro_random_walk = positive(imu["gyroscope_random_walk"], imu_file, "gyroscope_random_walk");
-  calibration.noise.accel_noise_density =
-      positive(imu["accelerometer_noise_density"], imu_file, "accelerometer_noise_density");
-  calibration.noise.accel_random_walk =
-      positive(imu["accelerometer_random_walk"], imu_file, "accelerometer_random_walk");
+  // The replay's reader of the noise model (tools/dataset/imu_reader.hpp): the same figures, the same errors.
+  calibration.noise = read_imu_noise_model(imu.root(), imu_file);
   if (!imu["rate_hz"].empty()) {
-    calibration.rate_hz = positive(imu["rate_hz"], imu_file, "rate_hz");
+    calibration.rate_hz = read_positive_number(imu["rate_hz"], imu_file, "rate_hz");
   } else if (!imu["update_rate"].empty()) {
-    calibration.rate_hz = positive(imu["update_rate"], imu_file, "update_rate");
+    calibration.rate_hz = read_positive_number(imu["update_rate"], imu_file, "update_rate");
   } else {
     throw std::runtime_error(imu_file.string() + ": rate_hz (EuRoC) or update_rate (Kalibr): missing");
   }

@@ -83,6 +83,13 @@ class LoopClosing {
   // restarted loop closer restores them.
   const std::vector<std::pair<KeyframeId, KeyframeId>>& loop_edges() const { return loop_edges_; }
   void add_loop_edge(KeyframeId loop_kf, KeyframeId matched_kf) { loop_edges_.emplace_back(loop_kf, matched_kf); }
+  // Inertial runs: from now on loop corrections use the 4-DoF pose graph about gravity_w (gravity's
+  // direction in the map's world, any length), as options.correction.pose_graph.four_dof / gravity_w do.
+  void use_four_dof_pose_graph(const Eigen::Vector3d& gravity_w) {
+    options_.correction.pose_graph.four_dof = true;
+    options_.correction.pose_graph.gravity_w = gravity_w;
+  }
+  const PoseGraphOptions& pose_graph_options() const { return options_.correction.pose_graph; }
 
  private:
   PinholeStereo camera_;

@@ -5,8 +5,9 @@
 # time (stage "total", median / p90), the local BA per keyframe (median), the keyframes the frontend
 # made (and their ratio to the lockstep run's), frames recorded and, with ground truth, the ATE.
 # Figures come from the components' end-of-run summaries in their logs (OUT_DIR/logs_*/NAME.log).
-#   tools/bench/realtime/realtime_pipeline.sh DATASET OUT_DIR [RUNS] [DOMAIN] [euroc|kitti]
-# euroc: config/pipelines/euroc_realtime.yaml against euroc.yaml (EuRoC folder, 20 Hz);
+#   tools/bench/realtime/realtime_pipeline.sh DATASET OUT_DIR [RUNS] [DOMAIN] [euroc|euroc_inertial|kitti]
+# euroc: config/pipelines/euroc_realtime.yaml against euroc.yaml (EuRoC folder, 20 Hz); euroc_inertial:
+# euroc_inertial_realtime.yaml against euroc_inertial.yaml (the folder needs mav0/imu0/);
 # kitti: kitti_realtime.yaml against kitti.yaml (a KITTI sequence folder DIR/sequences/NN, e.g. heslam-synth --preset street --format kitti, 10 Hz; ATE against DIR/poses/NN.txt).
 # PRELOAD_MB=N (environment): real-time runs decode the images before frame 0 (replay --preload N), so
 # that PNG decoding (about a quarter of the pipeline's CPU on MH01) does not compete with the system.
@@ -16,15 +17,15 @@
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)
 bin=${HESLAM_BUILD_DIR:-$root/build}/bin
-usage="usage: realtime_pipeline.sh DATASET OUT_DIR [RUNS] [DOMAIN] [euroc|kitti]"
+usage="usage: realtime_pipeline.sh DATASET OUT_DIR [RUNS] [DOMAIN] [euroc|euroc_inertial|kitti]"
 dataset=${1:?$usage}
 out=${2:?$usage}
 runs=${3:-5}
 domain=${4:-217}
 kind=${5:-euroc}
 case $kind in
-  euroc | kitti) ;;
-  *) echo "realtime_pipeline.sh: kind '$kind': expected euroc or kitti" >&2; exit 2 ;;
+  euroc | euroc_inertial | kitti) ;;
+  *) echo "realtime_pipeline.sh: kind '$kind': expected euroc, euroc_inertial or kitti" >&2; exit 2 ;;
 esac
 [[ -d $dataset ]] || { echo "realtime_pipeline.sh: dataset '$dataset' is not a folder" >&2; exit 2; }
 [[ $runs =~ ^[1-9][0-9]*$ ]] || { echo "realtime_pipeline.sh: RUNS '$runs': expected a positive integer" >&2; exit 2; }
@@ -43,7 +44,7 @@ field() {
 # DATASET/../../poses/NN.txt with DATASET/times.txt, as heslam-synth --format kitti writes them).
 ate_mm() {
   local trajectory=$1 rmse gt gt_args
-  if [[ $kind == euroc ]]; then
+  if [[ $kind == euroc* ]]; then
     gt=$dataset/mav0/state_groundtruth_estimate0/data.csv
     gt_args=(--gt "$gt")
   else
