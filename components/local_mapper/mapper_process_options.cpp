@@ -57,6 +57,7 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
   imu.enabled = config.get_bool("imu.enabled", imu.enabled);
   imu.wait_s = config.get_double("imu.wait_s", imu.wait_s, 0.01, kMaxReaderWaitS);
   imu.window_keyframes = config.get_int("imu.window_keyframes", imu.window_keyframes, 1, kMaxNeighbours);
+  imu.estimate_gravity = config.get_bool("imu.estimate_gravity", imu.estimate_gravity);
   imu.init_min_keyframes = config.get_int("imu.init_min_keyframes", imu.init_min_keyframes, 3, 1000);
   imu.init_min_duration_s = config.get_double("imu.init_min_duration_s", imu.init_min_duration_s, 0.1, 60.0);
   imu.init_max_keyframes = config.get_int("imu.init_max_keyframes", imu.init_max_keyframes, 3, 1000);

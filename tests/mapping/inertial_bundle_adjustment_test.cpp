@@ -122,20 +122,24 @@ TEST(InertialBundleAdjustment, ImuCameraCostJacobiansMatchCentralDifferencesOnTh
   const InertialScene scene = make_scene(3);
   const ImuBias bias = scene.imu.bias;
   const InertialWindow window = make_window(scene, 1, 2, bias);
-  const ImuCameraCost cost(window.intervals[0], window.gravity_w, scene.T_cb);
+  const ImuCameraCost cost(window.intervals[0], scene.T_cb);
+  Eigen::Vector3d gravity_w = window.gravity_w;
   PoseBlock pose_i = to_pose_block(scene.truth.map.keyframes.at(1).T_wc);
   PoseBlock pose_j = to_pose_block(scene.truth.map.keyframes.at(2).T_wc);
   Eigen::Vector3d v_i = window.states.at(1).v_wb + Eigen::Vector3d(0.01, -0.02, 0.03);
   Eigen::Vector3d bg = bias.gyro_rad_s, ba = bias.accel_m_s2;
   Eigen::Vector3d v_j = window.states.at(2).v_wb;
-  const double* parameters[6] = {pose_i.data(), v_i.data(), bg.data(), ba.data(), pose_j.data(), v_j.data()};
+  const double* parameters[7] = {pose_i.data(), v_i.data(), bg.data(),       ba.data(),
+                                 pose_j.data(), v_j.data(), gravity_w.data()};
   Eigen::Matrix<double, 9, 1> residual;
   Eigen::Matrix<double, 9, 7, Eigen::RowMajor> J_pose_i, J_pose_j;
-  Eigen::Matrix<double, 9, 3, Eigen::RowMajor> J_v_i, J_bg, J_ba, J_v_j;
-  double* jacobians[6] = {J_pose_i.data(), J_v_i.data(), J_bg.data(), J_ba.data(), J_pose_j.data(), J_v_j.data()};
+  Eigen::Matrix<double, 9, 3, Eigen::RowMajor> J_v_i, J_bg, J_ba, J_v_j, J_g;
+  double* jacobians[7] = {J_pose_i.data(), J_v_i.data(), J_bg.data(), J_ba.data(),
+                          J_pose_j.data(), J_v_j.data(), J_g.data()};
   // At the true states (exact readings) the whitened residual is the 200 Hz integration's error alone.
   Eigen::Vector3d v_true = window.states.at(1).v_wb;
-  const double* exact[6] = {pose_i.data(), v_true.data(), bg.data(), ba.data(), pose_j.data(), v_j.data()};
+  const double* exact[7] = {pose_i.data(), v_true.data(), bg.data(),       ba.data(),
+                            pose_j.data(), v_j.data(),    gravity_w.data()};
   ASSERT_TRUE(cost.Evaluate(exact, residual.data(), nullptr));
   std::printf("ImuCameraCost at the truth: whitened residual %.2e\n", residual.norm());
   EXPECT_LT(residual.norm(), 0.05);
@@ -155,10 +159,10 @@ TEST(InertialBundleAdjustment, ImuCameraCostJacobiansMatchCentralDifferencesOnTh
       manifold.Plus(x.data(), delta, plus.data());
       delta[d] = -h;
       manifold.Plus(x.data(), delta, minus.data());
-      const double* p_plus[6] = {parameters[0], parameters[1], parameters[2],
-                                 parameters[3], parameters[4], parameters[5]};
-      const double* p_minus[6] = {parameters[0], parameters[1], parameters[2],
-                                  parameters[3], parameters[4], parameters[5]};
+      const double* p_plus[7] = {parameters[0], parameters[1], parameters[2], parameters[3],
+                                 parameters[4], parameters[5], parameters[6]};
+      const double* p_minus[7] = {parameters[0], parameters[1], parameters[2], parameters[3],
+                                  parameters[4], parameters[5], parameters[6]};
       p_plus[block] = plus.data();
       p_minus[block] = minus.data();
       Eigen::Matrix<double, 9, 1> r_plus, r_minus;
@@ -211,6 +215,24 @@ TEST(InertialBundleAdjustment, RecoversPosesVelocitiesAndBiasesFromExactData) {
   EXPECT_EQ(result.visual.outliers_removed, 0);
   // The anchor (keyframe 1) is held.
   EXPECT_EQ(scene.truth.map.keyframes.at(1).T_wc.matrix(), scene.truth.true_T_wc.at(1).matrix());
+}
+
+TEST(InertialBundleAdjustment, EstimatesTheDirectionOfGravityFromAPrior) {
+  InertialScene scene = make_scene(8);
+  InertialWindow window = make_window(scene, 1, 8, scene.imu.bias);
+  const Eigen::Vector3d truth = window.gravity_w;
+  window.gravity_w = so3::exp(Eigen::Vector3d(0.0175, -0.01, 0.0)) * truth;  // 1.15 deg off
+  window.gravity_stddev_rad = 0.035;                                         // 2 deg
+  MapChanges changes;
+  const InertialBundleAdjustmentResult result = inertial_local_bundle_adjustment(
+      scene.truth.map, 8, scene.world.camera, LocalBundleAdjustmentOptions{}, window, changes);
+  ASSERT_TRUE(result.solved);
+  const double error_deg =
+      std::acos(std::clamp(window.gravity_w.normalized().dot(truth.normalized()), -1.0, 1.0)) * 180.0 / M_PI;
+  std::printf("gravity 1.15 deg off, prior 2 deg: %.4f deg from the truth after the BA, |g| %.6f\n", error_deg,
+              window.gravity_w.norm());
+  EXPECT_LT(error_deg, 0.1);
+  EXPECT_NEAR(window.gravity_w.norm(), truth.norm(), 1e-9);
 }
 
 TEST(InertialBundleAdjustment, TheImuPullsPosesTowardsTheTruthWhenPixelsAreNoisy) {

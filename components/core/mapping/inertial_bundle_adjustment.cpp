@@ -11,6 +11,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <ceres/sphere_manifold.h>
+
 #include "components/core/map/ids.hpp"
 #include "components/core/mapping/map_editing.hpp"
 #include "components/core/mapping/point_statistics.hpp"
@@ -42,6 +44,17 @@ Eigen::Matrix<double, 4, 3> quaternion_plus_jacobian(const double* q) {
   return J;
 }
 
+// Prior on the direction of gravity: (g - g0) / (|g0| sigma), g on the sphere of radius |g0|.
+struct GravityPrior {
+  Eigen::Vector3d g0;
+  double inv_sigma;
+  template <typename T>
+  bool operator()(const T* g, T* residual) const {
+    for (int k = 0; k < 3; ++k) residual[k] = (g[k] - T(g0[k])) * T(inv_sigma);
+    return true;
+  }
+};
+
 bool finite(const PoseBlock& block) {
   for (const double x : block) {
     if (!std::isfinite(x)) return false;
@@ -51,16 +64,15 @@ bool finite(const PoseBlock& block) {
 
 }  // namespace
 
-ImuCameraCost::ImuCameraCost(const ImuPreintegration& preintegration, const Eigen::Vector3d& gravity_w,
-                             const Pose3& T_cb)
-    : autodiff_(new Functor{ImuIntervalResidual(preintegration), gravity_w, T_cb.linear(), T_cb.translation()}) {}
+ImuCameraCost::ImuCameraCost(const ImuPreintegration& preintegration, const Pose3& T_cb)
+    : autodiff_(new Functor{ImuIntervalResidual(preintegration), T_cb.linear(), T_cb.translation()}) {}
 
 bool ImuCameraCost::Evaluate(const double* const* parameters, double* residuals, double** jacobians) const {
   if (jacobians == nullptr) return autodiff_.Evaluate(parameters, residuals, nullptr);
   // Ambient (quaternion) Jacobians from autodiff, then chained with PoseManifold's Plus at zero.
   Eigen::Matrix<double, 9, 7, Eigen::RowMajor> ambient_i, ambient_j;
-  double* inner[6] = {jacobians[0] != nullptr ? ambient_i.data() : nullptr, jacobians[1], jacobians[2], jacobians[3],
-                      jacobians[4] != nullptr ? ambient_j.data() : nullptr, jacobians[5]};
+  double* inner[7] = {jacobians[0] != nullptr ? ambient_i.data() : nullptr, jacobians[1], jacobians[2], jacobians[3],
+                      jacobians[4] != nullptr ? ambient_j.data() : nullptr, jacobians[5], jacobians[6]};
   if (!autodiff_.Evaluate(parameters, residuals, inner)) return false;
   for (const int block : {0, 4}) {
     if (jacobians[block] == nullptr) continue;
@@ -186,11 +198,12 @@ InertialBundleAdjustmentResult inertial_local_bundle_adjustment(Map& map, Keyfra
   visual.initial_rms_px = rms();
   if (free_kfs.empty()) return result;
 
+  PoseManifold pose_manifold;  // both outlive the problem (not owned by it)
+  ceres::SphereManifold<3> sphere;
   ceres::Problem::Options problem_options;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.enable_fast_removal = true;
   ceres::Problem problem(problem_options);
-  PoseManifold pose_manifold;
   for (Observation& obs : observations) {
     double chi2 = 0.0;
     obs.inlier = chi2_of(obs, chi2);  // a point behind an observer cannot enter the problem
@@ -211,12 +224,13 @@ InertialBundleAdjustmentResult inertial_local_bundle_adjustment(Map& map, Keyfra
     const InertialKeyframeState& state = window.states.at(window.chain[k]);
     inertial[k] = {state.v_wb, state.bias.gyro_rad_s, state.bias.accel_m_s2};
   }
+  Eigen::Vector3d gravity_w = window.gravity_w;
   for (std::size_t k = 0; k + 1 < window.chain.size(); ++k) {
     PoseBlock& pose_i = poses[pose_index.at(window.chain[k])];
     PoseBlock& pose_j = poses[pose_index.at(window.chain[k + 1])];
-    problem.AddResidualBlock(new ImuCameraCost(window.intervals[k], window.gravity_w, window.T_cb), nullptr,
-                             pose_i.data(), inertial[k].v.data(), inertial[k].bg.data(), inertial[k].ba.data(),
-                             pose_j.data(), inertial[k + 1].v.data());
+    problem.AddResidualBlock(new ImuCameraCost(window.intervals[k], window.T_cb), nullptr, pose_i.data(),
+                             inertial[k].v.data(), inertial[k].bg.data(), inertial[k].ba.data(), pose_j.data(),
+                             inertial[k + 1].v.data(), gravity_w.data());
     problem.AddResidualBlock(BiasRandomWalkFactor::create(window.intervals[k]), nullptr, inertial[k].bg.data(),
                              inertial[k].ba.data(), inertial[k + 1].bg.data(), inertial[k + 1].ba.data());
     ++result.imu_factors;
@@ -227,6 +241,14 @@ InertialBundleAdjustmentResult inertial_local_bundle_adjustment(Map& map, Keyfra
     problem.SetParameterBlockConstant(inertial[0].ba.data());
   }
   result.inertial_keyframes = static_cast<int>(window.chain.size()) - (window.hold_anchor ? 1 : 0);
+  if (window.gravity_stddev_rad > 0.0) {
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GravityPrior, 3, 3>(new GravityPrior{
+                                 window.gravity_w, 1.0 / (window.gravity_w.norm() * window.gravity_stddev_rad)}),
+                             nullptr, gravity_w.data());
+    problem.SetManifold(gravity_w.data(), &sphere);
+  } else {
+    problem.SetParameterBlockConstant(gravity_w.data());
+  }
 
   auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
   for (Eigen::Vector3d& point : points) {
@@ -242,6 +264,7 @@ InertialBundleAdjustmentResult inertial_local_bundle_adjustment(Map& map, Keyfra
   for (Inertial& state : inertial) {
     for (double* block : {state.v.data(), state.bg.data(), state.ba.data()}) ordering->AddElementToGroup(block, 1);
   }
+  ordering->AddElementToGroup(gravity_w.data(), 1);
 
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::DENSE_SCHUR;
@@ -272,6 +295,7 @@ InertialBundleAdjustmentResult inertial_local_bundle_adjustment(Map& map, Keyfra
   for (const Inertial& state : inertial)
     usable = usable && state.v.allFinite() && state.bg.allFinite() && state.ba.allFinite();
   for (const Eigen::Vector3d& point : points) usable = usable && point.allFinite();
+  usable = usable && gravity_w.allFinite();
   if (!usable) return result;  // nothing written back: the caller falls back to the visual BA
   result.solved = true;
 
@@ -286,6 +310,7 @@ InertialBundleAdjustmentResult inertial_local_bundle_adjustment(Map& map, Keyfra
     state.bias.accel_m_s2 = inertial[k].ba;
   }
   for (const auto& [id, index] : point_index) map.point(id)->p_w = points[index];
+  window.gravity_w = gravity_w;
   for (Observation& obs : observations) {
     double chi2 = 0.0;
     obs.inlier = chi2_of(obs, chi2) && chi2 <= obs.chi2_threshold;

@@ -50,6 +50,9 @@ struct InertialWindow {
   std::map<KeyframeId, InertialKeyframeState> states;
   // The anchor's velocity and biases held (its pose always is); false for a guessed state (after a gap).
   bool hold_anchor = true;
+  // > 0: the direction of gravity is estimated too (its magnitude kept), with a prior of this stddev
+  // (radians) around gravity_w; out: the estimate. 0: gravity held.
+  double gravity_stddev_rad = 0.0;
 };
 
 struct InertialBundleAdjustmentResult {
@@ -69,22 +72,21 @@ InertialBundleAdjustmentResult inertial_local_bundle_adjustment(Map& map, Keyfra
                                                                 InertialWindow& window, MapChanges& changes);
 
 // The IMU factor on two camera pose blocks (PoseBlock: q_cw x y z w, t_cw) with T_wb = T_wc * T_cb:
-// blocks pose_i (7), v_i, bg_i, ba_i, pose_j (7), v_j; 9 residuals. Its Jacobians are in PoseManifold's
+// blocks pose_i (7), v_i, bg_i, ba_i, pose_j (7), v_j, gravity_w (3); 9 residuals. Its Jacobians are in PoseManifold's
 // tangent space (first 6 columns, the 7th zero), as ReprojectionCost's.
-class ImuCameraCost : public ceres::SizedCostFunction<9, 7, 3, 3, 3, 7, 3> {
+class ImuCameraCost : public ceres::SizedCostFunction<9, 7, 3, 3, 3, 7, 3, 3> {
  public:
-  ImuCameraCost(const ImuPreintegration& preintegration, const Eigen::Vector3d& gravity_w, const Pose3& T_cb);
+  ImuCameraCost(const ImuPreintegration& preintegration, const Pose3& T_cb);
   bool Evaluate(const double* const* parameters, double* residuals, double** jacobians) const override;
 
   struct Functor {
     ImuIntervalResidual residual;
-    Eigen::Vector3d gravity_w;
     Eigen::Matrix3d R_cb;
     Eigen::Vector3d t_cb;
 
     template <typename T>
     bool operator()(const T* pose_i, const T* v_i, const T* bg_i, const T* ba_i, const T* pose_j, const T* v_j,
-                    T* out) const {
+                    const T* gravity_w, T* out) const {
       using Vector3 = Eigen::Matrix<T, 3, 1>;
       using Matrix3 = Eigen::Matrix<T, 3, 3>;
       const auto body = [&](const T* pose, Matrix3& R_wb, Vector3& p_wb) {
@@ -100,13 +102,13 @@ class ImuCameraCost : public ceres::SizedCostFunction<9, 7, 3, 3, 3, 7, 3> {
       body(pose_j, R_wj, p_wj);
       residual.evaluate<T>(R_wi, p_wi, Eigen::Map<const Vector3>(v_i), Eigen::Map<const Vector3>(bg_i),
                            Eigen::Map<const Vector3>(ba_i), R_wj, p_wj, Eigen::Map<const Vector3>(v_j),
-                           gravity_w.cast<T>(), out);
+                           Eigen::Map<const Vector3>(gravity_w), out);
       return true;
     }
   };
 
  private:
-  ceres::AutoDiffCostFunction<Functor, 9, 7, 3, 3, 3, 7, 3> autodiff_;
+  ceres::AutoDiffCostFunction<Functor, 9, 7, 3, 3, 3, 7, 3, 3> autodiff_;
 };
 
 }  // namespace heslam

@@ -2,6 +2,7 @@
 #include "components/core/mapping/inertial_mapping.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -178,6 +179,7 @@ std::optional<LocalBundleAdjustmentResult> InertialMapping::bundle_adjust(Map& m
   InertialWindow inertial;
   inertial.T_cb = *T_cb_;
   inertial.gravity_w = gravity_w_;
+  if (options_.estimate_gravity) inertial.gravity_stddev_rad = std::max(gravity_stddev_deg_, 0.01) * M_PI / 180.0;
   std::string why;
   // A keyframe after a gap has no state: it starts a new chain with the velocity of the body between the
   // keyframe before it and itself and the newest biases, and that state is estimated, not held.
@@ -244,6 +246,7 @@ std::optional<LocalBundleAdjustmentResult> InertialMapping::bundle_adjust(Map& m
     return std::nullopt;
   }
   for (const auto& [id, state] : inertial.states) states_[id] = state;
+  gravity_w_ = inertial.gravity_w;
   if (!inertial.hold_anchor) seeded_.erase(inertial.chain.front());
   last_bias_ = inertial.states.at(kf_id).bias;
   ++counts_.inertial_bas;

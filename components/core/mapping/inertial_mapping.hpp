@@ -42,6 +42,9 @@ struct InertialMappingOptions {
   // imu.window_keyframes: the newest keyframes in time order with a velocity and biases in the local BA
   // (ORB-SLAM3: 10), plus the one before them, held fixed.
   int window_keyframes = 10;
+  // imu.estimate_gravity: the local BA estimates the direction of gravity too, with the initialization's
+  // stddev as its prior (ORB-SLAM3 refines it in its inertial BAs of the initialization). False: held.
+  bool estimate_gravity = true;
   // imu.init_min_keyframes / imu.init_min_duration_s / imu.init_max_keyframes: the initialization is tried
   // at each keyframe once the map's newest keyframes (at most init_max_keyframes) are this many over
   // this long; until it succeeds the visual BA runs. imu.init_max_gravity_stddev_deg,
