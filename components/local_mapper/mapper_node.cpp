@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "components/core/camera/stereo_rectifier.hpp"
 #include "components/core/map/ids.hpp"
 #include "components/local_mapper/write_batch.hpp"
 #include "components/messages/camera.hpp"
@@ -34,9 +35,10 @@ constexpr std::size_t kHeldCorrections = 100;
 
 // The per-keyframe stages in pipeline order (status percentiles and the final summary).
 // `*_cpu`: CPU time of the mapper's thread in that stage, the figure to compare on a loaded machine.
-constexpr const char* kStageOrder[] = {"insertion", "point_culling", "triangulation",    "fusion",
-                                       "local_ba",  "local_ba_cpu",  "keyframe_culling", "mapping_total",
-                                       "map_save",  "publish",       "publish_cpu",      "correction"};
+constexpr const char* kStageOrder[] = {
+    "insertion",    "point_culling",     "triangulation",         "fusion",           "local_ba",
+    "local_ba_cpu", "local_ba_inertial", "local_ba_inertial_cpu", "keyframe_culling", "mapping_total",
+    "map_save",     "publish",           "publish_cpu",           "correction"};
 
 // CPU time of the calling thread, milliseconds.
 double thread_cpu_ms() {
@@ -80,6 +82,7 @@ void MapperNode::configure(const runtime::Config& config) {
       return !pending_.empty() || keyframe_reader_->has_unread();
     };
   }
+  if (options_.inertial.enabled) configure_inertial();
   load_initial_map();
   log().info(
       options_.map_file.empty() ? std::string("no map file (map not persisted)")
@@ -235,6 +238,11 @@ void MapperNode::start_mapper(const PendingKeyframe& first) {
   } else {
     mapper_ = std::make_unique<LocalMapper>(first.camera, options_.mapper);
   }
+  if (inertial_) {
+    mapper_->set_bundle_adjustment(
+        [this](Map& map, KeyframeId id, const PinholeStereo& camera, const LocalBundleAdjustmentOptions& ba_options,
+               MapChanges& changes) { return inertial_->bundle_adjust(map, id, camera, ba_options, changes); });
+  }
   log().info("camera fx ", first.camera.fx_px, " px, baseline ", first.camera.baseline_m, " m; ",
              mapper_->map().keyframes.size(), " keyframes in the map");
   for (const auto& [id, keyframe] : mapper_->map().keyframes) publish_keyframe(keyframe);
@@ -273,6 +281,7 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
     }
     return;
   }
+  if (inertial_) wait_for_imu(keyframe.decoded.keyframe.stamp_ns, id);
   MapChanges changes;
   try {
     const TrackedAgainst tracked{keyframe.decoded.reference_kf, keyframe.decoded.tracked_map_version};
@@ -285,6 +294,7 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
     return;
   }
   record(changes);
+  if (inertial_) report_inertial(changes);
   if (++unsaved_keyframes_ >= options_.save_every_keyframes) save();
   if (const Keyframe* inserted = mapper_->map().keyframe(id)) publish_keyframe(*inserted);
   publish(changes);
@@ -308,7 +318,14 @@ void MapperNode::apply_corrections() {
   while (!pending_corrections_.empty()) {
     const LoopCorrection correction = std::move(pending_corrections_.begin()->second);
     pending_corrections_.erase(pending_corrections_.begin());
+    std::map<KeyframeId, Pose3> old_T_wc;
+    if (inertial_) {
+      for (const auto& [id, state] : inertial_->states()) {
+        if (const Keyframe* keyframe = mapper_->map().keyframe(id)) old_T_wc.emplace(id, keyframe->T_wc);
+      }
+    }
     const MapChanges changes = mapper_->apply_correction(correction);
+    if (inertial_) inertial_->moved(old_T_wc, mapper_->map());
     stats().count("corrections");
     stats().record_ms("correction", changes.timings.total_ms);
     save();
@@ -426,6 +443,121 @@ void MapperNode::acknowledge(KeyframeId id, std::uint64_t correction_id) {
   keyframe_done_writer_->write(done);
 }
 
+void MapperNode::configure_inertial() {
+  runtime::CheckedReaderOptions batch_options;
+  batch_options.rejected_counter = "imu_rejected_batches";
+  imu_reader_.emplace(participant(), topics().imu(), log(), stats(), nullptr, batch_options);
+  runtime::CheckedReaderOptions calibration_options;
+  calibration_options.rejected_counter = "imu_rejected_calibrations";
+  imu_calibration_reader_.emplace(participant(), topics().imu_calibration(), log(), stats(), nullptr,
+                                  calibration_options);
+  stereo_calibration_reader_.emplace(participant(), topics().calibration(), log(), stats(),
+                                     messages::sample_check<msg::StereoCalibration>(),
+                                     messages::checked_options<msg::StereoCalibration>(1));
+  imu_waitset_ = std::make_unique<runtime::WaitSet>(participant());
+  imu_waitset_->attach(*imu_reader_);
+  imu_waitset_->attach(*imu_calibration_reader_);
+  imu_waitset_->attach(*stereo_calibration_reader_);
+  inertial_ = std::make_unique<InertialMapping>(options_.inertial, imu_reader_->name());
+  inertial_->set_log([this](const std::string& line) { log().warn(line); },
+                     [this](const std::string& line) { log().info(line); });
+  imu_stream_ = std::make_unique<messages::ImuStreamReader>(inertial_->buffer());
+  const InertialMappingOptions& o = options_.inertial;
+  log().info("inertial local BA: ", imu_reader_->name(), ", ", imu_calibration_reader_->name(), " and ",
+             stereo_calibration_reader_->name(), ", window ", o.window_keyframes, " keyframes, initialization after ",
+             o.init_min_keyframes, " keyframes over ", o.init_min_duration_s, " s",
+             options_.real_time
+                 ? "; real time (never waits for the IMU)"
+                 : "; each keyframe waits for the IMU to cover it, at most " + std::to_string(o.wait_s) + " s");
+  for (const char* name :
+       {"imu_readings", "imu_bad_readings", "imu_ba_inertial", "imu_ba_visual_fallbacks", "imu_ba_failed_solves",
+        "imu_ba_factors", "imu_init_attempts", "imu_initialized", "imu_refinements", "imu_off"}) {
+    stats().count(name, 0);
+  }
+}
+
+void MapperNode::take_imu() {
+  for (auto& received : stereo_calibration_reader_->take()) {
+    if (!received.info.valid_data || inertial_->has_camera()) continue;
+    try {
+      const StereoRectifier rectifier(messages::to_calibration(*received.sample));
+      inertial_->set_camera(rectifier.T_B_rect());
+    } catch (const std::exception& error) {
+      stats().count("imu_bad_calibrations");
+      log().warn_throttled("imu_bad_calibrations", "topic '", stereo_calibration_reader_->name(), "': ", error.what());
+    }
+  }
+  for (auto& received : imu_calibration_reader_->take()) {
+    if (!received.info.valid_data || inertial_->has_calibration()) continue;
+    try {
+      const ImuCalibration calibration = messages::to_imu_calibration(*received.sample);
+      inertial_->set_imu_calibration(calibration);
+      log().info("IMU calibration '", calibration.source, "': ", calibration.rate_hz, " Hz, time offset ",
+                 calibration.time_offset_ns, " ns");
+    } catch (const std::exception& error) {
+      stats().count("imu_bad_calibrations");
+      log().warn_throttled("imu_bad_calibrations", "topic '", imu_calibration_reader_->name(), "': ", error.what());
+    }
+  }
+  for (auto& received : imu_reader_->take()) {
+    if (!received.info.valid_data) continue;
+    const messages::ImuBatchReport report = imu_stream_->add(*received.sample);
+    if (report.lost_readings > 0) stats().count("imu_lost_readings", report.lost_readings);
+    for (const std::string& warning : report.warnings) log().warn_throttled("imu_readings", warning);
+  }
+}
+
+void MapperNode::wait_for_imu(std::int64_t stamp_ns, KeyframeId id) {
+  take_imu();
+  if (inertial_->off() || options_.real_time) return;
+  const auto covered = [&] {
+    return inertial_->has_calibration() && inertial_->has_camera() &&
+           inertial_->buffer().covered_until_ns() >= inertial_->imu_stamp(stamp_ns);
+  };
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                               std::chrono::duration<double>(options_.inertial.wait_s));
+  while (!covered()) {
+    std::string missing = !inertial_->has_camera() ? "no stereo calibration on '" + stereo_calibration_reader_->name()
+                          : !inertial_->has_calibration() ? "no IMU calibration on '" + imu_calibration_reader_->name()
+                                                          : "no IMU readings on '" + imu_reader_->name();
+    if (imu_stream_->ended()) {
+      inertial_->turn_off("the IMU stream ended (end_of_stream) before keyframe " + format_id(id));
+      stats().count("imu_off");
+      return;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= deadline || shutdown_requested()) {
+      inertial_->turn_off(missing + "' up to keyframe " + format_id(id) + " (" + std::to_string(stamp_ns) +
+                          " ns) within imu.wait_s " + std::to_string(options_.inertial.wait_s) + " s");
+      stats().count("imu_off");
+      return;
+    }
+    imu_waitset_->wait(std::min<std::chrono::nanoseconds>(kWaitPeriod, deadline - now));
+    take_imu();
+  }
+}
+
+void MapperNode::report_inertial(const MapChanges& changes) {
+  if (changes.counts.inertial_bundle_adjustment) {
+    stats().record_ms("local_ba_inertial", changes.timings.bundle_adjustment_ms);
+    stats().record_ms("local_ba_inertial_cpu", changes.timings.bundle_adjustment_cpu_ms);
+  }
+  const InertialMappingCounts& c = inertial_->counts();
+  const ImuBufferCounts& buffer = inertial_->buffer().counts();
+  const std::map<std::string, std::uint64_t> now = {
+      {"imu_readings", buffer.accepted},         {"imu_bad_readings", buffer.skipped()},
+      {"imu_ba_inertial", c.inertial_bas},       {"imu_ba_visual_fallbacks", c.visual_fallbacks},
+      {"imu_ba_failed_solves", c.failed_solves}, {"imu_ba_factors", c.imu_factors},
+      {"imu_init_attempts", c.init_attempts},    {"imu_initialized", c.initialized},
+      {"imu_refinements", c.refinements},
+  };
+  for (const auto& [name, value] : now) {
+    std::uint64_t& reported = imu_counters_reported_[name];
+    if (value > reported) stats().count(name, value - reported);
+    reported = std::max(reported, value);
+  }
+}
+
 void MapperNode::load_applied_corrections(const std::vector<std::string>& records) {
   for (const std::string& record : records) {
     std::uint64_t id = 0;
@@ -457,6 +589,14 @@ void MapperNode::log_summary() {
          << " corrections (" << counter(counters, "late_keyframes_moved")
          << " keyframes tracked before one moved into it)";
   if (options_.real_time) totals << "; " << counter(counters, "ba_stopped_early") << " local BAs stopped early";
+  if (inertial_) {
+    totals << "; inertial local BA: " << counter(counters, "imu_ba_inertial") << " keyframes ("
+           << counter(counters, "imu_ba_visual_fallbacks") << " visual fallbacks, "
+           << counter(counters, "imu_ba_failed_solves") << " failed solves), IMU "
+           << (inertial_->off()           ? "off"
+               : inertial_->initialized() ? "initialized"
+                                          : "not initialized");
+  }
   log().info(totals.str());
   if (counter(counters, runtime::kSecondWriterSamples) > 0 || counter(counters, "bad_corrections") > 0) {
     log().warn("samples refused: ", counter(counters, runtime::kSecondWriterSamples), " from second writers (",

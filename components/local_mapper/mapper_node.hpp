@@ -19,8 +19,10 @@
 #include <vector>
 
 #include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/mapping/inertial_mapping.hpp"
 #include "components/core/mapping/local_mapper.hpp"
 #include "components/local_mapper/mapper_process_options.hpp"
+#include "components/messages/imu.hpp"
 #include "components/messages/keyframe.hpp"
 #include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
@@ -67,6 +69,15 @@ class MapperNode : public runtime::Component {
   void acknowledge(KeyframeId id, std::uint64_t correction_id = 0);
   void log_summary();
 
+  // The inertial local BA (options_.inertial.enabled; docs/local_mapper.md, Inertial local BA).
+  void configure_inertial();
+  // Takes the IMU calibration, the stereo calibration (the IMU-camera extrinsic) and the readings that
+  // arrived (never waits).
+  void take_imu();
+  // Lockstep: waits (at most imu.wait_s) until the IMU covers the keyframe's stamp; else the IMU is off.
+  void wait_for_imu(std::int64_t stamp_ns, KeyframeId id);
+  void report_inertial(const MapChanges& changes);
+
   void load_applied_corrections(const std::vector<std::string>& records);
   void remember_applied_correction(std::uint64_t id);
 
@@ -95,6 +106,14 @@ class MapperNode : public runtime::Component {
   // The map's size as last reported in the status (record(): counters MAP_added / MAP_removed).
   std::uint64_t reported_keyframes_ = 0;
   std::uint64_t reported_points_ = 0;
+
+  std::optional<runtime::CheckedReader<msg::ImuCalibration>> imu_calibration_reader_;
+  std::optional<runtime::CheckedReader<msg::ImuBatch>> imu_reader_;
+  std::optional<runtime::CheckedReader<msg::StereoCalibration>> stereo_calibration_reader_;
+  std::unique_ptr<runtime::WaitSet> imu_waitset_;  // the IMU readers only: the lockstep wait
+  std::unique_ptr<InertialMapping> inertial_;
+  std::unique_ptr<messages::ImuStreamReader> imu_stream_;
+  std::map<std::string, std::uint64_t> imu_counters_reported_;
 
   std::vector<msg::CovisibleKeyframe> covisible_buffer_;
   std::vector<msg::PointObservation> observation_buffer_;

@@ -53,6 +53,24 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
   m.keyframe_culling.redundant_ratio =
       config.get_double("keyframe_culling.redundant_ratio", m.keyframe_culling.redundant_ratio, 0.0, 1.0);
 
+  InertialMappingOptions& imu = o.inertial;
+  imu.enabled = config.get_bool("imu.enabled", imu.enabled);
+  imu.wait_s = config.get_double("imu.wait_s", imu.wait_s, 0.01, kMaxReaderWaitS);
+  imu.window_keyframes = config.get_int("imu.window_keyframes", imu.window_keyframes, 1, kMaxNeighbours);
+  imu.estimate_gravity = config.get_bool("imu.estimate_gravity", imu.estimate_gravity);
+  imu.init_min_keyframes = config.get_int("imu.init_min_keyframes", imu.init_min_keyframes, 3, 1000);
+  imu.init_min_duration_s = config.get_double("imu.init_min_duration_s", imu.init_min_duration_s, 0.1, 60.0);
+  imu.init_max_keyframes = config.get_int("imu.init_max_keyframes", imu.init_max_keyframes, 3, 1000);
+  imu.init.max_gravity_stddev_deg =
+      config.get_double("imu.init_max_gravity_stddev_deg", imu.init.max_gravity_stddev_deg, 0.01, 90.0);
+  imu.init.max_accel_bias_stddev_m_s2 =
+      config.get_double("imu.init_max_accel_bias_stddev_m_s2", imu.init.max_accel_bias_stddev_m_s2, 0.001, 100.0);
+  imu.init.max_gravity_stddev_of_prior =
+      config.get_double("imu.init_max_gravity_stddev_of_prior", imu.init.max_gravity_stddev_of_prior, 0.01, 1000.0);
+  imu.refine_every_s = config.get_double("imu.refine_every_s", imu.refine_every_s, 0.0, 3600.0);
+  imu.refine_until_s = config.get_double("imu.refine_until_s", imu.refine_until_s, 0.0, 1e6);
+  std::string imu_flag = "auto";
+
   runtime::Flags flags("heslam-local-mapper [options]");
   flags.path("--map-file", "FILE", &o.map_file, "the map file the mapper publishes from")
       .custom("--load-map", "FILE", "start from this saved map",
@@ -60,8 +78,14 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
                 o.load_map = value;
                 o.load_map_given_empty = o.load_map.empty();
               })
-      .path("--save-map", "FILE", &o.save_map, "save the map here at the end (\"\": none)");
+      .path("--save-map", "FILE", &o.save_map, "save the map here at the end (\"\": none)")
+      .custom("--imu", "auto|none", "none: no inertial local BA whatever imu.enabled says (auto: imu.enabled)",
+              [&imu_flag](const std::string& value) {
+                if (value != "auto" && value != "none") runtime::throw_bad_flag_value("--imu", "auto or none", value);
+                imu_flag = value;
+              });
   flags.parse(rest);
+  if (imu_flag == "none") imu.enabled = false;
   if (o.load_map_given_empty) {
     throw std::runtime_error(
         "--load-map: no saved map given (an empty file name; a localize pipeline needs "

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "components/core/mapping/inertial_mapping.hpp"
 #include "components/core/mapping/local_mapper_options.hpp"
 #include "runtime/config.hpp"
 
@@ -44,9 +45,11 @@ struct MapperProcessOptions {
   // messages, flushed after the batch's version markers (write_batch.hpp), instead of one datagram
   // per sample.
   bool batch_map_writes = true;
+  // imu.* / --imu auto|none: the inertial local BA (docs/local_mapper.md, Inertial local BA). Off by default.
+  InertialMappingOptions inertial;
 
-  // Reads the config, then `--map-file FILE` / `--load-map FILE` / `--save-map FILE` from `rest` (the command line
-  // wins). Throws std::runtime_error naming the config file and field, or the bad argument.
+  // Reads the config, then `--map-file FILE` / `--load-map FILE` / `--save-map FILE` / `--imu auto|none` from `rest`
+  // (the command line wins). Throws std::runtime_error naming the config file and field, or the bad argument.
   static MapperProcessOptions from_config(const runtime::Config& config, const std::vector<std::string>& rest);
 };
 

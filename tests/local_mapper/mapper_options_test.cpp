@@ -36,5 +36,28 @@ TEST(MapperOptions, ConfigAndCommandLine) {
   EXPECT_THROW(MapperProcessOptions::from_config(runtime::Config::empty(), {"--bogus"}), std::runtime_error);
 }
 
+TEST(MapperOptions, InertialLocalBundleAdjustment) {
+  EXPECT_FALSE(MapperProcessOptions::from_config(runtime::Config::empty(), {}).inertial.enabled);  // off by default
+  const runtime::Config config = runtime::Config::parse(
+      "imu: {enabled: true, window_keyframes: 7, estimate_gravity: false, init_min_keyframes: 8, wait_s: 2.5}\n",
+      "inertial.yaml");
+  const MapperProcessOptions options = MapperProcessOptions::from_config(config, {});
+  EXPECT_TRUE(options.inertial.enabled);
+  EXPECT_EQ(options.inertial.window_keyframes, 7);
+  EXPECT_FALSE(options.inertial.estimate_gravity);
+  EXPECT_EQ(options.inertial.init_min_keyframes, 8);
+  EXPECT_EQ(options.inertial.wait_s, 2.5);
+  EXPECT_FALSE(MapperProcessOptions::from_config(config, {"--imu", "none"}).inertial.enabled);
+  EXPECT_TRUE(MapperProcessOptions::from_config(config, {"--imu", "auto"}).inertial.enabled);
+  EXPECT_THROW(MapperProcessOptions::from_config(config, {"--imu", "maybe"}), std::runtime_error);
+  const runtime::Config bad = runtime::Config::parse("imu: {window_keyframes: 0}\n", "inertial.yaml");
+  try {
+    MapperProcessOptions::from_config(bad, {});
+    FAIL() << "expected a rejection";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("imu.window_keyframes"), std::string::npos) << error.what();
+  }
+}
+
 }  // namespace
 }  // namespace heslam::local_mapper

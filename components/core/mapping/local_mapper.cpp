@@ -235,7 +235,11 @@ MapChanges LocalMapper::process_keyframe(Keyframe kf, std::vector<MapPoint> new_
 
   if (options_.enable_bundle_adjustment) {
     const double cpu_start_ms = thread_cpu_ms();
-    const auto ba = local_bundle_adjustment(map_, kf_id, camera_, options_.bundle_adjustment, changes);
+    std::optional<LocalBundleAdjustmentResult> replaced;
+    if (bundle_adjustment_) replaced = bundle_adjustment_(map_, kf_id, camera_, options_.bundle_adjustment, changes);
+    changes.counts.inertial_bundle_adjustment = replaced.has_value();
+    const LocalBundleAdjustmentResult ba =
+        replaced ? *replaced : local_bundle_adjustment(map_, kf_id, camera_, options_.bundle_adjustment, changes);
     changes.timings.bundle_adjustment_cpu_ms = thread_cpu_ms() - cpu_start_ms;
     changes.counts.bundle_adjustment_outliers = ba.outliers_removed;
     changes.counts.bundle_adjustment_aborted = ba.aborted;

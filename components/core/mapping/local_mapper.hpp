@@ -8,10 +8,13 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <vector>
 
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/map/map.hpp"
+#include "components/core/mapping/local_bundle_adjustment.hpp"
 #include "components/core/mapping/local_mapper_options.hpp"
 #include "components/core/mapping/loop_correction.hpp"
 #include "components/core/mapping/map_changes.hpp"
@@ -37,6 +40,12 @@ class LocalMapper {
 
   MapChanges apply_correction(const LoopCorrection& correction);
 
+  // A local BA run instead of the visual one (the inertial BA, inertial_mapping.hpp); when it returns
+  // nothing, the visual BA runs. Unset (the default): the visual BA always.
+  using BundleAdjustment = std::function<std::optional<LocalBundleAdjustmentResult>(
+      Map&, KeyframeId, const PinholeStereo&, const LocalBundleAdjustmentOptions&, MapChanges&)>;
+  void set_bundle_adjustment(BundleAdjustment bundle_adjustment) { bundle_adjustment_ = std::move(bundle_adjustment); }
+
   const Map& map() const { return map_; }
   const MapperState& state() const { return state_; }
   const PinholeStereo& camera() const { return camera_; }
@@ -56,6 +65,7 @@ class LocalMapper {
   LocalMapperOptions options_;
   Map map_;
   MapperState state_;
+  BundleAdjustment bundle_adjustment_;
 };
 
 }  // namespace heslam

@@ -35,6 +35,7 @@ void MapChanges::merge(const MapChanges& other) {
   counts.culled_keyframes += other.counts.culled_keyframes;
   counts.late_keyframes_moved += other.counts.late_keyframes_moved;
   counts.bundle_adjustment_aborted = counts.bundle_adjustment_aborted || other.counts.bundle_adjustment_aborted;
+  counts.inertial_bundle_adjustment = counts.inertial_bundle_adjustment || other.counts.inertial_bundle_adjustment;
 }
 
 }  // namespace heslam

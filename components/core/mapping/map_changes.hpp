@@ -35,7 +35,8 @@ struct LocalMapperCounts {
   int bundle_adjustment_observations = 0;
   int culled_keyframes = 0;
   bool bundle_adjustment_aborted = false;
-  int late_keyframes_moved = 0;  // tracked before a correction applied since: moved into its frame
+  bool inertial_bundle_adjustment = false;  // the local BA had IMU factors (LocalMapper::set_bundle_adjustment)
+  int late_keyframes_moved = 0;             // tracked before a correction applied since: moved into its frame
 };
 
 struct MapChanges {
