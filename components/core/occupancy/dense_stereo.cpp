@@ -4,10 +4,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
 #include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
 
 namespace heslam {
 namespace {
@@ -36,6 +38,10 @@ void DenseStereoOptions::check(const std::string& source) const {
   }
   if (pixel_step < 1) fail(source, "pixel_step", ">= 1");
   if (!(thin_voxel_m >= 0.0) || !std::isfinite(thin_voxel_m)) fail(source, "thin_voxel_m", ">= 0");
+  if (edge_radius_px < 0 || edge_radius_px > 16) fail(source, "edge_radius_px", "0..16");
+  if (smooth_radius_px < 0 || smooth_radius_px > 16) fail(source, "smooth_radius_px", "0..16");
+  if (!(edge_step_px > 0.0) || !std::isfinite(edge_step_px)) fail(source, "edge_step_px", "> 0");
+  if (!(disparity_sigma_px >= 0.0) || !std::isfinite(disparity_sigma_px)) fail(source, "disparity_sigma_px", ">= 0");
   if (uniqueness_ratio < 0 || speckle_window < 0 || speckle_range < 0) {
     fail(source, "uniqueness_ratio / speckle_window / speckle_range", ">= 0");
   }
@@ -61,12 +67,46 @@ cv::Mat DenseStereo::disparity(const cv::Mat& left, const cv::Mat& right) const 
   }
   const int area = options_.block_size * options_.block_size;
   cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
-      0, options_.num_disparities, options_.block_size, kP1PerPixel * area, kP2PerPixel * area, 1, 0,
+      0, options_.num_disparities, options_.block_size, kP1PerPixel * area, kP2PerPixel * area, options_.disp12_max_diff, 0,
       options_.uniqueness_ratio, options_.speckle_window, options_.speckle_range, cv::StereoSGBM::MODE_SGBM);
   cv::Mat fixed;
   sgbm->compute(left, right, fixed);
   cv::Mat out;
   fixed.convertTo(out, CV_32F, 1.0 / kDisparityScale);
+  if (options_.edge_radius_px > 0) {
+    // The largest and smallest valid disparity around each pixel (invalid pixels count for neither).
+    const int side = 2 * options_.edge_radius_px + 1;
+    const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(side, side));
+    const cv::Mat invalid = out <= 0.f;
+    cv::Mat high, low = out.clone();
+    low.setTo(std::numeric_limits<float>::max(), invalid);
+    cv::dilate(out, high, kernel);
+    cv::erode(low, low, kernel);
+    const float step = static_cast<float>(options_.edge_step_px);
+    for (int v = 0; v < out.rows; ++v) {
+      float* row = out.ptr<float>(v);
+      const float* h = high.ptr<float>(v);
+      const float* l = low.ptr<float>(v);
+      for (int u = 0; u < out.cols; ++u) {
+        if (row[u] > 0.f && (h[u] - row[u] > step || row[u] - l[u] > step)) row[u] = -1.f;
+      }
+    }
+  }
+  if (options_.smooth_radius_px > 0) {
+    const int side = 2 * options_.smooth_radius_px + 1;
+    cv::Mat valid, sum, count;
+    cv::threshold(out, valid, 0.0, 1.0, cv::THRESH_BINARY);  // 1 where kept, 0 elsewhere
+    cv::boxFilter(out.mul(valid), sum, CV_32F, cv::Size(side, side), cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
+    cv::boxFilter(valid, count, CV_32F, cv::Size(side, side), cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
+    for (int v = 0; v < out.rows; ++v) {
+      float* row = out.ptr<float>(v);
+      const float* s = sum.ptr<float>(v);
+      const float* c = count.ptr<float>(v);
+      for (int u = 0; u < out.cols; ++u) {
+        if (row[u] > 0.f) row[u] = s[u] / c[u];
+      }
+    }
+  }
   return out;
 }
 

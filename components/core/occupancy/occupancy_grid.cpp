@@ -25,14 +25,13 @@ constexpr double kFreeThresh = 0.196;
 
 OccupancyGrid OccupancyGrid::from_voxels(const VoxelMap& voxels, const GridBand& band) {
   OccupancyGrid grid(voxels.options().resolution_m);
-  const float threshold = voxels.options().occupied_log_odds;
-  voxels.for_each([&](const VoxelIndex& v, float log_odds) {
+  voxels.for_each_state([&](const VoxelIndex& v, VoxelMap::VoxelState state) {
     const double z = voxels.center_of(v).z();
     if (z < band.min_m || z > band.max_m) return;
     CellState& cell = grid.cells_[{v.x, v.y}];
-    if (log_odds > threshold) {
+    if (state == VoxelMap::VoxelState::kOccupied) {
       cell = CellState::kOccupied;
-    } else if (log_odds < -threshold && cell != CellState::kOccupied) {
+    } else if (state == VoxelMap::VoxelState::kFree && cell != CellState::kOccupied) {
       cell = CellState::kFree;
     }
   });
