@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include <Eigen/Eigenvalues>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -23,6 +24,10 @@ constexpr double kDisparityScale = 16.0;
 constexpr int kCubeBits = 21;
 constexpr double kCubeOffset = static_cast<double>(1 << (kCubeBits - 1));
 constexpr std::uint64_t kCubeMask = (std::uint64_t{1} << kCubeBits) - 1;
+// A cube's normal: from at least this many points, and only when flat (smallest spread below this
+// fraction of the middle one).
+constexpr std::size_t kMinNormalPoints = 6;
+constexpr double kMaxFlatness = 0.2;
 
 [[noreturn]] void fail(const std::string& source, const std::string& field, const std::string& expected) {
   throw std::runtime_error(source + ": " + field + " must be " + expected);
@@ -66,9 +71,10 @@ cv::Mat DenseStereo::disparity(const cv::Mat& left, const cv::Mat& right) const 
     }
   }
   const int area = options_.block_size * options_.block_size;
-  cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
-      0, options_.num_disparities, options_.block_size, kP1PerPixel * area, kP2PerPixel * area, options_.disp12_max_diff, 0,
-      options_.uniqueness_ratio, options_.speckle_window, options_.speckle_range, cv::StereoSGBM::MODE_SGBM);
+  cv::Ptr<cv::StereoSGBM> sgbm =
+      cv::StereoSGBM::create(0, options_.num_disparities, options_.block_size, kP1PerPixel * area, kP2PerPixel * area,
+                             options_.disp12_max_diff, 0, options_.uniqueness_ratio, options_.speckle_window,
+                             options_.speckle_range, cv::StereoSGBM::MODE_SGBM);
   cv::Mat fixed;
   sgbm->compute(left, right, fixed);
   cv::Mat out;
@@ -111,13 +117,21 @@ cv::Mat DenseStereo::disparity(const cv::Mat& left, const cv::Mat& right) const 
 }
 
 std::vector<Eigen::Vector3f> DenseStereo::cloud_from_disparity(const cv::Mat& disparity) const {
+  std::vector<Eigen::Vector3f> points;
+  cloud_from_disparity(disparity, points, nullptr);
+  return points;
+}
+
+void DenseStereo::cloud_from_disparity(const cv::Mat& disparity, std::vector<Eigen::Vector3f>& points,
+                                       std::vector<Eigen::Vector3f>* normals) const {
+  points.clear();
+  if (normals) normals->clear();
   const double bf = camera_.bf();
   const int step = options_.pixel_step;
   const double r = options_.thin_voxel_m;
   // Thinning: the points keyed by their lattice cube (x, y, z packed most significant first, so the
   // key order is the cubes' lexicographic order and the output order is fixed), sorted, one mean per cube.
   std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> keyed;
-  std::vector<Eigen::Vector3f> points;
   auto axis = [](double value) { return static_cast<std::uint64_t>(std::floor(value) + kCubeOffset) & kCubeMask; };
   // The left num_disparities columns: their match may lie left of the right image, where SGBM
   // still answers with a smaller (wrong) disparity, i.e. a point too far.
@@ -132,21 +146,41 @@ std::vector<Eigen::Vector3f> DenseStereo::cloud_from_disparity(const cv::Mat& di
       const Eigen::Vector3d p = camera_.unproject(u, v, z);
       if (r <= 0.0) {
         points.push_back(p.cast<float>());
+        if (normals) normals->push_back(Eigen::Vector3f::Zero());
         continue;
       }
       keyed.emplace_back((axis(p.x() / r) << (2 * kCubeBits)) | (axis(p.y() / r) << kCubeBits) | axis(p.z() / r), p);
     }
   }
-  if (r <= 0.0) return points;
+  if (r <= 0.0) return;
   std::stable_sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   for (std::size_t begin = 0; begin < keyed.size();) {
     std::size_t end = begin;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (; end < keyed.size() && keyed[end].first == keyed[begin].first; ++end) sum += keyed[end].second;
-    points.push_back((sum / static_cast<double>(end - begin)).cast<float>());
+    const std::size_t n = end - begin;
+    const Eigen::Vector3d mean = sum / static_cast<double>(n);
+    points.push_back(mean.cast<float>());
+    if (normals) {
+      Eigen::Vector3f normal = Eigen::Vector3f::Zero();
+      if (n >= kMinNormalPoints) {
+        Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+        for (std::size_t i = begin; i < end; ++i) {
+          const Eigen::Vector3d d = keyed[i].second - mean;
+          covariance += d * d.transpose();
+        }
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+        const Eigen::Vector3d values = eigen.eigenvalues();  // ascending
+        if (eigen.info() == Eigen::Success && values(0) < kMaxFlatness * values(1)) {
+          Eigen::Vector3d axis = eigen.eigenvectors().col(0);
+          if (axis.dot(mean) > 0.0) axis = -axis;  // towards the camera
+          normal = axis.cast<float>();
+        }
+      }
+      normals->push_back(normal);
+    }
     begin = end;
   }
-  return points;
 }
 
 std::vector<Eigen::Vector3f> DenseStereo::cloud(const cv::Mat& left, const cv::Mat& right) const {

@@ -63,6 +63,10 @@ class DenseStereo {
   std::vector<Eigen::Vector3f> cloud(const cv::Mat& left, const cv::Mat& right) const;
   // The points of a disparity image (as disparity() returns).
   std::vector<Eigen::Vector3f> cloud_from_disparity(const cv::Mat& disparity) const;
+  // The same points and, per point, the normal of its thinning cube's points (the covariance's
+  // smallest axis, towards the camera; zero where the cube has fewer than 6 points or is not flat).
+  void cloud_from_disparity(const cv::Mat& disparity, std::vector<Eigen::Vector3f>& points,
+                            std::vector<Eigen::Vector3f>* normals) const;
 
   const PinholeStereo& camera() const { return camera_; }
   // disparity_sigma_px / bf (1/m): KeyframeCloud::sigma_per_m2 of this matcher's clouds.

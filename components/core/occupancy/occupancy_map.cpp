@@ -87,7 +87,12 @@ void OccupancyMap::fuse(std::uint64_t id, const KeyframeCloud& cloud, const Pose
     sigmas.reserve(cloud.points_c.size());
     for (const Eigen::Vector3f& p : cloud.points_c) sigmas.push_back(cloud.sigma_per_m2 * p.norm() * std::abs(p.z()));
   }
-  voxels_.integrate((R_gw_ * T_wc.translation()), points_g, sigmas);
+  std::vector<Eigen::Vector3f> normals_g;
+  if (cloud.normals_c.size() == cloud.points_c.size()) {
+    normals_g.reserve(cloud.normals_c.size());
+    for (const Eigen::Vector3f& n : cloud.normals_c) normals_g.push_back(R * n);
+  }
+  voxels_.integrate((R_gw_ * T_wc.translation()), points_g, sigmas, normals_g);
   fused_[id] = T_wc;
 }
 
@@ -142,10 +147,19 @@ void write_cloud(const std::filesystem::path& file, std::uint64_t id, const Keyf
   put(out, cloud.stamp_ns);
   put(out, static_cast<std::uint64_t>(cloud.points_c.size()));
   put(out, cloud.sigma_per_m2);
+  const bool with_normals = !cloud.normals_c.empty() && cloud.normals_c.size() == cloud.points_c.size();
+  put(out, static_cast<std::uint32_t>(with_normals ? 1 : 0));
   for (const Eigen::Vector3f& p : cloud.points_c) {
     put(out, p.x());
     put(out, p.y());
     put(out, p.z());
+  }
+  if (with_normals) {
+    for (const Eigen::Vector3f& n : cloud.normals_c) {
+      put(out, n.x());
+      put(out, n.y());
+      put(out, n.z());
+    }
   }
   runtime::replace_file_contents(file, out, /*sync=*/false);
 }
@@ -154,7 +168,8 @@ KeyframeCloud read_cloud(const std::filesystem::path& file, std::uint64_t& id) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw std::runtime_error(file.string() + ": cannot open");
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  constexpr std::size_t kHeader = sizeof(kCloudMagic) + 3 * sizeof(std::uint64_t) + sizeof(float);
+  constexpr std::size_t kHeader =
+      sizeof(kCloudMagic) + 3 * sizeof(std::uint64_t) + sizeof(float) + sizeof(std::uint32_t);
   if (bytes.size() < kHeader || std::memcmp(bytes.data(), kCloudMagic, sizeof(kCloudMagic)) != 0) {
     throw std::runtime_error(file.string() + ": not a heslam-occupancy keyframe cloud (magic HESOCC02)");
   }
@@ -165,14 +180,17 @@ KeyframeCloud read_cloud(const std::filesystem::path& file, std::uint64_t& id) {
   std::memcpy(&cloud.stamp_ns, at + 8, sizeof(cloud.stamp_ns));
   std::memcpy(&count, at + 16, sizeof(count));
   std::memcpy(&cloud.sigma_per_m2, at + 24, sizeof(cloud.sigma_per_m2));
+  std::uint32_t with_normals = 0;
+  std::memcpy(&with_normals, at + 28, sizeof(with_normals));
+  if (with_normals > 1) throw std::runtime_error(file.string() + ": normals flag " + std::to_string(with_normals));
   if (!(cloud.sigma_per_m2 >= 0.f) || !std::isfinite(cloud.sigma_per_m2)) {
     throw std::runtime_error(file.string() + ": sigma_per_m2 " + std::to_string(cloud.sigma_per_m2) +
                              " is not a finite number >= 0");
   }
-  if (bytes.size() != kHeader + count * 3 * sizeof(float)) {
+  const std::size_t expected = kHeader + count * 3 * sizeof(float) * (with_normals ? 2 : 1);
+  if (bytes.size() != expected) {
     throw std::runtime_error(file.string() + ": " + std::to_string(bytes.size()) + " bytes, expected " +
-                             std::to_string(kHeader + count * 3 * sizeof(float)) + " for " + std::to_string(count) +
-                             " points");
+                             std::to_string(expected) + " for " + std::to_string(count) + " points");
   }
   cloud.points_c.resize(count);
   const char* points = bytes.data() + kHeader;
@@ -180,6 +198,15 @@ KeyframeCloud read_cloud(const std::filesystem::path& file, std::uint64_t& id) {
     float xyz[3];
     std::memcpy(xyz, points + i * sizeof(xyz), sizeof(xyz));
     cloud.points_c[i] = {xyz[0], xyz[1], xyz[2]};
+  }
+  if (with_normals) {
+    cloud.normals_c.resize(count);
+    const char* normals = points + count * 3 * sizeof(float);
+    for (std::uint64_t i = 0; i < count; ++i) {
+      float xyz[3];
+      std::memcpy(xyz, normals + i * sizeof(xyz), sizeof(xyz));
+      cloud.normals_c[i] = {xyz[0], xyz[1], xyz[2]};
+    }
   }
   return cloud;
 }

@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace heslam {
@@ -87,8 +88,8 @@ VoxelMap::VoxelState VoxelMap::state(const Cell& c) const {
       return VoxelState::kOccupied;
     }
     // Free: the band's averaged distance is in front by more than half the truncation.
-    if (c.value >= 0.5 * options_.tsdf_truncation_m) return VoxelState::kFree;
-    return VoxelState::kUnknown;
+    if (c.value >= 0.5 * options_.tsdf_truncation_m && c.weight >= options_.tsdf_min_weight) return VoxelState::kFree;
+    return std::abs(c.value) < 0.5 * options_.tsdf_truncation_m ? VoxelState::kNear : VoxelState::kUnknown;
   }
   if (c.value > options_.occupied_log_odds) return VoxelState::kOccupied;
   if (c.value < -options_.occupied_log_odds) return VoxelState::kFree;
@@ -154,13 +155,17 @@ void VoxelMap::traverse(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
 }
 
 std::size_t VoxelMap::integrate(const Eigen::Vector3d& origin, std::span<const Eigen::Vector3f> points,
-                                std::span<const float> sigmas_m) {
+                                std::span<const float> sigmas_m, std::span<const Eigen::Vector3f> normals) {
   if (!origin.allFinite()) return 0;
   if (!sigmas_m.empty() && sigmas_m.size() != points.size()) {
     throw std::invalid_argument("voxel map: integrate got " + std::to_string(sigmas_m.size()) + " sigmas for " +
                                 std::to_string(points.size()) + " points");
   }
-  if (options_.model == FusionModel::kTsdf) return integrate_tsdf(origin, points, sigmas_m);
+  if (!normals.empty() && normals.size() != points.size()) {
+    throw std::invalid_argument("voxel map: integrate got " + std::to_string(normals.size()) + " normals for " +
+                                std::to_string(points.size()) + " points");
+  }
+  if (options_.model == FusionModel::kTsdf) return integrate_tsdf(origin, points, sigmas_m, normals);
   std::vector<std::uint64_t> hits;
   std::vector<std::uint64_t> misses;
   hits.reserve(points.size());
@@ -200,7 +205,7 @@ std::size_t VoxelMap::integrate(const Eigen::Vector3d& origin, std::span<const E
 }
 
 std::size_t VoxelMap::integrate_tsdf(const Eigen::Vector3d& origin, std::span<const Eigen::Vector3f> points,
-                                     std::span<const float> sigmas_m) {
+                                     std::span<const float> sigmas_m, std::span<const Eigen::Vector3f> normals) {
   const double r = options_.resolution_m;
   const float truncation = static_cast<float>(options_.tsdf_truncation_m);
   // Per image: the voxels in some point's band (their weighted distances summed), and the voxels
@@ -226,12 +231,19 @@ std::size_t VoxelMap::integrate_tsdf(const Eigen::Vector3d& origin, std::span<co
     const float w = static_cast<float>(sigma > r ? (r / sigma) * (r / sigma) : 1.0);
     const bool hit = sigma <= options_.hit_max_sigma_m;
     const Eigen::Vector3d end = origin + direction * (length + (hit ? band : 0.0));
+    const Eigen::Vector3d normal =
+        normals.empty() ? Eigen::Vector3d(Eigen::Vector3d::Zero()) : Eigen::Vector3d(normals[i].cast<double>());
+    const bool planar = normal.squaredNorm() > 0.5;
     walk(r, origin, end, [&](int x, int y, int z) {
       const Eigen::Vector3d centre((x + 0.5) * r, (y + 0.5) * r, (z + 0.5) * r);
-      const double distance = length - (centre - origin).dot(direction);  // > 0: in front of the point
+      const double along = length - (centre - origin).dot(direction);  // > 0: in front of the point
+      // The distance to the point's plane where its normal is known (towards the camera: > 0 in front).
+      const double distance = planar ? (centre - point).dot(normal) : along;
       const std::uint64_t k = key({x, y, z});
-      if (distance > band) {
+      if (along > band && distance > band) {
         crossed.push_back(k);
+      } else if (along > band) {
+        return true;  // near the point's plane but far along the ray: a grazing ray; no evidence
       } else if (hit) {
         const float d = std::clamp(static_cast<float>(distance), -truncation, truncation);
         near.push_back({k, d * w, w});
@@ -273,8 +285,9 @@ void VoxelMap::for_each(const std::function<void(const VoxelIndex&, float)>& vis
 }
 
 std::size_t VoxelMap::memory_bytes() const {
-  // A node: next pointer, key, value (+ cached hash in libstdc++ only for non-fast hashes); a bucket pointer.
-  return cells_.size() * (sizeof(void*) + sizeof(std::uint64_t) + sizeof(Cell)) +
+  // A node: next pointer, key and cell padded as a pair (+ cached hash in libstdc++ only for non-fast
+  // hashes); a bucket pointer.
+  return cells_.size() * (sizeof(void*) + sizeof(std::pair<const std::uint64_t, Cell>)) +
          cells_.bucket_count() * sizeof(void*);
 }
 

@@ -85,8 +85,9 @@ class VoxelMap {
   // (a voxel both crossed and hit counts as hit only: OctoMap's computeUpdate). Non-finite points and
   // points beyond max_ray_m are skipped; returns how many points were used. `sigmas_m`: each point's
   // depth sigma along its ray (empty: exact points; see hit_max_sigma_m).
+  // `normals`: each point's surface normal (zero: unknown; empty: none), used by kTsdf only.
   std::size_t integrate(const Eigen::Vector3d& origin, std::span<const Eigen::Vector3f> points,
-                        std::span<const float> sigmas_m = {});
+                        std::span<const float> sigmas_m = {}, std::span<const Eigen::Vector3f> normals = {});
 
   // The voxels a segment from a to b crosses, in order, both ends' voxels included (Amanatides-Woo).
   // `visit` returns false to stop early.
@@ -103,7 +104,9 @@ class VoxelMap {
   bool occupied(const VoxelIndex& v) const { return state(cell(v)) == VoxelState::kOccupied; }
   bool free(const VoxelIndex& v) const { return state(cell(v)) == VoxelState::kFree; }
 
-  enum class VoxelState : std::uint8_t { kUnknown, kFree, kOccupied };
+  // kNear (kTsdf only): observed near a surface, not confirmed occupied; a grid column holding one is
+  // never called free.
+  enum class VoxelState : std::uint8_t { kUnknown, kFree, kOccupied, kNear };
   // Every observed voxel and its state (unordered).
   void for_each_state(const std::function<void(const VoxelIndex&, VoxelState)>& visit) const;
 
@@ -127,7 +130,7 @@ class VoxelMap {
   Cell cell(const VoxelIndex& v) const;
   VoxelState state(const Cell& c) const;
   std::size_t integrate_tsdf(const Eigen::Vector3d& origin, std::span<const Eigen::Vector3f> points,
-                             std::span<const float> sigmas_m);
+                             std::span<const float> sigmas_m, std::span<const Eigen::Vector3f> normals);
 
   VoxelMapOptions options_;
   std::unordered_map<std::uint64_t, Cell> cells_;
