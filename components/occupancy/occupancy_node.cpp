@@ -343,7 +343,11 @@ void OccupancyNode::make_cloud(const Job& job) {
     rectifier->rectify(job.frame.left, job.frame.right, left, right);
     // HE as the frontend applies it (one mapping for the pair), so SGBM matches what ORB saw.
     equalizer_->equalize(left, right, left, right);
-    cloud.points_c = stereo_->cloud(left, right);
+    // Normals only for the TSDF (its distance to the point's plane); sigma for both fusion models.
+    const bool normals = options_.map.voxels.model == FusionModel::kTsdf;
+    stereo_->cloud_from_disparity(stereo_->disparity(left, right), cloud.points_c,
+                                  normals ? &cloud.normals_c : nullptr);
+    cloud.sigma_per_m2 = stereo_->sigma_per_m2();
   }
   // Persisted before it is counted: a process whose status shows N clouds has N clouds on disk.
   if (!options_.state_dir.empty()) write_cloud(cloud_file(options_.state_dir, job.keyframe_id), job.keyframe_id, cloud);

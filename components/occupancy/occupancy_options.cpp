@@ -21,9 +21,25 @@ OccupancyProcessOptions OccupancyProcessOptions::from_config(const runtime::Conf
   s.max_depth_m = config.get_double("stereo.max_depth_m", s.max_depth_m, 0.01, 1000.0);
   s.pixel_step = config.get_int("stereo.pixel_step", s.pixel_step, 1, 64);
   s.thin_voxel_m = config.get_double("stereo.thin_voxel_m", s.thin_voxel_m, 0.0, 10.0);
+  s.disp12_max_diff = config.get_int("stereo.disp12_max_diff", s.disp12_max_diff, -1, 64);
+  s.edge_radius_px = config.get_int("stereo.edge_radius_px", s.edge_radius_px, 0, 16);
+  s.edge_step_px = config.get_double("stereo.edge_step_px", s.edge_step_px, 0.01, 64.0);
+  s.smooth_radius_px = config.get_int("stereo.smooth_radius_px", s.smooth_radius_px, 0, 16);
+  s.disparity_sigma_px = config.get_double("stereo.disparity_sigma_px", s.disparity_sigma_px, 0.0, 16.0);
   s.check(config.source() + ": stereo");
   VoxelMapOptions& v = o.map.voxels;
   v.resolution_m = config.get_double("voxel.resolution_m", v.resolution_m, 0.005, 10.0);
+  v.model = parse_fusion_model(config.get_choice("voxel.model", to_string(v.model), {"log_odds", "tsdf"}));
+  v.free_margin_m = config.get_double("voxel.free_margin_m", v.free_margin_m, 0.0, 10.0);
+  v.hit_max_sigma_m = config.get_double("voxel.hit_max_sigma_m", v.hit_max_sigma_m, 0.0, 100.0);
+  v.free_sigmas = config.get_double("voxel.free_sigmas", v.free_sigmas, 0.0, 100.0);
+  v.tsdf_truncation_m = config.get_double("voxel.tsdf_truncation_m", v.tsdf_truncation_m, 0.001, 10.0);
+  v.tsdf_occupied_m = config.get_double("voxel.tsdf_occupied_m", v.tsdf_occupied_m, 0.001, 10.0);
+  v.tsdf_min_weight = config.get_double("voxel.tsdf_min_weight", v.tsdf_min_weight, 0.001, 1e6);
+  v.tsdf_free_ratio = config.get_double("voxel.tsdf_free_ratio", v.tsdf_free_ratio, 0.001, 1e6);
+  if (!(v.tsdf_occupied_m < v.tsdf_truncation_m)) {
+    throw std::runtime_error(config.source() + ": voxel.tsdf_occupied_m must be below voxel.tsdf_truncation_m");
+  }
   o.map.band.min_m = config.get_double("grid.band_min_m", o.map.band.min_m, -1000.0, 1000.0);
   o.map.band.max_m = config.get_double("grid.band_max_m", o.map.band.max_m, -1000.0, 1000.0);
   if (!(o.map.band.min_m < o.map.band.max_m)) {

@@ -180,7 +180,7 @@ TEST(OccupancyMap, KeyframeCloudMovesWithItsKeyframe) {
   options.up = UpAxis::kZ;
   options.band = {-0.3, 0.3};
   OccupancyMap map(options);
-  map.add_cloud(7, KeyframeCloud{100, wall_points(1.02)});
+  map.add_cloud(7, KeyframeCloud{100, wall_points(1.02), 0.f, {}});
   EXPECT_EQ(map.fused(), 0u);  // no pose yet
   Pose3 T_wc = Pose3::Identity();
   T_wc.translation() = Eigen::Vector3d(0.025, 0.025, 0.025);
@@ -203,7 +203,7 @@ TEST(OccupancyMap, KeyframeCloudMovesWithItsKeyframe) {
   map.cull(7);
   map.rebuild_if_stale();
   EXPECT_EQ(map.grid().count(CellState::kOccupied), 0u);
-  map.add_cloud(7, KeyframeCloud{100, wall_points(1.02)});
+  map.add_cloud(7, KeyframeCloud{100, wall_points(1.02), 0.f, {}});
   EXPECT_FALSE(map.has_cloud(7));
 }
 
@@ -214,7 +214,7 @@ TEST(OccupancyMap, MinusYUpGridIsTheCamerasGroundPlane) {
   for (double x = -0.49; x < 0.5; x += 0.02) {
     for (double y = -0.29; y < 0.3; y += 0.02) points.emplace_back(x, y, 1.02);
   }
-  map.add_cloud(1, KeyframeCloud{0, points});
+  map.add_cloud(1, KeyframeCloud{0, points, 0.f, {}});
   map.set_pose(1, Pose3::Identity());
   map.fuse_pending();
   const OccupancyGrid grid = map.grid();
@@ -233,7 +233,7 @@ TEST(OccupancyMap, RebuildIsIndependentOfArrivalOrder) {
       Pose3 T = Pose3::Identity();
       T.translation() = Eigen::Vector3d(0.1 * id, 0.03 * id, 0.0);
       map.set_pose(id, T);
-      map.add_cloud(id, KeyframeCloud{0, wall_points(1.0 + 0.01 * id)});
+      map.add_cloud(id, KeyframeCloud{0, wall_points(1.0 + 0.01 * id), 0.f, {}});
       map.fuse_pending();
     }
     map.rebuild();
@@ -242,9 +242,44 @@ TEST(OccupancyMap, RebuildIsIndependentOfArrivalOrder) {
   EXPECT_EQ(build(false), build(true));
 }
 
+// Stereo-like noise: ten images of the wall at x = 1.02, each placed 6 cm (more than a cell) in front of or
+// behind it in turn, with the wall's normal. A hit per point makes a fringe two cells thick and never
+// hits the wall's own voxel (log-odds below); the TSDF averages the distances and finds the wall's voxel
+// only, and no column of the wall or the fringe is called free.
+TEST(OccupancyGrid, TsdfAveragesNoisyDepthToTheWallWhereHitsMakeAFringe) {
+  auto fuse = [](FusionModel model) {
+    VoxelMapOptions options;
+    options.model = model;
+    options.tsdf_truncation_m = 0.15;
+    options.tsdf_occupied_m = 0.03;
+    options.tsdf_min_weight = 0.5;
+    VoxelMap map(options);
+    for (int k = 0; k < 10; ++k) {
+      const std::vector<Eigen::Vector3f> points = wall_points(k % 2 == 0 ? 0.96 : 1.08);
+      const std::vector<float> sigmas(points.size(), 0.03f);
+      const std::vector<Eigen::Vector3f> normals(points.size(), Eigen::Vector3f(-1.f, 0.f, 0.f));
+      EXPECT_EQ(map.integrate({0.025, 0.025, 0.025}, points, sigmas, normals), points.size());
+    }
+    return OccupancyGrid::from_voxels(map, GridBand{-0.3, 0.3});
+  };
+  const OccupancyGrid tsdf = fuse(FusionModel::kTsdf);
+  const OccupancyGrid hits = fuse(FusionModel::kLogOdds);
+  for (int j = -20; j < 20; ++j) {
+    EXPECT_EQ(tsdf.at(20, j), CellState::kOccupied) << j;  // x in [1.0, 1.05): the wall
+    if (j == -20 || j == 19) continue;                     // the wall's ends (y = +-1): fewer points to average
+    for (const int i : {18, 19, 21}) EXPECT_EQ(tsdf.at(i, j), CellState::kUnknown) << i << " " << j;
+    EXPECT_EQ(hits.at(19, j), CellState::kOccupied) << j;  // the fringe, and the wall's voxel never hit
+    EXPECT_EQ(hits.at(21, j), CellState::kOccupied) << j;
+    EXPECT_EQ(hits.at(20, j), CellState::kUnknown) << j;
+  }
+  for (int i = 2; i < 15; ++i) EXPECT_EQ(tsdf.at(i, 0), CellState::kFree) << i;
+}
+
 TEST(OccupancyMap, CloudFilesRoundTripAndRefuseTruncation) {
   const auto dir = temp_dir("cloud");
-  const KeyframeCloud cloud{123456789, wall_points(1.5)};
+  KeyframeCloud cloud{123456789, wall_points(1.5), 0.002f, {}};
+  cloud.normals_c.assign(cloud.points_c.size(), Eigen::Vector3f(-1.f, 0.f, 0.f));
+  cloud.normals_c[17] = Eigen::Vector3f::Zero();
   write_cloud(dir / "kf.cloud", 42, cloud);
   std::uint64_t id = 0;
   const KeyframeCloud back = read_cloud(dir / "kf.cloud", id);
@@ -252,6 +287,8 @@ TEST(OccupancyMap, CloudFilesRoundTripAndRefuseTruncation) {
   EXPECT_EQ(back.stamp_ns, cloud.stamp_ns);
   ASSERT_EQ(back.points_c.size(), cloud.points_c.size());
   EXPECT_EQ(back.points_c[17], cloud.points_c[17]);
+  EXPECT_EQ(back.sigma_per_m2, cloud.sigma_per_m2);
+  EXPECT_EQ(back.normals_c, cloud.normals_c);
   std::filesystem::resize_file(dir / "kf.cloud", std::filesystem::file_size(dir / "kf.cloud") - 5);
   EXPECT_THROW(read_cloud(dir / "kf.cloud", id), std::runtime_error);
   std::filesystem::remove_all(dir);

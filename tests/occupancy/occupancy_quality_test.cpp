@@ -3,6 +3,7 @@
 // and the truth's convention alone), then the dense stereo of the rendered pair (SGBM's noise added),
 // both at the ground-truth poses (no SLAM pose error). The full pipeline (poses from SLAM) is scored
 // by heslam-occupancy-compare in docs/occupancy.md.
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -37,6 +38,10 @@ struct Room {
   OccupancyGrid seen;            // the part of the truth the keyframes see within max_depth_m
   double disparity_cpu_s = 0.0;  // SGBM's process CPU time over the keyframes (printed, never asserted)
 };
+
+// The seen truth: what the left camera sees within 5 m (the shipped stereo.max_depth_m when it was made),
+// fixed whatever the matcher's settings so that no setting narrows the truth it is scored on.
+constexpr double kSeenMaxDepthM = 5.0;
 
 double cpu_s() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
@@ -79,7 +84,7 @@ Room render_room(DepthSource source, int stride, const DenseStereoOptions& stere
     room.keyframes.push_back(std::move(keyframe));
   }
   room.truth = synth::occupancy_truth(renderer.scene(), renderer.T_wc_left(0), resolution_m, band);
-  room.seen = synth::occupancy_truth_seen(renderer, stride, stereo_options.max_depth_m, resolution_m, band);
+  room.seen = synth::occupancy_truth_seen(renderer, stride, kSeenMaxDepthM, resolution_m, band);
   return room;
 }
 
@@ -87,13 +92,15 @@ Room render_room(DepthSource source, int stride, const DenseStereoOptions& stere
 std::pair<GridAgreement, GridAgreement> fuse_room(const Room& room, const DenseStereoOptions& stereo_options,
                                                   const OccupancyMapOptions& map_options, const std::string& label) {
   const DenseStereo stereo(room.camera, stereo_options);
+  const bool use_normals = map_options.voxels.model == FusionModel::kTsdf;
   OccupancyMap map(map_options);
   std::uint64_t id = 0;
   double cloud_cpu_s = 0.0, fusion_cpu_s = 0.0;
   for (const Keyframe& keyframe : room.keyframes) {
     map.set_pose(id, keyframe.T_c0c);
     const double start = cpu_s();
-    KeyframeCloud cloud{0, stereo.cloud_from_disparity(keyframe.disparity)};
+    KeyframeCloud cloud{0, {}, stereo.sigma_per_m2(), {}};
+    stereo.cloud_from_disparity(keyframe.disparity, cloud.points_c, use_normals ? &cloud.normals_c : nullptr);
     const double fusion_start = cpu_s();
     map.add_cloud(id, std::move(cloud));
     map.fuse_pending();
@@ -106,6 +113,22 @@ std::pair<GridAgreement, GridAgreement> fuse_room(const Room& room, const DenseS
               1e3 * room.disparity_cpu_s / n, 1e3 * cloud_cpu_s / n, static_cast<double>(map.cloud_points()) / n,
               1e3 * fusion_cpu_s / n);
   const OccupancyGrid grid = map.grid();
+  if (std::getenv("D_DUMP")) {
+    int shown = 0;
+    for (const auto& [ij, state] : room.seen.cells()) {
+      if (state != CellState::kOccupied || grid.at(ij.first, ij.second) != CellState::kFree) continue;
+      if (++shown > 12) break;
+      std::printf("cell %d %d:", ij.first, ij.second);
+      const VoxelMap& vm = map.voxels();
+      for (int k = -14; k <= 6; ++k) {
+        const VoxelIndex v{ij.first, ij.second, k};
+        if (!vm.observed(v)) continue;
+        std::printf(" [%d %.3f w%.2f c%.0f %c]", k, vm.sdf(v), vm.weight(v), vm.crossed(v),
+                    vm.occupied(v) ? 'O' : (vm.free(v) ? 'F' : 'U'));
+      }
+      std::printf("\n");
+    }
+  }
   const GridAgreement a = compare(grid, room.truth);
   const GridAgreement b = compare(grid, room.seen);
   if (const char* dir = std::getenv("HESLAM_OCCUPANCY_DIAG_DIR")) {
@@ -149,6 +172,168 @@ TEST(OccupancyQuality, RoomFromStereoAtTruePoses) {
   const GridAgreement seen = fuse_room(room, {}, map_options, "room_sgbm").second;
   EXPECT_GE(seen.occupied_iou, 0.28);
   EXPECT_GE(seen.both_occupied, 2400u);
+}
+
+// The TSDF settings measured best on this room (docs/occupancy.md, Quality).
+OccupancyMapOptions tsdf_map_options() {
+  OccupancyMapOptions m;
+  m.voxels.model = FusionModel::kTsdf;
+  m.voxels.hit_max_sigma_m = 0.15;
+  m.voxels.tsdf_truncation_m = 0.2;
+  m.voxels.tsdf_occupied_m = 0.04;
+  m.voxels.tsdf_min_weight = 0.5;
+  return m;
+}
+
+DenseStereoOptions tsdf_stereo_options() {
+  DenseStereoOptions o;
+  o.edge_radius_px = 2;
+  o.disparity_sigma_px = 0.3;
+  return o;
+}
+
+// The TSDF with exact depth (and the normals of the thinning cubes): seen-truth IoU 0.83, 9 seen cells
+// free where the log-odds hits leave 51; the box tops seen at grazing angles are found.
+TEST(OccupancyQuality, RoomTsdfFromTrueDepthAtTruePoses) {
+  OccupancyMapOptions m = tsdf_map_options();
+  m.voxels.tsdf_truncation_m = 0.15;
+  m.voxels.tsdf_occupied_m = 0.03;
+  m.voxels.tsdf_min_weight = 1.0;
+  const Room room = render_room(DepthSource::kTruth, kStride, {}, m.band, m.voxels.resolution_m);
+  const GridAgreement seen = fuse_room(room, {}, m, "room_tsdf_truth_depth").second;
+  EXPECT_GE(seen.occupied_iou, 0.82);
+  EXPECT_LE(seen.free_in_truth_occupied, 12u);
+}
+
+// The TSDF with SGBM (edge filter, sigma 0.3 px) at true poses: seen-truth IoU 0.374 where the log-odds
+// hits give 0.302: the fringe in front of and behind the walls averages out (3734 grid cells, 7999 with
+// hits), but far walls (sigma above 0.15 m beyond ~4 m) are only free space, and 263 seen wall cells
+// are free. Not the target (0.85); a floor against getting worse.
+TEST(OccupancyQuality, RoomTsdfFromStereoAtTruePoses) {
+  const OccupancyMapOptions m = tsdf_map_options();
+  const DenseStereoOptions o = tsdf_stereo_options();
+  const Room room = render_room(DepthSource::kStereo, kStride, o, m.band, m.voxels.resolution_m);
+  const GridAgreement seen = fuse_room(room, o, m, "room_tsdf_sgbm").second;
+  EXPECT_GE(seen.occupied_iou, 0.36);
+  EXPECT_LE(seen.grid_occupied, 4500u);
+  EXPECT_LE(seen.free_in_truth_occupied, 300u);
+}
+
+double env_or(const char* name, double value) {
+  const char* e = std::getenv(name);
+  return e ? std::atof(e) : value;
+}
+
+// A tuning harness (disabled; --gtest_also_run_disabled_tests): the SGBM room fused with the settings
+// of the environment (D_TSDF=1, D_SIGMA px, D_HITSIG m, D_EDGE_R px, D_TRUNC m, D_TOCC m, D_TMINW, ...;
+// D_TRUTH=1: true depth; D_DUMP=1: the voxels of truth-occupied cells the grid calls free).
+TEST(OccupancyQuality, DISABLED_TuneFusion) {
+  OccupancyMapOptions m;
+  DenseStereoOptions o;
+  if (env_or("D_BEST", 0)) {
+    m = tsdf_map_options();
+    o = tsdf_stereo_options();
+  }
+  o.uniqueness_ratio = static_cast<int>(env_or("D_UNIQ", o.uniqueness_ratio));
+  o.disp12_max_diff = static_cast<int>(env_or("D_LR", o.disp12_max_diff));
+  o.edge_radius_px = static_cast<int>(env_or("D_EDGE_R", o.edge_radius_px));
+  o.edge_step_px = env_or("D_EDGE_STEP", o.edge_step_px);
+  o.smooth_radius_px = static_cast<int>(env_or("D_SMOOTH", o.smooth_radius_px));
+  o.disparity_sigma_px = env_or("D_SIGMA", o.disparity_sigma_px);
+  o.max_depth_m = env_or("D_MAXD", o.max_depth_m);
+  m.voxels.free_margin_m = env_or("D_MARGIN", m.voxels.free_margin_m);
+  m.voxels.hit_max_sigma_m = env_or("D_HITSIG", m.voxels.hit_max_sigma_m);
+  m.voxels.free_sigmas = env_or("D_FREESIG", m.voxels.free_sigmas);
+  m.voxels.occupied_log_odds = static_cast<float>(env_or("D_OCC", m.voxels.occupied_log_odds));
+  if (env_or("D_TSDF", 0)) m.voxels.model = FusionModel::kTsdf;
+  m.voxels.tsdf_truncation_m = env_or("D_TRUNC", m.voxels.tsdf_truncation_m);
+  m.voxels.tsdf_occupied_m = env_or("D_TOCC", m.voxels.tsdf_occupied_m);
+  m.voxels.tsdf_min_weight = env_or("D_TMINW", m.voxels.tsdf_min_weight);
+  m.voxels.tsdf_free_ratio = env_or("D_TFREE", m.voxels.tsdf_free_ratio);
+  const int stride = static_cast<int>(env_or("D_STRIDE", kStride));
+  const Room room = render_room(env_or("D_TRUTH", 0) ? DepthSource::kTruth : DepthSource::kStereo, stride, o, m.band,
+                                m.voxels.resolution_m);
+  fuse_room(room, o, m, "diag");
+}
+
+// Where the SGBM depth goes wrong: its disparity against the renderer's (every 24th frame of the room,
+// ideal pinhole pairs), binned by true depth and by whether a depth step of more than 1 px is within 3 px
+// (an occlusion edge). Measured (docs/occupancy.md, Quality): off edges 10-15% of the pixels are more
+// than 0.5 px off, 4-7% more than 1 px, the rms of the rest ~0.3 px and biased ~-0.12 px (too far):
+// at 4 m, 0.3 px is 0.1 m, two cells; on edges a third is more than 1 px off.
+TEST(OccupancyQuality, RoomSgbmDisparityErrorAgainstTruth) {
+  synth::RenderOptions render;
+  render.apply_distortion = false;
+  synth::SequenceRenderer renderer(synth::load_preset(synth::find_preset("room")), render);
+  const synth::CameraSpec& spec = renderer.preset().camera;
+  PinholeStereo camera;
+  camera.fx_px = spec.fx_px;
+  camera.fy_px = spec.fy_px;
+  camera.cx_px = spec.cx_px;
+  camera.cy_px = spec.cy_px;
+  camera.baseline_m = spec.baseline_m;
+  camera.width_px = spec.width_px;
+  camera.height_px = spec.height_px;
+  const DenseStereo stereo(camera, DenseStereoOptions{});
+  // bins: depth 0-1,1-2,2-3,3-4,4-5,5+ ; edge/not
+  const double edges[] = {1, 2, 3, 4, 5, 1e9};
+  struct Bin {
+    long n = 0, valid = 0, e05 = 0, e1 = 0, e3 = 0, pos3 = 0;
+    double sum = 0, sum2 = 0;
+  };
+  Bin bins[2][6];
+  for (int index = 0; index < renderer.num_frames(); index += 24) {
+    cv::Mat radiance, depth;
+    renderer.render_radiance_left(index, radiance, &depth);
+    const synth::SynthFrame frame = renderer.render_frame(index);
+    const cv::Mat d = stereo.disparity(frame.left, frame.right);
+    for (int v = 3; v < depth.rows - 3; ++v) {
+      for (int u = 64; u < depth.cols - 3; ++u) {
+        const float z = depth.at<float>(v, u);
+        if (!(z > 0.f)) continue;
+        const double td = camera.bf() / z;
+        bool edge = false;
+        for (int dv = -3; dv <= 3 && !edge; ++dv)
+          for (int du = -3; du <= 3; ++du) {
+            const float z2 = depth.at<float>(v + dv, u + du);
+            if (!(z2 > 0.f) || std::abs(camera.bf() / z2 - td) > 1.0) {
+              edge = true;
+              break;
+            }
+          }
+        int b = 0;
+        while (z > edges[b]) ++b;
+        Bin& bin = bins[edge][b];
+        ++bin.n;
+        const float sd = d.at<float>(v, u);
+        if (!(sd > 0.f)) continue;
+        ++bin.valid;
+        const double err = sd - td;
+        bin.sum += err;
+        if (std::abs(err) < 1) bin.sum2 += err * err;
+        if (std::abs(err) > 0.5) ++bin.e05;
+        if (std::abs(err) > 1) ++bin.e1;
+        if (std::abs(err) > 3) {
+          ++bin.e3;
+          if (err > 0) ++bin.pos3;
+        }
+      }
+    }
+  }
+  for (int e = 0; e < 2; ++e)
+    for (int b = 0; b < 6; ++b) {
+      const Bin& x = bins[e][b];
+      if (!x.valid) continue;
+      std::printf(
+          "SGBM disparity, edge %d, true depth < %g m: n %ld valid %.3f |err|>0.5 %.3f >1 %.3f >3 %.3f (closer %.3f) "
+          "mean %.3f rms(<1) %.3f\n",
+          e, edges[b], x.n, double(x.valid) / x.n, double(x.e05) / x.valid, double(x.e1) / x.valid,
+          double(x.e3) / x.valid, double(x.pos3) / x.valid, x.sum / x.valid, std::sqrt(x.sum2 / (x.valid - x.e1)));
+      if (e == 0) {
+        EXPECT_LT(static_cast<double>(x.e1) / x.valid, 0.08) << edges[b];
+        EXPECT_LT(std::sqrt(x.sum2 / (x.valid - x.e1)), 0.35) << edges[b];
+      }
+    }
 }
 
 }  // namespace

@@ -4,10 +4,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
+#include <Eigen/Eigenvalues>
 #include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
 
 namespace heslam {
 namespace {
@@ -21,6 +24,10 @@ constexpr double kDisparityScale = 16.0;
 constexpr int kCubeBits = 21;
 constexpr double kCubeOffset = static_cast<double>(1 << (kCubeBits - 1));
 constexpr std::uint64_t kCubeMask = (std::uint64_t{1} << kCubeBits) - 1;
+// A cube's normal: from at least this many points, and only when flat (smallest spread below this
+// fraction of the middle one).
+constexpr std::size_t kMinNormalPoints = 6;
+constexpr double kMaxFlatness = 0.2;
 
 [[noreturn]] void fail(const std::string& source, const std::string& field, const std::string& expected) {
   throw std::runtime_error(source + ": " + field + " must be " + expected);
@@ -36,6 +43,10 @@ void DenseStereoOptions::check(const std::string& source) const {
   }
   if (pixel_step < 1) fail(source, "pixel_step", ">= 1");
   if (!(thin_voxel_m >= 0.0) || !std::isfinite(thin_voxel_m)) fail(source, "thin_voxel_m", ">= 0");
+  if (edge_radius_px < 0 || edge_radius_px > 16) fail(source, "edge_radius_px", "0..16");
+  if (smooth_radius_px < 0 || smooth_radius_px > 16) fail(source, "smooth_radius_px", "0..16");
+  if (!(edge_step_px > 0.0) || !std::isfinite(edge_step_px)) fail(source, "edge_step_px", "> 0");
+  if (!(disparity_sigma_px >= 0.0) || !std::isfinite(disparity_sigma_px)) fail(source, "disparity_sigma_px", ">= 0");
   if (uniqueness_ratio < 0 || speckle_window < 0 || speckle_range < 0) {
     fail(source, "uniqueness_ratio / speckle_window / speckle_range", ">= 0");
   }
@@ -60,24 +71,67 @@ cv::Mat DenseStereo::disparity(const cv::Mat& left, const cv::Mat& right) const 
     }
   }
   const int area = options_.block_size * options_.block_size;
-  cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
-      0, options_.num_disparities, options_.block_size, kP1PerPixel * area, kP2PerPixel * area, 1, 0,
-      options_.uniqueness_ratio, options_.speckle_window, options_.speckle_range, cv::StereoSGBM::MODE_SGBM);
+  cv::Ptr<cv::StereoSGBM> sgbm =
+      cv::StereoSGBM::create(0, options_.num_disparities, options_.block_size, kP1PerPixel * area, kP2PerPixel * area,
+                             options_.disp12_max_diff, 0, options_.uniqueness_ratio, options_.speckle_window,
+                             options_.speckle_range, cv::StereoSGBM::MODE_SGBM);
   cv::Mat fixed;
   sgbm->compute(left, right, fixed);
   cv::Mat out;
   fixed.convertTo(out, CV_32F, 1.0 / kDisparityScale);
+  if (options_.edge_radius_px > 0) {
+    // The largest and smallest valid disparity around each pixel (invalid pixels count for neither).
+    const int side = 2 * options_.edge_radius_px + 1;
+    const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(side, side));
+    const cv::Mat invalid = out <= 0.f;
+    cv::Mat high, low = out.clone();
+    low.setTo(std::numeric_limits<float>::max(), invalid);
+    cv::dilate(out, high, kernel);
+    cv::erode(low, low, kernel);
+    const float step = static_cast<float>(options_.edge_step_px);
+    for (int v = 0; v < out.rows; ++v) {
+      float* row = out.ptr<float>(v);
+      const float* h = high.ptr<float>(v);
+      const float* l = low.ptr<float>(v);
+      for (int u = 0; u < out.cols; ++u) {
+        if (row[u] > 0.f && (h[u] - row[u] > step || row[u] - l[u] > step)) row[u] = -1.f;
+      }
+    }
+  }
+  if (options_.smooth_radius_px > 0) {
+    const int side = 2 * options_.smooth_radius_px + 1;
+    cv::Mat valid, sum, count;
+    cv::threshold(out, valid, 0.0, 1.0, cv::THRESH_BINARY);  // 1 where kept, 0 elsewhere
+    cv::boxFilter(out.mul(valid), sum, CV_32F, cv::Size(side, side), cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
+    cv::boxFilter(valid, count, CV_32F, cv::Size(side, side), cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
+    for (int v = 0; v < out.rows; ++v) {
+      float* row = out.ptr<float>(v);
+      const float* s = sum.ptr<float>(v);
+      const float* c = count.ptr<float>(v);
+      for (int u = 0; u < out.cols; ++u) {
+        if (row[u] > 0.f) row[u] = s[u] / c[u];
+      }
+    }
+  }
   return out;
 }
 
 std::vector<Eigen::Vector3f> DenseStereo::cloud_from_disparity(const cv::Mat& disparity) const {
+  std::vector<Eigen::Vector3f> points;
+  cloud_from_disparity(disparity, points, nullptr);
+  return points;
+}
+
+void DenseStereo::cloud_from_disparity(const cv::Mat& disparity, std::vector<Eigen::Vector3f>& points,
+                                       std::vector<Eigen::Vector3f>* normals) const {
+  points.clear();
+  if (normals) normals->clear();
   const double bf = camera_.bf();
   const int step = options_.pixel_step;
   const double r = options_.thin_voxel_m;
   // Thinning: the points keyed by their lattice cube (x, y, z packed most significant first, so the
   // key order is the cubes' lexicographic order and the output order is fixed), sorted, one mean per cube.
   std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> keyed;
-  std::vector<Eigen::Vector3f> points;
   auto axis = [](double value) { return static_cast<std::uint64_t>(std::floor(value) + kCubeOffset) & kCubeMask; };
   // The left num_disparities columns: their match may lie left of the right image, where SGBM
   // still answers with a smaller (wrong) disparity, i.e. a point too far.
@@ -92,21 +146,41 @@ std::vector<Eigen::Vector3f> DenseStereo::cloud_from_disparity(const cv::Mat& di
       const Eigen::Vector3d p = camera_.unproject(u, v, z);
       if (r <= 0.0) {
         points.push_back(p.cast<float>());
+        if (normals) normals->push_back(Eigen::Vector3f::Zero());
         continue;
       }
       keyed.emplace_back((axis(p.x() / r) << (2 * kCubeBits)) | (axis(p.y() / r) << kCubeBits) | axis(p.z() / r), p);
     }
   }
-  if (r <= 0.0) return points;
+  if (r <= 0.0) return;
   std::stable_sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   for (std::size_t begin = 0; begin < keyed.size();) {
     std::size_t end = begin;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (; end < keyed.size() && keyed[end].first == keyed[begin].first; ++end) sum += keyed[end].second;
-    points.push_back((sum / static_cast<double>(end - begin)).cast<float>());
+    const std::size_t n = end - begin;
+    const Eigen::Vector3d mean = sum / static_cast<double>(n);
+    points.push_back(mean.cast<float>());
+    if (normals) {
+      Eigen::Vector3f normal = Eigen::Vector3f::Zero();
+      if (n >= kMinNormalPoints) {
+        Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+        for (std::size_t i = begin; i < end; ++i) {
+          const Eigen::Vector3d d = keyed[i].second - mean;
+          covariance += d * d.transpose();
+        }
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+        const Eigen::Vector3d values = eigen.eigenvalues();  // ascending
+        if (eigen.info() == Eigen::Success && values(0) < kMaxFlatness * values(1)) {
+          Eigen::Vector3d axis = eigen.eigenvectors().col(0);
+          if (axis.dot(mean) > 0.0) axis = -axis;  // towards the camera
+          normal = axis.cast<float>();
+        }
+      }
+      normals->push_back(normal);
+    }
     begin = end;
   }
-  return points;
 }
 
 std::vector<Eigen::Vector3f> DenseStereo::cloud(const cv::Mat& left, const cv::Mat& right) const {

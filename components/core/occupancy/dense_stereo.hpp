@@ -21,6 +21,21 @@ struct DenseStereoOptions {
   int uniqueness_ratio = 10;
   int speckle_window = 100;
   int speckle_range = 2;
+  // Left-right consistency: the largest difference (pixels) between the left-right and right-left
+  // matches; < 0 disables the check.
+  int disp12_max_diff = 1;
+  // Depth discontinuities: a pixel whose disparity differs by more than edge_step_px from one within
+  // edge_radius_px is dropped (block matching smears a near surface over its far neighbours there,
+  // and a point between the two lies on neither). 0 radius: kept.
+  int edge_radius_px = 0;
+  double edge_step_px = 1.0;
+  // Smoothing: each kept disparity replaced by the mean of the kept ones within smooth_radius_px (after
+  // the edge filter, so that with smooth_radius_px <= edge_radius_px no mean mixes two surfaces; on a
+  // plane the mean of a symmetric window is the centre's value, the noise shrinks). 0: none.
+  int smooth_radius_px = 0;
+  // The disparity's sigma (pixels) on good texture: a point's depth sigma is z^2 / bf * this (the
+  // fusion's hit / free rule, VoxelMapOptions::hit_max_sigma_m); 0: points taken as exact.
+  double disparity_sigma_px = 0.0;
   // Depth range kept: stereo depth error grows with depth squared (z^2 / bf per pixel of disparity).
   double min_depth_m = 0.3;
   double max_depth_m = 5.0;
@@ -48,8 +63,14 @@ class DenseStereo {
   std::vector<Eigen::Vector3f> cloud(const cv::Mat& left, const cv::Mat& right) const;
   // The points of a disparity image (as disparity() returns).
   std::vector<Eigen::Vector3f> cloud_from_disparity(const cv::Mat& disparity) const;
+  // The same points and, per point, the normal of its thinning cube's points (the covariance's
+  // smallest axis, towards the camera; zero where the cube has fewer than 6 points or is not flat).
+  void cloud_from_disparity(const cv::Mat& disparity, std::vector<Eigen::Vector3f>& points,
+                            std::vector<Eigen::Vector3f>* normals) const;
 
   const PinholeStereo& camera() const { return camera_; }
+  // disparity_sigma_px / bf (1/m): KeyframeCloud::sigma_per_m2 of this matcher's clouds.
+  float sigma_per_m2() const { return static_cast<float>(options_.disparity_sigma_px / camera_.bf()); }
 
  private:
   PinholeStereo camera_;

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <set>
 #include <vector>
 
 #include "runtime/atomic_file.hpp"
@@ -25,17 +26,23 @@ constexpr double kFreeThresh = 0.196;
 
 OccupancyGrid OccupancyGrid::from_voxels(const VoxelMap& voxels, const GridBand& band) {
   OccupancyGrid grid(voxels.options().resolution_m);
-  const float threshold = voxels.options().occupied_log_odds;
-  voxels.for_each([&](const VoxelIndex& v, float log_odds) {
+  std::set<std::pair<int, int>> near;  // columns with a voxel near a surface: never free
+  voxels.for_each_state([&](const VoxelIndex& v, VoxelMap::VoxelState state) {
     const double z = voxels.center_of(v).z();
     if (z < band.min_m || z > band.max_m) return;
     CellState& cell = grid.cells_[{v.x, v.y}];
-    if (log_odds > threshold) {
+    if (state == VoxelMap::VoxelState::kOccupied) {
       cell = CellState::kOccupied;
-    } else if (log_odds < -threshold && cell != CellState::kOccupied) {
+    } else if (state == VoxelMap::VoxelState::kFree && cell != CellState::kOccupied) {
       cell = CellState::kFree;
+    } else if (state == VoxelMap::VoxelState::kNear) {
+      near.insert({v.x, v.y});
     }
   });
+  for (const auto& column : near) {
+    CellState& cell = grid.cells_[column];
+    if (cell == CellState::kFree) cell = CellState::kUnknown;
+  }
   // Columns seen only as unknown (log-odds exactly at the threshold) are not kept.
   std::erase_if(grid.cells_, [](const auto& entry) { return entry.second == CellState::kUnknown; });
   return grid;

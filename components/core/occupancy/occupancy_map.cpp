@@ -13,7 +13,7 @@
 namespace heslam {
 namespace {
 
-constexpr char kCloudMagic[8] = {'H', 'E', 'S', 'O', 'C', 'C', '0', '1'};
+constexpr char kCloudMagic[8] = {'H', 'E', 'S', 'O', 'C', 'C', '0', '2'};
 
 Eigen::Matrix3d rotation_for(UpAxis up) {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
@@ -80,9 +80,19 @@ void OccupancyMap::fuse(std::uint64_t id, const KeyframeCloud& cloud, const Pose
   const Eigen::Matrix3f R = (R_gw_ * T_wc.rotation()).cast<float>();
   const Eigen::Vector3f t = (R_gw_ * T_wc.translation()).cast<float>();
   std::vector<Eigen::Vector3f> points_g;
+  std::vector<float> sigmas;
   points_g.reserve(cloud.points_c.size());
   for (const Eigen::Vector3f& p : cloud.points_c) points_g.push_back(R * p + t);
-  voxels_.integrate((R_gw_ * T_wc.translation()), points_g);
+  if (cloud.sigma_per_m2 > 0.f) {
+    sigmas.reserve(cloud.points_c.size());
+    for (const Eigen::Vector3f& p : cloud.points_c) sigmas.push_back(cloud.sigma_per_m2 * p.norm() * std::abs(p.z()));
+  }
+  std::vector<Eigen::Vector3f> normals_g;
+  if (cloud.normals_c.size() == cloud.points_c.size()) {
+    normals_g.reserve(cloud.normals_c.size());
+    for (const Eigen::Vector3f& n : cloud.normals_c) normals_g.push_back(R * n);
+  }
+  voxels_.integrate((R_gw_ * T_wc.translation()), points_g, sigmas, normals_g);
   fused_[id] = T_wc;
 }
 
@@ -136,10 +146,20 @@ void write_cloud(const std::filesystem::path& file, std::uint64_t id, const Keyf
   put(out, id);
   put(out, cloud.stamp_ns);
   put(out, static_cast<std::uint64_t>(cloud.points_c.size()));
+  put(out, cloud.sigma_per_m2);
+  const bool with_normals = !cloud.normals_c.empty() && cloud.normals_c.size() == cloud.points_c.size();
+  put(out, static_cast<std::uint32_t>(with_normals ? 1 : 0));
   for (const Eigen::Vector3f& p : cloud.points_c) {
     put(out, p.x());
     put(out, p.y());
     put(out, p.z());
+  }
+  if (with_normals) {
+    for (const Eigen::Vector3f& n : cloud.normals_c) {
+      put(out, n.x());
+      put(out, n.y());
+      put(out, n.z());
+    }
   }
   runtime::replace_file_contents(file, out, /*sync=*/false);
 }
@@ -148,9 +168,10 @@ KeyframeCloud read_cloud(const std::filesystem::path& file, std::uint64_t& id) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw std::runtime_error(file.string() + ": cannot open");
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  constexpr std::size_t kHeader = sizeof(kCloudMagic) + 3 * sizeof(std::uint64_t);
+  constexpr std::size_t kHeader =
+      sizeof(kCloudMagic) + 3 * sizeof(std::uint64_t) + sizeof(float) + sizeof(std::uint32_t);
   if (bytes.size() < kHeader || std::memcmp(bytes.data(), kCloudMagic, sizeof(kCloudMagic)) != 0) {
-    throw std::runtime_error(file.string() + ": not a heslam-occupancy keyframe cloud (magic HESOCC01)");
+    throw std::runtime_error(file.string() + ": not a heslam-occupancy keyframe cloud (magic HESOCC02)");
   }
   KeyframeCloud cloud;
   std::uint64_t count = 0;
@@ -158,10 +179,18 @@ KeyframeCloud read_cloud(const std::filesystem::path& file, std::uint64_t& id) {
   std::memcpy(&id, at, sizeof(id));
   std::memcpy(&cloud.stamp_ns, at + 8, sizeof(cloud.stamp_ns));
   std::memcpy(&count, at + 16, sizeof(count));
-  if (bytes.size() != kHeader + count * 3 * sizeof(float)) {
+  std::memcpy(&cloud.sigma_per_m2, at + 24, sizeof(cloud.sigma_per_m2));
+  std::uint32_t with_normals = 0;
+  std::memcpy(&with_normals, at + 28, sizeof(with_normals));
+  if (with_normals > 1) throw std::runtime_error(file.string() + ": normals flag " + std::to_string(with_normals));
+  if (!(cloud.sigma_per_m2 >= 0.f) || !std::isfinite(cloud.sigma_per_m2)) {
+    throw std::runtime_error(file.string() + ": sigma_per_m2 " + std::to_string(cloud.sigma_per_m2) +
+                             " is not a finite number >= 0");
+  }
+  const std::size_t expected = kHeader + count * 3 * sizeof(float) * (with_normals ? 2 : 1);
+  if (bytes.size() != expected) {
     throw std::runtime_error(file.string() + ": " + std::to_string(bytes.size()) + " bytes, expected " +
-                             std::to_string(kHeader + count * 3 * sizeof(float)) + " for " + std::to_string(count) +
-                             " points");
+                             std::to_string(expected) + " for " + std::to_string(count) + " points");
   }
   cloud.points_c.resize(count);
   const char* points = bytes.data() + kHeader;
@@ -169,6 +198,15 @@ KeyframeCloud read_cloud(const std::filesystem::path& file, std::uint64_t& id) {
     float xyz[3];
     std::memcpy(xyz, points + i * sizeof(xyz), sizeof(xyz));
     cloud.points_c[i] = {xyz[0], xyz[1], xyz[2]};
+  }
+  if (with_normals) {
+    cloud.normals_c.resize(count);
+    const char* normals = points + count * 3 * sizeof(float);
+    for (std::uint64_t i = 0; i < count; ++i) {
+      float xyz[3];
+      std::memcpy(xyz, normals + i * sizeof(xyz), sizeof(xyz));
+      cloud.normals_c[i] = {xyz[0], xyz[1], xyz[2]};
+    }
   }
   return cloud;
 }

@@ -44,6 +44,14 @@ struct OccupancyMapOptions {
 struct KeyframeCloud {
   std::int64_t stamp_ns = 0;
   std::vector<Eigen::Vector3f> points_c;  // keyframe camera frame, metres
+  // Stereo depth uncertainty: sigma_d / bf (1/m, sigma_d the disparity sigma in pixels), so that a point
+  // at depth z and range r has a sigma along its ray of r * z * this (z^2 / bf * sigma_d in depth).
+  // 0: exact points (true depth).
+  float sigma_per_m2 = 0.f;
+  // Per point, the surface normal (keyframe camera frame, towards the camera; zero: unknown), or empty.
+  // kTsdf fusion measures a voxel's distance to the point's plane instead of along the ray, so that a
+  // surface seen at a grazing angle is not pushed a few voxels off itself.
+  std::vector<Eigen::Vector3f> normals_c;
 };
 
 class OccupancyMap {
@@ -101,7 +109,8 @@ class OccupancyMap {
   bool stale_ = false;
 };
 
-// A keyframe cloud as a file (binary: magic, id, stamp, count, x y z float per point), replaced
+// A keyframe cloud as a file (binary: magic HESOCC02, id, stamp, count, sigma_per_m2 float, a
+// normals flag uint32, x y z float per point, then the normals' x y z when flagged), replaced
 // atomically; read back exactly. read_cloud throws std::runtime_error naming the file on a short or
 // foreign file.
 void write_cloud(const std::filesystem::path& file, std::uint64_t id, const KeyframeCloud& cloud);

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
+#include <utility>
 #include <vector>
 
 namespace heslam {
@@ -17,6 +19,14 @@ constexpr std::uint64_t kAxisMask = (std::uint64_t{1} << kAxisBits) - 1;
 
 }  // namespace
 
+FusionModel parse_fusion_model(const std::string& name) {
+  if (name == "log_odds") return FusionModel::kLogOdds;
+  if (name == "tsdf") return FusionModel::kTsdf;
+  throw std::invalid_argument("fusion model '" + name + "': expected log_odds or tsdf");
+}
+
+const char* to_string(FusionModel model) { return model == FusionModel::kTsdf ? "tsdf" : "log_odds"; }
+
 VoxelMap::VoxelMap(const VoxelMapOptions& options) : options_(options) {
   if (!(options.resolution_m > 0.0) || !std::isfinite(options.resolution_m)) {
     throw std::invalid_argument("voxel map: resolution_m must be a positive number");
@@ -24,6 +34,11 @@ VoxelMap::VoxelMap(const VoxelMapOptions& options) : options_(options) {
   if (!(options.hit_log_odds > 0.f) || !(options.miss_log_odds < 0.f) ||
       !(options.min_log_odds < options.max_log_odds)) {
     throw std::invalid_argument("voxel map: log-odds need hit > 0 > miss and min < max");
+  }
+  if (!(options.tsdf_truncation_m > 0.0) || !(options.tsdf_occupied_m > 0.0) ||
+      !(options.tsdf_occupied_m < options.tsdf_truncation_m) || !(options.tsdf_min_weight > 0.0) ||
+      !(options.tsdf_free_ratio > 0.0)) {
+    throw std::invalid_argument("voxel map: tsdf needs 0 < occupied_m < truncation_m, min_weight > 0, free_ratio > 0");
   }
 }
 
@@ -51,13 +66,38 @@ VoxelIndex VoxelMap::unkey(std::uint64_t key) {
 }
 
 void VoxelMap::update(std::uint64_t k, float delta) {
-  float& value = cells_[k];
+  float& value = cells_[k].value;
   value = std::clamp(value + delta, options_.min_log_odds, options_.max_log_odds);
 }
 
-float VoxelMap::log_odds(const VoxelIndex& v) const {
+VoxelMap::Cell VoxelMap::cell(const VoxelIndex& v) const {
   const auto found = cells_.find(key(v));
-  return found == cells_.end() ? 0.f : found->second;
+  return found == cells_.end() ? Cell{} : found->second;
+}
+
+float VoxelMap::log_odds(const VoxelIndex& v) const { return cell(v).value; }
+
+float VoxelMap::weight(const VoxelIndex& v) const { return cell(v).weight; }
+
+VoxelMap::VoxelState VoxelMap::state(const Cell& c) const {
+  if (options_.model == FusionModel::kTsdf) {
+    const double crossed_limit = options_.tsdf_free_ratio * c.weight;
+    if (c.crossed > crossed_limit) return VoxelState::kFree;
+    if (!(c.weight > 0.f)) return VoxelState::kUnknown;
+    if (std::abs(c.value) <= options_.tsdf_occupied_m && c.weight >= options_.tsdf_min_weight) {
+      return VoxelState::kOccupied;
+    }
+    // Free: the band's averaged distance is in front by more than half the truncation.
+    if (c.value >= 0.5 * options_.tsdf_truncation_m && c.weight >= options_.tsdf_min_weight) return VoxelState::kFree;
+    return std::abs(c.value) < 0.5 * options_.tsdf_truncation_m ? VoxelState::kNear : VoxelState::kUnknown;
+  }
+  if (c.value > options_.occupied_log_odds) return VoxelState::kOccupied;
+  if (c.value < -options_.occupied_log_odds) return VoxelState::kFree;
+  return VoxelState::kUnknown;
+}
+
+void VoxelMap::for_each_state(const std::function<void(const VoxelIndex&, VoxelState)>& visit) const {
+  for (const auto& [k, c] : cells_) visit(unkey(k), state(c));
 }
 
 bool VoxelMap::observed(const VoxelIndex& v) const { return cells_.count(key(v)) != 0; }
@@ -114,21 +154,34 @@ void VoxelMap::traverse(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
   walk(options_.resolution_m, a, b, [&](int x, int y, int z) { return visit({x, y, z}); });
 }
 
-std::size_t VoxelMap::integrate(const Eigen::Vector3d& origin, std::span<const Eigen::Vector3f> points) {
+std::size_t VoxelMap::integrate(const Eigen::Vector3d& origin, std::span<const Eigen::Vector3f> points,
+                                std::span<const float> sigmas_m, std::span<const Eigen::Vector3f> normals) {
   if (!origin.allFinite()) return 0;
+  if (!sigmas_m.empty() && sigmas_m.size() != points.size()) {
+    throw std::invalid_argument("voxel map: integrate got " + std::to_string(sigmas_m.size()) + " sigmas for " +
+                                std::to_string(points.size()) + " points");
+  }
+  if (!normals.empty() && normals.size() != points.size()) {
+    throw std::invalid_argument("voxel map: integrate got " + std::to_string(normals.size()) + " normals for " +
+                                std::to_string(points.size()) + " points");
+  }
+  if (options_.model == FusionModel::kTsdf) return integrate_tsdf(origin, points, sigmas_m, normals);
   std::vector<std::uint64_t> hits;
   std::vector<std::uint64_t> misses;
   hits.reserve(points.size());
   std::size_t used = 0;
-  for (const Eigen::Vector3f& point_f : points) {
-    const Eigen::Vector3d point = point_f.cast<double>();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d point = points[i].cast<double>();
     if (!point.allFinite() || (point - origin).norm() > options_.max_ray_m) continue;
+    const double sigma = sigmas_m.empty() ? 0.0 : static_cast<double>(sigmas_m[i]);
+    if (!std::isfinite(sigma)) continue;
     ++used;
     const std::uint64_t end_key = key(index_of(point));
-    hits.push_back(end_key);
+    if (sigma <= options_.hit_max_sigma_m) hits.push_back(end_key);
     const double length = (point - origin).norm();
-    if (length <= options_.free_margin_m) continue;
-    const Eigen::Vector3d free_end = origin + (point - origin) * ((length - options_.free_margin_m) / length);
+    const double margin = std::max(options_.free_margin_m, options_.free_sigmas * sigma);
+    if (length <= margin) continue;
+    const Eigen::Vector3d free_end = origin + (point - origin) * ((length - margin) / length);
     walk(options_.resolution_m, origin, free_end, [&](int x, int y, int z) {
       const std::uint64_t k = key({x, y, z});
       if (k != end_key) misses.push_back(k);
@@ -151,13 +204,90 @@ std::size_t VoxelMap::integrate(const Eigen::Vector3d& origin, std::span<const E
   return used;
 }
 
+std::size_t VoxelMap::integrate_tsdf(const Eigen::Vector3d& origin, std::span<const Eigen::Vector3f> points,
+                                     std::span<const float> sigmas_m, std::span<const Eigen::Vector3f> normals) {
+  const double r = options_.resolution_m;
+  const float truncation = static_cast<float>(options_.tsdf_truncation_m);
+  // Per image: the voxels in some point's band (their weighted distances summed), and the voxels
+  // crossed in front of every band (free). A voxel in a band takes only the band's distances (the
+  // TSDF's "hit wins over miss": a ray passing a surface at a grazing angle does not carve it).
+  struct Sample {
+    std::uint64_t key;
+    float sdf_times_weight;
+    float weight;
+  };
+  std::vector<Sample> near;
+  std::vector<std::uint64_t> crossed;
+  std::size_t used = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d point = points[i].cast<double>();
+    const double length = (point - origin).norm();
+    if (!point.allFinite() || length > options_.max_ray_m || !(length > 0.0)) continue;
+    const double sigma = sigmas_m.empty() ? 0.0 : static_cast<double>(sigmas_m[i]);
+    if (!std::isfinite(sigma)) continue;
+    ++used;
+    const Eigen::Vector3d direction = (point - origin) / length;
+    const double band = std::max(options_.tsdf_truncation_m, options_.free_sigmas * sigma);
+    const float w = static_cast<float>(sigma > r ? (r / sigma) * (r / sigma) : 1.0);
+    const bool hit = sigma <= options_.hit_max_sigma_m;
+    const Eigen::Vector3d end = origin + direction * (length + (hit ? band : 0.0));
+    const Eigen::Vector3d normal =
+        normals.empty() ? Eigen::Vector3d(Eigen::Vector3d::Zero()) : Eigen::Vector3d(normals[i].cast<double>());
+    const bool planar = normal.squaredNorm() > 0.5;
+    walk(r, origin, end, [&](int x, int y, int z) {
+      const Eigen::Vector3d centre((x + 0.5) * r, (y + 0.5) * r, (z + 0.5) * r);
+      const double along = length - (centre - origin).dot(direction);  // > 0: in front of the point
+      // The distance to the point's plane where its normal is known (towards the camera: > 0 in front).
+      const double distance = planar ? (centre - point).dot(normal) : along;
+      const std::uint64_t k = key({x, y, z});
+      if (along > band && distance > band) {
+        crossed.push_back(k);
+      } else if (along > band) {
+        return true;  // near the point's plane but far along the ray: a grazing ray; no evidence
+      } else if (hit) {
+        const float d = std::clamp(static_cast<float>(distance), -truncation, truncation);
+        near.push_back({k, d * w, w});
+      }
+      return true;
+    });
+  }
+  std::sort(near.begin(), near.end(), [](const Sample& a, const Sample& b) { return a.key < b.key; });
+  std::sort(crossed.begin(), crossed.end());
+  crossed.erase(std::unique(crossed.begin(), crossed.end()), crossed.end());
+  // One observation per voxel and image: the band's weighted mean distance, with the mean weight.
+  std::vector<std::uint64_t> banded;
+  for (std::size_t begin = 0; begin < near.size();) {
+    std::size_t end = begin;
+    float sum = 0.f, weight = 0.f;
+    for (; end < near.size() && near[end].key == near[begin].key; ++end) {
+      sum += near[end].sdf_times_weight;
+      weight += near[end].weight;
+    }
+    const float d = sum / weight;
+    const float w = weight / static_cast<float>(end - begin);
+    Cell& c = cells_[near[begin].key];
+    c.value = (c.value * c.weight + d * w) / (c.weight + w);
+    c.weight += w;
+    banded.push_back(near[begin].key);
+    begin = end;
+  }
+  auto in_band = banded.begin();
+  for (const std::uint64_t k : crossed) {
+    while (in_band != banded.end() && *in_band < k) ++in_band;
+    if (in_band != banded.end() && *in_band == k) continue;
+    cells_[k].crossed += 1.f;
+  }
+  return used;
+}
+
 void VoxelMap::for_each(const std::function<void(const VoxelIndex&, float)>& visit) const {
-  for (const auto& [k, value] : cells_) visit(unkey(k), value);
+  for (const auto& [k, c] : cells_) visit(unkey(k), c.value);
 }
 
 std::size_t VoxelMap::memory_bytes() const {
-  // A node: next pointer, key, value (+ cached hash in libstdc++ only for non-fast hashes); a bucket pointer.
-  return cells_.size() * (sizeof(void*) + sizeof(std::uint64_t) + sizeof(float) + 4) +
+  // A node: next pointer, key and cell padded as a pair (+ cached hash in libstdc++ only for non-fast
+  // hashes); a bucket pointer.
+  return cells_.size() * (sizeof(void*) + sizeof(std::pair<const std::uint64_t, Cell>)) +
          cells_.bucket_count() * sizeof(void*);
 }
 
