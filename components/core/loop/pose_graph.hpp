@@ -1,8 +1,8 @@
 // SE(3) pose-graph optimization: keyframe poses T_wc as vertices, measured relative poses as edges,
 // some vertices held fixed; Gauss-Newton with Levenberg-Marquardt damping on the block-sparse normal
-// equations (CHOLMOD), the convergence tests Ceres uses (relative cost change 1e-6). The loop closer's
-// essential-graph optimization (ORB-SLAM2's OptimizeEssentialGraph, here SE(3) because stereo fixes
-// the scale).
+// equations (Eigen's simplicial Cholesky), the convergence tests Ceres uses (relative cost change
+// 1e-6). The loop closer's essential-graph optimization (ORB-SLAM2's OptimizeEssentialGraph, here
+// SE(3) because stereo fixes the scale).
 //
 // Edge residual (6-vector, in the `from` keyframe's frame): translation of T_from_to estimated minus
 // measured, and 2 vec(q_measured^-1 q_estimated) for the rotation; scaled by sqrt(weight). With
