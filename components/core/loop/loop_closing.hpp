@@ -57,6 +57,13 @@ struct LoopClosingTimings {
   double correction_ms = 0.0;    // group propagation, fusion, essential graph
 };
 
+// A place verified geometrically (a loop, or a merge with another map) before any correction.
+struct VerifiedPlace {
+  Pose3 T_matched_loop = Pose3::Identity();                 // the query keyframe in the candidate's frame
+  std::vector<std::pair<PointId, PointId>> matched_points;  // (query-side, candidate-side) RANSAC inliers
+  int matches = 0;                                          // after the projection top-up
+};
+
 struct LoopClosingResult {
   LoopCandidates candidates;
   std::vector<LoopRejection> rejected;
@@ -73,6 +80,13 @@ class LoopClosing {
   // Processes keyframe `query` of `map`. On an accepted loop the result holds the correction
   // (corrected poses of every keyframe, point merges) computed on map.version.
   LoopClosingResult process_keyframe(const Map& map, KeyframeId query);
+
+  // The shared geometric check of candidate `candidate` for keyframe `query`: the detector's matches,
+  // SE(3) RANSAC, the projection top-up; with `drift_gate` also the drift gate. nullopt with the
+  // reason in `why` when rejected. A merge calls it without the drift gate (two maps' poses are not
+  // comparable) and applies its own gate (map_merge.hpp).
+  std::optional<VerifiedPlace> verify_place(const Map& map, KeyframeId query, KeyframeId candidate, bool drift_gate,
+                                            std::string& why) const;
 
   // A global bundle adjustment of the whole map, as a correction of kind kGlobalBundleAdjustment
   // (poses and point positions). nullopt when `abort` was set before it finished.
