@@ -11,6 +11,7 @@
 
 #include "components/core/loop/loop_closing.hpp"
 #include "components/core/loop/map_merge.hpp"
+#include "components/core/loop/proximity_loop_detector.hpp"
 #include "components/core/mapping/correction_application.hpp"
 #include "tests/loop/loop_world.hpp"
 
@@ -247,6 +248,26 @@ TEST(MapMergeTest, TheGateRejectsAMergeThatImpliesImpossibleUnobservedMotion) {
   EXPECT_TRUE(MapMerge()
                   .compute(maps.map, maps.world.camera, request_for(maps, *place, id_of_a(12), id_of_b(12)), {})
                   .error.empty());
+}
+
+TEST(MapMergeTest, TheProximityDetectorFindsTheOtherMapsPlaceByAppearanceAlone) {
+  // A's frame is 12 m and 40 deg away from B's: poses say nothing, descriptors do.
+  const TwoMaps maps = make_two_maps(kLongGapNs);
+  ProximityLoopDetectorOptions options;
+  options.merge_keyframes_per_query = 6;  // B has 15 keyframes: three queries cover them
+  ProximityLoopDetector detector(options);
+  std::set<KeyframeId> found;
+  for (int k = 12; k <= 14; ++k) {
+    const LoopCandidates candidates = detector.detect_merge(maps.map, id_of_a(k), maps.map_b);
+    for (const KeyframeId id : candidates.keyframes) {
+      EXPECT_EQ(maps.map_b.count(id), 1u);
+      found.insert(id);
+    }
+  }
+  // Ring keyframes 10..14 of B see what A's 12..14 see; 0..5 look elsewhere.
+  EXPECT_FALSE(found.empty());
+  for (const KeyframeId id : found) EXPECT_GE(id, id_of_b(6)) << format_id(id);
+  EXPECT_NE(detector.detect_merge(maps.map, id_of_a(12), {}).reason.find("no other map"), std::string::npos);
 }
 
 TEST(MapMergeTest, ARequestAcrossTheWrongMapsIsRefusedWithItsReason) {
