@@ -182,6 +182,7 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
   if (const Keyframe* reference = map_.keyframe(reference_kf_)) {
     result.T_ref_c = reference->T_wc.inverse() * frame.T_wc;
   }
+  result.map_id = active_map_;
   last_T_ref_c_ = result.T_ref_c;
   last_frame_ = std::move(frame);
   result.timings.total_ms = elapsed_ms(start);
@@ -240,7 +241,8 @@ bool Tracker::initialize(Frame& frame, TrackResult& result) {
   frame.T_wc = Pose3::Identity();
   TrackerOptions all_points = options_;
   all_points.new_keyframe_min_points = std::numeric_limits<int>::max();
-  KeyframeCandidate candidate = make_keyframe(frame, camera_, map_, next_keyframe_id(), point_counter_, all_points);
+  KeyframeCandidate candidate =
+      make_keyframe(frame, camera_, map_, next_keyframe_id(), point_counter_, all_points, active_map_);
   insert_keyframe(map_, candidate, camera_, options_);
   frame.point_ids = candidate.keyframe.point_ids;
   sync_place_database();
@@ -249,6 +251,7 @@ bool Tracker::initialize(Frame& frame, TrackResult& result) {
   reference_kf_ = candidate.keyframe.id;
   frames_since_keyframe_ = 0;
   result.state = state_;
+  result.map_id = active_map_;
   result.method = TrackingMethod::kInitialization;
   result.T_wc = frame.T_wc;
   result.reference_kf = reference_kf_;
@@ -361,7 +364,8 @@ void Tracker::maybe_insert_keyframe(Frame& frame, int inliers, TrackResult& resu
   input.revisit_covered = revisit_covered(frame, map_, camera_, options_);
   if (!decide_keyframe(frame, camera_, input, options_).insert) return;
 
-  KeyframeCandidate candidate = make_keyframe(frame, camera_, map_, next_keyframe_id(), point_counter_, options_);
+  KeyframeCandidate candidate =
+      make_keyframe(frame, camera_, map_, next_keyframe_id(), point_counter_, options_, active_map_);
   insert_keyframe(map_, candidate, camera_, options_);
   frame.point_ids = candidate.keyframe.point_ids;  // the next frame tracks the new points too
   sync_place_database();                           // the new keyframe, transformed once

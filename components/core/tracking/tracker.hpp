@@ -50,6 +50,7 @@ struct TrackResult {
   // Published only when state == kOk or kInertialOnly; otherwise T_wc is the last good pose and must
   // not be used.
   Pose3 T_wc = Pose3::Identity();
+  MapId map_id = kFirstMapId;  // the map T_wc is in (the atlas: docs/frontend.md)
   KeyframeId reference_kf = kNoId;
   Pose3 T_ref_c = Pose3::Identity();  // current camera in the reference keyframe's frame
   int tracked_points = 0;             // inlier map points after the local map search
@@ -167,6 +168,7 @@ class Tracker {
   Pose3 last_T_ref_c_ = Pose3::Identity();  // the last frame in its reference keyframe's frame
   std::optional<Pose3> velocity_;           // T_last_current of the last tracked pair
   KeyframeId reference_kf_ = kNoId;
+  MapId active_map_ = kFirstMapId;  // the map tracked in, and the one new keyframes join
   std::uint64_t keyframe_counter_ = 0;
   std::uint64_t point_counter_ = 1;
   int frames_since_keyframe_ = 0;
