@@ -24,6 +24,8 @@ constexpr int kLastOfB = 14;
 constexpr int kFirstOfA = 10;  // map A: ring keyframes 10..24, 5 cm further out (same place, other views)
 constexpr int kLastOfA = 24;
 constexpr KeyframeId kIdOffsetA = 100;
+constexpr MapId kMapB = 3;  // the older map
+constexpr MapId kMapA = 5;  // the active one
 constexpr double kExact = 1e-6;
 // Points are triangulated from float keypoints and depths (ulp 6e-5 px at u = 700, on a 6 px
 // disparity at 8 m: up to 1e-4 m).
@@ -61,7 +63,7 @@ TwoMaps make_two_maps(std::int64_t gap_ns) {
   std::uint64_t counter = 0;
   std::int64_t last_b_stamp_ns = 0;
   const auto build = [&](int first, int last, KeyframeId offset, double radius_m, const Pose3& T_frame_w,
-                         std::set<KeyframeId>& members, std::int64_t stamp_offset_ns) {
+                         std::set<KeyframeId>& members, std::int64_t stamp_offset_ns, MapId map_id) {
     std::map<int, PointId> point_of_truth;
     for (int k = first; k <= last; ++k) {
       const KeyframeId id = offset + static_cast<KeyframeId>(k + 1);
@@ -71,6 +73,7 @@ TwoMaps make_two_maps(std::int64_t gap_ns) {
       view.kf.T_wc = T_frame_w * T_true;
       view.kf.stamp_ns = stamp_offset_ns + (k - first) * 50'000'000;
       view.kf.parent = k > first ? id - 1 : kNoId;
+      view.kf.map_id = map_id;
       result.true_T_wc[id] = T_true;
       result.truth_of_keypoint[id] = view.truth;
       result.map.keyframes.emplace(id, view.kf);
@@ -89,6 +92,7 @@ TwoMaps make_two_maps(std::int64_t gap_ns) {
         const Keypoint& kp = kf.features.keypoints[i];
         point.p_w = kf.T_wc * result.world.camera.unproject(kp.u_px, kp.v_px, kf.features.depth_m[i]);
         point.reference_kf = id;
+        point.map_id = map_id;
         result.map.points.emplace(point.id, point);
         add_observation(result.map, point.id, id, static_cast<int>(i));
         point_of_truth[t] = point.id;
@@ -97,8 +101,8 @@ TwoMaps make_two_maps(std::int64_t gap_ns) {
       last_b_stamp_ns = std::max(last_b_stamp_ns, view.kf.stamp_ns);
     }
   };
-  build(kFirstOfB, kLastOfB, 0, 2.0, Pose3::Identity(), result.map_b, 0);
-  build(kFirstOfA, kLastOfA, kIdOffsetA, 2.05, result.T_AW, result.map_a, last_b_stamp_ns + gap_ns);
+  build(kFirstOfB, kLastOfB, 0, 2.0, Pose3::Identity(), result.map_b, 0, kMapB);
+  build(kFirstOfA, kLastOfA, kIdOffsetA, 2.05, result.T_AW, result.map_a, last_b_stamp_ns + gap_ns, kMapA);
   for (const auto& [id, point] : result.map.points) update_point_statistics(result.map, id);
   for (const auto& [id, kf] : result.map.keyframes) update_connections(result.map, id, CovisibilityOptions{});
   result.map.version = 9;
@@ -195,9 +199,24 @@ TEST(MapMergeTest, TheActiveMapIsWeldedIntoTheOlderMapsFrame) {
 
   // Applied as the mapper applies it: A's duplicates of B's points are gone into B's, every point is at
   // its true position, and no world point seen by both maps' seam keyframes is held twice.
+  // A keyframe the mapper made in A after the merge's map version (unknown to the loop closer) follows
+  // its parent into B's frame and map.
   Map after = maps.map;
+  const KeyframeId late = id_of_a(kLastOfA) + 1;
+  const Pose3 T_parent_late =
+      test::ring_pose(kLastOfA, kPerTurn, 2.05).inverse() * test::ring_pose(kLastOfA + 1, kPerTurn, 2.05);
+  Keyframe& late_kf = after.keyframes[late];
+  late_kf.id = late;
+  late_kf.map_id = kMapA;
+  late_kf.parent = id_of_a(kLastOfA);
+  late_kf.T_wc = after.keyframes.at(id_of_a(kLastOfA)).T_wc * T_parent_late;
   MapChanges changes;
-  EXPECT_EQ(apply_loop_correction(after, merged.correction, {}, changes), 0);
+  EXPECT_EQ(apply_loop_correction(after, merged.correction, {{late, maps.map.version + 1}}, changes), 0);
+  EXPECT_EQ(after.keyframes.at(late).map_id, kMapB);
+  EXPECT_LT((after.keyframes.at(late).T_wc.translation() - test::ring_pose(kLastOfA + 1, kPerTurn, 2.05).translation())
+                .norm(),
+            kExact);
+  after.keyframes.erase(late);
   ASSERT_GT(merged.stats.point_merges, 100);
   for (const auto& [from, into] : merged.correction.point_merges) {
     EXPECT_EQ(maps.truth_of_point.at(from), maps.truth_of_point.at(into));
@@ -218,6 +237,9 @@ TEST(MapMergeTest, TheActiveMapIsWeldedIntoTheOlderMapsFrame) {
   for (const auto& [id, point] : after.points) {
     EXPECT_LE(error_m(id, point.p_w), input_error_m + kExact) << format_id(id);
   }
+  // One map: every keyframe and point of A now carries B's map id.
+  for (const auto& [id, kf] : after.keyframes) EXPECT_EQ(kf.map_id, kMapB) << format_id(id);
+  for (const auto& [id, point] : after.points) EXPECT_EQ(point.map_id, kMapB) << format_id(id);
   std::map<int, int> holders;
   for (const PointId id : after.keyframe(id_of_a(12))->point_ids) {
     if (id != kNoId) ++holders[maps.truth_of_point.at(id)];
@@ -268,6 +290,30 @@ TEST(MapMergeTest, TheProximityDetectorFindsTheOtherMapsPlaceByAppearanceAlone) 
   EXPECT_FALSE(found.empty());
   for (const KeyframeId id : found) EXPECT_GE(id, id_of_b(6)) << format_id(id);
   EXPECT_NE(detector.detect_merge(maps.map, id_of_a(12), {}).reason.find("no other map"), std::string::npos);
+}
+
+TEST(MapMergeTest, LoopClosingFindsVerifiesAndMergesAnotherMapsPlace) {
+  // The proximity closer's path end to end: detection by descriptors, the shared verification, the
+  // merge gate (a minute apart: passes), the weld.
+  const TwoMaps maps = make_two_maps(kLongGapNs);
+  LoopClosing closing(maps.world.camera, std::make_unique<ProximityLoopDetector>(ProximityLoopDetectorOptions{}), {});
+  const LoopClosingResult result = closing.process_merge(maps.map, id_of_a(12));
+  ASSERT_TRUE(result.correction) << (result.rejected.empty() ? result.candidates.reason
+                                                             : result.rejected.front().reason);
+  EXPECT_EQ(result.correction->kind, CorrectionKind::kMerge);
+  EXPECT_EQ(result.merged_map, kMapA);
+  EXPECT_EQ(result.into_map, kMapB);
+  EXPECT_EQ(maps.map_b.count(result.correction->matched_kf), 1u);
+  for (const auto& [id, T_wc] : result.correction->corrected_T_wc) {
+    EXPECT_LT((T_wc.translation() - maps.true_T_wc.at(id).translation()).norm(), kExact) << format_id(id);
+  }
+
+  // One map only: no merge search at all.
+  Map only_b = maps.map;
+  for (const KeyframeId id : maps.map_a) only_b.keyframes.at(id).map_id = kMapB;
+  const LoopClosingResult alone = closing.process_merge(only_b, id_of_a(13));
+  EXPECT_FALSE(alone.correction);
+  EXPECT_TRUE(alone.candidates.keyframes.empty());
 }
 
 TEST(MapMergeTest, ARequestAcrossTheWrongMapsIsRefusedWithItsReason) {

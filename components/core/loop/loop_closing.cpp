@@ -64,7 +64,9 @@ std::string implausible_drift(const Map& map, const Keyframe& loop_kf, const Key
 
 LoopClosing::LoopClosing(const PinholeStereo& camera, std::unique_ptr<LoopDetector> detector,
                          const LoopClosingOptions& options)
-    : camera_(camera), detector_(std::move(detector)), options_(options) {}
+    : camera_(camera), detector_(std::move(detector)), options_(options) {
+  options_.merge.correction = options_.correction;  // fusion, essential graph and pose graph as the loops'
+}
 
 LoopClosing::~LoopClosing() = default;
 
@@ -206,6 +208,57 @@ LoopClosingResult LoopClosing::process_keyframe(const Map& map, KeyframeId query
   result.correction = std::move(output.correction);
   loop_edges_.emplace_back(query, accepted_kf);
   detector_->loop_closed(query);
+  return result;
+}
+
+LoopClosingResult LoopClosing::process_merge(const Map& map, KeyframeId query) {
+  LoopClosingResult result;
+  const Keyframe* query_kf = map.keyframe(query);
+  if (!options_.merging || query_kf == nullptr || query_kf->culled) return result;
+  const MapId active = query_kf->map_id;
+  std::set<KeyframeId> other_maps;
+  for (const auto& [id, kf] : map.keyframes) {
+    if (!kf.culled && kf.map_id != active) other_maps.insert(other_maps.end(), id);
+  }
+  if (other_maps.empty()) return result;  // one map: nothing to merge (the common case, no cost)
+  const auto detection_start = Clock::now();
+  result.candidates = detector_->detect_merge(map, query, other_maps);
+  result.timings.detection_ms = ms_since(detection_start);
+  for (const KeyframeId candidate_id : result.candidates.keyframes) {
+    const auto verification_start = Clock::now();
+    std::string why;
+    const std::optional<VerifiedPlace> place = verify_place(map, query, candidate_id, /*drift_gate=*/false, why);
+    result.timings.verification_ms += ms_since(verification_start);
+    if (!place) {
+      result.rejected.push_back({candidate_id, "merge: " + why});
+      continue;
+    }
+    const MapId matched = map.keyframe(candidate_id)->map_id;
+    MapMergeRequest request;
+    request.active_kf = query;
+    request.matched_kf = candidate_id;
+    request.T_matched_active = place->T_matched_loop;
+    request.matched_points = place->matched_points;
+    for (const auto& [id, kf] : map.keyframes) {
+      if (kf.map_id == active) request.active_map.insert(request.active_map.end(), id);
+      if (kf.map_id == matched) request.matched_map.insert(request.matched_map.end(), id);
+    }
+    const auto merge_start = Clock::now();
+    MapMergeOutput merged = MapMerge(options_.merge).compute(map, camera_, request, loop_edges_);
+    result.timings.merge_ms += ms_since(merge_start);
+    result.merge_stats = merged.stats;
+    if (!merged.error.empty()) {
+      result.rejected.push_back({candidate_id, merged.error});
+      continue;
+    }
+    result.loop_matches = place->matches;
+    result.merged_map = active;
+    result.into_map = matched;
+    result.correction = std::move(merged.correction);
+    loop_edges_.emplace_back(query, candidate_id);
+    detector_->maps_merged(query);
+    break;
+  }
   return result;
 }
 

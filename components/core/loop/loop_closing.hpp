@@ -14,6 +14,7 @@
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/loop/loop_correction_builder.hpp"
 #include "components/core/loop/loop_detector.hpp"
+#include "components/core/loop/map_merge.hpp"
 #include "components/core/map/map.hpp"
 #include "components/core/mapping/loop_correction.hpp"
 #include "components/core/tracking/tracker_options.hpp"
@@ -42,6 +43,9 @@ struct LoopClosingOptions {
   double max_rotation_drift_deg_per_m = 0.2;
   double min_rotation_allowance_deg = 10.0;
   std::uint64_t ransac_seed = 0x100b;
+  // The atlas: look for places of other maps too and merge them (map_merge.hpp).
+  bool merging = true;
+  MapMergeOptions merge;                    // its `correction` is replaced by the loops' `correction` below
   TrackerOptions matching;                  // descriptor thresholds, orientation check
   LoopCorrectionBuilderOptions correction;  // pose_graph.* (4-DoF in inertial runs)
 };
@@ -55,6 +59,7 @@ struct LoopClosingTimings {
   double detection_ms = 0.0;
   double verification_ms = 0.0;  // matching + RANSAC + refinement + top-up, all candidates
   double correction_ms = 0.0;    // group propagation, fusion, essential graph
+  double merge_ms = 0.0;         // a merge's weld (map_merge.hpp)
 };
 
 // A place verified geometrically (a loop, or a merge with another map) before any correction.
@@ -67,8 +72,11 @@ struct VerifiedPlace {
 struct LoopClosingResult {
   LoopCandidates candidates;
   std::vector<LoopRejection> rejected;
-  std::optional<LoopCorrection> correction;  // id 0: the caller assigns it
+  std::optional<LoopCorrection> correction;  // id 0: the caller assigns it; kind kMerge for a merge
   int loop_matches = 0;
+  MapId merged_map = kFirstMapId;  // a merge: the map welded into ...
+  MapId into_map = kFirstMapId;    // ... this one
+  MapMergeStats merge_stats;
   LoopClosingTimings timings;
 };
 
@@ -80,6 +88,11 @@ class LoopClosing {
   // Processes keyframe `query` of `map`. On an accepted loop the result holds the correction
   // (corrected poses of every keyframe, point merges) computed on map.version.
   LoopClosingResult process_keyframe(const Map& map, KeyframeId query);
+
+  // The atlas: places of maps other than `query`'s (LoopDetector::detect_merge), verified without the
+  // drift gate, merged with the merge gate (map_merge.hpp). On an accepted merge the correction (kind
+  // kMerge) moves query's map into the matched keyframe's; the caller publishes it as a loop's.
+  LoopClosingResult process_merge(const Map& map, KeyframeId query);
 
   // The shared geometric check of candidate `candidate` for keyframe `query`: the detector's matches,
   // SE(3) RANSAC, the projection top-up; with `drift_gate` also the drift gate. nullopt with the

@@ -112,7 +112,8 @@ MapMergeOutput MapMerge::compute(const Map& map, const PinholeStereo& camera, co
     return output;
   }
 
-  // The two maps alone, A moved into B's frame (a).
+  // The two maps alone, A moved into B's frame and into B's map id (a): one map from here on.
+  const MapId into = map.keyframe(request.matched_kf)->map_id;
   Map joined;
   joined.version = map.version;
   std::set<PointId> points_a;
@@ -122,12 +123,16 @@ MapMergeOutput MapMerge::compute(const Map& map, const PinholeStereo& camera, co
       const Keyframe* kf = map.keyframe(id);
       if (kf == nullptr) continue;
       Keyframe& copy = joined.keyframes.emplace(id, *kf).first->second;
-      if (moved) copy.T_wc = T_BA * copy.T_wc;
+      if (moved) {
+        copy.T_wc = T_BA * copy.T_wc;
+        copy.map_id = into;
+      }
       for (const PointId point_id : kf->point_ids) {
         const MapPoint* point = point_id == kNoId ? nullptr : map.point(point_id);
         if (point == nullptr || joined.points.count(point_id) != 0) continue;
         MapPoint& point_copy = joined.points.emplace(point_id, *point).first->second;
         if (moved) {
+          point_copy.map_id = into;
           point_copy.p_w = T_BA * point_copy.p_w;
           point_copy.normal = T_BA.rotation() * point_copy.normal;
           points_a.insert(point_id);
