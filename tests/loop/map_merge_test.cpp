@@ -116,9 +116,13 @@ KeyframeId id_of_b(int k) { return static_cast<KeyframeId>(k + 1); }
 // shared one; detection has its own tests).
 class TruthMatcher final : public LoopDetector {
  public:
-  explicit TruthMatcher(const TwoMaps& maps) : maps_(maps) {}
+  explicit TruthMatcher(const TwoMaps& maps, KeyframeId loop_candidate = kNoId)
+      : maps_(maps), loop_candidate_(loop_candidate) {}
   const char* name() const override { return "truth"; }
-  LoopCandidates detect(const Map&, KeyframeId) override { return {}; }
+  LoopCandidates detect(const Map&, KeyframeId) override {
+    if (loop_candidate_ == kNoId) return {};
+    return {{loop_candidate_}, ""};
+  }
   void loop_closed(KeyframeId) override {}
   std::vector<std::pair<std::uint32_t, std::uint32_t>> match(const Map& map, KeyframeId query,
                                                              KeyframeId candidate) const override {
@@ -140,6 +144,7 @@ class TruthMatcher final : public LoopDetector {
 
  private:
   const TwoMaps& maps_;
+  KeyframeId loop_candidate_;
 };
 
 double rotation_error_rad(const Pose3& a, const Pose3& b) {
@@ -314,6 +319,15 @@ TEST(MapMergeTest, LoopClosingFindsVerifiesAndMergesAnotherMapsPlace) {
   const LoopClosingResult alone = closing.process_merge(only_b, id_of_a(13));
   EXPECT_FALSE(alone.correction);
   EXPECT_TRUE(alone.candidates.keyframes.empty());
+}
+
+TEST(MapMergeTest, APlaceOfAnotherMapIsNoLoop) {
+  const TwoMaps maps = make_two_maps(kLongGapNs);
+  LoopClosing closing(maps.world.camera, std::make_unique<TruthMatcher>(maps, id_of_b(12)), {});
+  const LoopClosingResult result = closing.process_keyframe(maps.map, id_of_a(12));
+  EXPECT_FALSE(result.correction);
+  ASSERT_EQ(result.rejected.size(), 1u);
+  EXPECT_EQ(result.rejected.front().reason, "in map 3, not in map 5 (a merge, not a loop)");
 }
 
 TEST(MapMergeTest, ARequestAcrossTheWrongMapsIsRefusedWithItsReason) {

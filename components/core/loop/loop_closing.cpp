@@ -179,7 +179,16 @@ LoopClosingResult LoopClosing::process_keyframe(const Map& map, KeyframeId query
   const auto verification_start = Clock::now();
   std::optional<VerifiedPlace> accepted;
   KeyframeId accepted_kf = kNoId;
+  const MapId query_map = map.keyframe(query)->map_id;
   for (const KeyframeId candidate_id : result.candidates.keyframes) {
+    // The atlas: a place of another map is no loop (its poses are in another world frame); recognising
+    // it is a merge of the two maps (process_merge).
+    if (const Keyframe* candidate = map.keyframe(candidate_id);
+        candidate != nullptr && candidate->map_id != query_map) {
+      result.rejected.push_back({candidate_id, "in map " + std::to_string(candidate->map_id) + ", not in map " +
+                                                   std::to_string(query_map) + " (a merge, not a loop)"});
+      continue;
+    }
     std::string why;
     accepted = verify_place(map, query, candidate_id, /*drift_gate=*/true, why);
     if (!accepted) {
