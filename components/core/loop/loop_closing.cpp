@@ -92,6 +92,13 @@ LoopClosingResult LoopClosing::process_keyframe(const Map& map, KeyframeId query
       result.rejected.push_back({candidate_id, "culled before verification"});
       continue;
     }
+    // The atlas: a place of another map is no loop (its poses are in another world frame); recognising
+    // it is a merge of the two maps.
+    if (candidate->map_id != loop_kf.map_id) {
+      result.rejected.push_back({candidate_id, "in map " + std::to_string(candidate->map_id) + ", not in map " +
+                                                   std::to_string(loop_kf.map_id) + " (a merge, not a loop)"});
+      continue;
+    }
     // 3D-3D correspondences from the detector's matches: A = the candidate, B = the loop keyframe, so
     // the RANSAC transform T_ab is T_matched_loop.
     const auto pairs = detector_->match(map, query, candidate_id);
