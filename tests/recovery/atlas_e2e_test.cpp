@@ -167,7 +167,9 @@ TEST(AtlasE2E, TeleportedCameraGoesOnInANewMapAndSurvivesKills) {
   ASSERT_EQ(run.maps.size(), run.poses) << "STEM.maps.txt has a line per pose";
   for (const auto& [seq, map_id] : run.maps) {
     EXPECT_EQ(map_id, seq < lost_at ? kFirstMapId : 1u) << "frame " << seq;
-    if (seq >= lost_at) EXPECT_GE(seq, started_at);
+    if (seq >= lost_at) {
+      EXPECT_GE(seq, started_at);
+    }
   }
   EXPECT_NE(run.output.find("new map 1 at frame " + std::to_string(started_at)), std::string::npos) << run.output;
   const std::map<MapId, int> keyframes = expect_partition(dir.path() / "atlas.map");
