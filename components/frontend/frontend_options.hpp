@@ -76,6 +76,9 @@ struct FrontendOptions {
   int max_pending_frames = 8;
   // imu.*: inertial tracking (docs/frontend.md, Inertial tracking); --imu auto|none (none wins: off).
   InertialOptions inertial;
+  // atlas.new_map_after_s (docs/frontend.md, Atlas): lost and not relocalized in any map for this long
+  // (frame stamps), the frontend starts a new map; 0 = never. Sets tracker.new_map_after_ns.
+  double new_map_after_s = 1.0;
 
   // Throws std::runtime_error (one line: file, field, expectation) on a bad field.
   // `rest`: the command line's own arguments (--settings FILE, --mapper-map-file FILE, --journal FILE,
