@@ -555,6 +555,7 @@ void Frontend::process_frame(const msg::StereoFrame& frame, std::int64_t publish
       mirror_.own_keyframe(result.new_keyframe->id, result.new_keyframe_reference, mirror_.version().complete());
     }
   }
+  follow_map_change(result, frame.seq);
   messages::OdometryMessage odometry(
       frame.stamp_ns, frame.seq, result, output.keypoints, output.timings, T_wo_,
       result.pose_valid() ? tracked_pose_covariance(processor_->tracker()) : std::nullopt);
@@ -948,6 +949,30 @@ std::string Frontend::inertial_summary() {
   line << ": " << counts.accepted << " readings, " << counts.skipped() << " bad, " << inertial_->gaps() << " gaps, "
        << count("inertial_only_frames") << " inertial-only frames";
   return line.str();
+}
+
+void Frontend::follow_map_change(const TrackResult& result, std::uint64_t seq) {
+  if (!result.pose_valid()) return;
+  if (result.new_map) {
+    stats().count("maps_started");
+    const double lost_s = 1e-9 * static_cast<double>(result.new_map->lost_since_ns);
+    log().info("new map ", result.map_id, " at frame ", seq, " (keyframe ", format_id(result.reference_kf),
+               "): lost in map ", result.new_map->previous_map, " for ", result.new_map->lost_frames,
+               " frames since stamp ", lost_s, " s, relocalization in every map failed (atlas.new_map_after_s ",
+               options_.new_map_after_s, "); it starts at the last pose");
+  }
+  if (odometry_map_ && *odometry_map_ != result.map_id) {
+    if (!result.new_map) {
+      stats().count("map_switches");
+      log().info("frame ", seq, " relocalized in map ", result.map_id, " (tracked in map ", *odometry_map_,
+                 " before the loss)");
+    }
+    // Each map has its own world: odom -> world takes the change, so Odometry.T_oc goes on from the last
+    // odom pose instead of jumping with T_wc (REP 105, as at a loop correction).
+    T_wo_ = result.T_wc * last_T_oc_.inverse();
+  }
+  odometry_map_ = result.map_id;
+  last_T_oc_ = T_wo_.inverse() * result.T_wc;
 }
 
 }  // namespace heslam::frontend

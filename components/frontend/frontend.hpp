@@ -61,6 +61,9 @@ class Frontend : public runtime::Component {
   // The tracker's last frame follows its reference keyframe after a loop correction (ORB-SLAM2's
   // UpdateLastFrame); the jump is kept in T_wo_.
   void follow_loop_correction();
+  // The atlas (docs/frontend.md, Atlas): counts and logs a new map, and when the tracked map changed
+  // (a new map, or relocalized in another one) moves T_wo_ so that Odometry.T_oc does not jump.
+  void follow_map_change(const TrackResult& result, std::uint64_t seq);
   // With a mapper: mirror its stored map into a new processor's tracker and, when it holds
   // keyframes (this frontend was restarted), relocalize in it instead of starting a new map.
   void resume_in_mapper_map();
@@ -149,6 +152,8 @@ class Frontend : public runtime::Component {
   GapPrediction gap_prediction_;  // the last motion, for a frame after a gap (realtime.predict_over_gaps)
   // odom -> world (REP 105 map -> odom): the loop corrections followed so far, left out of Odometry.T_oc.
   Pose3 T_wo_ = Pose3::Identity();
+  std::optional<MapId> odometry_map_;    // the map of the last frame published with a pose
+  Pose3 last_T_oc_ = Pose3::Identity();  // ... and its odometry pose
   // Inertial tracking: the readers, the stream's continuity, the state (null when off by option).
   std::optional<runtime::CheckedReader<msg::ImuCalibration>> imu_calibration_reader_;
   std::optional<runtime::CheckedReader<msg::ImuBatch>> imu_reader_;

@@ -2,6 +2,7 @@
 #include "components/frontend/frontend_options.hpp"
 
 #include <climits>
+#include <cmath>
 #include <stdexcept>
 
 #include "components/core/place/vocabulary_setting.hpp"
@@ -80,6 +81,7 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
   options.journal_file = config.get_string("journal.file", "");
   options.settings_file = config.get_path("settings.file", "");
   options.inertial = read_inertial(config);
+  read(config, "atlas.new_map_after_s", options.new_map_after_s, 0.0, kMaxTimeoutS);
   std::string imu = "auto";
   std::string loop_closer = config.get_string("lockstep.loop_closer", "none");
   const std::string loop_closer_name = config.get_string("lockstep.loop_closer_name", "loop_closer");
@@ -137,6 +139,7 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
   options.tracker.maintain_map = !options.mapper_enabled;
   options.tracker.id_tag = kFrontendTag;
   options.tracker.create_keyframes = options.mapping;
+  options.tracker.new_map_after_ns = std::llround(options.new_map_after_s * 1e9);
   return options;
 }
 

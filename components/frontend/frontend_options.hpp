@@ -79,6 +79,9 @@ struct FrontendOptions {
   InertialOptions inertial;
   // realtime.*, debug.frame_delay_ms: load shedding of a real-time frontend (load_shedding.hpp).
   LoadSheddingOptions shedding;
+  // atlas.new_map_after_s (docs/frontend.md, Atlas): lost and not relocalized in any map for this long
+  // (frame stamps), the frontend starts a new map; 0 = never. Sets tracker.new_map_after_ns.
+  double new_map_after_s = 1.0;
 
   // Throws std::runtime_error (one line: file, field, expectation) on a bad field.
   // `rest`: the command line's own arguments (--settings FILE, --mapper-map-file FILE, --journal FILE,

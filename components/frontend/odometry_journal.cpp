@@ -9,7 +9,8 @@ namespace heslam::frontend {
 namespace {
 
 // What the records hold; a journal of another format is not resumed from.
-constexpr const char* kFormat = "heslam-frontend-journal 2";
+// 3: the map id (the atlas) after the finished flag.
+constexpr const char* kFormat = "heslam-frontend-journal 3";
 
 void write_pose(std::ostringstream& record, const msg::Pose& pose) {
   for (const double value : pose.position_m) record << ' ' << value;
@@ -31,11 +32,11 @@ bool read_record(const std::string& record, msg::Odometry& odometry, bool& finis
   unsigned long long seq = 0, reference = 0;
   long long stamp_ns = 0;
   int state = 0, keyframe_created = 0, finished_flag = 0;
-  unsigned keypoints = 0, tracked_points = 0;
+  unsigned keypoints = 0, tracked_points = 0, map_id = 0;
   std::string rest;
   if (!(fields >> seq >> stamp_ns >> state >> reference) || !read_pose(fields, odometry.T_wc) ||
       !read_pose(fields, odometry.T_ref_c) ||
-      !(fields >> keypoints >> tracked_points >> keyframe_created >> finished_flag) || fields >> rest) {
+      !(fields >> keypoints >> tracked_points >> keyframe_created >> finished_flag >> map_id) || fields >> rest) {
     return false;
   }
   // A state that is no TrackingState is a damaged line (casting it to the enum would be undefined).
@@ -48,6 +49,7 @@ bool read_record(const std::string& record, msg::Odometry& odometry, bool& finis
   odometry.stamp_ns = stamp_ns;
   odometry.state = static_cast<heslam_msg_TrackingState>(state);
   odometry.reference_keyframe_id = reference;
+  odometry.map_id = map_id;
   odometry.keypoints = keypoints;
   odometry.tracked_points = tracked_points;
   odometry.keyframe_created = keyframe_created != 0;
@@ -88,7 +90,7 @@ void OdometryJournal::append(const msg::Odometry& odometry, bool finished) {
   write_pose(record, odometry.T_wc);
   write_pose(record, odometry.T_ref_c);
   record << ' ' << odometry.keypoints << ' ' << odometry.tracked_points << ' ' << (odometry.keyframe_created ? 1 : 0)
-         << ' ' << (finished ? 1 : 0);
+         << ' ' << (finished ? 1 : 0) << ' ' << odometry.map_id;
   journal_.append(record.str());
 }
 

@@ -256,20 +256,33 @@ void LoopCloserNode::process_keyframe(KeyframeId id) {
     log().debug("keyframe ", format_id(id), ": candidate ", format_id(rejection.candidate),
                 " rejected: ", rejection.reason);
   }
-  if (!result.correction) return;
-  stats().count("loops_accepted");
-  if (closing_->pose_graph_options().four_dof) stats().count("four_dof_corrections");
-  stats().record_ms("correction", result.timings.correction_ms);
+  if (!result.correction) {
+    result = process_merge(id);
+    if (!result.correction) return;
+  } else {
+    stats().count("loops_accepted");
+    if (closing_->pose_graph_options().four_dof) stats().count("four_dof_corrections");
+    stats().record_ms("correction", result.timings.correction_ms);
+  }
   // ORB-SLAM2: a new loop makes the running global BA stale; it restarts after this correction.
   if (global_ba_.abort()) {
     stats().count("global_ba_aborted");
     log().info("global BA aborted: a newer loop at keyframe ", format_id(id));
   }
   LoopCorrection correction = std::move(*result.correction);
-  log().info("loop closed: keyframe ", format_id(id), " -> ", format_id(correction.matched_kf), " with ",
-             result.loop_matches, " matches; correcting ", correction.corrected_T_wc.size(), " keyframes, merging ",
-             correction.point_merges.size(), " points (map version ", mirror_.map().version, ", ", awaiting_state,
-             " keyframes from the frontend left out: not mapped yet)");
+  if (correction.kind == CorrectionKind::kMerge) {
+    log().info("maps merged: map ", result.merged_map, " into map ", result.into_map, " at keyframe ", format_id(id),
+               " -> ", format_id(correction.matched_kf), " with ", result.loop_matches, " matches; ",
+               result.merge_stats.moved_keyframes, " keyframes moved, ", correction.point_merges.size(),
+               " points fused, ", result.merge_stats.seam_connections, " keyframe pairs joined across the seam, ",
+               correction.corrected_T_wc.size(), " keyframes corrected in ", result.timings.merge_ms,
+               " ms (map version ", mirror_.map().version, ")");
+  } else {
+    log().info("loop closed: keyframe ", format_id(id), " -> ", format_id(correction.matched_kf), " with ",
+               result.loop_matches, " matches; correcting ", correction.corrected_T_wc.size(), " keyframes, merging ",
+               correction.point_merges.size(), " points (map version ", mirror_.map().version, ", ", awaiting_state,
+               " keyframes from the frontend left out: not mapped yet)");
+  }
   if (!publish_and_wait(std::move(correction)) || !options_.global_bundle_adjustment) return;
 
   log().info("global BA started on map version ", mirror_.map().version, ": ", mirror_.map().keyframes.size(),
@@ -329,6 +342,27 @@ void LoopCloserNode::choose_pose_graph(KeyframeId id) {
     log().info("inertial run: loop corrections use the 4-DoF pose graph about the odometry's gravity (", gravity_w.x(),
                ", ", gravity_w.y(), ", ", gravity_w.z(), ") m/s^2 from keyframe ", format_id(id));
   }
+}
+
+LoopClosingResult LoopCloserNode::process_merge(KeyframeId id) {
+  LoopClosingResult result = closing_->process_merge(mirror_.map(), id);
+  if (!result.candidates.keyframes.empty()) stats().count("merge_candidates", result.candidates.keyframes.size());
+  for (const LoopRejection& rejection : result.rejected) {
+    stats().count("merges_rejected");
+    // A merge the gate refuses is worth a line: the maps stay apart.
+    if (rejection.reason.rfind("merge gate:", 0) == 0) {
+      log().info("keyframe ", format_id(id), ": merge with keyframe ", format_id(rejection.candidate),
+                 " rejected: ", rejection.reason);
+    } else {
+      log().debug("keyframe ", format_id(id), ": merge candidate ", format_id(rejection.candidate),
+                  " rejected: ", rejection.reason);
+    }
+  }
+  if (result.correction) {
+    stats().count("merges_accepted");
+    stats().record_ms("merge", result.timings.merge_ms);
+  }
+  return result;
 }
 
 void LoopCloserNode::finish_global_ba() {

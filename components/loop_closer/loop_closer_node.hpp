@@ -50,6 +50,8 @@ class LoopCloserNode : public runtime::Component {
   // completely (version markers), so a keyframe acknowledged at version v is processed only on it.
   std::size_t take_all();
   void process_ready_keyframes();
+  // The atlas: a place of another map recognised from keyframe `id` (no loop was closed there).
+  LoopClosingResult process_merge(KeyframeId id);
   void process_keyframe(KeyframeId id);
   // Waits for the global BA started last and publishes its correction (if it was not aborted).
   void finish_global_ba();

@@ -46,6 +46,15 @@ LoopCloserProcessOptions LoopCloserProcessOptions::from_config(const runtime::Co
   }
   pose_graph.gravity_w = Eigen::Vector3d(gravity[0], gravity[1], gravity[2]);
   o.gravity_from_odometry = config.get_bool("pose_graph.gravity_from_odometry", o.gravity_from_odometry);
+  // The atlas's merges (docs/loop_closing.md, Merging).
+  c.merging = config.get_bool("merge.enabled", c.merging);
+  MapMergeOptions& merge = c.merge;
+  merge.max_unobserved_speed_mps =
+      config.get_double("merge.max_unobserved_speed_mps", merge.max_unobserved_speed_mps, 0.0, 1e6);
+  merge.max_drift_fraction = config.get_double("merge.max_drift_fraction", merge.max_drift_fraction, 0.0, 10.0);
+  merge.min_drift_allowance_m = config.get_double("merge.min_drift_allowance_m", merge.min_drift_allowance_m, 0.0, 1e6);
+  merge.max_tilt_deg = config.get_double("merge.max_tilt_deg", merge.max_tilt_deg, 0.0, 180.0);
+  merge.seam_bundle_adjustment = config.get_bool("merge.seam_bundle_adjustment", merge.seam_bundle_adjustment);
   o.global_bundle_adjustment = config.get_bool("global_ba.enabled", o.global_bundle_adjustment);
   o.real_time = config.get_bool("real_time", o.real_time);
   const double timeout_s = config.get_double("lockstep.mapper_timeout_s", 30.0, 0.1, kMaxTimeoutS);

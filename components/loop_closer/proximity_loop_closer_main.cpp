@@ -25,6 +25,9 @@ class ProximityLoopCloser final : public LoopCloserNode {
     o.max_candidates = config.get_int("detection.max_candidates", o.max_candidates, 1, 100);
     o.min_keyframes_in_map = config.get_int("detection.min_keyframes_in_map", o.min_keyframes_in_map, 1, 100000);
     o.keyframes_after_loop = config.get_int("detection.keyframes_after_loop", o.keyframes_after_loop, 0, 100000);
+    o.merge_min_matches = config.get_int("detection.merge_min_matches", o.merge_min_matches, 3, 100000);
+    o.merge_keyframes_per_query =
+        config.get_int("detection.merge_keyframes_per_query", o.merge_keyframes_per_query, 1, 100000);
     return std::make_unique<ProximityLoopDetector>(o);
   }
 };

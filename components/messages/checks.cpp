@@ -211,7 +211,8 @@ std::optional<std::string> check(const msg::MapPointState& point) {
 std::optional<std::string> check(const msg::LoopCorrection& correction) {
   if (correction.id == 0) return std::string("id is 0 (no correction)");
   const std::string name = text("correction ", format_id(correction.id), ": ");
-  if (!runtime::wire_value_is_one_of(correction.kind, heslam_msg_CORRECTION_LOOP, heslam_msg_CORRECTION_GLOBAL_BA)) {
+  if (!runtime::wire_value_is_one_of(correction.kind, heslam_msg_CORRECTION_LOOP, heslam_msg_CORRECTION_GLOBAL_BA,
+                                     heslam_msg_CORRECTION_MERGE)) {
     return text(name, "kind ", runtime::wire_value(correction.kind), " is not a CorrectionKind");
   }
   if (auto problem = check(correction.T_matched_loop, "T_matched_loop")) return name + *problem;

@@ -24,6 +24,7 @@ KeyframeMessage::KeyframeMessage(const Keyframe& keyframe, std::uint64_t frame_s
   message_.id = keyframe.id;
   message_.stamp_ns = keyframe.stamp_ns;
   message_.frame_seq = frame_seq;
+  message_.map_id = keyframe.map_id;
   message_.T_wc = to_message(keyframe.T_wc);
   message_.reference_keyframe_id = reference_kf;
   message_.tracked_map_version = tracked_map_version;
@@ -70,6 +71,7 @@ DecodedKeyframe to_keyframe(const msg::Keyframe& message) {
   decoded.tracked_map_version = message.tracked_map_version;
   Keyframe& keyframe = decoded.keyframe;
   keyframe.id = message.id;
+  keyframe.map_id = message.map_id;
   keyframe.stamp_ns = message.stamp_ns;
   keyframe.T_wc = to_pose(message.T_wc);
   StereoFeatures& features = keyframe.features;
@@ -89,6 +91,7 @@ DecodedKeyframe to_keyframe(const msg::Keyframe& message) {
   for (const msg::NewStereoPoint& entry : runtime::view(message.new_points)) {
     MapPoint point;
     point.id = entry.id;
+    point.map_id = keyframe.map_id;
     point.p_w = Eigen::Vector3d(entry.position_w_m[0], entry.position_w_m[1], entry.position_w_m[2]);
     point.reference_kf = keyframe.id;
     point.observations.emplace_back(keyframe.id, static_cast<int>(entry.keypoint_index));

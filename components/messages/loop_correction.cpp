@@ -25,8 +25,11 @@ LoopCorrectionMessage::LoopCorrectionMessage(const LoopCorrection& correction) {
   message_.T_matched_loop = to_message(correction.T_matched_loop);
   runtime::borrow(message_.corrected_poses, poses_);
   runtime::borrow(message_.point_merges, merges_);
-  message_.kind = correction.kind == CorrectionKind::kGlobalBundleAdjustment ? heslam_msg_CORRECTION_GLOBAL_BA
-                                                                             : heslam_msg_CORRECTION_LOOP;
+  switch (correction.kind) {
+    case CorrectionKind::kLoop: message_.kind = heslam_msg_CORRECTION_LOOP; break;
+    case CorrectionKind::kGlobalBundleAdjustment: message_.kind = heslam_msg_CORRECTION_GLOBAL_BA; break;
+    case CorrectionKind::kMerge: message_.kind = heslam_msg_CORRECTION_MERGE; break;
+  }
   runtime::borrow(message_.corrected_points, points_);
 }
 
@@ -56,11 +59,13 @@ LoopCorrection to_loop_correction(const msg::LoopCorrection& message) {
     correction.point_merges.emplace_back(merge.from_id, merge.into_id);
   }
   // Any value may come in an enum field (runtime/wire_enum.hpp): checked as the integer first.
-  if (!runtime::wire_value_is_one_of(message.kind, heslam_msg_CORRECTION_LOOP, heslam_msg_CORRECTION_GLOBAL_BA)) {
+  if (!runtime::wire_value_is_one_of(message.kind, heslam_msg_CORRECTION_LOOP, heslam_msg_CORRECTION_GLOBAL_BA,
+                                     heslam_msg_CORRECTION_MERGE)) {
     throw std::runtime_error(name + ": kind " + std::to_string(runtime::wire_value(message.kind)) + " is unknown");
   }
-  correction.kind =
-      message.kind == heslam_msg_CORRECTION_GLOBAL_BA ? CorrectionKind::kGlobalBundleAdjustment : CorrectionKind::kLoop;
+  correction.kind = message.kind == heslam_msg_CORRECTION_GLOBAL_BA ? CorrectionKind::kGlobalBundleAdjustment
+                    : message.kind == heslam_msg_CORRECTION_MERGE   ? CorrectionKind::kMerge
+                                                                    : CorrectionKind::kLoop;
   for (const msg::CorrectedPointPosition& entry : runtime::view(message.corrected_points)) {
     const Eigen::Vector3d p_w(entry.position_w_m[0], entry.position_w_m[1], entry.position_w_m[2]);
     if (entry.point_id == kNoId || !p_w.allFinite()) {

@@ -51,6 +51,7 @@ msg::KeyframeState to_state_message(const Keyframe& keyframe, std::uint64_t map_
   msg::KeyframeState message{};
   message.id = keyframe.id;
   message.map_version = map_version;
+  message.map_id = keyframe.map_id;
   message.T_wc = to_message(keyframe.T_wc);
   message.parent_id = keyframe.parent;
   message.culled = keyframe.culled;
@@ -67,6 +68,7 @@ msg::MapPointState to_state_message(const MapPoint& point, std::uint64_t map_ver
   msg::MapPointState message{};
   message.id = point.id;
   message.map_version = map_version;
+  message.map_id = point.map_id;
   for (int k = 0; k < 3; ++k) {
     message.position_w_m[k] = point.p_w[k];
     message.normal_w[k] = static_cast<float>(point.normal[k]);
@@ -117,6 +119,7 @@ bool is_version_marker(const msg::MapPointState& state) { return state.id == kVe
 bool apply_keyframe_state(Map& map, const msg::KeyframeState& state) {
   Keyframe* keyframe = map.keyframe(state.id);
   if (keyframe == nullptr) return false;
+  keyframe->map_id = state.map_id;
   keyframe->T_wc = to_pose(state.T_wc);
   keyframe->parent = state.parent_id;
   keyframe->covisible.clear();
@@ -134,6 +137,7 @@ void apply_point_state(Map& map, const msg::MapPointState& state) {
   }
   MapPoint& point = map.points[state.id];  // creates it when the mapper made it (triangulation)
   point.id = state.id;
+  point.map_id = state.map_id;
   point.p_w = Eigen::Vector3d(state.position_w_m[0], state.position_w_m[1], state.position_w_m[2]);
   std::memcpy(point.descriptor.data(), state.descriptor, kDescriptorBytes);
   point.normal = Eigen::Vector3d(state.normal_w[0], state.normal_w[1], state.normal_w[2]);

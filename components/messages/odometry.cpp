@@ -33,6 +33,7 @@ OdometryMessage::OdometryMessage(std::int64_t stamp_ns, std::uint64_t seq, const
   message_.stamp_ns = stamp_ns;
   message_.seq = seq;
   message_.state = to_message(result.state);
+  message_.map_id = result.map_id;
   // Never a garbage pose: a frame that is not tracked carries the identity, and its state says so.
   message_.T_wc = to_message(result.pose_valid() ? result.T_wc : Pose3::Identity());
   message_.reference_keyframe_id = result.pose_valid() ? result.reference_kf : kNoId;

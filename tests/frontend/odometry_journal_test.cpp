@@ -25,6 +25,7 @@ msg::Odometry odometry(std::uint64_t seq, heslam_msg_TrackingState state, double
   message.keypoints = 1200;
   message.tracked_points = 300 + static_cast<std::uint32_t>(seq);
   message.keyframe_created = seq % 10 == 0;
+  message.map_id = static_cast<std::uint32_t>(seq % 3);  // the atlas: the map each frame was in
   return message;
 }
 
@@ -57,6 +58,8 @@ TEST(OdometryJournal, ResumesTheFramesOfItsRunExactlyAndSurvivesATornLine) {
     EXPECT_EQ(first.T_ref_c.orientation_xyzw[0], 0.6);
     EXPECT_EQ(first.tracked_points, 300u);
     EXPECT_TRUE(first.keyframe_created);
+    EXPECT_EQ(first.map_id, 0u);
+    EXPECT_EQ(opened.frames[1].map_id, 1u);
     EXPECT_EQ(opened.frames[1].state, heslam_msg_TRACKING_LOST);
     journal.append(odometry(2, heslam_msg_TRACKING_OK, 2.0), true);   // after the torn line, not glued to it
     journal.append(odometry(3, heslam_msg_TRACKING_OK, 3.0), false);  // killed while waiting for the mapper

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <string>
+#include <vector>
 
 #include "runtime/run_journal.hpp"
 #include "tools/eval/trajectory_io.hpp"
@@ -130,6 +132,43 @@ TEST(RecorderFiles, WritesTrajectoryKeyframesAndLostListInTheChosenFormat) {
 
   EXPECT_THROW(RecorderOptions::from(runtime::Config::empty(), {"--format", "ply"}), std::runtime_error);
   EXPECT_THROW(RecorderOptions::from(runtime::Config::empty(), {"--output"}), std::runtime_error);
+}
+
+// The atlas: a frame's map is its reference keyframe's latest (a merge renumbers it), else the
+// odometry's; STEM.maps.txt is written only when the run had several maps, one line per pose.
+TEST(RecorderFiles, MapsFileSaysWhichMapEachPoseIsIn) {
+  const auto dir = std::filesystem::temp_directory_path() / ("heslam_recorder_maps_" + std::to_string(getpid()));
+  std::filesystem::remove_all(dir);
+  const RecorderOptions options =
+      RecorderOptions::from(runtime::Config::empty(), {"--output", (dir / "run.txt").string()});
+  EXPECT_EQ(options.maps_output, dir / "run.maps.txt");
+  TrajectoryRecorder recorder;
+  recorder.add_keyframe(1, 1'000'000'000, 0, translation(0, 0, 0));
+  recorder.add_frame(tracked(0, 1, translation(0, 0, 0), translation(0, 0, 0)));
+  write_recording(recorder.build(), options);
+  EXPECT_FALSE(std::filesystem::exists(options.maps_output)) << "one map: no maps file";
+
+  recorder.add_keyframe(2, 1'100'000'000, 2, translation(0.2, 0, 0));
+  recorder.set_keyframe_map(2, 1);
+  RecordedFrame second_map = tracked(2, 2, translation(0, 0, 0), translation(0.2, 0, 0));
+  second_map.map_id = 1;
+  recorder.add_frame(second_map);
+  RecordedFrame unknown_reference = tracked(3, 9, translation(0, 0, 0), translation(0.3, 0, 0));
+  unknown_reference.map_id = 1;  // its keyframe never arrived: the odometry's map
+  recorder.add_frame(unknown_reference);
+  const RecordedTrajectories out = recorder.build();
+  EXPECT_EQ(out.frame_maps, (std::vector<MapId>{0, 1, 1}));
+  EXPECT_EQ(out.keyframe_maps, (std::vector<MapId>{0, 1}));
+  write_recording(out, options);
+  std::ifstream maps(options.maps_output);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(maps, line);) {
+    if (!line.empty() && line[0] != '#') lines.push_back(line);
+  }
+  EXPECT_EQ(lines, (std::vector<std::string>{"0 1.000000000 0", "2 1.100000000 1", "3 1.150000000 1",
+                                             "keyframe 0 1.000000000 0", "keyframe 2 1.100000000 1"}));
+  EXPECT_EQ(eval::read_trajectory(options.output).size(), 3u) << "the trajectory stays a plain TUM file";
+  std::filesystem::remove_all(dir);
 }
 
 Pose3 rotation_about(const Eigen::Vector3d& axis, double angle_rad, const Eigen::Vector3d& t) {

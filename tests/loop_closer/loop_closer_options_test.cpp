@@ -36,6 +36,21 @@ TEST(LoopCloserOptions, ShippedConfigsKeepTheSixDofGraph) {
   }
 }
 
+TEST(LoopCloserOptions, ShippedConfigsMergeMapsWithTheDocumentedGate) {
+  for (const char* name : {"heslam-loop-closer.yaml", "heslam-loop-closer-proximity.yaml"}) {
+    SCOPED_TRACE(name);
+    const runtime::Config config = runtime::Config::load(test::source_dir() / "config/loop_closer" / name);
+    const LoopCloserProcessOptions options = LoopCloserProcessOptions::from_config(config, {});
+    EXPECT_TRUE(options.closing.merging);
+    EXPECT_EQ(options.closing.merge.max_unobserved_speed_mps, 10.0);
+    EXPECT_EQ(options.closing.merge.min_drift_allowance_m, 1.0);
+    EXPECT_TRUE(options.closing.merge.seam_bundle_adjustment);
+  }
+  const LoopCloserProcessOptions off = parse("merge:\n  enabled: false\n  max_unobserved_speed_mps: 0.0\n");
+  EXPECT_FALSE(off.closing.merging);
+  EXPECT_EQ(off.closing.merge.max_unobserved_speed_mps, 0.0);
+}
+
 TEST(LoopCloserOptions, FourDofTakesTheGravityDirection) {
   const LoopCloserProcessOptions options = parse("pose_graph:\n  four_dof: true\n  gravity_w: [0.0, 9.81, 0]\n");
   EXPECT_TRUE(options.closing.correction.pose_graph.four_dof);

@@ -22,6 +22,7 @@ void expect_maps_equal(const Map& a, const Map& b) {
   for (const auto& [id, ka] : a.keyframes) {
     const Keyframe& kb = b.keyframes.at(id);
     EXPECT_EQ(ka.stamp_ns, kb.stamp_ns);
+    EXPECT_EQ(ka.map_id, kb.map_id) << "keyframe " << id;
     EXPECT_EQ(ka.T_wc.matrix(), kb.T_wc.matrix()) << "keyframe " << id;
     EXPECT_EQ(ka.parent, kb.parent);
     EXPECT_EQ(ka.covisible, kb.covisible);
@@ -41,6 +42,7 @@ void expect_maps_equal(const Map& a, const Map& b) {
   for (const auto& [id, pa] : a.points) {
     const MapPoint& pb = b.points.at(id);
     EXPECT_EQ(pa.p_w, pb.p_w) << "point " << id;
+    EXPECT_EQ(pa.map_id, pb.map_id) << "point " << id;
     EXPECT_EQ(pa.descriptor, pb.descriptor);
     EXPECT_EQ(pa.normal, pb.normal);
     EXPECT_EQ(pa.min_distance_m, pb.min_distance_m);
@@ -143,6 +145,24 @@ TEST_F(MapFileTest, WrongMagicAndVersionAreNamed) {
   EXPECT_NE(load_error(damaged([](std::vector<char>& bytes) { bytes[8] = 99; })).find("format version 99"),
             std::string::npos);
   EXPECT_NE(load_error(temp_path("missing.bin")).find("cannot open"), std::string::npos);
+}
+
+// The atlas: keyframes and points of a second map keep their map id through save and load (a restarted
+// mapper, save_map / load).
+TEST_F(MapFileTest, MapIdsSurviveTheRoundTrip) {
+  Map map = mapper_.map();
+  ASSERT_GE(map.keyframes.size(), 2u);
+  const KeyframeId second_map_keyframe = map.keyframes.rbegin()->first;
+  map.keyframes.at(second_map_keyframe).map_id = 3;
+  map.points.begin()->second.map_id = 3;
+  const auto path = temp_path("atlas.bin");
+  save_map_file(path, map, mapper_.state());
+  const MapSnapshot loaded = load_map_file(path);
+  std::filesystem::remove(path);
+  expect_maps_equal(map, loaded.map);
+  EXPECT_EQ(loaded.map.keyframes.at(second_map_keyframe).map_id, 3u);
+  EXPECT_EQ(loaded.map.keyframes.begin()->second.map_id, kFirstMapId);
+  EXPECT_EQ(loaded.map.points.begin()->second.map_id, 3u);
 }
 
 TEST_F(MapFileTest, SaveLeavesNoTemporaryFile) {

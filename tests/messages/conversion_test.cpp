@@ -200,6 +200,7 @@ TEST(MessageConversion, OdometryOfAnInertialOnlyFrameCarriesItsPoseAndVelocity) 
   result.state = TrackingState::kInertialOnly;
   result.T_wc = test_pose();
   result.reference_kf = 5;
+  result.map_id = 1;
   OdometryMessage odometry(100, 3, result, 0, {});
   EXPECT_FALSE(odometry.get().velocity_valid);
   odometry.set_velocity(Eigen::Vector3d(0.5, -1.0, 2.0));
@@ -207,6 +208,7 @@ TEST(MessageConversion, OdometryOfAnInertialOnlyFrameCarriesItsPoseAndVelocity) 
   EXPECT_EQ(message.state, heslam_msg_TRACKING_INERTIAL_ONLY);
   EXPECT_TRUE(to_pose(message.T_wc).isApprox(test_pose()));
   EXPECT_EQ(message.reference_keyframe_id, 5u);
+  EXPECT_EQ(message.map_id, 1u);
   EXPECT_TRUE(message.velocity_valid);
   EXPECT_EQ(message.v_w[0], 0.5);
   EXPECT_EQ(message.v_w[1], -1.0);
@@ -232,7 +234,8 @@ Keyframe make_keyframe(KeyframeId id, int keypoints) {
 }
 
 TEST(MessageConversion, KeyframeRoundTripKeepsFeaturesPointsAndNewPoints) {
-  const Keyframe keyframe = make_keyframe(make_id(kFrontendTag, 3), 6);
+  Keyframe keyframe = make_keyframe(make_id(kFrontendTag, 3), 6);
+  keyframe.map_id = 2;  // the atlas: a keyframe of the third map; its new points are in it too
   MapPoint point;
   point.id = make_id(kFrontendTag, 104);
   point.p_w = Eigen::Vector3d(1, 2, 3);
@@ -241,10 +244,12 @@ TEST(MessageConversion, KeyframeRoundTripKeepsFeaturesPointsAndNewPoints) {
   const KeyframeId reference = make_id(kFrontendTag, 2);
   const KeyframeMessage message(keyframe, 17, {point}, camera, reference, 41);
   EXPECT_EQ(message.get().frame_seq, 17u);
+  EXPECT_EQ(message.get().map_id, 2u);
   EXPECT_EQ(message.get().camera.baseline_m, 0.11);
 
   const DecodedKeyframe decoded = to_keyframe(message.get());
   EXPECT_EQ(decoded.keyframe.id, keyframe.id);
+  EXPECT_EQ(decoded.keyframe.map_id, 2u);
   EXPECT_EQ(decoded.reference_kf, reference);
   EXPECT_EQ(decoded.tracked_map_version, 41u);
   EXPECT_EQ(decoded.keyframe.point_ids, keyframe.point_ids);
@@ -256,6 +261,7 @@ TEST(MessageConversion, KeyframeRoundTripKeepsFeaturesPointsAndNewPoints) {
   EXPECT_EQ(decoded.keyframe.features.pyramid.levels, 8);
   ASSERT_EQ(decoded.new_points.size(), 1u);
   EXPECT_EQ(decoded.new_points[0].p_w, point.p_w);
+  EXPECT_EQ(decoded.new_points[0].map_id, 2u);
   EXPECT_EQ(decoded.new_points[0].observations.front(), std::make_pair(keyframe.id, 4));
 }
 
@@ -273,6 +279,7 @@ TEST(MessageConversion, MirrorAppliesKeyframeStateAndPointMerges) {
   msg::KeyframeState state{};
   state.id = keyframe.id;
   state.map_version = 7;
+  state.map_id = 4;
   Pose3 refined = test_pose();
   refined.translation().x() += 0.01;
   state.T_wc = to_message(refined);
@@ -281,6 +288,7 @@ TEST(MessageConversion, MirrorAppliesKeyframeStateAndPointMerges) {
   ASSERT_TRUE(apply_keyframe_state(map, state));
   EXPECT_NEAR(map.keyframes[keyframe.id].T_wc.translation().x(), refined.translation().x(), 1e-15);
   EXPECT_EQ(map.keyframes[keyframe.id].covisible.front(), std::make_pair(make_id(kFrontendTag, 2), 33));
+  EXPECT_EQ(map.keyframes[keyframe.id].map_id, 4u);
   EXPECT_EQ(map.version, 0u);  // only the mapper's version markers advance it (MirrorVersion)
   EXPECT_FALSE(is_version_marker(state));
   state.id = 999;
@@ -300,6 +308,7 @@ TEST(MessageConversion, MirrorAppliesKeyframeStateAndPointMerges) {
   msg::MapPointState created{};
   created.id = make_id(kMapperTag, 1);
   created.position_w_m[2] = 4.0;
+  created.map_id = 4;
   created.descriptor[0] = 0xAB;
   std::vector<msg::PointObservation> observations{{keyframe.id, 1}};
   runtime::borrow(created.observations, observations);
@@ -307,6 +316,7 @@ TEST(MessageConversion, MirrorAppliesKeyframeStateAndPointMerges) {
   ASSERT_NE(map.point(created.id), nullptr);
   EXPECT_EQ(map.point(created.id)->p_w.z(), 4.0);
   EXPECT_EQ(map.point(created.id)->descriptor[0], 0xAB);
+  EXPECT_EQ(map.point(created.id)->map_id, 4u);
   EXPECT_EQ(map.keyframes[keyframe.id].point_ids[1], created.id);
 
   erase_point(map, b);

@@ -168,5 +168,18 @@ TEST(MapStateMessages, LoopCorrectionIsConvertedAndBadOnesAreRejectedWithTheirId
   }
 }
 
+TEST(MapStateMessages, EveryCorrectionKindTravels) {
+  for (const CorrectionKind kind :
+       {CorrectionKind::kLoop, CorrectionKind::kGlobalBundleAdjustment, CorrectionKind::kMerge}) {
+    LoopCorrection correction;
+    correction.id = 8;
+    correction.loop_kf = 9;
+    correction.matched_kf = 4;
+    correction.kind = kind;
+    const LoopCorrectionMessage message(correction);
+    EXPECT_EQ(to_loop_correction(message.get()).kind, kind);
+  }
+}
+
 }  // namespace
 }  // namespace heslam::messages

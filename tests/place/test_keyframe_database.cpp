@@ -116,6 +116,24 @@ TEST(KeyframeDatabase, LoopCandidatesExcludeTheQueryAndItsCovisibleKeyframes) {
   EXPECT_TRUE(database.loop_candidates(77, map, 0.0).empty());  // not in the database
 }
 
+TEST(KeyframeDatabase, MergeCandidatesComeOnlyFromTheOtherMaps) {
+  const HandBuiltVocabulary v;
+  Map map;
+  map.keyframes[1] = keyframe_with(1, v, {0, 1, 2, 3});     // another map: the place, a bit different
+  map.keyframes[2] = keyframe_with(2, v, {9, 10, 11});      // another map: elsewhere
+  map.keyframes[8] = keyframe_with(8, v, {0, 1, 2, 3, 4});  // the query's own map: the same place
+  map.keyframes[9] = keyframe_with(9, v, {0, 1, 2, 3, 4});  // the query
+  KeyframeDatabase database(v.vocabulary());
+  database.sync(map);
+  // A loop query answers with the own map's keyframe 8 first (it scores best), the merge query with 1 only.
+  EXPECT_EQ(ids(database.loop_candidates(9, map, 0.0)).front(), 8u);
+  const auto merge = database.merge_candidates(9, {1, 2}, map, 0.0);
+  ASSERT_EQ(ids(merge), std::vector<KeyframeId>{1});
+  EXPECT_NEAR(merge[0].score, 0.8, 1e-6);
+  EXPECT_TRUE(database.merge_candidates(9, {1, 2}, map, 0.9).empty());  // min_score
+  EXPECT_TRUE(database.merge_candidates(9, {}, map, 0.0).empty());      // no other map
+}
+
 TEST(KeyframeDatabase, GroupAccumulationAnswersWithTheBestOfAGroup) {
   const HandBuiltVocabulary v;
   Map map;

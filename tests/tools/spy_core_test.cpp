@@ -187,8 +187,9 @@ TEST(MessageFormat, IdsShowCreatorAndCounter) {
   msg::KeyframeState state{};
   state.id = make_id(kFrontendTag, 9);
   state.parent_id = make_id(kFrontendTag, 8);
+  state.map_id = 2;
   const std::string text = format_message(state, {});
-  EXPECT_NE(text.find("id: fe:9\nmap_version: 0\nT_wc: "), std::string::npos) << text;
+  EXPECT_NE(text.find("id: fe:9\nmap_version: 0\nmap_id: 2\nT_wc: "), std::string::npos) << text;
   EXPECT_NE(text.find("parent_id: fe:8\n"), std::string::npos) << text;
 }
 

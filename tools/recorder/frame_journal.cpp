@@ -35,8 +35,13 @@ bool read_record(const std::string& record, RecordedFrame& frame) {
       !read_pose(fields, frame.T_ref_c) || !read_pose(fields, frame.T_wc)) {
     return false;
   }
-  // Inertial runs: optional "v x y z" (velocity) and "g x y z" (gravity) after the poses.
+  // Inertial runs: optional "v x y z" (velocity) and "g x y z" (gravity) after the poses; a frame
+  // of a map other than the first (the atlas): "m MAP_ID".
   while (fields >> rest) {
+    if (rest == "m") {
+      if (!(fields >> frame.map_id)) return false;
+      continue;
+    }
     Eigen::Vector3d value;
     if ((rest != "v" && rest != "g") || !(fields >> value.x() >> value.y() >> value.z())) return false;
     (rest == "v" ? frame.v_w : frame.g_w) = value;
@@ -75,6 +80,7 @@ void FrameJournal::append(const RecordedFrame& frame) {
   write_pose(record, frame.T_wc);
   if (frame.v_w) record << " v " << frame.v_w->x() << ' ' << frame.v_w->y() << ' ' << frame.v_w->z();
   if (frame.g_w) record << " g " << frame.g_w->x() << ' ' << frame.g_w->y() << ' ' << frame.g_w->z();
+  if (frame.map_id != kFirstMapId) record << " m " << frame.map_id;
   journal_.append(record.str());
 }
 

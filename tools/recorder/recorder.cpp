@@ -90,6 +90,7 @@ RecorderOptions RecorderOptions::from(const runtime::Config& config, const std::
   options.keyframe_output = config.get_path("keyframe_output", {});
   options.lost_output = config.get_path("lost_output", {});
   options.inertial_output = config.get_path("inertial_output", {});
+  options.maps_output = config.get_path("maps_output", {});
   if (config.has("frame")) {
     options.frame = parse_frame_or_throw(config.get_choice("frame", "body", {"body", "cam0", "rectified"}), "frame");
     options.frame_given = true;
@@ -106,13 +107,16 @@ RecorderOptions RecorderOptions::from(const runtime::Config& config, const std::
       .path("--keyframes", "FILE", &options.keyframe_output, "the keyframe trajectory (the config's keyframe_output)")
       .path("--lost", "FILE", &options.lost_output, "the stamps of lost frames (the config's lost_output)")
       .path("--inertial", "FILE", &options.inertial_output,
-            "inertial runs: the world's gravity alignment and the velocities (the config's inertial_output)");
+            "inertial runs: the world's gravity alignment and the velocities (the config's inertial_output)")
+      .path("--maps", "FILE", &options.maps_output,
+            "runs with several maps (the atlas): the map of each pose (the config's maps_output)");
   parser.parse(flags);
   if (options.output.empty()) throw std::runtime_error("--output: expected a file name");
   const std::string extension = options.format == eval::Format::euroc ? ".csv" : ".txt";
   if (options.keyframe_output.empty()) options.keyframe_output = sibling_path(options.output, ".keyframes" + extension);
   if (options.lost_output.empty()) options.lost_output = sibling_path(options.output, ".lost.txt");
   if (options.inertial_output.empty()) options.inertial_output = sibling_path(options.output, ".inertial.txt");
+  if (options.maps_output.empty()) options.maps_output = sibling_path(options.output, ".maps.txt");
   return options;
 }
 
@@ -141,6 +145,35 @@ void write_output(const std::filesystem::path& path, const std::string& what, Wr
   }
 }
 
+// The atlas (docs/outputs.md): which map each pose is in, when the run had several. A one-map run
+// writes no such file (and removes a stale one of an earlier run with the same output).
+void write_maps(const RecordedTrajectories& recording, const RecorderOptions& options) {
+  if (!recording.several_maps()) {
+    std::error_code ignored;
+    std::filesystem::remove(options.maps_output, ignored);
+    return;
+  }
+  write_output(options.maps_output, "map ids", [&](const std::filesystem::path& path) {
+    std::ofstream out(path);
+    out.precision(9);
+    out << std::fixed;
+    out << "# heslam map ids (docs/outputs.md): the map of each pose of the trajectory files; poses of different "
+           "maps are in different world frames (each map's own) until the maps are merged\n"
+        << "# trajectory " << options.output.string() << ": seq stamp_s map_id, one line per pose, in its order\n";
+    for (std::size_t i = 0; i < recording.frame_maps.size(); ++i) {
+      out << recording.frames.frame_ids[i] << " " << recording.frames.stamps_s[i] << " " << recording.frame_maps[i]
+          << "\n";
+    }
+    out << "# keyframes " << options.keyframe_output.string() << ": keyframe frame_seq stamp_s map_id\n";
+    for (std::size_t i = 0; i < recording.keyframe_maps.size(); ++i) {
+      out << "keyframe " << recording.keyframes.frame_ids[i] << " " << recording.keyframes.stamps_s[i] << " "
+          << recording.keyframe_maps[i] << "\n";
+    }
+    out.flush();
+    if (!out) throw std::runtime_error("write error");
+  });
+}
+
 }  // namespace
 
 void write_recording(const RecordedTrajectories& recording, const RecorderOptions& options) {
@@ -161,6 +194,7 @@ void write_recording(const RecordedTrajectories& recording, const RecorderOption
     lost.flush();
     if (!lost) throw std::runtime_error("write error");
   });
+  write_maps(recording, options);
   if (!recording.R_gw && recording.velocities.empty()) return;  // stereo-only: no such file
   write_output(options.inertial_output, "inertial outputs", [&](const std::filesystem::path& path) {
     std::ofstream out(path);
@@ -337,6 +371,7 @@ std::size_t Recorder::drain() {
     if (!received.info.valid_data) continue;
     const msg::Keyframe& keyframe = *received.sample;
     recorder_.add_keyframe(keyframe.id, keyframe.stamp_ns, keyframe.frame_seq, messages::to_pose(keyframe.T_wc));
+    recorder_.set_keyframe_map(keyframe.id, keyframe.map_id);
     stats().count("keyframes");
   }
   for (auto& received : keyframe_state_reader_->take()) {
@@ -346,6 +381,7 @@ std::size_t Recorder::drain() {
     // by flag and its writers keep their instances when it exits or restarts.
     if (!received.info.valid_data || messages::is_version_marker(state)) continue;
     recorder_.update_keyframe(state.id, messages::to_pose(state.T_wc), state.parent_id, state.culled);
+    recorder_.set_keyframe_map(state.id, state.map_id);
   }
   for (auto& received : odometry_reader_->take()) {
     ++taken;
@@ -361,6 +397,7 @@ std::size_t Recorder::drain() {
     frame.reference = odometry.reference_keyframe_id;
     frame.T_ref_c = messages::to_pose(odometry.T_ref_c);
     frame.T_wc = messages::to_pose(odometry.T_wc);
+    frame.map_id = odometry.map_id;
     if (frame.tracked) take_inertial(odometry, frame);
     recorder_.add_frame(frame);
     if (odometry.keyframe_created && frame.tracked && frame.reference != kNoId) {

@@ -29,6 +29,7 @@ struct RecorderOptions {
   std::filesystem::path keyframe_output;  // empty: <output stem>.keyframes<ext>
   std::filesystem::path lost_output;      // empty: <output stem>.lost.txt
   std::filesystem::path inertial_output;  // empty: <output stem>.inertial.txt (written by inertial runs only)
+  std::filesystem::path maps_output;      // empty: <output stem>.maps.txt (written by runs with several maps only)
   // The frame the poses are written in (tools/eval/pose_frame.hpp), named in the files' header.
   // body: the calibration's T_BS body frame, what EuRoC's ground truth is of (= cam0 when T_BS is
   // the identity, as for KITTI).

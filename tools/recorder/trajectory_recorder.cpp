@@ -52,6 +52,14 @@ void TrajectoryRecorder::update_keyframe(KeyframeId id, const Pose3& T_wc, Keyfr
   if (culled) cull(record);
 }
 
+void TrajectoryRecorder::set_keyframe_map(KeyframeId id, MapId map_id) { keyframes_[id].map_id = map_id; }
+
+bool RecordedTrajectories::several_maps() const {
+  const auto other = [](MapId id) { return id != kFirstMapId; };
+  return std::any_of(frame_maps.begin(), frame_maps.end(), other) ||
+         std::any_of(keyframe_maps.begin(), keyframe_maps.end(), other);
+}
+
 void TrajectoryRecorder::cull(KeyframeRecord& record) {
   record.culled = true;
   auto parent = keyframes_.find(record.parent);
@@ -91,6 +99,8 @@ RecordedTrajectories TrajectoryRecorder::build() const {
     }
     const double stamp_s = static_cast<double>(frame.stamp_ns) / kNsPerSecond;
     out.frames.push_back(T_wc, static_cast<std::int64_t>(seq), stamp_s);
+    out.frame_maps.push_back(keyframe != keyframes_.end() && keyframe->second.map_id ? *keyframe->second.map_id
+                                                                                     : frame.map_id);
     // The velocity turns with the frame's pose when a correction moved it.
     if (frame.v_w)
       out.velocities.push_back({seq, stamp_s, T_wc.linear() * frame.T_wc.linear().transpose() * *frame.v_w});
@@ -105,6 +115,7 @@ RecordedTrajectories TrajectoryRecorder::build() const {
     const KeyframeRecord& record = keyframes_.at(id);
     out.keyframes.push_back(record.T_wc, static_cast<std::int64_t>(record.frame_seq),
                             static_cast<double>(stamp_ns) / kNsPerSecond);
+    out.keyframe_maps.push_back(record.map_id.value_or(kFirstMapId));
   }
   return out;
 }

@@ -25,6 +25,7 @@ struct RecordedFrame {
   KeyframeId reference = kNoId;
   Pose3 T_ref_c = Pose3::Identity();
   Pose3 T_wc = Pose3::Identity();  // as estimated at the time (fallback when the reference is unknown)
+  MapId map_id = kFirstMapId;      // Odometry.map_id (fallback when the reference's map is unknown)
   // Inertial tracking: the IMU body's velocity and gravity in the map's world, as estimated at the time.
   std::optional<Eigen::Vector3d> v_w;
   std::optional<Eigen::Vector3d> g_w;
@@ -46,6 +47,11 @@ struct LostFrame {
 struct RecordedTrajectories {
   eval::Trajectory frames;     // tracked frames in seq order; frame ids = seq
   eval::Trajectory keyframes;  // non-culled keyframes in stamp order; frame ids = their frame seq
+  // The atlas: the map of each pose of `frames` / `keyframes`, in their order (a frame's is its
+  // reference keyframe's latest map id, which a merge changes).
+  std::vector<MapId> frame_maps;
+  std::vector<MapId> keyframe_maps;
+  bool several_maps() const;
   std::vector<LostFrame> lost;
   int frames_without_reference = 0;  // tracked frames whose keyframe never arrived (odometry pose used)
   // Inertial tracking: the velocities of tracked frames that had one (rotated with their frame's pose
@@ -94,6 +100,8 @@ class TrajectoryRecorder {
   // The mapper's latest state of a keyframe. A culled keyframe keeps its pose relative to its parent
   // from then on (ORB-SLAM2's Tcp), so frames referencing it follow the parent.
   void update_keyframe(KeyframeId id, const Pose3& T_wc, KeyframeId parent, bool culled);
+  // The keyframe's map (Keyframe.map_id, then the mapper's KeyframeState.map_id: the latest wins).
+  void set_keyframe_map(KeyframeId id, MapId map_id);
 
   RecordedTrajectories build() const;
   // Frames are numbered from 0 by their publisher (StereoFrame.seq); frames_published is its count
@@ -113,6 +121,7 @@ class TrajectoryRecorder {
     bool culled = false;
     std::optional<Pose3> T_parent_kf;   // fixed when culled
     bool from_keyframe_sample = false;  // stamp and frame from the Keyframe sample (else odometry or none)
+    std::optional<MapId> map_id;
   };
   // The keyframe's final pose, following culled keyframes up their parents; nullopt when unknown.
   std::optional<Pose3> final_pose(KeyframeId id, int depth = 0) const;

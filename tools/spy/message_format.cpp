@@ -192,6 +192,7 @@ std::string format_message(const msg::Odometry& odometry, const FormatOptions& o
   text.line(0, "seq", std::to_string(odometry.seq));
   text.line(0, "stamp_ns", std::to_string(odometry.stamp_ns));
   text.line(0, "state", state);
+  text.line(0, "map_id", std::to_string(odometry.map_id));
   text.line(0, "T_wc", pose(odometry.T_wc));
   text.line(0, "T_wc_frame", kOdometryFrame);
   text.line(0, "reference_keyframe_id", format_id(odometry.reference_keyframe_id));
@@ -230,6 +231,7 @@ std::string format_message(const msg::Keyframe& keyframe, const FormatOptions& o
   text.line(0, "id", format_id(keyframe.id));
   text.line(0, "stamp_ns", std::to_string(keyframe.stamp_ns));
   text.line(0, "frame_seq", std::to_string(keyframe.frame_seq));
+  text.line(0, "map_id", std::to_string(keyframe.map_id));
   text.line(0, "T_wc", pose(keyframe.T_wc));
   text.line(0, "reference_keyframe_id", format_id(keyframe.reference_keyframe_id));
   text.line(0, "tracked_map_version", std::to_string(keyframe.tracked_map_version));
@@ -263,6 +265,7 @@ std::string format_message(const msg::KeyframeState& state, const FormatOptions&
   if (state.id == kVersionMarkerId) return version_marker(state.map_version);
   text.line(0, "id", format_id(state.id));
   text.line(0, "map_version", std::to_string(state.map_version));
+  text.line(0, "map_id", std::to_string(state.map_id));
   text.line(0, "T_wc", pose(state.T_wc));
   text.line(0, "parent_id", format_id(state.parent_id));
   text.line(0, "culled", state.culled ? "true" : "false");
@@ -278,6 +281,7 @@ std::string format_message(const msg::MapPointState& point, const FormatOptions&
   if (point.id == kVersionMarkerId) return version_marker(point.map_version);
   text.line(0, "id", format_id(point.id));
   text.line(0, "map_version", std::to_string(point.map_version));
+  text.line(0, "map_id", std::to_string(point.map_id));
   text.line(0, "position_w_m", array(point.position_w_m));
   text.line(0, "normal_w", array(point.normal_w));
   text.line(0, "distance_range_m", "[" + number(point.min_distance_m) + ", " + number(point.max_distance_m) + "]");

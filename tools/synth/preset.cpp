@@ -186,6 +186,12 @@ Preset load_preset(const fs::path& yaml_path) {
     int stop_at_end = p.trajectory.stop_at_end ? 1 : 0;
     read_int(tr, "stop_at_end", pre, f, stop_at_end);
     p.trajectory.stop_at_end = stop_at_end != 0;
+    read_number(tr, "teleport_at_s", pre, f, p.trajectory.teleport_at_s);
+    read_number(tr, "teleport_m", pre, f, p.trajectory.teleport_m);
+    if (p.trajectory.teleport_m < 0) fail(f, pre + "teleport_m", "must be >= 0 (metres further along the path)");
+    if (p.trajectory.teleport_m > 0 && !(p.trajectory.teleport_at_s > 0)) {
+      fail(f, pre + "teleport_at_s", "must be > 0 with a teleport (the time of the jump, seconds)");
+    }
     const cv::FileNode stops = tr["stops"];
     if (!stops.empty() && !stops.isNone()) {
       if (!stops.isSeq()) fail(f, pre + "stops", "expected a list of {at_m, wait_s}");

@@ -50,6 +50,11 @@ struct TrajectorySpec {
   // speed), so a vehicle at rest does not sway.
   std::vector<StopSpec> stops;
   bool stop_at_end = false;  // open paths: brake to rest at the end (without: stop dead there)
+  // A teleport (the atlas's proof, docs/tools/synth.md): from teleport_at_s on the camera is
+  // teleport_m further along the path, between two frames, with nothing in between (carried
+  // somewhere the camera has not seen). 0 m: none. Not with --imu (no IMU can measure a jump).
+  double teleport_at_s = 0.0;
+  double teleport_m = 0.0;
 };
 
 struct PhotometrySpec {

@@ -37,6 +37,10 @@ Trajectory::Trajectory(const PathSpec& path, const TrajectorySpec& spec, std::ui
   const auto& cps = path.control_points_w;
   const int n = static_cast<int>(cps.size());
   if (n < 4) throw std::runtime_error("trajectory needs at least 4 control points");
+  if (smooth && spec.teleport_m > 0) {
+    throw std::runtime_error(
+        "trajectory.teleport_m: a teleport cannot be rendered with --imu (no IMU measures a jump)");
+  }
   std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + 17);
   // Jitter is a smooth function of the distance along the control polygon (two seeded sine waves),
   // so densely placed control points (tight turns) are displaced together instead of zig-zagging.
@@ -194,6 +198,7 @@ Trajectory::Travel Trajectory::smooth_travel_at(double t_s) const {
 double Trajectory::distance_at(double t_s) const {
   if (smooth_) return smooth_travel_at(t_s).s_m;
   const double v = spec_.speed_mps;
+  const double teleported_m = spec_.teleport_m > 0 && t_s >= spec_.teleport_at_s ? spec_.teleport_m : 0.0;
   const double ta = std::max(spec_.accel_time_s, 1e-6);
   double s = t_s < ta ? v * t_s * t_s / (2 * ta) : v * (t_s - ta / 2);
   if (!speed_phases_.empty()) {
@@ -203,6 +208,7 @@ double Trajectory::distance_at(double t_s) const {
     const double dt = std::max(0.0, t_s - phase.t0_s);
     s = phase.s0_m + phase.v0_mps * dt + 0.5 * phase.a_mps2 * dt * dt;
   }
+  s += teleported_m;
   const double length = length_m();
   if (closed_) {
     s = std::fmod(s, length);
@@ -302,8 +308,12 @@ Eigen::Vector3d Trajectory::velocity_w(double t_s) const {
     const Travel travel = smooth_travel_at(t_s);
     return spline_derivative(param_at_distance(travel.s_m), 1) * (num_segments_ / length_m()) * travel.speed_mps;
   }
-  const double t0 = std::max(0.0, t_s - kVelocityStepS);
-  const double t1 = t_s + kVelocityStepS;
+  double t0 = std::max(0.0, t_s - kVelocityStepS);
+  double t1 = t_s + kVelocityStepS;
+  // Across a teleport: the difference on the frame's side of the jump.
+  if (spec_.teleport_m > 0 && t0 < spec_.teleport_at_s && spec_.teleport_at_s <= t1) {
+    (t_s >= spec_.teleport_at_s ? t0 : t1) = t_s;
+  }
   return (T_wb(t1).translation() - T_wb(t0).translation()) / (t1 - t0);
 }
 

@@ -63,34 +63,44 @@ LoopCandidates BowLoopDetector::detect(const Map& map, KeyframeId query) {
     return result;
   }
 
-  // The worst score among the query's covisible neighbours: a loop candidate must look at least as
-  // much like the query as the keyframes it is known to see the same things with.
-  const BowVector& bow = *database_.bow(query);
-  double min_score = 1.0;
-  for (const auto& [neighbour, weight] : keyframe->covisible) {
-    const BowVector* other = database_.bow(neighbour);
-    if (other == nullptr) continue;
-    min_score = std::min(min_score, database_.vocabulary().score(bow, *other));
-  }
+  const double min_score = covisible_min_score(map, *keyframe);
   const std::vector<PlaceCandidate> candidates = database_.loop_candidates(query, map, min_score, options_.query);
   if (candidates.empty()) {
     groups_.clear();
     result.reason = "no database candidate above the covisible minimum score " + std::to_string(min_score);
     return result;
   }
+  consistent(map, candidates, groups_, result);
+  return result;
+}
 
+// The worst score among the query's covisible neighbours: a candidate must look at least as much like
+// the query as the keyframes it is known to see the same things with.
+double BowLoopDetector::covisible_min_score(const Map& /*map*/, const Keyframe& keyframe) const {
+  const BowVector& bow = *database_.bow(keyframe.id);
+  double min_score = 1.0;
+  for (const auto& [neighbour, weight] : keyframe.covisible) {
+    const BowVector* other = database_.bow(neighbour);
+    if (other == nullptr) continue;
+    min_score = std::min(min_score, database_.vocabulary().score(bow, *other));
+  }
+  return min_score;
+}
+
+void BowLoopDetector::consistent(const Map& map, const std::vector<PlaceCandidate>& candidates,
+                                 std::vector<ConsistentGroup>& groups, LoopCandidates& result) const {
   // Consistency: each candidate's group must share a keyframe with a group that was already a
   // candidate for the previous queries, `consistency_threshold` times in a row.
   std::vector<ConsistentGroup> current;
-  std::vector<bool> previous_extended(groups_.size(), false);
+  std::vector<bool> previous_extended(groups.size(), false);
   for (const PlaceCandidate& candidate : candidates) {
     const std::set<KeyframeId> group = group_of(map, candidate.id);
     bool consistent_with_any = false;
     bool enough = false;
-    for (std::size_t g = 0; g < groups_.size(); ++g) {
-      if (!share_a_keyframe(group, groups_[g].keyframes)) continue;
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+      if (!share_a_keyframe(group, groups[g].keyframes)) continue;
       consistent_with_any = true;
-      const int consistency = groups_[g].consistency + 1;
+      const int consistency = groups[g].consistency + 1;
       if (!previous_extended[g]) {
         current.push_back({group, consistency});
         previous_extended[g] = true;
@@ -102,12 +112,41 @@ LoopCandidates BowLoopDetector::detect(const Map& map, KeyframeId query) {
       result.keyframes.push_back(candidate.id);
     }
   }
-  groups_ = std::move(current);
+  groups = std::move(current);
   if (result.keyframes.empty()) {
     result.reason = std::to_string(candidates.size()) + " candidate(s), none consistent over " +
                     std::to_string(options_.consistency_threshold) + " keyframes yet";
   }
+}
+
+LoopCandidates BowLoopDetector::detect_merge(const Map& map, KeyframeId query, const std::set<KeyframeId>& other_maps) {
+  database_.sync(map);
+  LoopCandidates result;
+  const Keyframe* keyframe = map.keyframe(query);
+  if (keyframe == nullptr || !database_.contains(query)) {
+    result.reason = "keyframe not in the map (culled or unknown)";
+    return result;
+  }
+  if (other_maps.empty()) {
+    merge_groups_.clear();
+    result.reason = "no other map";
+    return result;
+  }
+  const double min_score = covisible_min_score(map, *keyframe);
+  const std::vector<PlaceCandidate> candidates =
+      database_.merge_candidates(query, other_maps, map, min_score, options_.query);
+  if (candidates.empty()) {
+    merge_groups_.clear();
+    result.reason = "no keyframe of another map above the covisible minimum score " + std::to_string(min_score);
+    return result;
+  }
+  consistent(map, candidates, merge_groups_, result);
   return result;
+}
+
+void BowLoopDetector::maps_merged(KeyframeId query) {
+  loop_closed(query);
+  merge_groups_.clear();
 }
 
 std::vector<std::pair<std::uint32_t, std::uint32_t>> BowLoopDetector::match(const Map& map, KeyframeId query,

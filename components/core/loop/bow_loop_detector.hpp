@@ -35,6 +35,9 @@ class BowLoopDetector final : public LoopDetector {
   const char* name() const override { return "bow"; }
   LoopCandidates detect(const Map& map, KeyframeId query) override;
   void loop_closed(KeyframeId query) override;
+  // The keyframe database's merge query with the loops' minimum score and consistency check.
+  LoopCandidates detect_merge(const Map& map, KeyframeId query, const std::set<KeyframeId>& other_maps) override;
+  void maps_merged(KeyframeId query) override;
   // ORB-SLAM2 SearchByBoW(KF, KF) with these options.
   std::vector<std::pair<std::uint32_t, std::uint32_t>> match(const Map& map, KeyframeId query,
                                                              KeyframeId candidate) const override;
@@ -47,10 +50,17 @@ class BowLoopDetector final : public LoopDetector {
     int consistency = 0;
   };
 
+  // Consistency: keeps candidates whose group shares a keyframe with groups of `groups` over
+  // consistency_threshold consecutive queries (ORB-SLAM2); updates `groups`.
+  void consistent(const Map& map, const std::vector<PlaceCandidate>& candidates, std::vector<ConsistentGroup>& groups,
+                  LoopCandidates& result) const;
+  double covisible_min_score(const Map& map, const Keyframe& keyframe) const;
+
   BowLoopDetectorOptions options_;
   std::shared_ptr<const Vocabulary> vocabulary_;  // the database refers to it
   KeyframeDatabase database_;
   std::vector<ConsistentGroup> groups_;
+  std::vector<ConsistentGroup> merge_groups_;  // the same, for candidates in other maps
   int keyframes_since_loop_;
 };
 

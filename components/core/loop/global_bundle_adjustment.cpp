@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <set>
 
 #include <ceres/ceres.h>
 
@@ -36,11 +37,13 @@ GlobalBundleAdjustmentResult GlobalBundleAdjustment::compute(const Map& map, con
 
   // Contiguous parameters in id order (Ceres orders blocks by address: reproducible solves).
   std::vector<PoseBlock> poses;
+  std::vector<MapId> pose_maps;
   std::map<KeyframeId, std::size_t> pose_index;
   for (const auto& [id, kf] : map.keyframes) {
     if (kf.culled) continue;
     pose_index[id] = poses.size();
     poses.push_back(to_pose_block(kf.T_wc));
+    pose_maps.push_back(kf.map_id);
   }
   std::vector<Eigen::Vector3d> points;
   std::vector<PointId> point_ids;
@@ -79,14 +82,14 @@ GlobalBundleAdjustmentResult GlobalBundleAdjustment::compute(const Map& map, con
     ordering->AddElementToGroup(point.data(), 0);
     ++result.stats.points;
   }
-  bool gauge_fixed = false;
-  for (PoseBlock& pose : poses) {
+  std::set<MapId> gauge_fixed;  // the atlas: no observation joins two maps, so each has a gauge of its own
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    PoseBlock& pose = poses[k];
     if (!problem.HasParameterBlock(pose.data())) continue;
     problem.SetManifold(pose.data(), &pose_manifold);
     ordering->AddElementToGroup(pose.data(), 1);
-    if (!gauge_fixed) {  // the oldest keyframe in the problem anchors the gauge
+    if (gauge_fixed.insert(pose_maps[k]).second) {  // the oldest keyframe of its map in the problem anchors it
       problem.SetParameterBlockConstant(pose.data());
-      gauge_fixed = true;
     }
     ++result.stats.keyframes;
   }

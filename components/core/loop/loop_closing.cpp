@@ -28,13 +28,6 @@ const MapPoint* live_point(const Map& map, PointId id) {
   return point != nullptr && !point->culled ? point : nullptr;
 }
 
-// A verified loop before correction.
-struct VerifiedLoop {
-  Pose3 T_matched_loop;
-  std::vector<std::pair<PointId, PointId>> matched_points;  // (loop-side, matched-side) RANSAC inliers
-  int matches = 0;                                          // after the projection top-up
-};
-
 // Distance travelled from keyframe `from` to keyframe `to` along the live keyframes between them (ids
 // grow in creation order), on the map's current poses.
 double path_between(const Map& map, KeyframeId from, KeyframeId to) {
@@ -71,9 +64,110 @@ std::string implausible_drift(const Map& map, const Keyframe& loop_kf, const Key
 
 LoopClosing::LoopClosing(const PinholeStereo& camera, std::unique_ptr<LoopDetector> detector,
                          const LoopClosingOptions& options)
-    : camera_(camera), detector_(std::move(detector)), options_(options) {}
+    : camera_(camera), detector_(std::move(detector)), options_(options) {
+  options_.merge.correction = options_.correction;  // fusion, essential graph and pose graph as the loops'
+}
 
 LoopClosing::~LoopClosing() = default;
+
+std::optional<VerifiedPlace> LoopClosing::verify_place(const Map& map, KeyframeId query, KeyframeId candidate_id,
+                                                       bool drift_gate, std::string& why) const {
+  const Keyframe* query_kf = map.keyframe(query);
+  const Keyframe* candidate = map.keyframe(candidate_id);
+  if (query_kf == nullptr || query_kf->culled || candidate == nullptr || candidate->culled) {
+    why = "culled before verification";
+    return std::nullopt;
+  }
+  const Keyframe& loop_kf = *query_kf;
+  // 3D-3D correspondences from the detector's matches: A = the candidate, B = the loop keyframe, so
+  // the RANSAC transform T_ab is T_matched_loop.
+  const auto pairs = detector_->match(map, query, candidate_id);
+  std::vector<Se3Correspondence> correspondences;
+  std::vector<std::pair<PointId, PointId>> correspondence_points;
+  const Pose3 T_loop_w = loop_kf.T_wc.inverse();
+  const Pose3 T_candidate_w = candidate->T_wc.inverse();
+  for (const auto& [i, j] : pairs) {
+    const MapPoint* loop_point = live_point(map, loop_kf.point_ids[i]);
+    const MapPoint* matched_point = live_point(map, candidate->point_ids[j]);
+    if (loop_point == nullptr || matched_point == nullptr) continue;
+    const Keypoint& kp_loop = loop_kf.features.keypoints[i];
+    const Keypoint& kp_matched = candidate->features.keypoints[j];
+    Se3Correspondence c;
+    c.p_a = T_candidate_w * matched_point->p_w;
+    c.p_b = T_loop_w * loop_point->p_w;
+    c.uv_a_px = {kp_matched.u_px, kp_matched.v_px};
+    c.uv_b_px = {kp_loop.u_px, kp_loop.v_px};
+    c.sigma2_a = candidate->features.pyramid.sigma2[static_cast<std::size_t>(kp_matched.octave)];
+    c.sigma2_b = loop_kf.features.pyramid.sigma2[static_cast<std::size_t>(kp_loop.octave)];
+    correspondences.push_back(c);
+    correspondence_points.emplace_back(loop_point->id, matched_point->id);
+  }
+  if (static_cast<int>(correspondences.size()) < options_.min_candidate_matches) {
+    why =
+        std::to_string(correspondences.size()) + " matches (< " + std::to_string(options_.min_candidate_matches) + ")";
+    return std::nullopt;
+  }
+  Se3RansacOptions ransac_options;
+  ransac_options.min_inliers = options_.min_ransac_inliers;
+  ransac_options.seed = options_.ransac_seed ^ query ^ (candidate_id << 1);
+  const auto ransac = Se3Ransac(ransac_options).compute(camera_, correspondences);
+  if (!ransac) {
+    why = "SE(3) RANSAC: fewer than " + std::to_string(options_.min_ransac_inliers) + " of " +
+          std::to_string(correspondences.size()) + " matches agree";
+    return std::nullopt;
+  }
+  if (drift_gate) {
+    if (std::string reason = implausible_drift(map, loop_kf, *candidate, ransac->T_ab, options_); !reason.empty()) {
+      why = "drift gate: " + reason;
+      return std::nullopt;
+    }
+  }
+  VerifiedPlace verified;
+  verified.T_matched_loop = ransac->T_ab;
+  std::set<PointId> matched_side;
+  for (std::size_t k = 0; k < correspondences.size(); ++k) {
+    if (!ransac->inlier[k]) continue;
+    verified.matched_points.push_back(correspondence_points[k]);
+    matched_side.insert(correspondence_points[k].second);
+  }
+  // Top-up (ORB-SLAM2 SearchByProjection in ComputeSim3): the candidate's covisible group's points,
+  // projected into the loop keyframe placed where the loop says it is.
+  verified.matches = ransac->inliers;
+  {
+    const Pose3 T_wc_corrected = candidate->T_wc * ransac->T_ab;
+    const FeatureGrid grid(loop_kf.features.keypoints, camera_.width_px, camera_.height_px);
+    std::vector<bool> taken(loop_kf.features.size(), false);
+    for (const auto& [loop_point, matched_point] : verified.matched_points) {
+      for (std::size_t i = 0; i < loop_kf.point_ids.size(); ++i) {
+        if (loop_kf.point_ids[i] == loop_point) taken[i] = true;
+      }
+    }
+    std::vector<KeyframeId> group{candidate_id};
+    for (const auto& [neighbour, weight] : candidate->covisible) group.push_back(neighbour);
+    std::set<PointId> seen = matched_side;
+    ProjectionMatchOptions projection;
+    projection.radius_px = options_.projection_radius_px;
+    projection.max_descriptor_distance = options_.matching.descriptor_threshold_low;
+    for (const KeyframeId kf_id : group) {
+      const Keyframe* kf = map.keyframe(kf_id);
+      if (kf == nullptr || kf->culled) continue;
+      for (const PointId point_id : kf->point_ids) {
+        const MapPoint* point = live_point(map, point_id);
+        if (point == nullptr || !seen.insert(point_id).second) continue;
+        const int index = best_projection_match(*point, loop_kf, T_wc_corrected, grid, camera_, projection);
+        if (index < 0 || taken[static_cast<std::size_t>(index)]) continue;
+        taken[static_cast<std::size_t>(index)] = true;
+        ++verified.matches;
+      }
+    }
+  }
+  if (verified.matches < options_.min_loop_matches) {
+    why = std::to_string(verified.matches) + " matches after the projection top-up (< " +
+          std::to_string(options_.min_loop_matches) + ")";
+    return std::nullopt;
+  }
+  return verified;
+}
 
 LoopClosingResult LoopClosing::process_keyframe(const Map& map, KeyframeId query) {
   LoopClosingResult result;
@@ -82,104 +176,25 @@ LoopClosingResult LoopClosing::process_keyframe(const Map& map, KeyframeId query
   result.timings.detection_ms = ms_since(detection_start);
   if (result.candidates.keyframes.empty()) return result;
 
-  const Keyframe& loop_kf = *map.keyframe(query);
   const auto verification_start = Clock::now();
-  std::optional<VerifiedLoop> accepted;
+  std::optional<VerifiedPlace> accepted;
   KeyframeId accepted_kf = kNoId;
+  const MapId query_map = map.keyframe(query)->map_id;
   for (const KeyframeId candidate_id : result.candidates.keyframes) {
-    const Keyframe* candidate = map.keyframe(candidate_id);
-    if (candidate == nullptr || candidate->culled) {
-      result.rejected.push_back({candidate_id, "culled before verification"});
+    // The atlas: a place of another map is no loop (its poses are in another world frame); recognising
+    // it is a merge of the two maps (process_merge).
+    if (const Keyframe* candidate = map.keyframe(candidate_id);
+        candidate != nullptr && candidate->map_id != query_map) {
+      result.rejected.push_back({candidate_id, "in map " + std::to_string(candidate->map_id) + ", not in map " +
+                                                   std::to_string(query_map) + " (a merge, not a loop)"});
       continue;
     }
-    // 3D-3D correspondences from the detector's matches: A = the candidate, B = the loop keyframe, so
-    // the RANSAC transform T_ab is T_matched_loop.
-    const auto pairs = detector_->match(map, query, candidate_id);
-    std::vector<Se3Correspondence> correspondences;
-    std::vector<std::pair<PointId, PointId>> correspondence_points;
-    const Pose3 T_loop_w = loop_kf.T_wc.inverse();
-    const Pose3 T_candidate_w = candidate->T_wc.inverse();
-    for (const auto& [i, j] : pairs) {
-      const MapPoint* loop_point = live_point(map, loop_kf.point_ids[i]);
-      const MapPoint* matched_point = live_point(map, candidate->point_ids[j]);
-      if (loop_point == nullptr || matched_point == nullptr) continue;
-      const Keypoint& kp_loop = loop_kf.features.keypoints[i];
-      const Keypoint& kp_matched = candidate->features.keypoints[j];
-      Se3Correspondence c;
-      c.p_a = T_candidate_w * matched_point->p_w;
-      c.p_b = T_loop_w * loop_point->p_w;
-      c.uv_a_px = {kp_matched.u_px, kp_matched.v_px};
-      c.uv_b_px = {kp_loop.u_px, kp_loop.v_px};
-      c.sigma2_a = candidate->features.pyramid.sigma2[static_cast<std::size_t>(kp_matched.octave)];
-      c.sigma2_b = loop_kf.features.pyramid.sigma2[static_cast<std::size_t>(kp_loop.octave)];
-      correspondences.push_back(c);
-      correspondence_points.emplace_back(loop_point->id, matched_point->id);
-    }
-    if (static_cast<int>(correspondences.size()) < options_.min_candidate_matches) {
-      result.rejected.push_back({candidate_id, std::to_string(correspondences.size()) + " matches (< " +
-                                                   std::to_string(options_.min_candidate_matches) + ")"});
+    std::string why;
+    accepted = verify_place(map, query, candidate_id, /*drift_gate=*/true, why);
+    if (!accepted) {
+      result.rejected.push_back({candidate_id, why});
       continue;
     }
-    Se3RansacOptions ransac_options;
-    ransac_options.min_inliers = options_.min_ransac_inliers;
-    ransac_options.seed = options_.ransac_seed ^ query ^ (candidate_id << 1);
-    const auto ransac = Se3Ransac(ransac_options).compute(camera_, correspondences);
-    if (!ransac) {
-      result.rejected.push_back({candidate_id, "SE(3) RANSAC: fewer than " +
-                                                   std::to_string(options_.min_ransac_inliers) + " of " +
-                                                   std::to_string(correspondences.size()) + " matches agree"});
-      continue;
-    }
-    if (std::string why = implausible_drift(map, loop_kf, *candidate, ransac->T_ab, options_); !why.empty()) {
-      result.rejected.push_back({candidate_id, "drift gate: " + why});
-      continue;
-    }
-    VerifiedLoop verified;
-    verified.T_matched_loop = ransac->T_ab;
-    std::set<PointId> matched_side;
-    for (std::size_t k = 0; k < correspondences.size(); ++k) {
-      if (!ransac->inlier[k]) continue;
-      verified.matched_points.push_back(correspondence_points[k]);
-      matched_side.insert(correspondence_points[k].second);
-    }
-    // Top-up (ORB-SLAM2 SearchByProjection in ComputeSim3): the candidate's covisible group's points,
-    // projected into the loop keyframe placed where the loop says it is.
-    verified.matches = ransac->inliers;
-    {
-      const Pose3 T_wc_corrected = candidate->T_wc * ransac->T_ab;
-      const FeatureGrid grid(loop_kf.features.keypoints, camera_.width_px, camera_.height_px);
-      std::vector<bool> taken(loop_kf.features.size(), false);
-      for (const auto& [loop_point, matched_point] : verified.matched_points) {
-        for (std::size_t i = 0; i < loop_kf.point_ids.size(); ++i) {
-          if (loop_kf.point_ids[i] == loop_point) taken[i] = true;
-        }
-      }
-      std::vector<KeyframeId> group{candidate_id};
-      for (const auto& [neighbour, weight] : candidate->covisible) group.push_back(neighbour);
-      std::set<PointId> seen = matched_side;
-      ProjectionMatchOptions projection;
-      projection.radius_px = options_.projection_radius_px;
-      projection.max_descriptor_distance = options_.matching.descriptor_threshold_low;
-      for (const KeyframeId kf_id : group) {
-        const Keyframe* kf = map.keyframe(kf_id);
-        if (kf == nullptr || kf->culled) continue;
-        for (const PointId point_id : kf->point_ids) {
-          const MapPoint* point = live_point(map, point_id);
-          if (point == nullptr || !seen.insert(point_id).second) continue;
-          const int index = best_projection_match(*point, loop_kf, T_wc_corrected, grid, camera_, projection);
-          if (index < 0 || taken[static_cast<std::size_t>(index)]) continue;
-          taken[static_cast<std::size_t>(index)] = true;
-          ++verified.matches;
-        }
-      }
-    }
-    if (verified.matches < options_.min_loop_matches) {
-      result.rejected.push_back({candidate_id, std::to_string(verified.matches) +
-                                                   " matches after the projection top-up (< " +
-                                                   std::to_string(options_.min_loop_matches) + ")"});
-      continue;
-    }
-    accepted = std::move(verified);
     accepted_kf = candidate_id;
     break;
   }
@@ -202,6 +217,57 @@ LoopClosingResult LoopClosing::process_keyframe(const Map& map, KeyframeId query
   result.correction = std::move(output.correction);
   loop_edges_.emplace_back(query, accepted_kf);
   detector_->loop_closed(query);
+  return result;
+}
+
+LoopClosingResult LoopClosing::process_merge(const Map& map, KeyframeId query) {
+  LoopClosingResult result;
+  const Keyframe* query_kf = map.keyframe(query);
+  if (!options_.merging || query_kf == nullptr || query_kf->culled) return result;
+  const MapId active = query_kf->map_id;
+  std::set<KeyframeId> other_maps;
+  for (const auto& [id, kf] : map.keyframes) {
+    if (!kf.culled && kf.map_id != active) other_maps.insert(other_maps.end(), id);
+  }
+  if (other_maps.empty()) return result;  // one map: nothing to merge (the common case, no cost)
+  const auto detection_start = Clock::now();
+  result.candidates = detector_->detect_merge(map, query, other_maps);
+  result.timings.detection_ms = ms_since(detection_start);
+  for (const KeyframeId candidate_id : result.candidates.keyframes) {
+    const auto verification_start = Clock::now();
+    std::string why;
+    const std::optional<VerifiedPlace> place = verify_place(map, query, candidate_id, /*drift_gate=*/false, why);
+    result.timings.verification_ms += ms_since(verification_start);
+    if (!place) {
+      result.rejected.push_back({candidate_id, "merge: " + why});
+      continue;
+    }
+    const MapId matched = map.keyframe(candidate_id)->map_id;
+    MapMergeRequest request;
+    request.active_kf = query;
+    request.matched_kf = candidate_id;
+    request.T_matched_active = place->T_matched_loop;
+    request.matched_points = place->matched_points;
+    for (const auto& [id, kf] : map.keyframes) {
+      if (kf.map_id == active) request.active_map.insert(request.active_map.end(), id);
+      if (kf.map_id == matched) request.matched_map.insert(request.matched_map.end(), id);
+    }
+    const auto merge_start = Clock::now();
+    MapMergeOutput merged = MapMerge(options_.merge).compute(map, camera_, request, loop_edges_);
+    result.timings.merge_ms += ms_since(merge_start);
+    result.merge_stats = merged.stats;
+    if (!merged.error.empty()) {
+      result.rejected.push_back({candidate_id, merged.error});
+      continue;
+    }
+    result.loop_matches = place->matches;
+    result.merged_map = active;
+    result.into_map = matched;
+    result.correction = std::move(merged.correction);
+    loop_edges_.emplace_back(query, candidate_id);
+    detector_->maps_merged(query);
+    break;
+  }
   return result;
 }
 

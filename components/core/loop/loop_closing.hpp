@@ -14,6 +14,7 @@
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/loop/loop_correction_builder.hpp"
 #include "components/core/loop/loop_detector.hpp"
+#include "components/core/loop/map_merge.hpp"
 #include "components/core/map/map.hpp"
 #include "components/core/mapping/loop_correction.hpp"
 #include "components/core/tracking/tracker_options.hpp"
@@ -42,6 +43,9 @@ struct LoopClosingOptions {
   double max_rotation_drift_deg_per_m = 0.2;
   double min_rotation_allowance_deg = 10.0;
   std::uint64_t ransac_seed = 0x100b;
+  // The atlas: look for places of other maps too and merge them (map_merge.hpp).
+  bool merging = true;
+  MapMergeOptions merge;                    // its `correction` is replaced by the loops' `correction` below
   TrackerOptions matching;                  // descriptor thresholds, orientation check
   LoopCorrectionBuilderOptions correction;  // pose_graph.* (4-DoF in inertial runs)
 };
@@ -55,13 +59,24 @@ struct LoopClosingTimings {
   double detection_ms = 0.0;
   double verification_ms = 0.0;  // matching + RANSAC + refinement + top-up, all candidates
   double correction_ms = 0.0;    // group propagation, fusion, essential graph
+  double merge_ms = 0.0;         // a merge's weld (map_merge.hpp)
+};
+
+// A place verified geometrically (a loop, or a merge with another map) before any correction.
+struct VerifiedPlace {
+  Pose3 T_matched_loop = Pose3::Identity();                 // the query keyframe in the candidate's frame
+  std::vector<std::pair<PointId, PointId>> matched_points;  // (query-side, candidate-side) RANSAC inliers
+  int matches = 0;                                          // after the projection top-up
 };
 
 struct LoopClosingResult {
   LoopCandidates candidates;
   std::vector<LoopRejection> rejected;
-  std::optional<LoopCorrection> correction;  // id 0: the caller assigns it
+  std::optional<LoopCorrection> correction;  // id 0: the caller assigns it; kind kMerge for a merge
   int loop_matches = 0;
+  MapId merged_map = kFirstMapId;  // a merge: the map welded into ...
+  MapId into_map = kFirstMapId;    // ... this one
+  MapMergeStats merge_stats;
   LoopClosingTimings timings;
 };
 
@@ -73,6 +88,18 @@ class LoopClosing {
   // Processes keyframe `query` of `map`. On an accepted loop the result holds the correction
   // (corrected poses of every keyframe, point merges) computed on map.version.
   LoopClosingResult process_keyframe(const Map& map, KeyframeId query);
+
+  // The atlas: places of maps other than `query`'s (LoopDetector::detect_merge), verified without the
+  // drift gate, merged with the merge gate (map_merge.hpp). On an accepted merge the correction (kind
+  // kMerge) moves query's map into the matched keyframe's; the caller publishes it as a loop's.
+  LoopClosingResult process_merge(const Map& map, KeyframeId query);
+
+  // The shared geometric check of candidate `candidate` for keyframe `query`: the detector's matches,
+  // SE(3) RANSAC, the projection top-up; with `drift_gate` also the drift gate. nullopt with the
+  // reason in `why` when rejected. A merge calls it without the drift gate (two maps' poses are not
+  // comparable) and applies its own gate (map_merge.hpp).
+  std::optional<VerifiedPlace> verify_place(const Map& map, KeyframeId query, KeyframeId candidate, bool drift_gate,
+                                            std::string& why) const;
 
   // A global bundle adjustment of the whole map, as a correction of kind kGlobalBundleAdjustment
   // (poses and point positions). nullopt when `abort` was set before it finished.

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -27,6 +28,16 @@ class LoopDetector {
   virtual LoopCandidates detect(const Map& map, KeyframeId query) = 0;
   // A loop was closed at `query`: detectors typically wait some keyframes before the next one.
   virtual void loop_closed(KeyframeId query) = 0;
+  // The atlas: keyframes of OTHER maps (`other_maps`: their live keyframes) that might show the place
+  // `query` of the active map sees, best first; verified as loops are, merged when accepted
+  // (map_merge.hpp). Poses of two maps are not comparable, so detectors must not use them here.
+  // Called after detect() for the same query. The default finds none (say why).
+  virtual LoopCandidates detect_merge(const Map& /*map*/, KeyframeId /*query*/,
+                                      const std::set<KeyframeId>& /*other_maps*/) {
+    return {{}, std::string(name()) + " detector does not look for merges"};
+  }
+  // Two maps were merged at `query`.
+  virtual void maps_merged(KeyframeId query) { loop_closed(query); }
   // Keypoint pairs (query keypoint, candidate keypoint), both observing live map points, that likely
   // show the same point: the input of the shared geometric check. Each detector matches the way
   // its candidates allow (words of a vocabulary, plain descriptors, ...).

@@ -72,6 +72,43 @@ LoopCandidates ProximityLoopDetector::detect(const Map& map, KeyframeId query) {
   return result;
 }
 
+LoopCandidates ProximityLoopDetector::detect_merge(const Map& map, KeyframeId query,
+                                                   const std::set<KeyframeId>& other_maps) {
+  LoopCandidates result;
+  const Keyframe* keyframe = map.keyframe(query);
+  if (keyframe == nullptr || keyframe->culled) {
+    result.reason = "keyframe not in the map (culled or unknown)";
+    return result;
+  }
+  if (other_maps.empty()) {
+    result.reason = "no other map";
+    return result;
+  }
+  // Round robin from after the cursor, wrapping once.
+  std::vector<std::pair<int, KeyframeId>> scored;  // (-matches, id): most matches first, ties by id
+  auto it = other_maps.upper_bound(merge_cursor_);
+  const std::size_t budget =
+      std::min(other_maps.size(), static_cast<std::size_t>(std::max(1, options_.merge_keyframes_per_query)));
+  for (std::size_t scanned = 0; scanned < budget; ++scanned) {
+    if (it == other_maps.end()) it = other_maps.begin();
+    const KeyframeId candidate = *it++;
+    merge_cursor_ = candidate;
+    const Keyframe* other = map.keyframe(candidate);
+    if (other == nullptr || other->culled) continue;
+    const int matches = static_cast<int>(match(map, query, candidate).size());
+    if (matches >= options_.merge_min_matches) scored.emplace_back(-matches, candidate);
+  }
+  std::sort(scored.begin(), scored.end());
+  for (std::size_t i = 0; i < scored.size() && static_cast<int>(i) < options_.max_candidates; ++i) {
+    result.keyframes.push_back(scored[i].second);
+  }
+  if (result.keyframes.empty()) {
+    result.reason = "none of " + std::to_string(budget) + " keyframes of other maps scanned has " +
+                    std::to_string(options_.merge_min_matches) + " descriptor matches";
+  }
+  return result;
+}
+
 std::vector<std::pair<std::uint32_t, std::uint32_t>> ProximityLoopDetector::match(const Map& map, KeyframeId query,
                                                                                   KeyframeId candidate) const {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;

@@ -17,6 +17,13 @@ struct ProximityLoopDetectorOptions {
   int max_candidates = 3;            // nearest first
   int min_keyframes_in_map = 10;     // as the BoW detector (ORB-SLAM2)
   int keyframes_after_loop = 10;
+  // Merges (the atlas): poses of two maps are not comparable, so merge candidates are found by
+  // appearance alone: the query's map-point keypoints matched by descriptor (below) against keyframes
+  // of the other maps, candidates with at least merge_min_matches matches, most matches first. At most
+  // merge_keyframes_per_query keyframes are scanned per query (a round robin over the other maps'
+  // keyframes, so the cost per keyframe stays bounded while successive keyframes cover them all).
+  int merge_min_matches = 30;
+  int merge_keyframes_per_query = 40;
   // Descriptor matching of the two keyframes' map-point keypoints.
   int max_descriptor_distance = 50;  // ORB-SLAM2 TH_LOW
   float ratio = 0.8f;                // best < ratio x second best
@@ -29,12 +36,14 @@ class ProximityLoopDetector final : public LoopDetector {
   const char* name() const override { return "proximity"; }
   LoopCandidates detect(const Map& map, KeyframeId query) override;
   void loop_closed(KeyframeId query) override;
+  LoopCandidates detect_merge(const Map& map, KeyframeId query, const std::set<KeyframeId>& other_maps) override;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> match(const Map& map, KeyframeId query,
                                                              KeyframeId candidate) const override;
 
  private:
   ProximityLoopDetectorOptions options_;
   int keyframes_since_loop_ = 1 << 30;
+  KeyframeId merge_cursor_ = kNoId;  // the last other-map keyframe scanned
 };
 
 }  // namespace heslam

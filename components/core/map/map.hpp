@@ -22,10 +22,19 @@ using KeyframeId = std::uint64_t;
 using PointId = std::uint64_t;
 inline constexpr std::uint64_t kNoId = 0;
 
+// The atlas (docs/frontend.md, Atlas): one Map holds several maps as a partition by map id. Every
+// keyframe and point carries its map's id; no observation, covisibility edge or spanning-tree edge
+// crosses two maps, so local BA, culling and covisibility stay inside one map without further checks.
+// The first map is 0 (so a map file or a message from before the atlas reads as the first map); the
+// frontend numbers the maps it starts after a loss 1, 2, ...
+using MapId = std::uint32_t;
+inline constexpr MapId kFirstMapId = 0;
+
 // Ids: make_id(creator_tag, counter), creator tags and format_id() are in ids.hpp.
 
 struct Keyframe {
   KeyframeId id = kNoId;
+  MapId map_id = kFirstMapId;
   std::int64_t stamp_ns = 0;
   Pose3 T_wc = Pose3::Identity();
   StereoFeatures features;
@@ -39,6 +48,7 @@ struct Keyframe {
 
 struct MapPoint {
   PointId id = kNoId;
+  MapId map_id = kFirstMapId;  // its observers' map
   Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
   Descriptor descriptor{};                           // representative (median-distance) descriptor
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // mean viewing direction, unit
@@ -74,6 +84,17 @@ struct Map {
     return it == points.end() ? nullptr : &it->second;
   }
 };
+
+// The root of map `map_id`'s spanning tree: its oldest keyframe (the first map's is the whole store's
+// oldest, as before the atlas), kNoId when the map has none. Local BA holds it fixed and culling keeps
+// it, per map. Keyframe ids grow with time and a new map starts with a new keyframe, so the first
+// keyframe found in id order is the map's first.
+inline KeyframeId map_origin(const Map& map, MapId map_id) {
+  for (const auto& [id, keyframe] : map.keyframes) {
+    if (keyframe.map_id == map_id) return id;
+  }
+  return kNoId;
+}
 
 // A point's observations counted as ORB-SLAM2's MapPoint::Observations(): 2 for a keypoint with stereo
 // depth, 1 otherwise. Its thresholds (point culling, the reference keyframe's tracked points) are in

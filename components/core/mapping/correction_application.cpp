@@ -79,6 +79,29 @@ int apply_loop_correction(Map& map, const LoopCorrection& correction,
     changes.changed_points.insert(id);
   }
 
+  // A merge: the loop keyframe's map becomes the matched keyframe's, keyframes the loop closer did not
+  // know yet included (they were made in that map). Before the point merges, so fused points agree.
+  if (correction.kind == CorrectionKind::kMerge) {
+    const Keyframe* loop_kf = map.keyframe(correction.loop_kf);
+    const Keyframe* matched_kf = map.keyframe(correction.matched_kf);
+    if (loop_kf == nullptr || matched_kf == nullptr) {
+      ++skipped;
+    } else if (loop_kf->map_id != matched_kf->map_id) {
+      const MapId merged = loop_kf->map_id;
+      const MapId into = matched_kf->map_id;
+      for (auto& [id, kf] : map.keyframes) {
+        if (kf.map_id != merged) continue;
+        kf.map_id = into;
+        changes.changed_keyframes.insert(id);
+      }
+      for (auto& [id, point] : map.points) {
+        if (point.map_id != merged) continue;
+        point.map_id = into;
+        changes.changed_points.insert(id);
+      }
+    }
+  }
+
   for (const auto& [from, into] : correction.point_merges) {
     if (map.point(from) == nullptr || map.point(into) == nullptr || from == into) {
       ++skipped;

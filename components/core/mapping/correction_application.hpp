@@ -5,8 +5,9 @@
 //   T_new(kf) = T_new(parent) T_old(parent)^-1 T_old(kf),
 // applied from the root downwards so a chain of new keyframes moves rigidly with its corrected
 // ancestor. Every map point moves with its reference keyframe, p_new = T_new(ref) T_old(ref)^-1 p_old.
-// Listed corrected points then take their given positions (a global BA's result). Finally the listed
-// point merges are executed.
+// Listed corrected points then take their given positions (a global BA's or a merge's result). A merge
+// (kind kMerge) then gives every keyframe and point of the loop keyframe's map the matched keyframe's
+// map id. Finally the listed point merges are executed.
 #pragma once
 
 #include <cstdint>

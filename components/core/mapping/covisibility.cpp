@@ -76,7 +76,7 @@ std::set<KeyframeId> update_connections(Map& map, KeyframeId kf_id, const Covisi
     kf->covisible = edges;
     touched.insert(kf_id);
   }
-  if (kf->parent == kNoId && !edges.empty() && kf_id != map.keyframes.begin()->first) {
+  if (kf->parent == kNoId && !edges.empty() && kf_id != map_origin(map, kf->map_id)) {
     kf->parent = edges.front().first;
     touched.insert(kf_id);
   }

@@ -40,8 +40,8 @@ std::vector<KeyframeId> cull_redundant_neighbours(Map& map, KeyframeId kf_id, co
   std::vector<KeyframeId> culled;
   const Keyframe* kf = map.keyframe(kf_id);
   if (kf == nullptr || map.keyframes.empty()) return culled;
-  const KeyframeId origin_id = map.keyframes.begin()->first;
-  const auto neighbours = kf->covisible;  // culling edits the lists
+  const KeyframeId origin_id = map_origin(map, kf->map_id);  // each map of the atlas has its own
+  const auto neighbours = kf->covisible;                     // culling edits the lists
   for (const auto& [neighbour, weight] : neighbours) {
     if (neighbour == origin_id || neighbour == kf_id) continue;
     if (!is_redundant_keyframe(map, neighbour, camera, options)) continue;

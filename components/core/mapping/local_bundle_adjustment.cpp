@@ -37,7 +37,7 @@ LocalBundleAdjustmentResult local_bundle_adjustment(Map& map, KeyframeId kf_id, 
   LocalBundleAdjustmentResult result;
   const Keyframe* kf = map.keyframe(kf_id);
   if (kf == nullptr || kf->culled || map.keyframes.empty()) return result;
-  const KeyframeId origin_id = map.keyframes.begin()->first;
+  const KeyframeId origin_id = map_origin(map, kf->map_id);  // each map of the atlas has its own
 
   std::set<KeyframeId> free_kfs{kf_id};
   for (const auto& [neighbour, weight] : kf->covisible) {

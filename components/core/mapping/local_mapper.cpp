@@ -80,6 +80,7 @@ void LocalMapper::insert_keyframe(Keyframe kf, std::vector<MapPoint> new_points,
                                   MapChanges& changes) {
   check_keyframe(map_, kf);
   const KeyframeId kf_id = kf.id;
+  const MapId map_id = kf.map_id;
   // Tracked before a correction applied since: into the corrected frame, with its reference.
   const Pose3 motion = motion_of_late_keyframe(state_.correction_motions, kf_id, tracked);
   if (!motion.matrix().isIdentity(0.0)) {
@@ -104,6 +105,7 @@ void LocalMapper::insert_keyframe(Keyframe kf, std::vector<MapPoint> new_points,
       continue;
     }
     point.observations.clear();
+    point.map_id = map_id;  // a keyframe's new points are in its map
     point.reference_kf = kf_id;
     point.culled = false;
     point.merged_into = kNoId;
@@ -116,7 +118,8 @@ void LocalMapper::insert_keyframe(Keyframe kf, std::vector<MapPoint> new_points,
     if (references[i] == kNoId) continue;
     const PointId id = resolve_merges(references[i]);
     MapPoint* point = map_.point(id);
-    if (point == nullptr || observation_index(*point, kf_id) >= 0) {
+    // The atlas: no observation crosses two maps (docs/topics.md, Map ids).
+    if (point == nullptr || observation_index(*point, kf_id) >= 0 || point->map_id != map_id) {
       ++changes.counts.rejected_observations;
       continue;
     }

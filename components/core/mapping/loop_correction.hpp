@@ -15,9 +15,10 @@
 
 namespace heslam {
 
-// What produced the correction: a closed loop (essential-graph optimization) or the global bundle
-// adjustment that follows one (which also sets point positions).
-enum class CorrectionKind { kLoop, kGlobalBundleAdjustment };
+// What produced the correction: a closed loop (essential-graph optimization), the global bundle
+// adjustment that follows one (which also sets point positions), or a merge of two maps (the loop
+// keyframe's map is welded into the matched keyframe's: poses, seam points and merges).
+enum class CorrectionKind { kLoop, kGlobalBundleAdjustment, kMerge };
 
 struct LoopCorrection {
   std::uint64_t id = 0;

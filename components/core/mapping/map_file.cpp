@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "components/core/map/ids.hpp"
@@ -200,6 +201,27 @@ void write_payload(Writer& w, const Map& map, const MapperState& state) {
       w.put_pose(T);
     }
   }
+
+  // Format 3: map ids, listed only where not the first map's (a one-map file stays as it was, plus two
+  // zero counts).
+  std::vector<std::pair<std::uint64_t, MapId>> map_ids;
+  for (const auto& [id, kf] : map.keyframes) {
+    if (kf.map_id != kFirstMapId) map_ids.emplace_back(id, kf.map_id);
+  }
+  w.put(static_cast<std::uint64_t>(map_ids.size()));
+  for (const auto& [id, map_id] : map_ids) {
+    w.put(id);
+    w.put(map_id);
+  }
+  map_ids.clear();
+  for (const auto& [id, p] : map.points) {
+    if (p.map_id != kFirstMapId) map_ids.emplace_back(id, p.map_id);
+  }
+  w.put(static_cast<std::uint64_t>(map_ids.size()));
+  for (const auto& [id, map_id] : map_ids) {
+    w.put(id);
+    w.put(map_id);
+  }
 }
 
 void read_payload(Reader& r, std::uint32_t format, MapSnapshot& out) {
@@ -306,6 +328,22 @@ void read_payload(Reader& r, std::uint32_t format, MapSnapshot& out) {
         record.T_new_old[id] = r.get_pose();
       }
       state.correction_motions.push_back(std::move(record));
+    }
+  }
+  if (format >= 3) {
+    r.context("keyframe map ids");
+    for (std::uint64_t n = r.get_count(12); n > 0; --n) {
+      const auto id = r.get<std::uint64_t>();
+      Keyframe* kf = map.keyframe(id);
+      if (kf == nullptr) r.fail("map id of unknown keyframe " + format_id(id));
+      kf->map_id = r.get<MapId>();
+    }
+    r.context("point map ids");
+    for (std::uint64_t n = r.get_count(12); n > 0; --n) {
+      const auto id = r.get<std::uint64_t>();
+      MapPoint* p = map.point(id);
+      if (p == nullptr) r.fail("map id of unknown point " + format_id(id));
+      p->map_id = r.get<MapId>();
     }
   }
   r.context("end of payload");

@@ -16,7 +16,9 @@ namespace heslam {
 
 // 2: the mapper's correction motions (correction_history.hpp) after the points. Version 1 files
 // are still read (no correction remembered).
-inline constexpr std::uint32_t kMapFileFormatVersion = 2;
+// 3: the map ids of keyframes and points not in the first map (the atlas), after the correction
+// motions. Older files read as one map, the first.
+inline constexpr std::uint32_t kMapFileFormatVersion = 3;
 inline constexpr std::uint32_t kOldestReadableMapFileFormatVersion = 1;
 
 struct MapSnapshot {

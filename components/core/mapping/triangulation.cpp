@@ -122,6 +122,7 @@ std::vector<PointId> create_new_points(Map& map, KeyframeId kf_id, const Pinhole
       if (!p_w) continue;
       MapPoint point;
       point.id = make_id(creator_tag, ++next_counter);
+      point.map_id = kf1_now.map_id;  // both keyframes are in it: covisibility never crosses maps
       point.p_w = *p_w;
       point.reference_kf = kf_id;
       const PointId id = point.id;

@@ -177,6 +177,21 @@ std::vector<PlaceCandidate> KeyframeDatabase::loop_candidates(KeyframeId query, 
   return rank_groups(*query_bow, table, *this, map, min_score, options);
 }
 
+std::vector<PlaceCandidate> KeyframeDatabase::merge_candidates(KeyframeId query, const std::set<KeyframeId>& among,
+                                                               const Map& map, double min_score,
+                                                               const PlaceQueryOptions& options) const {
+  const BowVector* query_bow = bow(query);
+  if (query_bow == nullptr || among.empty()) return {};
+  SharingTable table;
+  for (const auto& [word, weight] : query_bow->entries) {
+    if (word >= inverted_.size()) continue;
+    for (const KeyframeId id : inverted_[word]) {
+      if (id != query && among.count(id) != 0) ++table[id].common_words;
+    }
+  }
+  return rank_groups(*query_bow, table, *this, map, min_score, options);
+}
+
 std::vector<PlaceCandidate> KeyframeDatabase::relocalization_candidates(const BowVector& query, const Map& map,
                                                                         const PlaceQueryOptions& options) const {
   SharingTable table;

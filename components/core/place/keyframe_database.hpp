@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <set>
 #include <span>
 #include <vector>
 
@@ -68,6 +69,12 @@ class KeyframeDatabase {
   // `min_score`, grouped with their covisible neighbours; the best of each retained group.
   std::vector<PlaceCandidate> loop_candidates(KeyframeId query, const Map& map, double min_score,
                                               const PlaceQueryOptions& options = {}) const;
+
+  // The atlas's merge query (ORB-SLAM3 DetectCommonRegions' BoW step): as loop_candidates, but only
+  // keyframes in `among` answer (the keyframes of the maps other than the query's); the query's own
+  // map cannot crowd them out of the ranking.
+  std::vector<PlaceCandidate> merge_candidates(KeyframeId query, const std::set<KeyframeId>& among, const Map& map,
+                                               double min_score, const PlaceQueryOptions& options = {}) const;
 
   // ORB-SLAM2 DetectRelocalizationCandidates for a frame's BoW vector (all keyframes may answer).
   std::vector<PlaceCandidate> relocalization_candidates(const BowVector& bow, const Map& map,

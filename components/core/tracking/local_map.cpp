@@ -161,10 +161,11 @@ LocalMapSelection select_local_map(const Frame& frame, const Map& map, const Tra
 }
 
 KeyframeCandidate make_keyframe(const Frame& frame, const PinholeStereo& camera, const Map& map, KeyframeId keyframe_id,
-                                std::uint64_t& next_point_counter, const TrackerOptions& options) {
+                                std::uint64_t& next_point_counter, const TrackerOptions& options, MapId map_id) {
   KeyframeCandidate candidate;
   Keyframe& kf = candidate.keyframe;
   kf.id = keyframe_id;
+  kf.map_id = map_id;
   kf.stamp_ns = frame.stamp_ns;
   kf.T_wc = frame.T_wc;
   kf.features = frame.features;
@@ -188,6 +189,7 @@ KeyframeCandidate make_keyframe(const Frame& frame, const PinholeStereo& camera,
       const Keypoint& kp = frame.features.keypoints[i];
       MapPoint point;
       point.id = make_id(options.id_tag, next_point_counter++);
+      point.map_id = kf.map_id;
       point.p_w = frame.T_wc * camera.unproject(kp.u_px, kp.v_px, depth_m);
       point.descriptor = frame.features.descriptors[i];
       point.observations.emplace_back(kf.id, static_cast<int>(i));

@@ -21,13 +21,15 @@ struct LocalMapSelection {
 LocalMapSelection select_local_map(const Frame& frame, const Map& map, const TrackerOptions& options);
 
 // Builds the new keyframe's map-point content from the frame: tracked points as observations, new
-// stereo points for close untracked features (ORB-SLAM2 CreateNewKeyFrame). Ids from the counters.
+// stereo points for close untracked features (ORB-SLAM2 CreateNewKeyFrame). Ids from the counters;
+// the keyframe and its new points belong to map `map_id`.
 struct KeyframeCandidate {
   Keyframe keyframe;
   std::vector<MapPoint> new_points;
 };
 KeyframeCandidate make_keyframe(const Frame& frame, const PinholeStereo& camera, const Map& map, KeyframeId keyframe_id,
-                                std::uint64_t& next_point_counter, const TrackerOptions& options);
+                                std::uint64_t& next_point_counter, const TrackerOptions& options,
+                                MapId map_id = kFirstMapId);
 
 // Inserts a keyframe and its new points into the map. With options.maintain_map (no mapper) it also
 // records the keyframe's observations of existing points, refreshes their normals, distance ranges and

@@ -122,7 +122,12 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
       ok = true;
       result.method = TrackingMethod::kRelocalization;
       reference_kf_ = relocalization->keyframe;
+      // The atlas: relocalization searches every map; a frame relocalized in another one goes on in it.
+      active_map_ = map_.keyframe(reference_kf_)->map_id;
       frames_since_relocalization_ = 0;
+    } else if (new_map_due(stamp_ns) && start_new_map(frame, result)) {
+      result.timings.total_ms = elapsed_ms(start);
+      return result;
     }
   }
   result.timings.initial_pose_ms = elapsed_ms(start);
@@ -137,6 +142,8 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
 
   if (ok) {
     state_ = TrackingState::kOk;
+    lost_since_ns_.reset();
+    lost_frames_ = 0;
     // On the frame's inliers, before keyframe creation adds its new points to the matches.
     std::optional<StationaryTestResult> stationary;
     if (last_frame_tracked) stationary = test_stationary(frame, map_, camera_, options_, last_frame_.T_wc);
@@ -171,6 +178,8 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
     result.T_wc = frame.T_wc;
   } else {
     state_ = TrackingState::kLost;
+    if (!lost_since_ns_) lost_since_ns_ = stamp_ns;
+    ++lost_frames_;
     velocity_.reset();
     frame.clear_matches();
     frame.T_wc = last_frame_.T_wc;  // kept only as the relocalization starting guess
@@ -181,7 +190,10 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
   result.reference_kf = reference_kf_;
   if (const Keyframe* reference = map_.keyframe(reference_kf_)) {
     result.T_ref_c = reference->T_wc.inverse() * frame.T_wc;
+    // The map a tracked frame is in is its reference keyframe's (which a merge may renumber).
+    if (result.pose_valid()) active_map_ = reference->map_id;
   }
+  result.map_id = active_map_;
   last_T_ref_c_ = result.T_ref_c;
   last_frame_ = std::move(frame);
   result.timings.total_ms = elapsed_ms(start);
@@ -213,6 +225,8 @@ bool Tracker::resume_in_map(const std::optional<LastFramePose>& last) {
   skip_ids_through(keyframes + kResumeIdGap, points + kResumeIdGap);
   reference_kf_ = map_.keyframes.rbegin()->first;
   state_ = TrackingState::kLost;  // the next frame goes to relocalization
+  lost_since_ns_.reset();         // ... and a new map may start only after a loss of its own
+  lost_frames_ = 0;
   if (last) {
     // The next frame is tracked against the reference keyframe from this pose (track_reference_keyframe),
     // which needs no place recognition: a frame just after a restart is as easy as any other.
@@ -220,6 +234,7 @@ bool Tracker::resume_in_map(const std::optional<LastFramePose>& last) {
     if (reference != nullptr && !reference->culled) reference_kf_ = last->reference;
     last_frame_.T_wc = reference != nullptr ? reference->T_wc * last->T_ref_c : last->T_wc;
     last_T_ref_c_ = map_.keyframe(reference_kf_)->T_wc.inverse() * last_frame_.T_wc;
+    active_map_ = map_.keyframe(reference_kf_)->map_id;
     velocity_.reset();
     state_ = TrackingState::kOk;
   }
@@ -227,7 +242,37 @@ bool Tracker::resume_in_map(const std::optional<LastFramePose>& last) {
   return true;
 }
 
-bool Tracker::initialize(Frame& frame, TrackResult& result) {
+bool Tracker::new_map_due(std::int64_t stamp_ns) const {
+  return options_.new_map_after_ns > 0 && options_.create_keyframes && lost_since_ns_ &&
+         stamp_ns - *lost_since_ns_ >= options_.new_map_after_ns;
+}
+
+bool Tracker::start_new_map(Frame& frame, TrackResult& result) {
+  // The next id after every map this tracker knows (its own and the mirror's): a restarted frontend
+  // that mirrors the mapper's map continues the numbering.
+  MapId newest = active_map_;
+  for (const auto& [id, keyframe] : map_.keyframes) newest = std::max(newest, keyframe.map_id);
+  const NewMapStart why{active_map_, *lost_since_ns_, lost_frames_};
+  const MapId previous = active_map_;
+  const KeyframeId previous_reference = reference_kf_;
+  active_map_ = newest + 1;
+  // Its origin: the last pose the tracker had (the last tracked frame's, or the IMU's), so the
+  // trajectory and the odometry go on from there instead of jumping to the identity.
+  if (!initialize(frame, result, last_frame_.T_wc)) {
+    active_map_ = previous;
+    reference_kf_ = previous_reference;
+    return false;
+  }
+  result.new_map = why;
+  last_T_ref_c_ = Pose3::Identity();
+  lost_since_ns_.reset();
+  lost_frames_ = 0;
+  velocity_.reset();
+  frames_since_relocalization_ = 1 << 30;
+  return true;
+}
+
+bool Tracker::initialize(Frame& frame, TrackResult& result, const Pose3& T_wc_origin) {
   int stereo = 0;
   for (std::size_t i = 0; i < frame.size(); ++i) stereo += frame.features.has_stereo(i) ? 1 : 0;
   result.state = TrackingState::kNotInitialized;
@@ -236,11 +281,13 @@ bool Tracker::initialize(Frame& frame, TrackResult& result) {
     return false;
   }
 
-  // The first keyframe is the world origin and gets a point for every stereo feature, near or far.
-  frame.T_wc = Pose3::Identity();
+  // The first keyframe is the world origin (of its map) and gets a point for every stereo feature, near
+  // or far.
+  frame.T_wc = T_wc_origin;
   TrackerOptions all_points = options_;
   all_points.new_keyframe_min_points = std::numeric_limits<int>::max();
-  KeyframeCandidate candidate = make_keyframe(frame, camera_, map_, next_keyframe_id(), point_counter_, all_points);
+  KeyframeCandidate candidate =
+      make_keyframe(frame, camera_, map_, next_keyframe_id(), point_counter_, all_points, active_map_);
   insert_keyframe(map_, candidate, camera_, options_);
   frame.point_ids = candidate.keyframe.point_ids;
   sync_place_database();
@@ -249,6 +296,7 @@ bool Tracker::initialize(Frame& frame, TrackResult& result) {
   reference_kf_ = candidate.keyframe.id;
   frames_since_keyframe_ = 0;
   result.state = state_;
+  result.map_id = active_map_;
   result.method = TrackingMethod::kInitialization;
   result.T_wc = frame.T_wc;
   result.reference_kf = reference_kf_;
@@ -361,7 +409,8 @@ void Tracker::maybe_insert_keyframe(Frame& frame, int inliers, TrackResult& resu
   input.revisit_covered = revisit_covered(frame, map_, camera_, options_);
   if (!decide_keyframe(frame, camera_, input, options_).insert) return;
 
-  KeyframeCandidate candidate = make_keyframe(frame, camera_, map_, next_keyframe_id(), point_counter_, options_);
+  KeyframeCandidate candidate =
+      make_keyframe(frame, camera_, map_, next_keyframe_id(), point_counter_, options_, active_map_);
   insert_keyframe(map_, candidate, camera_, options_);
   frame.point_ids = candidate.keyframe.point_ids;  // the next frame tracks the new points too
   sync_place_database();                           // the new keyframe, transformed once

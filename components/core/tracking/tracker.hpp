@@ -44,12 +44,21 @@ struct TrackTimings {
   double total_ms = 0.0;
 };
 
+// Why a frame started a new map (the atlas): the tracker was lost since `lost_since_ns` (the first
+// frame without a pose) for `lost_frames` frames, relocalization in every map failed each time.
+struct NewMapStart {
+  MapId previous_map = kFirstMapId;
+  std::int64_t lost_since_ns = 0;
+  int lost_frames = 0;
+};
+
 struct TrackResult {
   TrackingState state = TrackingState::kNotInitialized;
   TrackingMethod method = TrackingMethod::kNone;
   // Published only when state == kOk or kInertialOnly; otherwise T_wc is the last good pose and must
   // not be used.
   Pose3 T_wc = Pose3::Identity();
+  MapId map_id = kFirstMapId;  // the map T_wc is in (the atlas: docs/frontend.md)
   KeyframeId reference_kf = kNoId;
   Pose3 T_ref_c = Pose3::Identity();  // current camera in the reference keyframe's frame
   int tracked_points = 0;             // inlier map points after the local map search
@@ -58,6 +67,8 @@ struct TrackResult {
       FrameMotion::kMoving;  // still / rotating in place: the stationary test held (part of) the last pose
   std::optional<Keyframe> new_keyframe;
   std::vector<MapPoint> new_points;  // created with new_keyframe
+  // Set on the frame that started a new map (its first keyframe is new_keyframe, map_id the new id).
+  std::optional<NewMapStart> new_map;
   // The reference keyframe new_keyframe was tracked against (reference_kf is the new keyframe
   // itself then); kNoId for the first keyframe. The mapper moves a keyframe that predates a loop
   // correction with this keyframe.
@@ -145,7 +156,12 @@ class Tracker {
   const TrackerOptions& options() const { return options_; }
 
  private:
-  bool initialize(Frame& frame, TrackResult& result);
+  // `T_wc_origin`: the first keyframe's pose, the identity for the first map; a new map starts at the
+  // last pose the tracker had, so the trajectory goes on from there (docs/frontend.md, Atlas).
+  bool initialize(Frame& frame, TrackResult& result, const Pose3& T_wc_origin = Pose3::Identity());
+  // The atlas: lost and not relocalized for options_.new_map_after_ns: the frame starts a new map.
+  bool new_map_due(std::int64_t stamp_ns) const;
+  bool start_new_map(Frame& frame, TrackResult& result);
   bool track_motion_model(Frame& frame, const Pose3& T_wc_start);
   bool track_reference_keyframe(Frame& frame, const Pose3& T_wc_start);
   // The tracking of a frame that had a prediction (set_prediction): motion model search from it,
@@ -167,6 +183,9 @@ class Tracker {
   Pose3 last_T_ref_c_ = Pose3::Identity();  // the last frame in its reference keyframe's frame
   std::optional<Pose3> velocity_;           // T_last_current of the last tracked pair
   KeyframeId reference_kf_ = kNoId;
+  MapId active_map_ = kFirstMapId;             // the map tracked in, and the one new keyframes join
+  std::optional<std::int64_t> lost_since_ns_;  // the stamp of the first frame of the current loss
+  int lost_frames_ = 0;                        // frames of the current loss
   std::uint64_t keyframe_counter_ = 0;
   std::uint64_t point_counter_ = 1;
   int frames_since_keyframe_ = 0;

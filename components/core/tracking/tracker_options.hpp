@@ -19,6 +19,13 @@ struct TrackerOptions {
   int min_features_to_initialize = 500;
   int min_stereo_points_to_initialize = 150;
 
+  // --- the atlas (docs/frontend.md, Atlas) ---
+  // Lost, and relocalization in every map failed, for this long (frame stamps, never wall clock, so a
+  // lockstep run repeats): the frame starts a new map, initialized from it alone as the first frame is.
+  // 0: never (wait for relocalization, as before the atlas). The frontend sets it from
+  // atlas.new_map_after_s (default 1 s); this default keeps the tracker's own tests as they were.
+  std::int64_t new_map_after_ns = 0;
+
   // --- depth classes ---
   // Stereo points closer than this many baselines are "close" (reliable depth): ORB-SLAM2 ThDepth = 35.
   double close_depth_baselines = 35.0;

@@ -117,6 +117,7 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
     record.state = result.state;
     record.method = result.method;
     record.T_wc = result.T_wc;
+    record.map_id = result.map_id;
     record.tracked_points = result.tracked_points;
     record.keyframe = result.new_keyframe.has_value();
     record.motion = result.motion;
@@ -124,6 +125,13 @@ OfflineRun run_offline(const EurocSequence& sequence, const OfflineRunOptions& o
     run.frames.push_back(record);
   }
   run.keyframes = static_cast<int>(tracker.local_map().keyframes.size());
+  for (const auto& [id, point] : tracker.local_map().points) {
+    for (const auto& [keyframe_id, index] : point.observations) {
+      const Keyframe* keyframe = tracker.local_map().keyframe(keyframe_id);
+      if (keyframe != nullptr && keyframe->map_id != point.map_id) ++run.cross_map_observations;
+    }
+  }
+  for (const auto& [id, keyframe] : tracker.local_map().keyframes) ++run.keyframes_per_map[keyframe.map_id];
   run.map_points = static_cast<int>(tracker.local_map().points.size());
   run.hand_offs = pipeline.hand_offs();
   run.sleeping_hand_offs = pipeline.sleeping_hand_offs();

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -61,6 +62,7 @@ struct FrameRecord {
   TrackingState state = TrackingState::kNotInitialized;
   TrackingMethod method = TrackingMethod::kNone;
   Pose3 T_wc = Pose3::Identity();   // rectified left camera in the tracker's world
+  MapId map_id = kFirstMapId;       // ... of this map (the atlas: TrackerOptions::new_map_after_ns)
   std::optional<Pose3> T_wc_truth;  // rectified left camera in the ground-truth world
   int features = 0;
   int stereo_features = 0;
@@ -85,6 +87,10 @@ struct OfflineRun {
   std::vector<FrameRecord> frames;
   int keyframes = 0;
   int map_points = 0;
+  // The atlas: keyframes of each map, and point observations by a keyframe of another map (0: the maps
+  // are a partition).
+  std::map<MapId, int> keyframes_per_map;
+  int cross_map_observations = 0;
   // Hand-offs between the feature pipeline's two threads over the run, and how many of them found the
   // other thread asleep (a futex wake-up).
   std::uint64_t hand_offs = 0;
