@@ -139,7 +139,9 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
   options.tracker.maintain_map = !options.mapper_enabled;
   options.tracker.id_tag = kFrontendTag;
   options.tracker.create_keyframes = options.mapping;
-  options.tracker.new_map_after_ns = std::llround(options.new_map_after_s * 1e9);
+  // A localization run's poses are worth something only in the saved map: a new map there would end the
+  // run with a trajectory in another frame (and hide "never relocalized in the saved map"), so it waits.
+  options.tracker.new_map_after_ns = options.localize ? 0 : std::llround(options.new_map_after_s * 1e9);
   return options;
 }
 

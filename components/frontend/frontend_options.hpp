@@ -80,7 +80,8 @@ struct FrontendOptions {
   // realtime.*, debug.frame_delay_ms: load shedding of a real-time frontend (load_shedding.hpp).
   LoadSheddingOptions shedding;
   // atlas.new_map_after_s (docs/frontend.md, Atlas): lost and not relocalized in any map for this long
-  // (frame stamps), the frontend starts a new map; 0 = never. Sets tracker.new_map_after_ns.
+  // (frame stamps), the frontend starts a new map; 0 = never. Sets tracker.new_map_after_ns; never with
+  // --localize (a frame stays lost until it is relocalized in the saved map).
   double new_map_after_s = 1.0;
 
   // Throws std::runtime_error (one line: file, field, expectation) on a bad field.

@@ -388,6 +388,21 @@ TEST(FrontendOptions, MappingOffIsLocalizationOnlyInTheSavedMap) {
                std::runtime_error);
 }
 
+// The atlas never starts a new map in a localization run (with or without mapping): a frame stays lost
+// until it is relocalized in the saved map, and a run that never is still fails.
+TEST(FrontendOptions, LocalizationRunsNeverStartANewMap) {
+  const runtime::Config config =
+      runtime::Config::parse("mapper:\n  enabled: true\nvocabulary:\n  file: none\n", "frontend.yaml");
+  EXPECT_EQ(FrontendOptions::from_config(config, {"--mapper-map-file", "/run/x.map"}).tracker.new_map_after_ns,
+            1'000'000'000);
+  EXPECT_EQ(FrontendOptions::from_config(config, {"--mapper-map-file", "/run/x.map", "--localize"})
+                .tracker.new_map_after_ns,
+            0);
+  EXPECT_EQ(FrontendOptions::from_config(config, {"--mapper-map-file", "/run/x.map", "--localize", "--mapping", "off"})
+                .tracker.new_map_after_ns,
+            0);
+}
+
 TEST(FrontendOptions, EurocAndSynthConfigsAreTheCoreDefaults) {
   const FrontendOptions defaults = FrontendOptions::from_config(runtime::Config::empty());
   for (const char* name : {"euroc", "synth"}) {
