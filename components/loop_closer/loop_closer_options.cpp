@@ -54,6 +54,7 @@ LoopCloserProcessOptions LoopCloserProcessOptions::from_config(const runtime::Co
   merge.max_drift_fraction = config.get_double("merge.max_drift_fraction", merge.max_drift_fraction, 0.0, 10.0);
   merge.min_drift_allowance_m = config.get_double("merge.min_drift_allowance_m", merge.min_drift_allowance_m, 0.0, 1e6);
   merge.max_tilt_deg = config.get_double("merge.max_tilt_deg", merge.max_tilt_deg, 0.0, 180.0);
+  merge.min_matches = config.get_int("merge.min_matches", merge.min_matches, 1, 100000);
   merge.seam_bundle_adjustment = config.get_bool("merge.seam_bundle_adjustment", merge.seam_bundle_adjustment);
   o.global_bundle_adjustment = config.get_bool("global_ba.enabled", o.global_bundle_adjustment);
   o.real_time = config.get_bool("real_time", o.real_time);

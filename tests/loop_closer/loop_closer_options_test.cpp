@@ -45,10 +45,13 @@ TEST(LoopCloserOptions, ShippedConfigsMergeMapsWithTheDocumentedGate) {
     EXPECT_EQ(options.closing.merge.max_unobserved_speed_mps, 10.0);
     EXPECT_EQ(options.closing.merge.min_drift_allowance_m, 1.0);
     EXPECT_TRUE(options.closing.merge.seam_bundle_adjustment);
+    EXPECT_EQ(options.closing.merge.min_matches, 80);  // a merge has no drift gate: ORB-SLAM3's bar, not 40
   }
-  const LoopCloserProcessOptions off = parse("merge:\n  enabled: false\n  max_unobserved_speed_mps: 0.0\n");
+  const LoopCloserProcessOptions off =
+      parse("merge:\n  enabled: false\n  max_unobserved_speed_mps: 0.0\n  min_matches: 40\n");
   EXPECT_FALSE(off.closing.merging);
   EXPECT_EQ(off.closing.merge.max_unobserved_speed_mps, 0.0);
+  EXPECT_EQ(off.closing.merge.min_matches, 40);
 }
 
 TEST(LoopCloserOptions, FourDofTakesTheGravityDirection) {

@@ -242,6 +242,11 @@ LoopClosingResult LoopClosing::process_merge(const Map& map, KeyframeId query) {
       result.rejected.push_back({candidate_id, "merge: " + why});
       continue;
     }
+    if (place->matches < options_.merge.min_matches) {
+      result.rejected.push_back({candidate_id, "merge: " + std::to_string(place->matches) + " matches (< " +
+                                                   std::to_string(options_.merge.min_matches) + ")"});
+      continue;
+    }
     const MapId matched = map.keyframe(candidate_id)->map_id;
     MapMergeRequest request;
     request.active_kf = query;

@@ -46,6 +46,12 @@ struct MapMergeOptions {
   // With pose_graph.four_dof (inertial: both maps gravity-aligned) the relative rotation may only turn
   // about gravity: a tilt above this is rejected.
   double max_tilt_deg = 10.0;
+  // Matches after the projection top-up that a merge needs (the loops need LoopClosingOptions::
+  // min_loop_matches, ORB-SLAM2's 40). A merge has no drift gate to catch a look-alike place, and one
+  // passes 40: corridor_jump's ring is symmetric and its brick panels and floor tiles repeat, so the
+  // far corridor, walked the other way, matches the near one with 42-48 consistent matches (one
+  // keyframe after another). 80 is ORB-SLAM3's bar for a place of another map (nProjOptMatches).
+  int min_matches = 80;
   bool seam_bundle_adjustment = true;
   LocalBundleAdjustmentOptions seam_ba;
   LoopCorrectionBuilderOptions correction;  // fusion thresholds, essential graph, pose_graph.*
