@@ -395,9 +395,9 @@ TEST(FrontendOptions, LocalizationRunsNeverStartANewMap) {
       runtime::Config::parse("mapper:\n  enabled: true\nvocabulary:\n  file: none\n", "frontend.yaml");
   EXPECT_EQ(FrontendOptions::from_config(config, {"--mapper-map-file", "/run/x.map"}).tracker.new_map_after_ns,
             1'000'000'000);
-  EXPECT_EQ(FrontendOptions::from_config(config, {"--mapper-map-file", "/run/x.map", "--localize"})
-                .tracker.new_map_after_ns,
-            0);
+  EXPECT_EQ(
+      FrontendOptions::from_config(config, {"--mapper-map-file", "/run/x.map", "--localize"}).tracker.new_map_after_ns,
+      0);
   EXPECT_EQ(FrontendOptions::from_config(config, {"--mapper-map-file", "/run/x.map", "--localize", "--mapping", "off"})
                 .tracker.new_map_after_ns,
             0);
