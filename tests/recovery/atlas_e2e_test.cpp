@@ -182,6 +182,9 @@ TEST(AtlasE2E, TeleportedCameraGoesOnInANewMapAndSurvivesKills) {
   std::string kills;
   for (const std::string& kill : killed.kills) kills += "\n  " + kill;
   ASSERT_EQ(killed.exit_code, 0) << kills << "\n" << killed.output;
+  // The kills happened (a run that ended before them would prove nothing).
+  ASSERT_EQ(killed.kills.size(), plan.size()) << kills;
+  EXPECT_EQ(kills.find("not running"), std::string::npos) << kills;
   EXPECT_EQ(killed.lost, run.lost) << kills;
   EXPECT_EQ(killed.maps, run.maps) << kills;
   EXPECT_EQ(expect_partition(dir.path() / "killed.map").size(), 2u);
