@@ -5,6 +5,7 @@
 #include <set>
 
 #include "components/core/loop/keyframe_projection.hpp"
+#include "components/core/loop/live_map.hpp"
 #include "components/core/map/ids.hpp"
 #include "components/core/mapping/point_statistics.hpp"
 #include "components/core/match/feature_grid.hpp"
@@ -12,21 +13,10 @@
 namespace heslam {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-bool live_keyframe(const Map& map, KeyframeId id) {
-  const Keyframe* kf = map.keyframe(id);
-  return kf != nullptr && !kf->culled;
-}
-
-bool live_point(const Map& map, PointId id) {
-  const MapPoint* point = map.point(id);
-  return point != nullptr && !point->culled;
-}
+using loop_detail::Clock;
+using loop_detail::live_keyframe;
+using loop_detail::live_point;
+using loop_detail::ms_since;
 
 // The keyframe first, then its live covisible keyframes by weight (ORB-SLAM2's connected keyframes).
 std::vector<KeyframeId> group_of(const Map& map, KeyframeId id) {

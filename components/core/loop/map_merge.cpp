@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "components/core/loop/live_map.hpp"
 #include "components/core/map/ids.hpp"
 #include "components/core/mapping/correction_application.hpp"
 #include "components/core/mapping/covisibility.hpp"
@@ -13,16 +14,9 @@
 namespace heslam {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-bool live_keyframe(const Map& map, KeyframeId id) {
-  const Keyframe* kf = map.keyframe(id);
-  return kf != nullptr && !kf->culled;
-}
+using loop_detail::Clock;
+using loop_detail::live_keyframe;
+using loop_detail::ms_since;
 
 // Distance along the live keyframes of `keyframes` (id = creation order) between ids `from` and `to`.
 double path_between(const Map& map, const std::set<KeyframeId>& keyframes, KeyframeId from, KeyframeId to) {
