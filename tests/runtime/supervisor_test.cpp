@@ -640,8 +640,8 @@ TEST_F(SupervisorCheck, RejectsDuplicateNames) {
 }
 
 TEST_F(SupervisorCheck, RejectsAnAfterThatIsNotAnEarlierComponent) {
-  const auto [code, text] =
-      check(pipeline(std::string(kTalker) + "    after: [later]\n  - name: later\n    executable: heslam-test-talker\n"));
+  const auto [code, text] = check(
+      pipeline(std::string(kTalker) + "    after: [later]\n  - name: later\n    executable: heslam-test-talker\n"));
   EXPECT_EQ(code, 1);
   EXPECT_EQ(text, "heslam-supervisor: " + file() +
                       ": component 'talker': field 'after': 'later' is not a component before it in the file "
