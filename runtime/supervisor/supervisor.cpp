@@ -259,9 +259,12 @@ std::vector<std::size_t> Supervisor::start_dependencies(std::size_t index) const
   const ComponentSpec& spec = components_[index]->spec;
   if (!spec.after) return index == 0 ? std::vector<std::size_t>{} : std::vector<std::size_t>{index - 1};
   std::vector<std::size_t> dependencies;
-  for (const std::string& name : *spec.after) {
-    for (std::size_t other = 0; other < index; ++other) {
-      if (components_[other]->spec.name == name) dependencies.push_back(other);
+  for (std::size_t other = 0; other < index; ++other) {
+    const ComponentSpec& earlier = components_[other]->spec;
+    // Another host's component gates every one after it, named or not: that host may start minutes
+    // later, longer than a lockstep consumer waits for its acknowledgements.
+    if (earlier.remote || std::find(spec.after->begin(), spec.after->end(), earlier.name) != spec.after->end()) {
+      dependencies.push_back(other);
     }
   }
   return dependencies;  // a disabled component's name matches none: nothing to wait for
