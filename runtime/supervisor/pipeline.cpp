@@ -554,6 +554,18 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
                                                                                             : Readiness::kStarted;
     });
     collect(problems, [&] { spec.ready_timeout_s = section.get_double("ready_timeout_s", 10.0, 0.1, 3600.0); });
+    collect(problems, [&] {
+      if (!section.has("after")) return;
+      spec.after.emplace();
+      for (const std::string& name : section.get_strings("after", {})) {
+        const auto earlier = first_index.find(name);
+        if (earlier == first_index.end() || earlier->second >= static_cast<int>(i)) {
+          throw std::runtime_error(source + ": " + label + ": field 'after': '" + runtime::quote_value(name) +
+                                   "' is not a component before it in the file (components start in file order)");
+        }
+        spec.after->push_back(name);
+      }
+    });
     collect(problems, [&] { spec.required = section.get_bool("required", true); });
     collect(problems, [&] {
       spec.shutdown_on_exit = section.get_choice("on_exit", "none", {"none", "shutdown"}) == "shutdown";

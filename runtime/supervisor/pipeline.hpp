@@ -31,6 +31,10 @@ struct ComponentSpec {
   double restart_backoff_s = 0.1;  // first delay; doubles per consecutive restart
   double restart_backoff_max_s = 5.0;
   Readiness ready = Readiness::kStatus;  // status: the next component waits for this one's status
+  // after: the components (earlier in the file) whose readiness this one's start waits for; unset:
+  // the previous component (one after the other); empty: none, it starts with the supervisor. Names of
+  // disabled components are kept here and skipped by the supervisor.
+  std::optional<std::vector<std::string>> after;
   double ready_timeout_s = 10.0;
   // SIGTERM -> SIGKILL for this process; unset: the pipeline's stop_timeout_s (a process with long
   // shutdown work, e.g. heslam-occupancy's final fusion, gets its own without slowing the others').

@@ -255,26 +255,106 @@ void Supervisor::start(Managed& component) {
   }
 }
 
-bool Supervisor::wait_ready(Managed& component) {
-  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                           std::chrono::duration<double>(component.spec.ready_timeout_s));
-  while (!component.ready) {
-    if (runtime::shutdown_requested() || end_requested_) return false;
-    // Ended while starting: fine for a short-lived program, fatal if it failed and is required.
-    if (component.phase == Phase::kEnded) return !failed_;
-    if (Clock::now() >= deadline) {
-      std::ostringstream reason;
-      reason << component.spec.name << ": no status within " << component.spec.ready_timeout_s
-             << " s (a program that publishes no heslam status needs 'ready: started'; a heslam program built"
-                " from other .idl files cannot talk to this one: rebuild both from the same tree)";
-      log_.error(reason.str());
-      if (component.spec.required) fail(reason.str());
-      return !component.spec.required;
+std::vector<std::size_t> Supervisor::start_dependencies(std::size_t index) const {
+  const ComponentSpec& spec = components_[index]->spec;
+  if (!spec.after) return index == 0 ? std::vector<std::size_t>{} : std::vector<std::size_t>{index - 1};
+  std::vector<std::size_t> dependencies;
+  for (std::size_t other = 0; other < index; ++other) {
+    const ComponentSpec& earlier = components_[other]->spec;
+    // Another host's component gates every one after it, named or not: that host may start minutes
+    // later, longer than a lockstep consumer waits for its acknowledgements.
+    if (earlier.remote || std::find(spec.after->begin(), spec.after->end(), earlier.name) != spec.after->end()) {
+      dependencies.push_back(other);
     }
+  }
+  return dependencies;  // a disabled component's name matches none: nothing to wait for
+}
+
+bool Supervisor::start_components() {
+  // Each component starts once the ones it comes after (`after:`, default the previous one) have
+  // settled: ready (its RUNNING status, or spawned for `ready: started`), ended without failing the
+  // run, or, for an optional one, given up on. Independent components start together.
+  enum class Start { kWaiting, kStarting, kSettled };
+  std::vector<Start> state(components_.size(), Start::kWaiting);
+  std::vector<Clock::time_point> deadline(components_.size());
+  const auto seconds = [](double s) {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  };
+  for (;;) {
+    bool all_settled = true;
+    for (std::size_t i = 0; i < components_.size(); ++i) {
+      Managed& component = *components_[i];
+      if (state[i] == Start::kSettled) continue;
+      all_settled = false;
+      if (runtime::shutdown_requested() || end_requested_) return false;
+      if (state[i] == Start::kWaiting) {
+        const std::vector<std::size_t> dependencies = start_dependencies(i);
+        if (!std::all_of(dependencies.begin(), dependencies.end(),
+                         [&](std::size_t other) { return state[other] == Start::kSettled; })) {
+          continue;
+        }
+        state[i] = Start::kStarting;
+        if (component.spec.remote) {
+          if (component.spec.ready == Readiness::kStarted) {
+            state[i] = Start::kSettled;
+            continue;
+          }
+          log_.info("waiting for ", component.spec.name, " on another host (its status on the status topic)");
+          deadline[i] = Clock::now() + seconds(pipeline_.remote_ready_timeout_s);
+        } else {
+          try {
+            start(component);
+          } catch (const std::exception& error) {
+            log_.error(error.what());
+            if (component.spec.required) {
+              fail(error.what());
+              return false;
+            }
+            state[i] = Start::kSettled;
+            continue;
+          }
+          deadline[i] = Clock::now() + seconds(component.spec.ready_timeout_s);
+        }
+      }
+      if (component.spec.remote) {
+        if (component.ready) {
+          log_.info(component.spec.name, " (another host) is ready");
+          state[i] = Start::kSettled;
+        } else if (Clock::now() >= deadline[i]) {
+          // Not ours to fail: the other host's supervisor reports its own components.
+          log_.warn(component.spec.name, ": no RUNNING status from another host within ",
+                    pipeline_.remote_ready_timeout_s, " s; starting the next components anyway");
+          state[i] = Start::kSettled;
+        }
+        continue;
+      }
+      if (component.ready) {
+        log_.info(component.spec.name, " is ready");
+        state[i] = Start::kSettled;
+        continue;
+      }
+      // Ended while starting: fine for a short-lived program, fatal if it failed and is required.
+      if (component.phase == Phase::kEnded) {
+        if (failed_) return false;
+        state[i] = Start::kSettled;
+        continue;
+      }
+      if (Clock::now() >= deadline[i]) {
+        std::ostringstream reason;
+        reason << component.spec.name << ": no status within " << component.spec.ready_timeout_s
+               << " s (a program that publishes no heslam status needs 'ready: started'; a heslam program built"
+                  " from other .idl files cannot talk to this one: rebuild both from the same tree)";
+        log_.error(reason.str());
+        if (component.spec.required) {
+          fail(reason.str());
+          return false;
+        }
+        state[i] = Start::kSettled;
+      }
+    }
+    if (all_settled) return true;
     pump(kPumpPeriod);
   }
-  log_.info(component.spec.name, " is ready");
-  return true;
 }
 
 void Supervisor::forward_output(Managed& component) {
@@ -458,25 +538,6 @@ void Supervisor::forward_pause_keys() {
   } else {
     log_.info(paused_ ? "paused " : "resumed ", names, paused_ ? " (space resumes)" : "");
   }
-}
-
-bool Supervisor::wait_remote_ready(Managed& component) {
-  if (component.spec.ready == Readiness::kStarted) return true;
-  log_.info("waiting for ", component.spec.name, " on another host (its status on the status topic)");
-  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                           std::chrono::duration<double>(pipeline_.remote_ready_timeout_s));
-  while (!component.ready) {
-    if (runtime::shutdown_requested() || end_requested_) return false;
-    if (Clock::now() >= deadline) {
-      // Not ours to fail: the other host's supervisor reports its own components.
-      log_.warn(component.spec.name, ": no RUNNING status from another host within ", pipeline_.remote_ready_timeout_s,
-                " s; starting the next components anyway");
-      return true;
-    }
-    pump(kPumpPeriod);
-  }
-  log_.info(component.spec.name, " (another host) is ready");
-  return true;
 }
 
 void Supervisor::report_progress() {
@@ -757,31 +818,7 @@ int Supervisor::run() {
       started_all = false;
     }
   }
-  for (auto& component : components_) {
-    if (!started_all) break;
-    if (component->spec.remote) {
-      if (!wait_remote_ready(*component)) {
-        started_all = false;
-        break;
-      }
-      continue;
-    }
-    try {
-      start(*component);
-    } catch (const std::exception& error) {
-      log_.error(error.what());
-      if (component->spec.required) {
-        fail(error.what());
-        started_all = false;
-        break;
-      }
-      continue;
-    }
-    if (!wait_ready(*component)) {
-      started_all = false;
-      break;
-    }
-  }
+  if (started_all) started_all = start_components();
   if (started_all) {
     while (!runtime::shutdown_requested() && !end_requested_ && anything_alive()) pump(kPumpPeriod);
   }

@@ -79,10 +79,13 @@ class Supervisor {
   struct Dds;  // participant, status reader and writer (pimpl: keeps DDS out of this header)
 
   void start(Managed& component);
-  bool wait_ready(Managed& component);
-  // Multi-host (docs/deployment.md): waits for another host's component to say RUNNING (bounded,
-  // never a failure here), and ends this side when another host's supervisor ends the run.
-  bool wait_remote_ready(Managed& component);
+  // Starts the components, each once those it comes after are ready (`after:`; a component of
+  // another host is waited for on the status topic, bounded, never a failure here); false when the
+  // run failed or was ended meanwhile.
+  bool start_components();
+  // The indexes of the components `components_[index]` waits for before it starts.
+  std::vector<std::size_t> start_dependencies(std::size_t index) const;
+  // Multi-host (docs/deployment.md): ends this side when another host's supervisor ends the run.
   void follow_remote_hosts();
   void pump(std::chrono::milliseconds timeout);  // output, exits, status, due restarts
   void forward_output(Managed& component);

@@ -26,7 +26,8 @@ constexpr auto kRunBound = 60s;
 class SupervisorHosts : public ::testing::Test {
  protected:
   // Host a runs first and last (last ends the run after exit_after_s), host b runs middle.
-  std::filesystem::path write_pipeline(const std::string& extra = "", const std::string& middle_config = "") {
+  std::filesystem::path write_pipeline(const std::string& extra = "", const std::string& middle_config = "",
+                                       const std::string& last_fields = "") {
     std::ofstream(dir_.path() / "last.yaml") << "exit_after_s: 2\n";
     if (!middle_config.empty()) std::ofstream(dir_.path() / "middle.yaml") << middle_config;
     const auto file = dir_.path() / "p.yaml";
@@ -39,7 +40,8 @@ class SupervisorHosts : public ::testing::Test {
                            "  - {name: middle, executable: heslam-test-talker"
                         << (middle_config.empty() ? "" : ", config: middle.yaml")
                         << "}\n"
-                           "  - {name: last, executable: heslam-test-talker, config: last.yaml, on_exit: shutdown}\n";
+                           "  - {name: last, executable: heslam-test-talker, config: last.yaml, on_exit: shutdown"
+                        << last_fields << "}\n";
     return file;
   }
   std::unique_ptr<test::ChildProcess> start(const std::filesystem::path& file, const std::string& host) {
@@ -73,6 +75,17 @@ TEST_F(SupervisorHosts, StartOrderHoldsAcrossHostsAndTheRunEndsOnBoth) {
   at(b_err, "the supervisor on host a is ending the run; stopping here too");
   at(b_err, "pipeline finished (ended by another host)");
   at(a_err, "info: pipeline finished");
+}
+
+// after: [] does not skip another host's component: that host may start much later than this one.
+TEST_F(SupervisorHosts, AnotherHostsComponentGatesTheOnesAfterItEvenWithAfter) {
+  const auto file = write_pipeline("", "", ", after: []");
+  auto b = start(file, "b");
+  auto a = start(file, "a");
+  ASSERT_EQ(a->wait(kRunBound), 0) << a->err();
+  ASSERT_EQ(b->wait(kRunBound), 0) << b->err();
+  const std::string a_err = a->err();
+  EXPECT_LT(at(a_err, "middle (another host) is ready"), at(a_err, "started last"));
 }
 
 TEST_F(SupervisorHosts, AnotherHostsFailureIsNotFailedHere) {

@@ -347,6 +347,49 @@ TEST_F(SupervisorTest, StartupErrorIsNotRestarted) {
       << text;
 }
 
+// after: [] starts a component with the supervisor, without waiting for the one before it; a
+// component after others starts once they are all ready. Without it, one after the other.
+TEST_F(SupervisorTest, AfterStartsIndependentComponentsTogether) {
+  start(
+      pipeline("  - name: first\n    executable: heslam-test-talker\n"
+               "  - name: second\n    executable: heslam-test-talker\n    after: []\n"
+               "  - name: third\n    executable: heslam-test-talker\n    after: [first, second]\n"
+               "  - name: fourth\n    executable: heslam-test-talker\n"));
+  ASSERT_TRUE(wait_for_output("fourth is ready", kStartupBound)) << output();
+  kill(supervisor_pid_, SIGTERM);
+  EXPECT_EQ(wait_exit(kExitBound), 0) << output();
+  const std::string text = output();
+  const auto at = [&](const std::string& line) {
+    const auto position = text.find(line);
+    EXPECT_NE(position, std::string::npos) << line << " in:\n" << text;
+    return position;
+  };
+  EXPECT_LT(at("started second"), at("first is ready"));
+  EXPECT_LT(at("first is ready"), at("started third"));
+  EXPECT_LT(at("second is ready"), at("started third"));
+  EXPECT_LT(at("third is ready"), at("started fourth"));
+}
+
+// A start-up error of a component started together with others fails the run as it would alone;
+// the others are stopped.
+TEST_F(SupervisorTest, StartupErrorOfAComponentStartedTogetherFailsTheRun) {
+  write("bad.yaml", "exit_code: 300\n");
+  start(
+      pipeline("  - name: good\n    executable: heslam-test-talker\n"
+               "  - name: bad\n    executable: heslam-test-talker\n    after: []\n    config: bad.yaml\n"
+               "    restart: on-failure\n"));
+  EXPECT_EQ(wait_exit(kExitBound), 1) << output();
+  EXPECT_TRUE(all_children_gone(kExitBound));
+  EXPECT_EQ(started_pids("bad").size(), 1u) << output();
+  const std::string text = output();
+  std::string last;
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) last = line;
+  EXPECT_EQ(last, "[supervisor] error: pipeline failed: bad failed at start-up (exit code 1): heslam-test-talker: " +
+                      (dir_ / "bad.yaml").string() + ": field 'exit_code': expected an integer in [0, 255], got 300")
+      << text;
+}
+
 // A crash after start-up is still restarted (the handshake said "running").
 TEST_F(SupervisorTest, FailureAfterStartupIsStillRestarted) {
   write("fail.yaml", "exit_after_s: 0.1\nexit_code: 1\n");
@@ -594,6 +637,15 @@ TEST_F(SupervisorCheck, RejectsDuplicateNames) {
   const auto [code, text] = check(pipeline(std::string(kTalker) + kTalker));
   EXPECT_EQ(code, 1);
   EXPECT_EQ(text, "heslam-supervisor: " + file() + ": components[1]: duplicate name 'talker' (also components[0])\n");
+}
+
+TEST_F(SupervisorCheck, RejectsAnAfterThatIsNotAnEarlierComponent) {
+  const auto [code, text] = check(
+      pipeline(std::string(kTalker) + "    after: [later]\n  - name: later\n    executable: heslam-test-talker\n"));
+  EXPECT_EQ(code, 1);
+  EXPECT_EQ(text, "heslam-supervisor: " + file() +
+                      ": component 'talker': field 'after': 'later' is not a component before it in the file "
+                      "(components start in file order)\n");
 }
 
 TEST_F(SupervisorCheck, RejectsMissingConfig) {

@@ -417,14 +417,29 @@ void Recorder::on_shutdown() {
   };
   const auto held_deadline = std::chrono::steady_clock::now() + kHeldSamplesWait;
   const auto drain_deadline = std::chrono::steady_clock::now() + kMaxShutdownDrain;
+  // Every writer gone (the supervisor stops the recorder after the frontend and the mapper): a
+  // reliable writer is unmatched once its samples are acknowledged, so two more drains (one poll
+  // apart, for a sample still on its way into the reader) take the last ones and no quiet period
+  // needs waiting for.
+  const auto writers_gone = [&] {
+    return odometry_reader_->matched_writers() == 0 && keyframe_reader_->matched_writers() == 0 &&
+           keyframe_state_reader_->matched_writers() == 0;
+  };
   auto quiet_since = std::chrono::steady_clock::now();
+  bool complete = false;
+  int drains_since_gone = 0;
   while ((std::chrono::steady_clock::now() - quiet_since < kDrainQuietPeriod ||
           (holding() && std::chrono::steady_clock::now() < held_deadline)) &&
          std::chrono::steady_clock::now() < drain_deadline) {
+    drains_since_gone = writers_gone() ? drains_since_gone + 1 : 0;
     if (drain() > 0) quiet_since = std::chrono::steady_clock::now();
+    if (drains_since_gone >= 2 && !holding()) {
+      complete = true;
+      break;
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  if (std::chrono::steady_clock::now() - quiet_since < kDrainQuietPeriod) {
+  if (!complete && std::chrono::steady_clock::now() - quiet_since < kDrainQuietPeriod) {
     stats().count("unfinished_drains");
     log().warn("samples kept arriving for ", kMaxShutdownDrain.count(),
                " ms after the run ended (a writer that does not stop); recording what arrived until then");
