@@ -43,14 +43,13 @@ cv::Mat window_sum(const cv::Mat& values, int radius) {
   return sum;
 }
 
-// Refines `disparity` (CV_32F, <= 0: none) in place by 1-D Lucas-Kanade on the pair (both smoothed by a
-// Gaussian of prefilter_sigma px first when > 0: linear interpolation of texture near the sampling limit
-// pulls the estimate towards whole pixels): each pixel's left
+// Refines `disparity` (CV_32F, <= 0: none) in place by 1-D Lucas-Kanade on the pair: each pixel's left
 // grey value against the right image at u - d (linear interpolation along the row), the residual's and the
 // right gradient's window means removed (a brightness offset between the cameras), one Gauss-Newton step
 // per iteration for all pixels at once (a window's pixels are sampled at their own disparities, so a
-// smooth surface converges as one). Pixels that move more than max_change from SGBM's value or have too
-// little gradient are dropped.
+// smooth surface converges as one). Both images are smoothed by a Gaussian of prefilter_sigma px first
+// when > 0 (linear interpolation of texture near the sampling limit pulls the estimate to whole pixels).
+// Pixels that move more than max_change from SGBM's value or have too little gradient are dropped.
 void refine_disparity(cv::Mat& disparity, const cv::Mat& left_u8, const cv::Mat& right_u8, int iterations, int radius,
                       double max_change, double prefilter_sigma) {
   cv::Mat left, right;
