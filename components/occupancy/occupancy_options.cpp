@@ -25,6 +25,11 @@ OccupancyProcessOptions OccupancyProcessOptions::from_config(const runtime::Conf
   s.edge_radius_px = config.get_int("stereo.edge_radius_px", s.edge_radius_px, 0, 16);
   s.edge_step_px = config.get_double("stereo.edge_step_px", s.edge_step_px, 0.01, 64.0);
   s.smooth_radius_px = config.get_int("stereo.smooth_radius_px", s.smooth_radius_px, 0, 16);
+  s.refine_iterations = config.get_int("stereo.refine_iterations", s.refine_iterations, 0, 32);
+  s.refine_radius_px = config.get_int("stereo.refine_radius_px", s.refine_radius_px, 1, 16);
+  s.refine_max_change_px = config.get_double("stereo.refine_max_change_px", s.refine_max_change_px, 0.01, 16.0);
+  s.refine_prefilter_sigma_px =
+      config.get_double("stereo.refine_prefilter_sigma_px", s.refine_prefilter_sigma_px, 0.0, 8.0);
   s.disparity_sigma_px = config.get_double("stereo.disparity_sigma_px", s.disparity_sigma_px, 0.0, 16.0);
   s.check(config.source() + ": stereo");
   VoxelMapOptions& v = o.map.voxels;

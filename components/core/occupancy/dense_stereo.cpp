@@ -29,6 +29,104 @@ constexpr std::uint64_t kCubeMask = (std::uint64_t{1} << kCubeBits) - 1;
 constexpr std::size_t kMinNormalPoints = 6;
 constexpr double kMaxFlatness = 0.2;
 
+// Sub-pixel refinement: a window's horizontal gradient must have at least this variance (grey levels^2
+// per pixel^2) for its disparity to be fixed by it; weaker texture keeps no disparity.
+constexpr float kRefineMinGradientVariance = 1.0f;
+// At most this change per Gauss-Newton step (pixels): beyond it the linearization does not hold.
+constexpr float kRefineMaxStepPx = 0.5f;
+
+// The sum over each pixel's (2 radius + 1)^2 window (zero outside the image).
+cv::Mat window_sum(const cv::Mat& values, int radius) {
+  cv::Mat sum;
+  const int side = 2 * radius + 1;
+  cv::boxFilter(values, sum, CV_32F, cv::Size(side, side), cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
+  return sum;
+}
+
+// Refines `disparity` (CV_32F, <= 0: none) in place by 1-D Lucas-Kanade on the pair: each pixel's left
+// grey value against the right image at u - d (linear interpolation along the row), the residual's and the
+// right gradient's window means removed (a brightness offset between the cameras), one Gauss-Newton step
+// per iteration for all pixels at once (a window's pixels are sampled at their own disparities, so a
+// smooth surface converges as one). Both images are smoothed by a Gaussian of prefilter_sigma px first
+// when > 0 (linear interpolation of texture near the sampling limit pulls the estimate to whole pixels).
+// Pixels that move more than max_change from SGBM's value or have too little gradient are dropped.
+void refine_disparity(cv::Mat& disparity, const cv::Mat& left_u8, const cv::Mat& right_u8, int iterations, int radius,
+                      double max_change, double prefilter_sigma) {
+  cv::Mat left, right;
+  left_u8.convertTo(left, CV_32F);
+  right_u8.convertTo(right, CV_32F);
+  if (prefilter_sigma > 0.0) {
+    cv::GaussianBlur(left, left, cv::Size(0, 0), prefilter_sigma);
+    cv::GaussianBlur(right, right, cv::Size(0, 0), prefilter_sigma);
+  }
+  cv::Mat gradient(right.size(), CV_32F, cv::Scalar(0.f));
+  for (int v = 0; v < right.rows; ++v) {
+    const float* r = right.ptr<float>(v);
+    float* g = gradient.ptr<float>(v);
+    for (int u = 1; u + 1 < right.cols; ++u) g[u] = 0.5f * (r[u + 1] - r[u - 1]);
+  }
+  const cv::Mat sgbm = disparity.clone();
+  const int rows = disparity.rows, cols = disparity.cols;
+  cv::Mat w(disparity.size(), CV_32F), e(disparity.size(), CV_32F), g(disparity.size(), CV_32F);
+  cv::Mat eg(disparity.size(), CV_32F), gg(disparity.size(), CV_32F);
+  cv::Mat sw, se, sg, seg, sgg;
+  for (int iteration = 0; iteration < iterations; ++iteration) {
+    for (int v = 0; v < rows; ++v) {
+      const float* d = disparity.ptr<float>(v);
+      const float* l = left.ptr<float>(v);
+      const float* r = right.ptr<float>(v);
+      const float* gr = gradient.ptr<float>(v);
+      float *pw = w.ptr<float>(v), *pe = e.ptr<float>(v), *pg = g.ptr<float>(v);
+      float *peg = eg.ptr<float>(v), *pgg = gg.ptr<float>(v);
+      for (int u = 0; u < cols; ++u) {
+        const float x = static_cast<float>(u) - d[u];
+        if (!(d[u] > 0.f) || !(x >= 1.f) || !(x < static_cast<float>(cols - 2))) {
+          pw[u] = pe[u] = pg[u] = peg[u] = pgg[u] = 0.f;
+          continue;
+        }
+        const int i = static_cast<int>(x);
+        const float a = x - static_cast<float>(i);
+        const float residual = l[u] - (r[i] + a * (r[i + 1] - r[i]));
+        const float slope = gr[i] + a * (gr[i + 1] - gr[i]);
+        pw[u] = 1.f;
+        pe[u] = residual;
+        pg[u] = slope;
+        peg[u] = residual * slope;
+        pgg[u] = slope * slope;
+      }
+    }
+    sw = window_sum(w, radius);
+    se = window_sum(e, radius);
+    sg = window_sum(g, radius);
+    seg = window_sum(eg, radius);
+    sgg = window_sum(gg, radius);
+    for (int v = 0; v < rows; ++v) {
+      float* d = disparity.ptr<float>(v);
+      const float *n = sw.ptr<float>(v), *s_e = se.ptr<float>(v), *s_g = sg.ptr<float>(v);
+      const float *s_eg = seg.ptr<float>(v), *s_gg = sgg.ptr<float>(v);
+      for (int u = 0; u < cols; ++u) {
+        if (!(d[u] > 0.f) || n[u] < 1.f) continue;
+        const float covariance = s_eg[u] - s_e[u] * s_g[u] / n[u];
+        const float variance = s_gg[u] - s_g[u] * s_g[u] / n[u];
+        if (!(variance > kRefineMinGradientVariance * n[u])) continue;
+        // L(u) = R(u - d) + c: d + delta lowers the residual by delta * gradient.
+        d[u] += std::clamp(-covariance / variance, -kRefineMaxStepPx, kRefineMaxStepPx);
+      }
+    }
+  }
+  // The last step's window statistics decide which pixels keep their disparity.
+  for (int v = 0; v < rows; ++v) {
+    float* d = disparity.ptr<float>(v);
+    const float* d0 = sgbm.ptr<float>(v);
+    const float *n = sw.ptr<float>(v), *s_g = sg.ptr<float>(v), *s_gg = sgg.ptr<float>(v);
+    for (int u = 0; u < cols; ++u) {
+      if (!(d0[u] > 0.f)) continue;
+      const bool textured = n[u] >= 1.f && s_gg[u] - s_g[u] * s_g[u] / n[u] > kRefineMinGradientVariance * n[u];
+      if (!textured || !(std::abs(d[u] - d0[u]) <= max_change) || !(d[u] > 0.f)) d[u] = -1.f;
+    }
+  }
+}
+
 [[noreturn]] void fail(const std::string& source, const std::string& field, const std::string& expected) {
   throw std::runtime_error(source + ": " + field + " must be " + expected);
 }
@@ -46,6 +144,14 @@ void DenseStereoOptions::check(const std::string& source) const {
   if (edge_radius_px < 0 || edge_radius_px > 16) fail(source, "edge_radius_px", "0..16");
   if (smooth_radius_px < 0 || smooth_radius_px > 16) fail(source, "smooth_radius_px", "0..16");
   if (!(edge_step_px > 0.0) || !std::isfinite(edge_step_px)) fail(source, "edge_step_px", "> 0");
+  if (refine_iterations < 0 || refine_iterations > 32) fail(source, "refine_iterations", "0..32");
+  if (refine_radius_px < 1 || refine_radius_px > 16) fail(source, "refine_radius_px", "1..16");
+  if (!(refine_max_change_px > 0.0) || !std::isfinite(refine_max_change_px)) {
+    fail(source, "refine_max_change_px", "> 0");
+  }
+  if (!(refine_prefilter_sigma_px >= 0.0) || refine_prefilter_sigma_px > 8.0) {
+    fail(source, "refine_prefilter_sigma_px", "0..8");
+  }
   if (!(disparity_sigma_px >= 0.0) || !std::isfinite(disparity_sigma_px)) fail(source, "disparity_sigma_px", ">= 0");
   if (uniqueness_ratio < 0 || speckle_window < 0 || speckle_range < 0) {
     fail(source, "uniqueness_ratio / speckle_window / speckle_range", ">= 0");
@@ -79,6 +185,10 @@ cv::Mat DenseStereo::disparity(const cv::Mat& left, const cv::Mat& right) const 
   sgbm->compute(left, right, fixed);
   cv::Mat out;
   fixed.convertTo(out, CV_32F, 1.0 / kDisparityScale);
+  if (options_.refine_iterations > 0) {
+    refine_disparity(out, left, right, options_.refine_iterations, options_.refine_radius_px,
+                     options_.refine_max_change_px, options_.refine_prefilter_sigma_px);
+  }
   if (options_.edge_radius_px > 0) {
     // The largest and smallest valid disparity around each pixel (invalid pixels count for neither).
     const int side = 2 * options_.edge_radius_px + 1;
