@@ -1,6 +1,8 @@
 // Config and command-line reading of heslam-local-mapper's options.
 #include "components/local_mapper/mapper_process_options.hpp"
 
+#include <filesystem>
+
 #include <stdexcept>
 
 #include "runtime/flags.hpp"
@@ -92,6 +94,14 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
     throw std::runtime_error(
         "--load-map: no saved map given (an empty file name; a localize or session pipeline needs "
         "--arg map=FILE, the map an earlier run saved)");
+  }
+  if (!o.load_map.empty() && !o.map_file.empty() &&
+      std::filesystem::absolute(o.load_map).lexically_normal() ==
+          std::filesystem::absolute(o.map_file).lexically_normal()) {
+    // The run's working copy is replaced at the start of every run: the saved map would be deleted.
+    throw std::runtime_error("--load-map " + o.load_map.string() +
+                             ": is this run's own map file (--map-file, the pipelines' OUTPUT stem + .map), which a "
+                             "run replaces; give the saved map another name or the run another output");
   }
   if (o.extend_map) {
     if (o.load_map.empty()) throw std::runtime_error("--extend-map: needs the saved map to extend (--load-map FILE)");

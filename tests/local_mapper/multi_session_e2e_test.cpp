@@ -33,6 +33,9 @@ namespace fs = std::filesystem;
 
 constexpr int kMaxFramesToJoin = 10;              // relocalized (or merged) within the second session's first 10 frames
 constexpr double kMaxSecondSessionAte_m = 0.005;  // MH01, with the first session's alignment
+// corridor_loop, the merged session with the first session's alignment: measured 6.0 mm (2026-12-06); a pose
+// left in the session's own map frame would be metres off.
+constexpr double kMaxMergedSessionAte_m = 0.015;
 constexpr std::chrono::seconds kRunTimeout{900};  // a hung run's bound, not a performance assertion
 
 std::string read_bytes(const fs::path& path) {
@@ -198,8 +201,7 @@ TEST(MultiSession, SessionOnUnmappedGroundIsMergedIntoTheSavedMap) {
   EXPECT_NE(output.find("maps merged: map 1 into map 0"), std::string::npos) << output;
   EXPECT_FALSE(fs::exists(dir.path() / "second.maps.txt")) << "a pose is not in map 0";
   expect_old_plus_new(loaded, extended);
-  // In the first session's frame: a pose left in its own map's frame would be metres off.
-  EXPECT_LE(ate, 0.1);
+  EXPECT_LE(ate, kMaxMergedSessionAte_m);
 }
 
 // A bad saved map never starts a session: missing, truncated, of another format version, none given.
@@ -227,6 +229,9 @@ TEST(MultiSession, ABadSavedMapRefusesToStartWithOneLine) {
       {"map=" + truncated.string(), "map file " + truncated.string() + ": truncated"},
       {"map=" + newer.string(), "map file " + newer.string() + ": format version 99, this build reads versions 1 to"},
       {"map=", "--load-map: no saved map given"},
+      // the run's own working copy (OUTPUT stem + .map, here bad4.map): it would be replaced
+      {"map=" + (dir.path() / "bad4.map").string(),
+       "--load-map " + (dir.path() / "bad4.map").string() + ": is this run's own map file"},
   };
   int label = 0;
   for (const auto& [arg, expected] : cases) {
@@ -238,6 +243,26 @@ TEST(MultiSession, ABadSavedMapRefusesToStartWithOneLine) {
     EXPECT_NE(output.find(expected), std::string::npos) << expected << "\n" << output;
   }
   EXPECT_EQ(read_bytes(good), bytes);
+
+  // A map of another camera: refused by the frontend when the calibration arrives (after its start-up, so
+  // the supervisor's restarts repeat it before the run fails with it).
+  PinholeStereo other_camera;
+  other_camera.fx_px = other_camera.fy_px = 500.0;
+  other_camera.cx_px = 376.0;
+  other_camera.cy_px = 240.0;
+  other_camera.baseline_m = 0.2;
+  other_camera.width_px = 752;
+  other_camera.height_px = 480;
+  const fs::path other = dir.path() / "other_camera.map";
+  save_map_file(other, map, MapperState{}, false, &other_camera);
+  auto run = test::start_pipeline("euroc_session", dataset, dir.path(), "session", test::exclusive_domain_id(),
+                                  {"map=" + other.string()});
+  EXPECT_EQ(test::finish(*run), 1) << run->out() << run->err();
+  const std::string output = run->out() + run->err();
+  EXPECT_NE(output.find("pipeline failed: frontend exit code 1: heslam-frontend: saved map " + other.string() +
+                        ": made with another camera (fx 500 px, baseline 0.2 m, 752x480) than this run's calibration"),
+            std::string::npos)
+      << output;
 }
 
 // Map file format 4: the camera is saved and read back exactly; another camera is told apart.
