@@ -164,6 +164,7 @@ void Frontend::configure(const runtime::Config& config) {
   keyframe_writer_.emplace(participant(), topics().keyframes());
   frame_done_writer_.emplace(participant(), topics().frame_done());
   resume_from_journal();
+  if (options_.session) configure_session();
   log().info("settings ",
              options_.settings_file.empty() ? std::string("(built-in defaults)") : options_.settings_file.string(),
              ": ", describe_settings(options_.features, options_.tracker));
@@ -179,11 +180,12 @@ void Frontend::configure(const runtime::Config& config) {
              options_.loop_closers.empty() ? "" : " and " + options_.loop_closers.front(),
              options_.mapping ? "" : "; localization only: mapping off, no keyframe or point is created");
   std::error_code no_file;
-  if (options_.localize && !std::filesystem::exists(options_.mapper_map_file, no_file)) {
+  if ((options_.localize || options_.session) && !std::filesystem::exists(options_.mapper_map_file, no_file)) {
     // The mapper (started before us) writes the saved map there at its start: without it there is
     // nothing to localize in, and tracking would silently start a new map.
     throw std::runtime_error(
-        "--localize: no saved map: the local mapper's map file " + options_.mapper_map_file.string() +
+        std::string(options_.session ? "--session" : "--localize") + ": no saved map: the local mapper's map file " +
+        options_.mapper_map_file.string() +
         (options_.saved_map.empty() ? std::string() : " (its copy of " + options_.saved_map.string() + ")") +
         " does not exist (start the mapper with --load-map FILE)");
   }
@@ -312,6 +314,8 @@ void Frontend::take_calibration() {
       warn_if_settings_disagree(camera);
       log().info("calibration '", calibration.source, "': rectified ", camera.width_px, "x", camera.height_px, ", fx ",
                  camera.fx_px, " px, baseline ", camera.baseline_m, " m");
+    } catch (const SavedMapCameraMismatch&) {
+      throw;  // the run cannot go on in that map: the process ends with this line
     } catch (const std::exception& error) {
       stats().count("bad_calibrations");
       log().error(error.what());
@@ -359,8 +363,12 @@ void Frontend::resume_in_mapper_map() {
   bool loaded = false;
   if (mapper_map_file_of_this_run()) {
     try {
-      tracker.local_map() = load_map_file(options_.mapper_map_file).map;
+      MapSnapshot snapshot = load_map_file(options_.mapper_map_file);
+      check_saved_map_camera(snapshot);
+      tracker.local_map() = std::move(snapshot.map);
       loaded = true;
+    } catch (const SavedMapCameraMismatch&) {
+      throw;
     } catch (const std::exception& error) {
       stats().count("unreadable_mapper_map_files");
       log().warn(error.what(), "; rebuilding the map from the local mapper's keyframes on DDS");
@@ -540,6 +548,7 @@ void Frontend::process_frame(const msg::StereoFrame& frame, std::int64_t publish
     relocalized_at_seq_ = frame.seq;
     log().info("relocalized in the saved map at frame ", frame.seq);
   }
+  if (options_.session && !session_started_) follow_session_start(result, frame.seq);
   if (!result.pose_valid()) stats().count("untracked");
   if (result.state == TrackingState::kLost) stats().count("lost");
   if (result.motion == FrameMotion::kStill) stats().count("still_frames");
@@ -973,6 +982,50 @@ void Frontend::follow_map_change(const TrackResult& result, std::uint64_t seq) {
   }
   odometry_map_ = result.map_id;
   last_T_oc_ = T_wo_.inverse() * result.T_wc;
+}
+
+// Multi-session mapping (docs/local_mapper.md): the start of a session on a saved map.
+void Frontend::configure_session() {
+  // A restarted frontend continues a session that started already: a loss from now on is an ordinary
+  // one, the atlas's rule applies.
+  if (last_seq_ || runtime::restart_number() > 0) {
+    session_started_ = true;
+    options_.tracker.new_map_after_ns = std::llround(options_.new_map_after_s * 1e9);
+  }
+  log().info("session on the saved map ",
+             options_.saved_map.empty() ? options_.mapper_map_file.string() : options_.saved_map.string(),
+             ": its first frames are relocalized in it; not relocalized within ", options_.session_new_map_after_s,
+             " s (session.new_map_after_s), a new map starts and is merged into it when recognised");
+}
+
+void Frontend::follow_session_start(const TrackResult& result, std::uint64_t seq) {
+  if (!result.pose_valid()) return;
+  session_started_ = true;
+  // From the first pose on, a loss is an ordinary one.
+  processor_->tracker().set_new_map_after_ns(std::llround(options_.new_map_after_s * 1e9));
+  const std::string saved =
+      options_.saved_map.empty() ? options_.mapper_map_file.string() : options_.saved_map.string();
+  if (result.new_map) {
+    stats().count("session_new_maps");
+    log().info("session: not relocalized in the saved map ", saved, " within ", options_.session_new_map_after_s,
+               " s: new map ", result.map_id, " at frame ", seq,
+               "; it is merged into the saved map when the loop closer recognises a place of it");
+  } else {
+    stats().count("session_relocalized");
+    log().info("session: relocalized in the saved map ", saved, " at frame ", seq, " (map ", result.map_id, ")");
+  }
+}
+
+void Frontend::check_saved_map_camera(const MapSnapshot& snapshot) const {
+  // Only a saved map (session, localization) can be of another camera; a restart's file is this run's.
+  if (!(options_.session || options_.localize) || !snapshot.camera) return;
+  const PinholeStereo& camera = processor_->camera();
+  if (same_map_camera(*snapshot.camera, camera)) return;
+  const std::string saved =
+      options_.saved_map.empty() ? options_.mapper_map_file.string() : options_.saved_map.string();
+  throw SavedMapCameraMismatch("saved map " + saved + ": made with another camera (" +
+                               describe_map_camera(*snapshot.camera) + ") than this run's calibration (" +
+                               describe_map_camera(camera) + ")");
 }
 
 }  // namespace heslam::frontend

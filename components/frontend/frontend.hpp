@@ -9,9 +9,11 @@
 #include <memory>
 #include <optional>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "components/core/mapping/map_file.hpp"
 #include "components/frontend/batched_mirror.hpp"
 #include "components/frontend/frame_processor.hpp"
 #include "components/frontend/frontend_options.hpp"
@@ -24,6 +26,12 @@
 #include "runtime/role_binding.hpp"
 
 namespace heslam::frontend {
+
+// A saved map (--session, --localize) of another camera than the run's calibration: ends the process.
+class SavedMapCameraMismatch : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 class Frontend : public runtime::Component {
  public:
@@ -67,6 +75,14 @@ class Frontend : public runtime::Component {
   // With a mapper: mirror its stored map into a new processor's tracker and, when it holds
   // keyframes (this frontend was restarted), relocalize in it instead of starting a new map.
   void resume_in_mapper_map();
+  // --session / --localize: a saved map of another camera than the calibration's ends the process
+  // (SavedMapCameraMismatch, one line); a map without a camera (format < 4) is not checked.
+  void check_saved_map_camera(const MapSnapshot& snapshot) const;
+  // --session: a restarted frontend continues its session (the atlas's rule at once).
+  void configure_session();
+  // --session: at the first frame with a pose, the atlas's own rule from then on; one line saying
+  // whether the session was relocalized in the saved map or started a map of its own.
+  void follow_session_start(const TrackResult& result, std::uint64_t seq);
   // The mapper's keyframes with their features from DDS (topics().mapper_keyframes()): for a
   // restarted frontend without a readable map file of the run. Empty when no mapper publishes them
   // within kMapHistoryWait.
@@ -164,6 +180,9 @@ class Frontend : public runtime::Component {
   std::optional<std::uint64_t> inertial_initialized_at_seq_;
   // --localize: the seq of the first frame tracked in the saved map, unset until then.
   std::optional<std::uint64_t> relocalized_at_seq_;
+  // --session (multi-session mapping): the first frame with a pose, relocalized in the saved map or the
+  // first of a new map; until then the session's new-map rule (session.new_map_after_s) holds.
+  bool session_started_ = false;
 };
 
 }  // namespace heslam::frontend

@@ -82,6 +82,7 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
   options.settings_file = config.get_path("settings.file", "");
   options.inertial = read_inertial(config);
   read(config, "atlas.new_map_after_s", options.new_map_after_s, 0.0, kMaxTimeoutS);
+  read(config, "session.new_map_after_s", options.session_new_map_after_s, 0.0, kMaxTimeoutS);
   std::string imu = "auto";
   std::string loop_closer = config.get_string("lockstep.loop_closer", "none");
   const std::string loop_closer_name = config.get_string("lockstep.loop_closer_name", "loop_closer");
@@ -96,6 +97,8 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
       .text("--loop-closer", "EXECUTABLE|none", &loop_closer,
             "the loop closer of a lockstep run (lockstep.loop_closer)")
       .toggle("--localize", &options.localize, "track against the saved map of --mapper-map-file")
+      .toggle("--session", &options.session,
+              "map on in the saved map of --mapper-map-file (a new map, merged later, when not relocalized)")
       .custom("--mapping", "on|off", "off: localization only (with --localize): no keyframe or point is created",
               [&options](const std::string& value) {
                 if (value != "on" && value != "off") runtime::throw_bad_flag_value("--mapping", "on or off", value);
@@ -115,6 +118,15 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
   if (options.localize && (options.mapper_map_file.empty() || !options.mapper_enabled)) {
     throw std::runtime_error(
         "--localize: needs the local mapper (mapper.enabled) and its map file (--mapper-map-file FILE)");
+  }
+  if (options.session && options.localize) {
+    throw std::runtime_error(
+        "--session and --localize: a session maps on in the saved map, --localize only "
+        "tracks in it; give one of them");
+  }
+  if (options.session && (options.mapper_map_file.empty() || !options.mapper_enabled)) {
+    throw std::runtime_error(
+        "--session: needs the local mapper (mapper.enabled) and its map file (--mapper-map-file FILE)");
   }
   if (!loop_closer.empty() && loop_closer != "none" && options.wait_for_mapper) {
     options.loop_closers.push_back(loop_closer_name);
@@ -141,7 +153,9 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
   options.tracker.create_keyframes = options.mapping;
   // A localization run's poses are worth something only in the saved map: a new map there would end the
   // run with a trajectory in another frame (and hide "never relocalized in the saved map"), so it waits.
-  options.tracker.new_map_after_ns = options.localize ? 0 : std::llround(options.new_map_after_s * 1e9);
+  options.tracker.new_map_after_ns = options.localize  ? 0
+                                     : options.session ? std::llround(options.session_new_map_after_s * 1e9)
+                                                       : std::llround(options.new_map_after_s * 1e9);
   return options;
 }
 

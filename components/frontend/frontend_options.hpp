@@ -62,6 +62,16 @@ struct FrontendOptions {
   // must exist at start (the mapper loaded the saved map into it), the first tracked frame is reported
   // ("relocalized in the saved map at frame N"), and a run that never relocalizes fails (exit 1).
   bool localize = false;
+  // --session: mapping on a saved map (multi-session, docs/local_mapper.md, Multi-session mapping). As
+  // with --localize the mapper's map file must exist at start and the first frames are relocalized in
+  // it; a session that is not relocalized within session_new_map_after_s starts a map of its own (the
+  // atlas: its id above every loaded one), which the loop closer merges into the saved map when it
+  // recognises a place of it. Not with --localize.
+  bool session = false;
+  // session.new_map_after_s: at the start of a session, how long (frame stamps) the first frames are
+  // relocalized in the saved map before a new map starts; after the first pose the atlas's rule
+  // (new_map_after_s) holds.
+  double session_new_map_after_s = 0.1;
   // --mapping on|off: off is localization only (TrackerOptions::create_keyframes = false, ORB-SLAM3's
   // localization mode): with --localize, frames are tracked in the saved map and relocalized in it
   // when lost, and no keyframe or point is created, so the map stays as saved. Needs --localize.

@@ -134,16 +134,22 @@ void MapperNode::load_initial_map() {
     // for these states to do so. The file is this run's (FILE.run), so there is nothing to confirm.
     publish_all(loaded_->map);
   } else if (!options_.load_map.empty()) {
+    const auto load_start = std::chrono::steady_clock::now();
     loaded_ = load_map_file(options_.load_map);
+    const double load_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - load_start).count();
+    stats().record_ms("map_load", load_ms);
+    for (const auto& [id, keyframe] : loaded_->map.keyframes) loaded_keyframe_ids_.insert(id);
     log().info("loaded ", options_.load_map.string(), ": ", loaded_->map.keyframes.size(), " keyframes, ",
-               loaded_->map.points.size(), " points, map version ", loaded_->map.version);
+               loaded_->map.points.size(), " points, map version ", loaded_->map.version, " in ", load_ms, " ms");
     // An explicitly loaded map is published right away (a viewer or a frontend may want it before
     // any keyframe arrives); a resumed one only once the run's keyframes confirm it is this run's.
     publish_all(loaded_->map);
     // ... and it is this run's map from now on: in the map file at once, so a frontend finds its
     // keyframes there (the state topics carry no features) and a restart resumes from it.
     if (!options_.map_file.empty()) {
-      save_map_file(options_.map_file, loaded_->map, loaded_->state, options_.sync_writes);
+      save_map_file(options_.map_file, loaded_->map, loaded_->state, options_.sync_writes,
+                    loaded_->camera ? &*loaded_->camera : nullptr);
     }
   }
 }
@@ -166,13 +172,19 @@ void MapperNode::run() {
 void MapperNode::save_map_to(const std::filesystem::path& path) {
   std::error_code error;
   if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), error);
+  // The user's saved map extended in place (--extend-map) is replaced atomically (FILE.tmp renamed over
+  // it) and durably: the only copy of the earlier sessions' map must survive a power loss too.
+  const bool replaces_loaded =
+      !options_.load_map.empty() && std::filesystem::equivalent(path, options_.load_map, error);
   if (mapper_) {
-    mapper_->save(path, options_.sync_writes);
+    mapper_->save(path, options_.sync_writes || replaces_loaded);
     log().info("saved the map to ", path.string(), ": ", mapper_->map().keyframes.size(), " keyframes, ",
                mapper_->map().points.size(), " points");
+    if (!options_.load_map.empty()) log_session_map(path);
   } else if (loaded_) {
     // Loaded, and no keyframe arrived to start mapping: the map is the loaded one.
-    save_map_file(path, loaded_->map, loaded_->state, options_.sync_writes);
+    save_map_file(path, loaded_->map, loaded_->state, options_.sync_writes || replaces_loaded,
+                  loaded_->camera ? &*loaded_->camera : nullptr);
     log().info("saved the map to ", path.string(), ": ", loaded_->map.keyframes.size(), " keyframes (as loaded)");
   } else {
     throw std::runtime_error("--save-map " + path.string() + ": no map to save (not one keyframe arrived)");
@@ -232,6 +244,12 @@ void MapperNode::process_pending() {
 }
 
 void MapperNode::start_mapper(const PendingKeyframe& first) {
+  if (loaded_ && loaded_->camera && !same_map_camera(*loaded_->camera, first.camera)) {
+    // Keyframes of two cameras in one map would be matched and adjusted with the wrong intrinsics.
+    throw std::runtime_error("map " + (options_.load_map.empty() ? options_.map_file : options_.load_map).string() +
+                             ": made with another camera (" + describe_map_camera(*loaded_->camera) +
+                             ") than this run's keyframes (" + describe_map_camera(first.camera) + ")");
+  }
   if (loaded_) {
     mapper_ = std::make_unique<LocalMapper>(first.camera, options_.mapper, std::move(*loaded_));
     loaded_.reset();
@@ -622,6 +640,21 @@ void MapperNode::log_summary() {
     log().info("map file ", options_.map_file.string(), ": ", last_save_.bytes, " bytes (last snapshot: serialize ",
                last_save_.serialize_ms, " ms, write ", last_save_.write_ms, " ms)");
   }
+}
+
+// Multi-session mapping (docs/local_mapper.md): what the saved map holds now, of the loaded one and of
+// this run, and in how many maps (a session that was never merged into the saved map stays a map of its own).
+void MapperNode::log_session_map(const std::filesystem::path& path) {
+  std::size_t loaded = 0;
+  std::size_t added = 0;
+  std::set<MapId> maps;
+  for (const auto& [id, keyframe] : mapper_->map().keyframes) {
+    (loaded_keyframe_ids_.count(id) != 0 ? loaded : added) += 1;
+    if (!keyframe.culled) maps.insert(keyframe.map_id);
+  }
+  log().info("session map ", path.string(), ": ", loaded, " keyframes of the loaded map ", options_.load_map.string(),
+             " and ", added, " of this run, in ", maps.size(),
+             maps.size() == 1 ? " map" : " maps (not merged: a session map stays apart until it is)");
 }
 
 }  // namespace heslam::local_mapper

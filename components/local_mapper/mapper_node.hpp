@@ -47,6 +47,8 @@ class MapperNode : public runtime::Component {
   void load_initial_map();
   // --save-map: the final map into `path`. Throws (the process then exits 1) when there is none.
   void save_map_to(const std::filesystem::path& path);
+  // After save_map_to with a loaded map (a session): one line, the loaded and the new keyframes.
+  void log_session_map(const std::filesystem::path& path);
   void take_keyframes();
   void take_corrections();
   void process_pending();
@@ -95,6 +97,8 @@ class MapperNode : public runtime::Component {
 
   // A loaded map waits here for the first keyframe (which brings the camera the mapper needs).
   std::optional<MapSnapshot> loaded_;
+  // The keyframes of the map loaded with --load-map (multi-session: old and new told apart at the end).
+  std::set<KeyframeId> loaded_keyframe_ids_;
   std::unique_ptr<LocalMapper> mapper_;
   std::map<KeyframeId, PendingKeyframe> pending_;  // taken, not yet processed; id order
   std::map<std::uint64_t, LoopCorrection> pending_corrections_;

@@ -1,6 +1,8 @@
 // Config and command-line reading of heslam-local-mapper's options.
 #include "components/local_mapper/mapper_process_options.hpp"
 
+#include <filesystem>
+
 #include <stdexcept>
 
 #include "runtime/flags.hpp"
@@ -79,6 +81,8 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
                 o.load_map_given_empty = o.load_map.empty();
               })
       .path("--save-map", "FILE", &o.save_map, "save the map here at the end (\"\": none)")
+      .toggle("--extend-map", &o.extend_map,
+              "with --load-map: the final map replaces the loaded file at the end (unless --save-map FILE)")
       .custom("--imu", "auto|none", "none: no inertial local BA whatever imu.enabled says (auto: imu.enabled)",
               [&imu_flag](const std::string& value) {
                 if (value != "auto" && value != "none") runtime::throw_bad_flag_value("--imu", "auto or none", value);
@@ -88,8 +92,20 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
   if (imu_flag == "none") imu.enabled = false;
   if (o.load_map_given_empty) {
     throw std::runtime_error(
-        "--load-map: no saved map given (an empty file name; a localize pipeline needs "
+        "--load-map: no saved map given (an empty file name; a localize or session pipeline needs "
         "--arg map=FILE, the map an earlier run saved)");
+  }
+  if (!o.load_map.empty() && !o.map_file.empty() &&
+      std::filesystem::absolute(o.load_map).lexically_normal() ==
+          std::filesystem::absolute(o.map_file).lexically_normal()) {
+    // The run's working copy is replaced at the start of every run: the saved map would be deleted.
+    throw std::runtime_error("--load-map " + o.load_map.string() +
+                             ": is this run's own map file (--map-file, the pipelines' OUTPUT stem + .map), which a "
+                             "run replaces; give the saved map another name or the run another output");
+  }
+  if (o.extend_map) {
+    if (o.load_map.empty()) throw std::runtime_error("--extend-map: needs the saved map to extend (--load-map FILE)");
+    if (o.save_map.empty()) o.save_map = o.load_map;
   }
   return o;
 }

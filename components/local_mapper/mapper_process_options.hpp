@@ -27,6 +27,11 @@ struct MapperProcessOptions {
   // save_map / --save-map FILE: when the run ends, the final map is written there as well (the
   // explicit "save" verb; map_file is the run's own working copy). Empty = none.
   std::filesystem::path save_map;
+  // --extend-map (multi-session mapping, the session pipelines): with --load-map and no --save-map, the
+  // final map (the loaded one and what this run added) replaces the loaded file when the run ends,
+  // written to FILE.tmp, fsynced and renamed over it; until then the file is only read, so a run that
+  // dies leaves it as it was.
+  bool extend_map = false;
   // save_every_keyframes: snapshot cadence. 1 = after every keyframe (a kill -9 then loses nothing;
   // larger values re-process the missing keyframes from DDS on restart, which also loses nothing as
   // long as the frontend still holds them).

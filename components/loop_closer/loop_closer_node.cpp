@@ -10,6 +10,7 @@
 #include <string>
 
 #include "components/core/map/ids.hpp"
+#include "components/core/mapping/map_file.hpp"
 #include "components/messages/checks.hpp"
 #include "components/messages/loop_correction.hpp"
 #include "components/messages/map_state.hpp"
@@ -86,6 +87,7 @@ void LoopCloserNode::configure(const runtime::Config& config) {
   correction_writer_.emplace(participant(), topics().loop_corrections());
   keyframe_done_writer_.emplace(participant(), topics().keyframe_done());
   correction_counter_ = clock_counter_start();
+  load_mapper_map();
   load_state();
   if (runtime::RunEndWatch::joined_by_hand()) run_end_.emplace(participant(), topics());
   // Under a supervisor the pipeline file says --real-time exactly for real-time runs; joined by hand,
@@ -420,6 +422,30 @@ void LoopCloserNode::acknowledge(KeyframeId id) {
   done.component = runtime::borrow(name());
   done.map_version = mirror_.map().version;
   keyframe_done_writer_->write(done);
+}
+
+void LoopCloserNode::load_mapper_map() {
+  if (options_.mapper_map_file.empty()) return;
+  std::error_code error;
+  // The mapper writes a loaded map to its map file (and FILE.run, this run's identity) before it runs,
+  // and the pipeline starts the loop closer after it; a file of an earlier run is not this map.
+  if (!std::filesystem::exists(options_.mapper_map_file, error) ||
+      !runtime::RunJournal::written_by_run(map_run_file_path(options_.mapper_map_file), runtime::supervisor_run_id(),
+                                           kMapRunFileFormat)) {
+    log().info("no map of this run's local mapper in ", options_.mapper_map_file.string(), " yet: starting empty");
+    return;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  MapSnapshot snapshot = load_map_file(options_.mapper_map_file);  // a bad file: one line, exit 1
+  const double load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  stats().record_ms("map_load", load_ms);
+  std::set<MapId> maps;
+  for (const auto& [id, keyframe] : snapshot.map.keyframes) maps.insert(keyframe.map_id);
+  log().info("took the local mapper's map from ", options_.mapper_map_file.string(), ": ",
+             snapshot.map.keyframes.size(), " keyframes, ", snapshot.map.points.size(), " points in ", maps.size(),
+             maps.size() == 1 ? " map" : " maps", ", loaded in ", load_ms,
+             " ms; its places are loop and merge candidates from the first keyframe on");
+  mirror_.load(std::move(snapshot.map));
 }
 
 // State file: a run file (runtime/run_journal.hpp) replaced whole after every keyframe, its records

@@ -64,6 +64,8 @@ class LoopCloserNode : public runtime::Component {
   bool odometry_covers(const Keyframe& keyframe);
   // Before processing keyframe `id`: the 4-DoF pose graph about the gravity of its frame, if there is one.
   void choose_pose_graph(KeyframeId id);
+  // --mapper-map-file: the map the local mapper loaded (a session on a saved map) into the mirror.
+  void load_mapper_map();
   void load_state();
   void save_state();
   void log_summary();

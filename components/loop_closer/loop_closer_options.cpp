@@ -65,6 +65,8 @@ LoopCloserProcessOptions LoopCloserProcessOptions::from_config(const runtime::Co
   runtime::Flags flags("heslam-loop-closer [options]");
   flags.path("--state-file", "FILE", &o.state_file, "where the loop closer keeps its state (state_file)")
       .path("--vocabulary", "FILE", &o.vocabulary, "the BoW vocabulary (vocabulary.file)")
+      .path("--mapper-map-file", "FILE", &o.mapper_map_file,
+            "the local mapper's map file: a map it loaded is taken from there at start")
       .toggle("--real-time", &o.real_time, "do not wait for the mapper (real_time)");
   flags.parse(rest);
   return o;

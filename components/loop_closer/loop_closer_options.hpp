@@ -33,6 +33,11 @@ struct LoopCloserProcessOptions {
   // state_file / --state-file FILE: the keyframes already processed and the loops closed, so a
   // restarted loop closer (kill -9) neither repeats nor loses work. Empty: nothing persisted.
   std::filesystem::path state_file;
+  // --mapper-map-file FILE (the session pipelines: multi-session mapping): the local mapper's map file.
+  // When this run's mapper wrote it before the loop closer started (it loaded a saved map), the
+  // keyframes (with the features the state topics do not carry) and points are taken from it, so the
+  // saved map's places are loop and merge candidates from the first keyframe on. Empty: none.
+  std::filesystem::path mapper_map_file;
   // vocabulary.file / --vocabulary FILE (bag-of-words closers): empty = the built default
   // vocabulary (docs/place_recognition.md).
   std::filesystem::path vocabulary;

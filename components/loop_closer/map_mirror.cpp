@@ -46,6 +46,11 @@ void MapMirror::add_keyframe(const msg::Keyframe& message) {
   pending_states_.erase(pending);
 }
 
+void MapMirror::load(Map map) {
+  // The map's own version: the mapper's versions go on from it, so its markers still count.
+  map_ = std::move(map);
+}
+
 Keyframe& MapMirror::insert(Keyframe incoming) {
   const KeyframeId id = incoming.id;
   Keyframe& keyframe = map_.keyframes[id] = std::move(incoming);

@@ -37,6 +37,10 @@ class MapMirror {
   // Throws std::runtime_error naming the keyframe when the sample is malformed (messages::check:
   // lengths, non-finite numbers, bad camera); the mirror is unchanged then.
   void add_keyframe(const msg::Keyframe& message);
+  // Before any sample: the keyframes (with features) and points of a map the local mapper loaded
+  // (multi-session mapping), which no Keyframe sample of this run carries. The mapper's states of
+  // them replace these values as they arrive.
+  void load(Map map);
   // Throws std::runtime_error naming the keyframe / point when messages::check refuses the sample
   // (non-finite pose or position, zero ids, ...).
   void apply_keyframe_state(const msg::KeyframeState& message);

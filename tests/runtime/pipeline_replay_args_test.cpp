@@ -82,7 +82,8 @@ TEST(PipelineReplayArgs, EveryReplayPipelineTakesTheReplaysControls) {
     EXPECT_TRUE(has_pair(plain->args, "--start-paused-mode", "off"));
     EXPECT_TRUE(has_pair(plain->args, "--loop-mode", "off"));
   }
-  EXPECT_EQ(replay_pipelines, 15);  // with euroc_inertial, euroc_inertial_realtime, synth_inertial
+  // with euroc_inertial, euroc_inertial_realtime, synth_inertial, euroc_session, synth_session
+  EXPECT_EQ(replay_pipelines, 17);
 }
 
 TEST(PipelineReplayArgs, TheStartLineNamesTheMode) {

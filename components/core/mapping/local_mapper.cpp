@@ -306,7 +306,7 @@ MapChanges LocalMapper::apply_correction(const LoopCorrection& correction) {
 }
 
 MapFileWriteStats LocalMapper::save(const std::filesystem::path& path, bool sync) const {
-  return save_map_file(path, map_, state_, sync);
+  return save_map_file(path, map_, state_, sync, &camera_);
 }
 
 }  // namespace heslam

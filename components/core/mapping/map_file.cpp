@@ -1,9 +1,12 @@
 // Binary snapshot writer and validating reader of the map file.
 #include "components/core/mapping/map_file.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -116,7 +119,7 @@ constexpr std::size_t kKeypointBytes = 4 * 4 + 4 + 4 + 4 + 32 + 8;
 constexpr std::size_t kKeyframeMinBytes = 8 + 8 + 96 + 8 + 1 + 4 + 4 + 8 + 8;
 constexpr std::size_t kPointMinBytes = 8 + 24 + 32 + 24 + 4 + 4 + 8 + 4 + 4 + 1 + 8 + 8;
 
-void write_payload(Writer& w, const Map& map, const MapperState& state) {
+void write_payload(Writer& w, const Map& map, const MapperState& state, const PinholeStereo* camera) {
   w.put(map.version);
   w.put(state.next_point_counter);
   w.put(state.keyframes_processed);
@@ -221,6 +224,18 @@ void write_payload(Writer& w, const Map& map, const MapperState& state) {
   for (const auto& [id, map_id] : map_ids) {
     w.put(id);
     w.put(map_id);
+  }
+
+  // Format 4: the camera.
+  w.put(static_cast<std::uint8_t>(camera != nullptr ? 1 : 0));
+  if (camera != nullptr) {
+    w.put(camera->fx_px);
+    w.put(camera->fy_px);
+    w.put(camera->cx_px);
+    w.put(camera->cy_px);
+    w.put(camera->baseline_m);
+    w.put(static_cast<std::int32_t>(camera->width_px));
+    w.put(static_cast<std::int32_t>(camera->height_px));
   }
 }
 
@@ -346,6 +361,24 @@ void read_payload(Reader& r, std::uint32_t format, MapSnapshot& out) {
       p->map_id = r.get<MapId>();
     }
   }
+  if (format >= 4) {
+    r.context("camera");
+    if (r.get<std::uint8_t>() != 0) {
+      PinholeStereo camera;
+      camera.fx_px = r.get<double>();
+      camera.fy_px = r.get<double>();
+      camera.cx_px = r.get<double>();
+      camera.cy_px = r.get<double>();
+      camera.baseline_m = r.get<double>();
+      camera.width_px = r.get<std::int32_t>();
+      camera.height_px = r.get<std::int32_t>();
+      if (!(camera.fx_px > 0.0) || !(camera.fy_px > 0.0) || !(camera.baseline_m > 0.0) || camera.width_px <= 0 ||
+          camera.height_px <= 0) {
+        r.fail("bad camera (" + describe_map_camera(camera) + ")");
+      }
+      out.camera = camera;
+    }
+  }
   r.context("end of payload");
   if (r.remaining() != 0) r.fail(std::to_string(r.remaining()) + " unexpected trailing bytes");
 }
@@ -358,15 +391,31 @@ std::filesystem::path map_run_file_path(const std::filesystem::path& map_file) {
   return path;
 }
 
-MapFileWriteStats save_map_file(const std::filesystem::path& path, const Map& map, const MapperState& state,
-                                bool sync) {
+bool same_map_camera(const PinholeStereo& a, const PinholeStereo& b) {
+  constexpr double kRelativeTolerance = 1e-6;  // the same calibration, rectified twice: equal to rounding
+  const auto close = [](double x, double y) {
+    return std::abs(x - y) <= kRelativeTolerance * std::max(1.0, std::abs(y));
+  };
+  return close(a.fx_px, b.fx_px) && close(a.fy_px, b.fy_px) && close(a.cx_px, b.cx_px) && close(a.cy_px, b.cy_px) &&
+         close(a.baseline_m, b.baseline_m) && a.width_px == b.width_px && a.height_px == b.height_px;
+}
+
+std::string describe_map_camera(const PinholeStereo& camera) {
+  std::ostringstream text;
+  text << "fx " << camera.fx_px << " px, baseline " << camera.baseline_m << " m, " << camera.width_px << "x"
+       << camera.height_px;
+  return text.str();
+}
+
+MapFileWriteStats save_map_file(const std::filesystem::path& path, const Map& map, const MapperState& state, bool sync,
+                                const PinholeStereo* camera) {
   MapFileWriteStats stats;
   auto start = std::chrono::steady_clock::now();
   Writer payload;
   std::size_t estimate = 1024 + 128 * map.points.size();
   for (const auto& [id, kf] : map.keyframes) estimate += 256 + kKeypointBytes * kf.point_ids.size();
   payload.buffer.reserve(estimate);  // one allocation instead of repeated growth
-  write_payload(payload, map, state);
+  write_payload(payload, map, state, camera);
   Writer file;
   file.buffer.reserve(kHeaderBytes + payload.buffer.size() + kChecksumBytes);
   file.buffer.insert(file.buffer.end(), kMagic, kMagic + sizeof(kMagic));

@@ -8,7 +8,10 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
+#include <string>
 
+#include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/map/map.hpp"
 #include "components/core/mapping/mapper_state.hpp"
 
@@ -18,13 +21,24 @@ namespace heslam {
 // are still read (no correction remembered).
 // 3: the map ids of keyframes and points not in the first map (the atlas), after the correction
 // motions. Older files read as one map, the first.
-inline constexpr std::uint32_t kMapFileFormatVersion = 3;
+// 4: the rectified stereo camera the map was made with (a flag, then fx, fy, cx, cy, baseline, width,
+// height), after the map ids: a saved map loaded with another camera is refused (multi-session mapping).
+// Older files have none (not checked).
+inline constexpr std::uint32_t kMapFileFormatVersion = 4;
 inline constexpr std::uint32_t kOldestReadableMapFileFormatVersion = 1;
 
 struct MapSnapshot {
   Map map;
   MapperState state;
+  // The rectified camera of its keyframes; unset in files before format 4 and in maps saved without one.
+  std::optional<PinholeStereo> camera;
 };
+
+// Whether `a` and `b` are the same rectified camera (intrinsics, baseline, image size), to a relative
+// 1e-6: a map's camera against a run's calibration.
+bool same_map_camera(const PinholeStereo& a, const PinholeStereo& b);
+// "fx F px, baseline B m, WxH": a camera in messages.
+std::string describe_map_camera(const PinholeStereo& camera);
 
 struct MapFileWriteStats {
   std::uint64_t bytes = 0;
@@ -40,8 +54,9 @@ std::filesystem::path map_run_file_path(const std::filesystem::path& map_file);
 
 // Throws std::runtime_error ("map file <path>: <what>") when the file cannot be written.
 // `sync` forces the data to disk before the rename (durable across power loss, slower).
+// `camera`: the rectified camera of the map's keyframes, stored since format 4 (null: none).
 MapFileWriteStats save_map_file(const std::filesystem::path& path, const Map& map, const MapperState& state,
-                                bool sync = false);
+                                bool sync = false, const PinholeStereo* camera = nullptr);
 
 // Throws std::runtime_error with one line naming the file and what is wrong (missing, bad magic,
 // unsupported version, truncated at which record, checksum mismatch).

@@ -116,6 +116,10 @@ class Tracker {
     inertial_constraint_ = std::move(constraint);
   }
 
+  // The atlas's rule from the next frame on (TrackerOptions::new_map_after_ns): a session on a saved map
+  // starts its own map sooner at its start than after a loss (docs/local_mapper.md, Multi-session mapping).
+  void set_new_map_after_ns(std::int64_t ns) { options_.new_map_after_ns = ns; }
+
   // Whether the local mapper can take a keyframe now (real-time mode); lockstep keeps it true.
   void set_mapper_idle(bool idle) { mapper_idle_ = idle; }
 
