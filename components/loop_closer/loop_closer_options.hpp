@@ -27,7 +27,7 @@ struct LoopCloserProcessOptions {
   // pose_graph.four_dof's) the global BA also holds a velocity and biases per keyframe and IMU factors
   // between consecutive keyframes (docs/loop_closer.md, Global BA with IMU factors). The loop closer then
   // subscribes imu/readings, imu/calibration and calibration. Stereo-only runs are unchanged either way.
-  bool global_ba_imu = true;
+  bool global_ba_imu = false;
   // global_ba.imu_buffer_s: IMU readings kept (older ones dropped): keyframes further back get no IMU
   // factor. 600 s at 200 Hz is ~7 MB.
   double imu_buffer_s = 600.0;
