@@ -26,7 +26,9 @@ class BackgroundGlobalBa {
   // Starts adjusting `map` (the caller's copy) for the loop closed at `loop_kf`. `closing` must
   // outlive the run; only its camera is read, so the caller may go on processing keyframes with it.
   // A run still going is aborted first.
-  void start(const LoopClosing& closing, Map map, KeyframeId loop_kf);
+  // `inertial`: the IMU factors of an inertial run (global_inertial_chain.hpp), nullopt: visual only.
+  void start(const LoopClosing& closing, Map map, KeyframeId loop_kf,
+             std::optional<GlobalInertialInput> inertial = std::nullopt);
   // True from start() until the result was collected or the run aborted.
   bool running() const { return thread_.joinable(); }
   // True when a run has finished and waits to be collected.
@@ -37,6 +39,8 @@ class BackgroundGlobalBa {
   struct Outcome {
     std::optional<LoopCorrection> correction;  // loop_kf set; nullopt when aborted
     double elapsed_ms = 0.0;
+    double cpu_ms = 0.0;                // the thread's CPU time (what the load does not inflate)
+    GlobalBundleAdjustmentStats stats;  // the solver's figures (imu_factors: 0 visual only)
   };
   // Waits for the run started last and returns its result.
   Outcome collect();
@@ -46,6 +50,8 @@ class BackgroundGlobalBa {
   std::atomic<bool> stop_{false};
   std::atomic<bool> done_{false};
   std::optional<LoopCorrection> result_;  // written by the thread before done_, read after join
+  GlobalBundleAdjustmentStats stats_;     // likewise
+  double cpu_ms_ = 0.0;                   // likewise
   std::chrono::steady_clock::time_point started_;
 };
 

@@ -1,7 +1,9 @@
 // A loop closer process's DDS side (see loop_closer_node.hpp).
 #include "components/loop_closer/loop_closer_node.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <climits>
 #include <cstddef>
 #include <ctime>
 #include <iterator>
@@ -9,8 +11,10 @@
 #include <stdexcept>
 #include <string>
 
+#include "components/core/camera/stereo_rectifier.hpp"
 #include "components/core/map/ids.hpp"
 #include "components/core/mapping/map_file.hpp"
+#include "components/messages/camera.hpp"
 #include "components/messages/checks.hpp"
 #include "components/messages/loop_correction.hpp"
 #include "components/messages/map_state.hpp"
@@ -45,6 +49,7 @@ constexpr std::chrono::milliseconds kOdometryWait{2000};
 // A gravity outside this range (m/s^2) is not one (the Earth's is 9.78..9.83).
 constexpr double kMinGravityM_S2 = 5.0;
 constexpr double kMaxGravityM_S2 = 15.0;
+constexpr double kEarthGravityM_S2 = 9.81;  // InertialInitOptions::gravity_m_s2, the frontend's
 // Gravity samples kept by stamp (those before the last processed keyframe's are dropped as it goes).
 constexpr std::size_t kMaxGravitySamples = 4096;
 // Odometry samples of a second writer kept in case it takes over (a restarted frontend).
@@ -78,6 +83,24 @@ void LoopCloserNode::configure(const runtime::Config& config) {
                              messages::sample_check<msg::Odometry>(),
                              messages::checked_options<msg::Odometry>(kHeldOdometry));
   }
+  const bool inertial_possible = options_.gravity_from_odometry || options_.closing.correction.pose_graph.four_dof;
+  if (options_.global_bundle_adjustment && options_.global_ba_imu && inertial_possible) {
+    runtime::CheckedReaderOptions batch_options;
+    batch_options.rejected_counter = "imu_rejected_batches";
+    imu_reader_.emplace(participant(), topics().imu(), log(), stats(), nullptr, batch_options);
+    runtime::CheckedReaderOptions calibration_options;
+    calibration_options.rejected_counter = "imu_rejected_calibrations";
+    imu_calibration_reader_.emplace(participant(), topics().imu_calibration(), log(), stats(), nullptr,
+                                    calibration_options);
+    stereo_calibration_reader_.emplace(participant(), topics().calibration(), log(), stats(),
+                                       messages::sample_check<msg::StereoCalibration>(),
+                                       messages::checked_options<msg::StereoCalibration>(1));
+    ImuBufferOptions buffer_options;
+    buffer_options.source = imu_reader_->name();
+    imu_buffer_ = std::make_unique<ImuBuffer>(buffer_options);
+    imu_stream_ = std::make_unique<messages::ImuStreamReader>(*imu_buffer_);
+    waitset_->attach(*imu_reader_);
+  }
   keyframe_done_roles_.emplace(log(), stats(), keyframe_done_reader_->name());
   waitset_->attach(*keyframe_reader_);
   waitset_->attach(*keyframe_state_reader_);
@@ -100,7 +123,8 @@ void LoopCloserNode::configure(const runtime::Config& config) {
       options_.state_file.empty() ? ", no state file" : ", state file " + options_.state_file.string(),
       options_.closing.correction.pose_graph.four_dof ? ", 4-DoF pose graph"
       : options_.gravity_from_odometry                ? ", 4-DoF pose graph once the odometry carries gravity"
-                                                      : "");
+                                                      : "",
+      imu_reader_ ? ", global BA with IMU factors in inertial runs" : "");
 }
 
 void LoopCloserNode::run() {
@@ -180,6 +204,7 @@ std::size_t LoopCloserNode::take_all() {
   }
   mirror_.count_markers(markers);
   take_odometry();
+  take_imu();
   for (auto& received : keyframe_done_reader_->take()) {
     ++taken;
     if (!received.info.valid_data) continue;
@@ -289,7 +314,7 @@ void LoopCloserNode::process_keyframe(KeyframeId id) {
 
   log().info("global BA started on map version ", mirror_.map().version, ": ", mirror_.map().keyframes.size(),
              " keyframes (", mirror_.keyframes_awaiting_state(), " more from the frontend left out: not mapped yet)");
-  global_ba_.start(*closing_, mirror_.map(), id);
+  global_ba_.start(*closing_, mirror_.map(), id, inertial_input());
   if (!options_.real_time) finish_global_ba();
 }
 
@@ -346,6 +371,99 @@ void LoopCloserNode::choose_pose_graph(KeyframeId id) {
   }
 }
 
+void LoopCloserNode::take_imu() {
+  if (!imu_reader_) return;
+  for (auto& received : stereo_calibration_reader_->take()) {
+    if (!received.info.valid_data || T_B_rect_) continue;
+    try {
+      T_B_rect_ = StereoRectifier(messages::to_calibration(*received.sample)).T_B_rect();
+    } catch (const std::exception& error) {
+      stats().count("imu_bad_calibrations");
+      log().warn_throttled("imu_bad_calibrations", "topic '", stereo_calibration_reader_->name(), "': ", error.what());
+    }
+  }
+  for (auto& received : imu_calibration_reader_->take()) {
+    if (!received.info.valid_data || imu_calibration_) continue;
+    try {
+      imu_calibration_ = messages::to_imu_calibration(*received.sample);
+    } catch (const std::exception& error) {
+      stats().count("imu_bad_calibrations");
+      log().warn_throttled("imu_bad_calibrations", "topic '", imu_calibration_reader_->name(), "': ", error.what());
+    }
+  }
+  for (auto& received : imu_reader_->take()) {
+    if (!received.info.valid_data) continue;
+    const messages::ImuBatchReport report = imu_stream_->add(*received.sample);
+    if (report.lost_readings > 0) stats().count("imu_lost_readings", report.lost_readings);
+    for (const std::string& warning : report.warnings) log().warn_throttled("imu_readings", warning);
+  }
+  // Bounded: readings older than imu_buffer_s before the newest covered stamp are dropped.
+  const std::int64_t covered = imu_buffer_->covered_until_ns();
+  const auto keep_ns = static_cast<std::int64_t>(options_.imu_buffer_s * 1e9);
+  if (!imu_buffer_->empty() && covered > INT64_MIN + keep_ns) imu_buffer_->discard_before(covered - keep_ns);
+}
+
+std::optional<GlobalInertialInput> LoopCloserNode::inertial_input() {
+  if (!imu_reader_ || !closing_ || !closing_->pose_graph_options().four_dof) return std::nullopt;
+  const auto warn_once = [&](const std::string& kind, const std::string& line) {
+    stats().count("global_ba_visual_" + kind);
+    if (imu_warned_.insert(kind).second) log().warn(line, " (said once; counted as global_ba_visual_", kind, ")");
+  };
+  take_imu();
+  std::int64_t newest_stamp = INT64_MIN;
+  for (const auto& [id, keyframe] : mirror_.map().keyframes) {
+    if (!keyframe.culled) newest_stamp = std::max(newest_stamp, keyframe.stamp_ns);
+  }
+  const auto imu_stamp = [&] { return newest_stamp + (imu_calibration_ ? imu_calibration_->time_offset_ns : 0); };
+  if (!options_.real_time) {
+    // Lockstep: the readings up to the newest keyframe are in flight at most (the source sends them
+    // before its frame), so wait for them: the same readings every run.
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                                 std::chrono::duration<double>(options_.imu_wait_s));
+    while (!(T_B_rect_ && imu_calibration_ && imu_buffer_->covered_until_ns() >= imu_stamp()) &&
+           !imu_stream_->ended() && std::chrono::steady_clock::now() < deadline && !shutdown_requested()) {
+      waitset_->wait(std::chrono::milliseconds(20));
+      take_imu();
+    }
+  }
+  if (!T_B_rect_ || !imu_calibration_) {
+    warn_once("no_calibration", std::string("global BA without IMU factors: no ") +
+                                    (!T_B_rect_ ? "stereo calibration on '" + stereo_calibration_reader_->name()
+                                                : "IMU calibration on '" + imu_calibration_reader_->name()) +
+                                    "'");
+    return std::nullopt;
+  }
+  if (imu_buffer_->covered_until_ns() < imu_stamp()) {
+    warn_once("imu_behind", "global BA: the IMU on '" + imu_reader_->name() + "' covers up to " +
+                                std::to_string(imu_buffer_->covered_until_ns()) + " ns, not the newest keyframe (" +
+                                std::to_string(imu_stamp()) + " ns): the keyframes after it get no IMU factor");
+  }
+  const Pose3 T_cb = T_B_rect_->inverse() * imu_calibration_->T_BS;
+  // The odometry's gravity (m/s^2); a direction given by pose_graph.gravity_w (any length) gets Earth's.
+  Eigen::Vector3d gravity_w = closing_->pose_graph_options().gravity_w;
+  if (!(gravity_w.norm() > kMinGravityM_S2 && gravity_w.norm() < kMaxGravityM_S2)) {
+    gravity_w = gravity_w.normalized() * kEarthGravityM_S2;
+  }
+  GlobalInertialChainOptions chain_options;
+  chain_options.max_interval_s = options_.imu_max_interval_s;
+  GlobalInertialChainReport report;
+  GlobalInertialInput input =
+      build_global_inertial_input(mirror_.map(), *imu_buffer_, T_cb, imu_calibration_->time_offset_ns,
+                                  imu_calibration_->noise, gravity_w, chain_options, &report);
+  log().info("global BA with IMU factors: ", report.intervals, " keyframe intervals (", report.not_covered,
+             " without IMU readings, ", report.too_long, " longer than ", options_.imu_max_interval_s, " s",
+             report.first_problem.empty() ? "" : "; first: " + report.first_problem, "), gyro bias guess (",
+             report.gyro_bias_rad_s.x(), ", ", report.gyro_bias_rad_s.y(), ", ", report.gyro_bias_rad_s.z(), ") rad/s");
+  if (input.intervals.empty()) {
+    warn_once("no_intervals",
+              "global BA without IMU factors: no two consecutive keyframes with IMU readings between "
+              "them" +
+                  (report.first_problem.empty() ? "" : " (" + report.first_problem + ")"));
+    return std::nullopt;
+  }
+  return input;
+}
+
 LoopClosingResult LoopCloserNode::process_merge(KeyframeId id) {
   LoopClosingResult result = closing_->process_merge(mirror_.map(), id);
   if (!result.candidates.keyframes.empty()) stats().count("merge_candidates", result.candidates.keyframes.size());
@@ -372,9 +490,15 @@ void LoopCloserNode::finish_global_ba() {
   if (!outcome.correction) return;
   stats().record_ms("global_ba", outcome.elapsed_ms);
   stats().count("global_bundle_adjustments");
+  stats().record_ms("global_ba_cpu", outcome.cpu_ms);
+  if (outcome.stats.imu_factors > 0) {
+    stats().count("global_ba_inertial");
+    stats().count("global_ba_imu_factors", static_cast<std::uint64_t>(outcome.stats.imu_factors));
+  }
   log().info("global BA for the loop at keyframe ", format_id(outcome.correction->loop_kf), ": ",
              outcome.correction->corrected_T_wc.size(), " keyframes, ", outcome.correction->corrected_points.size(),
-             " points in ", outcome.elapsed_ms, " ms");
+             " points, ", outcome.stats.imu_factors, " IMU factors, ", outcome.stats.iterations, " iterations in ",
+             outcome.elapsed_ms, " ms (CPU ", outcome.cpu_ms, " ms)");
   publish_and_wait(std::move(*outcome.correction));
 }
 

@@ -19,10 +19,13 @@
 
 #include <Eigen/Core>
 
+#include "components/core/imu/imu_buffer.hpp"
+#include "components/core/loop/global_inertial_chain.hpp"
 #include "components/core/loop/loop_closing.hpp"
 #include "components/loop_closer/background_global_ba.hpp"
 #include "components/loop_closer/loop_closer_options.hpp"
 #include "components/loop_closer/map_mirror.hpp"
+#include "components/messages/imu.hpp"
 #include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
 #include "runtime/role_binding.hpp"
@@ -66,6 +69,12 @@ class LoopCloserNode : public runtime::Component {
   void choose_pose_graph(KeyframeId id);
   // --mapper-map-file: the map the local mapper loaded (a session on a saved map) into the mirror.
   void load_mapper_map();
+  // Global BA with IMU factors (options_.global_ba_imu): takes the IMU readings and the IMU's and the
+  // camera's calibrations into imu_buffer_ (bounded by options_.imu_buffer_s).
+  void take_imu();
+  // The IMU chain for a global BA on the mirror's map, or nullopt (not an inertial run, no calibration,
+  // no readings). Lockstep: waits (at most options_.imu_wait_s) for the IMU to cover the newest keyframe.
+  std::optional<GlobalInertialInput> inertial_input();
   void load_state();
   void save_state();
   void log_summary();
@@ -100,6 +109,15 @@ class LoopCloserNode : public runtime::Component {
   std::int64_t newest_odometry_stamp_ = 0;
   std::optional<std::chrono::steady_clock::time_point> odometry_wait_since_;
   bool four_dof_announced_ = false;
+  // The IMU for the global BA (options_.global_ba_imu; docs/loop_closer.md, Global BA with IMU factors).
+  std::optional<runtime::CheckedReader<msg::ImuBatch>> imu_reader_;
+  std::optional<runtime::CheckedReader<msg::ImuCalibration>> imu_calibration_reader_;
+  std::optional<runtime::CheckedReader<msg::StereoCalibration>> stereo_calibration_reader_;
+  std::unique_ptr<ImuBuffer> imu_buffer_;
+  std::unique_ptr<messages::ImuStreamReader> imu_stream_;
+  std::optional<ImuCalibration> imu_calibration_;
+  std::optional<Pose3> T_B_rect_;     // rectified left camera -> body
+  std::set<std::string> imu_warned_;  // one warning per kind, then counted only
   std::optional<runtime::Writer<msg::LoopCorrection>> correction_writer_;
   std::optional<runtime::Writer<msg::KeyframeDone>> keyframe_done_writer_;
 

@@ -57,6 +57,10 @@ LoopCloserProcessOptions LoopCloserProcessOptions::from_config(const runtime::Co
   merge.min_matches = config.get_int("merge.min_matches", merge.min_matches, 1, 100000);
   merge.seam_bundle_adjustment = config.get_bool("merge.seam_bundle_adjustment", merge.seam_bundle_adjustment);
   o.global_bundle_adjustment = config.get_bool("global_ba.enabled", o.global_bundle_adjustment);
+  o.global_ba_imu = config.get_bool("global_ba.imu", o.global_ba_imu);
+  o.imu_buffer_s = config.get_double("global_ba.imu_buffer_s", o.imu_buffer_s, 1.0, 1e6);
+  o.imu_wait_s = config.get_double("global_ba.imu_wait_s", o.imu_wait_s, 0.0, kMaxTimeoutS);
+  o.imu_max_interval_s = config.get_double("global_ba.imu_max_interval_s", o.imu_max_interval_s, 0.01, 60.0);
   o.real_time = config.get_bool("real_time", o.real_time);
   const double timeout_s = config.get_double("lockstep.mapper_timeout_s", 30.0, 0.1, kMaxTimeoutS);
   o.mapper_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));

@@ -23,6 +23,19 @@ struct LoopCloserProcessOptions {
   // a second correction (ORB-SLAM2 does, in a thread). Lockstep waits for it, so runs stay
   // deterministic.
   bool global_bundle_adjustment = true;
+  // global_ba.imu: in inertial runs (once the pose graph is 4-DoF about a gravity: the odometry's or
+  // pose_graph.four_dof's) the global BA also holds a velocity and biases per keyframe and IMU factors
+  // between consecutive keyframes (docs/loop_closer.md, Global BA with IMU factors). The loop closer then
+  // subscribes imu/readings, imu/calibration and calibration. Stereo-only runs are unchanged either way.
+  bool global_ba_imu = false;
+  // global_ba.imu_buffer_s: IMU readings kept (older ones dropped): keyframes further back get no IMU
+  // factor. 600 s at 200 Hz is ~7 MB.
+  double imu_buffer_s = 600.0;
+  // global_ba.imu_wait_s: lockstep only: before a global BA, wait at most this long for the IMU to cover
+  // the newest keyframe (then it goes on with what it has, warned, counted).
+  double imu_wait_s = 2.0;
+  // global_ba.imu_max_interval_s: two consecutive keyframes further apart get no IMU factor.
+  double imu_max_interval_s = 3.0;
   // real_time / --real-time: the global BA runs on its own thread while keyframes go on being
   // processed (and a newer loop aborts it), instead of finishing before the keyframe is acknowledged.
   // The real-time pipelines set it; lockstep runs must not.

@@ -54,6 +54,36 @@ TEST(LoopCloserOptions, ShippedConfigsMergeMapsWithTheDocumentedGate) {
   EXPECT_EQ(off.closing.merge.min_matches, 40);
 }
 
+// The global BA's IMU factors (docs/loop_closer.md, Global BA with IMU factors): off in the code and the
+// shipped configs, the documented bounds, a bad value one line naming file and field.
+TEST(LoopCloserOptions, GlobalBaImuIsOffByDefaultAndReadFromTheConfig) {
+  EXPECT_FALSE(parse("real_time: false\n").global_ba_imu);
+  for (const char* name : {"heslam-loop-closer.yaml", "heslam-loop-closer-proximity.yaml"}) {
+    SCOPED_TRACE(name);
+    const runtime::Config config = runtime::Config::load(test::source_dir() / "config/loop_closer" / name);
+    const LoopCloserProcessOptions options = LoopCloserProcessOptions::from_config(config, {});
+    EXPECT_FALSE(options.global_ba_imu);
+    EXPECT_EQ(options.imu_buffer_s, 600.0);
+    EXPECT_EQ(options.imu_wait_s, 2.0);
+    EXPECT_EQ(options.imu_max_interval_s, 3.0);
+  }
+  const LoopCloserProcessOptions on =
+      parse("global_ba:\n  imu: true\n  imu_buffer_s: 60\n  imu_wait_s: 0.5\n  imu_max_interval_s: 1.5\n");
+  EXPECT_TRUE(on.global_ba_imu);
+  EXPECT_EQ(on.imu_buffer_s, 60.0);
+  EXPECT_EQ(on.imu_wait_s, 0.5);
+  EXPECT_EQ(on.imu_max_interval_s, 1.5);
+  try {
+    parse("global_ba:\n  imu_max_interval_s: -1\n");
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("closer.yaml"), std::string::npos) << message;
+    EXPECT_NE(message.find("global_ba.imu_max_interval_s"), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+}
+
 TEST(LoopCloserOptions, FourDofTakesTheGravityDirection) {
   const LoopCloserProcessOptions options = parse("pose_graph:\n  four_dof: true\n  gravity_w: [0.0, 9.81, 0]\n");
   EXPECT_TRUE(options.closing.correction.pose_graph.four_dof);

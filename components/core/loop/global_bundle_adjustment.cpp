@@ -1,4 +1,8 @@
 // Global bundle adjustment with Ceres over the whole map, abortable between iterations.
+// GCC 12 with -march=native (AVX-512) reports Eigen's vectorised quaternion reductions as "may be used
+// uninitialized": a known false positive (bundle_adjustment_terms.cpp, inertial_bundle_adjustment.cpp).
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+
 #include "components/core/loop/global_bundle_adjustment.hpp"
 
 #include <chrono>
@@ -6,9 +10,13 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <stdexcept>
+#include <string>
 
 #include <ceres/ceres.h>
 
+#include "components/core/imu/imu_factor.hpp"
+#include "components/core/map/ids.hpp"
 #include "components/core/mapping/bundle_adjustment_terms.hpp"
 
 namespace heslam {
@@ -28,10 +36,30 @@ class AbortCallback : public ceres::IterationCallback {
   bool aborted_ = false;
 };
 
+// Gaussian prior on a keyframe's biases around b0: (bg - bg0) / sigma_g, (ba - ba0) / sigma_a.
+struct BiasPrior {
+  Eigen::Vector3d bg0, ba0;
+  double inv_sigma_gyro, inv_sigma_accel;
+  template <typename T>
+  bool operator()(const T* bg, const T* ba, T* residual) const {
+    for (int k = 0; k < 3; ++k) {
+      residual[k] = (bg[k] - T(bg0[k])) * T(inv_sigma_gyro);
+      residual[3 + k] = (ba[k] - T(ba0[k])) * T(inv_sigma_accel);
+    }
+    return true;
+  }
+};
+
+// A keyframe's velocity and bias blocks in the problem.
+struct InertialBlocks {
+  Eigen::Vector3d v, bg, ba;
+};
+
 }  // namespace
 
 GlobalBundleAdjustmentResult GlobalBundleAdjustment::compute(const Map& map, const PinholeStereo& camera,
-                                                             const std::atomic<bool>* stop) const {
+                                                             const std::atomic<bool>* stop,
+                                                             const GlobalInertialInput* inertial) const {
   const auto start = std::chrono::steady_clock::now();
   GlobalBundleAdjustmentResult result;
 
@@ -76,6 +104,50 @@ GlobalBundleAdjustmentResult GlobalBundleAdjustment::compute(const Map& map, con
       ++result.stats.observations;
     }
   }
+  // Inertial runs: a velocity and biases per keyframe of the IMU chain, an IMU factor and a bias random
+  // walk between consecutive ones (std::map: the blocks' addresses stay put).
+  std::map<KeyframeId, InertialBlocks> inertial_blocks;
+  Eigen::Vector3d gravity_w = inertial != nullptr ? inertial->gravity_w : Eigen::Vector3d::Zero();
+  if (inertial != nullptr) {
+    const auto blocks_of = [&](KeyframeId id) -> InertialBlocks& {
+      const auto state = inertial->states.find(id);
+      if (state == inertial->states.end()) {
+        throw std::invalid_argument("GlobalBundleAdjustment: IMU interval keyframe " + format_id(id) +
+                                    " has no inertial state");
+      }
+      auto [it, inserted] = inertial_blocks.try_emplace(id);
+      if (inserted) it->second = {state->second.v_wb, state->second.bias.gyro_rad_s, state->second.bias.accel_m_s2};
+      return it->second;
+    };
+    std::set<KeyframeId> followers;  // keyframes an interval ends at: not the first of a chain
+    for (const GlobalInertialInterval& interval : inertial->intervals) {
+      const auto pose_i = pose_index.find(interval.from);
+      const auto pose_j = pose_index.find(interval.to);
+      if (pose_i == pose_index.end() || pose_j == pose_index.end()) {
+        ++result.stats.imu_intervals_skipped;
+        continue;
+      }
+      InertialBlocks& i = blocks_of(interval.from);
+      InertialBlocks& j = blocks_of(interval.to);
+      problem.AddResidualBlock(new ImuCameraCost(interval.preintegration, inertial->T_cb), nullptr,
+                               poses[pose_i->second].data(), i.v.data(), i.bg.data(), i.ba.data(),
+                               poses[pose_j->second].data(), j.v.data(), gravity_w.data());
+      problem.AddResidualBlock(BiasRandomWalkFactor::create(interval.preintegration), nullptr, i.bg.data(), i.ba.data(),
+                               j.bg.data(), j.ba.data());
+      followers.insert(interval.to);
+      ++result.stats.imu_factors;
+    }
+    for (auto& [id, blocks] : inertial_blocks) {
+      if (followers.count(id) != 0) continue;
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<BiasPrior, 6, 3, 3>(
+                                   new BiasPrior{blocks.bg, blocks.ba, 1.0 / inertial->gyro_bias_prior_stddev_rad_s,
+                                                 1.0 / inertial->accel_bias_prior_stddev_m_s2}),
+                               nullptr, blocks.bg.data(), blocks.ba.data());
+    }
+    if (!inertial_blocks.empty()) problem.SetParameterBlockConstant(gravity_w.data());
+    result.stats.inertial_keyframes = static_cast<int>(inertial_blocks.size());
+  }
+
   auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
   for (Eigen::Vector3d& point : points) {
     if (!problem.HasParameterBlock(point.data())) continue;
@@ -93,8 +165,12 @@ GlobalBundleAdjustmentResult GlobalBundleAdjustment::compute(const Map& map, con
     }
     ++result.stats.keyframes;
   }
+  for (auto& [id, blocks] : inertial_blocks) {
+    for (double* block : {blocks.v.data(), blocks.bg.data(), blocks.ba.data()}) ordering->AddElementToGroup(block, 1);
+  }
+  if (!inertial_blocks.empty()) ordering->AddElementToGroup(gravity_w.data(), 1);
 
-  if (result.stats.observations > 0) {
+  if (result.stats.observations > 0 || result.stats.imu_factors > 0) {
     AbortCallback abort_callback(stop);
     ceres::Solver::Options solver_options;
     solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
@@ -118,6 +194,12 @@ GlobalBundleAdjustmentResult GlobalBundleAdjustment::compute(const Map& map, con
   }
   for (std::size_t p = 0; p < point_ids.size(); ++p) {
     if (problem.HasParameterBlock(points[p].data())) result.p_w.emplace_back(point_ids[p], points[p]);
+  }
+  for (const auto& [id, blocks] : inertial_blocks) {
+    InertialKeyframeState& state = result.states[id];
+    state.v_wb = blocks.v;
+    state.bias.gyro_rad_s = blocks.bg;
+    state.bias.accel_m_s2 = blocks.ba;
   }
   result.stats.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return result;

@@ -276,9 +276,11 @@ LoopClosingResult LoopClosing::process_merge(const Map& map, KeyframeId query) {
   return result;
 }
 
-std::optional<LoopCorrection> LoopClosing::global_bundle_adjustment(const Map& map,
-                                                                    const std::atomic<bool>* abort) const {
-  GlobalBundleAdjustmentResult adjusted = GlobalBundleAdjustment().compute(map, camera_, abort);
+std::optional<LoopCorrection> LoopClosing::global_bundle_adjustment(const Map& map, const std::atomic<bool>* abort,
+                                                                    const GlobalInertialInput* inertial,
+                                                                    GlobalBundleAdjustmentStats* stats) const {
+  GlobalBundleAdjustmentResult adjusted = GlobalBundleAdjustment().compute(map, camera_, abort, inertial);
+  if (stats != nullptr) *stats = adjusted.stats;
   if (adjusted.stats.aborted) return std::nullopt;
   LoopCorrection correction;
   correction.kind = CorrectionKind::kGlobalBundleAdjustment;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/loop/global_bundle_adjustment.hpp"
 #include "components/core/loop/loop_correction_builder.hpp"
 #include "components/core/loop/loop_detector.hpp"
 #include "components/core/loop/map_merge.hpp"
@@ -102,8 +103,11 @@ class LoopClosing {
                                             std::string& why) const;
 
   // A global bundle adjustment of the whole map, as a correction of kind kGlobalBundleAdjustment
-  // (poses and point positions). nullopt when `abort` was set before it finished.
-  std::optional<LoopCorrection> global_bundle_adjustment(const Map& map, const std::atomic<bool>* abort) const;
+  // (poses and point positions). nullopt when `abort` was set before it finished. `inertial`: the IMU
+  // factors of an inertial run (global_inertial_chain.hpp); `stats` receives the solver's figures.
+  std::optional<LoopCorrection> global_bundle_adjustment(const Map& map, const std::atomic<bool>* abort,
+                                                         const GlobalInertialInput* inertial = nullptr,
+                                                         GlobalBundleAdjustmentStats* stats = nullptr) const;
 
   const LoopDetector& detector() const { return *detector_; }
   // Accepted loops (loop keyframe, matched keyframe): the essential graph keeps them as edges. A
