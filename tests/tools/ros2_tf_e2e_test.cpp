@@ -3,12 +3,16 @@
 // knows only the ROS 2 types and topic names (rt/tf, rt/tf_static). At every tracked frame
 // map -> odom -> base_link (-> camera on /tf_static) composes to the frontend's published pose; across
 // the loop correction odom -> base_link moves like the camera does, the correction goes into map -> odom.
+// The same run is heslam-loop-closer-proximity's corridor loop test: every frame in the trajectory, at
+// least one loop accepted, ATE below 0.2 % of the path (the bar of tests/loop_closer/loop_closer_e2e_test.cpp,
+// whose bag-of-words runs are there; one 960-frame run instead of two with the same arguments).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <map>
+#include <regex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -37,6 +41,18 @@ using std::chrono::seconds;
 constexpr int kCorridorFrames = 960;
 // The composition is exact arithmetic on doubles sent as doubles: only rounding separates them.
 constexpr double kComposeTolerance = 1e-6;
+// The issue's bar for a closed loop (as tests/loop_closer): ATE after closing at most 0.2 % of the path length.
+constexpr double kMaxAteOfPath = 0.002;
+
+// The sum of "A loops accepted" over the loop closer's summaries (one per process start).
+int loops_accepted(const std::string& output) {
+  static const std::regex summary(R"((\d+) loops accepted)");
+  int total = 0;
+  for (auto it = std::sregex_iterator(output.begin(), output.end(), summary); it != std::sregex_iterator(); ++it) {
+    total += std::stoi((*it)[1]);
+  }
+  return total;
+}
 
 Pose3 to_pose3(const Transform& t) {
   Pose3 T = Pose3::Identity();
@@ -145,8 +161,23 @@ TEST(Ros2TfEndToEnd, CorridorLoopTfComposesToThePosesAndOdomNeverJumps) {
   while (!(code = supervisor->wait(milliseconds(100))) && std::chrono::steady_clock::now() < run_deadline) drain();
   if (!code) code = test::finish(*supervisor, seconds(0));
   ASSERT_EQ(code.value_or(-1), 0) << supervisor->out() << supervisor->err();
-  std::this_thread::sleep_for(seconds(1));  // the bridge's last samples
+  // The bridge's last samples: every frame's odometry and, for each tracked one, its TF (bounded against
+  // a hang; a run short of them fails below).
+  const auto all_in = [&] {
+    if (odometry_by_stamp.size() < static_cast<std::size_t>(kCorridorFrames)) return false;
+    for (const auto& [stamp, odometry] : odometry_by_stamp) {
+      if (odometry.state != heslam_msg_TRACKING_OK) continue;
+      const auto found = tf_by_stamp.find(stamp);
+      if (found == tf_by_stamp.end() || !found->second.T_map_odom || !found->second.T_odom_base) return false;
+    }
+    return true;
+  };
+  const auto samples_deadline = std::chrono::steady_clock::now() + seconds(30);
   drain();
+  while (!all_in() && std::chrono::steady_clock::now() < samples_deadline) {
+    std::this_thread::sleep_for(milliseconds(50));
+    drain();
+  }
   bridge.signal(SIGINT);
   EXPECT_EQ(bridge.wait(seconds(20)).value_or(-1), 0) << bridge.err();
   const std::string output = supervisor->out() + supervisor->err();
@@ -204,6 +235,18 @@ TEST(Ros2TfEndToEnd, CorridorLoopTfComposesToThePosesAndOdomNeverJumps) {
   EXPECT_GT(largest_correction, 4.0 * worst_odom_step_error) << output;
   EXPECT_LT(worst_odom_step_error, largest_true_step);
   EXPECT_LT(worst_odom_step_error, worst_map_step_error);
+
+  // The proximity loop closer closes the loop (was CorridorLoop.ProximityLoopCloserClosesTheSameLoop, a
+  // second run of this pipeline with the same arguments): the recorder's trajectory against the truth.
+  const double path_m = truth.path_length_m();
+  const double ate_m = test::ate_rmse_m(dataset, dir.path() / "tf.txt");
+  std::printf(
+      "[ figures  ] corridor_loop: with heslam-loop-closer-proximity ATE rmse %.1f mm (%.3f %% of %.1f m), "
+      "%d loop(s) accepted\n",
+      ate_m * 1e3, 100.0 * ate_m / path_m, path_m, loops_accepted(output));
+  EXPECT_EQ(eval::read_trajectory(dir.path() / "tf.txt").size(), truth.size());
+  EXPECT_GE(loops_accepted(output), 1) << output;
+  EXPECT_LT(ate_m, kMaxAteOfPath * path_m);
 }
 
 }  // namespace
