@@ -274,6 +274,12 @@ void Frontend::run() {
                options_.shedding.shed_after_ms, " ms with a newer frame waiting (realtime.shed_frames_after_ms); ",
                count("gap_predictions"), " frames after a gap started from the motion scaled to it");
   }
+  if (count("poses_rechecked_after_gap") > 0 || count("poses_refused_after_gap") > 0) {
+    log().warn(count("poses_rechecked_after_gap") + count("poses_refused_after_gap"),
+               " frames after a gap had a doubtful first pose (docs/frontend.md, \"After a gap\"): ",
+               count("poses_rechecked_after_gap"), " kept the best of every start, ", count("poses_refused_after_gap"),
+               " refused (no pose)");
+  }
   log_stage_summary(log(), stats());
   if (options_.localize && !relocalized_at_seq_) {
     // A localization run that never found itself in the map has no pose at all: a failure.
@@ -551,6 +557,9 @@ void Frontend::process_frame(const msg::StereoFrame& frame, std::int64_t publish
   if (options_.session && !session_started_) follow_session_start(result, frame.seq);
   if (!result.pose_valid()) stats().count("untracked");
   if (result.state == TrackingState::kLost) stats().count("lost");
+  // A frame after a gap whose first pose was doubtful (docs/frontend.md, "After a gap").
+  if (result.gap_check == GapCheck::kChosen) stats().count("poses_rechecked_after_gap");
+  if (result.gap_check == GapCheck::kRefused) stats().count("poses_refused_after_gap");
   if (result.motion == FrameMotion::kStill) stats().count("still_frames");
   if (result.motion == FrameMotion::kRotatingInPlace) stats().count("rotating_in_place_frames");
   for (const messages::StageTiming& timing : output.timings) stats().record_ms(timing.stage, timing.ms);

@@ -26,6 +26,7 @@ constexpr float kMotionRetryFactor = 2.f;
 constexpr std::uint64_t kResumeIdGap = std::uint64_t{1} << 32;
 // For two frames after a relocalization the motion model is not trusted (no velocity yet).
 constexpr int kFramesWithoutMotionModelAfterRelocalization = 2;
+constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 // One line naming the field that is wrong; the frontend skips and counts such frames.
 void validate(const StereoFeatures& f) {
@@ -62,6 +63,16 @@ const char* to_string(TrackingState state) {
     case TrackingState::kInertialOnly: return "INERTIAL_ONLY";
   }
   return "UNKNOWN";
+}
+
+const char* to_string(GapCheck check) {
+  switch (check) {
+    case GapCheck::kNoGap: return "no_gap";
+    case GapCheck::kAccepted: return "accepted";
+    case GapCheck::kChosen: return "chosen";
+    case GapCheck::kRefused: return "refused";
+  }
+  return "unknown";
 }
 
 const char* to_string(TrackingMethod method) {
@@ -102,17 +113,29 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
   const std::optional<Pose3> fallback = std::exchange(inertial_fallback_, std::nullopt);
   const std::optional<InertialPoseConstraint> constraint = std::exchange(inertial_constraint_, std::nullopt);
   const bool last_frame_tracked = state_ == TrackingState::kOk;
+  // Tracked from the last frame's pose (a prediction, the motion model, the reference keyframe), or
+  // relocalized when the last frame had no pose.
+  const bool from_last_frame = last_frame_tracked || (prediction && state_ == TrackingState::kInertialOnly);
+  // Frames the tracker never saw lie between the last one and this one (missed or shed in real time;
+  // lockstep never has a gap). A restarted tracker's first frame has no last frame to have a gap to.
+  const bool after_gap = from_last_frame && last_frame_.size() > 0 && frame.seq > last_frame_.seq + 1;
+  if (after_gap) result.frames_before_missed = frame.seq - last_frame_.seq - 1;
   bool ok = false;
-  if (prediction && (last_frame_tracked || state_ == TrackingState::kInertialOnly)) {
-    ok = track_predicted(frame, *prediction, result);
-  } else if (last_frame_tracked) {
-    if (velocity_ && frames_since_relocalization_ >= kFramesWithoutMotionModelAfterRelocalization) {
-      ok = track_motion_model(frame, last_frame_.T_wc * *velocity_);
-      if (ok) result.method = TrackingMethod::kMotionModel;
-    }
-    if (!ok) {
-      ok = track_reference_keyframe(frame, last_frame_.T_wc);
-      if (ok) result.method = TrackingMethod::kReferenceKeyframe;
+  int inliers = 0;
+  if (from_last_frame) {
+    const KeyframeId reference_before = reference_kf_;
+    std::vector<PointCounters> touched;
+    ok = track_from_last_frame(frame, prediction, constraint ? &*constraint : nullptr, result, inliers,
+                               after_gap ? &touched : nullptr, start);
+    if (after_gap) {
+      const bool doubtful = !ok || inliers < options_.min_local_map_inliers_after_gap ||
+                            inliers < options_.gap_doubt_ratio * last_inliers_;
+      if (doubtful) {
+        ok = check_after_gap(frame, ok, prediction, constraint ? &*constraint : nullptr, reference_before, result,
+                             inliers, touched);
+      } else {
+        result.gap_check = GapCheck::kAccepted;
+      }
     }
   } else {
     frame.T_wc = last_frame_.T_wc;
@@ -129,15 +152,13 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
       result.timings.total_ms = elapsed_ms(start);
       return result;
     }
-  }
-  result.timings.initial_pose_ms = elapsed_ms(start);
-
-  int inliers = 0;
-  if (ok) {
-    const auto local_start = std::chrono::steady_clock::now();
-    ok = track_local_map(frame, inliers, constraint ? &*constraint : nullptr, result.inertial_state);
-    if (!ok) result.inertial_state.reset();
-    result.timings.local_map_ms = elapsed_ms(local_start);
+    result.timings.initial_pose_ms = elapsed_ms(start);
+    if (ok) {
+      const auto local_start = std::chrono::steady_clock::now();
+      ok = track_local_map(frame, inliers, constraint ? &*constraint : nullptr, result.inertial_state);
+      if (!ok) result.inertial_state.reset();
+      result.timings.local_map_ms = elapsed_ms(local_start);
+    }
   }
 
   if (ok) {
@@ -152,9 +173,12 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
       if (frame.point_ids[i] != kNoId && frame.features.has_stereo(i)) ++result.tracked_stereo;
     }
     result.tracked_points = inliers;
+    last_inliers_ = inliers;
     ++frames_since_keyframe_;
     const auto keyframe_start = std::chrono::steady_clock::now();
-    maybe_insert_keyframe(frame, inliers, result);
+    // A pose chosen among several starts is not doubtful, but a keyframe (and its new points) made
+    // from it would carry any error into the map: the next frame tracked from it may make one.
+    if (result.gap_check != GapCheck::kChosen) maybe_insert_keyframe(frame, inliers, result);
     result.timings.keyframe_ms = elapsed_ms(keyframe_start);
     // A held pose is this frame's output, not an anchor for new map points: a frame that became a
     // keyframe keeps its optimized pose, from which its points were created.
@@ -322,6 +346,150 @@ bool Tracker::track_predicted(Frame& frame, const Pose3& T_wc_predicted, TrackRe
   return false;
 }
 
+bool Tracker::track_from_last_frame(Frame& frame, const std::optional<Pose3>& prediction,
+                                    const InertialPoseConstraint* constraint, TrackResult& result, int& inliers,
+                                    std::vector<PointCounters>* touched, std::chrono::steady_clock::time_point start) {
+  bool ok = false;
+  if (prediction) {
+    ok = track_predicted(frame, *prediction, result);
+  } else {
+    if (velocity_ && frames_since_relocalization_ >= kFramesWithoutMotionModelAfterRelocalization) {
+      ok = track_motion_model(frame, last_frame_.T_wc * *velocity_);
+      if (ok) result.method = TrackingMethod::kMotionModel;
+    }
+    if (!ok) {
+      ok = track_reference_keyframe(frame, last_frame_.T_wc);
+      if (ok) result.method = TrackingMethod::kReferenceKeyframe;
+    }
+  }
+  result.timings.initial_pose_ms = elapsed_ms(start);
+  inliers = 0;
+  if (ok) {
+    const auto local_start = std::chrono::steady_clock::now();
+    ok = track_local_map(frame, inliers, constraint, result.inertial_state, touched);
+    if (!ok) result.inertial_state.reset();
+    result.timings.local_map_ms = elapsed_ms(local_start);
+  }
+  return ok;
+}
+
+bool Tracker::check_after_gap(Frame& frame, bool first_ok, const std::optional<Pose3>& prediction,
+                              const InertialPoseConstraint* constraint, KeyframeId reference_before,
+                              TrackResult& result, int& inliers, const std::vector<PointCounters>& touched) {
+  // The first tracking is undone (the map points' counters, the reference keyframe); each start below
+  // runs from this same state, so the one kept can be run again for real with the same result.
+  for (auto it = touched.rbegin(); it != touched.rend(); ++it) {
+    if (MapPoint* point = map_.point(it->id)) {
+      point->visible = it->visible;
+      point->found = it->found;
+    }
+  }
+  reference_kf_ = reference_before;
+  std::vector<std::pair<int, int>> counters;
+  counters.reserve(map_.points.size());
+  for (const auto& [id, point] : map_.points) counters.emplace_back(point.visible, point.found);
+  const int relocalization_count = frames_since_relocalization_;
+  const MapId map_before = active_map_;
+  const auto restore = [&] {
+    auto saved = counters.begin();
+    for (auto& [id, point] : map_.points) {
+      point.visible = saved->first;
+      point.found = saved->second;
+      ++saved;
+    }
+    reference_kf_ = reference_before;
+    frames_since_relocalization_ = relocalization_count;
+    active_map_ = map_before;
+  };
+
+  // The starts: the first one (the prediction, else the motion model), then the one-frame motion model
+  // when a prediction replaced it, the last pose (the camera did not move), and relocalization, which
+  // owes nothing to any pose before the gap.
+  enum class Start { kFirst, kMotionModel, kLastPose, kRelocalization };
+  const auto run = [&](Start how, TrackResult& out, int& found) {
+    out.method = TrackingMethod::kNone;
+    out.inertial_state.reset();
+    found = 0;
+    bool ok = false;
+    switch (how) {
+      case Start::kFirst:
+        return track_from_last_frame(frame, prediction, constraint, out, found, nullptr,
+                                     std::chrono::steady_clock::now());
+      case Start::kMotionModel:
+        return track_from_last_frame(frame, std::nullopt, constraint, out, found, nullptr,
+                                     std::chrono::steady_clock::now());
+      case Start::kLastPose:
+        return track_from_last_frame(frame, last_frame_.T_wc, constraint, out, found, nullptr,
+                                     std::chrono::steady_clock::now());
+      case Start::kRelocalization: {
+        frame.T_wc = last_frame_.T_wc;
+        sync_place_database();
+        const auto relocalization = relocalize(frame, map_, camera_, options_, place_database());
+        if (!relocalization) return false;
+        out.method = TrackingMethod::kRelocalization;
+        reference_kf_ = relocalization->keyframe;
+        active_map_ = map_.keyframe(reference_kf_)->map_id;
+        frames_since_relocalization_ = 0;
+        ok = track_local_map(frame, found, constraint, out.inertial_state);
+        if (!ok) out.inertial_state.reset();
+        return ok;
+      }
+    }
+    return ok;
+  };
+
+  struct Candidate {
+    Start start;
+    bool ok = false;
+    int inliers = 0;
+    Pose3 T_wc = Pose3::Identity();
+  };
+  std::vector<Candidate> candidates;
+  candidates.push_back({Start::kFirst, first_ok, inliers, frame.T_wc});
+  std::vector<Start> others;
+  if (prediction) others.push_back(Start::kMotionModel);
+  others.push_back(Start::kLastPose);
+  others.push_back(Start::kRelocalization);
+  for (const Start how : others) {
+    TrackResult scratch;
+    int found = 0;
+    const bool ok = run(how, scratch, found);
+    candidates.push_back({how, ok, found, frame.T_wc});
+    restore();
+  }
+
+  const Candidate* best = nullptr;
+  for (const Candidate& candidate : candidates) {
+    if (candidate.ok && (best == nullptr || candidate.inliers > best->inliers)) best = &candidate;
+  }
+  bool accepted = best != nullptr && best->inliers >= options_.min_local_map_inliers_after_gap;
+  if (accepted) {
+    const double max_distance_m = options_.gap_agreement_baselines * camera_.baseline_m;
+    const double max_angle_rad = options_.gap_agreement_deg * kDegToRad;
+    for (const Candidate& other : candidates) {
+      if (!other.ok || &other == best) continue;
+      const Pose3 difference = best->T_wc.inverse() * other.T_wc;
+      const bool apart = difference.translation().norm() > max_distance_m ||
+                         Eigen::AngleAxisd(difference.rotation()).angle() > max_angle_rad;
+      if (apart && other.inliers >= options_.gap_ambiguity_ratio * best->inliers) accepted = false;
+    }
+  }
+  if (!accepted) {
+    frame.clear_matches();
+    result.inertial_state.reset();
+    result.method = TrackingMethod::kNone;
+    result.gap_check = GapCheck::kRefused;
+    inliers = 0;
+    return false;
+  }
+  // The pose kept, tracked again for real (the same result: every step is deterministic).
+  const auto timings = result.timings;
+  const bool ok = run(best->start, result, inliers);
+  result.timings = timings;
+  result.gap_check = GapCheck::kChosen;
+  return ok;
+}
+
 bool Tracker::track_motion_model(Frame& frame, const Pose3& T_wc_start) {
   frame.T_wc = T_wc_start;
   frame.clear_matches();
@@ -359,9 +527,18 @@ bool Tracker::track_reference_keyframe(Frame& frame, const Pose3& T_wc_start) {
 }
 
 bool Tracker::track_local_map(Frame& frame, int& inliers, const InertialPoseConstraint* constraint,
-                              std::optional<InertialFrameState>& state) {
+                              std::optional<InertialFrameState>& state, std::vector<PointCounters>* touched) {
   const LocalMapSelection local = select_local_map(frame, map_, options_);
   if (local.reference != kNoId) reference_kf_ = local.reference;
+  if (touched != nullptr) {
+    const auto save = [&](PointId id) {
+      if (const MapPoint* point = map_.point(id)) touched->push_back({id, point->visible, point->found});
+    };
+    for (const PointId id : frame.point_ids) {
+      if (id != kNoId) save(id);
+    }
+    for (const PointId id : local.points) save(id);
+  }
   for (std::size_t i = 0; i < frame.size(); ++i) {
     if (MapPoint* point = map_.point(frame.point_ids[i])) ++point->visible;
   }

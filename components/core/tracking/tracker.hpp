@@ -10,6 +10,7 @@
 // against the newest keyframes only.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -36,6 +37,16 @@ const char* to_string(TrackingState state);
 // How the frame's pose was first found, before the local map refinement.
 enum class TrackingMethod { kNone, kInitialization, kMotionModel, kReferenceKeyframe, kRelocalization, kInertial };
 const char* to_string(TrackingMethod method);
+
+// How the pose of a frame after a gap (its seq more than one past the last frame's: frames missed or
+// shed in real time) was checked (TrackerOptions, "a frame after a gap"; docs/frontend.md "After a gap").
+enum class GapCheck {
+  kNoGap,     // the frame follows the last one, or the last one had no pose
+  kAccepted,  // after a gap; its first pose was not doubtful
+  kChosen,    // its first pose was doubtful: of every start tried, the best was confident and unambiguous
+  kRefused,   // ... none was: the frame is lost (or inertial-only with an IMU's pose)
+};
+const char* to_string(GapCheck check);
 
 struct TrackTimings {
   double initial_pose_ms = 0.0;  // motion model / reference keyframe / relocalization, with its BA
@@ -74,11 +85,20 @@ struct TrackResult {
   // correction with this keyframe.
   KeyframeId new_keyframe_reference = kNoId;
   TrackTimings timings;
+  GapCheck gap_check = GapCheck::kNoGap;
+  std::uint64_t frames_before_missed = 0;  // seq - last seq - 1: the frames of the gap before this one
   // The velocity and biases of the motion-only optimization with IMU factors (set_inertial_constraint),
   // when it ran for this frame and the frame was tracked.
   std::optional<InertialFrameState> inertial_state;
 
   bool pose_valid() const { return state == TrackingState::kOk || state == TrackingState::kInertialOnly; }
+};
+
+// A map point's tracking counters, saved before a tentative tracking changes them.
+struct PointCounters {
+  PointId id = kNoId;
+  int visible = 0;
+  int found = 0;
 };
 
 // Where a previous tracker's last frame was: its reference keyframe and its pose in it, and in the
@@ -171,9 +191,24 @@ class Tracker {
   // The tracking of a frame that had a prediction (set_prediction): motion model search from it,
   // else the reference keyframe's points projected from it.
   bool track_predicted(Frame& frame, const Pose3& T_wc_predicted, TrackResult& result);
+  // The first tracking of a frame with a pose before it (motion model, prediction, reference keyframe),
+  // the local map included.
+  // `start`: the frame's start, for its timings.
+  bool track_from_last_frame(Frame& frame, const std::optional<Pose3>& prediction,
+                             const InertialPoseConstraint* constraint, TrackResult& result, int& inliers,
+                             std::vector<PointCounters>* touched, std::chrono::steady_clock::time_point start);
+  // A frame after a gap whose first pose is doubtful: every other start is tried and the best kept when
+  // confident and unambiguous (TrackerOptions, "a frame after a gap"). Returns whether the frame has a
+  // pose; `inliers` and `result` (method, inertial state) are those of the pose kept.
+  // `first_ok`, `inliers`: the first tracking's verdict and inliers; `touched`: the counters it changed.
+  bool check_after_gap(Frame& frame, bool first_ok, const std::optional<Pose3>& prediction,
+                       const InertialPoseConstraint* constraint, KeyframeId reference_before, TrackResult& result,
+                       int& inliers, const std::vector<PointCounters>& touched);
   // With `constraint`, the pose optimization is the inertial one and `state` receives its velocity and biases.
+  // `touched`, when given, receives the counters (visible, found) of every point before the search
+  // changes them, so that a tentative tracking can be undone.
   bool track_local_map(Frame& frame, int& inliers, const InertialPoseConstraint* constraint,
-                       std::optional<InertialFrameState>& state);
+                       std::optional<InertialFrameState>& state, std::vector<PointCounters>* touched = nullptr);
   void maybe_insert_keyframe(Frame& frame, int inliers, TrackResult& result);
   KeyframeId next_keyframe_id() { return make_id(options_.id_tag, ++keyframe_counter_); }
 
@@ -193,6 +228,7 @@ class Tracker {
   std::uint64_t keyframe_counter_ = 0;
   std::uint64_t point_counter_ = 1;
   int frames_since_keyframe_ = 0;
+  int last_inliers_ = 0;  // local-map inliers of the last tracked frame
   int frames_since_relocalization_ = 1 << 30;
   bool mapper_idle_ = true;
   std::optional<Pose3> prediction_;                            // set_prediction, for the next frame only

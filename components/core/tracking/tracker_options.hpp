@@ -57,6 +57,23 @@ struct TrackerOptions {
   int min_local_map_inliers = 30;              // fewer: tracking is lost
   int min_local_map_inliers_after_relocalization = 50;
 
+  // --- a frame after a gap (issue 41; docs/frontend.md "After a gap"; not in ORB-SLAM2) ---
+  // A frame whose seq is more than one past the last frame's (frames the tracker never saw: missed or
+  // shed in real time) may start from a prediction that is far off; a wrong start can converge to a
+  // wrong pose that still gathers the 30 local-map inliers of min_local_map_inliers (MH01 with 10
+  // frames dropped: 40-51 inliers 59-153 mm off, where the right pose gathers 238-318). Its pose is
+  // doubtful when it has fewer than min_local_map_inliers_after_gap inliers or fewer than
+  // gap_doubt_ratio times the last tracked frame's; then every other start is tried (the one-frame
+  // motion model, the last pose, relocalization by bag of words) and the frame keeps the pose with most
+  // inliers only if it has min_local_map_inliers_after_gap of them and no pose further than
+  // gap_agreement_baselines baselines or gap_agreement_deg from it has gap_ambiguity_ratio of its
+  // inliers; otherwise the frame is lost (refused). A frame checked that way makes no keyframe.
+  int min_local_map_inliers_after_gap = 50;  // as after a relocalization
+  double gap_doubt_ratio = 0.5;
+  double gap_ambiguity_ratio = 0.5;
+  double gap_agreement_baselines = 0.25;
+  double gap_agreement_deg = 2.0;
+
   // --- motion-only bundle adjustment ---
   int pose_optimization_rounds = 4;       // outlier reclassification rounds
   int pose_optimization_iterations = 10;  // Levenberg-Marquardt iterations per round
