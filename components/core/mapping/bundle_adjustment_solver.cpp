@@ -274,8 +274,7 @@ BundleAdjustmentSolverSummary solve_bundle_adjustment(BundleAdjustmentProblem& p
     }
     model_decrease = 0.0;
     if (extra_size > 0) {
-      model_decrease += step_extra.dot(b_extra.tail(extra_size)) +
-                        lambda * step_extra.cwiseAbs2().dot(diag_extra);
+      model_decrease += step_extra.dot(b_extra.tail(extra_size)) + lambda * step_extra.cwiseAbs2().dot(diag_extra);
     }
     for (int f = 0; f < num_free; ++f) {
       const std::size_t fi = static_cast<std::size_t>(f);

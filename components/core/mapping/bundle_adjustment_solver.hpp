@@ -52,8 +52,8 @@ class BundleAdjustmentExtraTerms {
   virtual double cost(const std::vector<PoseBlock>& poses, const Eigen::VectorXd* step) const = 0;
   // Adds J^T J to H and -J^T r to b at `poses` and the own parameters: free pose i's 6 tangent entries
   // (PoseManifold's) at 6 * free_index[i] (-1: held, no entries), the own parameters from 6 * (free poses).
-  virtual void linearise(const std::vector<PoseBlock>& poses, const std::vector<int>& free_index,
-                         Eigen::MatrixXd& H, Eigen::VectorXd& b) const = 0;
+  virtual void linearise(const std::vector<PoseBlock>& poses, const std::vector<int>& free_index, Eigen::MatrixXd& H,
+                         Eigen::VectorXd& b) const = 0;
   // An accepted step: the own parameters move by `step`.
   virtual void update(const Eigen::VectorXd& step) = 0;
   // Squared norm of the own parameters (the parameter tolerance's |x|).

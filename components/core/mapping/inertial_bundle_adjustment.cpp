@@ -79,9 +79,9 @@ class InertialTerms : public BundleAdjustmentExtraTerms {
     double sum = 0.0;
     for (std::size_t k = 0; k < imu_.size(); ++k) {
       Eigen::Matrix<double, 9, 1> r;
-      const double* parameters[7] = {poses[poses_[k]].data(),     states[k].data(),     states[k].data() + 3,
-                                     states[k].data() + 6,        poses[poses_[k + 1]].data(),
-                                     states[k + 1].data(),        gravity.data()};
+      const double* parameters[7] = {
+          poses[poses_[k]].data(),     states[k].data(),     states[k].data() + 3, states[k].data() + 6,
+          poses[poses_[k + 1]].data(), states[k + 1].data(), gravity.data()};
       if (!imu_[k]->Evaluate(parameters, r.data(), nullptr)) return std::numeric_limits<double>::infinity();
       sum += r.squaredNorm();
       sum += walk_residual(k, states).squaredNorm();
@@ -106,9 +106,9 @@ class InertialTerms : public BundleAdjustmentExtraTerms {
       Eigen::Matrix<double, 9, 1> r;
       Eigen::Matrix<double, 9, 7, Eigen::RowMajor> J_pose_i, J_pose_j;
       Eigen::Matrix<double, 9, 3, Eigen::RowMajor> J_v_i, J_bg_i, J_ba_i, J_v_j, J_g;
-      const double* parameters[7] = {poses[poses_[k]].data(),     states_[k].data(),    states_[k].data() + 3,
-                                     states_[k].data() + 6,       poses[poses_[k + 1]].data(),
-                                     states_[k + 1].data(),       gravity_.data()};
+      const double* parameters[7] = {poses[poses_[k]].data(), states_[k].data(),           states_[k].data() + 3,
+                                     states_[k].data() + 6,   poses[poses_[k + 1]].data(), states_[k + 1].data(),
+                                     gravity_.data()};
       double* jacobians[7] = {J_pose_i.data(), J_v_i.data(), J_bg_i.data(), J_ba_i.data(),
                               J_pose_j.data(), J_v_j.data(), J_g.data()};
       imu_[k]->Evaluate(parameters, r.data(), jacobians);
