@@ -254,6 +254,44 @@ TEST(InertialBundleAdjustment, TheImuPullsPosesTowardsTheTruthWhenPixelsAreNoisy
   EXPECT_LT(inertial_error, visual_error);
 }
 
+TEST(InertialBundleAdjustment, StopRequestEndsTheSolveAndKeepsTheStateReached) {
+  // The mapper's real-time stop (a new keyframe waits): asked after every iteration, as the visual BA's.
+  const auto run = [](int stop_after, int& asks, InertialWindow& window, double& error_m) {
+    InertialScene scene = make_scene(8);
+    perturb(scene, 2, 0.02, 0.01, 7);
+    window = make_window(scene, 1, 8, ImuBias{});
+    window.states.at(1).bias = scene.imu.bias;
+    LocalBundleAdjustmentOptions options;
+    options.stop_requested = [&asks, stop_after] { return ++asks >= stop_after; };
+    MapChanges changes;
+    const InertialBundleAdjustmentResult result =
+        inertial_local_bundle_adjustment(scene.truth.map, 8, scene.world.camera, options, window, changes);
+    error_m = worst_position_error_m(scene);
+    EXPECT_TRUE(result.solved);
+    for (const auto& [id, kf] : scene.truth.map.keyframes) EXPECT_TRUE(kf.T_wc.matrix().allFinite());
+    EXPECT_FALSE(changes.changed_keyframes.empty());
+    return result;
+  };
+  int complete_asks = 0;
+  InertialWindow complete_window;
+  double complete_error_m = 0.0;
+  const InertialBundleAdjustmentResult complete = run(1000, complete_asks, complete_window, complete_error_m);
+  EXPECT_FALSE(complete.visual.aborted);
+  ASSERT_GT(complete_asks, 3);
+  int asks = 0;
+  InertialWindow window;
+  double error_m = 0.0;
+  const InertialBundleAdjustmentResult stopped = run(2, asks, window, error_m);
+  std::printf("stopped after 2 of %d iterations: worst position error %.2e m (complete %.2e m)\n", complete_asks,
+              error_m, complete_error_m);
+  EXPECT_TRUE(stopped.visual.aborted);
+  EXPECT_EQ(asks, 2);
+  EXPECT_LT(stopped.final_cost, stopped.initial_cost);
+  EXPECT_GT(stopped.final_cost, complete.final_cost);
+  EXPECT_LT(error_m, 0.02);  // part of the way from the 2 cm perturbation
+  for (KeyframeId id = 2; id <= 8; ++id) EXPECT_TRUE(window.states.at(id).v_wb.allFinite());
+}
+
 TEST(InertialBundleAdjustment, RefusesAnInconsistentWindow) {
   InertialScene scene = make_scene(3);
   InertialWindow window = make_window(scene, 1, 3, ImuBias{});

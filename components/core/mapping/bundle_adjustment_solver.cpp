@@ -125,9 +125,12 @@ BundleAdjustmentSolverSummary solve_bundle_adjustment(BundleAdjustmentProblem& p
     }
   }
 
+  BundleAdjustmentExtraTerms* const extra = problem.extra;
+  const int extra_size = extra != nullptr ? extra->dimension() : 0;
   double cost = total_cost(problem, problem.poses, problem.points);
+  if (extra != nullptr) cost += extra->cost(problem.poses, nullptr);
   summary.initial_cost = summary.final_cost = cost;
-  if (num_free == 0 && num_points == 0) return summary;
+  if (num_free == 0 && num_points == 0 && extra_size == 0) return summary;
   if (!std::isfinite(cost)) return summary;  // the caller keeps points in front; nothing sensible to do
 
   const PoseManifold manifold;
@@ -144,7 +147,18 @@ BundleAdjustmentSolverSummary solve_bundle_adjustment(BundleAdjustmentProblem& p
   std::vector<Eigen::Vector3d> step_x(num_points);
   std::vector<PoseBlock> candidate_poses = problem.poses;
   std::vector<Eigen::Vector3d> candidate_points = problem.points;
-  const int reduced_size = 6 * num_free;
+  const int pose_size = 6 * num_free;
+  const int reduced_size = pose_size + extra_size;
+  // The extra terms' normal equations over the whole reduced system (their pose diagonal blocks and
+  // gradient are folded into H_pp / b_p), the damping of their own parameters and their step.
+  Eigen::MatrixXd H_extra;
+  Eigen::VectorXd b_extra, diag_extra, step_extra;
+  if (extra != nullptr) {
+    H_extra.resize(reduced_size, reduced_size);
+    b_extra.resize(reduced_size);
+    diag_extra.resize(extra_size);
+    step_extra.setZero(extra_size);
+  }
   Eigen::MatrixXd S(reduced_size, reduced_size);
   Eigen::VectorXd rhs(reduced_size);
   Eigen::LLT<Eigen::MatrixXd> llt(reduced_size);
@@ -185,6 +199,20 @@ BundleAdjustmentSolverSummary solve_bundle_adjustment(BundleAdjustmentProblem& p
       eq.H_px[k].noalias() = w * J_p.transpose() * J_x;
     }
     gradient_max = 0.0;
+    if (extra != nullptr) {
+      H_extra.setZero();
+      b_extra.setZero();
+      extra->linearise(problem.poses, free_index, H_extra, b_extra);
+      for (int f = 0; f < num_free; ++f) {
+        eq.H_pp[static_cast<std::size_t>(f)] += H_extra.block<6, 6>(6 * f, 6 * f);
+        eq.b_p[static_cast<std::size_t>(f)] += b_extra.segment<6>(6 * f);
+        H_extra.block<6, 6>(6 * f, 6 * f).setZero();  // set into S with H_pp
+      }
+      if (extra_size > 0) {
+        gradient_max = b_extra.tail(extra_size).cwiseAbs().maxCoeff();
+        diag_extra = H_extra.diagonal().tail(extra_size).cwiseMax(kMinDiagonal).cwiseMin(kMaxDiagonal);
+      }
+    }
     for (std::size_t f = 0; f < eq.b_p.size(); ++f) {
       gradient_max = std::max(gradient_max, eq.b_p[f].cwiseAbs().maxCoeff());
       diag_p[f] = eq.H_pp[f].diagonal().cwiseMax(kMinDiagonal).cwiseMin(kMaxDiagonal);
@@ -199,7 +227,13 @@ BundleAdjustmentSolverSummary solve_bundle_adjustment(BundleAdjustmentProblem& p
   // the reduced system is not positive definite. Returns the model's predicted cost decrease.
   const auto solve_step = [&](double& model_decrease) {
     const double lambda = 1.0 / radius;
-    S.setZero();
+    if (extra != nullptr) {
+      S = H_extra;
+      S.diagonal().tail(extra_size) += lambda * diag_extra;
+      rhs.tail(extra_size) = b_extra.tail(extra_size);
+    } else {
+      S.setZero();
+    }
     for (int f = 0; f < num_free; ++f) {
       const std::size_t fi = static_cast<std::size_t>(f);
       S.block<6, 6>(6 * f, 6 * f) = eq.H_pp[fi];
@@ -230,14 +264,18 @@ BundleAdjustmentSolverSummary solve_bundle_adjustment(BundleAdjustmentProblem& p
         }
       }
     }
-    if (num_free > 0) {
+    if (reduced_size > 0) {
       llt.compute(S);  // reads the lower triangle
       if (llt.info() != Eigen::Success) return false;
       const Eigen::VectorXd dp = llt.solve(rhs);
       if (!dp.allFinite()) return false;
       for (int f = 0; f < num_free; ++f) step_p[static_cast<std::size_t>(f)] = dp.segment<6>(6 * f);
+      if (extra_size > 0) step_extra = dp.tail(extra_size);
     }
     model_decrease = 0.0;
+    if (extra_size > 0) {
+      model_decrease += step_extra.dot(b_extra.tail(extra_size)) + lambda * step_extra.cwiseAbs2().dot(diag_extra);
+    }
     for (int f = 0; f < num_free; ++f) {
       const std::size_t fi = static_cast<std::size_t>(f);
       model_decrease += step_p[fi].dot(eq.b_p[fi]) + lambda * step_p[fi].cwiseAbs2().dot(diag_p[fi]);
@@ -282,12 +320,18 @@ BundleAdjustmentSolverSummary solve_bundle_adjustment(BundleAdjustmentProblem& p
         step_norm2 += step_x[j].squaredNorm();
         x_norm2 += problem.points[j].squaredNorm();
       }
-      const double new_cost = total_cost(problem, candidate_poses, candidate_points);
+      double new_cost = total_cost(problem, candidate_poses, candidate_points);
+      if (extra != nullptr) {
+        new_cost += extra->cost(candidate_poses, &step_extra);
+        step_norm2 += step_extra.squaredNorm();
+        x_norm2 += extra->squared_norm();
+      }
       const double actual_decrease = cost - new_cost;
       const double rho = actual_decrease / model_decrease;
       if (std::isfinite(new_cost) && rho > kMinRelativeDecrease) {
         accepted = true;
         ++summary.successful_steps;
+        if (extra != nullptr) extra->update(step_extra);
         problem.poses.swap(candidate_poses);
         problem.points.swap(candidate_points);
         candidate_poses = problem.poses;

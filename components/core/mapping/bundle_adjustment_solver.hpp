@@ -39,6 +39,27 @@ struct BundleAdjustmentObservation {
   bool active = true;             // inactive observations are ignored (outliers between passes)
 };
 
+// Terms besides the reprojections (the inertial local BA's IMU factors, inertial_bundle_adjustment.cpp):
+// parameters of their own (`dimension()` tangent entries, appended after the free poses in the reduced
+// system and never eliminated) and residuals over them and the poses, without a robust kernel (cost
+// 0.5 |r|^2). The solver owns the Levenberg-Marquardt loop; the terms only evaluate and move themselves.
+class BundleAdjustmentExtraTerms {
+ public:
+  virtual ~BundleAdjustmentExtraTerms() = default;
+  virtual int dimension() const = 0;
+  // 0.5 |r|^2 at `poses` and the own parameters moved by `step` (nullptr: as they are); non-finite when
+  // the residuals are.
+  virtual double cost(const std::vector<PoseBlock>& poses, const Eigen::VectorXd* step) const = 0;
+  // Adds J^T J to H and -J^T r to b at `poses` and the own parameters: free pose i's 6 tangent entries
+  // (PoseManifold's) at 6 * free_index[i] (-1: held, no entries), the own parameters from 6 * (free poses).
+  virtual void linearise(const std::vector<PoseBlock>& poses, const std::vector<int>& free_index, Eigen::MatrixXd& H,
+                         Eigen::VectorXd& b) const = 0;
+  // An accepted step: the own parameters move by `step`.
+  virtual void update(const Eigen::VectorXd& step) = 0;
+  // Squared norm of the own parameters (the parameter tolerance's |x|).
+  virtual double squared_norm() const = 0;
+};
+
 struct BundleAdjustmentProblem {
   PinholeStereo camera;
   std::vector<PoseBlock> poses;  // world -> camera
@@ -47,6 +68,8 @@ struct BundleAdjustmentProblem {
   // Must be grouped by point (all observations of a point contiguous); the Schur elimination walks
   // them point by point.
   std::vector<BundleAdjustmentObservation> observations;
+  // Optional (not owned): more terms and parameters in the same solve. nullptr: reprojections only.
+  BundleAdjustmentExtraTerms* extra = nullptr;
 };
 
 struct BundleAdjustmentSolverOptions {

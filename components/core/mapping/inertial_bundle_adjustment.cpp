@@ -1,4 +1,5 @@
-// Inertial local bundle adjustment (Ceres): reprojection residuals plus IMU and bias random walk factors.
+// Inertial local bundle adjustment: the visual BA's window and solver (local_bundle_adjustment.hpp,
+// bundle_adjustment_solver.hpp) with the IMU and bias random walk factors as extra terms.
 // GCC 12 with -march=native (AVX-512) reports Eigen's vectorised quaternion reductions as "may be used
 // uninitialized": a known false positive (bundle_adjustment_terms.cpp).
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
@@ -6,31 +7,17 @@
 #include "components/core/mapping/inertial_bundle_adjustment.hpp"
 
 #include <cmath>
+#include <limits>
 #include <memory>
-#include <set>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
-#include <ceres/sphere_manifold.h>
-
+#include "components/core/imu/so3.hpp"
 #include "components/core/map/ids.hpp"
-#include "components/core/mapping/map_editing.hpp"
-#include "components/core/mapping/point_statistics.hpp"
 
 namespace heslam {
 namespace {
-
-struct Observation {
-  KeyframeId kf_id;
-  PointId point_id;
-  std::size_t pose;
-  std::size_t point;
-  bool stereo;
-  double chi2_threshold;
-  double u_px, v_px, disparity_px, inv_sigma2;
-  ceres::ResidualBlockId block = nullptr;
-  bool inlier = true;
-};
 
 // d(Plus(x, (w, 0)))/dw at w = 0 for PoseManifold's quaternion (x y z w): Exp(w) q = q + 0.5 (w, 0) * q.
 Eigen::Matrix<double, 4, 3> quaternion_plus_jacobian(const double* q) {
@@ -44,23 +31,180 @@ Eigen::Matrix<double, 4, 3> quaternion_plus_jacobian(const double* q) {
   return J;
 }
 
-// Prior on the direction of gravity: (g - g0) / (|g0| sigma), g on the sphere of radius |g0|.
-struct GravityPrior {
-  Eigen::Vector3d g0;
-  double inv_sigma;
-  template <typename T>
-  bool operator()(const T* g, T* residual) const {
-    for (int k = 0; k < 3; ++k) residual[k] = (g[k] - T(g0[k])) * T(inv_sigma);
-    return true;
+// The IMU terms of the window as the solver's extra terms. Own parameters, in this order: per chain
+// keyframe whose state is free, (v_wb, bg, ba) (9), then, when estimated, gravity's direction (2: a
+// rotation of g about two axes orthogonal to it, so its magnitude stays). Residuals: per interval the IMU
+// factor (ImuCameraCost, on the solver's camera poses) and the bias random walk; gravity's prior.
+class InertialTerms : public BundleAdjustmentExtraTerms {
+ public:
+  InertialTerms(const InertialWindow& window, std::vector<std::size_t> chain_poses)
+      : poses_(std::move(chain_poses)), gravity_(window.gravity_w), gravity_prior_(window.gravity_w) {
+    const std::size_t n = window.chain.size();
+    states_.resize(n);
+    offsets_.assign(n, -1);
+    int next = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const InertialKeyframeState& state = window.states.at(window.chain[k]);
+      states_[k] << state.v_wb, state.bias.gyro_rad_s, state.bias.accel_m_s2;
+      if (k > 0 || !window.hold_anchor) {
+        offsets_[k] = next;
+        next += 9;
+      }
+    }
+    for (std::size_t k = 0; k + 1 < n; ++k) {
+      imu_.push_back(std::make_unique<ImuCameraCost>(window.intervals[k], window.T_cb));
+      const Eigen::Matrix<double, 6, 6> walk = window.intervals[k].bias_random_walk_covariance();
+      if (!(walk(0, 0) > 0.0) || !(walk(3, 3) > 0.0)) {
+        throw std::invalid_argument(
+            "inertial_local_bundle_adjustment: interval " + std::to_string(k) +
+            ": expected positive bias random walks and duration (gyro_random_walk, accel_random_walk)");
+      }
+      walk_inv_sigma_.emplace_back(1.0 / std::sqrt(walk(0, 0)), 1.0 / std::sqrt(walk(3, 3)));
+    }
+    if (window.gravity_stddev_rad > 0.0) {
+      gravity_offset_ = next;
+      next += 2;
+      gravity_inv_sigma_ = 1.0 / (window.gravity_w.norm() * window.gravity_stddev_rad);
+      update_gravity_basis();
+    }
+    dimension_ = next;
   }
-};
 
-bool finite(const PoseBlock& block) {
-  for (const double x : block) {
-    if (!std::isfinite(x)) return false;
+  int dimension() const override { return dimension_; }
+
+  double cost(const std::vector<PoseBlock>& poses, const Eigen::VectorXd* step) const override {
+    std::vector<Vector9> states = states_;
+    Eigen::Vector3d gravity = gravity_;
+    if (step != nullptr) moved(*step, states, gravity);
+    double sum = 0.0;
+    for (std::size_t k = 0; k < imu_.size(); ++k) {
+      Eigen::Matrix<double, 9, 1> r;
+      const double* parameters[7] = {
+          poses[poses_[k]].data(),     states[k].data(),     states[k].data() + 3, states[k].data() + 6,
+          poses[poses_[k + 1]].data(), states[k + 1].data(), gravity.data()};
+      if (!imu_[k]->Evaluate(parameters, r.data(), nullptr)) return std::numeric_limits<double>::infinity();
+      sum += r.squaredNorm();
+      sum += walk_residual(k, states).squaredNorm();
+    }
+    if (gravity_offset_ >= 0) sum += ((gravity - gravity_prior_) * gravity_inv_sigma_).squaredNorm();
+    return 0.5 * sum;
   }
-  return true;
-}
+
+  void linearise(const std::vector<PoseBlock>& poses, const std::vector<int>& free_index, Eigen::MatrixXd& H,
+                 Eigen::VectorXd& b) const override {
+    const int base = static_cast<int>(H.rows()) - dimension_;
+    // Columns of one term: (offset in the reduced system, Jacobian block).
+    std::vector<std::pair<int, Eigen::MatrixXd>> blocks;
+    const auto add = [&](const Eigen::VectorXd& r) {
+      for (const auto& [oa, Ja] : blocks) {
+        b.segment(oa, Ja.cols()).noalias() -= Ja.transpose() * r;
+        for (const auto& [ob, Jb] : blocks) H.block(oa, ob, Ja.cols(), Jb.cols()).noalias() += Ja.transpose() * Jb;
+      }
+    };
+    const Eigen::Matrix<double, 3, 2> dg = -so3::hat(gravity_) * gravity_basis_;  // d(Exp(B d) g)/dd at 0
+    for (std::size_t k = 0; k < imu_.size(); ++k) {
+      Eigen::Matrix<double, 9, 1> r;
+      Eigen::Matrix<double, 9, 7, Eigen::RowMajor> J_pose_i, J_pose_j;
+      Eigen::Matrix<double, 9, 3, Eigen::RowMajor> J_v_i, J_bg_i, J_ba_i, J_v_j, J_g;
+      const double* parameters[7] = {poses[poses_[k]].data(), states_[k].data(),           states_[k].data() + 3,
+                                     states_[k].data() + 6,   poses[poses_[k + 1]].data(), states_[k + 1].data(),
+                                     gravity_.data()};
+      double* jacobians[7] = {J_pose_i.data(), J_v_i.data(), J_bg_i.data(), J_ba_i.data(),
+                              J_pose_j.data(), J_v_j.data(), J_g.data()};
+      imu_[k]->Evaluate(parameters, r.data(), jacobians);
+      blocks.clear();
+      const int fi = free_index[poses_[k]];
+      const int fj = free_index[poses_[k + 1]];
+      if (fi >= 0) blocks.emplace_back(6 * fi, J_pose_i.leftCols<6>());
+      if (fj >= 0) blocks.emplace_back(6 * fj, J_pose_j.leftCols<6>());
+      if (offsets_[k] >= 0) {
+        Eigen::Matrix<double, 9, 9> J_state;
+        J_state << J_v_i, J_bg_i, J_ba_i;
+        blocks.emplace_back(base + offsets_[k], J_state);
+      }
+      if (offsets_[k + 1] >= 0) blocks.emplace_back(base + offsets_[k + 1], J_v_j);
+      if (gravity_offset_ >= 0) blocks.emplace_back(base + gravity_offset_, J_g * dg);
+      add(r);
+      // The bias random walk: (bg_j - bg_i, ba_j - ba_i), whitened.
+      blocks.clear();
+      Eigen::Matrix<double, 6, 6> J_walk = Eigen::Matrix<double, 6, 6>::Zero();
+      J_walk.diagonal() << Eigen::Vector3d::Constant(walk_inv_sigma_[k].first),
+          Eigen::Vector3d::Constant(walk_inv_sigma_[k].second);
+      if (offsets_[k] >= 0) {
+        Eigen::Matrix<double, 6, 9> J_i = Eigen::Matrix<double, 6, 9>::Zero();
+        J_i.rightCols<6>() = -J_walk;
+        blocks.emplace_back(base + offsets_[k], J_i);
+      }
+      if (offsets_[k + 1] >= 0) {
+        Eigen::Matrix<double, 6, 9> J_j = Eigen::Matrix<double, 6, 9>::Zero();
+        J_j.rightCols<6>() = J_walk;
+        blocks.emplace_back(base + offsets_[k + 1], J_j);
+      }
+      add(walk_residual(k, states_));
+    }
+    if (gravity_offset_ >= 0) {
+      blocks.clear();
+      blocks.emplace_back(base + gravity_offset_, gravity_inv_sigma_ * dg);
+      add((gravity_ - gravity_prior_) * gravity_inv_sigma_);
+    }
+  }
+
+  void update(const Eigen::VectorXd& step) override {
+    moved(step, states_, gravity_);
+    if (gravity_offset_ >= 0) update_gravity_basis();
+  }
+
+  double squared_norm() const override {
+    double sum = 0.0;
+    for (std::size_t k = 0; k < states_.size(); ++k) {
+      if (offsets_[k] >= 0) sum += states_[k].squaredNorm();
+    }
+    if (gravity_offset_ >= 0) sum += gravity_.squaredNorm();
+    return sum;
+  }
+
+  // The state of chain keyframe k (v_wb, bg, ba) and gravity, as they are.
+  const Eigen::Matrix<double, 9, 1>& state(std::size_t k) const { return states_[k]; }
+  const Eigen::Vector3d& gravity() const { return gravity_; }
+
+ private:
+  using Vector9 = Eigen::Matrix<double, 9, 1>;
+
+  void moved(const Eigen::VectorXd& step, std::vector<Vector9>& states, Eigen::Vector3d& gravity) const {
+    for (std::size_t k = 0; k < states.size(); ++k) {
+      if (offsets_[k] >= 0) states[k] += step.segment<9>(offsets_[k]);
+    }
+    if (gravity_offset_ >= 0) gravity = so3::exp(gravity_basis_ * step.segment<2>(gravity_offset_)) * gravity;
+  }
+
+  Eigen::Matrix<double, 6, 1> walk_residual(std::size_t k, const std::vector<Vector9>& states) const {
+    Eigen::Matrix<double, 6, 1> r;
+    r.head<3>() = (states[k + 1].segment<3>(3) - states[k].segment<3>(3)) * walk_inv_sigma_[k].first;
+    r.tail<3>() = (states[k + 1].segment<3>(6) - states[k].segment<3>(6)) * walk_inv_sigma_[k].second;
+    return r;
+  }
+
+  // Two unit axes orthogonal to gravity: rotations about them tilt it.
+  void update_gravity_basis() {
+    const Eigen::Vector3d u = gravity_.normalized();
+    const Eigen::Vector3d seed = std::abs(u.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d a = u.cross(seed).normalized();
+    gravity_basis_.col(0) = a;
+    gravity_basis_.col(1) = u.cross(a);
+  }
+
+  std::vector<std::size_t> poses_;  // the problem's pose of each chain keyframe
+  std::vector<Vector9> states_;
+  std::vector<int> offsets_;  // of each chain keyframe's state in the own parameters; -1: held
+  std::vector<std::unique_ptr<ImuCameraCost>> imu_;
+  std::vector<std::pair<double, double>> walk_inv_sigma_;  // gyro, accel
+  Eigen::Vector3d gravity_;
+  Eigen::Vector3d gravity_prior_;
+  Eigen::Matrix<double, 3, 2> gravity_basis_ = Eigen::Matrix<double, 3, 2>::Zero();
+  double gravity_inv_sigma_ = 0.0;
+  int gravity_offset_ = -1;
+  int dimension_ = 0;
+};
 
 }  // namespace
 
@@ -101,239 +245,36 @@ InertialBundleAdjustmentResult inertial_local_bundle_adjustment(Map& map, Keyfra
                                   (window.states.count(id) == 0 ? " has no inertial state" : " is not in the map"));
     }
   }
-  const Keyframe* kf = map.keyframe(kf_id);
-  if (kf == nullptr || kf->culled || map.keyframes.empty()) return result;
-  const KeyframeId origin_id = map.keyframes.begin()->first;
-  const KeyframeId anchor_id = window.chain.front();
-
-  std::set<KeyframeId> free_kfs{kf_id};
-  for (const auto& [neighbour, weight] : kf->covisible) {
-    const Keyframe* other = map.keyframe(neighbour);
-    if (other != nullptr && !other->culled) free_kfs.insert(neighbour);
-  }
-  for (std::size_t k = 1; k < window.chain.size(); ++k) free_kfs.insert(window.chain[k]);
-  free_kfs.erase(anchor_id);
-  std::set<PointId> point_ids;
-  for (const KeyframeId id : free_kfs) {
-    for (const PointId point_id : map.keyframe(id)->point_ids) {
-      if (point_id != kNoId && map.point(point_id) != nullptr) point_ids.insert(point_id);
-    }
-  }
-  std::set<KeyframeId> fixed_kfs{anchor_id};
-  for (const PointId point_id : point_ids) {
-    for (const auto& [observer, index] : map.point(point_id)->observations) {
-      if (free_kfs.count(observer) == 0) fixed_kfs.insert(observer);
-    }
-  }
-  if (free_kfs.count(origin_id) != 0) {
-    free_kfs.erase(origin_id);
-    fixed_kfs.insert(origin_id);
-  }
-
-  std::map<KeyframeId, std::size_t> pose_index;
-  std::vector<PoseBlock> poses;
-  for (const auto& [id, unused] : map.keyframes) {
-    if (free_kfs.count(id) == 0 && fixed_kfs.count(id) == 0) continue;
-    pose_index[id] = poses.size();
-    poses.push_back(to_pose_block(map.keyframe(id)->T_wc));
-  }
-  std::map<PointId, std::size_t> point_index;
-  std::vector<Eigen::Vector3d> points;
-  for (const PointId id : point_ids) {
-    point_index[id] = points.size();
-    points.push_back(map.point(id)->p_w);
-  }
-
-  std::vector<Observation> observations;
-  for (const PointId point_id : point_ids) {
-    for (const auto& [observer, index] : map.point(point_id)->observations) {
-      const Keyframe* observer_kf = map.keyframe(observer);
-      const auto pose = pose_index.find(observer);
-      if (observer_kf == nullptr || pose == pose_index.end()) continue;
-      const std::size_t i = static_cast<std::size_t>(index);
-      const StereoFeatures& features = observer_kf->features;
-      const Keypoint& kp = features.keypoints[i];
-      const bool stereo = features.has_stereo(i);
-      Observation obs{observer,
-                      point_id,
-                      pose->second,
-                      point_index.at(point_id),
-                      stereo,
-                      stereo ? options.stereo_chi2 : options.mono_chi2,
-                      kp.u_px,
-                      kp.v_px,
-                      stereo ? kp.u_px - features.u_right_px[i] : 0.0,
-                      features.pyramid.inv_sigma2[static_cast<std::size_t>(kp.octave)]};
-      observations.push_back(obs);
-    }
-  }
-  const auto chi2_of = [&](const Observation& obs, double& chi2) {
-    const Eigen::Vector3d pc = transform_to_camera(poses[obs.pose], points[obs.point]);
-    if (pc.z() <= 0.0) return false;
-    const Eigen::Vector2d uv = camera.project(pc);
-    double error2 = (uv - Eigen::Vector2d(obs.u_px, obs.v_px)).squaredNorm();
-    if (obs.stereo) {
-      const double dd = (camera.bf() / pc.z() - obs.disparity_px) / options.disparity_sigma_ratio;
-      error2 += dd * dd;
-    }
-    chi2 = error2 * obs.inv_sigma2;
-    return true;
-  };
-  const auto rms = [&]() {
-    double sum = 0.0;
-    int count = 0;
-    for (const Observation& obs : observations) {
-      double chi2 = 0.0;
-      if (!obs.inlier || !chi2_of(obs, chi2)) continue;
-      sum += chi2;
-      ++count;
-    }
-    return count > 0 ? std::sqrt(sum / count) : 0.0;
-  };
-  LocalBundleAdjustmentResult& visual = result.visual;
-  visual.free_keyframes = static_cast<int>(free_kfs.size());
-  visual.fixed_keyframes = static_cast<int>(fixed_kfs.size());
-  visual.points = static_cast<int>(points.size());
-  visual.observations = static_cast<int>(observations.size());
-  visual.initial_rms_px = rms();
-  if (free_kfs.empty()) return result;
-
-  PoseManifold pose_manifold;  // both outlive the problem (not owned by it)
-  ceres::SphereManifold<3> sphere;
-  ceres::Problem::Options problem_options;
-  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.enable_fast_removal = true;
-  ceres::Problem problem(problem_options);
-  for (Observation& obs : observations) {
-    double chi2 = 0.0;
-    obs.inlier = chi2_of(obs, chi2);  // a point behind an observer cannot enter the problem
-    if (!obs.inlier) continue;
-    const double inv_sigma = std::sqrt(static_cast<float>(obs.inv_sigma2));
-    auto* cost = new ReprojectionCost(camera, obs.u_px, obs.v_px, obs.u_px - obs.disparity_px, inv_sigma, obs.stereo,
-                                      options.disparity_sigma_ratio);
-    obs.block = problem.AddResidualBlock(cost, new ceres::HuberLoss(std::sqrt(obs.chi2_threshold)),
-                                         poses[obs.pose].data(), points[obs.point].data());
-  }
-
-  // Inertial blocks, one set per chain keyframe.
-  struct Inertial {
-    Eigen::Vector3d v, bg, ba;
-  };
-  std::vector<Inertial> inertial(window.chain.size());
-  for (std::size_t k = 0; k < window.chain.size(); ++k) {
-    const InertialKeyframeState& state = window.states.at(window.chain[k]);
-    inertial[k] = {state.v_wb, state.bias.gyro_rad_s, state.bias.accel_m_s2};
-  }
-  Eigen::Vector3d gravity_w = window.gravity_w;
-  for (std::size_t k = 0; k + 1 < window.chain.size(); ++k) {
-    PoseBlock& pose_i = poses[pose_index.at(window.chain[k])];
-    PoseBlock& pose_j = poses[pose_index.at(window.chain[k + 1])];
-    problem.AddResidualBlock(new ImuCameraCost(window.intervals[k], window.T_cb), nullptr, pose_i.data(),
-                             inertial[k].v.data(), inertial[k].bg.data(), inertial[k].ba.data(), pose_j.data(),
-                             inertial[k + 1].v.data(), gravity_w.data());
-    problem.AddResidualBlock(BiasRandomWalkFactor::create(window.intervals[k]), nullptr, inertial[k].bg.data(),
-                             inertial[k].ba.data(), inertial[k + 1].bg.data(), inertial[k + 1].ba.data());
-    ++result.imu_factors;
-  }
-  if (window.hold_anchor) {
-    problem.SetParameterBlockConstant(inertial[0].v.data());
-    problem.SetParameterBlockConstant(inertial[0].bg.data());
-    problem.SetParameterBlockConstant(inertial[0].ba.data());
-  }
+  // The visual window with the chain's keyframes free, its oldest (the anchor) held.
+  const std::vector<KeyframeId> chain_free(window.chain.begin() + 1, window.chain.end());
+  LocalBundleAdjustmentWindow visual(map, kf_id, camera, options, chain_free, {window.chain.front()});
+  result.visual = visual.result();
+  if (!visual.solvable()) return result;
+  std::vector<std::size_t> chain_poses;
+  for (const KeyframeId id : window.chain) chain_poses.push_back(visual.pose_index(id));
+  InertialTerms terms(window, chain_poses);
+  result.imu_factors = static_cast<int>(window.intervals.size());
   result.inertial_keyframes = static_cast<int>(window.chain.size()) - (window.hold_anchor ? 1 : 0);
-  if (window.gravity_stddev_rad > 0.0) {
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GravityPrior, 3, 3>(new GravityPrior{
-                                 window.gravity_w, 1.0 / (window.gravity_w.norm() * window.gravity_stddev_rad)}),
-                             nullptr, gravity_w.data());
-    problem.SetManifold(gravity_w.data(), &sphere);
-  } else {
-    problem.SetParameterBlockConstant(gravity_w.data());
+  visual.solve(&terms);
+  result.initial_cost = visual.initial_cost();
+  result.final_cost = visual.final_cost();
+  bool usable = visual.finite() && terms.gravity().allFinite();
+  for (std::size_t k = 0; k < window.chain.size(); ++k) usable = usable && terms.state(k).allFinite();
+  if (!usable) {
+    result.visual = visual.result();
+    return result;  // nothing written back: the caller falls back to the visual BA
   }
-
-  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-  for (Eigen::Vector3d& point : points) {
-    if (problem.HasParameterBlock(point.data())) ordering->AddElementToGroup(point.data(), 0);
-  }
-  for (const auto& [id, index] : pose_index) {
-    double* pose = poses[index].data();
-    if (!problem.HasParameterBlock(pose)) continue;
-    problem.SetManifold(pose, &pose_manifold);
-    ordering->AddElementToGroup(pose, 1);
-    if (free_kfs.count(id) == 0) problem.SetParameterBlockConstant(pose);
-  }
-  for (Inertial& state : inertial) {
-    for (double* block : {state.v.data(), state.bg.data(), state.ba.data()}) ordering->AddElementToGroup(block, 1);
-  }
-  ordering->AddElementToGroup(gravity_w.data(), 1);
-
-  ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::DENSE_SCHUR;
-  solver_options.linear_solver_ordering = ordering;
-  solver_options.num_threads = 1;
-  solver_options.logging_type = ceres::SILENT;
-  solver_options.max_num_iterations = options.first_pass_iterations;
-  ceres::Solver::Summary summary;
-  ceres::Solve(solver_options, &problem, &summary);
-  result.initial_cost = summary.initial_cost;
-  bool usable = summary.termination_type != ceres::FAILURE && std::isfinite(summary.final_cost);
-  if (usable && options.second_pass_iterations > 0) {
-    for (Observation& obs : observations) {
-      if (obs.block == nullptr) continue;
-      double chi2 = 0.0;
-      obs.inlier = chi2_of(obs, chi2) && chi2 <= obs.chi2_threshold;
-      if (!obs.inlier) {
-        problem.RemoveResidualBlock(obs.block);
-        obs.block = nullptr;
-      }
-    }
-    solver_options.max_num_iterations = options.second_pass_iterations;
-    ceres::Solve(solver_options, &problem, &summary);
-    usable = summary.termination_type != ceres::FAILURE && std::isfinite(summary.final_cost);
-  }
-  result.final_cost = summary.final_cost;
-  for (const KeyframeId id : free_kfs) usable = usable && finite(poses[pose_index.at(id)]);
-  for (const Inertial& state : inertial)
-    usable = usable && state.v.allFinite() && state.bg.allFinite() && state.ba.allFinite();
-  for (const Eigen::Vector3d& point : points) usable = usable && point.allFinite();
-  usable = usable && gravity_w.allFinite();
-  if (!usable) return result;  // nothing written back: the caller falls back to the visual BA
   result.solved = true;
-
-  for (const KeyframeId id : free_kfs) {
-    map.keyframe(id)->T_wc = from_pose_block(poses[pose_index.at(id)]);
-    changes.changed_keyframes.insert(id);
-  }
   for (std::size_t k = window.hold_anchor ? 1 : 0; k < window.chain.size(); ++k) {
     InertialKeyframeState& state = window.states.at(window.chain[k]);
-    state.v_wb = inertial[k].v;
-    state.bias.gyro_rad_s = inertial[k].bg;
-    state.bias.accel_m_s2 = inertial[k].ba;
+    const Eigen::Matrix<double, 9, 1>& x = terms.state(k);
+    state.v_wb = x.head<3>();
+    state.bias.gyro_rad_s = x.segment<3>(3);
+    state.bias.accel_m_s2 = x.tail<3>();
   }
-  for (const auto& [id, index] : point_index) map.point(id)->p_w = points[index];
-  window.gravity_w = gravity_w;
-  for (Observation& obs : observations) {
-    double chi2 = 0.0;
-    obs.inlier = chi2_of(obs, chi2) && chi2 <= obs.chi2_threshold;
-  }
-  visual.final_rms_px = rms();
-  for (const Observation& obs : observations) {
-    if (obs.inlier || map.point(obs.point_id) == nullptr) continue;
-    erase_observation(map, obs.point_id, obs.kf_id);
-    ++visual.outliers_removed;
-    changes.changed_keyframes.insert(obs.kf_id);
-    if (observation_weight(map, *map.point(obs.point_id)) <= 2) {  // ORB-SLAM2: too weakly observed to keep
-      erase_point(map, obs.point_id);
-      changes.removed_points[obs.point_id] = kNoId;
-    }
-  }
-  for (const auto& [id, index] : point_index) {
-    if (map.point(id) == nullptr) {
-      changes.changed_points.erase(id);
-      continue;
-    }
-    update_point_statistics(map, id);
-    changes.changed_points.insert(id);
-  }
+  if (window.gravity_stddev_rad > 0.0) window.gravity_w = terms.gravity();
+  visual.write_back(changes);
+  result.visual = visual.result();
   return result;
 }
 

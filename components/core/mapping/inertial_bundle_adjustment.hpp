@@ -1,7 +1,7 @@
-// Inertial local bundle adjustment (ORB-SLAM3's Optimizer::LocalInertialBA), solved with Ceres.
+// Inertial local bundle adjustment (ORB-SLAM3's Optimizer::LocalInertialBA), solved by the visual BA's own solver.
 //
 // The visual part is local_bundle_adjustment.hpp's: the new keyframe and its covisible keyframes free,
-// the other observers of their points fixed, the map's first keyframe fixed, stereo / monocular
+// the other observers of their points fixed, the map's origin keyframe fixed, stereo / monocular
 // reprojection residuals whitened by the keypoint's level under Huber at the chi2 95 % threshold, two
 // passes with the outliers of the first left out of the second and unlinked at the end. The inertial
 // part: the newest keyframes in time order (`window.chain`, oldest first) each get a velocity and a
@@ -12,6 +12,8 @@
 //
 // Poses stay camera poses (PoseBlock, PoseManifold, as the visual BA and the loop closer's global BA);
 // the IMU factor's body pose is T_wb = T_wc * T_cb with the IMU-camera extrinsic T_cb (IMU -> camera).
+// The IMU terms are the solver's extra terms (bundle_adjustment_solver.hpp): velocity and biases per chain
+// keyframe and gravity's direction join the free poses in its reduced system; the stop request ends it too.
 #pragma once
 
 #include <map>
