@@ -62,6 +62,9 @@ struct FrontendOptions {
   // must exist at start (the mapper loaded the saved map into it), the first tracked frame is reported
   // ("relocalized in the saved map at frame N"), and a run that never relocalizes fails (exit 1).
   bool localize = false;
+  // --agent N (docs/agents.md): the agent id that goes into every keyframe, point and map id this
+  // frontend creates (components/core/map/ids.hpp); 0, a single agent, keeps the ids of before.
+  int agent = 0;
   // --mapping on|off: off is localization only (TrackerOptions::create_keyframes = false, ORB-SLAM3's
   // localization mode): with --localize, frames are tracked in the saved map and relocalized in it
   // when lost, and no keyframe or point is created, so the map stays as saved. Needs --localize.

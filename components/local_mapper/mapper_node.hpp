@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/map/agent_guard.hpp"
 #include "components/core/mapping/inertial_mapping.hpp"
 #include "components/core/mapping/local_mapper.hpp"
 #include "components/local_mapper/mapper_process_options.hpp"
@@ -47,6 +48,9 @@ class MapperNode : public runtime::Component {
   void load_initial_map();
   // --save-map: the final map into `path`. Throws (the process then exits 1) when there is none.
   void save_map_to(const std::filesystem::path& path);
+  // --agents N > 1: whether a keyframe of this run's frontends passes the AgentKeyframeGuard; a refused
+  // one is counted (refused_agent_keyframes), named in one line and acknowledged.
+  bool admit_agent_keyframe(const msg::Keyframe& message, dds_instance_handle_t writer);
   void take_keyframes();
   void take_corrections();
   void process_pending();
@@ -86,6 +90,7 @@ class MapperNode : public runtime::Component {
   // One writer each (runtime/checked_reader.hpp); samples are checked where they are converted, so a
   // bad keyframe of the frontend is still acknowledged.
   std::optional<runtime::CheckedReader<msg::Keyframe>> keyframe_reader_;
+  std::optional<AgentKeyframeGuard> agent_guard_;  // --agents N > 1: several frontends (docs/agents.md)
   std::optional<runtime::CheckedReader<msg::LoopCorrection>> correction_reader_;
   std::optional<runtime::Writer<msg::KeyframeState>> keyframe_state_writer_;
   std::optional<runtime::Writer<msg::MapPointState>> point_state_writer_;
