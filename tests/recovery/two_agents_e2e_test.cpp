@@ -97,12 +97,13 @@ TEST(TwoAgentsEndToEnd, Mh01HalvesMergeIntoOneFrame) {
   make_part(clip, half_b, kFirstB, kFramesPerAgent);
 
   const std::string label = "agents";
-  ChildProcess supervisor(test::bin_dir() / "heslam-supervisor",
-                          {(test::source_dir() / "config/pipelines/euroc_two_agents.yaml").string(), "--domain",
-                           std::to_string(test::exclusive_domain_id()), "--log-dir", (dir.path() / "logs").string(),
-                           "--arg", "dataset_a=" + half_a.string(), "--arg", "dataset_b=" + half_b.string(), "--arg",
-                           "output=" + (dir.path() / (label + ".txt")).string()},
-                          dir.path(), "supervisor_" + label);
+  test::ChildProcess supervisor(
+      test::bin_dir() / "heslam-supervisor",
+      {(test::source_dir() / "config/pipelines/euroc_two_agents.yaml").string(), "--domain",
+       std::to_string(test::exclusive_domain_id()), "--log-dir", (dir.path() / "logs").string(), "--arg",
+       "dataset_a=" + half_a.string(), "--arg", "dataset_b=" + half_b.string(), "--arg",
+       "output=" + (dir.path() / (label + ".txt")).string()},
+      dir.path(), "supervisor_" + label);
   const int code = test::finish(supervisor, kRunTimeout);
   const std::string output = supervisor.out() + supervisor.err();
   ASSERT_EQ(code, 0) << output;
