@@ -50,6 +50,13 @@ Flags common_flags(CommonArgs& args) {
                 Topics check(value);  // throws the namespace message
                 args.ns = value;
               })
+      .custom("--agent-namespace", "NAME",
+              "one agent of several (docs/agents.md): its frames, IMU, odometry and FrameDone\n"
+              "under NAMESPACE/NAME/ (default: none, a single agent)",
+              [&args](const std::string& value) {
+                Topics check(args.ns, value);  // throws the namespace message
+                args.agent_ns = value;
+              })
       .non_empty_text("--name", "NAME", &args.name, "instance name in status and logs (default: the program's)")
       .custom("--config", "FILE",
               "YAML options (default: every option at its documented default); given\n"

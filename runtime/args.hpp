@@ -1,5 +1,6 @@
 // The command-line flags every component and tool shares (the pipeline file sets them):
-//   --domain N  --namespace NAME  --name NAME  --config FILE  --log-level LEVEL  --dds-config XML|file://…
+//   --domain N  --namespace NAME  --agent-namespace NAME  --name NAME  --config FILE  --log-level LEVEL  --dds-config
+//   XML|file://…
 //   --image-transport udp|shm  --image-domain N  --check
 // parse_common_args() takes these out and leaves every other argument, in order, for the tool.
 #pragma once
@@ -17,8 +18,12 @@ namespace heslam::runtime {
 struct CommonArgs {
   int domain_id = 0;          // default: $HESLAM_DOMAIN when set, else 0
   std::string ns = "heslam";  // topic namespace
-  std::string name;           // instance name (status key, log prefix); default: the program's
-  std::string program;        // the executable's name for error lines, see program_name()
+  // --agent-namespace NAME: this process belongs to one agent of several (docs/agents.md): its
+  // frames, IMU, odometry and FrameDone topics go under NS/NAME/, the map topics stay shared. Empty:
+  // a single agent, every topic directly under NS.
+  std::string agent_ns;
+  std::string name;     // instance name (status key, log prefix); default: the program's
+  std::string program;  // the executable's name for error lines, see program_name()
   // --config, in order: each file overlays the ones before it field by field (the pipeline passes its
   // shipped file, then a user's); none: every option at its documented default.
   std::vector<std::filesystem::path> config_files;

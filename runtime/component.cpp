@@ -12,7 +12,7 @@ Component::Component(std::string default_name, const CommonArgs& args)
       log_(name_, args.log_level),
       participant_(ParticipantOptions{args.domain_id, args.dds_config}),
       image_participant_(participant_, args.image_transport, args.image_domain_id, args.dds_config),
-      topics_(args.ns),
+      topics_(args.ns, args.agent_ns),
       status_(std::make_unique<StatusPublisher>(participant_, topics_, name_, stats_)),
       waitset_(participant_) {
   install_shutdown_handlers();

@@ -24,20 +24,26 @@ constexpr std::array kAllTopics{
     TopicEntry{topic_names::kLoopCorrections, "LoopCorrection", QosRole::kCorrections},
     TopicEntry{topic_names::kFrameDone, "FrameDone", QosRole::kLockstep},
     TopicEntry{topic_names::kKeyframeDone, "KeyframeDone", QosRole::kLockstep},
+    TopicEntry{topic_names::kTurns, "FrameDone", QosRole::kLockstep},
     TopicEntry{topic_names::kStatus, "ComponentStatus", QosRole::kStatus},
     TopicEntry{topic_names::kOccupancyGrid, "OccupancyGrid2D", QosRole::kCalibration},
     TopicEntry{topic_names::kDenseCloud, "DenseCloud", QosRole::kCalibration},
 };
 
-}  // namespace
-
-Topics::Topics(std::string_view ns) : ns_(ns) {
-  bool valid = !ns_.empty() && ns_.front() != '/' && ns_.back() != '/' && !(ns_.front() >= '0' && ns_.front() <= '9');
-  for (char c : ns_) valid = valid && valid_namespace_char(c);
+void check_namespace(const char* what, const std::string& ns) {
+  bool valid = !ns.empty() && ns.front() != '/' && ns.back() != '/' && !(ns.front() >= '0' && ns.front() <= '9');
+  for (char c : ns) valid = valid && valid_namespace_char(c);
   if (!valid) {
-    throw std::runtime_error("namespace '" + ns_ +
+    throw std::runtime_error(std::string(what) + " '" + ns +
                              "': expected letters, digits, '_', '-' or inner '/', not starting with a digit");
   }
+}
+
+}  // namespace
+
+Topics::Topics(std::string_view ns, std::string_view agent_ns) : ns_(ns), agent_ns_(agent_ns) {
+  check_namespace("namespace", ns_);
+  if (!agent_ns_.empty()) check_namespace("agent namespace", agent_ns_);
 }
 
 std::span<const TopicEntry> all_topics() { return kAllTopics; }

@@ -105,6 +105,8 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
                 options.mapping = value == "on";
               })
       .path("--saved-map", "FILE", &options.saved_map, "the saved map the mapper loaded (named in messages)")
+      .integer("--agent", "N", &options.agent, 0, kMaxAgentId,
+               "agent id of this frontend (several agents, docs/agents.md): in its keyframe, point and map ids")
       .custom("--imu", "auto|none", "none: no inertial tracking whatever imu.enabled says (auto: imu.enabled)",
               [&imu](const std::string& value) {
                 if (value != "auto" && value != "none") runtime::throw_bad_flag_value("--imu", "auto or none", value);
@@ -149,7 +151,8 @@ FrontendOptions FrontendOptions::from_config(const runtime::Config& config, cons
 
   // With a mapper the frontend mirrors the map instead of maintaining it; its ids stay the frontend's.
   options.tracker.maintain_map = !options.mapper_enabled;
-  options.tracker.id_tag = kFrontendTag;
+  options.tracker.id_tag = frontend_tag(options.agent);
+  options.tracker.first_map_id = first_map_id(options.agent);
   options.tracker.create_keyframes = options.mapping;
   // A localization run's poses are worth something only in the saved map: a new map there would end the
   // run with a trajectory in another frame (and hide "never relocalized in the saved map"), so it waits.

@@ -72,6 +72,9 @@ struct FrontendOptions {
   // relocalized in the saved map before a new map starts; after the first pose the atlas's rule
   // (new_map_after_s) holds.
   double session_new_map_after_s = 0.1;
+  // --agent N (docs/agents.md): the agent id that goes into every keyframe, point and map id this
+  // frontend creates (components/core/map/ids.hpp); 0, a single agent, keeps the ids of before.
+  int agent = 0;
   // --mapping on|off: off is localization only (TrackerOptions::create_keyframes = false, ORB-SLAM3's
   // localization mode): with --localize, frames are tracked in the saved map and relocalized in it
   // when lost, and no keyframe or point is created, so the map stays as saved. Needs --localize.

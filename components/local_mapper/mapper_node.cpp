@@ -20,6 +20,7 @@
 #include "runtime/run_id.hpp"
 #include "runtime/run_journal.hpp"
 #include "runtime/sequence.hpp"
+#include "runtime/writer_identity.hpp"
 
 namespace heslam::local_mapper {
 namespace {
@@ -52,6 +53,15 @@ std::uint64_t counter(const std::map<std::string, std::uint64_t>& counters, cons
   return it == counters.end() ? 0 : it->second;
 }
 
+// The newest keyframe `creator` made in the map (ids grow per creator: ids.hpp), kNoId when none.
+KeyframeId newest_of_creator(const Map& map, std::uint8_t creator) {
+  auto after = creator == 0xff ? map.keyframes.end()
+                               : map.keyframes.lower_bound(make_id(static_cast<std::uint8_t>(creator + 1), 0));
+  if (after == map.keyframes.begin()) return kNoId;
+  --after;
+  return creator_of(after->first) == creator ? after->first : kNoId;
+}
+
 }  // namespace
 
 MapperNode::MapperNode(const runtime::CommonArgs& args) : Component("local_mapper", args) {}
@@ -59,8 +69,13 @@ MapperNode::MapperNode(const runtime::CommonArgs& args) : Component("local_mappe
 void MapperNode::configure(const runtime::Config& config) {
   options_ = MapperProcessOptions::from_config(config, args().rest);
   waitset_ = std::make_unique<runtime::WaitSet>(participant());
-  keyframe_reader_.emplace(participant(), topics().keyframes(), log(), stats(), nullptr,
-                           messages::checked_options<msg::Keyframe>(kHeldKeyframes));
+  runtime::CheckedReaderOptions keyframe_options = messages::checked_options<msg::Keyframe>(kHeldKeyframes);
+  if (options_.agents > 1) {
+    // Several frontends write map/keyframes: each is held to its agent's ids instead (take_keyframes).
+    keyframe_options.single_writer = false;
+    agent_guard_.emplace(options_.agents);
+  }
+  keyframe_reader_.emplace(participant(), topics().keyframes(), log(), stats(), nullptr, keyframe_options);
   correction_reader_.emplace(participant(), topics().loop_corrections(), log(), stats(), nullptr,
                              messages::checked_options<msg::LoopCorrection>(kHeldCorrections));
   waitset_->attach(*keyframe_reader_);
@@ -195,6 +210,7 @@ void MapperNode::take_keyframes() {
   for (auto& received : keyframe_reader_->take()) {
     if (!received.info.valid_data) continue;  // a frontend that left: its keyframes stay in the map
     const msg::Keyframe& message = *received.sample;
+    if (agent_guard_ && !admit_agent_keyframe(message, received.info.publication_handle)) continue;
     try {
       if (auto problem = messages::check(message))
         throw std::runtime_error("topic '" + keyframe_reader_->name() + "': " + *problem);
@@ -211,6 +227,27 @@ void MapperNode::take_keyframes() {
       acknowledge(message.id);  // a lockstep frontend must not wait for a keyframe we cannot use
     }
   }
+}
+
+bool MapperNode::admit_agent_keyframe(const msg::Keyframe& message, dds_instance_handle_t writer) {
+  if (!runtime::writer_of_this_run(keyframe_reader_->handle(), writer)) {
+    stats().count(runtime::kSecondWriterSamples);
+    return false;  // another run's frontend on the domain: neither mapped nor acknowledged
+  }
+  const auto map_exists = [this](MapId map_id) {
+    if (!mapper_) return false;
+    for (const auto& [id, keyframe] : mapper_->map().keyframes) {
+      if (keyframe.map_id == map_id) return true;
+    }
+    return false;
+  };
+  const std::optional<std::string> problem = agent_guard_->check(writer, message.id, message.map_id, map_exists);
+  if (!problem) return true;
+  stats().count("refused_agent_keyframes");
+  log().warn_throttled("refused_agent_keyframes", "topic '", keyframe_reader_->name(), "': ", *problem,
+                       "; refused (counted as refused_agent_keyframes)");
+  acknowledge(message.id);  // its lockstep frontend must not wait for a keyframe we will not map
+  return false;
 }
 
 void MapperNode::take_corrections() {
@@ -276,13 +313,14 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
   if (!mapper_) start_mapper(keyframe);
   const KeyframeId id = keyframe.decoded.keyframe.id;
   const Map& map = mapper_->map();
-  if (map.keyframe(id) == nullptr && !map.keyframes.empty() && id < map.keyframes.rbegin()->first) {
+  const KeyframeId newest = newest_of_creator(map, creator_of(id));
+  if (map.keyframe(id) == nullptr && newest != kNoId && id < newest) {
     // Keyframe ids only grow within a run (a restarted frontend continues past the map's), so this
-    // one is not of this map: mapping it would mix two maps.
+    // one is not of this map: mapping it would mix two maps. Per creator: each agent counts its own.
     stats().count("foreign_keyframes");
     log().warn_throttled("foreign_keyframes", "keyframe ", format_id(id),
-                         ": not in the map and older than its newest keyframe ",
-                         format_id(map.keyframes.rbegin()->first), "; ignored");
+                         ": not in the map and older than its creator's newest keyframe ", format_id(newest),
+                         "; ignored");
     acknowledge(id);
     return;
   }

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "components/core/camera/pinhole_stereo.hpp"
+#include "components/core/map/agent_guard.hpp"
 #include "components/core/mapping/inertial_mapping.hpp"
 #include "components/core/mapping/local_mapper.hpp"
 #include "components/local_mapper/mapper_process_options.hpp"
@@ -49,6 +50,9 @@ class MapperNode : public runtime::Component {
   void save_map_to(const std::filesystem::path& path);
   // After save_map_to with a loaded map (a session): one line, the loaded and the new keyframes.
   void log_session_map(const std::filesystem::path& path);
+  // --agents N > 1: whether a keyframe of this run's frontends passes the AgentKeyframeGuard; a refused
+  // one is counted (refused_agent_keyframes), named in one line and acknowledged.
+  bool admit_agent_keyframe(const msg::Keyframe& message, dds_instance_handle_t writer);
   void take_keyframes();
   void take_corrections();
   void process_pending();
@@ -88,6 +92,7 @@ class MapperNode : public runtime::Component {
   // One writer each (runtime/checked_reader.hpp); samples are checked where they are converted, so a
   // bad keyframe of the frontend is still acknowledged.
   std::optional<runtime::CheckedReader<msg::Keyframe>> keyframe_reader_;
+  std::optional<AgentKeyframeGuard> agent_guard_;  // --agents N > 1: several frontends (docs/agents.md)
   std::optional<runtime::CheckedReader<msg::LoopCorrection>> correction_reader_;
   std::optional<runtime::Writer<msg::KeyframeState>> keyframe_state_writer_;
   std::optional<runtime::Writer<msg::MapPointState>> point_state_writer_;

@@ -5,6 +5,7 @@
 
 #include <stdexcept>
 
+#include "components/core/map/ids.hpp"
 #include "runtime/flags.hpp"
 
 namespace heslam::local_mapper {
@@ -83,6 +84,8 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
       .path("--save-map", "FILE", &o.save_map, "save the map here at the end (\"\": none)")
       .toggle("--extend-map", &o.extend_map,
               "with --load-map: the final map replaces the loaded file at the end (unless --save-map FILE)")
+      .integer("--agents", "N", &o.agents, 1, kMaxAgentId + 1,
+               "frontends of agents 0..N-1 publish keyframes (docs/agents.md; 1: a single frontend)")
       .custom("--imu", "auto|none", "none: no inertial local BA whatever imu.enabled says (auto: imu.enabled)",
               [&imu_flag](const std::string& value) {
                 if (value != "auto" && value != "none") runtime::throw_bad_flag_value("--imu", "auto or none", value);

@@ -50,6 +50,10 @@ struct MapperProcessOptions {
   // messages, flushed after the batch's version markers (write_batch.hpp), instead of one datagram
   // per sample.
   bool batch_map_writes = true;
+  // --agents N (docs/agents.md): keyframes come from the frontends of agents 0..N-1, several writers of
+  // map/keyframes, each held to its agent's ids and maps (AgentKeyframeGuard). 1: one frontend, the
+  // topic's single-writer rule (runtime/checked_reader.hpp) as before.
+  int agents = 1;
   // imu.* / --imu auto|none: the inertial local BA (docs/local_mapper.md, Inertial local BA). Off by default.
   InertialMappingOptions inertial;
 

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <climits>
 #include <cstddef>
+#include <cstdio>
 #include <ctime>
 #include <iterator>
 #include <sstream>
@@ -71,8 +72,13 @@ void LoopCloserNode::configure(const runtime::Config& config) {
   options_ = LoopCloserProcessOptions::from_config(config, args().rest);
   detector_ = make_detector(config, options_);
   waitset_ = std::make_unique<runtime::WaitSet>(participant());
-  keyframe_reader_.emplace(participant(), topics().keyframes(), log(), stats(), nullptr,
-                           messages::checked_options<msg::Keyframe>(kHeldKeyframes));
+  runtime::CheckedReaderOptions keyframe_options = messages::checked_options<msg::Keyframe>(kHeldKeyframes);
+  if (options_.agents > 1) {
+    // Several frontends write map/keyframes: each is held to its agent's ids instead (take_all).
+    keyframe_options.single_writer = false;
+    agent_guard_.emplace(options_.agents);
+  }
+  keyframe_reader_.emplace(participant(), topics().keyframes(), log(), stats(), nullptr, keyframe_options);
   keyframe_state_reader_.emplace(participant(), topics().keyframe_states(), log(), stats(), nullptr,
                                  messages::checked_options<msg::KeyframeState>(messages::kMapStateHeld));
   point_state_reader_.emplace(participant(), topics().map_points(), log(), stats(), nullptr,
@@ -153,6 +159,7 @@ std::size_t LoopCloserNode::take_all() {
   for (auto& received : keyframe_reader_->take()) {
     ++taken;
     if (!received.info.valid_data) continue;
+    if (agent_guard_ && !admit_agent_keyframe(*received.sample, received.info.publication_handle)) continue;
     try {
       mirror_.add_keyframe(*received.sample);
     } catch (const std::exception& error) {
@@ -240,14 +247,42 @@ std::size_t LoopCloserNode::take_all() {
   return taken;
 }
 
+bool LoopCloserNode::admit_agent_keyframe(const msg::Keyframe& message, dds_instance_handle_t writer) {
+  if (!runtime::writer_of_this_run(keyframe_reader_->handle(), writer)) {
+    stats().count(runtime::kSecondWriterSamples);
+    return false;
+  }
+  const auto map_exists = [this](MapId map_id) {
+    for (const auto& [id, keyframe] : mirror_.map().keyframes) {
+      if (keyframe.map_id == map_id) return true;
+    }
+    return false;
+  };
+  const std::optional<std::string> problem = agent_guard_->check(writer, message.id, message.map_id, map_exists);
+  if (!problem) return true;
+  stats().count("refused_agent_keyframes");
+  log().warn_throttled("refused_agent_keyframes", "topic '", keyframe_reader_->name(), "': ", *problem,
+                       "; refused (counted as refused_agent_keyframes)");
+  refused_.insert(message.id);
+  acknowledge(message.id);  // its lockstep frontend must not wait for a keyframe we will not process
+  return false;
+}
+
 void LoopCloserNode::process_ready_keyframes() {
   // In keyframe order, each once the mirror holds it and the map state the mapper acknowledged.
   while (!mapped_.empty() && !shutdown_requested()) {
     const auto [id, version] = *mapped_.begin();
-    if (id <= last_processed_) {
+    if (refused_.count(id) != 0) {  // refused by the agent guard (the mapper refuses it too)
+      mapped_.erase(mapped_.begin());
+      continue;
+    }
+    // Ids grow per creator, not across agents (ids.hpp): each agent's keyframes are compared with
+    // the last processed keyframe of the same agent.
+    const auto last = last_processed_.find(creator_of(id));
+    if (last != last_processed_.end() && id <= last->second) {
       mapped_.erase(mapped_.begin());
       // A restarted loop closer: the frontend may still wait for the last one.
-      if (id == last_processed_) acknowledge(id);
+      if (id == last->second) acknowledge(id);
       continue;
     }
     if (mirror_.map().keyframe(id) == nullptr || mirror_.map().version < version) return;  // in flight
@@ -255,7 +290,7 @@ void LoopCloserNode::process_ready_keyframes() {
     mapped_.erase(mapped_.begin());
     keyframe_done_roles_->done(id);
     process_keyframe(id);
-    last_processed_ = id;
+    last_processed_[creator_of(id)] = id;
     save_state();
     acknowledge(id);
   }
@@ -298,9 +333,12 @@ void LoopCloserNode::process_keyframe(KeyframeId id) {
   }
   LoopCorrection correction = std::move(*result.correction);
   if (correction.kind == CorrectionKind::kMerge) {
+    const Keyframe* query = mirror_.map().keyframe(id);
+    char stamp[32];
+    std::snprintf(stamp, sizeof stamp, "%.6f", query != nullptr ? static_cast<double>(query->stamp_ns) * 1e-9 : 0.0);
     log().info("maps merged: map ", result.merged_map, " into map ", result.into_map, " at keyframe ", format_id(id),
-               " -> ", format_id(correction.matched_kf), " with ", result.loop_matches, " matches; ",
-               result.merge_stats.moved_keyframes, " keyframes moved, ", correction.point_merges.size(),
+               " (stamp ", stamp, " s) -> ", format_id(correction.matched_kf), " with ", result.loop_matches,
+               " matches; ", result.merge_stats.moved_keyframes, " keyframes moved, ", correction.point_merges.size(),
                " points fused, ", result.merge_stats.seam_connections, " keyframe pairs joined across the seam, ",
                correction.corrected_T_wc.size(), " keyframes corrected in ", result.timings.merge_ms,
                " ms (map version ", mirror_.map().version, ")");
@@ -573,7 +611,8 @@ void LoopCloserNode::load_mapper_map() {
 }
 
 // State file: a run file (runtime/run_journal.hpp) replaced whole after every keyframe, its records
-// "last <keyframe>", "counter <n>", then "loop <loop kf> <matched kf>" per loop closed.
+// "last <keyframe>" (one per agent: the last processed keyframe of each creator), "counter <n>", then "loop <loop kf>
+// <matched kf>" per loop closed.
 void LoopCloserNode::load_state() {
   if (options_.state_file.empty()) return;
   state_file_.emplace(options_.state_file, kStateFileFormat);
@@ -590,7 +629,7 @@ void LoopCloserNode::load_state() {
     save_state();
     return;
   }
-  KeyframeId last = kNoId;
+  std::map<std::uint8_t, KeyframeId> last;
   std::uint64_t counter = 0;
   std::vector<std::pair<KeyframeId, KeyframeId>> loops;
   for (const std::string& record : contents.records) {
@@ -598,7 +637,9 @@ void LoopCloserNode::load_state() {
     std::string key;
     fields >> key;
     if (key == "last") {
-      fields >> last;
+      KeyframeId id = kNoId;
+      fields >> id;
+      if (id != kNoId) last[creator_of(id)] = id;
     } else if (key == "counter") {
       fields >> counter;
     } else if (key == "loop") {
@@ -608,17 +649,22 @@ void LoopCloserNode::load_state() {
       loops.emplace_back(a, b);
     }
   }
-  last_processed_ = last;
+  last_processed_ = std::move(last);
   correction_counter_ = std::max(correction_counter_, counter);
   restored_loops_ = std::move(loops);
-  log().info("resuming: keyframes up to ", format_id(last_processed_), " processed, ", restored_loops_.size(),
+  std::string processed;
+  for (const auto& [creator, id] : last_processed_) processed += (processed.empty() ? "" : ", ") + format_id(id);
+  log().info("resuming: keyframes up to ", processed.empty() ? "0" : processed, " processed, ", restored_loops_.size(),
              " loops closed");
 }
 
 void LoopCloserNode::save_state() {
   if (!state_file_) return;
-  std::vector<std::string> records = {"last " + std::to_string(last_processed_),
-                                      "counter " + std::to_string(correction_counter_)};
+  // One "last" record per creator (per agent); a single agent's file reads as before.
+  std::vector<std::string> records;
+  for (const auto& [creator, id] : last_processed_) records.push_back("last " + std::to_string(id));
+  if (records.empty()) records.push_back("last 0");
+  records.push_back("counter " + std::to_string(correction_counter_));
   const auto& loops = closing_ ? closing_->loop_edges() : restored_loops_;
   for (const auto& [a, b] : loops) records.push_back("loop " + std::to_string(a) + " " + std::to_string(b));
   state_file_->replace(records);

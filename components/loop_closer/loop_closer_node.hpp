@@ -22,6 +22,7 @@
 #include "components/core/imu/imu_buffer.hpp"
 #include "components/core/loop/global_inertial_chain.hpp"
 #include "components/core/loop/loop_closing.hpp"
+#include "components/core/map/agent_guard.hpp"
 #include "components/loop_closer/background_global_ba.hpp"
 #include "components/loop_closer/loop_closer_options.hpp"
 #include "components/loop_closer/map_mirror.hpp"
@@ -52,6 +53,9 @@ class LoopCloserNode : public runtime::Component {
   // returns how many it took. The mirror's map version then is the mapper's version it holds
   // completely (version markers), so a keyframe acknowledged at version v is processed only on it.
   std::size_t take_all();
+  // --agents N > 1: whether a keyframe of this run's frontends passes the AgentKeyframeGuard; a refused
+  // one is counted (refused_agent_keyframes), named in one line and acknowledged.
+  bool admit_agent_keyframe(const msg::Keyframe& message, dds_instance_handle_t writer);
   void process_ready_keyframes();
   // The atlas: a place of another map recognised from keyframe `id` (no loop was closed there).
   LoopClosingResult process_merge(KeyframeId id);
@@ -123,12 +127,14 @@ class LoopCloserNode : public runtime::Component {
 
   std::unique_ptr<LoopDetector> detector_;  // moved into closing_ once the camera is known
   std::unique_ptr<LoopClosing> closing_;
-  BackgroundGlobalBa global_ba_;                                // after closing_: stopped before closing_ goes
-  MapMirror mirror_{KeyframeAdmission::kWithMapperState};       // loop closing on mapped keyframes only
-  std::map<KeyframeId, std::uint64_t> mapped_;                  // mapper acknowledged: keyframe -> map version
+  BackgroundGlobalBa global_ba_;                           // after closing_: stopped before closing_ goes
+  MapMirror mirror_{KeyframeAdmission::kWithMapperState};  // loop closing on mapped keyframes only
+  std::optional<AgentKeyframeGuard> agent_guard_;          // --agents N > 1: several frontends (docs/agents.md)
+  std::set<KeyframeId> refused_;                           // keyframes the agent guard refused (acknowledged already)
+  std::map<KeyframeId, std::uint64_t> mapped_;             // mapper acknowledged: keyframe -> map version
   std::map<std::uint64_t, std::uint64_t> corrections_applied_;  // correction id -> map version after it
   std::optional<runtime::RunJournal> state_file_;               // with options_.state_file
-  KeyframeId last_processed_ = kNoId;
+  std::map<std::uint8_t, KeyframeId> last_processed_;           // by creator tag (each agent's ids grow on their own)
   std::uint64_t correction_counter_ = 0;
   std::vector<std::pair<KeyframeId, KeyframeId>> restored_loops_;
   bool reader_wait_done_ = false;

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "components/core/map/ids.hpp"
 #include "runtime/flags.hpp"
 
 namespace heslam::loop_closer {
@@ -71,7 +72,9 @@ LoopCloserProcessOptions LoopCloserProcessOptions::from_config(const runtime::Co
       .path("--vocabulary", "FILE", &o.vocabulary, "the BoW vocabulary (vocabulary.file)")
       .path("--mapper-map-file", "FILE", &o.mapper_map_file,
             "the local mapper's map file: a map it loaded is taken from there at start")
-      .toggle("--real-time", &o.real_time, "do not wait for the mapper (real_time)");
+      .toggle("--real-time", &o.real_time, "do not wait for the mapper (real_time)")
+      .integer("--agents", "N", &o.agents, 1, kMaxAgentId + 1,
+               "frontends of agents 0..N-1 publish keyframes (docs/agents.md; 1: a single frontend)");
   flags.parse(rest);
   return o;
 }

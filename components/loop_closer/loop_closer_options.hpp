@@ -14,6 +14,8 @@
 namespace heslam::loop_closer {
 
 struct LoopCloserProcessOptions {
+  // --agents N (docs/agents.md): keyframes come from the frontends of agents 0..N-1 (as the local mapper's).
+  int agents = 1;
   LoopClosingOptions closing;  // verification.*; pose_graph.four_dof / pose_graph.gravity_w (correction.pose_graph)
   // pose_graph.gravity_from_odometry: once the odometry carries a gravity (gravity_valid: an inertial run
   // whose IMU is initialized), loop corrections use the 4-DoF pose graph about that gravity (the one of

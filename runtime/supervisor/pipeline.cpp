@@ -568,7 +568,9 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
     });
     collect(problems, [&] { spec.required = section.get_bool("required", true); });
     collect(problems, [&] {
-      spec.shutdown_on_exit = section.get_choice("on_exit", "none", {"none", "shutdown"}) == "shutdown";
+      const std::string on_exit = section.get_choice("on_exit", "none", {"none", "shutdown", "shutdown_with_all"});
+      spec.shutdown_on_exit = on_exit == "shutdown";
+      spec.shutdown_with_all = on_exit == "shutdown_with_all";
     });
     collect(problems, [&] { spec.common_args = section.get_bool("common_args", true); });
     collect(problems, [&] { spec.pausable = section.get_bool("pausable", false); });

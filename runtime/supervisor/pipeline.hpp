@@ -41,7 +41,10 @@ struct ComponentSpec {
   std::optional<double> stop_timeout_s;
   bool required = true;           // its failure fails the run (exit code 1)
   bool shutdown_on_exit = false;  // on_exit: shutdown — its end ends the run
-  bool common_args = true;        // pass --domain --namespace --name [--config] --log-level --dds-config
+  // on_exit: shutdown_with_all — the run ends when every component with this choice has ended (the
+  // replays of several agents, docs/agents.md)
+  bool shutdown_with_all = false;
+  bool common_args = true;  // pass --domain --namespace --name [--config] --log-level --dds-config
   // pausable: true — space on the supervisor's terminal pauses it (SIGUSR1) and resumes it (SIGUSR2),
   // as heslam-replay's own keyboard would (docs/supervisor.md, Pause).
   bool pausable = false;

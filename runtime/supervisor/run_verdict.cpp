@@ -66,6 +66,19 @@ std::optional<std::string> input_cut_short(const std::vector<ProgramReport>& rep
   return std::nullopt;
 }
 
+// Several agents (docs/agents.md): recorder_X records the frames of frontend_X, played by replay_X, so
+// its counts are held against theirs; `counter` of the program `role`_X, nothing when there is none.
+std::optional<std::uint64_t> of_same_agent(const std::vector<ProgramReport>& reports, const std::string& recorder,
+                                           const std::string& role, const char* counter) {
+  const std::string prefix = "recorder_";
+  if (!recorder.starts_with(prefix)) return std::nullopt;
+  const std::string name = role + "_" + recorder.substr(prefix.size());
+  for (const ProgramReport& report : reports) {
+    if (report.name == name) return counter_of(report, counter);
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 RunVerdict judge_run(const std::vector<ProgramReport>& reports) {
@@ -73,10 +86,16 @@ RunVerdict judge_run(const std::vector<ProgramReport>& reports) {
   verdict.failure = writer_conflicts(reports);
   verdict.writer_conflict = verdict.failure.has_value();
   if (!verdict.failure) verdict.failure = input_cut_short(reports);
-  const std::optional<std::uint64_t> published = largest(reports, runtime::kFramesPublished);
-  const std::optional<std::uint64_t> produced = largest(reports, runtime::kOdometryFrames);
+  const std::optional<std::uint64_t> all_published = largest(reports, runtime::kFramesPublished);
+  const std::optional<std::uint64_t> all_produced = largest(reports, runtime::kOdometryFrames);
   for (const ProgramReport& report : reports) {
     std::string result = report.result;
+    const std::optional<std::uint64_t> own_published =
+        of_same_agent(reports, report.name, "replay", runtime::kFramesPublished);
+    const std::optional<std::uint64_t> own_produced =
+        of_same_agent(reports, report.name, "frontend", runtime::kOdometryFrames);
+    const std::optional<std::uint64_t> published = own_published ? own_published : all_published;
+    const std::optional<std::uint64_t> produced = own_produced ? own_produced : all_produced;
     const std::optional<std::uint64_t> recorded = counter_of(report, runtime::kFramesRecorded);
     if (recorded && produced && *recorded < *produced && !verdict.failure) {
       verdict.failure = report.name + ": " + std::to_string(*produced - *recorded) + " of the " +

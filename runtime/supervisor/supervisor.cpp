@@ -679,6 +679,12 @@ void Supervisor::on_exit(Managed& component, int wait_status) {
     if (component.spec.required) fail(name + " " + how + why);
   }
   if (component.spec.shutdown_on_exit || (!success && component.spec.required)) end_requested_ = true;
+  if (component.spec.shutdown_with_all) {
+    const bool all_ended = std::all_of(components_.begin(), components_.end(), [](const auto& other) {
+      return !other->spec.shutdown_with_all || other->phase == Phase::kEnded;
+    });
+    if (all_ended) end_requested_ = true;
+  }
 }
 
 void Supervisor::pump(std::chrono::milliseconds timeout) {

@@ -95,7 +95,7 @@ class Camera {
         calibration_message_(opened_.calibration, opened_.rectifier.camera()),
         participant_({.domain_id = common.domain_id, .dds_config = common.dds_config}),
         image_participant_(participant_, common.image_transport, common.image_domain_id, common.dds_config),
-        topics_(common.ns),
+        topics_(common.ns, common.agent_ns),
         calibration_writer_(participant_, topics_.calibration()),
         frame_writer_(image_participant_.get(), topics_.stereo()),
         status_(participant_, topics_, common.name, stats_) {

@@ -109,7 +109,10 @@ RecorderOptions RecorderOptions::from(const runtime::Config& config, const std::
       .path("--inertial", "FILE", &options.inertial_output,
             "inertial runs: the world's gravity alignment and the velocities (the config's inertial_output)")
       .path("--maps", "FILE", &options.maps_output,
-            "runs with several maps (the atlas): the map of each pose (the config's maps_output)");
+            "runs with several maps (the atlas): the map of each pose (the config's maps_output)")
+      .integer("--agent", "N", &options.agent, -1, kMaxAgentId,
+               "several agents (docs/agents.md): record agent N's keyframes (-1: a single agent)")
+      .text("--source", "NAME", &options.source, "the status name of the source of the frames (empty: any)");
   parser.parse(flags);
   if (options.output.empty()) throw std::runtime_error("--output: expected a file name");
   const std::string extension = options.format == eval::Format::euroc ? ".csv" : ".txt";
@@ -239,8 +242,12 @@ void Recorder::configure(const runtime::Config& config) {
   options_ = RecorderOptions::from(config, args().rest);
   odometry_reader_.emplace(participant(), topics().odometry(), log(), stats(), messages::sample_check<msg::Odometry>(),
                            messages::checked_options<msg::Odometry>(kHeldOdometry));
+  runtime::CheckedReaderOptions keyframe_options = messages::checked_options<msg::Keyframe>(kHeldKeyframes);
+  // Several agents: one writer of map/keyframes per agent (the local mapper guards who writes what).
+  if (options_.agent >= 0) keyframe_options.single_writer = false;
+  recorder_.set_agent(options_.agent);
   keyframe_reader_.emplace(participant(), topics().keyframes(), log(), stats(), messages::sample_check<msg::Keyframe>(),
-                           messages::checked_options<msg::Keyframe>(kHeldKeyframes));
+                           keyframe_options);
   keyframe_state_reader_.emplace(participant(), topics().keyframe_states(), log(), stats(),
                                  messages::sample_check<msg::KeyframeState>(),
                                  messages::checked_options<msg::KeyframeState>(messages::kMapStateHeld));
@@ -359,6 +366,7 @@ std::size_t Recorder::drain() {
   for (auto& received : status_reader_->take()) {
     if (!received.info.valid_data) continue;
     const msg::ComponentStatus& status = *received.sample;
+    if (!options_.source.empty() && runtime::to_string(status.name) != options_.source) continue;
     for (std::uint32_t i = 0; i < status.counters._length; ++i) {
       const msg::Counter& counter = status.counters._buffer[i];
       if (runtime::to_string(counter.name) == kFramesPublishedCounter) {
@@ -370,6 +378,7 @@ std::size_t Recorder::drain() {
     ++taken;
     if (!received.info.valid_data) continue;
     const msg::Keyframe& keyframe = *received.sample;
+    if (options_.agent >= 0 && agent_of(keyframe.id) != options_.agent) continue;  // another agent's
     recorder_.add_keyframe(keyframe.id, keyframe.stamp_ns, keyframe.frame_seq, messages::to_pose(keyframe.T_wc));
     recorder_.set_keyframe_map(keyframe.id, keyframe.map_id);
     stats().count("keyframes");

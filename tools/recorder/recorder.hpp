@@ -35,6 +35,13 @@ struct RecorderOptions {
   // the identity, as for KITTI).
   eval::PoseFrame frame = eval::PoseFrame::body;
   bool frame_given = false;  // set by --frame / `frame`: a run without a calibration then fails
+  // --agent N (several agents, docs/agents.md): this recorder records agent N (its odometry comes on the
+  // agent's topic, --agent-namespace); map/keyframes has one writer per agent, and the keyframe file
+  // holds agent N's keyframes only. -1: a single agent, as before.
+  int agent = -1;
+  // --source NAME: the status name of the source whose frames_published counter says how many frames
+  // were sent (several agents: each agent's replay); empty: any component's.
+  std::string source;
 
   // Throws std::runtime_error naming the field or flag on a bad value.
   static RecorderOptions from(const runtime::Config& config, const std::vector<std::string>& flags);

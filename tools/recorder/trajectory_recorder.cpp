@@ -108,7 +108,7 @@ RecordedTrajectories TrajectoryRecorder::build() const {
   }
   std::vector<std::pair<std::int64_t, KeyframeId>> by_stamp;
   for (const auto& [id, record] : keyframes_) {
-    if (!record.culled) by_stamp.emplace_back(record.stamp_ns, id);
+    if (!record.culled && (agent_ < 0 || agent_of(id) == agent_)) by_stamp.emplace_back(record.stamp_ns, id);
   }
   std::sort(by_stamp.begin(), by_stamp.end());
   for (const auto& [stamp_ns, id] : by_stamp) {

@@ -103,6 +103,10 @@ class TrajectoryRecorder {
   // The keyframe's map (Keyframe.map_id, then the mapper's KeyframeState.map_id: the latest wins).
   void set_keyframe_map(KeyframeId id, MapId map_id);
 
+  // Several agents (docs/agents.md): the keyframe trajectory holds agent `agent`'s keyframes only (the
+  // others' states are still kept: a frame of this agent may reference one after a merge). -1: all.
+  void set_agent(int agent) { agent_ = agent; }
+
   RecordedTrajectories build() const;
   // Frames are numbered from 0 by their publisher (StereoFrame.seq); frames_published is its count
   // (0 when unknown: the highest recorded seq + 1 stands in).
@@ -129,6 +133,7 @@ class TrajectoryRecorder {
 
   std::map<std::uint64_t, RecordedFrame> frames_;   // by seq
   std::map<KeyframeId, KeyframeRecord> keyframes_;  // by id
+  int agent_ = -1;
 };
 
 }  // namespace heslam::recorder

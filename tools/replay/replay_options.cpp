@@ -30,6 +30,22 @@ runtime::Flags replay_flags(ReplayOptions& options) {
       .number("--rate", "R", &options.rate, 0.0, kMaxRate,
               "speed, 1 = real time (default), 0 = as fast as possible (0-100)")
       .toggle("--lockstep", &options.lockstep, "publish frame n+1 only after the consumer's FrameDone for frame n")
+      .custom("--turns", "A,B,...",
+              "lockstep with several agents: every agent's namespace, this one's among them;\n"
+              "the frames of all are published one at a time in stamp order (docs/agents.md)",
+              [&options](const std::string& value) {
+                options.turns.clear();
+                std::string::size_type start = 0;
+                for (;;) {
+                  const std::string::size_type comma = value.find(',', start);
+                  const std::string name = value.substr(start, comma == std::string::npos ? comma : comma - start);
+                  if (name.empty())
+                    runtime::throw_bad_flag_value("--turns", "agent namespaces separated by ','", value);
+                  options.turns.push_back(name);
+                  if (comma == std::string::npos) break;
+                  start = comma + 1;
+                }
+              })
       .number("--ack-timeout", "S", &options.ack_timeout_s, 0.001, kMaxSeconds,
               "lockstep: give up after S s without a consumer/FrameDone (10;\n0.001-86400)")
       .number("--wait", "S", &options.wait_subscriber_s, 0.0, kMaxSeconds,

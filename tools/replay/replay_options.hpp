@@ -19,6 +19,10 @@ struct ReplayOptions {
   std::filesystem::path camera_file;
   double rate = 1.0;      // --rate: 1 = real time, 0 = as fast as the transport allows
   bool lockstep = false;  // --lockstep: frame n+1 after FrameDone(n)
+  // --turns A,B,...: several agents in lockstep (docs/agents.md): the agent namespaces of every agent's
+  // replay, this one's (--agent-namespace) among them; the frames of all go out one at a time in stamp
+  // order (equal stamps: in this list's order), so the run is repeatable. Empty: this replay alone.
+  std::vector<std::string> turns;
   bool loop = false;
   double start_offset_s = 0.0;
   double duration_s = 0.0;  // 0 = to the end

@@ -5,11 +5,14 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <functional>
 #include <future>
+#include <map>
 #include <optional>
 #include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -22,6 +25,7 @@
 #include "runtime/reader.hpp"
 #include "runtime/role_binding.hpp"
 #include "runtime/run_counters.hpp"
+#include "runtime/sequence.hpp"
 #include "runtime/shutdown.hpp"
 #include "runtime/status.hpp"
 #include "runtime/topics.hpp"
@@ -148,7 +152,7 @@ class Replay {
         calibration_message_(dataset_.calibration, rectifier_.camera()),
         participant_({.domain_id = common.domain_id, .dds_config = common.dds_config}),
         image_participant_(participant_, common.image_transport, common.image_domain_id, common.dds_config),
-        topics_(common.ns),
+        topics_(common.ns, common.agent_ns),
         calibration_writer_(participant_, topics_.calibration()),
         frame_writer_(image_participant_.get(), topics_.stereo()),
         imu_recording_(open_replay_imu(options, dataset_)),
@@ -160,6 +164,7 @@ class Replay {
       ack_waitset_.emplace(participant_);
       ack_waitset_->attach(*acks_);
     }
+    if (!options_.turns.empty()) configure_turns(common.agent_ns);
     counts_.total = dataset_.frames.size();
     // Frames per pass, for whoever shows the progress of the whole run (heslam-supervisor).
     stats_.count("frames_total", counts_.total);
@@ -215,6 +220,8 @@ class Replay {
         }
         std::optional<StereoImages> images = load(index);
         if (!wait_until_due(frame.stamp_ns + pass_offset_ns)) return finish();
+        // Several agents: this frame's turn comes when every other agent's next frame is later.
+        if (turn_writer_ && !wait_for_turn(frame.stamp_ns + pass_offset_ns)) return finish();
         // The IMU readings up to this frame leave before it, also for a frame whose images are
         // skipped: the watermark then still advances (docs/topics.md, imu/readings).
         publish_imu(frame.stamp_ns);
@@ -534,6 +541,79 @@ class Replay {
     }
   }
 
+  // Several agents in lockstep (--turns; docs/agents.md): the replays take turns in stamp order through
+  // lockstep/turns. Each announces the stamp of the frame it wants to publish next; a replay publishes
+  // its frame with stamp t once every other agent has announced a later one (an equal one: the agent
+  // listed later goes second). The one with the earliest frame always may go, so no two wait on each
+  // other; the frame after an announcement is published only when its own frontend acknowledged the
+  // previous one, so all frontends together process one frame at a time, in the same order every run.
+  static constexpr std::int64_t kNoMoreFrames = INT64_MAX;
+
+  void configure_turns(const std::string& own) {
+    if (!options_.lockstep) throw std::runtime_error("--turns: needs --lockstep (turns pace lockstep replays)");
+    const auto self = std::find(options_.turns.begin(), options_.turns.end(), own);
+    if (own.empty() || self == options_.turns.end()) {
+      throw std::runtime_error("--turns: this replay's agent namespace ('" + own +
+                               "', --agent-namespace) is not in the list of turns");
+    }
+    own_turn_ = own;
+    own_turn_index_ = static_cast<std::size_t>(self - options_.turns.begin());
+    turn_writer_.emplace(participant_, topics_.turns());
+    turn_reader_.emplace(participant_, topics_.turns());
+    turn_waitset_.emplace(participant_);
+    turn_waitset_->attach(*turn_reader_);
+  }
+
+  void announce_turn(std::int64_t next_stamp_ns) {
+    msg::FrameDone announcement{};
+    announcement.seq = seq_;
+    announcement.stamp_ns = next_stamp_ns;
+    announcement.component = runtime::borrow(own_turn_);
+    turn_writer_->write(announcement);
+  }
+
+  // Announces `stamp_ns` and waits for its turn; false when asked to stop. Throws when another agent
+  // stays silent for the ack timeout (its replay never started or died).
+  bool wait_for_turn(std::int64_t stamp_ns) {
+    announce_turn(stamp_ns);
+    auto deadline = Clock::now() + to_ms(options_.ack_timeout_s);
+    for (;;) {
+      for (auto& received : turn_reader_->take()) {
+        if (!received.info.valid_data ||
+            !runtime::writer_of_this_run(turn_reader_->handle(), received.info.publication_handle)) {
+          continue;
+        }
+        const std::string agent = runtime::to_string(received.sample->component);
+        if (agent == own_turn_) continue;
+        std::int64_t& next = others_next_[agent];
+        if (received.sample->stamp_ns > next) {
+          next = received.sample->stamp_ns;
+          deadline = Clock::now() + to_ms(options_.ack_timeout_s);  // it is alive and moving
+        }
+      }
+      std::string waiting_for;
+      for (std::size_t i = 0; i < options_.turns.size() && waiting_for.empty(); ++i) {
+        if (i == own_turn_index_) continue;
+        const auto known = others_next_.find(options_.turns[i]);
+        const bool later = known != others_next_.end() &&
+                           (known->second > stamp_ns || (known->second == stamp_ns && i > own_turn_index_));
+        if (!later) waiting_for = options_.turns[i];
+      }
+      if (waiting_for.empty()) return true;
+      handle_controls();
+      if (quit_) return false;
+      const auto now = Clock::now();
+      if (now >= deadline) {
+        throw std::runtime_error("--turns: agent '" + waiting_for + "' announced no frame after stamp " +
+                                 std::to_string(stamp_ns) + " ns on '" + turn_reader_->name() + "' within " +
+                                 std::to_string(options_.ack_timeout_s) +
+                                 " s (its replay did not start or stopped; raise --ack-timeout)");
+      }
+      const auto wait = std::min<Clock::duration>(deadline - now, kControlPollPeriod);
+      if (turn_waitset_->wait(wait) == runtime::Wake::kShutdown) return false;
+    }
+  }
+
   // Lockstep: a stage time of the handshake, and its sum over the run (the summary line's figures).
   void record_handshake(const char* stage, Clock::duration took, Clock::duration& total) {
     stats_.record_ms(stage, std::chrono::duration<double, std::milli>(took).count());
@@ -569,6 +649,7 @@ class Replay {
   }
 
   int finish() {
+    if (turn_writer_) announce_turn(kNoMoreFrames);  // the other agents go on without this one
     if (imu_ && !runtime::shutdown_requested() && !quit_) {
       // The last batch says no reading follows; its watermark stays where the last frame left it.
       const ImuBatchPlan plan{{}, imu_->published(), imu_->watermark_ns()};
@@ -616,6 +697,13 @@ class Replay {
   std::uint64_t imu_seq_ = 0;
   std::optional<runtime::Reader<msg::FrameDone>> acks_;
   std::optional<runtime::WaitSet> ack_waitset_;
+  // --turns: this agent's announcements and the others' (their next frame's stamp, by agent namespace)
+  std::string own_turn_;
+  std::size_t own_turn_index_ = 0;
+  std::optional<runtime::Writer<msg::FrameDone>> turn_writer_;
+  std::optional<runtime::Reader<msg::FrameDone>> turn_reader_;
+  std::optional<runtime::WaitSet> turn_waitset_;
+  std::map<std::string, std::int64_t> others_next_;
   runtime::Stats stats_;
   runtime::RoleBinding consumer_{log_, stats_, topics_.frame_done().name};
   struct HeldAck {

@@ -274,8 +274,13 @@ bool Tracker::new_map_due(std::int64_t stamp_ns) const {
 bool Tracker::start_new_map(Frame& frame, TrackResult& result) {
   // The next id after every map this tracker knows (its own and the mirror's): a restarted frontend
   // that mirrors the mapper's map continues the numbering.
-  MapId newest = active_map_;
-  for (const auto& [id, keyframe] : map_.keyframes) newest = std::max(newest, keyframe.map_id);
+  // Only this agent's maps count (ids.hpp): after a merge into another agent's map, active_map_ is that
+  // agent's, and its next map id is not ours to take.
+  const auto own = [this](MapId map_id) { return agent_of_map(map_id) == agent_of_map(options_.first_map_id); };
+  MapId newest = own(active_map_) ? active_map_ : options_.first_map_id;
+  for (const auto& [id, keyframe] : map_.keyframes) {
+    if (own(keyframe.map_id)) newest = std::max(newest, keyframe.map_id);
+  }
   const NewMapStart why{active_map_, *lost_since_ns_, lost_frames_};
   const MapId previous = active_map_;
   const KeyframeId previous_reference = reference_kf_;

@@ -222,7 +222,7 @@ class Tracker {
   Pose3 last_T_ref_c_ = Pose3::Identity();  // the last frame in its reference keyframe's frame
   std::optional<Pose3> velocity_;           // T_last_current of the last tracked pair
   KeyframeId reference_kf_ = kNoId;
-  MapId active_map_ = kFirstMapId;             // the map tracked in, and the one new keyframes join
+  MapId active_map_ = options_.first_map_id;   // the map tracked in, and the one new keyframes join
   std::optional<std::int64_t> lost_since_ns_;  // the stamp of the first frame of the current loss
   int lost_frames_ = 0;                        // frames of the current loss
   std::uint64_t keyframe_counter_ = 0;

@@ -144,6 +144,9 @@ struct TrackerOptions {
   bool assume_mapper_idle = true;
   // Creator tag for keyframe and point ids (map.hpp).
   std::uint8_t id_tag = 1;
+  // The first map's id; maps started after a loss count up from it (ids.hpp: agent a's maps are
+  // first_map_id(a) + 0, 1, 2, ...), so several agents number their maps without coordination.
+  std::uint32_t first_map_id = 0;
 
   bool operator==(const TrackerOptions&) const = default;
 };
