@@ -123,6 +123,7 @@ TEST(SecurityInit, GrantsEachTopicOnlyToTheComponentsThatNeedIt) {
       {"map/mapper_keyframes", {"local_mapper"}},
       {"loop/corrections", {"loop_closer"}},
       {"lockstep/frame_done", {"frontend"}},
+      {"lockstep/turns", {"replay"}},
       {"lockstep/keyframe_done", {"local_mapper", "loop_closer"}},
       {"map/occupancy_grid", {"occupancy"}},
       {"map/dense_cloud", {"occupancy"}}};
