@@ -36,8 +36,13 @@ class LoopbackCapture {
       error_ = std::string("cannot open a raw UDP socket (needs root / CAP_NET_RAW): ") + std::strerror(errno);
       return;
     }
-    const int buffer_bytes = 8 << 20;  // 8 MB: image fragments arrive in bursts
-    ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &buffer_bytes, sizeof buffer_bytes);
+    // 8 MB: image fragments arrive in bursts, and a raw socket also receives every other domain's
+    // datagrams (a parallel suite). SO_RCVBUF is capped at net.core.rmem_max (often 208 KB), which lost
+    // image datagrams under load; SO_RCVBUFFORCE (root, as the raw socket itself) is not.
+    const int buffer_bytes = 8 << 20;
+    if (::setsockopt(fd_, SOL_SOCKET, SO_RCVBUFFORCE, &buffer_bytes, sizeof buffer_bytes) != 0) {
+      ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &buffer_bytes, sizeof buffer_bytes);
+    }
     thread_ = std::thread([this] { loop(); });
   }
   ~LoopbackCapture() {
