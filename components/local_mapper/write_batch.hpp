@@ -2,8 +2,8 @@
 //
 // Without it every dds_write of a map state goes out as its own UDP datagram to every matched
 // participant: on the KITTI-size street a keyframe changes ~5000 points, and the mapper then spent a
-// quarter of its CPU in sendmsg (73000 calls in 20 s; docs/benchmarks.md, "Local mapper cost, street
-// and publish"), the receivers one wake-up per datagram. Cyclone 0.10 has no per-writer batching QoS
+// quarter of its CPU in sendmsg (73000 calls in 20 s; docs/benchmarks.md at 5c1f792, "Local mapper cost,
+// street and publish"), the receivers one wake-up per datagram. Cyclone 0.10 has no per-writer batching QoS
 // (it came with 0.11): a writer batches when the domain's WriteBatch setting was on when it was
 // created, and dds_write_set_batch() changes that setting (in 0.10.2 its push-down to existing
 // writers does not reach writers under a publisher, i.e. all of them, so it acts on new writers

@@ -4,7 +4,7 @@
 // observations) spent most of its time in Ceres' general machinery, not in the arithmetic: building,
 // preprocessing and destroying the problem, per-block bookkeeping of the evaluator, and the
 // dynamic-size Schur eliminator (mono (2) and stereo (3) residuals are mixed, so none of Ceres'
-// fixed-size specializations apply); docs/benchmarks.md "Local mapper cost, street and publish".
+// fixed-size specializations apply); docs/benchmarks.md at 5c1f792, "Local mapper cost, street and publish".
 // This solver does the same mathematics with fixed-size blocks: the normal equations accumulated
 // observation by observation (analytic Jacobians of bundle_adjustment_terms.hpp's model), the points
 // eliminated by the Schur complement into a dense system over the free poses (LLT), back
