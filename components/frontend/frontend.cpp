@@ -801,20 +801,13 @@ void Frontend::acknowledge(const msg::StereoFrame& frame, const FrameOutput* out
 }
 
 void Frontend::configure_inertial() {
-  runtime::CheckedReaderOptions batch_options;
-  batch_options.rejected_counter = "imu_rejected_batches";
-  imu_reader_.emplace(participant(), topics().imu(), log(), stats(), nullptr, batch_options);
-  runtime::CheckedReaderOptions calibration_options;
-  calibration_options.rejected_counter = "imu_rejected_calibrations";
-  imu_calibration_reader_.emplace(participant(), topics().imu_calibration(), log(), stats(), nullptr,
-                                  calibration_options);
+  imu_input_.emplace(participant(), topics(), log(), stats(), messages::ImuInput::Camera::kNotNeeded);
   imu_waitset_ = std::make_unique<runtime::WaitSet>(participant());
-  imu_waitset_->attach(*imu_reader_);
-  imu_waitset_->attach(*imu_calibration_reader_);
-  inertial_ = std::make_unique<InertialFrontend>(options_.inertial, imu_reader_->name());
-  imu_stream_ = std::make_unique<messages::ImuStreamReader>(inertial_->buffer());
+  imu_input_->attach(*imu_waitset_);
+  inertial_ = std::make_unique<InertialFrontend>(options_.inertial, imu_input_->readings_topic());
+  imu_input_->feed(inertial_->buffer());
   const InertialOptions& o = options_.inertial;
-  log().info("inertial tracking: ", imu_reader_->name(), " and ", imu_calibration_reader_->name(), ", ",
+  log().info("inertial tracking: ", imu_input_->readings_topic(), " and ", imu_input_->calibration_topic(), ", ",
              o.lockstep
                  ? "lockstep (each frame waits for the IMU to cover it, at most " + std::to_string(o.wait_s) + " s)"
                  : std::string("real time (never waits for the IMU)"),
@@ -829,23 +822,9 @@ void Frontend::configure_inertial() {
 
 void Frontend::take_imu() {
   if (!inertial_) return;
-  for (auto& received : imu_calibration_reader_->take()) {
-    if (!received.info.valid_data || inertial_->has_calibration()) continue;
-    try {
-      const ImuCalibration calibration = messages::to_imu_calibration(*received.sample);
-      inertial_->set_imu_calibration(calibration);
-      log().info("IMU calibration '", calibration.source, "': ", calibration.rate_hz, " Hz, time offset ",
-                 calibration.time_offset_ns, " ns");
-    } catch (const std::exception& error) {
-      stats().count("imu_bad_calibrations");
-      log().warn_throttled("imu_bad_calibrations", "topic '", imu_calibration_reader_->name(), "': ", error.what());
-    }
-  }
-  for (auto& received : imu_reader_->take()) {
-    if (!received.info.valid_data) continue;
-    const messages::ImuBatchReport report = imu_stream_->add(*received.sample);
-    if (report.lost_readings > 0) stats().count("imu_lost_readings", report.lost_readings);
-    for (const std::string& warning : report.warnings) log().warn_throttled("imu_readings", warning);
+  imu_input_->take();
+  if (!inertial_->has_calibration() && imu_input_->calibration()) {
+    inertial_->set_imu_calibration(*imu_input_->calibration());
   }
 }
 
@@ -860,7 +839,7 @@ void Frontend::wait_for_imu(const msg::StereoFrame& frame) {
   for (;;) {
     take_imu();
     if (covered()) return;
-    if (imu_stream_->ended()) {
+    if (imu_input_->ended()) {
       turn_inertial_off("the IMU stream ended (end_of_stream) before frame " + std::to_string(frame.seq) + " at " +
                         std::to_string(frame.stamp_ns) + " ns");
       return;
@@ -868,8 +847,8 @@ void Frontend::wait_for_imu(const msg::StereoFrame& frame) {
     const auto now = std::chrono::steady_clock::now();
     if (now >= deadline || shutdown_requested()) {
       turn_inertial_off(std::string(inertial_->has_calibration()
-                                        ? "no IMU readings on '" + imu_reader_->name() + "'"
-                                        : "no IMU calibration on '" + imu_calibration_reader_->name() + "'") +
+                                        ? "no IMU readings on '" + imu_input_->readings_topic() + "'"
+                                        : "no IMU calibration on '" + imu_input_->calibration_topic() + "'") +
                         " up to frame " + std::to_string(frame.seq) + " (" + std::to_string(frame.stamp_ns) +
                         " ns) within imu.wait_s " + std::to_string(options_.inertial.wait_s) + " s");
       return;
@@ -892,7 +871,7 @@ void Frontend::predict_inertial(const msg::StereoFrame& frame) {
   if (!inertial_->has_camera() || !inertial_->has_calibration()) return;
   const std::int64_t t = inertial_->imu_stamp(frame.stamp_ns);
   if (inertial_->buffer().dead_at(t)) {
-    turn_inertial_off("no IMU reading on '" + imu_reader_->name() + "' for " +
+    turn_inertial_off("no IMU reading on '" + imu_input_->readings_topic() + "' for " +
                       std::to_string(inertial_->buffer().options().dead_after_ns / 1'000'000) + " ms before frame " +
                       std::to_string(frame.seq) + " (" + std::to_string(frame.stamp_ns) + " ns): the IMU stopped");
     return;

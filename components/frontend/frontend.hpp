@@ -19,7 +19,7 @@
 #include "components/frontend/frontend_options.hpp"
 #include "components/frontend/inertial_frontend.hpp"
 #include "components/frontend/odometry_journal.hpp"
-#include "components/messages/imu.hpp"
+#include "components/messages/imu_input.hpp"
 #include "components/messages/odometry.hpp"
 #include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
@@ -171,11 +171,9 @@ class Frontend : public runtime::Component {
   std::optional<MapId> odometry_map_;    // the map of the last frame published with a pose
   Pose3 last_T_oc_ = Pose3::Identity();  // ... and its odometry pose
   // Inertial tracking: the readers, the stream's continuity, the state (null when off by option).
-  std::optional<runtime::CheckedReader<msg::ImuCalibration>> imu_calibration_reader_;
-  std::optional<runtime::CheckedReader<msg::ImuBatch>> imu_reader_;
+  std::optional<messages::ImuInput> imu_input_;
   std::unique_ptr<runtime::WaitSet> imu_waitset_;  // the IMU readers only: the lockstep wait
   std::unique_ptr<InertialFrontend> inertial_;
-  std::unique_ptr<messages::ImuStreamReader> imu_stream_;
   std::map<std::string, std::uint64_t> imu_counters_reported_;
   std::optional<std::uint64_t> inertial_initialized_at_seq_;
   // --localize: the seq of the first frame tracked in the saved map, unset until then.

@@ -500,27 +500,16 @@ void MapperNode::acknowledge(KeyframeId id, std::uint64_t correction_id) {
 }
 
 void MapperNode::configure_inertial() {
-  runtime::CheckedReaderOptions batch_options;
-  batch_options.rejected_counter = "imu_rejected_batches";
-  imu_reader_.emplace(participant(), topics().imu(), log(), stats(), nullptr, batch_options);
-  runtime::CheckedReaderOptions calibration_options;
-  calibration_options.rejected_counter = "imu_rejected_calibrations";
-  imu_calibration_reader_.emplace(participant(), topics().imu_calibration(), log(), stats(), nullptr,
-                                  calibration_options);
-  stereo_calibration_reader_.emplace(participant(), topics().calibration(), log(), stats(),
-                                     messages::sample_check<msg::StereoCalibration>(),
-                                     messages::checked_options<msg::StereoCalibration>(1));
+  imu_input_.emplace(participant(), topics(), log(), stats(), messages::ImuInput::Camera::kNeeded);
   imu_waitset_ = std::make_unique<runtime::WaitSet>(participant());
-  imu_waitset_->attach(*imu_reader_);
-  imu_waitset_->attach(*imu_calibration_reader_);
-  imu_waitset_->attach(*stereo_calibration_reader_);
-  inertial_ = std::make_unique<InertialMapping>(options_.inertial, imu_reader_->name());
+  imu_input_->attach(*imu_waitset_);
+  inertial_ = std::make_unique<InertialMapping>(options_.inertial, imu_input_->readings_topic());
   inertial_->set_log([this](const std::string& line) { log().warn(line); },
                      [this](const std::string& line) { log().info(line); });
-  imu_stream_ = std::make_unique<messages::ImuStreamReader>(inertial_->buffer());
+  imu_input_->feed(inertial_->buffer());
   const InertialMappingOptions& o = options_.inertial;
-  log().info("inertial local BA: ", imu_reader_->name(), ", ", imu_calibration_reader_->name(), " and ",
-             stereo_calibration_reader_->name(), ", window ", o.window_keyframes, " keyframes, initialization after ",
+  log().info("inertial local BA: ", imu_input_->readings_topic(), ", ", imu_input_->calibration_topic(), " and ",
+             imu_input_->camera_topic(), ", window ", o.window_keyframes, " keyframes, initialization after ",
              o.init_min_keyframes, " keyframes over ", o.init_min_duration_s, " s",
              options_.real_time
                  ? "; real time (never waits for the IMU)"
@@ -533,33 +522,10 @@ void MapperNode::configure_inertial() {
 }
 
 void MapperNode::take_imu() {
-  for (auto& received : stereo_calibration_reader_->take()) {
-    if (!received.info.valid_data || inertial_->has_camera()) continue;
-    try {
-      const StereoRectifier rectifier(messages::to_calibration(*received.sample));
-      inertial_->set_camera(rectifier.T_B_rect());
-    } catch (const std::exception& error) {
-      stats().count("imu_bad_calibrations");
-      log().warn_throttled("imu_bad_calibrations", "topic '", stereo_calibration_reader_->name(), "': ", error.what());
-    }
-  }
-  for (auto& received : imu_calibration_reader_->take()) {
-    if (!received.info.valid_data || inertial_->has_calibration()) continue;
-    try {
-      const ImuCalibration calibration = messages::to_imu_calibration(*received.sample);
-      inertial_->set_imu_calibration(calibration);
-      log().info("IMU calibration '", calibration.source, "': ", calibration.rate_hz, " Hz, time offset ",
-                 calibration.time_offset_ns, " ns");
-    } catch (const std::exception& error) {
-      stats().count("imu_bad_calibrations");
-      log().warn_throttled("imu_bad_calibrations", "topic '", imu_calibration_reader_->name(), "': ", error.what());
-    }
-  }
-  for (auto& received : imu_reader_->take()) {
-    if (!received.info.valid_data) continue;
-    const messages::ImuBatchReport report = imu_stream_->add(*received.sample);
-    if (report.lost_readings > 0) stats().count("imu_lost_readings", report.lost_readings);
-    for (const std::string& warning : report.warnings) log().warn_throttled("imu_readings", warning);
+  imu_input_->take();
+  if (!inertial_->has_camera() && imu_input_->T_B_rect()) inertial_->set_camera(*imu_input_->T_B_rect());
+  if (!inertial_->has_calibration() && imu_input_->calibration()) {
+    inertial_->set_imu_calibration(*imu_input_->calibration());
   }
 }
 
@@ -573,10 +539,10 @@ void MapperNode::wait_for_imu(std::int64_t stamp_ns, KeyframeId id) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::nanoseconds>(
                                                                std::chrono::duration<double>(options_.inertial.wait_s));
   while (!covered()) {
-    std::string missing = !inertial_->has_camera() ? "no stereo calibration on '" + stereo_calibration_reader_->name()
-                          : !inertial_->has_calibration() ? "no IMU calibration on '" + imu_calibration_reader_->name()
-                                                          : "no IMU readings on '" + imu_reader_->name();
-    if (imu_stream_->ended()) {
+    std::string missing = !inertial_->has_camera()        ? "no stereo calibration on '" + imu_input_->camera_topic()
+                          : !inertial_->has_calibration() ? "no IMU calibration on '" + imu_input_->calibration_topic()
+                                                          : "no IMU readings on '" + imu_input_->readings_topic();
+    if (imu_input_->ended()) {
       inertial_->turn_off("the IMU stream ended (end_of_stream) before keyframe " + format_id(id));
       stats().count("imu_off");
       return;

@@ -23,7 +23,7 @@
 #include "components/core/mapping/inertial_mapping.hpp"
 #include "components/core/mapping/local_mapper.hpp"
 #include "components/local_mapper/mapper_process_options.hpp"
-#include "components/messages/imu.hpp"
+#include "components/messages/imu_input.hpp"
 #include "components/messages/keyframe.hpp"
 #include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
@@ -116,12 +116,9 @@ class MapperNode : public runtime::Component {
   std::uint64_t reported_keyframes_ = 0;
   std::uint64_t reported_points_ = 0;
 
-  std::optional<runtime::CheckedReader<msg::ImuCalibration>> imu_calibration_reader_;
-  std::optional<runtime::CheckedReader<msg::ImuBatch>> imu_reader_;
-  std::optional<runtime::CheckedReader<msg::StereoCalibration>> stereo_calibration_reader_;
+  std::optional<messages::ImuInput> imu_input_;
   std::unique_ptr<runtime::WaitSet> imu_waitset_;  // the IMU readers only: the lockstep wait
   std::unique_ptr<InertialMapping> inertial_;
-  std::unique_ptr<messages::ImuStreamReader> imu_stream_;
   std::map<std::string, std::uint64_t> imu_counters_reported_;
 
   std::vector<msg::CovisibleKeyframe> covisible_buffer_;

@@ -91,21 +91,12 @@ void LoopCloserNode::configure(const runtime::Config& config) {
   }
   const bool inertial_possible = options_.gravity_from_odometry || options_.closing.correction.pose_graph.four_dof;
   if (options_.global_bundle_adjustment && options_.global_ba_imu && inertial_possible) {
-    runtime::CheckedReaderOptions batch_options;
-    batch_options.rejected_counter = "imu_rejected_batches";
-    imu_reader_.emplace(participant(), topics().imu(), log(), stats(), nullptr, batch_options);
-    runtime::CheckedReaderOptions calibration_options;
-    calibration_options.rejected_counter = "imu_rejected_calibrations";
-    imu_calibration_reader_.emplace(participant(), topics().imu_calibration(), log(), stats(), nullptr,
-                                    calibration_options);
-    stereo_calibration_reader_.emplace(participant(), topics().calibration(), log(), stats(),
-                                       messages::sample_check<msg::StereoCalibration>(),
-                                       messages::checked_options<msg::StereoCalibration>(1));
+    imu_input_.emplace(participant(), topics(), log(), stats(), messages::ImuInput::Camera::kNeeded);
     ImuBufferOptions buffer_options;
-    buffer_options.source = imu_reader_->name();
+    buffer_options.source = imu_input_->readings_topic();
     imu_buffer_ = std::make_unique<ImuBuffer>(buffer_options);
-    imu_stream_ = std::make_unique<messages::ImuStreamReader>(*imu_buffer_);
-    waitset_->attach(*imu_reader_);
+    imu_input_->feed(*imu_buffer_);
+    imu_input_->attach(*waitset_);
   }
   keyframe_done_roles_.emplace(log(), stats(), keyframe_done_reader_->name());
   waitset_->attach(*keyframe_reader_);
@@ -130,7 +121,7 @@ void LoopCloserNode::configure(const runtime::Config& config) {
       options_.closing.correction.pose_graph.four_dof ? ", 4-DoF pose graph"
       : options_.gravity_from_odometry                ? ", 4-DoF pose graph once the odometry carries gravity"
                                                       : "",
-      imu_reader_ ? ", global BA with IMU factors in inertial runs" : "");
+      imu_input_ ? ", global BA with IMU factors in inertial runs" : "");
 }
 
 void LoopCloserNode::run() {
@@ -410,31 +401,8 @@ void LoopCloserNode::choose_pose_graph(KeyframeId id) {
 }
 
 void LoopCloserNode::take_imu() {
-  if (!imu_reader_) return;
-  for (auto& received : stereo_calibration_reader_->take()) {
-    if (!received.info.valid_data || T_B_rect_) continue;
-    try {
-      T_B_rect_ = StereoRectifier(messages::to_calibration(*received.sample)).T_B_rect();
-    } catch (const std::exception& error) {
-      stats().count("imu_bad_calibrations");
-      log().warn_throttled("imu_bad_calibrations", "topic '", stereo_calibration_reader_->name(), "': ", error.what());
-    }
-  }
-  for (auto& received : imu_calibration_reader_->take()) {
-    if (!received.info.valid_data || imu_calibration_) continue;
-    try {
-      imu_calibration_ = messages::to_imu_calibration(*received.sample);
-    } catch (const std::exception& error) {
-      stats().count("imu_bad_calibrations");
-      log().warn_throttled("imu_bad_calibrations", "topic '", imu_calibration_reader_->name(), "': ", error.what());
-    }
-  }
-  for (auto& received : imu_reader_->take()) {
-    if (!received.info.valid_data) continue;
-    const messages::ImuBatchReport report = imu_stream_->add(*received.sample);
-    if (report.lost_readings > 0) stats().count("imu_lost_readings", report.lost_readings);
-    for (const std::string& warning : report.warnings) log().warn_throttled("imu_readings", warning);
-  }
+  if (!imu_input_) return;
+  imu_input_->take();
   // Bounded: readings older than imu_buffer_s before the newest covered stamp are dropped.
   const std::int64_t covered = imu_buffer_->covered_until_ns();
   const auto keep_ns = static_cast<std::int64_t>(options_.imu_buffer_s * 1e9);
@@ -442,7 +410,7 @@ void LoopCloserNode::take_imu() {
 }
 
 std::optional<GlobalInertialInput> LoopCloserNode::inertial_input() {
-  if (!imu_reader_ || !closing_ || !closing_->pose_graph_options().four_dof) return std::nullopt;
+  if (!imu_input_ || !closing_ || !closing_->pose_graph_options().four_dof) return std::nullopt;
   const auto warn_once = [&](const std::string& kind, const std::string& line) {
     stats().count("global_ba_visual_" + kind);
     if (imu_warned_.insert(kind).second) log().warn(line, " (said once; counted as global_ba_visual_", kind, ")");
@@ -452,31 +420,33 @@ std::optional<GlobalInertialInput> LoopCloserNode::inertial_input() {
   for (const auto& [id, keyframe] : mirror_.map().keyframes) {
     if (!keyframe.culled) newest_stamp = std::max(newest_stamp, keyframe.stamp_ns);
   }
-  const auto imu_stamp = [&] { return newest_stamp + (imu_calibration_ ? imu_calibration_->time_offset_ns : 0); };
+  const std::optional<ImuCalibration>& imu_calibration = imu_input_->calibration();
+  const std::optional<Pose3>& T_B_rect = imu_input_->T_B_rect();
+  const auto imu_stamp = [&] { return newest_stamp + (imu_calibration ? imu_calibration->time_offset_ns : 0); };
   if (!options_.real_time) {
     // Lockstep: the readings up to the newest keyframe are in flight at most (the source sends them
     // before its frame), so wait for them: the same readings every run.
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::nanoseconds>(
                                                                  std::chrono::duration<double>(options_.imu_wait_s));
-    while (!(T_B_rect_ && imu_calibration_ && imu_buffer_->covered_until_ns() >= imu_stamp()) &&
-           !imu_stream_->ended() && std::chrono::steady_clock::now() < deadline && !shutdown_requested()) {
+    while (!(T_B_rect && imu_calibration && imu_buffer_->covered_until_ns() >= imu_stamp()) && !imu_input_->ended() &&
+           std::chrono::steady_clock::now() < deadline && !shutdown_requested()) {
       waitset_->wait(std::chrono::milliseconds(20));
       take_imu();
     }
   }
-  if (!T_B_rect_ || !imu_calibration_) {
+  if (!T_B_rect || !imu_calibration) {
     warn_once("no_calibration", std::string("global BA without IMU factors: no ") +
-                                    (!T_B_rect_ ? "stereo calibration on '" + stereo_calibration_reader_->name()
-                                                : "IMU calibration on '" + imu_calibration_reader_->name()) +
+                                    (!T_B_rect ? "stereo calibration on '" + imu_input_->camera_topic()
+                                               : "IMU calibration on '" + imu_input_->calibration_topic()) +
                                     "'");
     return std::nullopt;
   }
   if (imu_buffer_->covered_until_ns() < imu_stamp()) {
-    warn_once("imu_behind", "global BA: the IMU on '" + imu_reader_->name() + "' covers up to " +
+    warn_once("imu_behind", "global BA: the IMU on '" + imu_input_->readings_topic() + "' covers up to " +
                                 std::to_string(imu_buffer_->covered_until_ns()) + " ns, not the newest keyframe (" +
                                 std::to_string(imu_stamp()) + " ns): the keyframes after it get no IMU factor");
   }
-  const Pose3 T_cb = T_B_rect_->inverse() * imu_calibration_->T_BS;
+  const Pose3 T_cb = T_B_rect->inverse() * imu_calibration->T_BS;
   // The odometry's gravity (m/s^2); a direction given by pose_graph.gravity_w (any length) gets Earth's.
   Eigen::Vector3d gravity_w = closing_->pose_graph_options().gravity_w;
   if (!(gravity_w.norm() > kMinGravityM_S2 && gravity_w.norm() < kMaxGravityM_S2)) {
@@ -486,8 +456,8 @@ std::optional<GlobalInertialInput> LoopCloserNode::inertial_input() {
   chain_options.max_interval_s = options_.imu_max_interval_s;
   GlobalInertialChainReport report;
   GlobalInertialInput input =
-      build_global_inertial_input(mirror_.map(), *imu_buffer_, T_cb, imu_calibration_->time_offset_ns,
-                                  imu_calibration_->noise, gravity_w, chain_options, &report);
+      build_global_inertial_input(mirror_.map(), *imu_buffer_, T_cb, imu_calibration->time_offset_ns,
+                                  imu_calibration->noise, gravity_w, chain_options, &report);
   log().info("global BA with IMU factors: ", report.intervals, " keyframe intervals (", report.not_covered,
              " without IMU readings, ", report.too_long, " longer than ", options_.imu_max_interval_s, " s",
              report.first_problem.empty() ? "" : "; first: " + report.first_problem, "), gyro bias guess (",

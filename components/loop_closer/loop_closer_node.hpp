@@ -26,7 +26,7 @@
 #include "components/loop_closer/background_global_ba.hpp"
 #include "components/loop_closer/loop_closer_options.hpp"
 #include "components/loop_closer/map_mirror.hpp"
-#include "components/messages/imu.hpp"
+#include "components/messages/imu_input.hpp"
 #include "runtime/checked_reader.hpp"
 #include "runtime/component.hpp"
 #include "runtime/role_binding.hpp"
@@ -114,13 +114,8 @@ class LoopCloserNode : public runtime::Component {
   std::optional<std::chrono::steady_clock::time_point> odometry_wait_since_;
   bool four_dof_announced_ = false;
   // The IMU for the global BA (options_.global_ba_imu; docs/loop_closer.md, Global BA with IMU factors).
-  std::optional<runtime::CheckedReader<msg::ImuBatch>> imu_reader_;
-  std::optional<runtime::CheckedReader<msg::ImuCalibration>> imu_calibration_reader_;
-  std::optional<runtime::CheckedReader<msg::StereoCalibration>> stereo_calibration_reader_;
+  std::optional<messages::ImuInput> imu_input_;
   std::unique_ptr<ImuBuffer> imu_buffer_;
-  std::unique_ptr<messages::ImuStreamReader> imu_stream_;
-  std::optional<ImuCalibration> imu_calibration_;
-  std::optional<Pose3> T_B_rect_;     // rectified left camera -> body
   std::set<std::string> imu_warned_;  // one warning per kind, then counted only
   std::optional<runtime::Writer<msg::LoopCorrection>> correction_writer_;
   std::optional<runtime::Writer<msg::KeyframeDone>> keyframe_done_writer_;

@@ -8,10 +8,12 @@
 #include <cmath>
 #include <csignal>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <optional>
 #include <stdexcept>
 #include <thread>
+#include <utility>
 
 #include <dds/ddsi/ddsi_serdata.h>
 
@@ -20,18 +22,23 @@
 #include <gtest/gtest.h>
 
 #include "child_process.hpp"
+#include "components/core/camera/stereo_calibration.hpp"
+#include "components/core/camera/stereo_rectifier.hpp"
 #include "components/core/map/ids.hpp"
 #include "runtime/participant.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/topics.hpp"
 #include "runtime/writer.hpp"
 #include "test_support.hpp"
+#include "tiny_euroc_sensor.hpp"
+#include "tools/replay/replay_messages.hpp"
 #include "tools/ros2_bridge/ros2_conversions.hpp"
 #include "tools/ros2_bridge/tf_tree.hpp"
 
 namespace heslam::ros2 {
 namespace {
 
+namespace fs = std::filesystem;
 using std::chrono::milliseconds;
 using std::chrono::seconds;
 
@@ -216,6 +223,11 @@ class Ros2Subscriber {
     reader_ = runtime::Entity(dds_create_reader(participant.handle(), topic_.get(), qos.get(), nullptr));
   }
 
+  bool matched() const {
+    dds_subscription_matched_status_t status{};
+    return dds_get_subscription_matched_status(reader_.get(), &status) == DDS_RETCODE_OK && status.current_count > 0;
+  }
+
   // Takes samples until one is accepted by `accept` (which sees it while it is alive) or the timeout.
   template <typename Accept>
   bool wait_for(Accept accept, seconds timeout) {
@@ -385,6 +397,60 @@ TEST(Ros2BridgeProcess, RepublishesOdometryPathAndPointsOnRos2Topics) {
   EXPECT_EQ(header[1], 0x01) << "CDR_LE (XCDR1) expected, got XCDR2 or big-endian";
   bridge.signal(SIGINT);
   EXPECT_EQ(bridge.wait(seconds(20)).value_or(-1), 0) << bridge.err();
+}
+
+// A frame tracked before the bridge has the calibration (discovery may bring the frontend's odometry
+// first): its TF is held and goes out when the calibration arrives, not dropped.
+TEST(Ros2BridgeProcess, TfOfAFrameTrackedBeforeTheCalibrationGoesOutWhenItArrives) {
+  const test::ScratchDir dir("ros2_bridge_tf_held");
+  for (const auto& [camera, tx_m] : {std::pair{"cam0", 0.0}, std::pair{"cam1", 0.1}}) {
+    fs::create_directories(dir.path() / "mav0" / camera);
+    std::ofstream(dir.path() / "mav0" / camera / "sensor.yaml") << test::tiny_euroc_sensor_yaml(tx_m);
+  }
+  const StereoCalibration calibration = load_euroc_calibration(dir.path() / "mav0");
+  const CalibrationMessage calibration_message(calibration, StereoRectifier(calibration).camera());
+
+  const int domain = test::exclusive_domain_id();
+  runtime::Participant participant({.domain_id = domain, .dds_config = ""});
+  const runtime::Topics topics;
+  runtime::Writer<msg::Odometry> odometry(participant, topics.odometry());
+  Ros2Subscriber<Odometry> ros_odometry(participant, &nav_msgs_msg_dds__Odometry__desc, "rt/heslam/odometry", false);
+  Ros2Subscriber<TFMessage> tf(participant, &tf2_msgs_msg_dds__TFMessage__desc, "rt/tf", false);
+  test::ChildProcess bridge(test::bin_dir() / "heslam-ros2-bridge", {"--domain", std::to_string(domain)}, dir.path(),
+                            "bridge");
+  ASSERT_TRUE(odometry.wait_for_readers(1, seconds(20))) << bridge.err();
+  const auto match_deadline = std::chrono::steady_clock::now() + seconds(20);
+  while (!(tf.matched() && ros_odometry.matched()) && std::chrono::steady_clock::now() < match_deadline) {
+    std::this_thread::sleep_for(milliseconds(20));
+  }
+  ASSERT_TRUE(tf.matched() && ros_odometry.matched()) << bridge.err();
+
+  msg::Odometry frame{};
+  frame.stamp_ns = 3'000'000'007;
+  frame.state = heslam_msg_TRACKING_OK;
+  frame.T_wc = test_pose(4.0);
+  frame.T_oc = test_pose(4.0);
+  odometry.write(frame);
+  // The bridge has taken the frame (its odometry is republished at once) before any calibration exists.
+  ASSERT_TRUE(ros_odometry.wait_for([](const Odometry& o) { return o.header.stamp.sec == 3; }, seconds(20)))
+      << bridge.err();
+  EXPECT_FALSE(tf.wait_for([](const TFMessage&) { return true; }, seconds(0)));
+
+  runtime::Writer<msg::StereoCalibration> calibration_writer(participant, topics.calibration());
+  calibration_writer.write(calibration_message.get());
+  EXPECT_TRUE(tf.wait_for(
+      [](const TFMessage& message) {
+        if (message.transforms._length != 2) return false;
+        const TransformStamped& odom_base = message.transforms._buffer[1];
+        return odom_base.header.stamp.sec == 3 && odom_base.header.stamp.nanosec == 7u &&
+               std::string(odom_base.header.frame_id) == "odom" && std::string(odom_base.child_frame_id) == "base_link";
+      },
+      seconds(20)))
+      << bridge.err();
+  bridge.signal(SIGINT);
+  EXPECT_EQ(bridge.wait(seconds(20)).value_or(-1), 0) << bridge.err();
+  EXPECT_NE(bridge.err().find("the TF of 1 frame(s) tracked before it goes out now"), std::string::npos)
+      << bridge.err();
 }
 
 }  // namespace

@@ -43,6 +43,8 @@ runtime::Qos latched_qos() { return runtime::Qos(runtime::QosRole::kCalibration)
 // 100), /tf_static StaticBroadcasterQoS (reliable, transient local, keep last 1: one message holding
 // every static transform, replayed to late joiners).
 constexpr int kTfDepth = 100;
+// Frames whose TF waits for the calibration at most (a run's first frames, see on_odometry).
+constexpr std::size_t kHeldTfFrames = 100;
 runtime::Qos tf_qos() { return runtime::Qos(runtime::QosRole::kOdometry).keep_last(kTfDepth).volatile_durability(); }
 runtime::Qos tf_static_qos() { return latched_qos(); }
 
@@ -240,27 +242,34 @@ void Ros2Bridge::on_odometry(const msg::Odometry& odometry) {
   odometry_writer_->write(OdometryMessage(odometry, options_.frames).get());
   pose_writer_->write(PoseStampedMessage(odometry.stamp_ns, odometry.T_wc, options_.frames).get());
   stats().count("odometry_published");
-  publish_tf(odometry);
-}
-
-void Ros2Bridge::publish_tf(const msg::Odometry& odometry) {
+  const TfFrame frame{odometry.stamp_ns, odometry.seq, odometry.T_wc, odometry.T_oc};
   if (!T_B_rect_) {
-    // The body frame comes with the calibration (transient local: it precedes the frames of a run).
-    stats().count("tf_skipped_without_calibration");
-    log().warn_throttled("tf_skipped_without_calibration", "frame ", odometry.seq, ": no calibration on ",
-                         topics().calibration().name, " yet: no TF for it (the body frame is unknown)");
+    // The body frame comes with the calibration. It precedes a run's first frame, but this bridge may
+    // discover the frontend's (transient local) odometry before the replay's calibration: hold the frame.
+    if (tf_held_.size() == kHeldTfFrames) {
+      stats().count("tf_skipped_without_calibration");
+      log().warn_throttled("tf_skipped_without_calibration", "frame ", tf_held_.front().seq, ": no calibration on ",
+                           topics().calibration().name, " after ", kHeldTfFrames,
+                           " frames: no TF for it (the body frame is unknown)");
+      tf_held_.pop_front();
+    }
+    tf_held_.push_back(frame);
     return;
   }
-  if (!is_unit_quaternion(odometry.T_oc)) {
+  publish_tf(frame);
+}
+
+void Ros2Bridge::publish_tf(const TfFrame& frame) {
+  if (!is_unit_quaternion(frame.T_oc)) {
     stats().count("tf_skipped_bad_T_oc");
-    log().warn_throttled("tf_skipped_bad_T_oc", "topic ", topics().odometry().name, ": frame ", odometry.seq,
+    log().warn_throttled("tf_skipped_bad_T_oc", "topic ", topics().odometry().name, ": frame ", frame.seq,
                          ": field T_oc has no unit quaternion (not from a heslam frontend of this schema): no TF");
     return;
   }
   const Rep105Transforms tf =
-      rep105_transforms(messages::to_pose(odometry.T_wc), messages::to_pose(odometry.T_oc), *T_B_rect_, T_map_b0());
-  tf_writer_->write(TfMessage(odometry.stamp_ns, {{options_.frames.map, options_.frames.odom, tf.T_map_odom},
-                                                  {options_.frames.odom, options_.frames.base, tf.T_odom_base}})
+      rep105_transforms(messages::to_pose(frame.T_wc), messages::to_pose(frame.T_oc), *T_B_rect_, T_map_b0());
+  tf_writer_->write(TfMessage(frame.stamp_ns, {{options_.frames.map, options_.frames.odom, tf.T_map_odom},
+                                               {options_.frames.odom, options_.frames.base, tf.T_odom_base}})
                         .get());
   stats().count("tf_published");
 }
@@ -277,6 +286,12 @@ void Ros2Bridge::on_calibration(const msg::StereoCalibration& calibration) {
   }
   T_B_rect_ = T_B_rect;
   publish_static_tf();
+  if (!tf_held_.empty()) {
+    log().info("calibration on ", topics().calibration().name, ": the TF of ", tf_held_.size(),
+               " frame(s) tracked before it goes out now");
+    for (const TfFrame& frame : tf_held_) publish_tf(frame);
+    tf_held_.clear();
+  }
   publish_occupancy();
 }
 

@@ -18,6 +18,7 @@
 
 #include <array>
 #include <chrono>
+#include <deque>
 #include <map>
 #include <optional>
 #include <string>
@@ -52,7 +53,14 @@ class Ros2Bridge : public runtime::Component {
 
   void on_odometry(const msg::Odometry& odometry);
   void on_calibration(const msg::StereoCalibration& calibration);
-  void publish_tf(const msg::Odometry& odometry);
+  // What a frame's TF needs of its odometry (held until the calibration gives the body frame).
+  struct TfFrame {
+    std::int64_t stamp_ns = 0;
+    std::uint64_t seq = 0;
+    msg::Pose T_wc{};
+    msg::Pose T_oc{};
+  };
+  void publish_tf(const TfFrame& frame);
   void publish_static_tf();
   // Inertial runs: takes the odometry's gravity; map turns (tf_static again) when it moved noticeably.
   void take_gravity(const msg::Odometry& odometry);
@@ -77,7 +85,10 @@ class Ros2Bridge : public runtime::Component {
   std::optional<Ros2Writer<TFMessage>> tf_static_writer_;
   std::optional<Ros2Writer<OccupancyGrid>> occupancy_grid_writer_;
   std::optional<Ros2Writer<PointCloud2>> dense_cloud_writer_;
-  std::optional<Pose3> T_B_rect_;             // rectified left camera -> body, from the newest calibration
+  std::optional<Pose3> T_B_rect_;  // rectified left camera -> body, from the newest calibration
+  // Frames tracked before the calibration arrived (discovery may bring a frontend's odometry before the
+  // replay's calibration): their TF goes out once it does; the oldest beyond kHeldTfFrames are dropped.
+  std::deque<TfFrame> tf_held_;
   std::optional<Eigen::Vector3d> gravity_w_;  // inertial runs: the gravity map is aligned with (world)
   std::map<std::uint64_t, KeyframeEntry> keyframes_;
   std::map<std::uint64_t, std::array<double, 3>> points_w_m_;
