@@ -370,6 +370,7 @@ void Frontend::resume_in_mapper_map() {
   if (mapper_map_file_of_this_run()) {
     try {
       MapSnapshot snapshot = load_map_file(options_.mapper_map_file);
+      if (!snapshot.journal.warning.empty()) log().warn(snapshot.journal.warning);
       check_saved_map_camera(snapshot);
       tracker.local_map() = std::move(snapshot.map);
       loaded = true;

@@ -37,9 +37,9 @@ constexpr std::size_t kHeldCorrections = 100;
 // The per-keyframe stages in pipeline order (status percentiles and the final summary).
 // `*_cpu`: CPU time of the mapper's thread in that stage, the figure to compare on a loaded machine.
 constexpr const char* kStageOrder[] = {
-    "insertion",    "point_culling",     "triangulation",         "fusion",           "local_ba",
-    "local_ba_cpu", "local_ba_inertial", "local_ba_inertial_cpu", "keyframe_culling", "mapping_total",
-    "map_save",     "publish",           "publish_cpu",           "correction"};
+    "insertion",         "point_culling",         "triangulation",    "fusion",        "local_ba",  "local_ba_cpu",
+    "local_ba_inertial", "local_ba_inertial_cpu", "keyframe_culling", "mapping_total", "map_save",  "map_save_journal",
+    "map_save_snapshot", "map_save_final",        "publish",          "publish_cpu",   "correction"};
 
 // CPU time of the calling thread, milliseconds.
 double thread_cpu_ms() {
@@ -99,6 +99,13 @@ void MapperNode::configure(const runtime::Config& config) {
   }
   if (options_.inertial.enabled) configure_inertial();
   load_initial_map();
+  if (!options_.map_file.empty()) {
+    MapJournalOptions journal;
+    journal.enabled = options_.map_journal;
+    journal.compact_ratio = options_.map_journal_compact_ratio;
+    journal.sync = options_.sync_writes;
+    map_journal_ = std::make_unique<MapJournal>(options_.map_file, journal);
+  }
   log().info(
       options_.map_file.empty() ? std::string("no map file (map not persisted)")
                                 : "map file " + options_.map_file.string() + ", saved every " +
@@ -126,6 +133,7 @@ void MapperNode::load_initial_map() {
         log().info("map file ", options_.map_file.string(), " is from an earlier run; starting a new map");
       }
       std::filesystem::remove(options_.map_file);
+      std::filesystem::remove(map_journal_path(options_.map_file));
       if (contents.same_run) run_file_->replace({});  // the corrections applied were the removed map's
     }
   }
@@ -142,8 +150,13 @@ void MapperNode::load_initial_map() {
   }
   if (resume) {
     load_applied_corrections(applied_corrections);
-    log().info("resuming from ", options_.map_file.string(), ": ", loaded_->map.keyframes.size(), " keyframes, ",
-               loaded_->map.points.size(), " points, map version ", loaded_->map.version);
+    if (!loaded_->journal.warning.empty()) {
+      stats().count("map_journal_dropped_records");
+      log().warn(loaded_->journal.warning);
+    }
+    log().info("resuming from ", options_.map_file.string(), " (snapshot + ", loaded_->journal.records,
+               " journal records): ", loaded_->map.keyframes.size(), " keyframes, ", loaded_->map.points.size(),
+               " points, map version ", loaded_->map.version);
     // Published at once, not at the first keyframe: when the frontend died too (a power glitch, an
     // OOM kill), no keyframe comes until a restarted frontend has resumed in this map, and it waits
     // for these states to do so. The file is this run's (FILE.run), so there is nothing to confirm.
@@ -151,6 +164,7 @@ void MapperNode::load_initial_map() {
   } else if (!options_.load_map.empty()) {
     const auto load_start = std::chrono::steady_clock::now();
     loaded_ = load_map_file(options_.load_map);
+    if (!loaded_->journal.warning.empty()) log().warn(loaded_->journal.warning);
     const double load_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - load_start).count();
     stats().record_ms("map_load", load_ms);
@@ -178,7 +192,12 @@ void MapperNode::run() {
     process_pending();
     apply_corrections();
   }
-  if (mapper_ && unsaved_keyframes_ > 0) save();
+  if (mapper_ && map_journal_ && (unsaved_keyframes_ > 0 || map_journal_->records() > 0)) {
+    // The file left behind is one snapshot, as any reader (an older build too) expects a saved map.
+    const auto timer = stats().time("map_save_final");
+    last_save_ = map_journal_->compact(mapper_->map(), mapper_->state(), &mapper_->camera(), /*keep_journal=*/false);
+    unsaved_keyframes_ = 0;
+  }
   log().flush_throttled();
   log_summary();
   if (!options_.save_map.empty()) save_map_to(options_.save_map);
@@ -351,6 +370,7 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
   }
   record(changes);
   if (inertial_) report_inertial(changes);
+  unsaved_changes_.merge(changes);
   if (++unsaved_keyframes_ >= options_.save_every_keyframes) save();
   if (const Keyframe* inserted = mapper_->map().keyframe(id)) publish_keyframe(*inserted);
   publish(changes);
@@ -384,6 +404,7 @@ void MapperNode::apply_corrections() {
     if (inertial_) inertial_->moved(old_T_wc, mapper_->map());
     stats().count("corrections");
     stats().record_ms("correction", changes.timings.total_ms);
+    unsaved_changes_.merge(changes);
     save();
     remember_applied_correction(correction.id);
     publish(changes, correction.id);
@@ -433,10 +454,27 @@ void MapperNode::report_size(const std::string& name, std::uint64_t now, std::ui
 
 void MapperNode::save() {
   unsaved_keyframes_ = 0;
-  if (options_.map_file.empty() || !mapper_) return;
-  const auto timer = stats().time("map_save");
-  last_save_ = mapper_->save(options_.map_file, options_.sync_writes);
+  if (!map_journal_ || !mapper_) return;
+  const auto start = std::chrono::steady_clock::now();
+  last_save_ = map_journal_->save(mapper_->map(), mapper_->state(), &mapper_->camera(), unsaved_changes_);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  unsaved_changes_ = MapChanges{};
+  stats().record_ms("map_save", ms);
+  stats().record_ms(last_save_.snapshot ? "map_save_snapshot" : "map_save_journal", ms);
   stats().count("map_saves");
+  stats().count(last_save_.snapshot ? "map_snapshots" : "map_journal_records");
+  stats().count(last_save_.snapshot ? "map_snapshot_bytes" : "map_journal_bytes", last_save_.bytes);
+  if (options_.map_journal_verify) verify_map_file();
+}
+
+void MapperNode::verify_map_file() {
+  const MapSnapshot loaded = load_map_file(options_.map_file);
+  if (const auto difference = first_map_difference(loaded.map, loaded.state, mapper_->map(), mapper_->state())) {
+    throw std::runtime_error("map_journal.verify: " + options_.map_file.string() + " (snapshot + " +
+                             std::to_string(loaded.journal.records) +
+                             " journal records) differs from the map: " + *difference);
+  }
+  stats().count("map_journal_verified");
 }
 
 void MapperNode::publish(const MapChanges& changes, std::uint64_t correction_id) {
@@ -641,8 +679,15 @@ void MapperNode::log_summary() {
     }
   }
   if (last_save_.bytes > 0) {
-    log().info("map file ", options_.map_file.string(), ": ", last_save_.bytes, " bytes (last snapshot: serialize ",
-               last_save_.serialize_ms, " ms, write ", last_save_.write_ms, " ms)");
+    const std::uint64_t records = counter(counters, "map_journal_records");
+    const std::uint64_t snapshots = counter(counters, "map_snapshots");
+    log().info("map file ", options_.map_file.string(), ": ", records, " journal records (",
+               records > 0 ? counter(counters, "map_journal_bytes") / records : 0, " bytes each on average) and ",
+               snapshots, " snapshots (", snapshots > 0 ? counter(counters, "map_snapshot_bytes") / snapshots : 0,
+               " bytes each on average) saved; last save ", last_save_.snapshot ? "a snapshot" : "a journal record",
+               " of ", last_save_.bytes, " bytes (serialize ", last_save_.serialize_ms, " ms, write ",
+               last_save_.write_ms, " ms); snapshot ", last_save_.snapshot_bytes, " bytes, journal ",
+               last_save_.journal_bytes, " bytes");
   }
 }
 

@@ -22,6 +22,7 @@
 #include "components/core/map/agent_guard.hpp"
 #include "components/core/mapping/inertial_mapping.hpp"
 #include "components/core/mapping/local_mapper.hpp"
+#include "components/core/mapping/map_journal.hpp"
 #include "components/local_mapper/mapper_process_options.hpp"
 #include "components/messages/imu_input.hpp"
 #include "components/messages/keyframe.hpp"
@@ -62,7 +63,10 @@ class MapperNode : public runtime::Component {
 
   void record(const MapChanges& changes);
   void report_size(const std::string& name, std::uint64_t now, std::uint64_t& reported);
+  // Persists what changed since the last save (unsaved_changes_): a journal record, or a snapshot.
   void save();
+  // map_journal.verify: the file loaded back must be the map in memory (throws otherwise).
+  void verify_map_file();
   // `correction_id`: the changes are that loop correction's (marked on the version marker).
   void publish(const MapChanges& changes, std::uint64_t correction_id = 0);
   void publish_all(const Map& map);
@@ -110,8 +114,10 @@ class MapperNode : public runtime::Component {
   std::set<std::uint64_t> applied_corrections_;  // ids; persisted in run_file_
   std::optional<runtime::RunJournal> run_file_;  // map_run_file_path(options_.map_file)
   int unsaved_keyframes_ = 0;
+  MapChanges unsaved_changes_;               // merged since the last save: what the next record holds
+  std::unique_ptr<MapJournal> map_journal_;  // options_.map_file's writer (map_journal.hpp)
   bool reader_wait_done_ = false;
-  MapFileWriteStats last_save_;
+  MapSaveStats last_save_;
   // The map's size as last reported in the status (record(): counters MAP_added / MAP_removed).
   std::uint64_t reported_keyframes_ = 0;
   std::uint64_t reported_points_ = 0;

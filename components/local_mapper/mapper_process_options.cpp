@@ -18,6 +18,8 @@ constexpr int kMaxThreads = 64;
 constexpr int kMaxSharedPoints = 1000;
 constexpr int kMaxSaveEvery = 1000000;
 constexpr double kMaxReaderWaitS = 60.0;
+constexpr double kMinCompactRatio = 0.01;  // below: a snapshot nearly every save, the journal pointless
+constexpr double kMaxCompactRatio = 100.0;
 
 }  // namespace
 
@@ -32,6 +34,10 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
   o.real_time = config.get_bool("real_time", o.real_time);
   o.save_every_keyframes = config.get_int("save_every_keyframes", o.save_every_keyframes, 1, kMaxSaveEvery);
   o.sync_writes = config.get_bool("sync_writes", o.sync_writes);
+  o.map_journal = config.get_bool("map_journal.enabled", o.map_journal);
+  o.map_journal_compact_ratio =
+      config.get_double("map_journal.compact_ratio", o.map_journal_compact_ratio, kMinCompactRatio, kMaxCompactRatio);
+  o.map_journal_verify = config.get_bool("map_journal.verify", o.map_journal_verify);
   o.batch_map_writes = config.get_bool("batch_map_writes", o.batch_map_writes);
   const double reader_wait_s = config.get_double("lockstep.reader_wait_s", 2.0, 0.0, kMaxReaderWaitS);
   o.reader_wait = std::chrono::milliseconds(static_cast<long long>(reader_wait_s * 1000.0));

@@ -36,8 +36,18 @@ struct MapperProcessOptions {
   // larger values re-process the missing keyframes from DDS on restart, which also loses nothing as
   // long as the frontend still holds them).
   int save_every_keyframes = 1;
-  // sync_writes: fsync each snapshot before its rename (durable across power loss; slower).
+  // sync_writes: fsync each snapshot before its rename and each journal record (durable across power
+  // loss; slower).
   bool sync_writes = false;
+  // map_journal.enabled: a save appends what changed since the previous one to FILE.journal
+  // (map_journal.hpp) instead of rewriting the whole map; false: a full snapshot at every save.
+  bool map_journal = true;
+  // map_journal.compact_ratio: a full snapshot instead of a record once the journal is larger than
+  // this x the snapshot (bounds the journal, and the time to reload it, by the snapshot's size).
+  double map_journal_compact_ratio = 1.0;
+  // map_journal.verify (a test aid, off): after every save, FILE is loaded back (snapshot + journal)
+  // and compared with the map in memory; a difference is one error line and exit 1.
+  bool map_journal_verify = false;
   // lockstep.reader_wait_s: before the first KeyframeDone, wait up to this long for the frontend's
   // reader to match. Lockstep acks are transient-local, so one written earlier still arrives; this
   // stays as a cheap guard.

@@ -569,6 +569,7 @@ void LoopCloserNode::load_mapper_map() {
   }
   const auto start = std::chrono::steady_clock::now();
   MapSnapshot snapshot = load_map_file(options_.mapper_map_file);  // a bad file: one line, exit 1
+  if (!snapshot.journal.warning.empty()) log().warn(snapshot.journal.warning);
   const double load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   stats().record_ms("map_load", load_ms);
   std::set<MapId> maps;

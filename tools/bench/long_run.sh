@@ -16,7 +16,7 @@
 # keyframes it made and its per-frame time (stage total, p50 / p90 over its last 1000 frames); from the
 # local mapper, the map's keyframes and points (counters map_*_added - map_*_removed), its time per
 # keyframe (stage mapping_total, p50) and its map save (stage map_save, p50), with the size of the map
-# file it keeps (STEM.map, saved after every keyframe). Then:
+# file it keeps (STEM.map and its journal STEM.map.journal, saved after every keyframe). Then:
 #   OUT_DIR/laps.csv   per lap (at the frontend's frame count k * lap_frames; in real time the frames it
 #                      missed are not counted, so there a lap row comes a little late): map keyframes, points,
 #                      map file size, map save p50, RSS of every process
@@ -71,13 +71,14 @@ rm -rf "$out/logs" "$trajectory" "$out"/trajectory.* "$out/status.csv" "$out/lap
 # The status stream as CSV rows; the spy's own status is left out.
 parse_status() {
   awk -v start="$(date +%s.%N)" -v map_file="$map_file" -v OFS=, '
-      function flush(   bytes, line) {
+      function flush(   bytes, line, cmd) {
         if (name == "" || name == "long_run_spy") return
         bytes = ""
         if (name == "local_mapper") {
-          line = ""
-          if ((("stat -c %s " map_file " 2>/dev/null") | getline line) > 0) bytes = line
-          close("stat -c %s " map_file " 2>/dev/null")
+          # the snapshot and the journal appended since it (docs/local_mapper.md, Persistence)
+          cmd = "stat -c %s " map_file " " map_file ".journal 2>/dev/null"
+          while ((cmd | getline line) > 0) bytes += line
+          close(cmd)
         }
         print stamp / 1e9 - start, name, pid, rss, c["frames"], c["keyframes"],
               (name == "local_mapper" ? c["map_keyframes_added"] - c["map_keyframes_removed"] : ""),
