@@ -55,6 +55,7 @@ InertialOptions read_inertial(const runtime::Config& c) {
   read(c, "imu.pose_prior_rotation_rad", o.pose_prior_rotation_rad, 1e-9, 1.0);
   read(c, "imu.pose_prior_position_m", o.pose_prior_position_m, 1e-9, 10.0);
   read(c, "imu.pose_prior_velocity_m_s", o.pose_prior_velocity_m_s, 1e-9, 10.0);
+  read(c, "imu.pose_optimization_max_gravity_stddev_deg", o.pose_optimization_max_gravity_stddev_deg, 0.0, 90.0);
   if (o.init_max_keyframes < o.init_min_keyframes) {
     throw std::runtime_error(c.source() + ": field 'imu.init_max_keyframes': " + std::to_string(o.init_max_keyframes) +
                              " is below imu.init_min_keyframes (" + std::to_string(o.init_min_keyframes) + ")");

@@ -103,7 +103,8 @@ InertialFrontend::Prediction InertialFrontend::predict(std::int64_t stamp_ns) {
       prediction.v = end.v_wb;
     }
     predicted_v_ = end.v_wb;
-    if (options_.pose_optimization && last.visual && pre.duration_s() > 0.0) {
+    if (options_.pose_optimization && last.visual && pre.duration_s() > 0.0 &&
+        gravity_stddev_deg_ <= options_.pose_optimization_max_gravity_stddev_deg) {
       InertialPoseConstraint constraint;
       constraint.preintegration = pre;
       constraint.previous = start;

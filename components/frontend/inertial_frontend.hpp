@@ -72,11 +72,16 @@ struct InertialOptions {
   // inertial_pose_optimization.hpp): pose, velocity and biases with the IMU factor from that frame, whose
   // velocity and biases the next frame starts from. Off: the visual optimization, the velocity from
   // velocity_window_s.
-  bool pose_optimization = false;
+  bool pose_optimization = true;
+  // imu.pose_optimization_max_gravity_stddev_deg: it waits for an estimate of gravity at least this certain
+  // (the initializer's standard deviation; the estimate is refined every refine_every_s): the IMU factor takes
+  // gravity as exact, and a tilt of d rad is an acceleration of 9.81 d m/s^2 it puts into every frame's motion
+  // (0.5 deg: 4 mm/s of velocity a frame at 20 Hz, against a velocity prior of 30 mm/s).
+  double pose_optimization_max_gravity_stddev_deg = 0.05;
   // imu.pose_prior_*: the standard deviations of the previous frame's state in that optimization.
   double pose_prior_rotation_rad = 1e-3;
-  double pose_prior_position_m = 1e-3;
-  double pose_prior_velocity_m_s = 1e-2;
+  double pose_prior_position_m = 3e-3;
+  double pose_prior_velocity_m_s = 3e-2;
 };
 
 enum class InertialInitState { kWaiting, kInitialized, kFailed, kOff };

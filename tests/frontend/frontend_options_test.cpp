@@ -478,6 +478,19 @@ TEST(FrontendOptions, InertialTrackingIsOffUnlessEnabledAndNoneWins) {
       FrontendOptions::from_config(runtime::Config::load(heslam::test::source_dir() / "config/frontend/inertial.yaml"));
   EXPECT_TRUE(shipped.inertial.enabled);
   EXPECT_TRUE(shipped.inertial.lockstep);
+  // The inertial pose optimization, once gravity is certain (docs/imu.md has the measurements behind these).
+  EXPECT_TRUE(shipped.inertial.pose_optimization);
+  EXPECT_DOUBLE_EQ(shipped.inertial.pose_optimization_max_gravity_stddev_deg, 0.05);
+  EXPECT_DOUBLE_EQ(shipped.inertial.pose_prior_position_m, 0.003);
+  EXPECT_DOUBLE_EQ(shipped.inertial.pose_prior_velocity_m_s, 0.03);
+  try {
+    FrontendOptions::from_config(
+        runtime::Config::parse("imu:\n  pose_optimization_max_gravity_stddev_deg: -0.1\n", "frontend.yaml"));
+    FAIL() << "a negative pose_optimization_max_gravity_stddev_deg was accepted";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("imu.pose_optimization_max_gravity_stddev_deg"), std::string::npos)
+        << error.what();
+  }
   EXPECT_THROW(FrontendOptions::from_config(runtime::Config::empty(), {"--imu", "maybe"}), std::runtime_error);
   try {
     FrontendOptions::from_config(runtime::Config::parse("imu:\n  blackout_max_s: -1\n", "frontend.yaml"));

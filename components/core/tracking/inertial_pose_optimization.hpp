@@ -8,8 +8,10 @@
 //     added to the IMU factor's covariance, which is what marginalizing a state with that Gaussian prior,
 //     linked to nothing else, gives at first order (ImuIntervalResidual's extra_covariance).
 // Rounds and outlier classification as optimize_pose(): Huber rounds then plain ones, every observation
-// reclassified by its chi-square after each round. Solved with Ceres (15 parameters, a few hundred
-// residual blocks).
+// reclassified by its chi-square after each round. Solved by a Levenberg-Marquardt of its own on the 15x15
+// normal equations (Ceres' defaults and damping, as motion_only_ba.cpp); optimize_pose_inertial_ceres() is
+// the same cost solved with Ceres (a Problem per round, autodiff), kept as the reference the tests compare
+// against (tests/tracking/test_inertial_pose_optimization.cpp).
 //
 // Frames: b is the IMU body, c the rectified left camera, T_cb the body in the camera (T_wc = T_wb T_cb^-1).
 #pragma once
@@ -61,6 +63,13 @@ struct InertialPoseResult {
 InertialPoseResult optimize_pose_inertial(const PinholeStereo& camera, const std::vector<PoseObservation>& observations,
                                           const Pose3& T_cw_guess, const InertialPoseConstraint& constraint,
                                           const MotionOnlyBaOptions& options = {});
+
+// The same cost, rounds and start solved with Ceres: the reference for optimize_pose_inertial() (about 30
+// times slower; not used by the tracker).
+InertialPoseResult optimize_pose_inertial_ceres(const PinholeStereo& camera,
+                                                const std::vector<PoseObservation>& observations,
+                                                const Pose3& T_cw_guess, const InertialPoseConstraint& constraint,
+                                                const MotionOnlyBaOptions& options = {});
 
 // optimize_frame_pose() with the IMU: the frame's matches as observations, the refined pose and the outlier
 // flags written back; `state` receives the velocity and biases. Returns the number of inlier matches.
