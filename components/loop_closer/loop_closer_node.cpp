@@ -504,7 +504,13 @@ std::optional<GlobalInertialInput> LoopCloserNode::inertial_input() {
 
 LoopClosingResult LoopCloserNode::process_merge(KeyframeId id) {
   LoopClosingResult result = closing_->process_merge(mirror_.map(), id);
-  if (!result.candidates.keyframes.empty()) stats().count("merge_candidates", result.candidates.keyframes.size());
+  if (!result.candidates.keyframes.empty()) {
+    stats().count("merge_candidates", result.candidates.keyframes.size());
+  }
+  if (!result.candidates.reason.empty()) {
+    log().debug("keyframe ", format_id(id), ": merge candidates ", result.candidates.keyframes.size(), " (",
+                result.candidates.reason, ")");
+  }
   for (const LoopRejection& rejection : result.rejected) {
     stats().count("merges_rejected");
     // A merge the gate refuses is worth a line: the maps stay apart.

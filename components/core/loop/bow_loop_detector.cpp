@@ -127,20 +127,30 @@ LoopCandidates BowLoopDetector::detect_merge(const Map& map, KeyframeId query, c
     result.reason = "keyframe not in the map (culled or unknown)";
     return result;
   }
+  std::vector<ConsistentGroup>& groups = merge_groups_[keyframe->map_id];
   if (other_maps.empty()) {
-    merge_groups_.clear();
+    groups.clear();
     result.reason = "no other map";
     return result;
   }
-  const double min_score = covisible_min_score(map, *keyframe);
+  // A new map's first keyframe has no covisible keyframe to compare with: the loops' minimum score
+  // (1 then) would refuse every candidate, so it has none.
+  const double min_score = keyframe->covisible.empty() ? 0.0 : covisible_min_score(map, *keyframe);
   const std::vector<PlaceCandidate> candidates =
       database_.merge_candidates(query, other_maps, map, min_score, options_.query);
   if (candidates.empty()) {
-    merge_groups_.clear();
+    groups.clear();
     result.reason = "no keyframe of another map above the covisible minimum score " + std::to_string(min_score);
     return result;
   }
-  consistent(map, candidates, merge_groups_, result);
+  consistent(map, candidates, groups, result);
+  constexpr std::size_t kMaxUnconfirmed = 3;  // ORB-SLAM3's merge candidates per query
+  for (const PlaceCandidate& candidate : candidates) {
+    if (result.unconfirmed.size() == kMaxUnconfirmed) break;
+    if (std::find(result.keyframes.begin(), result.keyframes.end(), candidate.id) == result.keyframes.end()) {
+      result.unconfirmed.push_back(candidate.id);
+    }
+  }
   return result;
 }
 

@@ -60,6 +60,29 @@ std::string implausible_drift(const Map& map, const Keyframe& loop_kf, const Key
   return reason;
 }
 
+// How many of the live points of the keyframes `group` match a keypoint of `kf` when `kf` is placed at
+// T_wc (each point and each keypoint once): the verification's top-up, for another keyframe.
+int projection_matches(const Map& map, const Keyframe& kf, const Pose3& T_wc, const std::vector<KeyframeId>& group,
+                       const PinholeStereo& camera, const ProjectionMatchOptions& projection) {
+  const FeatureGrid grid(kf.features.keypoints, camera.width_px, camera.height_px);
+  std::vector<bool> taken(kf.features.size(), false);
+  std::set<PointId> seen;
+  int matches = 0;
+  for (const KeyframeId kf_id : group) {
+    const Keyframe* member = map.keyframe(kf_id);
+    if (member == nullptr || member->culled) continue;
+    for (const PointId point_id : member->point_ids) {
+      const MapPoint* point = live_point(map, point_id);
+      if (point == nullptr || !seen.insert(point_id).second) continue;
+      const int index = best_projection_match(*point, kf, T_wc, grid, camera, projection);
+      if (index < 0 || taken[static_cast<std::size_t>(index)]) continue;
+      taken[static_cast<std::size_t>(index)] = true;
+      ++matches;
+    }
+  }
+  return matches;
+}
+
 }  // namespace
 
 LoopClosing::LoopClosing(const PinholeStereo& camera, std::unique_ptr<LoopDetector> detector,
@@ -233,10 +256,17 @@ LoopClosingResult LoopClosing::process_merge(const Map& map, KeyframeId query) {
   const auto detection_start = Clock::now();
   result.candidates = detector_->detect_merge(map, query, other_maps);
   result.timings.detection_ms = ms_since(detection_start);
-  for (const KeyframeId candidate_id : result.candidates.keyframes) {
+  // The detector's confirmed candidates first, then those it has not confirmed yet (spatial check below).
+  std::vector<std::pair<KeyframeId, bool>> to_verify;
+  for (const KeyframeId id : result.candidates.keyframes) to_verify.emplace_back(id, true);
+  for (const KeyframeId id : result.candidates.unconfirmed) to_verify.emplace_back(id, false);
+  for (const auto& [candidate_id, confirmed] : to_verify) {
     const auto verification_start = Clock::now();
     std::string why;
     const std::optional<VerifiedPlace> place = verify_place(map, query, candidate_id, /*drift_gate=*/false, why);
+    if (place && place->matches >= options_.merge.min_matches && !confirmed) {
+      why = confirm_in_space(map, *query_kf, candidate_id, place->T_matched_loop);
+    }
     result.timings.verification_ms += ms_since(verification_start);
     if (!place) {
       result.rejected.push_back({candidate_id, "merge: " + why});
@@ -245,6 +275,10 @@ LoopClosingResult LoopClosing::process_merge(const Map& map, KeyframeId query) {
     if (place->matches < options_.merge.min_matches) {
       result.rejected.push_back({candidate_id, "merge: " + std::to_string(place->matches) + " matches (< " +
                                                    std::to_string(options_.merge.min_matches) + ")"});
+      continue;
+    }
+    if (!why.empty()) {
+      result.rejected.push_back({candidate_id, "merge: " + why});
       continue;
     }
     const MapId matched = map.keyframe(candidate_id)->map_id;
@@ -274,6 +308,35 @@ LoopClosingResult LoopClosing::process_merge(const Map& map, KeyframeId query) {
     break;
   }
   return result;
+}
+
+std::string LoopClosing::confirm_in_space(const Map& map, const Keyframe& query, KeyframeId candidate_id,
+                                          const Pose3& T_matched_query) const {
+  const Keyframe& candidate = *map.keyframe(candidate_id);
+  const Pose3 T_BA = candidate.T_wc * T_matched_query * query.T_wc.inverse();
+  std::vector<KeyframeId> group{candidate_id};
+  for (const auto& [neighbour, weight] : candidate.covisible) group.push_back(neighbour);
+  ProjectionMatchOptions projection;
+  projection.radius_px = options_.projection_radius_px;
+  projection.max_descriptor_distance = options_.matching.descriptor_threshold_low;
+  constexpr int kLookedAt = 5;  // the query's best covisible keyframes (ORB-SLAM3: 5)
+  int looked_at = 0;
+  int confirmations = 0;
+  std::string counts;
+  for (const auto& [neighbour, weight] : query.covisible) {
+    const Keyframe* kf = map.keyframe(neighbour);
+    if (kf == nullptr || kf->culled || kf->map_id != query.map_id) continue;
+    if (looked_at++ == kLookedAt || confirmations == options_.merge.covisible_confirmations) break;
+    const int matches = projection_matches(map, *kf, T_BA * kf->T_wc, group, camera_, projection);
+    counts += (counts.empty() ? "" : ", ") + std::to_string(matches);
+    if (matches >= options_.merge.confirmation_matches) ++confirmations;
+  }
+  if (confirmations >= options_.merge.covisible_confirmations) return {};
+  return "not consistent yet: " + std::to_string(confirmations) +
+         " of the query's covisible keyframes see the place (< " +
+         std::to_string(options_.merge.covisible_confirmations) + "; projection matches " +
+         (counts.empty() ? std::string("none") : counts) +
+         ", >= " + std::to_string(options_.merge.confirmation_matches) + " each)";
 }
 
 std::optional<LoopCorrection> LoopClosing::global_bundle_adjustment(const Map& map, const std::atomic<bool>* abort,

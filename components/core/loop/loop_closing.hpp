@@ -101,6 +101,10 @@ class LoopClosing {
   // comparable) and applies its own gate (map_merge.hpp).
   std::optional<VerifiedPlace> verify_place(const Map& map, KeyframeId query, KeyframeId candidate, bool drift_gate,
                                             std::string& why) const;
+  // A verified merge the detector did not confirm: empty when enough of `query`'s covisible keyframes see
+  // the candidate's covisible group where T_matched_query places them (MapMergeOptions), else why not.
+  std::string confirm_in_space(const Map& map, const Keyframe& query, KeyframeId candidate,
+                               const Pose3& T_matched_query) const;
 
   // A global bundle adjustment of the whole map, as a correction of kind kGlobalBundleAdjustment
   // (poses and point positions). nullopt when `abort` was set before it finished. `inertial`: the IMU

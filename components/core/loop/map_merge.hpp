@@ -52,6 +52,14 @@ struct MapMergeOptions {
   // far corridor, walked the other way, matches the near one with 42-48 consistent matches (one
   // keyframe after another). 80 is ORB-SLAM3's bar for a place of another map (nProjOptMatches).
   int min_matches = 80;
+  // A place the detector found but did not confirm over successive queries (the BoW closer's 3-query
+  // consistency: a new map's first keyframes, or an agent's keyframes interleaved with another's, cannot
+  // give it in time) is merged when it is confirmed in space instead, as ORB-SLAM3 does: after it passed
+  // the verification and min_matches, at least `covisible_confirmations` of the query's best covisible
+  // keyframes (5 looked at) must see the matched keyframe's covisible group's points where the verified
+  // transform places them, each with >= `confirmation_matches` projection matches.
+  int covisible_confirmations = 2;
+  int confirmation_matches = 40;
   bool seam_bundle_adjustment = true;
   LocalBundleAdjustmentOptions seam_ba;
   LoopCorrectionBuilderOptions correction;  // fusion thresholds, essential graph, pose_graph.*
