@@ -4,14 +4,18 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <set>
 #include <string>
+#include <utility>
 
 #include "components/core/loop/global_bundle_adjustment.hpp"
 #include "components/core/loop/keyframe_projection.hpp"
 #include "components/core/loop/loop_correction_builder.hpp"
 #include "components/core/loop/se3_ransac.hpp"
+#include "components/core/map/ids.hpp"
 #include "components/core/match/feature_grid.hpp"
 
 namespace heslam {
@@ -81,6 +85,16 @@ int projection_matches(const Map& map, const Keyframe& kf, const Pose3& T_wc, co
     }
   }
   return matches;
+}
+
+// Whether map `a` (first keyframe stamp `a_first_ns`) is older than map `b`. One agent numbers its maps
+// in creation order (a new map takes the next id after every map of the agent it knows, a loaded saved
+// map's included), so the smaller id is the older, whatever the stamps of the data (a session may replay
+// an earlier recording than the saved map's). Two agents' maps are made at once by different frontends:
+// the one whose first keyframe is older (equal stamps: the smaller id).
+bool older_map(MapId a, std::int64_t a_first_ns, MapId b, std::int64_t b_first_ns) {
+  if (agent_of_map(a) == agent_of_map(b) || a_first_ns == b_first_ns) return a < b;
+  return a_first_ns < b_first_ns;
 }
 
 }  // namespace
@@ -287,9 +301,27 @@ LoopClosingResult LoopClosing::process_merge(const Map& map, KeyframeId query) {
     request.matched_kf = candidate_id;
     request.T_matched_active = place->T_matched_loop;
     request.matched_points = place->matched_points;
+    std::int64_t active_first_ns = std::numeric_limits<std::int64_t>::max();
+    std::int64_t matched_first_ns = std::numeric_limits<std::int64_t>::max();
     for (const auto& [id, kf] : map.keyframes) {
-      if (kf.map_id == active) request.active_map.insert(request.active_map.end(), id);
-      if (kf.map_id == matched) request.matched_map.insert(request.matched_map.end(), id);
+      if (kf.map_id == active) {
+        request.active_map.insert(request.active_map.end(), id);
+        active_first_ns = std::min(active_first_ns, kf.stamp_ns);
+      }
+      if (kf.map_id == matched) {
+        request.matched_map.insert(request.matched_map.end(), id);
+        matched_first_ns = std::min(matched_first_ns, kf.stamp_ns);
+      }
+    }
+    // The older map stays where it is and the newer one moves into it (map_merge.hpp). After a loss the
+    // query's map is the newer one; the query's map is the older when an agent recognises another agent's
+    // newer map, or when a frame relocalized in an older map of its own: then the matched map moves, seen
+    // from the matched keyframe (the transform inverted, the point pairs turned round).
+    if (older_map(active, active_first_ns, matched, matched_first_ns)) {
+      std::swap(request.active_kf, request.matched_kf);
+      std::swap(request.active_map, request.matched_map);
+      request.T_matched_active = request.T_matched_active.inverse();
+      for (auto& [active_point, matched_point] : request.matched_points) std::swap(active_point, matched_point);
     }
     const auto merge_start = Clock::now();
     MapMergeOutput merged = MapMerge(options_.merge).compute(map, camera_, request, loop_edges_);
@@ -300,8 +332,8 @@ LoopClosingResult LoopClosing::process_merge(const Map& map, KeyframeId query) {
       continue;
     }
     result.loop_matches = place->matches;
-    result.merged_map = active;
-    result.into_map = matched;
+    result.merged_map = map.keyframe(request.active_kf)->map_id;
+    result.into_map = map.keyframe(request.matched_kf)->map_id;
     result.correction = std::move(merged.correction);
     loop_edges_.emplace_back(query, candidate_id);
     detector_->maps_merged(query);

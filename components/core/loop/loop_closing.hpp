@@ -92,7 +92,9 @@ class LoopClosing {
 
   // The atlas: places of maps other than `query`'s (LoopDetector::detect_merge), verified without the
   // drift gate, merged with the merge gate (map_merge.hpp). On an accepted merge the correction (kind
-  // kMerge) moves query's map into the matched keyframe's; the caller publishes it as a loop's.
+  // kMerge) moves the newer of the two maps into the older (usually the query's into the matched
+  // keyframe's; the other way when the query's map is the older: another agent's newer map, a map
+  // relocalized back into); the caller publishes it as a loop's.
   LoopClosingResult process_merge(const Map& map, KeyframeId query);
 
   // The shared geometric check of candidate `candidate` for keyframe `query`: the detector's matches,

@@ -65,11 +65,12 @@ struct MapMergeOptions {
   LoopCorrectionBuilderOptions correction;  // fusion thresholds, essential graph, pose_graph.*
 };
 
-// A place of map B recognised from a keyframe of map A, verified (LoopClosing::verify_place).
+// A place of map B recognised from a keyframe of map A, or the other way, verified
+// (LoopClosing::verify_place). A is the map that moves: the newer one, whichever keyframe was the query.
 struct MapMergeRequest {
-  KeyframeId active_kf = kNoId;   // keyframe of A (the query)
-  KeyframeId matched_kf = kNoId;  // keyframe of B
-  Pose3 T_matched_active = Pose3::Identity();
+  KeyframeId active_kf = kNoId;                // keyframe of A (usually the query)
+  KeyframeId matched_kf = kNoId;               // keyframe of B
+  Pose3 T_matched_active = Pose3::Identity();  // active_kf's camera in matched_kf's (p_matched = T p_active)
   std::vector<std::pair<PointId, PointId>> matched_points;  // (A-side, B-side) RANSAC inliers
   // The two maps' keyframes, culled ones included (the caller partitions the store by map id).
   std::set<KeyframeId> active_map;
