@@ -133,14 +133,17 @@ LoopCandidates BowLoopDetector::detect_merge(const Map& map, KeyframeId query, c
     result.reason = "no other map";
     return result;
   }
-  // A new map's first keyframe has no covisible keyframe to compare with: the loops' minimum score
-  // (1 then) would refuse every candidate, so it has none.
-  const double min_score = keyframe->covisible.empty() ? 0.0 : covisible_min_score(map, *keyframe);
+  // No minimum score (ORB-SLAM3's DetectNBestCandidates for merges): the loops' one, the worst score among
+  // the query's covisible keyframes, is 1 for a new map's first keyframe and refuses everything, and the
+  // scores of another map's keyframes at the same place are of the same order as that worst score
+  // (MH01 halves: 0.01-0.04), so it refused them by chance. The verification (merge.min_matches) and the
+  // consistency or the spatial confirmation guard the merge instead.
+  constexpr double min_score = 0.0;
   const std::vector<PlaceCandidate> candidates =
       database_.merge_candidates(query, other_maps, map, min_score, options_.query);
   if (candidates.empty()) {
     groups.clear();
-    result.reason = "no keyframe of another map above the covisible minimum score " + std::to_string(min_score);
+    result.reason = "no keyframe of another map shares enough words";
     return result;
   }
   consistent(map, candidates, groups, result);
