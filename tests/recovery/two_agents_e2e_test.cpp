@@ -30,8 +30,8 @@ namespace fs = std::filesystem;
 constexpr int kFirstA = 0;   // agent a: frames 0-99 of the clip
 constexpr int kFirstB = 60;  // agent b: frames 60-159
 constexpr int kFramesPerAgent = 100;
-// The bar: a merge within 10 frames of b's start. Measured (docs/agents.md): at b's frame 6 (agent a's
-// keyframe at the same stamp recognises b's second keyframe, 261 matches, confirmed in space).
+// The bar: a merge within 10 frames of b's start. Measured (docs/agents.md): at b's frame 6 (b's third
+// keyframe recognises a's keyframe of the clip's frame 59, 138 matches).
 constexpr int kMaxMergeDelayFrames = 10;
 constexpr double kMaxAteM = 0.005;  // the bar: ATE of each agent <= 5 mm
 constexpr double kRateHz = 20.0;
