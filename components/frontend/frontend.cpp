@@ -960,14 +960,21 @@ void Frontend::follow_map_change(const TrackResult& result, std::uint64_t seq) {
                options_.new_map_after_s, "); it starts at the last pose");
   }
   if (odometry_map_ && *odometry_map_ != result.map_id) {
-    if (!result.new_map) {
+    // Tracked on in another map without a relocalization or a new map: a merge renumbered ours, and
+    // odom -> world took the merge's move when the frontend followed the correction (as a loop's).
+    const bool merged = !result.new_map && result.method != TrackingMethod::kRelocalization;
+    if (merged) {
+      stats().count("maps_merged_into");
+      log().info("frame ", seq, " in map ", result.map_id, ": map ", *odometry_map_, " was merged into it");
+    } else if (!result.new_map) {
       stats().count("map_switches");
       log().info("frame ", seq, " relocalized in map ", result.map_id, " (tracked in map ", *odometry_map_,
                  " before the loss)");
     }
     // Each map has its own world: odom -> world takes the change, so Odometry.T_oc goes on from the last
-    // odom pose instead of jumping with T_wc (REP 105, as at a loop correction).
-    T_wo_ = result.T_wc * last_T_oc_.inverse();
+    // odom pose instead of jumping with T_wc (REP 105, as at a loop correction). After a merge it has
+    // already: taking it again would drop this frame's motion from the odometry.
+    if (!merged) T_wo_ = result.T_wc * last_T_oc_.inverse();
   }
   odometry_map_ = result.map_id;
   last_T_oc_ = T_wo_.inverse() * result.T_wc;

@@ -56,6 +56,8 @@ LoopCloserProcessOptions LoopCloserProcessOptions::from_config(const runtime::Co
   merge.min_drift_allowance_m = config.get_double("merge.min_drift_allowance_m", merge.min_drift_allowance_m, 0.0, 1e6);
   merge.max_tilt_deg = config.get_double("merge.max_tilt_deg", merge.max_tilt_deg, 0.0, 180.0);
   merge.min_matches = config.get_int("merge.min_matches", merge.min_matches, 1, 100000);
+  merge.covisible_confirmations = config.get_int("merge.covisible_confirmations", merge.covisible_confirmations, 0, 5);
+  merge.confirmation_matches = config.get_int("merge.confirmation_matches", merge.confirmation_matches, 1, 100000);
   merge.seam_bundle_adjustment = config.get_bool("merge.seam_bundle_adjustment", merge.seam_bundle_adjustment);
   o.global_bundle_adjustment = config.get_bool("global_ba.enabled", o.global_bundle_adjustment);
   o.global_ba_imu = config.get_bool("global_ba.imu", o.global_ba_imu);

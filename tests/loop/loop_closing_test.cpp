@@ -17,7 +17,7 @@ class TruthDetector final : public LoopDetector {
  public:
   TruthDetector(const test::LoopWorld& world, KeyframeId candidate) : world_(world), candidate_(candidate) {}
   const char* name() const override { return "truth"; }
-  LoopCandidates detect(const Map&, KeyframeId) override { return {{candidate_}, ""}; }
+  LoopCandidates detect(const Map&, KeyframeId) override { return {{candidate_}, "", {}}; }
   void loop_closed(KeyframeId) override {}
   std::vector<std::pair<std::uint32_t, std::uint32_t>> match(const Map& map, KeyframeId query,
                                                              KeyframeId candidate) const override {

@@ -121,7 +121,7 @@ class TruthMatcher final : public LoopDetector {
   const char* name() const override { return "truth"; }
   LoopCandidates detect(const Map&, KeyframeId) override {
     if (loop_candidate_ == kNoId) return {};
-    return {{loop_candidate_}, ""};
+    return {{loop_candidate_}, "", {}};
   }
   void loop_closed(KeyframeId) override {}
   std::vector<std::pair<std::uint32_t, std::uint32_t>> match(const Map& map, KeyframeId query,
@@ -319,6 +319,64 @@ TEST(MapMergeTest, LoopClosingFindsVerifiesAndMergesAnotherMapsPlace) {
   const LoopClosingResult alone = closing.process_merge(only_b, id_of_a(13));
   EXPECT_FALSE(alone.correction);
   EXPECT_TRUE(alone.candidates.keyframes.empty());
+}
+
+// Every keyframe and point of map `from` relabelled `to`.
+void relabel_map(Map& map, MapId from, MapId to) {
+  for (auto& [id, kf] : map.keyframes) {
+    if (kf.map_id == from) kf.map_id = to;
+  }
+  for (auto& [id, point] : map.points) {
+    if (point.map_id == from) point.map_id = to;
+  }
+}
+
+// Whichever keyframe is the query, the older map stays and the newer one moves into it: one agent's maps
+// by id (creation order), two agents' by their first keyframe's stamp.
+void expect_newer_moves_into_older(const TwoMaps& maps, const Map& map, KeyframeId query, MapId newer, MapId older) {
+  LoopClosing closing(maps.world.camera, std::make_unique<ProximityLoopDetector>(ProximityLoopDetectorOptions{}), {});
+  const LoopClosingResult result = closing.process_merge(map, query);
+  ASSERT_TRUE(result.correction) << format_id(query) << ": "
+                                 << (result.rejected.empty() ? result.candidates.reason
+                                                             : result.rejected.front().reason);
+  EXPECT_EQ(result.merged_map, newer) << format_id(query);
+  EXPECT_EQ(result.into_map, older) << format_id(query);
+  // The correction's loop keyframe is in the map that moves, its matched keyframe in the one that stays
+  // (the mapper renumbers the loop keyframe's map: correction_application.hpp).
+  EXPECT_EQ(maps.map_a.count(result.correction->loop_kf), 1u) << format_id(query);
+  EXPECT_EQ(maps.map_b.count(result.correction->matched_kf), 1u) << format_id(query);
+  // Every keyframe of both maps at its true pose in the older map's frame (B's: the world).
+  EXPECT_EQ(result.correction->corrected_T_wc.size(), maps.map_a.size() + maps.map_b.size());
+  for (const auto& [id, T_wc] : result.correction->corrected_T_wc) {
+    EXPECT_LT((T_wc.translation() - maps.true_T_wc.at(id).translation()).norm(), kExact) << format_id(id);
+    EXPECT_LT(rotation_error_rad(T_wc, maps.true_T_wc.at(id)), kExact) << format_id(id);
+  }
+  // The seam's duplicates: the newer map's point replaced by the older map's, each by its own world point.
+  ASSERT_GT(result.correction->point_merges.size(), 100u) << format_id(query);
+  for (const auto& [from, into] : result.correction->point_merges) {
+    EXPECT_EQ(maps.truth_of_point.at(from), maps.truth_of_point.at(into));
+    EXPECT_EQ(maps.map_a.count(map.point(from)->reference_kf), 1u) << "the newer map's point is replaced";
+    EXPECT_EQ(maps.map_b.count(map.point(into)->reference_kf), 1u) << "the older map's point survives";
+  }
+  Map applied = map;
+  MapChanges changes;
+  EXPECT_EQ(apply_loop_correction(applied, *result.correction, {}, changes), 0);
+  for (const auto& [id, kf] : applied.keyframes) EXPECT_EQ(kf.map_id, older) << format_id(id);
+}
+
+TEST(MapMergeTest, TheOlderMapStaysWhicheverKeyframeRecognisesTheOther) {
+  const TwoMaps maps = make_two_maps(kLongGapNs);
+  // One agent: A (map 5) was made after B (map 3). A query in A moves A into B, and so does a query in B
+  // (a frame relocalized back into B recognising A): the place is verified from B's keyframe, and the
+  // request is turned round (transform inverted, point pairs swapped).
+  expect_newer_moves_into_older(maps, maps.map, id_of_a(12), kMapA, kMapB);
+  expect_newer_moves_into_older(maps, maps.map, id_of_b(12), kMapA, kMapB);
+  // Two agents: B is agent 1's map, A agent 0's (a smaller id), but B's first keyframe is older: B stays.
+  Map agents = maps.map;
+  relabel_map(agents, kMapB, first_map_id(1));
+  relabel_map(agents, kMapA, first_map_id(0));
+  expect_newer_moves_into_older(maps, agents, id_of_a(12), first_map_id(0), first_map_id(1));
+  expect_newer_moves_into_older(maps, agents, id_of_b(12), first_map_id(0), first_map_id(1));
 }
 
 TEST(MapMergeTest, APlaceOfAnotherMapIsNoLoop) {

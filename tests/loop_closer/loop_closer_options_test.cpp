@@ -46,12 +46,17 @@ TEST(LoopCloserOptions, ShippedConfigsMergeMapsWithTheDocumentedGate) {
     EXPECT_EQ(options.closing.merge.min_drift_allowance_m, 1.0);
     EXPECT_TRUE(options.closing.merge.seam_bundle_adjustment);
     EXPECT_EQ(options.closing.merge.min_matches, 80);  // a merge has no drift gate: ORB-SLAM3's bar, not 40
+    EXPECT_EQ(options.closing.merge.covisible_confirmations, 2);
+    EXPECT_EQ(options.closing.merge.confirmation_matches, 40);
   }
-  const LoopCloserProcessOptions off =
-      parse("merge:\n  enabled: false\n  max_unobserved_speed_mps: 0.0\n  min_matches: 40\n");
+  const LoopCloserProcessOptions off = parse(
+      "merge:\n  enabled: false\n  max_unobserved_speed_mps: 0.0\n  min_matches: 40\n  covisible_confirmations: 3\n"
+      "  confirmation_matches: 30\n");
   EXPECT_FALSE(off.closing.merging);
   EXPECT_EQ(off.closing.merge.max_unobserved_speed_mps, 0.0);
   EXPECT_EQ(off.closing.merge.min_matches, 40);
+  EXPECT_EQ(off.closing.merge.covisible_confirmations, 3);
+  EXPECT_EQ(off.closing.merge.confirmation_matches, 30);
 }
 
 // The global BA's IMU factors (docs/loop_closer.md, Global BA with IMU factors): off in the code and the

@@ -127,20 +127,33 @@ LoopCandidates BowLoopDetector::detect_merge(const Map& map, KeyframeId query, c
     result.reason = "keyframe not in the map (culled or unknown)";
     return result;
   }
+  std::vector<ConsistentGroup>& groups = merge_groups_[keyframe->map_id];
   if (other_maps.empty()) {
-    merge_groups_.clear();
+    groups.clear();
     result.reason = "no other map";
     return result;
   }
-  const double min_score = covisible_min_score(map, *keyframe);
+  // No minimum score (ORB-SLAM3's DetectNBestCandidates for merges): the loops' one, the worst score among
+  // the query's covisible keyframes, is 1 for a new map's first keyframe and refuses everything, and the
+  // scores of another map's keyframes at the same place are of the same order as that worst score
+  // (MH01 halves: 0.01-0.04), so it refused them by chance. The verification (merge.min_matches) and the
+  // consistency or the spatial confirmation guard the merge instead.
+  constexpr double min_score = 0.0;
   const std::vector<PlaceCandidate> candidates =
       database_.merge_candidates(query, other_maps, map, min_score, options_.query);
   if (candidates.empty()) {
-    merge_groups_.clear();
-    result.reason = "no keyframe of another map above the covisible minimum score " + std::to_string(min_score);
+    groups.clear();
+    result.reason = "no keyframe of another map shares enough words";
     return result;
   }
-  consistent(map, candidates, merge_groups_, result);
+  consistent(map, candidates, groups, result);
+  constexpr std::size_t kMaxUnconfirmed = 3;  // ORB-SLAM3's merge candidates per query
+  for (const PlaceCandidate& candidate : candidates) {
+    if (result.unconfirmed.size() == kMaxUnconfirmed) break;
+    if (std::find(result.keyframes.begin(), result.keyframes.end(), candidate.id) == result.keyframes.end()) {
+      result.unconfirmed.push_back(candidate.id);
+    }
+  }
   return result;
 }
 

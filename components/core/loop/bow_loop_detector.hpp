@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <map>
 #include <memory>
 #include <set>
 #include <utility>
@@ -35,7 +36,9 @@ class BowLoopDetector final : public LoopDetector {
   const char* name() const override { return "bow"; }
   LoopCandidates detect(const Map& map, KeyframeId query) override;
   void loop_closed(KeyframeId query) override;
-  // The keyframe database's merge query with the loops' minimum score and consistency check.
+  // The keyframe database's merge query with the loops' minimum score (none for a keyframe without
+  // covisible keyframes: a new map's first) and consistency check, kept per active map; the candidates
+  // not consistent yet come back as `unconfirmed` (the best 3).
   LoopCandidates detect_merge(const Map& map, KeyframeId query, const std::set<KeyframeId>& other_maps) override;
   void maps_merged(KeyframeId query) override;
   // ORB-SLAM2 SearchByBoW(KF, KF) with these options.
@@ -60,7 +63,9 @@ class BowLoopDetector final : public LoopDetector {
   std::shared_ptr<const Vocabulary> vocabulary_;  // the database refers to it
   KeyframeDatabase database_;
   std::vector<ConsistentGroup> groups_;
-  std::vector<ConsistentGroup> merge_groups_;  // the same, for candidates in other maps
+  // The same, for candidates in other maps, per active map: the keyframes of two agents (two maps)
+  // interleave, and one agent's queries must not reset the other's consistency.
+  std::map<MapId, std::vector<ConsistentGroup>> merge_groups_;
   int keyframes_since_loop_;
 };
 

@@ -4,14 +4,18 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <set>
 #include <string>
+#include <utility>
 
 #include "components/core/loop/global_bundle_adjustment.hpp"
 #include "components/core/loop/keyframe_projection.hpp"
 #include "components/core/loop/loop_correction_builder.hpp"
 #include "components/core/loop/se3_ransac.hpp"
+#include "components/core/map/ids.hpp"
 #include "components/core/match/feature_grid.hpp"
 
 namespace heslam {
@@ -58,6 +62,39 @@ std::string implausible_drift(const Map& map, const Keyframe& loop_kf, const Key
                 "implies %.2f m / %.1f deg of drift over %.1f m travelled (allowed %.2f m / %.1f deg)", drift_m,
                 drift_deg, path_m, allowed_m, allowed_deg);
   return reason;
+}
+
+// How many of the live points of the keyframes `group` match a keypoint of `kf` when `kf` is placed at
+// T_wc (each point and each keypoint once): the verification's top-up, for another keyframe.
+int projection_matches(const Map& map, const Keyframe& kf, const Pose3& T_wc, const std::vector<KeyframeId>& group,
+                       const PinholeStereo& camera, const ProjectionMatchOptions& projection) {
+  const FeatureGrid grid(kf.features.keypoints, camera.width_px, camera.height_px);
+  std::vector<bool> taken(kf.features.size(), false);
+  std::set<PointId> seen;
+  int matches = 0;
+  for (const KeyframeId kf_id : group) {
+    const Keyframe* member = map.keyframe(kf_id);
+    if (member == nullptr || member->culled) continue;
+    for (const PointId point_id : member->point_ids) {
+      const MapPoint* point = live_point(map, point_id);
+      if (point == nullptr || !seen.insert(point_id).second) continue;
+      const int index = best_projection_match(*point, kf, T_wc, grid, camera, projection);
+      if (index < 0 || taken[static_cast<std::size_t>(index)]) continue;
+      taken[static_cast<std::size_t>(index)] = true;
+      ++matches;
+    }
+  }
+  return matches;
+}
+
+// Whether map `a` (first keyframe stamp `a_first_ns`) is older than map `b`. One agent numbers its maps
+// in creation order (a new map takes the next id after every map of the agent it knows, a loaded saved
+// map's included), so the smaller id is the older, whatever the stamps of the data (a session may replay
+// an earlier recording than the saved map's). Two agents' maps are made at once by different frontends:
+// the one whose first keyframe is older (equal stamps: the smaller id).
+bool older_map(MapId a, std::int64_t a_first_ns, MapId b, std::int64_t b_first_ns) {
+  if (agent_of_map(a) == agent_of_map(b) || a_first_ns == b_first_ns) return a < b;
+  return a_first_ns < b_first_ns;
 }
 
 }  // namespace
@@ -233,10 +270,17 @@ LoopClosingResult LoopClosing::process_merge(const Map& map, KeyframeId query) {
   const auto detection_start = Clock::now();
   result.candidates = detector_->detect_merge(map, query, other_maps);
   result.timings.detection_ms = ms_since(detection_start);
-  for (const KeyframeId candidate_id : result.candidates.keyframes) {
+  // The detector's confirmed candidates first, then those it has not confirmed yet (spatial check below).
+  std::vector<std::pair<KeyframeId, bool>> to_verify;
+  for (const KeyframeId id : result.candidates.keyframes) to_verify.emplace_back(id, true);
+  for (const KeyframeId id : result.candidates.unconfirmed) to_verify.emplace_back(id, false);
+  for (const auto& [candidate_id, confirmed] : to_verify) {
     const auto verification_start = Clock::now();
     std::string why;
     const std::optional<VerifiedPlace> place = verify_place(map, query, candidate_id, /*drift_gate=*/false, why);
+    if (place && place->matches >= options_.merge.min_matches && !confirmed) {
+      why = confirm_in_space(map, *query_kf, candidate_id, place->T_matched_loop);
+    }
     result.timings.verification_ms += ms_since(verification_start);
     if (!place) {
       result.rejected.push_back({candidate_id, "merge: " + why});
@@ -247,15 +291,37 @@ LoopClosingResult LoopClosing::process_merge(const Map& map, KeyframeId query) {
                                                    std::to_string(options_.merge.min_matches) + ")"});
       continue;
     }
+    if (!why.empty()) {
+      result.rejected.push_back({candidate_id, "merge: " + why});
+      continue;
+    }
     const MapId matched = map.keyframe(candidate_id)->map_id;
     MapMergeRequest request;
     request.active_kf = query;
     request.matched_kf = candidate_id;
     request.T_matched_active = place->T_matched_loop;
     request.matched_points = place->matched_points;
+    std::int64_t active_first_ns = std::numeric_limits<std::int64_t>::max();
+    std::int64_t matched_first_ns = std::numeric_limits<std::int64_t>::max();
     for (const auto& [id, kf] : map.keyframes) {
-      if (kf.map_id == active) request.active_map.insert(request.active_map.end(), id);
-      if (kf.map_id == matched) request.matched_map.insert(request.matched_map.end(), id);
+      if (kf.map_id == active) {
+        request.active_map.insert(request.active_map.end(), id);
+        active_first_ns = std::min(active_first_ns, kf.stamp_ns);
+      }
+      if (kf.map_id == matched) {
+        request.matched_map.insert(request.matched_map.end(), id);
+        matched_first_ns = std::min(matched_first_ns, kf.stamp_ns);
+      }
+    }
+    // The older map stays where it is and the newer one moves into it (map_merge.hpp). After a loss the
+    // query's map is the newer one; the query's map is the older when an agent recognises another agent's
+    // newer map, or when a frame relocalized in an older map of its own: then the matched map moves, seen
+    // from the matched keyframe (the transform inverted, the point pairs turned round).
+    if (older_map(active, active_first_ns, matched, matched_first_ns)) {
+      std::swap(request.active_kf, request.matched_kf);
+      std::swap(request.active_map, request.matched_map);
+      request.T_matched_active = request.T_matched_active.inverse();
+      for (auto& [active_point, matched_point] : request.matched_points) std::swap(active_point, matched_point);
     }
     const auto merge_start = Clock::now();
     MapMergeOutput merged = MapMerge(options_.merge).compute(map, camera_, request, loop_edges_);
@@ -266,14 +332,43 @@ LoopClosingResult LoopClosing::process_merge(const Map& map, KeyframeId query) {
       continue;
     }
     result.loop_matches = place->matches;
-    result.merged_map = active;
-    result.into_map = matched;
+    result.merged_map = map.keyframe(request.active_kf)->map_id;
+    result.into_map = map.keyframe(request.matched_kf)->map_id;
     result.correction = std::move(merged.correction);
     loop_edges_.emplace_back(query, candidate_id);
     detector_->maps_merged(query);
     break;
   }
   return result;
+}
+
+std::string LoopClosing::confirm_in_space(const Map& map, const Keyframe& query, KeyframeId candidate_id,
+                                          const Pose3& T_matched_query) const {
+  const Keyframe& candidate = *map.keyframe(candidate_id);
+  const Pose3 T_BA = candidate.T_wc * T_matched_query * query.T_wc.inverse();
+  std::vector<KeyframeId> group{candidate_id};
+  for (const auto& [neighbour, weight] : candidate.covisible) group.push_back(neighbour);
+  ProjectionMatchOptions projection;
+  projection.radius_px = options_.projection_radius_px;
+  projection.max_descriptor_distance = options_.matching.descriptor_threshold_low;
+  constexpr int kLookedAt = 5;  // the query's best covisible keyframes (ORB-SLAM3: 5)
+  int looked_at = 0;
+  int confirmations = 0;
+  std::string counts;
+  for (const auto& [neighbour, weight] : query.covisible) {
+    const Keyframe* kf = map.keyframe(neighbour);
+    if (kf == nullptr || kf->culled || kf->map_id != query.map_id) continue;
+    if (looked_at++ == kLookedAt || confirmations == options_.merge.covisible_confirmations) break;
+    const int matches = projection_matches(map, *kf, T_BA * kf->T_wc, group, camera_, projection);
+    counts += (counts.empty() ? "" : ", ") + std::to_string(matches);
+    if (matches >= options_.merge.confirmation_matches) ++confirmations;
+  }
+  if (confirmations >= options_.merge.covisible_confirmations) return {};
+  return "not consistent yet: " + std::to_string(confirmations) +
+         " of the query's covisible keyframes see the place (< " +
+         std::to_string(options_.merge.covisible_confirmations) + "; projection matches " +
+         (counts.empty() ? std::string("none") : counts) +
+         ", >= " + std::to_string(options_.merge.confirmation_matches) + " each)";
 }
 
 std::optional<LoopCorrection> LoopClosing::global_bundle_adjustment(const Map& map, const std::atomic<bool>* abort,

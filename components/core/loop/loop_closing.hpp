@@ -92,7 +92,9 @@ class LoopClosing {
 
   // The atlas: places of maps other than `query`'s (LoopDetector::detect_merge), verified without the
   // drift gate, merged with the merge gate (map_merge.hpp). On an accepted merge the correction (kind
-  // kMerge) moves query's map into the matched keyframe's; the caller publishes it as a loop's.
+  // kMerge) moves the newer of the two maps into the older (usually the query's into the matched
+  // keyframe's; the other way when the query's map is the older: another agent's newer map, a map
+  // relocalized back into); the caller publishes it as a loop's.
   LoopClosingResult process_merge(const Map& map, KeyframeId query);
 
   // The shared geometric check of candidate `candidate` for keyframe `query`: the detector's matches,
@@ -101,6 +103,10 @@ class LoopClosing {
   // comparable) and applies its own gate (map_merge.hpp).
   std::optional<VerifiedPlace> verify_place(const Map& map, KeyframeId query, KeyframeId candidate, bool drift_gate,
                                             std::string& why) const;
+  // A verified merge the detector did not confirm: empty when enough of `query`'s covisible keyframes see
+  // the candidate's covisible group where T_matched_query places them (MapMergeOptions), else why not.
+  std::string confirm_in_space(const Map& map, const Keyframe& query, KeyframeId candidate,
+                               const Pose3& T_matched_query) const;
 
   // A global bundle adjustment of the whole map, as a correction of kind kGlobalBundleAdjustment
   // (poses and point positions). nullopt when `abort` was set before it finished. `inertial`: the IMU

@@ -16,6 +16,10 @@ namespace heslam {
 struct LoopCandidates {
   std::vector<KeyframeId> keyframes;  // to verify geometrically, best first
   std::string reason;                 // when empty: why not (for the debug log), e.g. "too few keyframes"
+  // detect_merge only: places found but not yet confirmed by the detector's own consistency over
+  // successive queries (best first, at most 3). A merge may confirm them spatially instead: the query's
+  // covisible keyframes see the matched place where its transform puts them (LoopClosing::process_merge).
+  std::vector<KeyframeId> unconfirmed;
 };
 
 class LoopDetector {
@@ -34,7 +38,7 @@ class LoopDetector {
   // Called after detect() for the same query. The default finds none (say why).
   virtual LoopCandidates detect_merge(const Map& /*map*/, KeyframeId /*query*/,
                                       const std::set<KeyframeId>& /*other_maps*/) {
-    return {{}, std::string(name()) + " detector does not look for merges"};
+    return {{}, std::string(name()) + " detector does not look for merges", {}};
   }
   // Two maps were merged at `query`.
   virtual void maps_merged(KeyframeId query) { loop_closed(query); }

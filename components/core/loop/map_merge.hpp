@@ -52,16 +52,25 @@ struct MapMergeOptions {
   // far corridor, walked the other way, matches the near one with 42-48 consistent matches (one
   // keyframe after another). 80 is ORB-SLAM3's bar for a place of another map (nProjOptMatches).
   int min_matches = 80;
+  // A place the detector found but did not confirm over successive queries (the BoW closer's 3-query
+  // consistency: a new map's first keyframes, or an agent's keyframes interleaved with another's, cannot
+  // give it in time) is merged when it is confirmed in space instead, as ORB-SLAM3 does: after it passed
+  // the verification and min_matches, at least `covisible_confirmations` of the query's best covisible
+  // keyframes (5 looked at) must see the matched keyframe's covisible group's points where the verified
+  // transform places them, each with >= `confirmation_matches` projection matches.
+  int covisible_confirmations = 2;
+  int confirmation_matches = 40;
   bool seam_bundle_adjustment = true;
   LocalBundleAdjustmentOptions seam_ba;
   LoopCorrectionBuilderOptions correction;  // fusion thresholds, essential graph, pose_graph.*
 };
 
-// A place of map B recognised from a keyframe of map A, verified (LoopClosing::verify_place).
+// A place of map B recognised from a keyframe of map A, or the other way, verified
+// (LoopClosing::verify_place). A is the map that moves: the newer one, whichever keyframe was the query.
 struct MapMergeRequest {
-  KeyframeId active_kf = kNoId;   // keyframe of A (the query)
-  KeyframeId matched_kf = kNoId;  // keyframe of B
-  Pose3 T_matched_active = Pose3::Identity();
+  KeyframeId active_kf = kNoId;                // keyframe of A (usually the query)
+  KeyframeId matched_kf = kNoId;               // keyframe of B
+  Pose3 T_matched_active = Pose3::Identity();  // active_kf's camera in matched_kf's (p_matched = T p_active)
   std::vector<std::pair<PointId, PointId>> matched_points;  // (A-side, B-side) RANSAC inliers
   // The two maps' keyframes, culled ones included (the caller partitions the store by map id).
   std::set<KeyframeId> active_map;

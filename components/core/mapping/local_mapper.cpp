@@ -139,12 +139,22 @@ void LocalMapper::insert_keyframe(Keyframe kf, std::vector<MapPoint> new_points,
   }
 }
 
-void LocalMapper::cull_recent_points(MapChanges& changes) {
+void LocalMapper::cull_recent_points(KeyframeId current, MapChanges& changes) {
   const PointCullingOptions& o = options_.point_culling;
   const std::uint64_t now = state_.keyframes_processed;
+  const int agent = agent_of(current);
   for (auto it = state_.recent_points.begin(); it != state_.recent_points.end();) {
     const MapPoint* point = map_.point(it->first);
-    const std::uint64_t age = now - it->second;
+    // Several agents: their keyframes interleave, and a point ages in the keyframes of its own agent only
+    // (the agent of the keyframe it was made at). Counted against another agent's, a new agent's first
+    // points were culled after two keyframes of the other one, before its second keyframe could see them.
+    if (point != nullptr && agent_of(point->reference_kf) != agent) {
+      ++other_agents_keyframes_[it->first];
+      ++it;
+      continue;
+    }
+    const auto skipped = other_agents_keyframes_.find(it->first);
+    const std::uint64_t age = now - it->second - (skipped != other_agents_keyframes_.end() ? skipped->second : 0);
     bool erase_entry = false;
     if (point == nullptr) {
       erase_entry = true;
@@ -163,6 +173,7 @@ void LocalMapper::cull_recent_points(MapChanges& changes) {
     } else if (age >= static_cast<std::uint64_t>(o.keyframes_until_mature)) {
       erase_entry = true;
     }
+    if (erase_entry) other_agents_keyframes_.erase(it->first);
     it = erase_entry ? state_.recent_points.erase(it) : std::next(it);
   }
 }
@@ -170,6 +181,7 @@ void LocalMapper::cull_recent_points(MapChanges& changes) {
 void LocalMapper::record_removed(const MapChanges& changes) {
   for (const auto& [id, into] : changes.removed_points) {
     state_.recent_points.erase(id);
+    other_agents_keyframes_.erase(id);
     if (into != kNoId) state_.merged_into[id] = into;
   }
 }
@@ -214,7 +226,7 @@ MapChanges LocalMapper::process_keyframe(Keyframe kf, std::vector<MapPoint> new_
   state_.last_keyframe = kf_id;
   changes.timings.insertion_ms = ms_since(stage);
 
-  cull_recent_points(changes);
+  cull_recent_points(kf_id, changes);
   changes.timings.point_culling_ms = ms_since(stage);
 
   if (options_.enable_triangulation) {

@@ -7,8 +7,10 @@
 // closer's LoopCorrection. The map version is bumped once per call that changed anything.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <optional>
 #include <vector>
 
@@ -56,7 +58,8 @@ class LocalMapper {
  private:
   void insert_keyframe(Keyframe kf, std::vector<MapPoint> new_points, const TrackedAgainst& tracked,
                        MapChanges& changes);
-  void cull_recent_points(MapChanges& changes);
+  // At keyframe `current`: the recent points of its agent (several agents: each ages in its own).
+  void cull_recent_points(KeyframeId current, MapChanges& changes);
   void record_removed(const MapChanges& changes);
   void refresh_culled_keyframes(MapChanges& changes);
   PointId resolve_merges(PointId id) const;
@@ -65,6 +68,9 @@ class LocalMapper {
   LocalMapperOptions options_;
   Map map_;
   MapperState state_;
+  // Recent points of one agent: the keyframes of other agents processed since they were made, which
+  // their age leaves out (not saved: after a restart such a point ages by them, for 3 keyframes at most).
+  std::map<PointId, std::uint64_t> other_agents_keyframes_;
   BundleAdjustment bundle_adjustment_;
 };
 

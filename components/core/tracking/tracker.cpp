@@ -175,6 +175,10 @@ TrackResult Tracker::track(std::int64_t stamp_ns, std::uint64_t seq, StereoFeatu
     result.tracked_points = inliers;
     last_inliers_ = inliers;
     ++frames_since_keyframe_;
+    // The map a tracked frame is in is its reference keyframe's, before a keyframe joins it: a merge may
+    // have renumbered that map since the last frame (another agent's keyframe merged it into an older
+    // map while this agent made none), and a keyframe made with the old id would start that map again.
+    if (const Keyframe* reference = map_.keyframe(reference_kf_)) active_map_ = reference->map_id;
     const auto keyframe_start = std::chrono::steady_clock::now();
     // A pose chosen among several starts is not doubtful, but a keyframe (and its new points) made
     // from it would carry any error into the map: the next frame tracked from it may make one.
