@@ -366,8 +366,15 @@ void Frontend::resume_in_mapper_map() {
   // each KeyframeDone), with features, which the state topics do not carry. It is loaded whether or
   // not the mapper runs now: killed together with us it is restarting, and its states (newer poses,
   // culls, merges) are applied as they arrive.
+  const bool restarted = runtime::restart_number() > 0 || last_seq_.has_value();
+  // One of several agents, started fresh: the mapper's file of this run can already hold the other
+  // agents' keyframes (whether it does depends on which process started first), never ours. Resuming in
+  // it made the run depend on that race; a fresh agent starts its own map, merged when a place of the
+  // others' is recognised (docs/agents.md). Restarted, it resumes like a single agent.
+  const bool fresh_agent = !restarted && !topics().agent_ns().empty();
+  const bool take_file = !fresh_agent && mapper_map_file_of_this_run();
   bool loaded = false;
-  if (mapper_map_file_of_this_run()) {
+  if (take_file) {
     try {
       MapSnapshot snapshot = load_map_file(options_.mapper_map_file);
       if (!snapshot.journal.warning.empty()) log().warn(snapshot.journal.warning);
@@ -384,7 +391,6 @@ void Frontend::resume_in_mapper_map() {
   // Without a usable file (unreadable, or on another host than the mapper), a restarted frontend
   // takes the mapper's live map from DDS: starting a new map would put a second map's keyframes
   // into the mapper's.
-  const bool restarted = runtime::restart_number() > 0 || last_seq_.has_value();
   if (!loaded && restarted) {
     tracker.local_map() = mapper_keyframes_from_dds();
     if (!tracker.local_map().keyframes.empty()) {
@@ -395,7 +401,7 @@ void Frontend::resume_in_mapper_map() {
                  topics().mapper_keyframes().name, "); starting a new map");
     }
   }
-  if (!mapper_map_file_of_this_run() && !restarted) return;
+  if (!take_file && !restarted) return;
   // States the mapper published already (it runs: only we were restarted) arrive shortly after the
   // readers match; wait briefly so the first frame is relocalized with the newest poses.
   if (keyframe_state_reader_->wait_for_writers(1, kMapHistoryWait)) {
