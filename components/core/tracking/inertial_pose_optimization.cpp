@@ -19,6 +19,7 @@
 #include <Eigen/Geometry>
 
 #include "components/core/imu/imu_factor.hpp"
+#include "components/core/solve/dense_levenberg_marquardt.hpp"
 #include "components/core/tracking/optimize_frame.hpp"
 
 namespace heslam {
@@ -154,18 +155,6 @@ Pose3 camera_from_world(const Eigen::Quaterniond& q_wb, const Eigen::Vector3d& p
 }
 
 // --- The hand-written solver (optimize_pose_inertial) --------------------------------------------------
-
-// Ceres' defaults, as the Ceres version runs with them (and motion_only_ba.cpp keeps them): initial damping
-// 1 / trust radius 1e4; stop at a relative cost decrease, a gradient (max norm) or a relative step below
-// these; rejected steps raise the damping up to kMaxLambda; the damping scales the diagonal of J^T J
-// clamped to [kMinDiagonal, kMaxDiagonal].
-constexpr double kInitialLambda = 1e-4;
-constexpr double kFunctionTolerance = 1e-6;
-constexpr double kGradientTolerance = 1e-10;
-constexpr double kParameterTolerance = 1e-8;
-constexpr double kMaxLambda = 1e16;
-constexpr double kMinDiagonal = 1e-6;
-constexpr double kMaxDiagonal = 1e32;
 
 using Matrix15d = Eigen::Matrix<double, 15, 15>;
 using Vector15d = Eigen::Matrix<double, 15, 1>;
@@ -330,51 +319,38 @@ class InertialLinearization {
   double inv_sigma_accel_ = 1.0;
 };
 
-// One round: at most `iterations` Levenberg-Marquardt steps, as Ceres' (and solve_round() in
-// motion_only_ba.cpp): rejected steps raise the damping and retry from the same linearization.
-void solve_round(const InertialLinearization& problem, const std::vector<VisualTerm>& active, BodyState& x, bool robust,
-                 int iterations) {
-  double lambda = kInitialLambda;
-  double lambda_factor = 2.0;
+// One round's problem for dense_levenberg_marquardt(): the 15 parameters, H and g computed with each
+// trial's cost (both come from one pass).
+struct InertialProblem {
+  const InertialLinearization& linearization;
+  const std::vector<VisualTerm>& active;
+  bool robust;
   Matrix15d H;
   Vector15d g;
-  double cost = problem.evaluate(active, x, robust, H, g);
   Matrix15d H_trial;
   Vector15d g_trial;
-  for (int iteration = 0; iteration < iterations; ++iteration) {
-    if (g.lpNorm<Eigen::Infinity>() <= kGradientTolerance) return;
-    bool accepted = false;
-    while (!accepted && lambda < kMaxLambda) {
-      Matrix15d damped = H;
-      for (int i = 0; i < 15; ++i) damped(i, i) += lambda * std::clamp(H(i, i), kMinDiagonal, kMaxDiagonal);
-      const Vector15d step = damped.ldlt().solve(-g);
-      if (!step.allFinite()) {
-        lambda *= 10.0;
-        continue;
-      }
-      if (step.norm() <= kParameterTolerance * (x.norm() + kParameterTolerance)) return;
-      const BodyState trial = plus(x, step);
-      const double new_cost = problem.evaluate(active, trial, robust, H_trial, g_trial);
-      // Gain ratio: actual over predicted decrease of the Gauss-Newton model of the cost.
-      const double predicted = -(step.dot(g) + 0.5 * step.dot(H * step));
-      const double ratio = predicted > 0.0 ? (cost - new_cost) / predicted : -1.0;
-      if (ratio > 0.0) {  // false for a non-finite cost
-        accepted = true;
-        x = trial;
-        H = H_trial;
-        g = g_trial;
-        const double decrease = cost - new_cost;
-        cost = new_cost;
-        lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * ratio - 1.0, 3));
-        lambda_factor = 2.0;
-        if (decrease <= kFunctionTolerance * (cost + decrease)) return;
-      } else {
-        lambda *= lambda_factor;
-        lambda_factor *= 2.0;
-      }
-    }
-    if (!accepted) return;
+
+  double evaluate_trial(const BodyState& x) { return linearization.evaluate(active, x, robust, H_trial, g_trial); }
+  void accept_trial() {
+    H = H_trial;
+    g = g_trial;
   }
+  void normal_equations(Matrix15d& H_out, Vector15d& g_out) const {
+    H_out = H;
+    g_out = g;
+  }
+  static BodyState plus(const BodyState& x, const Vector15d& step) { return heslam::plus(x, step); }
+  static double norm(const BodyState& x) { return x.norm(); }
+};
+
+// One round: at most `iterations` Levenberg-Marquardt steps (dense_levenberg_marquardt(), as
+// solve_round() in motion_only_ba.cpp).
+void solve_round(const InertialLinearization& linearization, const std::vector<VisualTerm>& active, BodyState& x,
+                 bool robust, int iterations) {
+  InertialProblem problem{linearization, active, robust, {}, {}, {}, {}};
+  const double cost = problem.evaluate_trial(x);
+  problem.accept_trial();
+  dense_levenberg_marquardt<15>(problem, x, cost, iterations);
 }
 
 }  // namespace

@@ -22,6 +22,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
+#include "components/core/solve/dense_levenberg_marquardt.hpp"
+
 namespace heslam {
 namespace {
 
@@ -29,18 +31,6 @@ namespace {
 constexpr int kMinEdgesToContinue = 10;
 // A point this close to (or behind) the camera plane gives no usable projection in an iteration.
 constexpr double kMinDepthM = 1e-9;
-// Ceres' defaults, kept from the Ceres version of this solver: initial damping 1 / trust radius 1e4,
-// stop when an accepted step lowers the cost by less than this fraction.
-constexpr double kInitialLambda = 1e-4;
-constexpr double kFunctionTolerance = 1e-6;
-// ... and, as Ceres, at a gradient below this (max norm) or a step below this relative size.
-constexpr double kGradientTolerance = 1e-10;
-constexpr double kParameterTolerance = 1e-8;
-// Rejected steps raise the damping; beyond this the step would be negligible, so the round ends.
-constexpr double kMaxLambda = 1e16;
-// LM scales its damping by the diagonal of J^T J clamped to this range (Ceres' min / max_lm_diagonal).
-constexpr double kMinDiagonal = 1e-6;
-constexpr double kMaxDiagonal = 1e32;
 
 using Matrix6 = Eigen::Matrix<double, 6, 6>;
 using Vector6 = Eigen::Matrix<double, 6, 1>;
@@ -184,56 +174,43 @@ void evaluate(const PinholeStereo& camera, const std::vector<Active>& active, co
   fill(camera, active, 0, active.size(), R, t, robust, ne);
 }
 
-// One round: at most `iterations` LM steps on the active observations; updates R and t. `current`
-// holds the pass at (R, t); `trial` receives a step's.
+// One round's problem for dense_levenberg_marquardt(): the pose, one pass over the active
+// observations per trial pose, the normal equations of an accepted pose only (from its columns).
+struct PoseProblem {
+  struct State {
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+  };
+  const PinholeStereo& camera;
+  const std::vector<Active>& active;
+  bool robust;
+  NormalEquations& current;  // the pass at the accepted pose
+  NormalEquations& trial;    // a step's
+
+  double evaluate_trial(const State& x) {
+    evaluate(camera, active, x.R, x.t, robust, trial);
+    return total_cost(trial);
+  }
+  void accept_trial() { std::swap(current, trial); }
+  void normal_equations(Matrix6& H, Vector6& g) const { heslam::normal_equations(current, H, g); }
+  static State plus(const State& x, const Vector6& step) {
+    const double angle = step.head<3>().norm();
+    const Eigen::Vector3d axis = angle > 0.0 ? Eigen::Vector3d(step.head<3>() / angle) : Eigen::Vector3d::UnitX();
+    return {Eigen::AngleAxisd(angle, axis).toRotationMatrix() * x.R, x.t + step.tail<3>()};
+  }
+  static double norm(const State& x) { return x.t.norm(); }
+};
+
+// One round: at most `iterations` LM steps on the active observations; updates R and t.
 void solve_round(const PinholeStereo& camera, const std::vector<Active>& active, Eigen::Matrix3d& R, Eigen::Vector3d& t,
                  bool robust, int iterations, NormalEquations& current, NormalEquations& trial) {
-  double lambda = kInitialLambda;
-  double lambda_factor = 2.0;  // grows while steps are rejected in a row (Ceres' decrease factor)
-  evaluate(camera, active, R, t, robust, current);
-  double cost = total_cost(current);
-  Matrix6 H;
-  Vector6 g;
-  for (int iteration = 0; iteration < iterations; ++iteration) {
-    normal_equations(current, H, g);
-    if (g.lpNorm<Eigen::Infinity>() <= kGradientTolerance) return;
-    // Rejected steps raise the damping and retry from the same linearization, as Ceres' LM does.
-    bool accepted = false;
-    while (!accepted && lambda < kMaxLambda) {
-      Matrix6 damped = H;
-      for (int i = 0; i < 6; ++i) damped(i, i) += lambda * std::clamp(H(i, i), kMinDiagonal, kMaxDiagonal);
-      const Vector6 step = damped.ldlt().solve(-g);
-      if (!step.allFinite()) {
-        lambda *= 10.0;
-        continue;
-      }
-      if (step.norm() <= kParameterTolerance * (t.norm() + kParameterTolerance)) return;
-      const double angle = step.head<3>().norm();
-      const Eigen::Vector3d axis = angle > 0.0 ? Eigen::Vector3d(step.head<3>() / angle) : Eigen::Vector3d::UnitX();
-      const Eigen::Matrix3d R_new = Eigen::AngleAxisd(angle, axis).toRotationMatrix() * R;
-      const Eigen::Vector3d t_new = t + step.tail<3>();
-      evaluate(camera, active, R_new, t_new, robust, trial);
-      const double new_cost = total_cost(trial);
-      // Gain ratio: actual over predicted decrease of the (Gauss-Newton model of the) cost.
-      const double predicted = -(step.dot(g) + 0.5 * step.dot(H * step));
-      const double ratio = predicted > 0.0 ? (cost - new_cost) / predicted : -1.0;
-      if (ratio > 0.0) {
-        accepted = true;
-        R = R_new;
-        t = t_new;
-        std::swap(current, trial);  // the next iteration linearizes at the accepted pose
-        const double decrease = cost - new_cost;
-        cost = new_cost;
-        lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * ratio - 1.0, 3));
-        lambda_factor = 2.0;
-        if (decrease <= kFunctionTolerance * (cost + decrease)) return;
-      } else {
-        lambda *= lambda_factor;
-        lambda_factor *= 2.0;
-      }
-    }
-    if (!accepted) return;
-  }
+  PoseProblem problem{camera, active, robust, current, trial};
+  PoseProblem::State x{R, t};
+  const double cost = problem.evaluate_trial(x);
+  problem.accept_trial();
+  dense_levenberg_marquardt<6>(problem, x, cost, iterations);
+  R = x.R;
+  t = x.t;
 }
 
 }  // namespace
