@@ -28,8 +28,10 @@ constexpr int32_t kCorrectionReplayDepth = 100;
 // Lockstep acks: tiny, one per frame; 64 covers any realistic backlog without KEEP_ALL blocking.
 constexpr int32_t kLockstepDepth = 64;
 // IMU batches: one per frame from the replay (10 readings at 200 Hz / 20 Hz), more from a driver that
-// publishes every reading; 256 batches is over 12 s of a replay and about 1 s of a 200 Hz driver.
-constexpr int32_t kImuDepth = 256;
+// publishes every reading (heslam-ros2-input: one per reading it takes). 2048 batches is 10 s of a 200 Hz
+// driver, so a frontend starved of CPU for seconds still gets every reading (256 lost readings to a frontend
+// held 1.3 s); about 100 B a batch of one reading, 200 KB of history.
+constexpr int32_t kImuDepth = 2048;
 // Default blocking for other reliable writers (KEEP_LAST never blocks long; bounds pathological cases).
 constexpr milliseconds kDefaultMaxBlocking{100};
 // Status is published every second; the supervisor declares a writer gone after 2 missed periods.
@@ -83,7 +85,7 @@ void apply(dds_qos_t* qos, QosRole role) {
     case QosRole::kImu:
       // Transient-local for the reason of kLockstep: a frontend whose IMU reader matches after the
       // replay's first batch (discovery matches each topic on its own) still receives it. KEEP_LAST
-      // never blocks the source; a reader that falls 256 batches behind sees the gap in first_index.
+      // never blocks the source; a reader that falls kImuDepth batches behind sees the gap in first_index.
       dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(kDefaultMaxBlocking.count()));
       dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
       dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, kImuDepth);

@@ -18,7 +18,7 @@ enum class QosRole {
   kKeyframes,    // keyed, reliable, transient-local, KEEP_LAST(1) per instance (one version per id)
   kMapState,     // keyed, reliable, transient-local, KEEP_LAST(1) per instance; deletions are disposes
   kCorrections,  // reliable, transient-local, KEEP_ALL + durability_service KEEP_LAST(100), 100 ms blocking
-  kImu,          // reliable, transient-local, KEEP_LAST(256): IMU batches, none lost to a reader matched late
+  kImu,          // reliable, transient-local, KEEP_LAST(2048): IMU batches, none lost to a reader matched late
   kLockstep,     // reliable, volatile, KEEP_LAST(64): acknowledgements are tiny and must not be lost
   kStatus,       // keyed by name, reliable, volatile, KEEP_LAST(1), liveliness automatic 2 s
   kSpy,          // readers only: best effort, KEEP_LAST(1), volatile — tapping never slows writers
