@@ -253,6 +253,33 @@ TEST(Ros2Input, PairsByStampCountsUnpairedAndRefusesStampsGoingBackwards) {
   EXPECT_EQ(pairer.unpaired(), 1u + 10u - StereoPairer::kMaxPending);
 }
 
+// Frames of which no image came are read from the gaps in the stamps against the camera's period: a
+// 20 Hz camera with +-2 ms jitter, both images of frames 1, 10 and 20-22 lost, the right image of frame 30
+// only (the pairer counts that one): 5 frames never received, each found at the next image's stamp.
+TEST(Ros2Input, FramesOfWhichNoImageCameAreCountedFromTheGapsInTheStamps) {
+  constexpr std::int64_t kPeriod = 50'000'000;
+  const auto stamp = [](int frame) { return 1'000'000'000 + frame * kPeriod + (frame % 3 - 1) * 2'000'000; };
+  FrameGapCounter gaps;
+  std::uint64_t found_at_frame_2 = 0, found_at_frame_4 = 0, found_at_frame_11 = 0, found_at_frame_23 = 0;
+  for (int frame = 0; frame < 40; ++frame) {
+    if (frame == 1 || frame == 10 || (frame >= 20 && frame <= 22)) continue;
+    std::uint64_t found = 0;
+    if (frame != 30) found += gaps.add(stamp(frame));  // left
+    found += gaps.add(stamp(frame));                   // right: the same stamp, ignored after the left
+    EXPECT_EQ(gaps.add(stamp(frame) - 1), 0u);         // a stamp not after the newest: ignored
+    if (frame == 2) found_at_frame_2 = found;
+    if (frame == 4) found_at_frame_4 = found;  // the third interval: the first ones judged
+    if (frame == 11) found_at_frame_11 = found;
+    if (frame == 23) found_at_frame_23 = found;
+  }
+  EXPECT_EQ(found_at_frame_2, 0u);  // not judged yet
+  EXPECT_EQ(found_at_frame_4, 1u);  // frame 1, between frames 0 and 2
+  EXPECT_EQ(found_at_frame_11, 1u);
+  EXPECT_EQ(found_at_frame_23, 3u);
+  EXPECT_EQ(gaps.missing(), 5u);
+  EXPECT_NEAR(static_cast<double>(gaps.period_ns()), static_cast<double>(kPeriod), 4'000'000.0);
+}
+
 // A left driver in mono8 and a right one in colour: the pair is refused naming both topics.
 TEST(Ros2Input, PairMixingMonoAndColourIsOneLineNamingBothTopics) {
   StereoPairer::Pair pair;

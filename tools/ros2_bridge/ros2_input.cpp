@@ -192,6 +192,7 @@ void Ros2Input::drop_early_images(std::size_t keep) {
 void Ros2Input::take_image(StereoPairer::Side side, const Image& image) {
   const std::string& topic = image_readers_[static_cast<int>(side)]->name();
   try {
+    count_frames_never_received(topic, to_stamp_ns(image.header.stamp));
     // Without a calibration the size cannot be checked yet (0 x 0: any); pair_image checks it.
     PackedImage packed = to_packed_image(image, topic, 0, 0);
     if (!calibration_) {
@@ -205,6 +206,16 @@ void Ros2Input::take_image(StereoPairer::Side side, const Image& image) {
     ++bad_images_;
     log().warn_throttled("bad_images", error.what());
   }
+}
+
+void Ros2Input::count_frames_never_received(const std::string& topic, std::int64_t stamp_ns) {
+  const std::uint64_t missing = gaps_.add(stamp_ns);
+  if (missing == 0) return;
+  stats().count("frames_never_received", missing);
+  log().warn_throttled("frames_never_received", "topic '", topic, "': no image of ", missing, " frame(s) before stamp ",
+                       stamp_ns, " ns (the camera's period ", static_cast<double>(gaps_.period_ns()) * 1e-6,
+                       " ms): lost before the input (its readers' history overrun on a busy machine, the network, "
+                       "or the driver); counted as frames_never_received");
 }
 
 void Ros2Input::pair_image(StereoPairer::Side side, std::int64_t stamp_ns, PackedImage packed) {
@@ -349,8 +360,8 @@ void Ros2Input::run() {
                " frames went out without the IMU covering them");
   }
   log().info("published ", next_seq_, " stereo frames; ", pairer_.unpaired(), " images unpaired, ",
-             images_before_calibration_, " before a usable CameraInfo pair, ", bad_images_, " bad; ", camera_outages_,
-             " camera outages");
+             images_before_calibration_, " before a usable CameraInfo pair, ", bad_images_, " bad; ", gaps_.missing(),
+             " frames never received (gaps in the stamps); ", camera_outages_, " camera outages");
   if (images_received_ > 0 && next_seq_ == 0) {
     throw std::runtime_error("received " + std::to_string(images_received_) +
                              " images but published no stereo frame (each drop counted and said above)");

@@ -113,9 +113,12 @@ class Ros2Input : public runtime::Component {
   // The image into the pairer (and a pair to the frames held for the IMU), checked against the
   // calibration's size; a bad one counted and said.
   void pair_image(StereoPairer::Side side, std::int64_t stamp_ns, PackedImage packed);
+  // Frames of which no image of either side arrived, found by this image's stamp: counted, said.
+  void count_frames_never_received(const std::string& topic, std::int64_t stamp_ns);
   // Drops early images beyond `keep`, counting each as an image before a usable CameraInfo pair.
   void drop_early_images(std::size_t keep);
   StereoPairer pairer_;
+  FrameGapCounter gaps_;  // frames of which no image arrived
   std::uint64_t next_seq_ = 0;
   std::uint64_t unpaired_reported_ = 0;
   std::uint64_t images_before_calibration_ = 0;

@@ -1,6 +1,7 @@
 // ROS 2 camera topics -> heslam camera input (see ros2_input_conversions.hpp).
 #include "tools/ros2_bridge/ros2_input_conversions.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -166,6 +167,62 @@ PackedImage to_packed_image(const Image& image, const std::string& topic, std::u
     }
   }
   return out;
+}
+
+namespace {
+
+// The frames missing in an interval between two images, for a camera of this period.
+std::uint64_t frames_missing_in(std::int64_t interval_ns, std::int64_t period_ns) {
+  if (static_cast<double>(interval_ns) <= FrameGapCounter::kGapFactor * static_cast<double>(period_ns)) return 0;
+  const long long periods = std::llround(static_cast<double>(interval_ns) / static_cast<double>(period_ns));
+  return static_cast<std::uint64_t>(std::max(periods - 1, 1LL));
+}
+
+}  // namespace
+
+std::int64_t FrameGapCounter::period_ns() const {
+  if (!judging_ || intervals_.empty()) return 0;
+  std::vector<std::int64_t> sorted = intervals_;
+  const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+  std::nth_element(sorted.begin(), middle, sorted.end());
+  return *middle;
+}
+
+std::uint64_t FrameGapCounter::judge(std::int64_t interval_ns) {
+  const std::uint64_t missing = frames_missing_in(interval_ns, period_ns());
+  if (missing == 0) {
+    intervals_.push_back(interval_ns);
+    if (intervals_.size() > kIntervals) intervals_.erase(intervals_.begin());
+  }
+  return missing;
+}
+
+std::uint64_t FrameGapCounter::add(std::int64_t stamp_ns) {
+  if (newest_ns_ && stamp_ns <= *newest_ns_) return 0;
+  const std::optional<std::int64_t> previous = newest_ns_;
+  newest_ns_ = stamp_ns;
+  if (!previous) return 0;
+  const std::int64_t interval = stamp_ns - *previous;
+  std::uint64_t found = 0;
+  if (judging_) {
+    found = judge(interval);
+  } else {
+    intervals_.push_back(interval);
+    if (intervals_.size() == kJudgeAfter) {
+      // The first intervals judged against their own median (one gap among them does not move it).
+      judging_ = true;
+      const std::int64_t period = period_ns();
+      std::vector<std::int64_t> ordinary;
+      for (const std::int64_t first : intervals_) {
+        const std::uint64_t missing = frames_missing_in(first, period);
+        found += missing;
+        if (missing == 0) ordinary.push_back(first);
+      }
+      intervals_ = std::move(ordinary);
+    }
+  }
+  missing_ += found;
+  return found;
 }
 
 std::optional<StereoPairer::Pair> StereoPairer::add(Side side, std::int64_t stamp_ns, PackedImage image) {

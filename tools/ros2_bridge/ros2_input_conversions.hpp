@@ -77,6 +77,34 @@ class StereoPairer {
   std::uint64_t unpaired_ = 0;
 };
 
+// Frames of which no image of either side ever arrived (a best-effort reader's KEEP_LAST overrun on a busy
+// machine, the network, the driver): no count of them can come from DDS, so they are read from the gaps
+// in the image stamps, against the median of the last kIntervals ordinary intervals (a camera's period,
+// its jitter well under half of it). Fed every image's stamp, of either side and in arrival order (a stamp
+// not after the newest fed is ignored: the other side's image of a frame, or one out of order). The
+// first kJudgeAfter intervals are judged once there are that many; frames lost before the first image
+// or after the last one cannot be seen.
+class FrameGapCounter {
+ public:
+  static constexpr std::size_t kIntervals = 15;
+  static constexpr std::size_t kJudgeAfter = 3;
+  static constexpr double kGapFactor = 1.5;  // an interval over 1.5 periods misses frames
+
+  // The frames found missing with this stamp (those before it, or the first intervals' once judged).
+  std::uint64_t add(std::int64_t stamp_ns);
+  std::uint64_t missing() const { return missing_; }
+  // The camera's period as judged so far (0 before kJudgeAfter intervals).
+  std::int64_t period_ns() const;
+
+ private:
+  std::uint64_t judge(std::int64_t interval_ns);  // the frames missing in it; keeps an ordinary one
+
+  std::optional<std::int64_t> newest_ns_;
+  std::vector<std::int64_t> intervals_;  // the last kIntervals ordinary ones, oldest first
+  bool judging_ = false;
+  std::uint64_t missing_ = 0;
+};
+
 // Throws std::runtime_error naming both topics when the pair mixes mono8 and colour (a left and a right
 // driver configured differently).
 void check_same_encoding(const StereoPairer::Pair& pair, const std::string& left_topic, const std::string& right_topic);
