@@ -247,6 +247,7 @@ void Supervisor::start(Managed& component) {
   component.ready = component.spec.ready == Readiness::kStarted;
   component.stopping = false;
   component.killed_at_stop = false;
+  component.in_stop_order = false;
   component.pending_exit.reset();
   component.last_line.clear();
   if (component.spec.nice > 0) {
@@ -586,7 +587,7 @@ void Supervisor::reap() {
     if (pid <= 0) break;
     for (auto& component : components_) {
       if (component->phase != Phase::kRunning || component->process.pid() != pid) continue;
-      if (component->stopping) {
+      if (component->in_stop_order) {
         component->pending_exit = wait_status;  // told in stop order
       } else {
         on_exit(*component, wait_status);
@@ -734,6 +735,7 @@ void Supervisor::pump(std::chrono::milliseconds timeout) {
     if (component->phase == Phase::kRunning && !component->ready && component->process.said_running()) {
       component->ready = true;
     }
+    if (!end_requested_ && ending_by_itself(*component)) end_requested_ = true;
   }
   reap();
   read_status();
@@ -766,16 +768,25 @@ bool Supervisor::anything_alive() const {
   });
 }
 
+bool Supervisor::ending_by_itself(const Managed& component) const {
+  return component.phase == Phase::kRunning && !component.stopping && component.spec.shutdown_on_exit &&
+         component.process.result() && component.process.said_shutting_down();
+}
+
 void Supervisor::stop(Managed& component) {
   if (component.phase == Phase::kRestartPending) component.phase = Phase::kEnded;
   if (component.phase != Phase::kRunning) return;
-  component.stopping = true;
-  component.process.signal_group(SIGTERM);
+  // One that ends the run and is ending is not signalled: its exit is waited for (and told) in turn.
+  if (!ending_by_itself(component)) {
+    component.stopping = true;
+    component.process.signal_group(SIGTERM);
+  }
   const double stop_timeout_s = component.spec.stop_timeout_s.value_or(pipeline_.stop_timeout_s);
   const auto stop_timeout = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(stop_timeout_s));
   component.stop_deadline = Clock::now() + stop_timeout;
   component.resume_at = Clock::now() + stop_timeout / 2;
   component.resume_checked = false;
+  component.in_stop_order = true;
   stop_order_.push_back(&component);
   // A heslam program says its result on its pipe after its shutdown work and its data writers are
   // done (runtime/startup_notify.hpp; a component's writers go before its status): what is left is
@@ -802,7 +813,7 @@ void Supervisor::wait_for_stop(Managed& component, bool until_result) {
 }
 
 void Supervisor::finish_stop(Managed& component) {
-  if (component.phase != Phase::kRunning || !component.stopping) return;
+  if (component.phase != Phase::kRunning || !component.in_stop_order) return;
   wait_for_stop(component, false);
   if (component.phase == Phase::kRunning && !component.pending_exit) {
     const double stop_timeout_s = component.spec.stop_timeout_s.value_or(pipeline_.stop_timeout_s);

@@ -71,6 +71,7 @@ class Supervisor {
     Clock::time_point stop_deadline{};  // our SIGTERM + its stop timeout: then SIGKILL
     Clock::time_point resume_at{};      // half-way: a stopped process is resumed (SIGCONT)
     bool resume_checked = false;
+    bool in_stop_order = false;       // stopped (or ending by itself) in stop_all: its exit told in order
     std::optional<int> pending_exit;  // its wait status, while exits are told in stop order (tell_exits)
     std::string last_reported_failure;
     std::string last_line;  // of its output: a failing heslam program's one-line reason
@@ -118,6 +119,9 @@ class Supervisor {
   void finish_stop(Managed& component);
   // Tells (on_exit) the exits of the stopping components in their stop order, as far as they exited.
   void tell_exits();
+  // A component that ends the run (on_exit: shutdown), not stopped by us, that said its result after
+  // a clean end: only its DDS teardown is left, the run's stop need not wait for its exit to begin.
+  bool ending_by_itself(const Managed& component) const;
   std::vector<std::string> child_args(const Managed& component) const;
   bool anything_alive() const;
   // Marks the run failed (exit code 1) for this reason, unless an earlier failure is already the reason.
