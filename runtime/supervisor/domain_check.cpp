@@ -105,6 +105,9 @@ std::optional<bool> other_participant_on_host(const Pipeline& pipeline, int doma
       }
       const std::size_t colon = local.rfind(':');
       if (colon == std::string::npos) continue;
+      // Cyclone binds its receiving sockets to every address (0.0.0.0 or ::); a socket bound to one
+      // address (its sending socket, 127.0.0.1 and an ephemeral port that may fall in the range) is not one.
+      if (local.find_first_not_of('0') != colon) continue;
       const int port = static_cast<int>(std::strtol(local.c_str() + colon + 1, nullptr, 16));
       const int offset = port - first;
       if (offset < 0 || offset % kParticipantGain != 0 || offset / kParticipantGain > kMaxIndexLooked) continue;
