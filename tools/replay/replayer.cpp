@@ -194,6 +194,9 @@ class Replay {
     }
     status_.set_state(runtime::ComponentState::kRunning);
     preload();
+    // Lockstep: the first pair decodes on the helper thread while the consumers start (as each next
+    // one does while they work on the previous one), not after they are there.
+    if (options_.lockstep && !dataset_.frames.empty()) prefetch(0);
     if (!wait_for_consumer()) return finish();
 
     const std::int64_t first_stamp_ns = dataset_.frames.front().stamp_ns;
