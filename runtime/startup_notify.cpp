@@ -58,13 +58,15 @@ void notify_supervisor_participant(const std::string& guid_prefix) {
   if (fd >= 0) write_line(fd, (std::string(kNotifyParticipant) + " " + guid_prefix).c_str());
 }
 
-void notify_supervisor_result(const std::map<std::string, std::uint64_t>& counters, const std::string& result) {
+void notify_supervisor_result(const std::map<std::string, std::uint64_t>& counters, const std::string& result,
+                              bool ended_cleanly) {
   std::lock_guard lock(g_mutex);
   const int fd = notify_fd_locked();
   if (fd < 0) return;
   // Never blocks (the pipe holds 64 KB; these lines are a few KB): a stopped supervisor must not
   // hold up a program's exit.
   fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK);
+  if (ended_cleanly) write_line(fd, kNotifyShuttingDown);
   for (const auto& [name, value] : counters) {
     // Counter names are identifiers; one with a space or newline could not be read back.
     if (name.find_first_of(" \n") != std::string::npos) continue;

@@ -36,9 +36,13 @@ inline constexpr const char* kNotifyParticipant = "participant";
 // result ("result TEXT", at most kMaxResultBytes). The supervisor's verdict uses these rather than
 // the status topic, whose last sample may not arrive before the process is gone, and closes the
 // descriptor. Never blocks: a supervisor that stopped reading loses the lines, not the program.
-void notify_supervisor_result(const std::map<std::string, std::uint64_t>& counters, const std::string& result);
+// ended_cleanly (its last state SHUTTING_DOWN, not FAILED): a line "shutting_down" first, so that
+// the supervisor may end a run at the result of the component that ends it (docs/supervisor.md, Stopping).
+void notify_supervisor_result(const std::map<std::string, std::uint64_t>& counters, const std::string& result,
+                              bool ended_cleanly = false);
 inline constexpr const char* kNotifyCounter = "counter";
 inline constexpr const char* kNotifyResult = "result";
+inline constexpr const char* kNotifyShuttingDown = "shutting_down";
 inline constexpr std::size_t kMaxResultBytes = 2000;
 
 }  // namespace heslam::runtime

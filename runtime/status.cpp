@@ -65,7 +65,7 @@ StatusPublisher::~StatusPublisher() {
   wake_.notify_all();
   thread_.join();
   // The end of the program: its final counters and result, for the supervisor's verdict.
-  notify_supervisor_result(stats_.counters(), message_);
+  notify_supervisor_result(stats_.counters(), message_, state_ == ComponentState::kShuttingDown);
   try {
     msg::ComponentStatus key{};
     key.name = borrow(name_);

@@ -123,6 +123,7 @@ ChildProcess& ChildProcess::operator=(ChildProcess&& other) noexcept {
     notify_fd_ = std::exchange(other.notify_fd_, -1);
     said_starting_ = std::exchange(other.said_starting_, false);
     said_running_ = std::exchange(other.said_running_, false);
+    said_shutting_down_ = std::exchange(other.said_shutting_down_, false);
     partial_ = std::move(other.partial_);
     notify_partial_ = std::move(other.notify_partial_);
     pending_result_ = std::exchange(other.pending_result_, Result{});
@@ -155,6 +156,7 @@ void ChildProcess::read_notifications() {
       notify_partial_.erase(0, newline + 1);
       if (line == runtime::kNotifyStarting) said_starting_ = true;
       if (line == runtime::kNotifyRunning) said_starting_ = said_running_ = true;
+      if (line == runtime::kNotifyShuttingDown) said_shutting_down_ = true;
       const std::string participant_prefix = std::string(runtime::kNotifyParticipant) + " ";
       if (line.starts_with(participant_prefix)) participants_.insert(line.substr(participant_prefix.size()));
       read_result_line(line);

@@ -49,6 +49,8 @@ class ChildProcess {
     std::string text;
   };
   const std::optional<Result>& result() const { return result_; }
+  // Its result came after a clean end (its last state SHUTTING_DOWN, not FAILED).
+  bool said_shutting_down() const { return said_shutting_down_; }
   // The GUID prefixes of the DDS participants the program said it created ("participant" lines).
   const std::set<std::string>& participants() const { return participants_; }
 
@@ -71,6 +73,7 @@ class ChildProcess {
   int notify_fd_ = -1;
   bool said_starting_ = false;
   bool said_running_ = false;
+  bool said_shutting_down_ = false;
   std::string partial_;
   std::string notify_partial_;
   Result pending_result_;  // counters read so far; complete with the "result" line

@@ -57,7 +57,66 @@ bool run_alive_here(const std::string& run) {
   return field == run.substr(colon + 1);
 }
 
+// Cyclone's default port mapping (Discovery/Ports, unchanged by config/cyclonedds.xml): a
+// participant of index i on domain d binds Base + DomainGain * d + UnicastMetaOffset +
+// ParticipantGain * i for its discovery.
+constexpr int kPortBase = 7400;
+constexpr int kDomainGain = 250;
+constexpr int kParticipantGain = 2;
+constexpr int kUnicastMetaOffset = 10;
+// Indices looked at: beyond the configured MaxAutoParticipantIndex (50), up to the next domain's ports.
+constexpr int kMaxIndexLooked = (kDomainGain - kUnicastMetaOffset) / kParticipantGain - 1;
+
+// The inodes of this process's sockets (/proc/self/fd -> "socket:[N]").
+std::set<std::string> own_socket_inodes() {
+  std::set<std::string> inodes;
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd", error)) {
+    std::error_code link_error;
+    const std::string target = std::filesystem::read_symlink(entry.path(), link_error).string();
+    if (!link_error && target.starts_with("socket:[") && target.ends_with("]")) {
+      inodes.insert(target.substr(8, target.size() - 9));
+    }
+  }
+  return inodes;
+}
+
 }  // namespace
+
+std::optional<bool> other_participant_on_host(const Pipeline& pipeline, int domain_id) {
+  // Another configuration may reach other hosts, use multicast or other ports: not told here.
+  if (!pipeline.dds_config.empty()) return std::nullopt;
+  if (const char* uri = std::getenv("CYCLONEDDS_URI"); uri != nullptr && *uri != '\0') return std::nullopt;
+  const int first = kPortBase + kDomainGain * domain_id + kUnicastMetaOffset;
+  const std::set<std::string> own = own_socket_inodes();
+  bool readable = false;
+  for (const char* table : {"/proc/net/udp", "/proc/net/udp6"}) {
+    std::ifstream file(table);
+    if (!file) continue;
+    readable = true;
+    std::string line;
+    std::getline(file, line);  // the header
+    while (std::getline(file, line)) {
+      // "  sl  local_address rem_address   st tx_queue:rx_queue tr:tm->when retrnsmt   uid  timeout inode ..."
+      std::istringstream fields(line);
+      std::string slot, local, remote, state, queues, timer, retransmits, uid, timeout, inode;
+      if (!(fields >> slot >> local >> remote >> state >> queues >> timer >> retransmits >> uid >> timeout >> inode)) {
+        continue;
+      }
+      const std::size_t colon = local.rfind(':');
+      if (colon == std::string::npos) continue;
+      // Cyclone binds its receiving sockets to every address (0.0.0.0 or ::); a socket bound to one
+      // address (its sending socket, 127.0.0.1 and an ephemeral port that may fall in the range) is not one.
+      if (local.find_first_not_of('0') != colon) continue;
+      const int port = static_cast<int>(std::strtol(local.c_str() + colon + 1, nullptr, 16));
+      const int offset = port - first;
+      if (offset < 0 || offset % kParticipantGain != 0 || offset / kParticipantGain > kMaxIndexLooked) continue;
+      if (!own.contains(inode)) return true;
+    }
+  }
+  if (!readable) return std::nullopt;
+  return false;
+}
 
 std::optional<DomainClaim> DomainClaim::try_claim(int domain_id, const std::string& ns, std::string* holder) {
   const std::filesystem::path folder = std::filesystem::temp_directory_path() / "heslam-domains";
@@ -196,6 +255,10 @@ int free_domain(const Pipeline& pipeline, std::optional<DomainClaim>& claim) {
   for (const int domain : candidates) {
     std::optional<DomainClaim> candidate = DomainClaim::try_claim(domain, pipeline.ns);
     if (!candidate) continue;
+    if (other_participant_on_host(pipeline, domain) == false) {
+      claim = std::move(candidate);  // no one else there to listen for
+      return domain;
+    }
     try {
       const runtime::Participant participant(runtime::ParticipantOptions{domain, pipeline.dds_config});
       OtherRunWatch watch(participant.handle(), pipeline.ns, runtime::own_run_id());

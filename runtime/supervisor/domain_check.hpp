@@ -72,6 +72,14 @@ class DomainClaim {
 std::optional<std::string> other_run_alive(OtherRunWatch& watch, std::chrono::milliseconds window,
                                            std::chrono::milliseconds stale_window);
 
+// With heslam's built-in Cyclone configuration (config/cyclonedds.xml: loopback only, no multicast,
+// participant index auto) only this host's processes can be on a domain, and each DDS participant
+// there binds its index's unicast discovery port. Whether a socket of another process binds one of
+// the domain's discovery ports (/proc/net/udp and udp6, this process's own sockets left out): false
+// means no other participant can hear or be heard on the domain. Nothing when that cannot be told
+// (another configuration: `dds_config` set, given by $CYCLONEDDS_URI, or /proc unreadable).
+std::optional<bool> other_participant_on_host(const Pipeline& pipeline, int domain_id);
+
 // --domain auto: the first domain (the pipeline's, then 1, 2, ..., 232, 0) that this host's
 // supervisors have not claimed and on which no other run's writer is heard within a second; its
 // claim is left in `claim`. Throws when every domain is in use.

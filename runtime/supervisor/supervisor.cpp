@@ -247,6 +247,8 @@ void Supervisor::start(Managed& component) {
   component.ready = component.spec.ready == Readiness::kStarted;
   component.stopping = false;
   component.killed_at_stop = false;
+  component.in_stop_order = false;
+  component.pending_exit.reset();
   component.last_line.clear();
   if (component.spec.nice > 0) {
     log_.info("started ", component.spec.name, " (pid ", component.process.pid(), "), nice +", component.spec.nice);
@@ -582,10 +584,27 @@ void Supervisor::reap() {
   for (;;) {
     int wait_status = 0;
     const pid_t pid = waitpid(-1, &wait_status, WNOHANG);
-    if (pid <= 0) return;
+    if (pid <= 0) break;
     for (auto& component : components_) {
-      if (component->phase == Phase::kRunning && component->process.pid() == pid) on_exit(*component, wait_status);
+      if (component->phase != Phase::kRunning || component->process.pid() != pid) continue;
+      if (component->in_stop_order) {
+        component->pending_exit = wait_status;  // told in stop order
+      } else {
+        on_exit(*component, wait_status);
+      }
     }
+  }
+  tell_exits();
+}
+
+void Supervisor::tell_exits() {
+  while (exits_told_ < stop_order_.size()) {
+    Managed& component = *stop_order_[exits_told_];
+    if (component.phase == Phase::kRunning) {
+      if (!component.pending_exit) return;
+      on_exit(component, *std::exchange(component.pending_exit, std::nullopt));
+    }
+    ++exits_told_;
   }
 }
 
@@ -696,15 +715,28 @@ void Supervisor::pump(std::chrono::milliseconds timeout) {
       owners.push_back(component.get());
     }
   }
+  const std::size_t output_fds = fds.size();
+  // The handshake pipes too: a component's "running" wakes the start of the ones after it at once.
+  for (auto& component : components_) {
+    if (component->process.notify_fd() >= 0) fds.push_back(pollfd{component->process.notify_fd(), POLLIN, 0});
+  }
   if (fds.empty()) {
     std::this_thread::sleep_for(timeout);
   } else {
     poll(fds.data(), fds.size(), static_cast<int>(timeout.count()));
   }
-  for (std::size_t i = 0; i < fds.size(); ++i) {
+  for (std::size_t i = 0; i < output_fds; ++i) {
     if (fds[i].revents != 0) forward_output(*owners[i]);
   }
-  for (auto& component : components_) component->process.read_notifications();
+  for (auto& component : components_) {
+    component->process.read_notifications();
+    // A heslam program says "running" on its pipe as it publishes its RUNNING status (runtime/status.cpp):
+    // ready then, not a status period later when the status topic, volatile, matched after that sample.
+    if (component->phase == Phase::kRunning && !component->ready && component->process.said_running()) {
+      component->ready = true;
+    }
+    if (!end_requested_ && ending_by_itself(*component)) end_requested_ = true;
+  }
   reap();
   read_status();
   watch_other_runs();
@@ -736,41 +768,70 @@ bool Supervisor::anything_alive() const {
   });
 }
 
+bool Supervisor::ending_by_itself(const Managed& component) const {
+  return component.phase == Phase::kRunning && !component.stopping && component.spec.shutdown_on_exit &&
+         component.process.result() && component.process.said_shutting_down();
+}
+
 void Supervisor::stop(Managed& component) {
   if (component.phase == Phase::kRestartPending) component.phase = Phase::kEnded;
   if (component.phase != Phase::kRunning) return;
-  component.stopping = true;
-  component.process.signal_group(SIGTERM);
+  // One that ends the run and is ending is not signalled: its exit is waited for (and told) in turn.
+  if (!ending_by_itself(component)) {
+    component.stopping = true;
+    component.process.signal_group(SIGTERM);
+  }
   const double stop_timeout_s = component.spec.stop_timeout_s.value_or(pipeline_.stop_timeout_s);
   const auto stop_timeout = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(stop_timeout_s));
-  const auto deadline = Clock::now() + stop_timeout;
-  // A stopped process (SIGSTOP, a debugger, Ctrl-Z) holds SIGTERM: half-way to the timeout it is
-  // resumed, so it still does its shutdown work (the recorder's files, the mapper's map) instead of
-  // being killed, and the run's verdict is made of what it really wrote.
-  const auto resume_at = Clock::now() + stop_timeout / 2;
-  bool resume_checked = false;
-  while (component.phase == Phase::kRunning && Clock::now() < deadline) {
+  component.stop_deadline = Clock::now() + stop_timeout;
+  component.resume_at = Clock::now() + stop_timeout / 2;
+  component.resume_checked = false;
+  component.in_stop_order = true;
+  stop_order_.push_back(&component);
+  // A heslam program says its result on its pipe after its shutdown work and its data writers are
+  // done (runtime/startup_notify.hpp; a component's writers go before its status): what is left is
+  // the DDS teardown of its participant, which the next one's stop overlaps.
+  wait_for_stop(component, true);
+  if (!component.process.result()) finish_stop(component);  // exited, or did not stop in time: killed now
+}
+
+void Supervisor::wait_for_stop(Managed& component, bool until_result) {
+  const auto running = [&component] { return component.phase == Phase::kRunning && !component.pending_exit; };
+  while (running() && !(until_result && component.process.result()) && Clock::now() < component.stop_deadline) {
     pump(kPumpPeriod);
-    if (!resume_checked && component.phase == Phase::kRunning && Clock::now() >= resume_at) {
-      resume_checked = true;
+    // A stopped process (SIGSTOP, a debugger, Ctrl-Z) holds SIGTERM: half-way to the timeout it is
+    // resumed, so it still does its shutdown work (the recorder's files, the mapper's map) instead of
+    // being killed, and the run's verdict is made of what it really wrote.
+    if (!component.resume_checked && running() && Clock::now() >= component.resume_at) {
+      component.resume_checked = true;
       if (component.process.stopped()) {
         log_.warn(component.spec.name, " is stopped (SIGSTOP or a debugger); resuming it (SIGCONT) so that it stops");
         component.process.signal_group(SIGCONT);
       }
     }
   }
-  if (component.phase == Phase::kRunning) {
+}
+
+void Supervisor::finish_stop(Managed& component) {
+  if (component.phase != Phase::kRunning || !component.in_stop_order) return;
+  wait_for_stop(component, false);
+  if (component.phase == Phase::kRunning && !component.pending_exit) {
+    const double stop_timeout_s = component.spec.stop_timeout_s.value_or(pipeline_.stop_timeout_s);
     log_.warn(component.spec.name, " did not stop within ", stop_timeout_s, " s; sending SIGKILL");
     component.killed_at_stop = true;
     component.process.signal_group(SIGKILL);
     const auto kill_deadline = Clock::now() + kKillReapTimeout;
-    while (component.phase == Phase::kRunning && Clock::now() < kill_deadline) pump(kPumpPeriod);
+    while (component.phase == Phase::kRunning && !component.pending_exit && Clock::now() < kill_deadline) {
+      pump(kPumpPeriod);
+    }
   }
+  tell_exits();
 }
 
 void Supervisor::stop_all() {
   clear_progress();
   for (auto it = components_.rbegin(); it != components_.rend(); ++it) stop(**it);
+  for (Managed* component : stop_order_) finish_stop(*component);
   for (auto& component : components_) {
     forward_output(*component);
     component->process.close_output();
@@ -801,7 +862,9 @@ int Supervisor::run() {
     }
   }
   dds_->status.set_state(runtime::ComponentState::kRunning);
-  if (dds_->watch) {
+  // Listened for only when another participant may be on the domain: with the built-in
+  // configuration, one of this host's that binds a discovery port of the domain.
+  if (dds_->watch && other_participant_on_host(pipeline_, pipeline_.domain_id) != false) {
     if (const std::optional<std::string> other = other_run_alive(*dds_->watch, kDomainListen, kKilledRunLinger)) {
       // Both runs would read each other's frames, acknowledgements and results: refused.
       fail("domain " + std::to_string(pipeline_.domain_id) + ", namespace '" + pipeline_.ns +

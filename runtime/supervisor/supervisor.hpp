@@ -66,8 +66,13 @@ class Supervisor {
     int restarts = 0;
     int consecutive_restarts = 0;
     bool ready = false;
-    bool stopping = false;        // we sent SIGTERM: the exit is expected
-    bool killed_at_stop = false;  // did not stop within stop_timeout_s: we sent SIGKILL
+    bool stopping = false;              // we sent SIGTERM: the exit is expected
+    bool killed_at_stop = false;        // did not stop within stop_timeout_s: we sent SIGKILL
+    Clock::time_point stop_deadline{};  // our SIGTERM + its stop timeout: then SIGKILL
+    Clock::time_point resume_at{};      // half-way: a stopped process is resumed (SIGCONT)
+    bool resume_checked = false;
+    bool in_stop_order = false;       // stopped (or ending by itself) in stop_all: its exit told in order
+    std::optional<int> pending_exit;  // its wait status, while exits are told in stop order (tell_exits)
     std::string last_reported_failure;
     std::string last_line;  // of its output: a failing heslam program's one-line reason
     std::string result;     // the one-line result in its latest status (the recorder's "tracked N/M ...")
@@ -101,8 +106,22 @@ class Supervisor {
   void report_progress();
   // Before any other output: wipes a live progress line so the output starts on a clean line.
   void clear_progress();
+  // Stops the components in reverse start order: each gets SIGTERM once the one before it has done
+  // its shutdown work (said its result on its pipe, or exited); their DDS teardowns overlap, and
+  // their exits are told in that order.
   void stop_all();
+  // SIGTERM, then waits until it said its result or exited (or its stop timeout: then SIGKILL).
   void stop(Managed& component);
+  // Waits while it runs (until_result: and has not said its result yet), up to its stop timeout;
+  // resumes it half-way if it is stopped (SIGSTOP, a debugger).
+  void wait_for_stop(Managed& component, bool until_result);
+  // Waits for its exit: the rest of its stop timeout, then SIGKILL.
+  void finish_stop(Managed& component);
+  // Tells (on_exit) the exits of the stopping components in their stop order, as far as they exited.
+  void tell_exits();
+  // A component that ends the run (on_exit: shutdown), not stopped by us, that said its result after
+  // a clean end: only its DDS teardown is left, the run's stop need not wait for its exit to begin.
+  bool ending_by_itself(const Managed& component) const;
   std::vector<std::string> child_args(const Managed& component) const;
   bool anything_alive() const;
   // Marks the run failed (exit code 1) for this reason, unless an earlier failure is already the reason.
@@ -129,6 +148,8 @@ class Supervisor {
   // stopped after the components.
   std::unique_ptr<RoudiProcess> roudi_;
   std::vector<std::unique_ptr<Managed>> components_;
+  std::vector<Managed*> stop_order_;  // the components stopped so far, in order
+  std::size_t exits_told_ = 0;        // of stop_order_
   std::size_t name_width_ = 0;
   bool failed_ = false;
   std::string failure_;  // the first reason the run failed

@@ -96,9 +96,9 @@ class Camera {
         participant_({.domain_id = common.domain_id, .dds_config = common.dds_config}),
         image_participant_(participant_, common.image_transport, common.image_domain_id, common.dds_config),
         topics_(common.ns, common.agent_ns),
+        status_(participant_, topics_, common.name, stats_),
         calibration_writer_(participant_, topics_.calibration()),
-        frame_writer_(image_participant_.get(), topics_.stereo()),
-        status_(participant_, topics_, common.name, stats_) {
+        frame_writer_(image_participant_.get(), topics_.stereo()) {
     if (opened_.capture.frame_count() > 0) stats_.count(runtime::kFramesTotal, opened_.capture.frame_count());
   }
 
@@ -254,10 +254,12 @@ class Camera {
   runtime::Participant participant_;
   runtime::ImageParticipant image_participant_;
   runtime::Topics topics_;
+  runtime::Stats stats_;
+  // Before the writers, so destroyed after them: its result on the supervisor's pipe (as it goes)
+  // comes once their last frames are acknowledged (docs/supervisor.md, Stopping).
+  runtime::StatusPublisher status_;
   runtime::Writer<msg::StereoCalibration> calibration_writer_;
   runtime::Writer<msg::StereoFrame> frame_writer_;
-  runtime::Stats stats_;
-  runtime::StatusPublisher status_;
   LatestSlot<CapturedFrame> slot_;
   std::atomic<bool> stop_{false};
   std::string capture_error_;  // written by the capture thread before it closes the slot

@@ -153,10 +153,10 @@ class Replay {
         participant_({.domain_id = common.domain_id, .dds_config = common.dds_config}),
         image_participant_(participant_, common.image_transport, common.image_domain_id, common.dds_config),
         topics_(common.ns, common.agent_ns),
+        status_(participant_, topics_, common.name, stats_),
         calibration_writer_(participant_, topics_.calibration()),
         frame_writer_(image_participant_.get(), topics_.stereo()),
         imu_recording_(open_replay_imu(options, dataset_)),
-        status_(participant_, topics_, common.name, stats_),
         progress_(options.progress),
         pacer_(options.rate) {
     if (options_.lockstep) {
@@ -194,6 +194,9 @@ class Replay {
     }
     status_.set_state(runtime::ComponentState::kRunning);
     preload();
+    // Lockstep: the first pair decodes on the helper thread while the consumers start (as each next
+    // one does while they work on the previous one), not after they are there.
+    if (options_.lockstep && !dataset_.frames.empty()) prefetch(0);
     if (!wait_for_consumer()) return finish();
 
     const std::int64_t first_stamp_ns = dataset_.frames.front().stamp_ns;
@@ -688,6 +691,10 @@ class Replay {
   runtime::Participant participant_;
   runtime::ImageParticipant image_participant_;  // the frames' (--image-transport shm: a domain of their own)
   runtime::Topics topics_;
+  runtime::Stats stats_;
+  // Before the writers, so destroyed after them: its result on the supervisor's pipe (as it goes)
+  // comes once their last samples are acknowledged (docs/supervisor.md, Stopping).
+  runtime::StatusPublisher status_;
   runtime::Writer<msg::StereoCalibration> calibration_writer_;
   runtime::Writer<msg::StereoFrame> frame_writer_;
   std::optional<ImuRecording> imu_recording_;
@@ -704,14 +711,12 @@ class Replay {
   std::optional<runtime::Reader<msg::FrameDone>> turn_reader_;
   std::optional<runtime::WaitSet> turn_waitset_;
   std::map<std::string, std::int64_t> others_next_;
-  runtime::Stats stats_;
   runtime::RoleBinding consumer_{log_, stats_, topics_.frame_done().name};
   struct HeldAck {
     dds_instance_handle_t writer;
     std::uint64_t seq;
   };
   std::vector<HeldAck> held_acks_;
-  runtime::StatusPublisher status_;
   ProgressLine progress_;
   ReplayPacer pacer_;
   ReplayCounts counts_;
