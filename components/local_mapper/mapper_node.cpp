@@ -25,6 +25,9 @@
 namespace heslam::local_mapper {
 namespace {
 
+// Keyframes still waiting when the stop comes that are mapped before the final save (a real-time run's
+// last ones; more means the mapper was far behind, and the stop must stay within stop_timeout_s).
+constexpr std::size_t kKeyframesMappedAtStop = 20;
 // Wait granularity of the main loop: shutdown is also signalled through the waitset, this only
 // bounds how long a missed wake-up could delay it.
 constexpr std::chrono::milliseconds kWaitPeriod{200};
@@ -192,6 +195,7 @@ void MapperNode::run() {
     process_pending();
     apply_corrections();
   }
+  map_keyframes_left_at_stop();
   if (mapper_ && map_journal_ && (unsaved_keyframes_ > 0 || map_journal_->records() > 0)) {
     // The file left behind is one snapshot, as any reader (an older build too) expects a saved map.
     const auto timer = stats().time("map_save_final");
@@ -296,6 +300,29 @@ void MapperNode::process_pending() {
     PendingKeyframe keyframe = std::move(pending_.begin()->second);
     pending_.erase(pending_.begin());
     process_keyframe(std::move(keyframe));
+  }
+}
+
+void MapperNode::map_keyframes_left_at_stop() {
+  // In real time the stop (SIGTERM) comes once the frontend has written its result, which it does after
+  // its writers' data was acknowledged: its last keyframes are here, unread or pending. They are mapped
+  // (and saved below) rather than lost with the run's end; at most kKeyframesMappedAtStop, each BA bounded
+  // as any other, so the stop stays within the supervisor's stop_timeout_s.
+  take_keyframes();
+  take_corrections();
+  std::size_t mapped = 0;
+  while (!pending_.empty() && mapped < kKeyframesMappedAtStop) {
+    PendingKeyframe keyframe = std::move(pending_.begin()->second);
+    pending_.erase(pending_.begin());
+    process_keyframe(std::move(keyframe));
+    ++mapped;
+  }
+  apply_corrections();
+  if (mapped > 0) log().info("mapped ", mapped, " keyframe(s) that arrived before the stop");
+  if (!pending_.empty()) {
+    stats().count("keyframes_unmapped_at_stop", pending_.size());
+    log().warn(pending_.size(), " keyframe(s) still waiting at the stop were not mapped (at most ",
+               kKeyframesMappedAtStop, " are mapped after SIGTERM); counted as keyframes_unmapped_at_stop");
   }
 }
 

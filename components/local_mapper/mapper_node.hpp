@@ -57,6 +57,7 @@ class MapperNode : public runtime::Component {
   void take_keyframes();
   void take_corrections();
   void process_pending();
+  void map_keyframes_left_at_stop();  // after SIGTERM: the frontend's last keyframes, bounded
   void process_keyframe(PendingKeyframe keyframe);
   void start_mapper(const PendingKeyframe& first);
   void apply_corrections();
