@@ -721,7 +721,10 @@ void Frontend::follow_loop_correction() {
   const Pose3 T_wc_before = tracker.last_frame().T_wc;
   tracker.follow_reference_keyframe();
   // The last frame's jump goes into odom -> world, so Odometry.T_oc continues without it (REP 105).
-  T_wo_ = tracker.last_frame().T_wc * T_wc_before.inverse() * T_wo_;
+  const Pose3 T_corr = tracker.last_frame().T_wc * T_wc_before.inverse();
+  T_wo_ = T_corr * T_wo_;
+  // The inertial state (the recent frames' poses and velocities) follows the same jump.
+  if (inertial_) inertial_->moved(T_corr);
 }
 
 void Frontend::use_keyframe_done(const HeldKeyframeDone& done) {

@@ -62,6 +62,16 @@ void InertialFrontend::turn_off(const std::string& reason) {
   frames_.clear();
 }
 
+void InertialFrontend::moved(const Pose3& T_corr) {
+  const Eigen::Matrix3d R = T_corr.linear();
+  for (FrameState& frame : frames_) {
+    frame.T_wb = T_corr * frame.T_wb;
+    frame.T_wb.linear() = so3::normalized(frame.T_wb.linear());
+    if (frame.v_wb) frame.v_wb = R * *frame.v_wb;
+  }
+  if (predicted_v_) predicted_v_ = R * *predicted_v_;
+}
+
 std::optional<ImuPreintegration> InertialFrontend::preintegrate_between(std::int64_t t0_ns, std::int64_t t1_ns) {
   if (t1_ns <= t0_ns) return std::nullopt;
   const ImuInterval interval = buffer_.interval(t0_ns, t1_ns);

@@ -135,6 +135,13 @@ class InertialFrontend {
   // initialization when due. Returns a line to log when the initialization state changed.
   std::optional<std::string> update(std::int64_t stamp_ns, const TrackResult& result, const Map& map);
 
+  // A loop correction (or a merge) moved the tracker's last frame by T_corr (world side: T_wc after =
+  // T_corr T_wc before): the recent frames' poses and velocities turn with it, so the next prediction
+  // and the inertial pose optimization's prior on the previous state are in the corrected map.
+  // Gravity stays: it belongs to the world, which the correction does not turn (a 4-DoF correction
+  // turns about it; the global BA with IMU factors holds it).
+  void moved(const Pose3& T_corr);
+
   // The body's velocity in the tracker's world at the last frame (initialized only).
   std::optional<Eigen::Vector3d> velocity() const;
   // The biases at the last frame: its inertial pose optimization's, else the initialization's.

@@ -2,8 +2,10 @@
 // pose_graph.gravity_from_odometry).
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "components/loop_closer/loop_closer_options.hpp"
 #include "runtime/config.hpp"
@@ -60,7 +62,8 @@ TEST(LoopCloserOptions, ShippedConfigsMergeMapsWithTheDocumentedGate) {
 }
 
 // The global BA's IMU factors (docs/loop_closer.md, Global BA with IMU factors): off in the code and the
-// shipped configs, the documented bounds, a bad value one line naming file and field.
+// loop closers' own configs, on with the inertial pipelines' overlay, the documented bounds, a bad value one line
+// naming file and field.
 TEST(LoopCloserOptions, GlobalBaImuIsOffByDefaultAndReadFromTheConfig) {
   EXPECT_FALSE(parse("real_time: false\n").global_ba_imu);
   for (const char* name : {"heslam-loop-closer.yaml", "heslam-loop-closer-proximity.yaml"}) {
@@ -71,6 +74,14 @@ TEST(LoopCloserOptions, GlobalBaImuIsOffByDefaultAndReadFromTheConfig) {
     EXPECT_EQ(options.imu_buffer_s, 600.0);
     EXPECT_EQ(options.imu_wait_s, 2.0);
     EXPECT_EQ(options.imu_max_interval_s, 3.0);
+    // The inertial pipelines lay config/loop_closer/inertial.yaml over it: on there, the rest kept.
+    const LoopCloserProcessOptions inertial = LoopCloserProcessOptions::from_config(
+        runtime::Config::load(std::vector<std::filesystem::path>{
+            test::source_dir() / "config/loop_closer" / name, test::source_dir() / "config/loop_closer/inertial.yaml"}),
+        {});
+    EXPECT_TRUE(inertial.global_ba_imu);
+    EXPECT_EQ(inertial.imu_buffer_s, 600.0);
+    EXPECT_EQ(inertial.imu_max_interval_s, 3.0);
   }
   const LoopCloserProcessOptions on =
       parse("global_ba:\n  imu: true\n  imu_buffer_s: 60\n  imu_wait_s: 0.5\n  imu_max_interval_s: 1.5\n");

@@ -255,12 +255,25 @@ std::optional<LocalBundleAdjustmentResult> InertialMapping::bundle_adjust(Map& m
 }
 
 void InertialMapping::moved(const std::map<KeyframeId, Pose3>& old_T_wc, const Map& map) {
+  // Gravity turns with the newest keyframes (the local BA's window): the mapper estimated it together
+  // with their roll and pitch, and a correction that turns them (the global BA with IMU factors levels
+  // them on the odometry's gravity) would otherwise leave the next local BAs pulling the new keyframes
+  // back towards the old tilt. A 4-DoF correction turns about gravity: nothing changes then.
+  std::vector<std::pair<std::int64_t, Eigen::Matrix3d>> turns;
   for (auto& [id, state] : states_) {
     const auto old = old_T_wc.find(id);
     const Keyframe* kf = map.keyframe(id);
     if (old == old_T_wc.end() || kf == nullptr) continue;
-    state.v_wb = kf->T_wc.linear() * old->second.linear().transpose() * state.v_wb;
+    const Eigen::Matrix3d R = kf->T_wc.linear() * old->second.linear().transpose();
+    state.v_wb = R * state.v_wb;
+    if (!kf->culled) turns.emplace_back(kf->stamp_ns, R);
   }
+  if (!initialized_ || turns.empty()) return;
+  std::sort(turns.begin(), turns.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  const auto window = std::min(turns.size(), static_cast<std::size_t>(options_.window_keyframes) + 1);
+  Eigen::Vector3d g = Eigen::Vector3d::Zero();
+  for (std::size_t k = turns.size() - window; k < turns.size(); ++k) g += turns[k].second * gravity_w_;
+  if (g.norm() > 0.5 * gravity_w_.norm()) gravity_w_ = g.normalized() * gravity_w_.norm();
 }
 
 }  // namespace heslam
