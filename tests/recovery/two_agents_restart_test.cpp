@@ -33,7 +33,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr double kMaxAteM = 0.005;  // issue 37's bar: ATE of each agent <= 5 mm
+constexpr double kMaxAteM = 0.005;   // issue 37's bar: ATE of each agent <= 5 mm
 constexpr int kKillAtFrameOfB = 30;  // b's frame 30 of 100: after the merge (b's frame 6), both agents running
 // The mapper's 16th keyframe: one of agent b's, after the merge, while both agents run (a makes 14, b 10).
 constexpr int kMapperKillAfterKeyframes = 16;
@@ -51,7 +51,6 @@ pid_t component_pid(const std::string& supervisor_output, const std::string& com
   }
   return pid;
 }
-
 
 struct AgentsRun {
   int exit_code = -1;
@@ -104,8 +103,10 @@ class TwoAgentsRestart : public ::testing::Test {
     }
     result.exit_code = test::finish(supervisor, kRunTimeout);
     result.output = supervisor.out() + supervisor.err();
-    if (fs::exists(dir_.path() / (label + ".a.txt"))) result.a = eval::read_trajectory(dir_.path() / (label + ".a.txt"));
-    if (fs::exists(dir_.path() / (label + ".b.txt"))) result.b = eval::read_trajectory(dir_.path() / (label + ".b.txt"));
+    if (fs::exists(dir_.path() / (label + ".a.txt")))
+      result.a = eval::read_trajectory(dir_.path() / (label + ".a.txt"));
+    if (fs::exists(dir_.path() / (label + ".b.txt")))
+      result.b = eval::read_trajectory(dir_.path() / (label + ".b.txt"));
     return result;
   }
 
@@ -121,9 +122,10 @@ class TwoAgentsRestart : public ::testing::Test {
     EXPECT_EQ(run.output.find("two live writers"), std::string::npos) << what << "\n" << run.output;
     EXPECT_EQ(run.output.find("refused_agent_keyframes"), std::string::npos) << what << "\n" << run.output;
     const test::TwoAgentAte ate = test::two_agent_ate(half_a(), run.a, half_b(), run.b);
-    std::printf("[ figures  ] MH01 halves as two agents, %s: 100/100 + 100/100 poses, ATE in one frame a %.3f mm, "
-                "b %.3f mm\n",
-                what.c_str(), ate.a_m * 1e3, ate.b_m * 1e3);
+    std::printf(
+        "[ figures  ] MH01 halves as two agents, %s: 100/100 + 100/100 poses, ATE in one frame a %.3f mm, "
+        "b %.3f mm\n",
+        what.c_str(), ate.a_m * 1e3, ate.b_m * 1e3);
     EXPECT_LE(ate.a_m, kMaxAteM) << what;
     EXPECT_LE(ate.b_m, kMaxAteM) << what;
   }
@@ -151,8 +153,7 @@ TEST_F(TwoAgentsRestart, LocalMapperKilledAfterASaveResumesAsTheUndisturbedRun) 
   const AgentsRun undisturbed = this->run("undisturbed", "");
   ASSERT_EQ(undisturbed.exit_code, 0) << undisturbed.output;
   const fs::path config = dir_.path() / "kill_after_save.yaml";
-  std::ofstream(config) << "%YAML:1.0\n---\ntest:\n  kill_after_saved_keyframes: " << kMapperKillAfterKeyframes
-                        << "\n";
+  std::ofstream(config) << "%YAML:1.0\n---\ntest:\n  kill_after_saved_keyframes: " << kMapperKillAfterKeyframes << "\n";
   const AgentsRun killed = this->run("mapper", "", {"mapper_config=" + config.string()});
   expect_complete(killed, "mapper", "local mapper killed after the save of its keyframe 16");
   EXPECT_NE(killed.output.find("test.kill_after_saved_keyframes: SIGKILL after the save of keyframe"),
