@@ -650,7 +650,7 @@ void Frontend::mirror_map_state() {
                           received.sample->keyframe_id,
                           received.sample->map_version,
                           received.sample->correction_id};
-    switch (keyframe_done_roles_->claim(keyframe_done_reader_->handle(), done.role, done.writer, done.keyframe_id)) {
+    switch (keyframe_done_roles_->claim(keyframe_done_reader_->handle(), done.role, done.writer, done.subject())) {
       case runtime::RoleBinding::Claim::kAccepted: use_keyframe_done(done); break;
       case runtime::RoleBinding::Claim::kHeld:
         held_keyframe_done_.push_back(std::move(done));
@@ -661,7 +661,7 @@ void Frontend::mirror_map_state() {
   }
   for (auto held = held_keyframe_done_.begin(); held != held_keyframe_done_.end();) {
     const runtime::RoleBinding::Claim claim =
-        keyframe_done_roles_->claim(keyframe_done_reader_->handle(), held->role, held->writer, held->keyframe_id,
+        keyframe_done_roles_->claim(keyframe_done_reader_->handle(), held->role, held->writer, held->subject(),
                                     /*again=*/true);
     if (claim == runtime::RoleBinding::Claim::kHeld) {
       ++held;
@@ -728,6 +728,12 @@ void Frontend::follow_loop_correction() {
 }
 
 void Frontend::use_keyframe_done(const HeldKeyframeDone& done) {
+  // Acknowledgements this frontend never waits for are done with at once: a correction's, and another agent's
+  // keyframe's (the topic is shared, docs/agents.md). A restarted mapper or loop closer acknowledges them again
+  // (a replayed correction, each agent's last keyframe) within its predecessor's lease; remembered, that would
+  // read as two live writers (runtime/role_binding.hpp) and fail the run.
+  if (done.correction_id != 0 || agent_of(done.keyframe_id) != options_.agent)
+    keyframe_done_roles_->done(done.subject());
   // The mapper's acknowledgement of a loop correction: the mirror acts on it when it applies the
   // correction's batch (whose version marker says the same, unless a newer marker replaced it).
   if (done.correction_id != 0) {

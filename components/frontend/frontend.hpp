@@ -102,6 +102,9 @@ class Frontend : public runtime::Component {
     std::uint64_t keyframe_id;
     std::uint64_t map_version;
     std::uint64_t correction_id;
+    // What the role binding remembers it acknowledged: the correction for a correction's acknowledgement (its
+    // keyframe_id is the loop's keyframe, which has an acknowledgement of its own), else the keyframe.
+    std::uint64_t subject() const { return correction_id != 0 ? correction_id : keyframe_id; }
   };
   // An acknowledgement of a writer that holds its role: what it says is acted upon.
   void use_keyframe_done(const HeldKeyframeDone& done);

@@ -1,9 +1,12 @@
 // heslam-local-mapper's DDS side (see mapper_node.hpp).
 #include "components/local_mapper/mapper_node.hpp"
 
+#include <signal.h>
+
 #include <algorithm>
 #include <charconv>
 #include <ctime>
+#include <fstream>
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
@@ -11,14 +14,17 @@
 
 #include "components/core/camera/stereo_rectifier.hpp"
 #include "components/core/map/ids.hpp"
+#include "components/core/map/point_ids_digest.hpp"
 #include "components/local_mapper/write_batch.hpp"
 #include "components/messages/camera.hpp"
 #include "components/messages/checks.hpp"
 #include "components/messages/keyframe.hpp"
 #include "components/messages/loop_correction.hpp"
 #include "components/messages/map_state.hpp"
+#include "runtime/atomic_file.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/run_journal.hpp"
+#include "runtime/run_self.hpp"
 #include "runtime/sequence.hpp"
 #include "runtime/writer_identity.hpp"
 
@@ -49,6 +55,15 @@ double thread_cpu_ms() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
+
+// FILE.removed: the points the last saved step removed (docs/local_mapper.md, The restart window).
+constexpr const char* kRemovedPointsHeader = "heslam-mapper-removed-points 1";
+
+std::filesystem::path removed_points_path(const std::filesystem::path& map_file) {
+  std::filesystem::path path = map_file;
+  path += ".removed";
+  return path;
 }
 
 std::uint64_t counter(const std::map<std::string, std::uint64_t>& counters, const char* name) {
@@ -101,6 +116,7 @@ void MapperNode::configure(const runtime::Config& config) {
     };
   }
   if (options_.inertial.enabled) configure_inertial();
+  if (!options_.map_file.empty()) removed_file_ = removed_points_path(options_.map_file);
   load_initial_map();
   if (!options_.map_file.empty()) {
     MapJournalOptions journal;
@@ -137,6 +153,7 @@ void MapperNode::load_initial_map() {
       }
       std::filesystem::remove(options_.map_file);
       std::filesystem::remove(map_journal_path(options_.map_file));
+      std::filesystem::remove(removed_file_);
       if (contents.same_run) run_file_->replace({});  // the corrections applied were the removed map's
     }
   }
@@ -163,7 +180,9 @@ void MapperNode::load_initial_map() {
     // Published at once, not at the first keyframe: when the frontend died too (a power glitch, an
     // OOM kill), no keyframe comes until a restarted frontend has resumed in this map, and it waits
     // for these states to do so. The file is this run's (FILE.run), so there is nothing to confirm.
-    publish_all(loaded_->map);
+    // The points the last saved step removed are disposed again: killed after that save and before
+    // its states were all published, the readers' mirrors would keep them for good.
+    publish_all(loaded_->map, read_removed_points());
   } else if (!options_.load_map.empty()) {
     const auto load_start = std::chrono::steady_clock::now();
     loaded_ = load_map_file(options_.load_map);
@@ -202,6 +221,7 @@ void MapperNode::run() {
     last_save_ = map_journal_->compact(mapper_->map(), mapper_->state(), &mapper_->camera(), /*keep_journal=*/false);
     unsaved_keyframes_ = 0;
   }
+  if (!removed_file_.empty()) std::filesystem::remove(removed_file_);  // the run is over: no restart reads it
   log().flush_throttled();
   log_summary();
   if (!options_.save_map.empty()) save_map_to(options_.save_map);
@@ -257,9 +277,12 @@ bool MapperNode::admit_agent_keyframe(const msg::Keyframe& message, dds_instance
     stats().count(runtime::kSecondWriterSamples);
     return false;  // another run's frontend on the domain: neither mapped nor acknowledged
   }
-  const auto map_exists = [this](MapId map_id) {
-    if (!mapper_) return false;
-    for (const auto& [id, keyframe] : mapper_->map().keyframes) {
+  // A restarted mapper holds its resumed map in loaded_ until the first keyframe to map brings the camera;
+  // the keyframes DDS delivers again before that (every agent's, in maps merged long ago) are checked there.
+  const Map* map = mapper_ ? &mapper_->map() : loaded_ ? &loaded_->map : nullptr;
+  const auto map_exists = [map](MapId map_id) {
+    if (map == nullptr) return false;
+    for (const auto& [id, keyframe] : map->keyframes) {
       if (keyframe.map_id == map_id) return true;
     }
     return false;
@@ -399,6 +422,8 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
   if (inertial_) report_inertial(changes);
   unsaved_changes_.merge(changes);
   if (++unsaved_keyframes_ >= options_.save_every_keyframes) save();
+  ++keyframes_mapped_here_;
+  kill_after_save_for_test(id, changes);
   if (const Keyframe* inserted = mapper_->map().keyframe(id)) publish_keyframe(*inserted);
   publish(changes);
   acknowledge(id);
@@ -483,6 +508,7 @@ void MapperNode::save() {
   unsaved_keyframes_ = 0;
   if (!map_journal_ || !mapper_) return;
   const auto start = std::chrono::steady_clock::now();
+  write_removed_points(unsaved_changes_.removed_points);
   last_save_ = map_journal_->save(mapper_->map(), mapper_->state(), &mapper_->camera(), unsaved_changes_);
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   unsaved_changes_ = MapChanges{};
@@ -535,7 +561,7 @@ void MapperNode::write_version_markers(std::uint64_t map_version, std::uint64_t 
   flush_writes({keyframe_state_writer_->handle(), point_state_writer_->handle()});
 }
 
-void MapperNode::publish_all(const Map& map) {
+void MapperNode::publish_all(const Map& map, const std::map<PointId, PointId>& removed) {
   const auto timer = stats().time("publish");
   for (const auto& [id, keyframe] : map.keyframes) {
     keyframe_state_writer_->write(messages::to_state_message(keyframe, map.version, covisible_buffer_));
@@ -543,8 +569,57 @@ void MapperNode::publish_all(const Map& map) {
   for (const auto& [id, point] : map.points) {
     point_state_writer_->write(messages::to_state_message(point, map.version, observation_buffer_));
   }
+  std::size_t disposed = 0;
+  for (const auto& [id, into] : removed) {
+    // Still in the map: the kill came before the save, the step is mapped again and removes it then.
+    if (map.point(id) != nullptr) continue;
+    const msg::MapPointState last = messages::merged_state_message(id, into, map.version);
+    if (into != kNoId) point_state_writer_->write(last);
+    point_state_writer_->dispose(last);
+    ++disposed;
+  }
   write_version_markers(map.version);
   log().info("published the state of ", map.keyframes.size(), " keyframes and ", map.points.size(), " points");
+  if (disposed > 0) {
+    stats().count("redisposed_points", disposed);
+    log().info("disposed again ", disposed, " points the last saved step removed (", removed_file_.string(),
+               "): its publication may not have finished before this restart");
+  }
+}
+
+void MapperNode::write_removed_points(const std::map<PointId, PointId>& removed) {
+  if (removed_file_.empty() || (removed.empty() && !removed_file_holds_ids_)) return;
+  std::ostringstream text;
+  text << kRemovedPointsHeader << "\n";
+  for (const auto& [id, into] : removed) text << id << " " << into << "\n";
+  runtime::replace_file_contents(removed_file_, text.str(), options_.sync_writes);
+  removed_file_holds_ids_ = !removed.empty();
+}
+
+std::map<PointId, PointId> MapperNode::read_removed_points() {
+  std::map<PointId, PointId> removed;
+  std::ifstream in(removed_file_);
+  if (!in) return removed;  // none yet: no save removed a point
+  std::string line;
+  if (!std::getline(in, line) || line != kRemovedPointsHeader) {
+    log().warn(removed_file_.string(), ": not a removed-points file (first line '", line, "', expected '",
+               kRemovedPointsHeader, "'); nothing disposed again");
+    return removed;
+  }
+  PointId id = kNoId;
+  PointId into = kNoId;
+  while (in >> id >> into) removed.emplace(id, into);
+  removed_file_holds_ids_ = !removed.empty();
+  return removed;
+}
+
+void MapperNode::kill_after_save_for_test(KeyframeId id, const MapChanges& changes) {
+  if (options_.test_kill_after_saved_keyframes != keyframes_mapped_here_ || runtime::restart_number() != 0) return;
+  log().warn("test.kill_after_saved_keyframes: SIGKILL after the save of keyframe ", format_id(id), ", before its ",
+             changes.changed_keyframes.size(), " keyframe states, ", changes.changed_points.size(),
+             " point states and ", changes.removed_points.size(), " disposals are published");
+  log().flush_throttled();
+  ::raise(SIGKILL);
 }
 
 void MapperNode::acknowledge(KeyframeId id, std::uint64_t correction_id) {
@@ -692,7 +767,7 @@ void MapperNode::log_summary() {
   }
   if (mapper_) {
     log().info("map: ", mapper_->map().keyframes.size(), " keyframes, ", mapper_->map().points.size(),
-               " points, version ", mapper_->map().version);
+               " points, version ", mapper_->map().version, ", point ids ", point_ids_digest(mapper_->map()));
   }
   const std::vector<runtime::StageSummary> stages = stats().stages();
   for (const char* name : kStageOrder) {

@@ -70,7 +70,16 @@ class MapperNode : public runtime::Component {
   void verify_map_file();
   // `correction_id`: the changes are that loop correction's (marked on the version marker).
   void publish(const MapChanges& changes, std::uint64_t correction_id = 0);
-  void publish_all(const Map& map);
+  // Every keyframe and point state of `map`; then, for a resumed map, the points `removed` (id ->
+  // merged_into) that the map no longer holds are disposed again (their merge sample first).
+  void publish_all(const Map& map, const std::map<PointId, PointId>& removed = {});
+  // Before a save: the points the step being saved removes, to FILE.removed (map_removed_path), so a
+  // mapper killed after the save and before the publication's end disposes them again when it resumes.
+  void write_removed_points(const std::map<PointId, PointId>& removed);
+  // What FILE.removed holds (empty when none or unreadable: one warning).
+  std::map<PointId, PointId> read_removed_points();
+  // test.kill_after_saved_keyframes: SIGKILL after the save of this process's N-th keyframe (first start only).
+  void kill_after_save_for_test(KeyframeId id, const MapChanges& changes);
   // The keyframe with its features on the mapper keyframes topic, for a frontend that rebuilds the
   // map from DDS (needs the camera, so only once the mapper runs).
   void publish_keyframe(const Keyframe& keyframe);
@@ -118,6 +127,9 @@ class MapperNode : public runtime::Component {
   MapChanges unsaved_changes_;               // merged since the last save: what the next record holds
   std::unique_ptr<MapJournal> map_journal_;  // options_.map_file's writer (map_journal.hpp)
   bool reader_wait_done_ = false;
+  std::filesystem::path removed_file_;   // map_removed_path(options_.map_file); empty without a map file
+  bool removed_file_holds_ids_ = false;  // false: nothing to clear before the next save that removes none
+  int keyframes_mapped_here_ = 0;        // by this process (test.kill_after_saved_keyframes)
   MapSaveStats last_save_;
   // The map's size as last reported in the status (record(): counters MAP_added / MAP_removed).
   std::uint64_t reported_keyframes_ = 0;

@@ -38,6 +38,8 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
   o.map_journal_compact_ratio =
       config.get_double("map_journal.compact_ratio", o.map_journal_compact_ratio, kMinCompactRatio, kMaxCompactRatio);
   o.map_journal_verify = config.get_bool("map_journal.verify", o.map_journal_verify);
+  o.test_kill_after_saved_keyframes =
+      config.get_int("test.kill_after_saved_keyframes", o.test_kill_after_saved_keyframes, 0, 1 << 30);
   o.batch_map_writes = config.get_bool("batch_map_writes", o.batch_map_writes);
   const double reader_wait_s = config.get_double("lockstep.reader_wait_s", 2.0, 0.0, kMaxReaderWaitS);
   o.reader_wait = std::chrono::milliseconds(static_cast<long long>(reader_wait_s * 1000.0));

@@ -48,6 +48,10 @@ struct MapperProcessOptions {
   // map_journal.verify (a test aid, off): after every save, FILE is loaded back (snapshot + journal)
   // and compared with the map in memory; a difference is one error line and exit 1.
   bool map_journal_verify = false;
+  // test.kill_after_saved_keyframes (a test aid, 0 = off): the first start of the process (not a
+  // restart) kills itself with SIGKILL right after the save of the N-th keyframe it mapped, before
+  // that keyframe's states are published: the restart window of docs/local_mapper.md made exact.
+  int test_kill_after_saved_keyframes = 0;
   // lockstep.reader_wait_s: before the first KeyframeDone, wait up to this long for the frontend's
   // reader to match. Lockstep acks are transient-local, so one written earlier still arrives; this
   // stays as a cheap guard.

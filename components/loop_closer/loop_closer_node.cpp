@@ -14,6 +14,7 @@
 
 #include "components/core/camera/stereo_rectifier.hpp"
 #include "components/core/map/ids.hpp"
+#include "components/core/map/point_ids_digest.hpp"
 #include "components/core/mapping/map_file.hpp"
 #include "components/messages/camera.hpp"
 #include "components/messages/checks.hpp"
@@ -219,7 +220,7 @@ std::size_t LoopCloserNode::take_all() {
   std::vector<HeldKeyframeDone> still_held;
   for (const HeldKeyframeDone& done : held_keyframe_done_) {
     const runtime::RoleBinding::Claim claim = keyframe_done_roles_->claim(
-        keyframe_done_reader_->handle(), done.component, done.writer, done.keyframe_id, done.held);
+        keyframe_done_reader_->handle(), done.component, done.writer, done.subject(), done.held);
     if (claim == runtime::RoleBinding::Claim::kHeld) {
       still_held.push_back(done);
       still_held.back().held = true;
@@ -272,6 +273,7 @@ void LoopCloserNode::process_ready_keyframes() {
     const auto last = last_processed_.find(creator_of(id));
     if (last != last_processed_.end() && id <= last->second) {
       mapped_.erase(mapped_.begin());
+      keyframe_done_roles_->done(id);
       // A restarted loop closer: the frontend may still wait for the last one.
       if (id == last->second) acknowledge(id);
       continue;
@@ -533,6 +535,8 @@ bool LoopCloserNode::publish_and_wait(LoopCorrection correction) {
     if (auto it = corrections_applied_.find(id);
         it != corrections_applied_.end() && mirror_.map().version >= it->second) {
       corrections_applied_.erase(it);
+      // A restarted mapper acknowledges a replayed correction again (docs/local_mapper.md): no conflict.
+      keyframe_done_roles_->done(id);
       return true;
     }
     const auto now = std::chrono::steady_clock::now();
@@ -651,7 +655,7 @@ void LoopCloserNode::log_summary() {
   const auto counters = stats().counters();
   const auto count = [&](const char* key) { return counters.count(key) != 0 ? counters.at(key) : 0; };
   log().info("map copy: ", mirror_.map().keyframes.size(), " keyframes, ", mirror_.map().points.size(),
-             " points (map version ", mirror_.map().version, ")");
+             " points (map version ", mirror_.map().version, ", point ids ", point_ids_digest(mirror_.map()), ")");
   log().info("processed ", count("keyframes"), " keyframes: ", count("candidates"), " loop candidates, ",
              count("loops_accepted"), " loops accepted, ", count("loops_rejected"), " rejected, ",
              count("global_bundle_adjustments"), " global BAs (", count("global_ba_aborted"), " aborted), ",

@@ -104,6 +104,8 @@ class LoopCloserNode : public runtime::Component {
     std::uint64_t map_version;
     std::uint64_t correction_id;
     bool held = false;  // asked about before (runtime::RoleBinding::claim's `again`)
+    // What the role binding remembers it acknowledged: the correction, or the keyframe (as the frontend's).
+    std::uint64_t subject() const { return correction_id != 0 ? correction_id : keyframe_id; }
   };
   std::vector<HeldKeyframeDone> held_keyframe_done_;
   // The frontend's odometry, for its gravity (inertial runs): gravity_valid samples by stamp, the newest

@@ -24,6 +24,7 @@
 
 #include "components/core/mapping/map_file.hpp"
 #include "fault_plan.hpp"
+#include "journal_frames.hpp"
 #include "pipeline_runs.hpp"
 #include "synth_render.hpp"
 #include "test_support.hpp"
@@ -75,19 +76,6 @@ std::vector<std::uint64_t> read_lost(const fs::path& path) {
   return lost;
 }
 
-// Frames the frontend finished (its journal, STEM.frontend): one more than the largest seq.
-std::size_t frames_done(const fs::path& journal) {
-  std::ifstream in(journal);
-  std::string line;
-  std::getline(in, line);  // header
-  std::size_t frames = 0;
-  unsigned long long seq = 0;
-  while (std::getline(in, line)) {
-    if (std::istringstream(line) >> seq) frames = std::max<std::size_t>(frames, seq + 1);
-  }
-  return frames;
-}
-
 // Runs synth.yaml on `dataset` into dir/label.txt, killing `plan`'s components at its frames.
 AtlasRun run_atlas(const fs::path& dataset, const fs::path& dir, const std::string& label,
                    const std::vector<test::KillEvent>& plan) {
@@ -97,7 +85,7 @@ AtlasRun run_atlas(const fs::path& dataset, const fs::path& dir, const std::stri
   std::size_t next = 0;
   while (next < plan.size() && std::chrono::steady_clock::now() < deadline &&
          !supervisor->wait(std::chrono::milliseconds(0))) {
-    if (frames_done(dir / (label + ".frontend")) < static_cast<std::size_t>(plan[next].at_frame)) {
+    if (test::frames_in_journal(dir / (label + ".frontend")) < static_cast<std::size_t>(plan[next].at_frame)) {
       std::this_thread::sleep_for(kPoll);
       continue;
     }

@@ -14,11 +14,10 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <regex>
 #include <string>
 #include <vector>
 
+#include "mh01_halves.hpp"
 #include "pipeline_runs.hpp"
 #include "test_support.hpp"
 
@@ -27,9 +26,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kFirstA = 0;   // agent a: frames 0-99 of the clip
-constexpr int kFirstB = 60;  // agent b: frames 60-159
-constexpr int kFramesPerAgent = 100;
+constexpr int kFirstA = test::kHalfAFirstFrame;  // agent a: frames 0-99 of the clip
+constexpr int kFirstB = test::kHalfBFirstFrame;  // agent b: frames 60-159
+constexpr int kFramesPerAgent = test::kFramesPerHalf;
 // The issue's bar: a merge within 10 frames of b's start. Measured (docs/agents.md): at b's frame 6 (b's third
 // keyframe recognises a's keyframe of the clip's frame 59, 138 matches).
 constexpr int kMaxMergeDelayFrames = 10;
@@ -37,68 +36,14 @@ constexpr double kMaxAteM = 0.005;  // the issue's bar: ATE of each agent <= 5 m
 constexpr double kRateHz = 20.0;
 constexpr std::chrono::seconds kRunTimeout{900};
 
-// The data rows (not the header) of a CSV file.
-std::vector<std::string> rows(const fs::path& path, std::string* header) {
-  std::ifstream in(path);
-  std::vector<std::string> out;
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty()) continue;
-    if (line[0] == '#') {
-      *header = line;
-      continue;
-    }
-    out.push_back(line);
-  }
-  return out;
-}
-
-void write_rows(const fs::path& path, const std::string& header, const std::vector<std::string>& all, int first,
-                int count) {
-  std::ofstream out(path);
-  out << header << "\n";
-  for (int i = first; i < first + count; ++i) out << all.at(static_cast<std::size_t>(i)) << "\n";
-}
-
-// A copy of the EuRoC folder `source` with frames [first, first + count) of its frame lists and ground
-// truth (images linked, not copied).
-void make_part(const fs::path& source, const fs::path& part, int first, int count) {
-  for (const char* camera : {"cam0", "cam1"}) {
-    const fs::path from = source / "mav0" / camera;
-    const fs::path to = part / "mav0" / camera;
-    fs::create_directories(to);
-    fs::create_symlink(from / "data", to / "data");
-    fs::copy_file(from / "sensor.yaml", to / "sensor.yaml");
-    std::string header;
-    const std::vector<std::string> frames = rows(from / "data.csv", &header);
-    write_rows(to / "data.csv", header, frames, first, count);
-  }
-  fs::copy_file(source / "mav0/body.yaml", part / "mav0/body.yaml");
-  const fs::path truth = "mav0/state_groundtruth_estimate0";
-  fs::create_directories(part / truth);
-  std::string header;
-  const std::vector<std::string> poses = rows(source / truth / "data.csv", &header);
-  write_rows(part / truth / "data.csv", header, poses, first, count);
-}
-
-// The loop closer's merge lines: the stamp (s) of the keyframe at which each merge happened.
-std::vector<double> merge_stamps_s(const std::string& output) {
-  static const std::regex line(R"(maps merged: map \d+ into map \d+ at keyframe \S+ \(stamp ([0-9.]+) s\))");
-  std::vector<double> stamps;
-  for (auto it = std::sregex_iterator(output.begin(), output.end(), line); it != std::sregex_iterator(); ++it) {
-    stamps.push_back(std::stod((*it)[1]));
-  }
-  return stamps;
-}
-
 TEST(TwoAgentsEndToEnd, Mh01HalvesMergeIntoOneFrame) {
   HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
   const fs::path clip = test::shared_dataset("euroc_mh01_handheld");
   const test::ScratchDir dir("two_agents");
   const fs::path half_a = dir.path() / "half_a";
   const fs::path half_b = dir.path() / "half_b";
-  make_part(clip, half_a, kFirstA, kFramesPerAgent);
-  make_part(clip, half_b, kFirstB, kFramesPerAgent);
+  test::make_part(clip, half_a, kFirstA, kFramesPerAgent);
+  test::make_part(clip, half_b, kFirstB, kFramesPerAgent);
 
   const std::string label = "agents";
   test::ChildProcess supervisor(
@@ -118,35 +63,19 @@ TEST(TwoAgentsEndToEnd, Mh01HalvesMergeIntoOneFrame) {
   EXPECT_EQ(b.size(), static_cast<std::size_t>(kFramesPerAgent));
 
   // One merge, within 10 frames of b's start (20 Hz: b's frame k has stamp b's first + k / 20 s).
-  const std::vector<double> merged_at_s = merge_stamps_s(output);
+  const std::vector<double> merged_at_s = test::merge_stamps_s(output);
   ASSERT_EQ(merged_at_s.size(), 1u) << output;
   const long merge_frame_of_b = std::lround((merged_at_s[0] - b.stamps_s.front()) * kRateHz);
 
   // One alignment for both agents: their pairs with the ground truth together.
-  eval::AlignedPair pair_a = eval::associate(test::ground_truth_for(half_a, a), a);
-  eval::AlignedPair pair_b = eval::associate(test::ground_truth_for(half_b, b), b);
-  eval::AlignedPair both = pair_a;
-  for (std::size_t i = 0; i < pair_b.size(); ++i) {
-    both.gt.push_back(pair_b.gt.poses_wc[i], pair_b.gt.frame_ids[i], pair_b.gt.stamps_s[i]);
-    both.est.push_back(pair_b.est.poses_wc[i], pair_b.est.frame_ids[i], pair_b.est.stamps_s[i]);
-  }
-  const eval::ApeResult ape = eval::compute_ape(both);
-  double sum_a = 0.0, sum_b = 0.0;
-  for (std::size_t i = 0; i < ape.translation_errors_m.size(); ++i) {
-    const double e2 = ape.translation_errors_m[i] * ape.translation_errors_m[i];
-    (i < pair_a.size() ? sum_a : sum_b) += e2;
-  }
-  const double ate_a = std::sqrt(sum_a / static_cast<double>(pair_a.size()));
-  const double ate_b = std::sqrt(sum_b / static_cast<double>(pair_b.size()));
-  const double alone_a = eval::compute_ape(pair_a).translation_m.rmse;
-  const double alone_b = eval::compute_ape(pair_b).translation_m.rmse;
+  const test::TwoAgentAte ate = test::two_agent_ate(half_a, a, half_b, b);
   std::printf(
       "[ figures  ] MH01 halves as two agents: ATE in one frame a %.2f mm, b %.2f mm (each aligned alone: %.2f, "
       "%.2f mm); merged at agent b's frame %ld\n",
-      ate_a * 1e3, ate_b * 1e3, alone_a * 1e3, alone_b * 1e3, merge_frame_of_b);
+      ate.a_m * 1e3, ate.b_m * 1e3, ate.alone_a_m * 1e3, ate.alone_b_m * 1e3, merge_frame_of_b);
   EXPECT_LE(merge_frame_of_b, kMaxMergeDelayFrames);
-  EXPECT_LE(ate_a, kMaxAteM);
-  EXPECT_LE(ate_b, kMaxAteM);
+  EXPECT_LE(ate.a_m, kMaxAteM);
+  EXPECT_LE(ate.b_m, kMaxAteM);
   EXPECT_EQ(output.find("refused_agent_keyframes"), std::string::npos) << output;
   // One map in the end: b's map renumbered by the merge, none started again by a keyframe made with its old id.
   EXPECT_FALSE(fs::exists(dir.path() / (label + ".a.maps.txt")));

@@ -1,11 +1,14 @@
 // The local mapper's per-keyframe pipeline and correction entry point.
 #include "components/core/mapping/local_mapper.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "components/core/map/ids.hpp"
 #include "components/core/mapping/correction_application.hpp"
@@ -41,6 +44,33 @@ double ms_since(Clock::time_point& start) {
   return ms;
 }
 
+// The recent points' ages in other agents' keyframes (LocalMapper::other_agents_keyframes_), which the map file
+// does not hold, as they follow from it: the map's keyframes in the order they were processed (created_version)
+// carry the counters keyframes_processed - n + 1 .. keyframes_processed, and each keyframe of another agent than
+// a recent point's, processed after the point was made (recent_points: its counter), skipped it. A resumed
+// mapper (a restart, a session) thus culls as the one that never stopped. One agent: empty.
+std::map<PointId, std::uint64_t> other_agents_keyframes_of(const Map& map, const MapperState& state) {
+  std::vector<std::pair<std::uint64_t, KeyframeId>> order;
+  for (const auto& [id, version] : state.created_version) {
+    if (map.keyframe(id) != nullptr) order.emplace_back(version, id);
+  }
+  std::map<PointId, std::uint64_t> skipped;
+  if (order.empty() || order.size() > state.keyframes_processed) return skipped;  // not a mapper's own state
+  std::sort(order.begin(), order.end());
+  const std::uint64_t first_counter = state.keyframes_processed - order.size() + 1;
+  for (const auto& [point_id, made_at] : state.recent_points) {
+    const MapPoint* point = map.point(point_id);
+    if (point == nullptr) continue;
+    const int agent = agent_of(point->reference_kf);
+    std::uint64_t count = 0;
+    for (std::size_t i = order.size(); i-- > 0 && first_counter + i > made_at;) {
+      if (agent_of(order[i].second) != agent) ++count;
+    }
+    if (count > 0) skipped.emplace(point_id, count);
+  }
+  return skipped;
+}
+
 void check_keyframe(const Map& map, const Keyframe& kf) {
   const std::string name = "keyframe " + format_id(kf.id);
   if (kf.id == kNoId) throw std::invalid_argument("keyframe: id 0 is reserved for 'no keyframe'");
@@ -64,7 +94,11 @@ LocalMapper::LocalMapper(const PinholeStereo& camera, const LocalMapperOptions& 
     : camera_(camera), options_(options) {}
 
 LocalMapper::LocalMapper(const PinholeStereo& camera, const LocalMapperOptions& options, MapSnapshot snapshot)
-    : camera_(camera), options_(options), map_(std::move(snapshot.map)), state_(std::move(snapshot.state)) {}
+    : camera_(camera),
+      options_(options),
+      map_(std::move(snapshot.map)),
+      state_(std::move(snapshot.state)),
+      other_agents_keyframes_(other_agents_keyframes_of(map_, state_)) {}
 
 PointId LocalMapper::resolve_merges(PointId id) const {
   // Merge chains are short; the bound guards a corrupt (cyclic) table.

@@ -69,7 +69,7 @@ class LocalMapper {
   Map map_;
   MapperState state_;
   // Recent points of one agent: the keyframes of other agents processed since they were made, which
-  // their age leaves out (not saved: after a restart such a point ages by them, for 3 keyframes at most).
+  // their age leaves out (not saved: a resumed mapper counts them again from the map, local_mapper.cpp).
   std::map<PointId, std::uint64_t> other_agents_keyframes_;
   BundleAdjustment bundle_adjustment_;
 };
