@@ -148,17 +148,10 @@ void LoopCloserNode::run() {
 
 std::size_t LoopCloserNode::take_all() {
   std::size_t taken = 0;
-  for (auto& received : keyframe_reader_->take()) {
-    ++taken;
-    if (!received.info.valid_data) continue;
-    if (agent_guard_ && !admit_agent_keyframe(*received.sample, received.info.publication_handle)) continue;
-    try {
-      mirror_.add_keyframe(*received.sample);
-    } catch (const std::exception& error) {
-      stats().count("bad_keyframes");
-      log().warn_throttled("bad_keyframes", "topic '", topics().keyframes().name, "': ", error.what(), "; skipped");
-    }
-  }
+  // The keyframes are admitted after the mapper's states taken with them: the agent guard's "the map
+  // exists" is the mapper's word, and a restarted loop closer gets another agent's keyframes of a merged
+  // map and the states that say the map exists in any order (the mirror takes either first).
+  std::vector<runtime::Received<msg::Keyframe>> keyframes = keyframe_reader_->take();
   // The state readers are drained until empty before the version markers taken meanwhile count
   // (messages::MirrorVersion).
   messages::MirrorVersion markers;
@@ -200,6 +193,17 @@ std::size_t LoopCloserNode::take_all() {
       }
     }
     taken += batch;
+  }
+  for (auto& received : keyframes) {
+    ++taken;
+    if (!received.info.valid_data) continue;
+    if (agent_guard_ && !admit_agent_keyframe(*received.sample, received.info.publication_handle)) continue;
+    try {
+      mirror_.add_keyframe(*received.sample);
+    } catch (const std::exception& error) {
+      stats().count("bad_keyframes");
+      log().warn_throttled("bad_keyframes", "topic '", topics().keyframes().name, "': ", error.what(), "; skipped");
+    }
   }
   mirror_.count_markers(markers);
   take_odometry();
@@ -244,12 +248,7 @@ bool LoopCloserNode::admit_agent_keyframe(const msg::Keyframe& message, dds_inst
     stats().count(runtime::kSecondWriterSamples);
     return false;
   }
-  const auto map_exists = [this](MapId map_id) {
-    for (const auto& [id, keyframe] : mirror_.map().keyframes) {
-      if (keyframe.map_id == map_id) return true;
-    }
-    return false;
-  };
+  const auto map_exists = [this](MapId map_id) { return mirror_.knows_map(map_id); };
   const std::optional<std::string> problem = agent_guard_->check(writer, message.id, message.map_id, map_exists);
   if (!problem) return true;
   stats().count("refused_agent_keyframes");

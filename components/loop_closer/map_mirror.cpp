@@ -64,9 +64,18 @@ Keyframe& MapMirror::insert(Keyframe incoming) {
   return keyframe;
 }
 
+bool MapMirror::knows_map(MapId map_id) const {
+  if (mapped_maps_.count(map_id) != 0) return true;
+  for (const auto& [id, keyframe] : map_.keyframes) {
+    if (keyframe.map_id == map_id) return true;  // a loaded map's (load()), before its states come
+  }
+  return false;
+}
+
 void MapMirror::apply_keyframe_state(const msg::KeyframeState& message) {
   if (messages::is_version_marker(message)) return;  // count_markers() takes those
   if (auto problem = messages::check(message)) throw std::runtime_error(*problem);
+  mapped_maps_.insert(message.map_id);
   if (auto awaiting = awaiting_state_.find(message.id); awaiting != awaiting_state_.end()) {
     insert(std::move(awaiting->second));
     awaiting_state_.erase(awaiting);

@@ -16,6 +16,7 @@
 
 #include <map>
 #include <optional>
+#include <set>
 
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/map/map.hpp"
@@ -52,6 +53,9 @@ class MapMirror {
   void count_markers(const messages::MirrorVersion& markers);
 
   const Map& map() const { return map_; }
+  // Whether the mapper holds keyframes of `map_id`: a state of one came (before its keyframe sample,
+  // too), or the map holds one (a loaded map's).
+  bool knows_map(MapId map_id) const;
   // kWithMapperState: keyframes received from the frontend without a mapper state yet (not in map()).
   std::size_t keyframes_awaiting_state() const { return awaiting_state_.size(); }
   // The rectified camera of the first keyframe (every keyframe of a run shares it).
@@ -73,6 +77,7 @@ class MapMirror {
   messages::MirrorVersion version_;
   std::optional<PinholeStereo> camera_;
   std::map<KeyframeId, PendingState> pending_states_;  // states of keyframes not received yet
+  std::set<MapId> mapped_maps_;                        // the maps of every keyframe state received
   // Keyframe samples without a mapper state yet: kept out of map_ until their first state.
   std::map<KeyframeId, Keyframe> awaiting_state_;
 };
