@@ -28,6 +28,10 @@
 namespace heslam::loop_closer {
 namespace {
 
+// How long a keyframe of another agent's map waits for the mapper's state of that map before the agent
+// guard refuses it (the states topic of a restarted loop closer matches within discovery's ~1 s).
+constexpr std::chrono::seconds kAwaitMapState{3};
+
 // Wait granularity of the main loop: shutdown is also signalled through the waitset, this only
 // bounds how long a missed wake-up could delay it.
 constexpr std::chrono::milliseconds kWaitPeriod{200};
@@ -194,12 +198,23 @@ std::size_t LoopCloserNode::take_all() {
     }
     taken += batch;
   }
+  // Those held for their map's state first (a restarted loop closer: the keyframes topic may match
+  // before the states topic), then the new ones, each once.
+  const auto now = std::chrono::steady_clock::now();
+  std::vector<KeyframeAwaitingMap> candidates = std::move(awaiting_map_);
+  awaiting_map_.clear();
   for (auto& received : keyframes) {
     ++taken;
-    if (!received.info.valid_data) continue;
-    if (agent_guard_ && !admit_agent_keyframe(*received.sample, received.info.publication_handle)) continue;
+    if (received.info.valid_data) candidates.push_back({std::move(received), now});
+  }
+  for (KeyframeAwaitingMap& candidate : candidates) {
+    if (agent_guard_) {
+      const Admission admission = admit_agent_keyframe(candidate, now);
+      if (admission == Admission::kWait) awaiting_map_.push_back(std::move(candidate));
+      if (admission != Admission::kAdmitted) continue;
+    }
     try {
-      mirror_.add_keyframe(*received.sample);
+      mirror_.add_keyframe(*candidate.received.sample);
     } catch (const std::exception& error) {
       stats().count("bad_keyframes");
       log().warn_throttled("bad_keyframes", "topic '", topics().keyframes().name, "': ", error.what(), "; skipped");
@@ -243,20 +258,27 @@ std::size_t LoopCloserNode::take_all() {
   return taken;
 }
 
-bool LoopCloserNode::admit_agent_keyframe(const msg::Keyframe& message, dds_instance_handle_t writer) {
+LoopCloserNode::Admission LoopCloserNode::admit_agent_keyframe(const KeyframeAwaitingMap& candidate,
+                                                               std::chrono::steady_clock::time_point now) {
+  const msg::Keyframe& message = *candidate.received.sample;
+  const dds_instance_handle_t writer = candidate.received.info.publication_handle;
   if (!runtime::writer_of_this_run(keyframe_reader_->handle(), writer)) {
     stats().count(runtime::kSecondWriterSamples);
-    return false;
+    return Admission::kRefused;
   }
   const auto map_exists = [this](MapId map_id) { return mirror_.knows_map(map_id); };
   const std::optional<std::string> problem = agent_guard_->check(writer, message.id, message.map_id, map_exists);
-  if (!problem) return true;
+  if (!problem) return Admission::kAdmitted;
+  // Refused only for its map: the mapper's states that say the map exists may still be on their way
+  // (another agent's keyframes of a merged map, replayed to a restarted loop closer); held a while.
+  const bool only_the_map = !agent_guard_->check(writer, message.id, message.map_id, [](MapId) { return true; });
+  if (only_the_map && now - candidate.since < kAwaitMapState) return Admission::kWait;
   stats().count("refused_agent_keyframes");
   log().warn_throttled("refused_agent_keyframes", "topic '", keyframe_reader_->name(), "': ", *problem,
                        "; refused (counted as refused_agent_keyframes)");
   refused_.insert(message.id);
   acknowledge(message.id);  // its lockstep frontend must not wait for a keyframe we will not process
-  return false;
+  return Admission::kRefused;
 }
 
 void LoopCloserNode::process_ready_keyframes() {

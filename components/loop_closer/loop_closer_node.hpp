@@ -53,9 +53,16 @@ class LoopCloserNode : public runtime::Component {
   // returns how many it took. The mirror's map version then is the mapper's version it holds
   // completely (version markers), so a keyframe acknowledged at version v is processed only on it.
   std::size_t take_all();
+  // A keyframe sample taken, and when (held while the mapper's state of its map is on its way).
+  struct KeyframeAwaitingMap {
+    runtime::Received<msg::Keyframe> received;
+    std::chrono::steady_clock::time_point since;
+  };
+  enum class Admission { kAdmitted, kWait, kRefused };
   // --agents N > 1: whether a keyframe of this run's frontends passes the AgentKeyframeGuard; a refused
-  // one is counted (refused_agent_keyframes), named in one line and acknowledged.
-  bool admit_agent_keyframe(const msg::Keyframe& message, dds_instance_handle_t writer);
+  // one is counted (refused_agent_keyframes), named in one line and acknowledged. One refused only
+  // because its map is unknown waits up to kAwaitMapState for the mapper's states of that map.
+  Admission admit_agent_keyframe(const KeyframeAwaitingMap& candidate, std::chrono::steady_clock::time_point now);
   void process_ready_keyframes();
   // The atlas: a place of another map recognised from keyframe `id` (no loop was closed there).
   LoopClosingResult process_merge(KeyframeId id);
@@ -127,6 +134,7 @@ class LoopCloserNode : public runtime::Component {
   BackgroundGlobalBa global_ba_;                           // after closing_: stopped before closing_ goes
   MapMirror mirror_{KeyframeAdmission::kWithMapperState};  // loop closing on mapped keyframes only
   std::optional<AgentKeyframeGuard> agent_guard_;          // --agents N > 1: several frontends (docs/agents.md)
+  std::vector<KeyframeAwaitingMap> awaiting_map_;          // keyframes whose map no state has named yet
   std::set<KeyframeId> refused_;                           // keyframes the agent guard refused (acknowledged already)
   std::map<KeyframeId, std::uint64_t> mapped_;             // mapper acknowledged: keyframe -> map version
   std::map<std::uint64_t, std::uint64_t> corrections_applied_;  // correction id -> map version after it

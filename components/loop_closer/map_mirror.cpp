@@ -39,6 +39,7 @@ void MapMirror::add_keyframe(const msg::Keyframe& message) {
     return;
   }
   Keyframe& keyframe = insert(std::move(incoming));
+  keyframe.map_id = pending->second.map_id;
   keyframe.T_wc = pending->second.T_wc;
   keyframe.parent = pending->second.parent;
   keyframe.covisible = std::move(pending->second.covisible);
@@ -82,6 +83,7 @@ void MapMirror::apply_keyframe_state(const msg::KeyframeState& message) {
   }
   if (messages::apply_keyframe_state(map_, message)) return;
   PendingState& pending = pending_states_[message.id];
+  pending.map_id = message.map_id;
   pending.T_wc = messages::to_pose(message.T_wc);
   pending.parent = message.parent_id;
   pending.covisible.clear();

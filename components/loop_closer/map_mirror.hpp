@@ -63,6 +63,7 @@ class MapMirror {
 
  private:
   struct PendingState {
+    MapId map_id = kFirstMapId;  // the mapper's (a merge moves a keyframe into another map)
     Pose3 T_wc;
     KeyframeId parent = kNoId;
     std::vector<std::pair<KeyframeId, int>> covisible;

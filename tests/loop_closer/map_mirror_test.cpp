@@ -98,6 +98,26 @@ TEST_F(MirrorOfARealTimeRun, AKeyframeEntersTheCopyWithItsFirstMapperState) {
   EXPECT_GT(observed, 100);
 }
 
+// A restarted loop closer can take the mapper's state of a keyframe before the frontend's sample of it
+// (each topic is matched on its own): the state's map id (here: merged into map 7) is the keyframe's, and
+// the map is known from the state alone (the agent guard asks before the sample is admitted).
+TEST_F(MirrorOfARealTimeRun, AStateBeforeItsKeyframeSampleGivesTheKeyframeTheMappersMap) {
+  auto made = publish_keyframe(1, truth(1), kNoId, 0);
+  const messages::KeyframeMessage sample(made.first, 1, made.second, world_.camera, kNoId, 0);
+  map(std::move(made), kNoId, 0);
+  Keyframe merged = mapper_.map().keyframes.at(1);
+  merged.map_id = 7;
+  std::vector<msg::CovisibleKeyframe> covisible;
+  MapMirror restarted(KeyframeAdmission::kWithMapperState);
+  EXPECT_FALSE(restarted.knows_map(7));
+  restarted.apply_keyframe_state(messages::to_state_message(merged, mapper_.map().version, covisible));
+  EXPECT_TRUE(restarted.knows_map(7));
+  EXPECT_FALSE(restarted.knows_map(kFirstMapId));
+  restarted.add_keyframe(sample.get());
+  ASSERT_NE(restarted.map().keyframe(1), nullptr);
+  EXPECT_EQ(restarted.map().keyframe(1)->map_id, 7u);
+}
+
 TEST_F(MirrorOfARealTimeRun, GlobalBaAfterALoopCorrectionKeepsAKeyframeThatWasInFlight) {
   for (KeyframeId k = 1; k <= 4; ++k) {
     map(publish_keyframe(k, truth(k), k - 1, mapper_.map().version), k - 1, mapper_.map().version);
