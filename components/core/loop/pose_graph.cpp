@@ -1,5 +1,6 @@
 // SE(3) pose graph: Gauss-Newton / Levenberg-Marquardt with analytic Jacobians on the block-sparse
-// normal equations, factorized by Eigen's simplicial Cholesky in a fill-reducing order of the keyframes.
+// normal equations, factorized by a supernodal block Cholesky (solve/block_sparse_cholesky.hpp) in a
+// fill-reducing order of the keyframes.
 // Until issue 41 this was a Ceres problem (autodiff, SPARSE_NORMAL_CHOLESKY): the same cost and the
 // same convergence tests, 2-2.5x slower at 5,000 keyframes (its general sparse assembly and scalar
 // ordering); tests/loop/pose_graph_test.cpp keeps that formulation as the reference it must match.
@@ -13,9 +14,9 @@
 #include <string>
 
 #include <Eigen/OrderingMethods>
-#include <Eigen/SparseCholesky>
 
 #include "components/core/imu/so3.hpp"
+#include "components/core/solve/block_sparse_cholesky.hpp"
 
 namespace heslam {
 namespace {
@@ -72,22 +73,14 @@ double robust_weight(double squared_norm, const PoseGraphOptions& options) {
   return options.huber_delta / std::sqrt(squared_norm);
 }
 
-// Eigen's simplicial LL^T of a matrix already in its fill-reducing order, upper triangle stored:
-// analysed and factorized in place. (Its own analyzePattern copies the matrix twice even for the
-// natural order, as NaturalOrdering<int> is not the NaturalOrdering<Index> it tests for: a third of
-// the solver's time at 5,000 keyframes, most of it page faults.)
-class InPlaceLLT : public Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>> {
- public:
-  void analyze_in_place(const Eigen::SparseMatrix<double>& H) { analyzePattern_preordered(H, false); }
-};
-
 // Gauss-Newton with Levenberg-Marquardt damping on the block-sparse normal equations, the pattern
-// and its fill-reducing ordering analysed once (AMD on the keyframe graph, Eigen's simplicial LL^T).
-// Simplicial rather than CHOLMOD's supernodal factorization: the essential graph's covisibility band
-// gives almost no fill in this order (at 5,000 keyframes L has 2.69 M entries, H's upper triangle 2.76
-// M), so supernodes bring little, and CHOLMOD 5.12 runs its copies in 4 OpenMP threads whatever the
-// machine: measured back to back at 5,000 keyframes (4 iterations, load 15-25), 1.0-1.7 s of process
-// CPU against 1.5-1.9 s for the same steps (the poses agree to 1e-12 m).
+// and its fill-reducing ordering analysed once (AMD on the keyframe graph), factorized by dense panels
+// (BlockSparseCholesky). A loop closing a long chain of keyframes is what costs: its ring has twice the
+// chain's band in any order, and at 5,000 keyframes L grows from 2.7 M to 5.0 M entries and 3.5x the
+// flops; Eigen's scalar simplicial LL^T took 85 % of LoopCorrectionBuilder::compute there (1.9 of 2.25 s
+// of CPU), the panels a quarter of that (docs/loop_closing.md, "Measured"). Not CHOLMOD's
+// supernodal method: it runs its copies in 4 OpenMP threads whatever the machine, and was slower
+// than the simplicial one on the chain alone (1.5-1.9 s of CPU against 1.0-1.7 s, issue 41).
 // D = 6: SE(3) unknowns (phi, dt), R <- R Exp(phi). D = 4 (inertial, options.four_dof): (psi, dt), a yaw
 // psi about the world's gravity axis a, R <- Exp(psi a) R = R Exp(psi R^T a), so the 6-DoF Jacobians
 // times [R^T a, 0; 0, I3] are the 4-DoF ones, and the direction of gravity in every camera (roll and
@@ -113,10 +106,9 @@ class GaussNewtonPoseGraph {
     double cost = total_cost(R_, t_);
     stats.initial_cost = cost;
     double lambda = kInitialLambda;
-    // The unknowns are already in a fill-reducing order (compute_gauss_newton); with the natural
-    // order and the upper triangle Eigen factorizes H_ in place, without a permuted copy.
-    InPlaceLLT solver;
-    solver.analyze_in_place(H_);
+    // The unknowns are already in a fill-reducing order (compute_gauss_newton).
+    BlockSparseCholesky solver;
+    solver.analyze(H_, D);
     Eigen::VectorXd gradient(D * unknowns_);
     int iterations = 0;
     while (iterations < options_.max_iterations) {
@@ -170,15 +162,14 @@ class GaussNewtonPoseGraph {
   }
 
   // Factorizes H + lambda diag(H) (H itself is left undamped). False when it is not positive definite.
-  bool factorize(InPlaceLLT& solver, double lambda) {
+  bool factorize(BlockSparseCholesky& solver, double lambda) {
     const Eigen::VectorXd diagonal = H_.diagonal();
     for (int k = 0; k < H_.outerSize(); ++k) {
       H_.coeffRef(k, k) = diagonal[k] + lambda * std::max(diagonal[k], kMinDiagonal);
     }
-    solver.factorize(H_);
+    const bool factorized = solver.factorize(H_);
     for (int k = 0; k < H_.outerSize(); ++k) H_.coeffRef(k, k) = diagonal[k];
-    factorized_ = solver.info() == Eigen::Success;
-    return factorized_;
+    return factorized;
   }
 
   const std::vector<Eigen::Matrix3d>& R() const { return R_; }
@@ -226,7 +217,7 @@ class GaussNewtonPoseGraph {
     return 0.5 * cost;
   }
 
-  // H (upper blocks) and the gradient J^T r at the current poses.
+  // H (lower blocks) and the gradient J^T r at the current poses.
   void linearize(Eigen::VectorXd& gradient) {
     std::fill(H_.valuePtr(), H_.valuePtr() + H_.nonZeros(), 0.0);
     gradient.setZero();
@@ -246,11 +237,11 @@ class GaussNewtonPoseGraph {
         gradient.template segment<D>(D * e.to_unknown) += w * J_t.transpose() * r;
       }
       if (e.from_unknown >= 0 && e.to_unknown >= 0) {
-        // The stored block is (smaller unknown, larger unknown).
+        // The stored block is (larger unknown, smaller unknown).
         if (e.from_unknown < e.to_unknown) {
-          add_block(e.offset_ft, w * J_f.transpose() * J_t);
-        } else {
           add_block(e.offset_ft, w * J_t.transpose() * J_f);
+        } else {
+          add_block(e.offset_ft, w * J_f.transpose() * J_t);
         }
       }
     }
@@ -265,11 +256,11 @@ class GaussNewtonPoseGraph {
 
   // The block pattern: a DxD block per unknown on the diagonal and per edge between two unknowns.
   void build_pattern() {
-    std::vector<std::vector<int>> rows_of_column(unknowns_);  // block rows of each block column (upper)
+    std::vector<std::vector<int>> rows_of_column(unknowns_);  // block rows of each block column (lower)
     for (int u = 0; u < unknowns_; ++u) rows_of_column[u].push_back(u);
     for (const SolverEdge& e : edges_) {
       if (e.from_unknown < 0 || e.to_unknown < 0) continue;
-      const int row = std::min(e.from_unknown, e.to_unknown), column = std::max(e.from_unknown, e.to_unknown);
+      const int row = std::max(e.from_unknown, e.to_unknown), column = std::min(e.from_unknown, e.to_unknown);
       rows_of_column[column].push_back(row);
     }
     for (auto& rows : rows_of_column) {
@@ -303,7 +294,7 @@ class GaussNewtonPoseGraph {
       if (e.from_unknown >= 0) e.offset_ff = offsets(e.from_unknown, e.from_unknown);
       if (e.to_unknown >= 0) e.offset_tt = offsets(e.to_unknown, e.to_unknown);
       if (e.from_unknown >= 0 && e.to_unknown >= 0) {
-        e.offset_ft = offsets(std::min(e.from_unknown, e.to_unknown), std::max(e.from_unknown, e.to_unknown));
+        e.offset_ft = offsets(std::max(e.from_unknown, e.to_unknown), std::min(e.from_unknown, e.to_unknown));
       }
     }
   }
@@ -314,9 +305,8 @@ class GaussNewtonPoseGraph {
   int unknowns_;
   std::vector<SolverEdge> edges_;
   PoseGraphOptions options_;
-  Eigen::Vector3d yaw_axis_w_;  // unit, along gravity (D = 4)
-  Eigen::SparseMatrix<double> H_;
-  bool factorized_ = false;
+  Eigen::Vector3d yaw_axis_w_;     // unit, along gravity (D = 4)
+  Eigen::SparseMatrix<double> H_;  // lower triangle
 };
 
 void compute_gauss_newton(const std::map<KeyframeId, Pose3>& initial_T_wc, const std::vector<PoseGraphEdge>& edges,

@@ -377,7 +377,7 @@ void bench_size(const Args& args, int keyframes, const std::vector<Descriptor>& 
   Timings mapper_apply;
   Map corrected_map;
   for (int r = 0; r < args.repeats; ++r) {
-    LocalMapper mapper(camera, LocalMapperOptions{}, MapSnapshot{map, MapperState{}, std::nullopt});
+    LocalMapper mapper(camera, LocalMapperOptions{}, MapSnapshot{map, MapperState{}, std::nullopt, {}});
     mapper_apply.start();
     applied = mapper.apply_correction(correction);
     mapper_apply.stop();
