@@ -352,10 +352,11 @@ void LoopCloserNode::process_keyframe(KeyframeId id) {
     std::snprintf(stamp, sizeof stamp, "%.6f", query != nullptr ? static_cast<double>(query->stamp_ns) * 1e-9 : 0.0);
     log().info("maps merged: map ", result.merged_map, " into map ", result.into_map, " at keyframe ", format_id(id),
                " (stamp ", stamp, " s): ", format_id(correction.loop_kf), " -> ", format_id(correction.matched_kf),
-               " with ", result.loop_matches, " matches; ", result.merge_stats.moved_keyframes, " keyframes moved, ",
-               correction.point_merges.size(), " points fused, ", result.merge_stats.seam_connections,
-               " keyframe pairs joined across the seam, ", correction.corrected_T_wc.size(), " keyframes corrected in ",
-               result.timings.merge_ms, " ms (map version ", mirror_.map().version, ")");
+               " with ", result.loop_matches, " matches (", result.merge_found, "); ",
+               result.merge_stats.moved_keyframes, " keyframes moved, ", correction.point_merges.size(),
+               " points fused, ", result.merge_stats.seam_connections, " keyframe pairs joined across the seam, ",
+               correction.corrected_T_wc.size(), " keyframes corrected in ", result.timings.merge_ms,
+               " ms (map version ", mirror_.map().version, ")");
   } else {
     log().info("loop closed: keyframe ", format_id(id), " -> ", format_id(correction.matched_kf), " with ",
                result.loop_matches, " matches; correcting ", correction.corrected_T_wc.size(), " keyframes, merging ",

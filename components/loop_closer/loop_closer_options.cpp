@@ -58,6 +58,7 @@ LoopCloserProcessOptions LoopCloserProcessOptions::from_config(const runtime::Co
   merge.min_matches = config.get_int("merge.min_matches", merge.min_matches, 1, 100000);
   merge.covisible_confirmations = config.get_int("merge.covisible_confirmations", merge.covisible_confirmations, 0, 5);
   merge.confirmation_matches = config.get_int("merge.confirmation_matches", merge.confirmation_matches, 1, 100000);
+  merge.min_found_share = config.get_double("merge.min_found_share", merge.min_found_share, 0.0, 1.0);
   merge.seam_bundle_adjustment = config.get_bool("merge.seam_bundle_adjustment", merge.seam_bundle_adjustment);
   o.global_bundle_adjustment = config.get_bool("global_ba.enabled", o.global_bundle_adjustment);
   o.global_ba_imu = config.get_bool("global_ba.imu", o.global_ba_imu);

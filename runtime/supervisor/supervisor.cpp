@@ -491,6 +491,19 @@ void Supervisor::follow_remote_hosts() {
 
 void Supervisor::follow_remote_end_of_stream() {
   if (!pipeline_.split() || end_requested_) return;
+  // The components that end the run together (on_exit: shutdown_with_all, the replays of several agents)
+  // on several hosts: the last to end, here or there, ends it. Checked here too, not only when one of ours
+  // exits: ours may all have ended before another host's.
+  const bool with_all = std::any_of(components_.begin(), components_.end(),
+                                    [](const auto& component) { return component->spec.shutdown_with_all; });
+  if (with_all && all_shutdown_with_all_ended()) {
+    clear_progress();
+    log_.info(
+        "every component that ends the run together (on_exit: shutdown_with_all) has ended, here or on "
+        "another host; stopping");
+    end_requested_ = true;
+    return;
+  }
   // Another host's supervisor ends the run itself when its component ends (follow_remote_hosts).
   const std::string prefix = std::string(kSupervisorName) + kHostSeparator;
   for (const auto& [name, seen] : dds_->seen) {
@@ -698,12 +711,18 @@ void Supervisor::on_exit(Managed& component, int wait_status) {
     if (component.spec.required) fail(name + " " + how + why);
   }
   if (component.spec.shutdown_on_exit || (!success && component.spec.required)) end_requested_ = true;
-  if (component.spec.shutdown_with_all) {
-    const bool all_ended = std::all_of(components_.begin(), components_.end(), [](const auto& other) {
-      return !other->spec.shutdown_with_all || other->phase == Phase::kEnded;
-    });
-    if (all_ended) end_requested_ = true;
-  }
+  if (component.spec.shutdown_with_all && all_shutdown_with_all_ended()) end_requested_ = true;
+}
+
+bool Supervisor::all_shutdown_with_all_ended() const {
+  return std::all_of(components_.begin(), components_.end(), [this](const auto& other) {
+    if (!other->spec.shutdown_with_all) return true;
+    if (!other->spec.remote) return other->phase == Phase::kEnded;
+    // Another host's (an agent's replay there): ended when its status says so.
+    const auto it = dds_->seen.find(other->spec.name);
+    return it != dds_->seen.end() &&
+           (it->second.state == heslam_msg_STATE_SHUTTING_DOWN || it->second.state == heslam_msg_STATE_FAILED);
+  });
 }
 
 void Supervisor::pump(std::chrono::milliseconds timeout) {

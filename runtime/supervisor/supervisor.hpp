@@ -139,6 +139,9 @@ class Supervisor {
   // A component that ends the run (on_exit: shutdown) but runs outside any supervisor (started by
   // hand next to an --only run): its SHUTTING_DOWN status ends this run as its exit would.
   void follow_remote_end_of_stream();
+  // Every component with on_exit: shutdown_with_all has ended: ours exited, another host's reported
+  // SHUTTING_DOWN or FAILED on the status topic.
+  bool all_shutdown_with_all_ended() const;
 
   Pipeline pipeline_;
   SupervisorOptions options_;

@@ -80,27 +80,6 @@ bool handles_pause_signals(pid_t pid) {
   return (caught & bit(SIGUSR1)) && (caught & bit(SIGUSR2));
 }
 
-// Stops the runs still going when the test leaves early (a failed ASSERT): SIGTERM to each
-// supervisor, which stops its components, and a bounded wait; ChildProcess's own destructor would
-// SIGKILL the supervisor, and the namespaces are deleted right after, so a component still shutting
-// down then loses its network interface and hangs for good in Cyclone's dds_delete (its receive
-// thread is never woken). Declared after the runs, so it runs before their destructors.
-class StopRunsOnExit {
- public:
-  explicit StopRunsOnExit(std::vector<test::ChildProcess*> runs) : runs_(std::move(runs)) {}
-  ~StopRunsOnExit() {
-    for (test::ChildProcess* run : runs_) run->signal(SIGTERM);
-    for (test::ChildProcess* run : runs_) run->wait(kStopBound);
-  }
-  StopRunsOnExit(const StopRunsOnExit&) = delete;
-  StopRunsOnExit& operator=(const StopRunsOnExit&) = delete;
-
- private:
-  // A supervisor gives its components a few seconds after SIGTERM; this leaves room on a loaded machine.
-  static constexpr std::chrono::seconds kStopBound{60};
-  std::vector<test::ChildProcess*> runs_;
-};
-
 class MultiHost : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -152,7 +131,7 @@ TEST_F(MultiHost, LockstepOverTwoHostsIsBitIdenticalToOneHost) {
   // Server first, as a user would start the map server; it waits for the camera host's recorder.
   auto server = start_half(kServer, "euroc", "two", domain);
   auto camera = start_half(kCamera, "euroc", "two", domain);
-  const StopRunsOnExit stop_runs({camera.get(), server.get()});
+  const test::StopRunsOnExit stop_runs({camera.get(), server.get()});
   const int camera_code = test::finish(*camera);
   const int server_code = test::finish(*server, 60s);
   EXPECT_EQ(camera_code, 0) << camera->err();
@@ -183,7 +162,7 @@ TEST_F(MultiHost, RealTimeRunSurvivesATwoSecondLinkCut) {
   const int domain = test::exclusive_domain_id();
   auto server = start_half(kServer, "euroc_realtime", "cut", domain, {"--arg", "rate=0.5"});
   auto camera = start_half(kCamera, "euroc_realtime", "cut", domain, {"--arg", "rate=0.5"});
-  const StopRunsOnExit stop_runs({camera.get(), server.get()});
+  const test::StopRunsOnExit stop_runs({camera.get(), server.get()});
   const auto deadline = std::chrono::steady_clock::now() + kPipelineBound;
   // Polls `done` every 20 ms while the camera host's run goes on (at most until the deadline).
   const auto wait_until = [&](const auto& done) {

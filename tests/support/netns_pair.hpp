@@ -6,10 +6,12 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "child_process.hpp"
@@ -121,6 +123,27 @@ class NetnsPair {
 
   std::string ns_[2], veth_[2], address_[2], root_veth_;
   bool ok_ = false;
+};
+
+// Stops the runs still going when the test leaves early (a failed ASSERT): SIGTERM to each
+// supervisor, which stops its components, and a bounded wait; ChildProcess's own destructor would
+// SIGKILL the supervisor, and the namespaces are deleted right after, so a component still shutting
+// down then loses its network interface and hangs for good in Cyclone's dds_delete (its receive
+// thread is never woken). Declared after the runs, so it runs before their destructors.
+class StopRunsOnExit {
+ public:
+  explicit StopRunsOnExit(std::vector<ChildProcess*> runs) : runs_(std::move(runs)) {}
+  ~StopRunsOnExit() {
+    for (ChildProcess* run : runs_) run->signal(SIGTERM);
+    for (ChildProcess* run : runs_) run->wait(kStopBound);
+  }
+  StopRunsOnExit(const StopRunsOnExit&) = delete;
+  StopRunsOnExit& operator=(const StopRunsOnExit&) = delete;
+
+ private:
+  // A supervisor gives its components a few seconds after SIGTERM; this leaves room on a loaded machine.
+  static constexpr std::chrono::seconds kStopBound{60};
+  std::vector<ChildProcess*> runs_;
 };
 
 }  // namespace heslam::test

@@ -5,6 +5,8 @@
 // loop verification's top-up and the loop correction's duplicate search.
 #pragma once
 
+#include <optional>
+
 #include "components/core/camera/pinhole_stereo.hpp"
 #include "components/core/geometry/pose.hpp"
 #include "components/core/map/map.hpp"
@@ -17,6 +19,15 @@ struct ProjectionMatchOptions {
   int max_descriptor_distance = 50;  // ORB-SLAM2 TH_LOW
   double min_view_cos = 0.5;         // viewing direction within 60 degrees of the point's mean
 };
+
+// Where `point` would be seen from a camera at T_wc: its pixel and distance, or nullopt when the
+// projection test fails (behind, outside the image, outside its scale range, too oblique).
+struct PredictedView {
+  Eigen::Vector2d uv_px;
+  double distance_m = 0.0;
+};
+std::optional<PredictedView> predict_view(const MapPoint& point, const Pose3& T_wc, const PinholeStereo& camera,
+                                          const ProjectionMatchOptions& options);
 
 // The keypoint index of `kf` (seen from T_wc, `grid` built on its keypoints) that best matches
 // `point`, or -1.

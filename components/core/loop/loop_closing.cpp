@@ -65,19 +65,22 @@ std::string implausible_drift(const Map& map, const Keyframe& loop_kf, const Key
 }
 
 // How many of the live points of the keyframes `group` match a keypoint of `kf` when `kf` is placed at
-// T_wc (each point and each keypoint once): the verification's top-up, for another keyframe.
+// T_wc (each point and each keypoint once): the verification's top-up, for another keyframe. `in_view`
+// (optional) receives how many of them pass the projection test there (predict_view).
 int projection_matches(const Map& map, const Keyframe& kf, const Pose3& T_wc, const std::vector<KeyframeId>& group,
-                       const PinholeStereo& camera, const ProjectionMatchOptions& projection) {
+                       const PinholeStereo& camera, const ProjectionMatchOptions& projection, int* in_view = nullptr) {
   const FeatureGrid grid(kf.features.keypoints, camera.width_px, camera.height_px);
   std::vector<bool> taken(kf.features.size(), false);
   std::set<PointId> seen;
   int matches = 0;
+  if (in_view != nullptr) *in_view = 0;
   for (const KeyframeId kf_id : group) {
     const Keyframe* member = map.keyframe(kf_id);
     if (member == nullptr || member->culled) continue;
     for (const PointId point_id : member->point_ids) {
       const MapPoint* point = live_point(map, point_id);
       if (point == nullptr || !seen.insert(point_id).second) continue;
+      if (in_view != nullptr && predict_view(*point, T_wc, camera, projection)) ++*in_view;
       const int index = best_projection_match(*point, kf, T_wc, grid, camera, projection);
       if (index < 0 || taken[static_cast<std::size_t>(index)]) continue;
       taken[static_cast<std::size_t>(index)] = true;
@@ -85,6 +88,13 @@ int projection_matches(const Map& map, const Keyframe& kf, const Pose3& T_wc, co
     }
   }
   return matches;
+}
+
+// `kf` and its covisible keyframes.
+std::vector<KeyframeId> covisible_group(const Keyframe& kf) {
+  std::vector<KeyframeId> group{kf.id};
+  for (const auto& [neighbour, weight] : kf.covisible) group.push_back(neighbour);
+  return group;
 }
 
 // Whether map `a` (first keyframe stamp `a_first_ns`) is older than map `b`. One agent numbers its maps
@@ -278,7 +288,11 @@ LoopClosingResult LoopClosing::process_merge(const Map& map, KeyframeId query) {
     const auto verification_start = Clock::now();
     std::string why;
     const std::optional<VerifiedPlace> place = verify_place(map, query, candidate_id, /*drift_gate=*/false, why);
-    if (place && place->matches >= options_.merge.min_matches && !confirmed) {
+    // The share of the predicted points found, for every verified candidate: a look-alike place's figure
+    // is in the debug log of its rejection whichever test refuses it first.
+    std::string found;
+    const bool look_alike = place && found_share_too_low(map, *query_kf, candidate_id, place->T_matched_loop, found);
+    if (place && place->matches >= options_.merge.min_matches && !look_alike && !confirmed) {
       why = confirm_in_space(map, *query_kf, candidate_id, place->T_matched_loop);
     }
     result.timings.verification_ms += ms_since(verification_start);
@@ -288,7 +302,11 @@ LoopClosingResult LoopClosing::process_merge(const Map& map, KeyframeId query) {
     }
     if (place->matches < options_.merge.min_matches) {
       result.rejected.push_back({candidate_id, "merge: " + std::to_string(place->matches) + " matches (< " +
-                                                   std::to_string(options_.merge.min_matches) + ")"});
+                                                   std::to_string(options_.merge.min_matches) + "); " + found});
+      continue;
+    }
+    if (look_alike) {
+      result.rejected.push_back({candidate_id, "merge: a look-alike place: " + found});
       continue;
     }
     if (!why.empty()) {
@@ -332,6 +350,7 @@ LoopClosingResult LoopClosing::process_merge(const Map& map, KeyframeId query) {
       continue;
     }
     result.loop_matches = place->matches;
+    result.merge_found = found;
     result.merged_map = map.keyframe(request.active_kf)->map_id;
     result.into_map = map.keyframe(request.matched_kf)->map_id;
     result.correction = std::move(merged.correction);
@@ -346,8 +365,7 @@ std::string LoopClosing::confirm_in_space(const Map& map, const Keyframe& query,
                                           const Pose3& T_matched_query) const {
   const Keyframe& candidate = *map.keyframe(candidate_id);
   const Pose3 T_BA = candidate.T_wc * T_matched_query * query.T_wc.inverse();
-  std::vector<KeyframeId> group{candidate_id};
-  for (const auto& [neighbour, weight] : candidate.covisible) group.push_back(neighbour);
+  const std::vector<KeyframeId> group = covisible_group(candidate);
   ProjectionMatchOptions projection;
   projection.radius_px = options_.projection_radius_px;
   projection.max_descriptor_distance = options_.matching.descriptor_threshold_low;
@@ -369,6 +387,31 @@ std::string LoopClosing::confirm_in_space(const Map& map, const Keyframe& query,
          std::to_string(options_.merge.covisible_confirmations) + "; projection matches " +
          (counts.empty() ? std::string("none") : counts) +
          ", >= " + std::to_string(options_.merge.confirmation_matches) + " each)";
+}
+
+bool LoopClosing::found_share_too_low(const Map& map, const Keyframe& query, KeyframeId candidate_id,
+                                      const Pose3& T_matched_query, std::string& figures) const {
+  const Keyframe& candidate = *map.keyframe(candidate_id);
+  ProjectionMatchOptions projection;
+  projection.radius_px = options_.projection_radius_px;
+  projection.max_descriptor_distance = options_.matching.descriptor_threshold_low;
+  // The candidate's group seen from the query placed in the candidate's map, and the query's group seen
+  // from the candidate placed in the query's map.
+  int in_view_of_query = 0, in_view_of_candidate = 0;
+  const int found_in_query = projection_matches(map, query, candidate.T_wc * T_matched_query,
+                                                covisible_group(candidate), camera_, projection, &in_view_of_query);
+  const int found_in_candidate = projection_matches(map, candidate, query.T_wc * T_matched_query.inverse(),
+                                                    covisible_group(query), camera_, projection, &in_view_of_candidate);
+  const int found = found_in_query + found_in_candidate;
+  const int in_view = in_view_of_query + in_view_of_candidate;
+  const double share = in_view > 0 ? static_cast<double>(found) / in_view : 0.0;
+  char text[200];
+  std::snprintf(text, sizeof text,
+                "%d of the %d points predicted in view found (%.1f %%: %d of %d, %d of %d; >= %.1f %%)", found, in_view,
+                100.0 * share, found_in_query, in_view_of_query, found_in_candidate, in_view_of_candidate,
+                100.0 * options_.merge.min_found_share);
+  figures = text;
+  return share < options_.merge.min_found_share;
 }
 
 std::optional<LoopCorrection> LoopClosing::global_bundle_adjustment(const Map& map, const std::atomic<bool>* abort,

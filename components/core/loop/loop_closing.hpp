@@ -78,6 +78,7 @@ struct LoopClosingResult {
   MapId merged_map = kFirstMapId;  // a merge: the map welded into ...
   MapId into_map = kFirstMapId;    // ... this one
   MapMergeStats merge_stats;
+  std::string merge_found;  // a merge: the points predicted in view found (LoopClosing::found_share_too_low)
   LoopClosingTimings timings;
 };
 
@@ -107,6 +108,11 @@ class LoopClosing {
   // the candidate's covisible group where T_matched_query places them (MapMergeOptions), else why not.
   std::string confirm_in_space(const Map& map, const Keyframe& query, KeyframeId candidate,
                                const Pose3& T_matched_query) const;
+  // A verified merge at a look-alike place: true when, of the points the candidate's covisible group puts
+  // in the query's view and the query's group in the candidate's (placed by T_matched_query), fewer than
+  // MapMergeOptions::min_found_share are found there; `figures` says how many were.
+  bool found_share_too_low(const Map& map, const Keyframe& query, KeyframeId candidate, const Pose3& T_matched_query,
+                           std::string& figures) const;
 
   // A global bundle adjustment of the whole map, as a correction of kind kGlobalBundleAdjustment
   // (poses and point positions). nullopt when `abort` was set before it finished. `inertial`: the IMU

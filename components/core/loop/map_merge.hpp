@@ -60,6 +60,15 @@ struct MapMergeOptions {
   // transform places them, each with >= `confirmation_matches` projection matches.
   int covisible_confirmations = 2;
   int confirmation_matches = 40;
+  // A look-alike place passes min_matches on its repeated part alone: corridor_loop's ring is point
+  // symmetric in its brick panels, floor tiles and twin checkerboards, and two agents walking it half a
+  // ring apart match each other's mirrored corridor with up to 78 matches (80 needed), while the true
+  // place gave 81 at its first keyframe. What tells them apart is what is NOT matched: of the points each
+  // side's covisible group predicts in the other keyframe's view (the projection test), a true place
+  // finds many (measured: 14.1-20.5 % at the merges of corridor_loop's two agents, corridor_jump with
+  // both closers and the MH01 halves), a look-alike few (its unique panels do not match: 3.5-9.6 %, the
+  // highest at 44 matches). A verified merge needs this share (docs/loop_closing.md, Merging).
+  double min_found_share = 0.12;
   bool seam_bundle_adjustment = true;
   LocalBundleAdjustmentOptions seam_ba;
   LoopCorrectionBuilderOptions correction;  // fusion thresholds, essential graph, pose_graph.*
