@@ -12,6 +12,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <set>
 #include <vector>
 
 #include "components/core/camera/pinhole_stereo.hpp"
@@ -71,6 +72,9 @@ class LocalMapper {
   // Recent points of one agent: the keyframes of other agents processed since they were made, which
   // their age leaves out (not saved: a resumed mapper counts them again from the map, local_mapper.cpp).
   std::map<PointId, std::uint64_t> other_agents_keyframes_;
+  // Keyframes made on a revisit (KeyframeCullingOptions::revisit_*), culled once a newer keyframe is
+  // mapped next to them (not saved: after a restart they stay, as any keyframe).
+  std::set<KeyframeId> revisit_keyframes_;
   BundleAdjustment bundle_adjustment_;
 };
 
