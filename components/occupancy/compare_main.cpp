@@ -132,6 +132,10 @@ int main(int argc, char** argv) {
         "occupied IoU %.4f (%zu of %zu truth cells, %zu grid cells), truth-occupied cells free %zu, unknown %zu\n",
         a.occupied_iou, a.both_occupied, a.truth_occupied, a.grid_occupied, a.free_in_truth_occupied,
         a.truth_occupied_unknown);
+    std::printf(
+        "grid-occupied outside the truth at 1 / 2 / 3+ cells from it: %zu / %zu / %zu; "
+        "truth-occupied missed at 1 / 2 / 3+ cells from the grid's: %zu / %zu / %zu\n",
+        a.extra_at[0], a.extra_at[1], a.extra_at[2], a.missed_at[0], a.missed_at[1], a.missed_at[2]);
     const bool ok =
         a.occupied_iou >= min_iou && a.free_in_truth_occupied <= static_cast<std::size_t>(max_free_in_walls);
     return ok ? 0 : 1;

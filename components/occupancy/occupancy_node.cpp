@@ -166,6 +166,14 @@ void OccupancyNode::take_all() {
     auto rectifier = std::make_shared<const StereoRectifier>(messages::to_calibration(message));
     log().info("calibration: raw ", rectifier->raw_size().width, "x", rectifier->raw_size().height,
                " pixels, rectified bf ", rectifier->camera().bf(), " px m");
+    const double nearest_m = rectifier->camera().bf() / options_.stereo.num_disparities;
+    if (nearest_m >= options_.stereo.max_depth_m) {
+      log().warn("stereo: the nearest depth ", options_.stereo.num_disparities, " disparities reach (bf / ",
+                 options_.stereo.num_disparities, " = ", nearest_m, " m) is beyond stereo.max_depth_m (",
+                 options_.stereo.max_depth_m,
+                 " m): no point can be kept; raise stereo.num_disparities or max_depth_m "
+                 "(config/occupancy/street.yaml: a wide-baseline camera outdoors)");
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     rectifier_ = std::move(rectifier);
   });

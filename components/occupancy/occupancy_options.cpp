@@ -42,6 +42,7 @@ OccupancyProcessOptions OccupancyProcessOptions::from_config(const runtime::Conf
   v.tsdf_occupied_m = config.get_double("voxel.tsdf_occupied_m", v.tsdf_occupied_m, 0.001, 10.0);
   v.tsdf_min_weight = config.get_double("voxel.tsdf_min_weight", v.tsdf_min_weight, 0.001, 1e6);
   v.tsdf_free_ratio = config.get_double("voxel.tsdf_free_ratio", v.tsdf_free_ratio, 0.001, 1e6);
+  v.tsdf_zero_crossing = config.get_bool("voxel.tsdf_zero_crossing", v.tsdf_zero_crossing);
   if (!(v.tsdf_occupied_m < v.tsdf_truncation_m)) {
     throw std::runtime_error(config.source() + ": voxel.tsdf_occupied_m must be below voxel.tsdf_truncation_m");
   }

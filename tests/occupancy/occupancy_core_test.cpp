@@ -174,6 +174,11 @@ TEST(OccupancyGrid, ComparesOccupiedCellsByIoU) {
   EXPECT_EQ(a.both_occupied, 9u);
   EXPECT_DOUBLE_EQ(a.occupied_iou, 9.0 / 11.0);
   EXPECT_EQ(a.free_in_truth_occupied, 1u);
+  // Where they disagree: the grid's extra cell is 5 cells from the truth's, the missed one next to the grid's.
+  EXPECT_EQ(a.extra_at[0] + a.extra_at[1], 0u);
+  EXPECT_EQ(a.extra_at[2], 1u);
+  EXPECT_EQ(a.missed_at[0], 1u);
+  EXPECT_EQ(a.missed_at[1] + a.missed_at[2], 0u);
   EXPECT_THROW(compare(grid, OccupancyGrid(0.1)), std::invalid_argument);
 }
 
@@ -275,6 +280,33 @@ TEST(OccupancyGrid, TsdfAveragesNoisyDepthToTheWallWhereHitsMakeAFringe) {
     EXPECT_EQ(hits.at(20, j), CellState::kUnknown) << j;
   }
   for (int i = 2; i < 15; ++i) EXPECT_EQ(tsdf.at(i, 0), CellState::kFree) << i;
+}
+
+// The zero crossing: a wall at x = 1.048, 2 mm before the border of cells 20 and 21, seen exactly. Both
+// voxels' centres are within tsdf_occupied_m (3 cm) of it, so the threshold marks a wall two cells thick;
+// the zero crossing marks the one it lies in (cell 20: 2.3 cm in front of its centre, 2.7 cm behind 21's).
+TEST(OccupancyGrid, TsdfZeroCrossingMarksTheVoxelTheSurfaceLiesIn) {
+  auto fuse = [](bool zero_crossing) {
+    VoxelMapOptions options;
+    options.model = FusionModel::kTsdf;
+    options.tsdf_truncation_m = 0.15;
+    options.tsdf_occupied_m = 0.03;
+    options.tsdf_zero_crossing = zero_crossing;
+    VoxelMap map(options);
+    const std::vector<Eigen::Vector3f> points = wall_points(1.048);
+    const std::vector<Eigen::Vector3f> normals(points.size(), Eigen::Vector3f(-1.f, 0.f, 0.f));
+    for (int k = 0; k < 3; ++k) map.integrate({0.025, 0.025, 0.025}, points, {}, normals);
+    return OccupancyGrid::from_voxels(map, GridBand{-0.3, 0.3});
+  };
+  const OccupancyGrid crossing = fuse(true);
+  const OccupancyGrid threshold = fuse(false);
+  for (int j = -15; j < 15; ++j) {
+    EXPECT_EQ(crossing.at(20, j), CellState::kOccupied) << j;
+    EXPECT_NE(crossing.at(21, j), CellState::kOccupied) << j;
+    EXPECT_NE(crossing.at(19, j), CellState::kOccupied) << j;
+    EXPECT_EQ(threshold.at(20, j), CellState::kOccupied) << j;
+    EXPECT_EQ(threshold.at(21, j), CellState::kOccupied) << j;
+  }
 }
 
 TEST(OccupancyMap, CloudFilesRoundTripAndRefuseTruncation) {

@@ -231,6 +231,28 @@ GridAgreement compare(const OccupancyGrid& grid, const OccupancyGrid& truth) {
     if (seen == CellState::kUnknown) ++a.truth_occupied_unknown;
   }
   a.grid_occupied = grid.count(CellState::kOccupied);
+  // The Chebyshev distance (1, 2, 3 = three or more) from a cell of one grid to the nearest occupied one of the other.
+  const auto distance_bin = [](const OccupancyGrid& other, const std::pair<int, int>& index) {
+    for (int radius = 1; radius <= 2; ++radius) {
+      for (int di = -radius; di <= radius; ++di) {
+        for (int dj = -radius; dj <= radius; ++dj) {
+          if (std::max(std::abs(di), std::abs(dj)) != radius) continue;
+          if (other.at(index.first + di, index.second + dj) == CellState::kOccupied) return radius - 1;
+        }
+      }
+    }
+    return 2;
+  };
+  for (const auto& [index, state] : grid.cells()) {
+    if (state == CellState::kOccupied && truth.at(index.first, index.second) != CellState::kOccupied) {
+      ++a.extra_at[distance_bin(truth, index)];
+    }
+  }
+  for (const auto& [index, state] : truth.cells()) {
+    if (state == CellState::kOccupied && grid.at(index.first, index.second) != CellState::kOccupied) {
+      ++a.missed_at[distance_bin(grid, index)];
+    }
+  }
   const std::size_t either = a.truth_occupied + a.grid_occupied - a.both_occupied;
   a.occupied_iou = either == 0 ? 1.0 : static_cast<double>(a.both_occupied) / static_cast<double>(either);
   return a;

@@ -60,6 +60,12 @@ struct GridAgreement {
   double occupied_iou = 0.0;               // |A and B| / |A or B| of occupied cells
   std::size_t free_in_truth_occupied = 0;  // cells the grid calls free that the truth says are occupied
   std::size_t truth_occupied_unknown = 0;  // truth-occupied cells the grid never observed
+  // Where the disagreement lies (Chebyshev distance in cells, 1, 2, 3 or more): grid-occupied cells
+  // outside the truth by their distance to the nearest truth-occupied cell, truth-occupied cells the
+  // grid misses by their distance to the nearest grid-occupied cell. Mostly at 1: the surfaces are found
+  // and misplaced (or thickened) by less than a cell; farther: false surfaces or missed ones.
+  std::size_t extra_at[3] = {0, 0, 0};
+  std::size_t missed_at[3] = {0, 0, 0};
 };
 // Throws std::invalid_argument when the resolutions differ.
 GridAgreement compare(const OccupancyGrid& grid, const OccupancyGrid& truth);

@@ -96,8 +96,29 @@ VoxelMap::VoxelState VoxelMap::state(const Cell& c) const {
   return VoxelState::kUnknown;
 }
 
+VoxelMap::VoxelState VoxelMap::state_at(const VoxelIndex& v, const Cell& c) const {
+  const VoxelState s = state(c);
+  if (options_.model != FusionModel::kTsdf || !options_.tsdf_zero_crossing || s != VoxelState::kOccupied) return s;
+  // Occupied only when the surface lies between this voxel's centre and a 6-neighbour's (their
+  // distances of opposite signs), nearer this one (a tie goes to the voxel in front).
+  const float min_weight = static_cast<float>(options_.tsdf_min_weight);
+  static constexpr int kNeighbours[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (const auto& d : kNeighbours) {
+    const auto found = cells_.find(key({v.x + d[0], v.y + d[1], v.z + d[2]}));
+    if (found == cells_.end()) continue;
+    const Cell& n = found->second;
+    if (!(n.weight >= min_weight) || (n.value >= 0.f) == (c.value >= 0.f)) continue;
+    const float here = std::abs(c.value), there = std::abs(n.value);
+    if (here < there || (here == there && c.value >= 0.f)) return VoxelState::kOccupied;
+  }
+  return std::abs(c.value) < 0.5 * options_.tsdf_truncation_m ? VoxelState::kNear : VoxelState::kUnknown;
+}
+
 void VoxelMap::for_each_state(const std::function<void(const VoxelIndex&, VoxelState)>& visit) const {
-  for (const auto& [k, c] : cells_) visit(unkey(k), state(c));
+  for (const auto& [k, c] : cells_) {
+    const VoxelIndex v = unkey(k);
+    visit(v, state_at(v, c));
+  }
 }
 
 bool VoxelMap::observed(const VoxelIndex& v) const { return cells_.count(key(v)) != 0; }

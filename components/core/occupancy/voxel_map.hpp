@@ -40,6 +40,11 @@ struct VoxelMapOptions {
   // is free when crossed in more than tsdf_free_ratio times its band weight (or its distance is in
   // front by half the truncation), and never occupied then.
   double tsdf_free_ratio = 4.0;
+  // kTsdf: occupied only where the surface is (the zero crossing): a voxel within tsdf_occupied_m with
+  // tsdf_min_weight whose distance is the smaller of a pair of 6-neighbours of opposite signs (both
+  // with tsdf_min_weight), so that a wall along the lattice is one voxel thick wherever it lies
+  // between the voxel centres. false: every voxel within tsdf_occupied_m of the surface (1-2 voxels).
+  bool tsdf_zero_crossing = false;
   // Log-odds of one observation and the clamping bounds: OctoMap's defaults (hit 0.7, miss 0.4,
   // clamped to [0.12, 0.97]), so a cell flips after a few contrary observations, never after one.
   float hit_log_odds = 0.847f;
@@ -101,8 +106,8 @@ class VoxelMap {
   float weight(const VoxelIndex& v) const;
   float crossed(const VoxelIndex& v) const { return cell(v).crossed; }
   bool observed(const VoxelIndex& v) const;
-  bool occupied(const VoxelIndex& v) const { return state(cell(v)) == VoxelState::kOccupied; }
-  bool free(const VoxelIndex& v) const { return state(cell(v)) == VoxelState::kFree; }
+  bool occupied(const VoxelIndex& v) const { return state_at(v, cell(v)) == VoxelState::kOccupied; }
+  bool free(const VoxelIndex& v) const { return state_at(v, cell(v)) == VoxelState::kFree; }
 
   // kNear (kTsdf only): observed near a surface, not confirmed occupied; a grid column holding one is
   // never called free.
@@ -129,6 +134,8 @@ class VoxelMap {
   void update(std::uint64_t key, float delta);
   Cell cell(const VoxelIndex& v) const;
   VoxelState state(const Cell& c) const;
+  // state() with the zero-crossing rule (tsdf_zero_crossing), which needs the voxel's neighbours.
+  VoxelState state_at(const VoxelIndex& v, const Cell& c) const;
   std::size_t integrate_tsdf(const Eigen::Vector3d& origin, std::span<const Eigen::Vector3f> points,
                              std::span<const float> sigmas_m, std::span<const Eigen::Vector3f> normals);
 
