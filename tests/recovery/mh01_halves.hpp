@@ -1,16 +1,16 @@
 // The two-agent proof's data and known answers (docs/agents.md), shared by the two-agent end-to-end tests:
-// the shared MH01 clip split in two overlapping halves (a copy of the dataset with a subset of the frame list
-// and its ground truth, images linked), the loop closer's merge lines, and each agent's ATE when both
-// trajectories are aligned to the ground truth ONCE (one SE(3) for the poses of both: one frame).
+// the shared MH01 clip split in two overlapping halves (test::make_euroc_part, euroc_parts.hpp), the loop
+// closer's merge lines, and each agent's ATE when both trajectories are aligned to the ground truth ONCE (one
+// SE(3) for the poses of both: one frame).
 #pragma once
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <regex>
 #include <string>
 #include <vector>
 
+#include "euroc_parts.hpp"
 #include "pipeline_runs.hpp"
 
 namespace heslam::test {
@@ -18,55 +18,6 @@ namespace heslam::test {
 inline constexpr int kHalfAFirstFrame = 0;   // agent a: frames 0-99 of the clip
 inline constexpr int kHalfBFirstFrame = 60;  // agent b: frames 60-159
 inline constexpr int kFramesPerHalf = 100;
-
-namespace halves_detail {
-
-// The data rows (not the header) of a CSV file.
-inline std::vector<std::string> rows(const std::filesystem::path& path, std::string* header) {
-  std::ifstream in(path);
-  std::vector<std::string> out;
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty()) continue;
-    if (line[0] == '#') {
-      *header = line;
-      continue;
-    }
-    out.push_back(line);
-  }
-  return out;
-}
-
-inline void write_rows(const std::filesystem::path& path, const std::string& header,
-                       const std::vector<std::string>& all, int first, int count) {
-  std::ofstream out(path);
-  out << header << "\n";
-  for (int i = first; i < first + count; ++i) out << all.at(static_cast<std::size_t>(i)) << "\n";
-}
-
-}  // namespace halves_detail
-
-// A copy of the EuRoC folder `source` with frames [first, first + count) of its frame lists and ground
-// truth (images linked, not copied).
-inline void make_part(const std::filesystem::path& source, const std::filesystem::path& part, int first, int count) {
-  namespace fs = std::filesystem;
-  for (const char* camera : {"cam0", "cam1"}) {
-    const fs::path from = source / "mav0" / camera;
-    const fs::path to = part / "mav0" / camera;
-    fs::create_directories(to);
-    fs::create_symlink(from / "data", to / "data");
-    fs::copy_file(from / "sensor.yaml", to / "sensor.yaml");
-    std::string header;
-    const std::vector<std::string> frames = halves_detail::rows(from / "data.csv", &header);
-    halves_detail::write_rows(to / "data.csv", header, frames, first, count);
-  }
-  fs::copy_file(source / "mav0/body.yaml", part / "mav0/body.yaml");
-  const fs::path truth = "mav0/state_groundtruth_estimate0";
-  fs::create_directories(part / truth);
-  std::string header;
-  const std::vector<std::string> poses = halves_detail::rows(source / truth / "data.csv", &header);
-  halves_detail::write_rows(part / truth / "data.csv", header, poses, first, count);
-}
 
 // The loop closer's merge lines: the stamp (s) of the keyframe at which each merge happened.
 inline std::vector<double> merge_stamps_s(const std::string& output) {

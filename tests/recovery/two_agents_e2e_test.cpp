@@ -42,8 +42,8 @@ TEST(TwoAgentsEndToEnd, Mh01HalvesMergeIntoOneFrame) {
   const test::ScratchDir dir("two_agents");
   const fs::path half_a = dir.path() / "half_a";
   const fs::path half_b = dir.path() / "half_b";
-  test::make_part(clip, half_a, kFirstA, kFramesPerAgent);
-  test::make_part(clip, half_b, kFirstB, kFramesPerAgent);
+  test::make_euroc_part(clip, half_a, kFirstA, kFramesPerAgent);
+  test::make_euroc_part(clip, half_b, kFirstB, kFramesPerAgent);
 
   const std::string label = "agents";
   test::ChildProcess supervisor(

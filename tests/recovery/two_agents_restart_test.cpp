@@ -65,8 +65,8 @@ class TwoAgentsRestart : public ::testing::Test {
   void SetUp() override {
     HESLAM_REQUIRE_SHARED_DATA("euroc_mh01_handheld");
     const fs::path clip = test::shared_dataset("euroc_mh01_handheld");
-    test::make_part(clip, half_a(), test::kHalfAFirstFrame, test::kFramesPerHalf);
-    test::make_part(clip, half_b(), test::kHalfBFirstFrame, test::kFramesPerHalf);
+    test::make_euroc_part(clip, half_a(), test::kHalfAFirstFrame, test::kFramesPerHalf);
+    test::make_euroc_part(clip, half_b(), test::kHalfBFirstFrame, test::kFramesPerHalf);
   }
 
   fs::path half_a() const { return dir_.path() / "half_a"; }
