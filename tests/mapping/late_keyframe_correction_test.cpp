@@ -35,8 +35,10 @@ class LocalMapperLateKeyframes : public ::testing::Test {
     Pose3 T_wc;
     std::map<PointId, Eigen::Vector3d> points;
   };
-  Sent insert(LocalMapper& mapper, KeyframeId id, KeyframeId reference, std::uint64_t version) {
+  Sent insert(LocalMapper& mapper, KeyframeId id, KeyframeId reference, std::uint64_t version,
+              MapId map_id = kFirstMapId) {
     auto [kf, points] = make(mapper, id);
+    kf.map_id = map_id;
     Sent sent{kf.T_wc, {}};
     for (const MapPoint& point : points) sent.points[point.id] = point.p_w;
     mapper.process_keyframe(std::move(kf), std::move(points), TrackedAgainst{reference, version});
@@ -144,6 +146,32 @@ TEST_F(LocalMapperLateKeyframes, GlobalBaAfterALoopCorrectionMovesEveryKeyframeO
   expect_moved(mapper, 5, five, B * A);  // once by each correction, not twice by either
   EXPECT_LT(test::max_abs_difference(mapper.map().keyframes.at(6).T_wc, B * six.T_wc), 1e-12);
   expect_moved(mapper, 7, seven, B);
+}
+
+// A keyframe made in a map that a merge folded into another before it arrived (agent b's frontend, in real
+// time, had not heard of the merge yet): it joins the map its reference keyframe went into, moved with it;
+// one made in the map that stays keeps it.
+TEST_F(LocalMapperLateKeyframes, KeyframeOfAMergedAwayMapJoinsTheMapItsReferenceWentInto) {
+  constexpr MapId kSecondMap = 7;
+  LocalMapper mapper(world_.camera, insertion_only());
+  insert(mapper, 1, kNoId, mapper.map().version);
+  insert(mapper, 2, 1, mapper.map().version);
+  insert(mapper, 3, kNoId, mapper.map().version, kSecondMap);  // the second map's first keyframe
+  insert(mapper, 4, 3, mapper.map().version, kSecondMap);
+  const std::uint64_t before_merge = mapper.map().version;
+  const Pose3 A = motion(0.04, Eigen::Vector3d(0.0, 1.0, 0.0), Eigen::Vector3d(0.1, 0.0, 0.05));
+  LoopCorrection merge = correct_3_and_4(mapper, A, 1);
+  merge.kind = CorrectionKind::kMerge;
+  merge.loop_kf = 3;
+  merge.matched_kf = 2;
+  mapper.apply_correction(merge);
+  ASSERT_EQ(mapper.map().keyframes.at(4).map_id, kFirstMapId);
+
+  const Sent five = insert(mapper, 5, 4, before_merge, kSecondMap);  // tracked before the merge
+  EXPECT_EQ(mapper.map().keyframes.at(5).map_id, kFirstMapId);
+  expect_moved(mapper, 5, five, A);
+  insert(mapper, 6, 2, mapper.map().version);  // the map that stayed
+  EXPECT_EQ(mapper.map().keyframes.at(6).map_id, kFirstMapId);
 }
 
 TEST_F(LocalMapperLateKeyframes, RememberedCorrectionsSurviveAMapFileRoundTrip) {

@@ -98,7 +98,9 @@ LocalMapper::LocalMapper(const PinholeStereo& camera, const LocalMapperOptions& 
       options_(options),
       map_(std::move(snapshot.map)),
       state_(std::move(snapshot.state)),
-      other_agents_keyframes_(other_agents_keyframes_of(map_, state_)) {}
+      other_agents_keyframes_(other_agents_keyframes_of(map_, state_)) {
+  for (const auto& [id, kf] : map_.keyframes) maps_seen_.insert(kf.map_id);
+}
 
 PointId LocalMapper::resolve_merges(PointId id) const {
   // Merge chains are short; the bound guards a corrupt (cyclic) table.
@@ -113,6 +115,15 @@ PointId LocalMapper::resolve_merges(PointId id) const {
 void LocalMapper::insert_keyframe(Keyframe kf, std::vector<MapPoint> new_points, const TrackedAgainst& tracked,
                                   MapChanges& changes) {
   check_keyframe(map_, kf);
+  // Made in a map a merge has folded into another since (a real-time frontend that had not heard of the
+  // merge yet): it joins the map its reference keyframe went into, as its pose follows that keyframe below.
+  if (tracked.reference_kf != kNoId && maps_seen_.count(kf.map_id) != 0) {
+    const Keyframe* reference = map_.keyframe(tracked.reference_kf);
+    const bool merged_away = std::none_of(map_.keyframes.begin(), map_.keyframes.end(),
+                                          [&](const auto& entry) { return entry.second.map_id == kf.map_id; });
+    if (reference != nullptr && reference->map_id != kf.map_id && merged_away) kf.map_id = reference->map_id;
+  }
+  maps_seen_.insert(kf.map_id);
   const KeyframeId kf_id = kf.id;
   const MapId map_id = kf.map_id;
   // Tracked before a correction applied since: into the corrected frame, with its reference.

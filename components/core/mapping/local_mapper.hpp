@@ -75,6 +75,9 @@ class LocalMapper {
   // Keyframes made on a revisit (KeyframeCullingOptions::revisit_*), culled once a newer keyframe is
   // mapped next to them (not saved: after a restart they stay, as any keyframe).
   std::set<KeyframeId> revisit_keyframes_;
+  // Every map id a keyframe was inserted in (the loaded map's too): one of them without keyframes now was
+  // merged into another (correction_application.cpp relabels a merged map's keyframes).
+  std::set<MapId> maps_seen_;
   BundleAdjustment bundle_adjustment_;
 };
 
