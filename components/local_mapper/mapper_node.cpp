@@ -486,7 +486,6 @@ void MapperNode::record(const MapChanges& changes) {
   stats().count("fused_points", static_cast<std::uint64_t>(c.fused_points));
   stats().count("culled_points", static_cast<std::uint64_t>(c.culled_points));
   stats().count("culled_keyframes", static_cast<std::uint64_t>(c.culled_keyframes));
-  stats().count("culled_revisit_keyframes", static_cast<std::uint64_t>(c.culled_revisit_keyframes));
   stats().count("ba_outliers", static_cast<std::uint64_t>(c.bundle_adjustment_outliers));
   if (c.bundle_adjustment_aborted) stats().count("ba_stopped_early");
   stats().count("late_keyframes_moved", static_cast<std::uint64_t>(c.late_keyframes_moved));
@@ -748,8 +747,7 @@ void MapperNode::log_summary() {
          << counter(counters, "keyframes_already_mapped") << " already in the map file, "
          << counter(counters, "bad_keyframes") << " bad), " << counter(counters, "triangulated_points")
          << " points triangulated, " << counter(counters, "culled_points") << " culled, "
-         << counter(counters, "culled_keyframes") << " keyframes culled ("
-         << counter(counters, "culled_revisit_keyframes") << " made on a revisit), " << counter(counters, "corrections")
+         << counter(counters, "culled_keyframes") << " keyframes culled, " << counter(counters, "corrections")
          << " corrections (" << counter(counters, "late_keyframes_moved")
          << " keyframes tracked before one moved into it)";
   if (options_.real_time) totals << "; " << counter(counters, "ba_stopped_early") << " local BAs stopped early";

@@ -63,10 +63,6 @@ MapperProcessOptions MapperProcessOptions::from_config(const runtime::Config& co
   m.enable_keyframe_culling = config.get_bool("keyframe_culling.enabled", m.enable_keyframe_culling);
   m.keyframe_culling.redundant_ratio =
       config.get_double("keyframe_culling.redundant_ratio", m.keyframe_culling.redundant_ratio, 0.0, 1.0);
-  m.keyframe_culling.revisit_min_share =
-      config.get_double("keyframe_culling.revisit_min_share", m.keyframe_culling.revisit_min_share, 0.0, 1.0);
-  m.keyframe_culling.revisit_min_age_s =
-      config.get_double("keyframe_culling.revisit_min_age_s", m.keyframe_culling.revisit_min_age_s, 0.0);
 
   InertialMappingOptions& imu = o.inertial;
   imu.enabled = config.get_bool("imu.enabled", imu.enabled);

@@ -1,8 +1,6 @@
 // Keyframe culling, recent point culling and spanning-tree repair on known configurations.
 #include <gtest/gtest.h>
 
-#include <cstdint>
-
 #include "components/core/mapping/keyframe_culling.hpp"
 #include "components/core/mapping/local_mapper.hpp"
 #include "tests/mapping/mapping_test_util.hpp"
@@ -64,37 +62,6 @@ TEST(KeyframeCulling, CullsSequentiallyUntilPointsNeedTheRest) {
   for (const auto& [id, point] : truth.map.points) {
     for (const auto& [kf_id, index] : point.observations) EXPECT_FALSE(truth.map.keyframes.at(kf_id).culled);
   }
-}
-
-// Revisits (issue 41): keyframes 4 and 5 are made 20 s after 1-3; 4 shares points with 3 (a place
-// mapped before) and is culled once 5 is mapped next to it, though the 90 % rule keeps every keyframe.
-TEST(KeyframeCulling, RevisitKeyframeIsCulledOnceANewerOneIsMapped) {
-  const auto world = test::make_room(800, 51);
-  // 0.6 rad apart: no keyframe is redundant by the 90 % rule.
-  auto truth = test::make_truth_map(world, 5, exact_level0(), 0.6);
-  for (auto& [id, kf] : truth.map.keyframes) {
-    kf.parent = id == 1 ? kNoId : id - 1;
-    kf.stamp_ns = (id <= 3 ? 0 : 20) * 1'000'000'000LL + static_cast<std::int64_t>(id);
-  }
-  KeyframeCullingOptions options;
-  // No keyframe 10 s older than 2 sees its points; 4's tracked points are seen by 3 or by 5.
-  EXPECT_EQ(old_map_share(truth.map, 2, options.revisit_min_age_s), 0.0);
-  EXPECT_FALSE(is_revisit_keyframe(truth.map, 2, options));
-  const double share = old_map_share(truth.map, 4, options.revisit_min_age_s);
-  EXPECT_GT(share, 0.0);
-  options.revisit_min_share = share;
-  EXPECT_TRUE(is_revisit_keyframe(truth.map, 4, options));
-  options.revisit_min_share = 0.0;  // off
-  EXPECT_FALSE(is_revisit_keyframe(truth.map, 4, options));
-  options.revisit_min_share = 0.8;
-
-  MapChanges changes;
-  EXPECT_TRUE(cull_redundant_neighbours(truth.map, 5, world.camera, options, changes).empty());
-  const auto culled = cull_redundant_neighbours(truth.map, 5, world.camera, options, changes, {4});
-  ASSERT_EQ(culled.size(), 1u);
-  EXPECT_EQ(culled[0], 4u);
-  EXPECT_TRUE(truth.map.keyframes.at(4).culled);
-  EXPECT_EQ(truth.map.keyframes.at(5).parent, 3u);
 }
 
 TEST(KeyframeCulling, ChildrenAreReattachedByCovisibility) {

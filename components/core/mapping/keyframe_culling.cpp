@@ -1,8 +1,6 @@
 // Redundant keyframes among the new keyframe's covisible neighbours.
 #include "components/core/mapping/keyframe_culling.hpp"
 
-#include <cstdint>
-
 #include "components/core/mapping/map_editing.hpp"
 
 namespace heslam {
@@ -37,35 +35,8 @@ bool is_redundant_keyframe(const Map& map, KeyframeId kf_id, const PinholeStereo
   return counted > 0 && redundant > options.redundant_ratio * counted;
 }
 
-double old_map_share(const Map& map, KeyframeId kf_id, double min_age_s) {
-  const Keyframe* kf = map.keyframe(kf_id);
-  if (kf == nullptr) return 0.0;
-  const auto newest_ns = kf->stamp_ns - static_cast<std::int64_t>(min_age_s * 1e9);
-  int tracked = 0;
-  int old = 0;
-  for (const PointId id : kf->point_ids) {
-    const MapPoint* point = id == kNoId ? nullptr : map.point(id);
-    if (point == nullptr || point->observations.size() < 2) continue;
-    ++tracked;
-    for (const auto& [other_id, index] : point->observations) {
-      const Keyframe* other = map.keyframe(other_id);
-      if (other != nullptr && other_id != kf_id && other->stamp_ns <= newest_ns) {
-        ++old;
-        break;
-      }
-    }
-  }
-  return tracked > 0 ? static_cast<double>(old) / tracked : 0.0;
-}
-
-bool is_revisit_keyframe(const Map& map, KeyframeId kf_id, const KeyframeCullingOptions& options) {
-  return options.revisit_min_share > 0.0 &&
-         old_map_share(map, kf_id, options.revisit_min_age_s) >= options.revisit_min_share;
-}
-
 std::vector<KeyframeId> cull_redundant_neighbours(Map& map, KeyframeId kf_id, const PinholeStereo& camera,
-                                                  const KeyframeCullingOptions& options, MapChanges& changes,
-                                                  const std::set<KeyframeId>& revisits) {
+                                                  const KeyframeCullingOptions& options, MapChanges& changes) {
   std::vector<KeyframeId> culled;
   const Keyframe* kf = map.keyframe(kf_id);
   if (kf == nullptr || map.keyframes.empty()) return culled;
@@ -73,7 +44,7 @@ std::vector<KeyframeId> cull_redundant_neighbours(Map& map, KeyframeId kf_id, co
   const auto neighbours = kf->covisible;                     // culling edits the lists
   for (const auto& [neighbour, weight] : neighbours) {
     if (neighbour == origin_id || neighbour == kf_id) continue;
-    if (revisits.count(neighbour) == 0 && !is_redundant_keyframe(map, neighbour, camera, options)) continue;
+    if (!is_redundant_keyframe(map, neighbour, camera, options)) continue;
     cull_keyframe(map, neighbour, changes);
     culled.push_back(neighbour);
   }

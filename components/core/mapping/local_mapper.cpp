@@ -269,9 +269,6 @@ MapChanges LocalMapper::process_keyframe(Keyframe kf, std::vector<MapPoint> new_
     throw;
   }
   state_.last_keyframe = kf_id;
-  if (options_.enable_keyframe_culling && is_revisit_keyframe(map_, kf_id, options_.keyframe_culling)) {
-    revisit_keyframes_.insert(kf_id);
-  }
   changes.timings.insertion_ms = ms_since(stage);
 
   cull_recent_points(kf_id, changes);
@@ -314,10 +311,8 @@ MapChanges LocalMapper::process_keyframe(Keyframe kf, std::vector<MapPoint> new_
   changes.timings.bundle_adjustment_ms = ms_since(stage);
 
   if (options_.enable_keyframe_culling) {
-    const auto culled =
-        cull_redundant_neighbours(map_, kf_id, camera_, options_.keyframe_culling, changes, revisit_keyframes_);
+    const auto culled = cull_redundant_neighbours(map_, kf_id, camera_, options_.keyframe_culling, changes);
     for (const KeyframeId id : culled) {
-      changes.counts.culled_revisit_keyframes += static_cast<int>(revisit_keyframes_.erase(id));
       const Keyframe& culled_kf = map_.keyframes.at(id);
       const Keyframe* parent = map_.keyframe(culled_kf.parent);
       if (parent != nullptr) state_.culled_T_pc[id] = parent->T_wc.inverse() * culled_kf.T_wc;

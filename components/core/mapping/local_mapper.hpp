@@ -72,9 +72,6 @@ class LocalMapper {
   // Recent points of one agent: the keyframes of other agents processed since they were made, which
   // their age leaves out (not saved: a resumed mapper counts them again from the map, local_mapper.cpp).
   std::map<PointId, std::uint64_t> other_agents_keyframes_;
-  // Keyframes made on a revisit (KeyframeCullingOptions::revisit_*), culled once a newer keyframe is
-  // mapped next to them (not saved: after a restart they stay, as any keyframe).
-  std::set<KeyframeId> revisit_keyframes_;
   // Every map id a keyframe was inserted in (the loaded map's too): one of them without keyframes now was
   // merged into another (correction_application.cpp relabels a merged map's keyframes).
   std::set<MapId> maps_seen_;

@@ -56,13 +56,6 @@ struct KeyframeCullingOptions {
   double redundant_ratio = 0.9;         // a keyframe is redundant when 90 % of its points are seen elsewhere
   int min_other_observers = 3;          // ... by at least this many other keyframes
   double close_depth_baselines = 35.0;  // stereo: only points closer than 35 baselines count
-  // Revisits (issue 41; not in ORB-SLAM2): a keyframe at least revisit_min_share of whose tracked
-  // points (those it did not create) keyframes made revisit_min_age_s or more before it observe was
-  // made on a place mapped before. It takes part in local BA (it refines the old map there), and is
-  // culled as soon as a newer keyframe is mapped next to it, so laps over mapped places do not grow
-  // the map with time. revisit_min_share 0: off.
-  double revisit_min_age_s = 10.0;
-  double revisit_min_share = 0.8;
 };
 
 struct LocalMapperOptions {

@@ -34,7 +34,6 @@ struct LocalMapperCounts {
   int bundle_adjustment_points = 0;
   int bundle_adjustment_observations = 0;
   int culled_keyframes = 0;
-  int culled_revisit_keyframes = 0;  // of them made on a revisit (KeyframeCullingOptions::revisit_*)
   bool bundle_adjustment_aborted = false;
   bool inertial_bundle_adjustment = false;  // the local BA had IMU factors (LocalMapper::set_bundle_adjustment)
   int late_keyframes_moved = 0;             // tracked before a correction applied since: moved into its frame
