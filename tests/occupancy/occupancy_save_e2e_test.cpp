@@ -159,9 +159,12 @@ TEST(OccupancySave, MidRunRequestWritesTheMapOfTheCloudsSoFarAndTheRunEndsWithIt
   EXPECT_NE(output.find("heslam-occupancy-save: heslam-occupancy did not save: "), std::string::npos) << output;
   EXPECT_FALSE(fs::exists(dir.path() / "no_such_folder"));
 
+  // Its status counts both (published once a second).
+  EXPECT_TRUE(watch.until([&] { return watch.counter("saves") == 1 && watch.counter("saves_failed") == 1; }))
+      << "saves " << watch.counter("saves") << ", failed " << watch.counter("saves_failed");
+
   ASSERT_EQ(kill(replay, SIGUSR2), 0);  // resume
   ASSERT_EQ(test::finish(*run), 0) << run->out() << run->err();
-  EXPECT_GE(watch.counter("saves"), 1u);
   // The run's own map at the end, with every keyframe of the room (more than at the request).
   const std::size_t final_points = ply_vertices(dir.path() / "run.ply");
   EXPECT_GT(final_points, ply_vertices(dir.path() / "mid.ply"));
