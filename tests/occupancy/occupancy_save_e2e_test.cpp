@@ -11,19 +11,13 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <map>
-#include <optional>
 #include <regex>
-#include <set>
 #include <string>
 #include <thread>
 
 #include "components/core/occupancy/occupancy_grid.hpp"
+#include "occupancy_run_watch.hpp"
 #include "pipeline_runs.hpp"
-#include "runtime/participant.hpp"
-#include "runtime/reader.hpp"
-#include "runtime/sequence.hpp"
-#include "runtime/topics.hpp"
 #include "synth_render.hpp"
 #include "test_support.hpp"
 
@@ -31,7 +25,6 @@ namespace heslam {
 namespace {
 
 namespace fs = std::filesystem;
-using std::chrono::milliseconds;
 using std::chrono::seconds;
 
 constexpr int kRoomFrames = 150;
@@ -47,57 +40,6 @@ std::size_t ply_vertices(const fs::path& file) {
   }
   return 0;
 }
-
-// The run's keyframes and frames, and heslam-occupancy's counters (its status).
-class RunWatch {
- public:
-  explicit RunWatch(int domain)
-      : participant_({.domain_id = domain, .dds_config = ""}),
-        keyframes_(participant_, topics_.keyframes()),
-        stereo_(participant_, topics_.stereo()),
-        frame_done_(participant_, topics_.frame_done()),
-        status_(participant_, topics_.status()) {}
-
-  template <typename Done>
-  bool until(Done done) {
-    const auto deadline = std::chrono::steady_clock::now() + kStateTimeout;
-    while (std::chrono::steady_clock::now() < deadline) {
-      for (auto& r : keyframes_.take()) {
-        if (r.info.valid_data) keyframe_ids.insert(r.sample->id);
-      }
-      for (auto& r : stereo_.take()) {
-        if (r.info.valid_data) last_frame_seq = r.sample->seq;
-      }
-      for (auto& r : frame_done_.take()) {
-        if (r.info.valid_data) last_done_seq = r.sample->seq;
-      }
-      for (auto& r : status_.take()) {
-        if (!r.info.valid_data || runtime::to_string(r.sample->name) != "occupancy") continue;
-        counters.clear();
-        for (const msg::Counter& c : runtime::view(r.sample->counters)) counters[runtime::to_string(c.name)] = c.value;
-      }
-      if (done()) return true;
-      std::this_thread::sleep_for(milliseconds(50));
-    }
-    return false;
-  }
-  std::uint64_t counter(const std::string& name) const {
-    const auto found = counters.find(name);
-    return found == counters.end() ? 0 : found->second;
-  }
-
-  std::set<std::uint64_t> keyframe_ids;
-  std::optional<std::uint64_t> last_frame_seq, last_done_seq;
-  std::map<std::string, std::uint64_t> counters;
-
- private:
-  runtime::Topics topics_;
-  runtime::Participant participant_;
-  runtime::Reader<msg::Keyframe> keyframes_;
-  runtime::Reader<msg::StereoFrame> stereo_;
-  runtime::Reader<msg::FrameDone> frame_done_;
-  runtime::Reader<msg::ComponentStatus> status_;
-};
 
 int save(const fs::path& dir, const std::string& label, int domain, const std::vector<std::string>& extra,
          std::string& output) {
@@ -123,7 +65,7 @@ TEST(OccupancySave, MidRunRequestWritesTheMapOfTheCloudsSoFarAndTheRunEndsWithIt
             std::string::npos)
       << output;
 
-  RunWatch watch(domain);
+  test::OccupancyRunWatch watch(domain, kStateTimeout);
   auto run = test::start_pipeline("synth", dataset, dir.path(), "run", domain,
                                   {"occupancy=heslam-occupancy", "loop_closer=none"});
   ASSERT_TRUE(watch.until([&] { return watch.keyframe_ids.size() >= kSaveAfterKeyframes; })) << run->err();
@@ -131,18 +73,15 @@ TEST(OccupancySave, MidRunRequestWritesTheMapOfTheCloudsSoFarAndTheRunEndsWithIt
   ASSERT_GT(replay, 0);
   ASSERT_EQ(kill(replay, SIGUSR1), 0);  // pause: the replay holds its next frame
   // Held: the last frame acknowledged and every keyframe's cloud made, so the saved map has them all.
-  ASSERT_TRUE(watch.until([&] {
-    return watch.last_frame_seq && watch.last_done_seq == watch.last_frame_seq &&
-           watch.counter("clouds") + watch.counter("keyframes_without_frame") == watch.keyframe_ids.size();
-  })) << run->err();
+  ASSERT_TRUE(watch.until([&] { return watch.settled(); })) << run->err();
   const std::uint64_t clouds = watch.counter("clouds");
   ASSERT_GT(clouds, 0u);
 
   // Relative -f: made absolute by the tool (the process may run elsewhere).
   const fs::path mid = dir.path() / "mid";
   ASSERT_EQ(save(dir.path(), "mid", domain, {"-f", mid.string()}, output), 0) << output << run->err();
-  const std::regex said(
-      R"(saved (\S+)\.pgm/\.yaml \(map_server\) and \S+\.ply: (\d+) keyframe clouds, (\d+) occupied \+ (\d+) free cells, (\d+) points)");
+  const std::regex said(R"(saved (\S+)\.pgm/\.yaml \(map_server\) and \S+\.ply: (\d+) keyframe clouds, )"
+                        R"((\d+) occupied \+ (\d+) free cells, (\d+) points)");
   std::smatch match;
   ASSERT_TRUE(std::regex_search(output, match, said)) << output;
   EXPECT_EQ(fs::path(match[1].str()), mid);
