@@ -1,13 +1,22 @@
 // heslam-occupancy's component (see occupancy_node.hpp).
 #include "components/occupancy/occupancy_node.hpp"
 
+#include <pthread.h>
+#include <sched.h>
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include <opencv2/core/utility.hpp>
 
 #include "components/messages/camera.hpp"
 #include "components/messages/checks.hpp"
@@ -27,6 +36,13 @@ constexpr std::chrono::milliseconds kWaitPeriod{200};
 constexpr int kFrameReaderDepth = 8;
 const char* const kRunFile = "RUN";
 const char* const kCloudExtension = ".cloud";
+
+// This thread's CPU time: the work per keyframe apart from the machine's load (wall times grow with it).
+double thread_cpu_ms() {
+  timespec now{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) * 1e3 + static_cast<double>(now.tv_nsec) * 1e-6;
+}
 
 std::filesystem::path cloud_file(const std::filesystem::path& dir, std::uint64_t id) {
   return dir / (std::to_string(id) + kCloudExtension);
@@ -59,6 +75,8 @@ void OccupancyNode::configure(const runtime::Config& config) {
   keyframe_state_reader_.emplace(participant(), topics().keyframe_states());
   grid_writer_.emplace(participant(), topics().occupancy_grid());
   if (options_.cloud_max_points > 0) cloud_writer_.emplace(participant(), topics().dense_cloud());
+  save_reader_.emplace(participant(), save_request_topic(topics()));
+  save_writer_.emplace(participant(), save_reply_topic(topics()));
   waitset_ = std::make_unique<runtime::WaitSet>(participant(), image_participant().separate_domain()
                                                                    ? runtime::WaitScope::kAllDomains
                                                                    : runtime::WaitScope::kParticipant);
@@ -66,6 +84,7 @@ void OccupancyNode::configure(const runtime::Config& config) {
   waitset_->attach(*frame_reader_);
   waitset_->attach(*keyframe_reader_);
   waitset_->attach(*keyframe_state_reader_);
+  waitset_->attach(*save_reader_);
   log().info(
       "voxels ", options_.map.voxels.resolution_m, " m, grid band [", options_.map.band.min_m, ", ",
       options_.map.band.max_m, "] m along ", to_string(options_.map.up), ", depth ", options_.stereo.min_depth_m, "-",
@@ -134,8 +153,15 @@ void OccupancyNode::run() {
   }
   const std::size_t unmatched = pending_.size();
   if (unmatched > 0) {
-    stats().count("keyframes_without_frame", unmatched);
-    log().warn(unmatched, " keyframe(s) still waiting for their frame at the end: skipped");
+    bool calibrated = false;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      calibrated = rectifier_ != nullptr;
+    }
+    const char* counter = calibrated ? "keyframes_without_frame" : "keyframes_without_calibration";
+    stats().count(counter, unmatched);
+    log().warn(unmatched, " keyframe(s) still waiting for their ", calibrated ? "frame" : "calibration",
+               " at the end: skipped (counted as ", counter, ")");
   }
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -145,6 +171,19 @@ void OccupancyNode::run() {
   worker_.join();
   if (worker_error_) std::rethrow_exception(worker_error_);
   write_outputs();
+  log_stages();
+}
+
+void OccupancyNode::log_stages() {
+  // Per keyframe: disparity (rectify, HE, SGBM, cloud) and fusion, wall and this thread's CPU; the
+  // rebuilds; the live outputs (tools/bench/realtime/realtime_pipeline.sh reads these lines).
+  for (const runtime::StageSummary& stage : stats().stages()) {
+    std::ostringstream line;
+    line << std::fixed << std::setprecision(2) << "stage " << std::left << std::setw(20) << stage.name << " median "
+         << std::right << std::setw(8) << stage.p50_ms << " ms  p90 " << std::setw(8) << stage.p90_ms << " ms  max "
+         << std::setw(8) << stage.max_ms << " ms  (" << stage.count << ")";
+    log().info(line.str());
+  }
 }
 
 void OccupancyNode::take_all() {
@@ -194,6 +233,16 @@ void OccupancyNode::take_all() {
   apply(*frame_reader_, "frames", [&](const msg::StereoFrame& message) { on_frame(message); });
   apply(*keyframe_reader_, "keyframes", [&](const msg::Keyframe& message) { on_keyframe(message); });
   match_pending();
+  // After this pass's frames and keyframes: the saved map has every keyframe whose cloud was queued.
+  for (auto& received : save_reader_->take()) {
+    if (!received.info.valid_data) continue;
+    Job job;
+    job.kind = Job::Kind::kSave;
+    job.request_id = received.sample->request_id;
+    job.stem = received.sample->output_stem != nullptr ? received.sample->output_stem : "";
+    stats().count("save_requests");
+    push(std::move(job));
+  }
 }
 
 void OccupancyNode::on_frame(const msg::StereoFrame& message) {
@@ -213,6 +262,7 @@ void OccupancyNode::on_frame(const msg::StereoFrame& message) {
 
 void OccupancyNode::on_keyframe(const msg::Keyframe& message) {
   const std::uint64_t id = message.id;
+  first_poses_.emplace(id, messages::to_pose(message.T_wc));
   if (!has_state_.count(id)) {
     Job job;
     job.kind = Job::Kind::kPose;
@@ -226,6 +276,12 @@ void OccupancyNode::on_keyframe(const msg::Keyframe& message) {
 }
 
 void OccupancyNode::match_pending() {
+  {
+    // Without a calibration a cloud cannot be made: the keyframes wait (their frames stay in the ring
+    // for frame_ring frames), as the frames' and the calibration's writers may match in either order.
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!rectifier_) return;
+  }
   for (auto it = pending_.begin(); it != pending_.end();) {
     const auto frame =
         std::find_if(ring_.begin(), ring_.end(), [&](const Frame& f) { return f.stamp_ns == it->stamp_ns; });
@@ -258,6 +314,16 @@ void OccupancyNode::push(Job job) {
 }
 
 void OccupancyNode::worker_loop() {
+  if (options_.idle_priority) {
+    // This thread only; the DDS thread that copies frames stays at the process's priority. OpenCV's
+    // pool threads would not inherit it (the pool may start on another thread): OpenCV's work stays on
+    // this one.
+    cv::setNumThreads(1);
+    const sched_param param{};
+    if (const int error = pthread_setschedparam(pthread_self(), SCHED_IDLE, &param); error != 0) {
+      log().warn("idle_priority: SCHED_IDLE refused (", std::strerror(error), "); the worker runs at normal priority");
+    }
+  }
   try {
     const auto period =
         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options_.rebuild_period_s));
@@ -284,6 +350,7 @@ void OccupancyNode::worker_loop() {
                                    ": non-finite pose; skipped (counted as bad_poses)");
             }
             break;
+          case Job::Kind::kSave: save_on_request(*job); break;
           case Job::Kind::kCull:
             if (map_->has_cloud(job->keyframe_id)) grid_dirty_ = cloud_dirty_ = true;
             map_->cull(job->keyframe_id);
@@ -293,23 +360,34 @@ void OccupancyNode::worker_loop() {
         }
       }
       bool idle = false;
+      bool stopping = false;
       {
         std::lock_guard<std::mutex> lock(mutex_);
         idle = jobs_.empty();
+        stopping = stop_;
       }
-      // Moved keyframes: fused again when no work waits (a cloud first), at most once a period.
-      if (idle && map_->stale() && Clock::now() - last_rebuild >= period) {
+      // Moved keyframes: fused again when no work waits (a cloud first), at most once a period; not
+      // once the process stops, whose final rebuild fuses everything anyway (on the room's 92 clouds
+      // with the TSDF a rebuild here took 44 s of the end's 116 s).
+      if (idle && !stopping && map_->stale() && Clock::now() - last_rebuild >= period) {
         auto timer = stats().time("rebuild");
         map_->rebuild();
         last_rebuild = Clock::now();
         stats().count("rebuilds");
         grid_dirty_ = cloud_dirty_ = true;
       }
-      {
+      if (!stopping) {
+        // Timed only when it fused something: the loop also passes here for poses and idle wake-ups.
+        // Stopping, the clouds still queued are made but not fused one by one: the final rebuild does.
         const std::size_t fused_before = map_->fused();
-        auto timer = stats().time("fusion");
+        const Clock::time_point start = Clock::now();
+        const double cpu_start_ms = thread_cpu_ms();
         map_->fuse_pending();
-        if (map_->fused() != fused_before) grid_dirty_ = cloud_dirty_ = true;
+        if (map_->fused() != fused_before) {
+          grid_dirty_ = cloud_dirty_ = true;
+          stats().record_ms("fusion", std::chrono::duration<double, std::milli>(Clock::now() - start).count());
+          stats().record_ms("fusion_cpu", thread_cpu_ms() - cpu_start_ms);
+        }
       }
       if (idle) publish_live(/*final=*/false);
     }
@@ -346,6 +424,7 @@ void OccupancyNode::make_cloud(const Job& job) {
   KeyframeCloud cloud;
   cloud.stamp_ns = job.frame.stamp_ns;
   {
+    const double cpu_start_ms = thread_cpu_ms();
     auto timer = stats().time("disparity");
     cv::Mat left, right;
     rectifier->rectify(job.frame.left, job.frame.right, left, right);
@@ -356,11 +435,64 @@ void OccupancyNode::make_cloud(const Job& job) {
     stereo_->cloud_from_disparity(stereo_->disparity(left, right), cloud.points_c,
                                   normals ? &cloud.normals_c : nullptr);
     cloud.sigma_per_m2 = stereo_->sigma_per_m2();
+    stats().record_ms("disparity_cpu", thread_cpu_ms() - cpu_start_ms);
   }
   // Persisted before it is counted: a process whose status shows N clouds has N clouds on disk.
   if (!options_.state_dir.empty()) write_cloud(cloud_file(options_.state_dir, job.keyframe_id), job.keyframe_id, cloud);
   stats().count("clouds");
   map_->add_cloud(job.keyframe_id, std::move(cloud));
+}
+
+void OccupancyNode::save_on_request(const Job& job) {
+  std::string problem;
+  const std::filesystem::path stem = job.stem.empty() ? options_.output_stem : job.stem;
+  if (stem.empty()) {
+    problem = "no output stem: the request names none and the process has no --output-stem";
+  } else if (!stem.is_absolute()) {
+    problem = "output stem '" + stem.string() + "' is not absolute (heslam-occupancy-save makes it so)";
+  }
+  // The map as it is now: the clouds queued before the request, at the keyframes' current poses.
+  map_->fuse_pending();
+  if (problem.empty() && map_->fused() == 0) problem = "no keyframe cloud fused yet";
+  OccupancyGrid grid;
+  std::size_t points = 0;
+  if (problem.empty()) {
+    try {
+      auto timer = stats().time("save");
+      if (map_->stale()) {
+        map_->rebuild();
+        grid_dirty_ = cloud_dirty_ = true;
+      }
+      grid = map_->grid();
+      std::filesystem::path ply = stem;
+      ply += ".ply";
+      grid.write_map_server(stem);
+      points = map_->write_ply(ply);
+    } catch (const std::exception& error) {
+      problem = error.what();
+    }
+  }
+  msg::OccupancySaveReply reply{};
+  reply.schema_version = msg::kSchemaVersion;
+  reply.request_id = job.request_id;
+  reply.ok = problem.empty();
+  const std::string stem_text = stem.string();
+  reply.output_stem = const_cast<char*>(stem_text.c_str());
+  reply.keyframes = static_cast<std::uint32_t>(map_->fused());
+  reply.occupied_cells = static_cast<std::uint32_t>(reply.ok ? grid.count(CellState::kOccupied) : 0);
+  reply.free_cells = static_cast<std::uint32_t>(reply.ok ? grid.count(CellState::kFree) : 0);
+  reply.points = static_cast<std::uint32_t>(points);
+  reply.message = const_cast<char*>(problem.c_str());
+  save_writer_->write(reply);
+  if (reply.ok) {
+    stats().count("saves");
+    log().info("saved on request ", job.request_id, ": ", stem_text, ".pgm/.yaml/.ply (", reply.keyframes,
+               " keyframe clouds, ", reply.occupied_cells, " occupied + ", reply.free_cells, " free cells, ", points,
+               " points)");
+  } else {
+    stats().count("saves_failed");
+    log().warn("save request ", job.request_id, ": ", problem, "; nothing written (counted as saves_failed)");
+  }
 }
 
 void OccupancyNode::write_outputs() {
@@ -388,6 +520,35 @@ void OccupancyNode::write_outputs() {
   const std::size_t points = map_->write_ply(ply);
   log().info("wrote ", options_.output_stem.string(), ".pgm/.yaml (map_server) and ", ply.string(), " (", points,
              " points)");
+  if (options_.first_poses_grid) write_first_poses_grid();
+}
+
+void OccupancyNode::write_first_poses_grid() {
+  auto timer = stats().time("first_poses_rebuild");
+  OccupancyMap before(options_.map);
+  std::size_t without_pose = 0;
+  double moved_max_m = 0.0;  // how far a keyframe's camera moved from its first pose to its final one
+  for (const auto& [id, cloud] : map_->all_clouds()) {
+    if (map_->culled(id)) continue;
+    const auto first = first_poses_.find(id);
+    if (first == first_poses_.end() || !before.set_pose(id, first->second)) {
+      ++without_pose;
+      continue;
+    }
+    const auto now = map_->poses().find(id);
+    if (now != map_->poses().end()) {
+      moved_max_m = std::max(moved_max_m, (now->second.translation() - first->second.translation()).norm());
+    }
+    before.add_cloud(id, cloud);
+  }
+  before.rebuild();
+  std::filesystem::path stem = options_.output_stem;
+  stem += ".first_poses";
+  const OccupancyGrid grid = before.grid();
+  grid.write_map_server(stem);
+  log().info("wrote ", stem.string(), ".pgm/.yaml: ", before.fused(), " keyframe clouds at their first poses (",
+             without_pose, " without one; the farthest moved ", moved_max_m, " m since), grid ",
+             grid.count(CellState::kOccupied), " occupied + ", grid.count(CellState::kFree), " free cells");
 }
 
 void OccupancyNode::publish_live(bool final) {

@@ -31,6 +31,7 @@
 #include "components/core/occupancy/dense_stereo.hpp"
 #include "components/core/occupancy/occupancy_map.hpp"
 #include "components/occupancy/occupancy_options.hpp"
+#include "components/occupancy/occupancy_save.hpp"
 #include "runtime/component.hpp"
 #include "runtime/writer.hpp"
 
@@ -49,10 +50,12 @@ class OccupancyNode final : public runtime::Component {
   };
   // Work for the worker, in arrival order: a keyframe's frame to turn into a cloud, or a pose update.
   struct Job {
-    enum class Kind { kCloud, kPose, kCull } kind = Kind::kCloud;
+    enum class Kind { kCloud, kPose, kCull, kSave } kind = Kind::kCloud;
     std::uint64_t keyframe_id = 0;
     Frame frame;                     // kCloud
     Pose3 T_wc = Pose3::Identity();  // kPose
+    std::uint64_t request_id = 0;    // kSave: the map as it is now, to ...
+    std::filesystem::path stem;      // ... STEM.pgm + STEM.yaml + STEM.ply
   };
   struct PendingKeyframe {
     std::uint64_t id = 0;
@@ -75,9 +78,14 @@ class OccupancyNode final : public runtime::Component {
   void push(Job job);
   void load_state();
   void write_outputs();
+  void log_stages();
+  // STEM.first_poses.pgm + .yaml: the clouds of the final map fused at their keyframes' first poses.
+  void write_first_poses_grid();
   // Worker thread (the DDS thread at the end): the grid when it changed and its period passed, the
   // cloud when its period passed; final: both, whatever the periods.
   void publish_live(bool final);
+  // Worker thread: a save request (map/occupancy_save_request) answered on map/occupancy_save_reply.
+  void save_on_request(const Job& job);
 
   OccupancyProcessOptions options_;
   std::optional<runtime::Reader<msg::StereoCalibration>> calibration_reader_;
@@ -87,6 +95,8 @@ class OccupancyNode final : public runtime::Component {
   std::unique_ptr<runtime::WaitSet> waitset_;
   std::optional<runtime::Writer<msg::OccupancyGrid2D>> grid_writer_;
   std::optional<runtime::Writer<msg::DenseCloud>> cloud_writer_;
+  std::optional<runtime::Reader<msg::OccupancySaveRequest>> save_reader_;
+  std::optional<runtime::Writer<msg::OccupancySaveReply>> save_writer_;
 
   // DDS thread only.
   std::deque<Frame> ring_;
@@ -94,6 +104,7 @@ class OccupancyNode final : public runtime::Component {
   std::map<std::uint64_t, bool> seen_keyframes_;  // ids whose cloud is queued, loaded or skipped
   std::map<std::uint64_t, bool> has_state_;       // ids with a mapper state (their pose is the mapper's)
   std::set<std::uint64_t> culled_ids_;            // ids the mapper culled
+  std::map<std::uint64_t, Pose3> first_poses_;    // each keyframe's pose in its keyframe sample
 
   // Shared with the worker (mutex_).
   std::mutex mutex_;

@@ -32,6 +32,14 @@ struct OccupancyProcessOptions {
   double grid_period_s = 2.0;
   double cloud_period_s = 10.0;
   int cloud_max_points = 200000;
+  // idle_priority: the worker thread (disparity, fusion) runs as SCHED_IDLE, i.e. only on CPU time no
+  // other thread wants, so on a loaded machine it never takes the frontend's: the real-time pipelines
+  // (config/occupancy/real_time.yaml). It may fall behind instead; frames wait in its queue, none is lost.
+  bool idle_priority = false;
+  // first_poses_grid: also STEM.first_poses.pgm + .yaml at the end: every cloud fused at its keyframe's
+  // first pose (the frontend's, before the mapper's refinement and any loop correction), the map as if
+  // no correction had come, beside the corrected one (docs/occupancy.md, "A loop correction").
+  bool first_poses_grid = false;
   // --output-stem STEM: STEM.pgm, STEM.yaml (map_server), STEM.ply written at the end; empty: none.
   std::filesystem::path output_stem;
   // --state-dir DIR: one file per keyframe cloud (replaced atomically), so a restarted process

@@ -30,6 +30,9 @@ constexpr int kMaxNiceIncrement = 19;
 constexpr std::size_t kMaxPipelineName = 64;
 // Arguments referring to each other deeper than this are a mistake, not a configuration.
 constexpr int kMaxArgDepth = 16;
+// A process's shutdown work may be long (heslam-occupancy fuses every keyframe cloud again and writes
+// its map as it stops: minutes for a few hundred keyframes on a loaded machine).
+constexpr double kMaxStopTimeoutS = 3600.0;
 
 const std::regex& arg_pattern() {
   static const std::regex pattern(R"(\$\((arg|stem)\s+([A-Za-z0-9_\-]+)\s*\))");
@@ -368,7 +371,8 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
     }
     pipeline.dds_config = "file://" + std::filesystem::absolute(path).string();
   });
-  collect(problems, [&] { pipeline.stop_timeout_s = config->get_double("stop_timeout_s", 5.0, 0.1, 600.0); });
+  collect(problems,
+          [&] { pipeline.stop_timeout_s = config->get_double("stop_timeout_s", 5.0, 0.1, kMaxStopTimeoutS); });
   collect(problems, [&] {
     std::string text = substitute("image_transport", config->get_string("image_transport", "udp"));
     if (overrides.image_transport) text = *overrides.image_transport;
@@ -544,7 +548,19 @@ LoadResult load_pipeline(const std::filesystem::path& file, const PipelineOverri
     });
     collect(problems, [&] { spec.max_restarts = section.get_int("max_restarts", 3, 0, 1000); });
     collect(problems, [&] {
-      if (section.has("stop_timeout_s")) spec.stop_timeout_s = section.get_double("stop_timeout_s", 5.0, 0.1, 600.0);
+      if (!section.has("stop_timeout_s")) return;
+      // A number, or "$(arg x)": a pipeline lets a run with long shutdown work (heslam-occupancy's final
+      // fusion) raise it, e.g. --arg occupancy_stop_timeout_s=600.
+      const std::string text = substitute(where + ".stop_timeout_s", section.get_scalar("stop_timeout_s", "5"));
+      double value = 0.0;
+      std::istringstream parse(text);
+      if (!(parse >> value) || !parse.eof() || !(value >= 0.1 && value <= kMaxStopTimeoutS)) {
+        std::ostringstream expected;
+        expected << "expected seconds in [0.1, " << kMaxStopTimeoutS << "]";
+        throw std::runtime_error(source + ": field '" + where + ".stop_timeout_s': " + expected.str() + ", got '" +
+                                 runtime::quote_value(text) + "'");
+      }
+      spec.stop_timeout_s = value;
     });
     collect(problems, [&] { spec.restart_backoff_s = section.get_double("restart_backoff_s", 0.1, 0.0, 600.0); });
     collect(problems,

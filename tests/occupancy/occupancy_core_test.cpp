@@ -214,6 +214,52 @@ TEST(OccupancyMap, KeyframeCloudMovesWithItsKeyframe) {
   EXPECT_FALSE(map.has_cloud(7));
 }
 
+// A loop: the same wall seen at the start (keyframes 1-3, exact poses) and again at the loop's end by
+// keyframes 10-12 whose first poses drifted 0.2 m (4 cells) towards it: their copy of the wall lies
+// 0.2 m behind it. As fused at those first poses the grid has the wall twice (IoU 0.5 against the one
+// wall); the loop correction moves 10-12 back, and the map fused again has the wall once, where it is
+// (IoU 1), nothing carved out of it.
+TEST(OccupancyMap, LoopCorrectionRemovesTheDoubledWall) {
+  OccupancyMapOptions options;
+  options.up = UpAxis::kZ;
+  options.band = {-0.3, 0.3};
+  OccupancyMap map(options);
+  OccupancyGrid truth(0.05);
+  for (int j = -20; j < 20; ++j) truth.set(20, j, CellState::kOccupied);  // x in [1.0, 1.05)
+  auto pose = [](double x, double y) {
+    Pose3 T = Pose3::Identity();
+    T.translation() = Eigen::Vector3d(x, y, 0.025);
+    return T;
+  };
+  const std::vector<Eigen::Vector3f> wall = wall_points(1.02);
+  std::vector<Eigen::Vector3f> seen_from(wall.size());
+  for (const std::uint64_t id : {1, 2, 3, 10, 11, 12}) {
+    const double y = 0.005 + 0.1 * static_cast<double>(id % 3);  // the camera's place along the wall
+    const double x = 0.025 + (id >= 10 ? 0.2 : 0.0);             // the drifted ones: 0.2 m nearer in their first pose
+    // The cloud as the camera at its true place sees the wall (its camera frame).
+    for (std::size_t k = 0; k < wall.size(); ++k)
+      seen_from[k] = wall[k] - Eigen::Vector3f(0.025f, static_cast<float>(y), 0.025f);
+    ASSERT_TRUE(map.set_pose(id, pose(x, y)));
+    map.add_cloud(id, KeyframeCloud{static_cast<std::int64_t>(id), seen_from, 0.f, {}});
+  }
+  map.rebuild();
+  const GridAgreement before = compare(map.grid(), truth);
+  EXPECT_EQ(before.both_occupied, 40u);
+  EXPECT_EQ(before.grid_occupied, 80u);  // the wall and its copy 4 cells behind it
+  EXPECT_DOUBLE_EQ(before.occupied_iou, 0.5);
+  EXPECT_EQ(map.grid().at(24, 0), CellState::kOccupied);
+  // The correction (the loop closer's, through the mapper's keyframe states): 10-12 where they were.
+  for (const std::uint64_t id : {10, 11, 12}) {
+    ASSERT_TRUE(map.set_pose(id, pose(0.025, 0.005 + 0.1 * static_cast<double>(id % 3))));
+  }
+  EXPECT_TRUE(map.stale());
+  map.rebuild_if_stale();
+  const GridAgreement after = compare(map.grid(), truth);
+  EXPECT_DOUBLE_EQ(after.occupied_iou, 1.0);
+  EXPECT_EQ(after.free_in_truth_occupied, 0u);
+  EXPECT_EQ(map.grid().at(24, 0), CellState::kUnknown);  // never seen: behind the wall
+}
+
 TEST(OccupancyMap, MinusYUpGridIsTheCamerasGroundPlane) {
   // Camera convention (x right, y down, z forward): a wall 1 m ahead is the grid row y = 1 m.
   OccupancyMap map(OccupancyMapOptions{});

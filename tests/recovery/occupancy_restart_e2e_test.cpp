@@ -22,11 +22,8 @@
 #include <string>
 #include <thread>
 
+#include "occupancy_run_watch.hpp"
 #include "pipeline_runs.hpp"
-#include "runtime/participant.hpp"
-#include "runtime/reader.hpp"
-#include "runtime/sequence.hpp"
-#include "runtime/topics.hpp"
 #include "synth_render.hpp"
 #include "test_support.hpp"
 
@@ -48,73 +45,6 @@ std::string file_text(const fs::path& file) {
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
-struct OccupancyStatus {
-  int pid = 0;
-  std::map<std::string, std::uint64_t> counters;
-  std::uint64_t counter(const std::string& name) const {
-    const auto found = counters.find(name);
-    return found == counters.end() ? 0 : found->second;
-  }
-  // Keyframes it is done with: a cloud made, or skipped (counted; the undisturbed run must skip the same).
-  std::uint64_t handled() const {
-    return counter("clouds") + counter("keyframes_without_frame") + counter("keyframes_without_calibration") +
-           counter("bad_frame_size");
-  }
-};
-
-class RunWatch {
- public:
-  explicit RunWatch(int domain)
-      : participant_({.domain_id = domain, .dds_config = ""}),
-        keyframes_(participant_, topics_.keyframes()),
-        stereo_(participant_, topics_.stereo()),
-        frame_done_(participant_, topics_.frame_done()),
-        status_(participant_, topics_.status()) {}
-
-  void poll() {
-    for (auto& r : keyframes_.take()) {
-      if (r.info.valid_data) keyframe_ids.insert(r.sample->id);
-    }
-    for (auto& r : stereo_.take()) {
-      if (r.info.valid_data) last_frame_seq = r.sample->seq;
-    }
-    for (auto& r : frame_done_.take()) {
-      if (r.info.valid_data) last_done_seq = r.sample->seq;
-    }
-    for (auto& r : status_.take()) {
-      if (!r.info.valid_data || runtime::to_string(r.sample->name) != "occupancy") continue;
-      OccupancyStatus status;
-      status.pid = r.sample->pid;
-      for (const msg::Counter& c : runtime::view(r.sample->counters))
-        status.counters[runtime::to_string(c.name)] = c.value;
-      occupancy = status;
-    }
-  }
-  // Polls until `done` holds; false after kStateTimeout.
-  template <typename Done>
-  bool until(Done done) {
-    const auto deadline = std::chrono::steady_clock::now() + kStateTimeout;
-    while (std::chrono::steady_clock::now() < deadline) {
-      poll();
-      if (done()) return true;
-      std::this_thread::sleep_for(milliseconds(50));
-    }
-    return false;
-  }
-
-  std::set<std::uint64_t> keyframe_ids;
-  std::optional<std::uint64_t> last_frame_seq, last_done_seq;
-  std::optional<OccupancyStatus> occupancy;
-
- private:
-  runtime::Topics topics_;
-  runtime::Participant participant_;
-  runtime::Reader<msg::Keyframe> keyframes_;
-  runtime::Reader<msg::StereoFrame> stereo_;
-  runtime::Reader<msg::FrameDone> frame_done_;
-  runtime::Reader<msg::ComponentStatus> status_;
-};
-
 TEST(OccupancyRestart, KilledMidRunItSavesTheGridAndCloudOfAnUndisturbedRun) {
   fs::path dataset;
   const std::string render_error = test::cached_synth("room", kRoomFrames, dataset);
@@ -128,18 +58,15 @@ TEST(OccupancyRestart, KilledMidRunItSavesTheGridAndCloudOfAnUndisturbedRun) {
   }
 
   const int domain = test::exclusive_domain_id();
-  RunWatch watch(domain);
+  test::OccupancyRunWatch watch(domain, kStateTimeout);
   auto run = test::start_pipeline("synth", dataset, dir.path(), "killed", domain, args);
   ASSERT_TRUE(watch.until([&] { return watch.keyframe_ids.size() >= kKillAfterKeyframes; })) << run->err();
   const pid_t replay = test::child_pid(run->pid(), "heslam-replay");
   ASSERT_GT(replay, 0);
   ASSERT_EQ(kill(replay, SIGUSR1), 0);  // pause: the replay holds its next frame
   // Held: the frontend acknowledged the last frame published, and every keyframe has its cloud on disk.
-  ASSERT_TRUE(watch.until([&] {
-    return watch.last_frame_seq && watch.last_done_seq == watch.last_frame_seq && watch.occupancy &&
-           watch.occupancy->handled() == watch.keyframe_ids.size();
-  })) << "frames "
-      << watch.last_frame_seq.value_or(0) << ", done " << watch.last_done_seq.value_or(0) << ", keyframes "
+  ASSERT_TRUE(watch.until([&] { return watch.settled(); }))
+      << "frames " << watch.last_frame_seq.value_or(0) << ", done " << watch.last_done_seq.value_or(0) << ", keyframes "
       << watch.keyframe_ids.size() << ", clouds " << (watch.occupancy ? watch.occupancy->counter("clouds") : 0) << "\n"
       << run->err();
   const std::size_t clouds_before = watch.occupancy->counter("clouds");

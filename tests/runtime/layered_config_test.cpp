@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <stdexcept>
 
 #include "runtime/config.hpp"
@@ -120,6 +121,69 @@ TEST_F(LayeredConfig, EveryShippedPipelineLaysTheUsersComponentConfigOverItsOwn)
     }
   }
   EXPECT_GE(pipelines_with_a_mapper, 6);
+}
+
+// Every shipped pipeline with a local mapper (the full system) can start heslam-occupancy
+// (--arg occupancy=heslam-occupancy; default none) with its shipped layers and the user's
+// occupancy_config last, and its stop timeout from --arg occupancy_stop_timeout_s (180 s by default).
+TEST_F(LayeredConfig, EveryFullSystemPipelineStartsTheOccupancyWithTheUsersLayerAndStopTimeout) {
+  const fs::path user_occupancy = write("occupancy_overlay.yaml", "voxel:\n  resolution_m: 0.1\n");
+  int with_occupancy = 0;
+  for (const auto& entry : fs::directory_iterator(test::source_dir() / "config/pipelines")) {
+    const std::string name = entry.path().stem().string();
+    if (name == "replay_spy" || name.find("odometry") != std::string::npos) continue;
+    supervisor::PipelineOverrides overrides;
+    if (name.rfind("camera", 0) == 0) overrides.args["source"] = dir_.path().string();
+    if (name.rfind("camera", 0) != 0 && !name.starts_with("ros2_input"))
+      overrides.args["dataset"] = dir_.path().string();
+    // The localization, session and two-agent pipelines have no occupancy process (yet).
+    std::ifstream in(entry.path());
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (text.find("$(arg occupancy)") == std::string::npos) continue;
+    SCOPED_TRACE(name);
+    ++with_occupancy;
+    // Default: none, so no occupancy process at all.
+    {
+      const supervisor::LoadResult result = supervisor::load_pipeline(entry.path(), overrides, test::bin_dir());
+      for (const std::string& problem : result.problems) ADD_FAILURE() << problem;
+      for (const supervisor::ComponentSpec& spec : result.pipeline.components) EXPECT_NE(spec.name, "occupancy");
+    }
+    overrides.args["occupancy"] = "heslam-occupancy";
+    for (const bool user : {false, true}) {
+      if (user) {
+        overrides.args["occupancy_config"] = user_occupancy.string();
+        overrides.args["occupancy_stop_timeout_s"] = "900";
+      }
+      const supervisor::LoadResult result = supervisor::load_pipeline(entry.path(), overrides, test::bin_dir());
+      for (const std::string& problem : result.problems) ADD_FAILURE() << problem;
+      bool found = false;
+      for (const supervisor::ComponentSpec& spec : result.pipeline.components) {
+        if (spec.name != "occupancy") continue;
+        found = true;
+        ASSERT_GE(spec.configs.size(), 2u);
+        EXPECT_EQ(spec.configs.front().filename(), "default.yaml");
+        EXPECT_EQ(spec.configs.back() == user_occupancy, user);
+        const Config occupancy = Config::load(spec.configs);
+        EXPECT_EQ(occupancy.get_double("voxel.resolution_m", 0.0), user ? 0.1 : name.starts_with("kitti") ? 0.2 : 0.05);
+        EXPECT_FALSE(occupancy.get_string("settings.file", "").empty());
+        // The real-time pipelines' worker takes only CPU time nobody else wants (real_time.yaml).
+        const bool real_time = name.find("realtime") != std::string::npos || name.starts_with("ros2_input");
+        EXPECT_EQ(occupancy.get_bool("idle_priority", false), real_time);
+        ASSERT_TRUE(spec.stop_timeout_s.has_value());
+        EXPECT_EQ(*spec.stop_timeout_s, user ? 900.0 : 180.0);
+      }
+      EXPECT_TRUE(found);
+    }
+    overrides.args["occupancy_stop_timeout_s"] = "soon";
+    const supervisor::LoadResult bad = supervisor::load_pipeline(entry.path(), overrides, test::bin_dir());
+    ASSERT_EQ(bad.problems.size(), 1u);
+    EXPECT_NE(bad.problems.front().find(".stop_timeout_s': expected seconds in [0.1, 3600], got 'soon'"),
+              std::string::npos)
+        << bad.problems.front();
+  }
+  // euroc, euroc_realtime, euroc_inertial(_realtime), kitti(_realtime), synth(_inertial), camera_realtime,
+  // ros2_input(_inertial).
+  EXPECT_EQ(with_occupancy, 11);
 }
 
 }  // namespace

@@ -13,6 +13,10 @@
 # that PNG decoding (about a quarter of the pipeline's CPU on MH01) does not compete with the system.
 # LOCKSTEP_REFERENCE=0 (environment): no lockstep reference run (tools/bench/side_by_side.sh times the
 # real-time runs only).
+# OCCUPANCY=1 (environment): every run with --arg occupancy=heslam-occupancy, and per run one more line:
+# the keyframe clouds it fused of the keyframes made, its disparity (rectify, HE, SGBM, cloud) and fusion
+# per keyframe (median wall and CPU, from its log) against the median keyframe interval (the recorded
+# keyframe trajectory's stamps). OCCUPANCY_CONFIG=FILE: its --arg occupancy_config.
 # Not repeatable run to run (real time depends on the machine's load): report the load with the figures.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)
@@ -64,6 +68,8 @@ ate_mm() {
 run_pipeline() {
   local pipeline=$1 label=$2 logs=$out/logs_$2 start wall extra=()
   [[ $pipeline == *_realtime.yaml ]] && extra=(--arg preload_mb="$preload_mb")
+  [[ ${OCCUPANCY:-0} == 1 ]] && extra+=(--arg occupancy=heslam-occupancy)
+  [[ -n ${OCCUPANCY_CONFIG:-} ]] && extra+=(--arg occupancy_config="$OCCUPANCY_CONFIG")
   rm -rf "$logs" "$out/$label.txt"*
   start=$(date +%s.%N)
   if ! "$bin/heslam-supervisor" "$root/config/pipelines/$pipeline" --domain "$domain" --log-dir "$logs" \
@@ -84,6 +90,21 @@ run_pipeline() {
   recorded=$( [[ -f $out/$label.txt ]] && grep -cv '^#' "$out/$label.txt" || echo 0)
   printf "%-10s %6s %6s %9s %10s %10s %12s %9s %8s %7s\n" "$label" "$missed" "$frames" "$keyframes" \
     "$total_median" "$total_p90" "$ba_median" "$recorded" "$(ate_mm "$out/$label.txt")" "$wall"
+  [[ ${OCCUPANCY:-0} == 1 ]] && occupancy_line "$label" "$logs/occupancy.log" "$out/$label.keyframes.txt"
+  return 0
+}
+
+# "#   occupancy LABEL: C/K clouds, disparity W ms (cpu C ms), fusion ..., keyframe interval I ms".
+occupancy_line() {
+  local label=$1 log=$2 keyframes=$3 clouds made interval
+  clouds=$(field "$log" 'keyframe clouds fused' 's/.*map: ([0-9]+) keyframe clouds fused.*/\1/')
+  made=$( [[ -f $keyframes ]] && grep -cv '^#' "$keyframes" || echo "-")
+  # Median gap between consecutive keyframe stamps (TUM: seconds in column 1).
+  interval=$( [[ -f $keyframes ]] && grep -v '^#' "$keyframes" | awk '{ print $1 }' | sort -g |
+    awk 'NR > 1 { print ($1 - p) * 1000 } { p = $1 }' | sort -g |
+    awk '{ a[NR] = $1 } END { if (NR) printf "%.0f", NR % 2 ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2; else print "-" }' || echo "-")
+  stage() { field "$log" "stage $1 " 's/.*median +([0-9.]+) ms.*/\1/'; }
+  echo "#   occupancy $label: $clouds/$made keyframe clouds, disparity $(stage disparity) ms (cpu $(stage disparity_cpu)), fusion $(stage fusion) ms (cpu $(stage fusion_cpu)), median keyframe interval $interval ms, final rebuild $(stage final_rebuild) ms"
 }
 
 header() {
