@@ -360,8 +360,15 @@ void OccupancyNode::make_cloud(const Job& job) {
     if (multiview_ && job.T_wc.matrix().allFinite()) {
       // Refined against the previous keyframes' left images, then kept as one of them.
       auto multiview_timer = stats().time("multiview");
-      disparity = multiview_->refine(disparity, left, right, job.T_wc);
+      MultiViewDepthStats refined;
+      disparity = multiview_->refine(disparity, left, right, job.T_wc, &refined);
       multiview_->add_view(left, job.T_wc);
+      if (refined.views_used > 0) {
+        ++multiview_keyframes_;
+        multiview_pixels_ += refined.pixels;
+        multiview_refined_ += refined.refined;
+        stats().count("multiview_keyframes");
+      }
     }
     stereo_->cloud_from_disparity(disparity, cloud.points_c, normals ? &cloud.normals_c : nullptr);
     cloud.sigma_per_m2 = stereo_->sigma_per_m2();
@@ -384,6 +391,10 @@ void OccupancyNode::write_outputs() {
   log().info("map: ", map_->fused(), " keyframe clouds fused (", map_->cloud_points(), " points), ",
              map_->voxels().size(), " voxels (", map_->voxels().memory_bytes() / 1024, " KiB), grid ", occupied,
              " occupied + ", free, " free cells (", area_m2, " m^2)");
+  if (options_.multiview.enabled()) {
+    log().info("multi-view: ", multiview_keyframes_, " keyframes refined against earlier keyframes, ",
+               multiview_refined_, " of their ", multiview_pixels_, " pixels refined");
+  }
   if (map_->fused() == 0) {
     throw std::runtime_error("no keyframe cloud was fused (keyframes received: " +
                              std::to_string(seen_keyframes_.size()) + "); no map written");

@@ -110,6 +110,10 @@ class OccupancyNode final : public runtime::Component {
   std::optional<HistogramEqualizer> equalizer_;
   std::optional<DenseStereo> stereo_;
   std::optional<MultiViewDepth> multiview_;  // options_.multiview enabled: the last keyframes' left images
+  // Keyframes refined against at least one neighbour, and their pixels (with a disparity / refined).
+  std::size_t multiview_keyframes_ = 0;
+  std::size_t multiview_pixels_ = 0;
+  std::size_t multiview_refined_ = 0;
   bool stop_ = false;
   // Live outputs (worker thread): whether the map changed since the last grid / cloud, when they went.
   bool grid_dirty_ = false;

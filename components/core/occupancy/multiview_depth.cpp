@@ -352,7 +352,7 @@ cv::Mat MultiViewDepth::refine(const cv::Mat& disparity, const cv::Mat& left, co
       const int* index = best_index.ptr<int>(v);
       float* r = refined.ptr<float>(v);
       for (int u = 0; u < cols; ++u) {
-        r[u] = nan;
+        r[u] = nan;  // a pixel the last pass does not refine keeps SGBM's value, not an earlier pass's
         if (!(d[u] > 0.f)) continue;
         const bool inner = index[u] > 0 && index[u] < candidates - 1;
         const float curvature = pbefore[u] - 2.f * pb[u] + pafter[u];

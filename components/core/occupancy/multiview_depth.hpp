@@ -48,8 +48,10 @@ struct MultiViewDepthOptions {
   // The pyramid level matched at: 0 full resolution, 1 half (a quarter of the work; each pixel takes
   // the offset its level pixel found, added to its own base).
   int level = 1;
-  // Passes: each after the first takes the previous pass's disparities as its base, with the range
-  // shrunk by pass_range_factor.
+  // Passes: each after the first takes the previous pass's disparities as its base (its smoother surface
+  // samples the windows where they lie), with the range shrunk by pass_range_factor. A pixel the last pass
+  // does not refine (its best candidate on the narrower range's edge, or a low score) is unrefined: on the
+  // room keeping the earlier pass's value instead fuses worse (seen-truth IoU 0.421 against 0.427).
   int passes = 2;
   double pass_range_factor = 0.4;
   // The base surface: the mean of the valid disparities within base_radius_px, where they differ from
