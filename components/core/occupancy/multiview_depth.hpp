@@ -72,9 +72,9 @@ struct MultiViewDepthOptions {
 
 struct MultiViewDepthStats {
   std::size_t views_used = 0;  // neighbours (and the right image) matched against
-  std::size_t candidates = 0;
-  std::size_t pixels = 0;   // pixels with a disparity
-  std::size_t refined = 0;  // of them, refined
+  std::size_t candidates = 0;  // searched, summed over the passes
+  std::size_t pixels = 0;      // pixels with a disparity
+  std::size_t refined = 0;     // of them, refined
   double mean_abs_change_px = 0.0;
 };
 
