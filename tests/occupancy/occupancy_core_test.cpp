@@ -330,14 +330,20 @@ TEST(OccupancyMap, CloudFilesRoundTripAndRefuseTruncation) {
   std::filesystem::remove_all(dir);
 }
 
-TEST(DenseStereo, KnownDisparityGivesKnownDepth) {
+// A rectified camera of width x height pixels, focal length f_px, principal point at the centre, 0.1 m baseline.
+PinholeStereo small_camera(double f_px, int width, int height) {
   PinholeStereo camera;
-  camera.fx_px = camera.fy_px = 400.0;
-  camera.cx_px = 160.0;
-  camera.cy_px = 120.0;
+  camera.fx_px = camera.fy_px = f_px;
+  camera.cx_px = 0.5 * width;
+  camera.cy_px = 0.5 * height;
   camera.baseline_m = 0.1;
-  camera.width_px = 320;
-  camera.height_px = 240;
+  camera.width_px = width;
+  camera.height_px = height;
+  return camera;
+}
+
+TEST(DenseStereo, KnownDisparityGivesKnownDepth) {
+  const PinholeStereo camera = small_camera(400.0, 320, 240);
   // A random texture; the right image is the left shifted 20 px left: disparity 20, depth 400 * 0.1 / 20 = 2 m.
   cv::Mat left(240, 320, CV_8UC1);
   cv::RNG rng(7);
@@ -379,13 +385,7 @@ TEST(DenseStereo, KnownDisparityGivesKnownDepth) {
 TEST(DenseStereo, RefinementFindsASubPixelShift) {
   constexpr int kScale = 8, kWidth = 320, kHeight = 120, kShiftFine = 99;  // 99 / 8 = 12.375 px
   constexpr float kTrue = static_cast<float>(kShiftFine) / kScale;
-  PinholeStereo camera;
-  camera.fx_px = camera.fy_px = 400.0;
-  camera.cx_px = 160.0;
-  camera.cy_px = 60.0;
-  camera.baseline_m = 0.1;
-  camera.width_px = kWidth;
-  camera.height_px = kHeight;
+  const PinholeStereo camera = small_camera(400.0, kWidth, kHeight);
   cv::RNG rng(11);
   cv::Mat coarse(kHeight / 2, kWidth / 2 + 16, CV_32F);
   rng.fill(coarse, cv::RNG::UNIFORM, 0, 255);
@@ -455,13 +455,7 @@ cv::Mat render_plane(const PinholeStereo& camera, const cv::Mat& texture, const 
 // 3 m) with 0.2 px of noise. Against three earlier keyframes 0.3-0.6 m away (one turned by 2 degrees) and the
 // right image, the refinement finds the plane: 91% of the interior pixels refined, median error 0.005 px.
 TEST(MultiViewDepth, RefinesABiasedDisparityOfATexturedPlaneToTheTruth) {
-  PinholeStereo camera;
-  camera.fx_px = camera.fy_px = 300.0;
-  camera.cx_px = 160.0;
-  camera.cy_px = 120.0;
-  camera.baseline_m = 0.1;
-  camera.width_px = 320;
-  camera.height_px = 240;
+  const PinholeStereo camera = small_camera(300.0, 320, 240);
   cv::Mat texture(900, 1200, CV_32F);
   cv::RNG rng(7);
   rng.fill(texture, cv::RNG::UNIFORM, 0.0, 255.0);
