@@ -272,7 +272,7 @@ void OccupancyNode::on_keyframe(const msg::Keyframe& message) {
   }
   if (seen_keyframes_.count(id)) return;  // sent again (a restarted frontend), or its cloud was loaded
   seen_keyframes_[id] = true;
-  pending_.push_back({id, message.stamp_ns});
+  pending_.push_back({id, message.stamp_ns, messages::to_pose(message.T_wc)});
 }
 
 void OccupancyNode::match_pending() {
@@ -290,6 +290,7 @@ void OccupancyNode::match_pending() {
       job.kind = Job::Kind::kCloud;
       job.keyframe_id = it->id;
       job.frame = *frame;
+      job.T_wc = it->T_wc;
       push(std::move(job));
       it = pending_.erase(it);
     } else if (!ring_.empty() && ring_.back().stamp_ns > it->stamp_ns) {
@@ -420,6 +421,8 @@ void OccupancyNode::make_cloud(const Job& job) {
   if (!stereo_ || stereo_->camera().width_px != rectifier->camera().width_px ||
       stereo_->camera().fx_px != rectifier->camera().fx_px || stereo_->camera().bf() != rectifier->camera().bf()) {
     stereo_.emplace(rectifier->camera(), options_.stereo);
+    multiview_.reset();
+    if (options_.multiview.enabled()) multiview_.emplace(rectifier->camera(), options_.multiview);
   }
   KeyframeCloud cloud;
   cloud.stamp_ns = job.frame.stamp_ns;
@@ -432,8 +435,21 @@ void OccupancyNode::make_cloud(const Job& job) {
     equalizer_->equalize(left, right, left, right);
     // Normals only for the TSDF (its distance to the point's plane); sigma for both fusion models.
     const bool normals = options_.map.voxels.model == FusionModel::kTsdf;
-    stereo_->cloud_from_disparity(stereo_->disparity(left, right), cloud.points_c,
-                                  normals ? &cloud.normals_c : nullptr);
+    cv::Mat disparity = stereo_->disparity(left, right);
+    if (multiview_ && job.T_wc.matrix().allFinite()) {
+      // Refined against the previous keyframes' left images, then kept as one of them.
+      auto multiview_timer = stats().time("multiview");
+      MultiViewDepthStats refined;
+      disparity = multiview_->refine(disparity, left, right, job.T_wc, &refined);
+      multiview_->add_view(left, job.T_wc);
+      if (refined.views_used > 0) {
+        ++multiview_keyframes_;
+        multiview_pixels_ += refined.pixels;
+        multiview_refined_ += refined.refined;
+        stats().count("multiview_keyframes");
+      }
+    }
+    stereo_->cloud_from_disparity(disparity, cloud.points_c, normals ? &cloud.normals_c : nullptr);
     cloud.sigma_per_m2 = stereo_->sigma_per_m2();
     stats().record_ms("disparity_cpu", thread_cpu_ms() - cpu_start_ms);
   }
@@ -507,6 +523,10 @@ void OccupancyNode::write_outputs() {
   log().info("map: ", map_->fused(), " keyframe clouds fused (", map_->cloud_points(), " points), ",
              map_->voxels().size(), " voxels (", map_->voxels().memory_bytes() / 1024, " KiB), grid ", occupied,
              " occupied + ", free, " free cells (", area_m2, " m^2)");
+  if (options_.multiview.enabled()) {
+    log().info("multi-view: ", multiview_keyframes_, " keyframes refined against earlier keyframes, ",
+               multiview_refined_, " of their ", multiview_pixels_, " pixels refined");
+  }
   if (map_->fused() == 0) {
     throw std::runtime_error("no keyframe cloud was fused (keyframes received: " +
                              std::to_string(seen_keyframes_.size()) + "); no map written");

@@ -29,6 +29,7 @@
 #include "components/core/camera/stereo_rectifier.hpp"
 #include "components/core/image/histogram_equalizer.hpp"
 #include "components/core/occupancy/dense_stereo.hpp"
+#include "components/core/occupancy/multiview_depth.hpp"
 #include "components/core/occupancy/occupancy_map.hpp"
 #include "components/occupancy/occupancy_options.hpp"
 #include "components/occupancy/occupancy_save.hpp"
@@ -53,13 +54,16 @@ class OccupancyNode final : public runtime::Component {
     enum class Kind { kCloud, kPose, kCull, kSave } kind = Kind::kCloud;
     std::uint64_t keyframe_id = 0;
     Frame frame;                     // kCloud
-    Pose3 T_wc = Pose3::Identity();  // kPose
+    Pose3 T_wc = Pose3::Identity();  // kPose; kCloud: the keyframe sample's (multi-view refinement)
     std::uint64_t request_id = 0;    // kSave: the map as it is now, to ...
     std::filesystem::path stem;      // ... STEM.pgm + STEM.yaml + STEM.ply
   };
   struct PendingKeyframe {
     std::uint64_t id = 0;
     std::int64_t stamp_ns = 0;
+    // The frontend's pose in the keyframe sample: the multi-view refinement uses it (not the mapper's
+    // later one), so its result does not depend on when the mapper's state arrives.
+    Pose3 T_wc = Pose3::Identity();
   };
 
   void configure(const runtime::Config& config) override;
@@ -116,6 +120,11 @@ class OccupancyNode final : public runtime::Component {
   std::unique_ptr<OccupancyMap> map_;
   std::optional<HistogramEqualizer> equalizer_;
   std::optional<DenseStereo> stereo_;
+  std::optional<MultiViewDepth> multiview_;  // options_.multiview enabled: the last keyframes' left images
+  // Keyframes refined against at least one neighbour, and their pixels (with a disparity / refined).
+  std::size_t multiview_keyframes_ = 0;
+  std::size_t multiview_pixels_ = 0;
+  std::size_t multiview_refined_ = 0;
   bool stop_ = false;
   // Live outputs (worker thread): whether the map changed since the last grid / cloud, when they went.
   bool grid_dirty_ = false;

@@ -8,6 +8,7 @@
 
 #include "components/core/image/histogram_equalizer.hpp"
 #include "components/core/occupancy/dense_stereo.hpp"
+#include "components/core/occupancy/multiview_depth.hpp"
 #include "components/core/occupancy/occupancy_map.hpp"
 #include "runtime/config.hpp"
 
@@ -15,7 +16,10 @@ namespace heslam::occupancy {
 
 struct OccupancyProcessOptions {
   DenseStereoOptions stereo;  // stereo.*
-  OccupancyMapOptions map;    // voxel.*, grid.*
+  // multiview.*: each keyframe's disparity refined against the previous keyframes' left images
+  // (MultiViewDepth; neighbours 0: off).
+  MultiViewDepthOptions multiview;
+  OccupancyMapOptions map;  // voxel.*, grid.*
   // HE.* of the settings file the frontend reads (settings.file / --settings FILE): the dense
   // matcher sees the images as the frontend's ORB does, so it works where HE-SLAM works.
   std::filesystem::path settings_file;
