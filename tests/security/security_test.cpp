@@ -162,7 +162,7 @@ TEST(SecurityFiles, IdentityFolderNamesTheFilesOfItsRunFolder) {
 
 // Positive control of the tests below: credentialed replay -> credentialed frontend, and the wire.
 TEST(SecureDds, AuthorisedReaderGetsTheImagesAndTheWireCarriesNoImageBytes) {
-  const int domain = test::exclusive_domain_id();
+  const int domain = test::capture_domain_id();
   const test::ScratchDir dir("secure_delivery");
   const fs::path security = test::make_security_folder(dir.path() / "sec", dir.path());
   test::LoopbackCapture capture(domain);
@@ -182,7 +182,7 @@ TEST(SecureDds, AuthorisedReaderGetsTheImagesAndTheWireCarriesNoImageBytes) {
 // The same exchange without security: the capture finds the image bytes, so the test above tells
 // encrypted from not captured.
 TEST(SecureDds, PlainModeControlTheCaptureSeesTheImageBytes) {
-  const int domain = test::exclusive_domain_id();
+  const int domain = test::capture_domain_id();
   const test::ScratchDir dir("plain_delivery");
   test::LoopbackCapture capture(domain);
   if (!capture.error().empty()) GTEST_SKIP() << capture.error();

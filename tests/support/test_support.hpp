@@ -5,6 +5,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -73,13 +74,13 @@ inline bool supervisor_on_domain(int domain_id) {
   return false;
 }
 
-// A DDS domain id in 1..230, tried from `first` on, reserved for this process: a lock on it and on
-// the next id (a pipeline's image domain with image_transport shm) under $TMPDIR/heslam-test-domains,
-// held until the process exits, and no supervisor of this host on either (a pipeline started by
-// hand without those locks). Throws when every id is taken.
-inline int reserve_test_domain(int first) {
+// A DDS domain id in 1..last_id (at most 230), tried from `first` on, reserved for this process: a lock
+// on it and on the next id (a pipeline's image domain with image_transport shm) under
+// $TMPDIR/heslam-test-domains, held until the process exits, and no supervisor of this host on either (a
+// pipeline started by hand without those locks). Throws when every id is taken.
+inline int reserve_test_domain(int first, int last_id = 230) {
   constexpr int kFirstDomain = 1;
-  constexpr int kDomainCount = 230;  // Cyclone allows up to 232; 0 is left to interactive runs
+  const int kDomainCount = std::min(last_id, 230);  // Cyclone allows up to 232; 0 is left to interactive runs
   const std::filesystem::path lock_dir = std::filesystem::temp_directory_path() / "heslam-test-domains";
   std::filesystem::create_directories(lock_dir);
   const auto lock = [&](int id) {
@@ -98,8 +99,8 @@ inline int reserve_test_domain(int first) {
     ::close(fd);
     if (image_fd >= 0) ::close(image_fd);
   }
-  throw std::runtime_error("no free DDS test domain in 1..230 (all locked under " + lock_dir.string() +
-                           " or used by a heslam run)");
+  throw std::runtime_error("no free DDS test domain in 1.." + std::to_string(kDomainCount) + " (all locked under " +
+                           lock_dir.string() + " or used by a heslam run)");
 }
 
 // This process's test domain (reserve_test_domain from a pid-derived id: ctest runs tests in
