@@ -22,6 +22,7 @@
 #include "components/messages/loop_correction.hpp"
 #include "components/messages/map_state.hpp"
 #include "runtime/atomic_file.hpp"
+#include "runtime/heap.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/run_journal.hpp"
 #include "runtime/run_self.hpp"
@@ -443,6 +444,7 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
 
 void MapperNode::apply_corrections() {
   if (!mapper_) return;  // corrections wait for the map (and its camera) to exist
+  const bool any = !pending_corrections_.empty();
   while (!pending_corrections_.empty()) {
     const LoopCorrection correction = std::move(pending_corrections_.begin()->second);
     pending_corrections_.erase(pending_corrections_.begin());
@@ -468,6 +470,9 @@ void MapperNode::apply_corrections() {
                "): ", changes.changed_keyframes.size(), " keyframes and ", changes.changed_points.size(),
                " points moved, ", changes.removed_points.size(), " points merged");
   }
+  // A correction's copies of the map (the change set, the messages) are freed now: back to the system,
+  // or the mapper's RSS keeps the peak of the largest one for the rest of the run (issue 41).
+  if (any) runtime::release_free_heap(&stats());
 }
 
 void MapperNode::record(const MapChanges& changes) {
