@@ -20,9 +20,9 @@ HeapRelease release_free_heap(Stats* stats) {
   malloc_trim(0);
 #endif
   release.rss_after_bytes = resident_bytes();
+  release.elapsed_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
   if (stats != nullptr) {
-    stats->record_ms("heap_release",
-                     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count());
+    stats->record_ms("heap_release", release.elapsed_ms);
     stats->count("heap_released_kib", release.released_bytes() / 1024);
   }
   return release;

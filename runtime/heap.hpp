@@ -13,6 +13,7 @@ class Stats;
 struct HeapRelease {
   std::uint64_t rss_before_bytes = 0;  // resident_bytes() before and after (0 if unknown)
   std::uint64_t rss_after_bytes = 0;
+  double elapsed_ms = 0.0;  // the call's wall time
   std::uint64_t released_bytes() const {
     return rss_before_bytes > rss_after_bytes ? rss_before_bytes - rss_after_bytes : 0;
   }

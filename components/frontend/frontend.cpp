@@ -23,7 +23,6 @@
 #include "components/messages/keyframe.hpp"
 #include "components/messages/odometry.hpp"
 #include "components/messages/pose.hpp"
-#include "runtime/heap.hpp"
 #include "runtime/run_counters.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/run_journal.hpp"
@@ -714,8 +713,6 @@ void Frontend::mirror_map_state() {
     log().info("loop correction in the mirror at map version ", mirror_.version().complete(), ": ",
                applied.keyframe_states, " keyframe and ", applied.point_states, " point states, ",
                applied.keyframes_moved, " of our keyframes in flight moved with their reference keyframe");
-    // The correction's batch of states is freed: back to the system (issue 41, runtime/heap.hpp).
-    runtime::release_free_heap(&stats());
   }
 }
 

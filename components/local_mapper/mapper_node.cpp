@@ -444,7 +444,6 @@ void MapperNode::process_keyframe(PendingKeyframe keyframe) {
 
 void MapperNode::apply_corrections() {
   if (!mapper_) return;  // corrections wait for the map (and its camera) to exist
-  const bool any = !pending_corrections_.empty();
   while (!pending_corrections_.empty()) {
     const LoopCorrection correction = std::move(pending_corrections_.begin()->second);
     pending_corrections_.erase(pending_corrections_.begin());
@@ -470,9 +469,6 @@ void MapperNode::apply_corrections() {
                "): ", changes.changed_keyframes.size(), " keyframes and ", changes.changed_points.size(),
                " points moved, ", changes.removed_points.size(), " points merged");
   }
-  // A correction's copies of the map (the change set, the messages) are freed now: back to the system,
-  // or the mapper's RSS keeps the peak of the largest one for the rest of the run (issue 41).
-  if (any) runtime::release_free_heap(&stats());
 }
 
 void MapperNode::record(const MapChanges& changes) {
@@ -522,6 +518,13 @@ void MapperNode::save() {
   stats().count("map_saves");
   stats().count(last_save_.snapshot ? "map_snapshots" : "map_journal_records");
   stats().count(last_save_.snapshot ? "map_snapshot_bytes" : "map_journal_bytes", last_save_.bytes);
+  // A snapshot's buffer (10 MB at 100 keyframes) stays in the heap once freed (glibc raises its mmap
+  // threshold to the largest block freed): back to the system, or the RSS keeps it (issue 41).
+  if (last_save_.snapshot) {
+    const runtime::HeapRelease release = runtime::release_free_heap(&stats());
+    log().debug("heap after the snapshot: ", release.released_bytes() / 1024, " KiB returned to the system in ",
+                release.elapsed_ms, " ms, RSS ", release.rss_after_bytes / (1024 * 1024), " MiB");
+  }
   if (options_.map_journal_verify) verify_map_file();
 }
 

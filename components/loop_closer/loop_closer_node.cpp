@@ -547,8 +547,8 @@ void LoopCloserNode::finish_global_ba() {
 
 void LoopCloserNode::release_heap(const char* after) {
   const runtime::HeapRelease release = runtime::release_free_heap(&stats());
-  log().info("heap after the ", after, ": ", release.released_bytes() / 1024, " KiB returned to the system, RSS ",
-             release.rss_after_bytes / (1024 * 1024), " MiB");
+  log().info("heap after the ", after, ": ", release.released_bytes() / 1024, " KiB returned to the system in ",
+             release.elapsed_ms, " ms, RSS ", release.rss_after_bytes / (1024 * 1024), " MiB");
 }
 
 bool LoopCloserNode::publish_and_wait(LoopCorrection correction) {
