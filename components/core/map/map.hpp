@@ -105,7 +105,6 @@ inline void release_culled_keyframe(Keyframe& keyframe) {
   released.pyramid = keyframe.features.pyramid;
   keyframe.features = std::move(released);
   std::vector<PointId>().swap(keyframe.point_ids);
-  std::vector<std::pair<KeyframeId, int>>().swap(keyframe.covisible);
 }
 
 // A point's observations counted as ORB-SLAM2's MapPoint::Observations(): 2 for a keypoint with stereo

@@ -129,6 +129,7 @@ void cull_keyframe(Map& map, KeyframeId kf_id, MapChanges& changes) {
     changed_keyframes.insert(child);
   }
 
+  std::vector<std::pair<KeyframeId, int>>().swap(kf->covisible);
   kf->culled = true;
   release_culled_keyframe(*kf);
   changed_keyframes.insert(kf_id);
