@@ -22,6 +22,7 @@
 #include "components/messages/loop_correction.hpp"
 #include "components/messages/map_state.hpp"
 #include "runtime/atomic_file.hpp"
+#include "runtime/heap.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/run_journal.hpp"
 #include "runtime/run_self.hpp"
@@ -517,6 +518,13 @@ void MapperNode::save() {
   stats().count("map_saves");
   stats().count(last_save_.snapshot ? "map_snapshots" : "map_journal_records");
   stats().count(last_save_.snapshot ? "map_snapshot_bytes" : "map_journal_bytes", last_save_.bytes);
+  // A snapshot's buffer (10 MB at 100 keyframes) stays in the heap once freed (glibc raises its mmap
+  // threshold to the largest block freed): back to the system, or the RSS keeps it (issue 41).
+  if (last_save_.snapshot) {
+    const runtime::HeapRelease release = runtime::release_free_heap(&stats());
+    log().debug("heap after the snapshot: ", release.released_bytes() / 1024, " KiB returned to the system in ",
+                release.elapsed_ms, " ms, RSS ", release.rss_after_bytes / (1024 * 1024), " MiB");
+  }
   if (options_.map_journal_verify) verify_map_file();
 }
 

@@ -20,6 +20,7 @@
 #include "components/messages/checks.hpp"
 #include "components/messages/loop_correction.hpp"
 #include "components/messages/map_state.hpp"
+#include "runtime/heap.hpp"
 #include "runtime/run_id.hpp"
 #include "runtime/run_journal.hpp"
 #include "runtime/sequence.hpp"
@@ -363,7 +364,10 @@ void LoopCloserNode::process_keyframe(KeyframeId id) {
                correction.point_merges.size(), " points (map version ", mirror_.map().version, ", ", awaiting_state,
                " keyframes from the frontend left out: not mapped yet)");
   }
-  if (!publish_and_wait(std::move(correction)) || !options_.global_bundle_adjustment) return;
+  if (!publish_and_wait(std::move(correction)) || !options_.global_bundle_adjustment) {
+    release_heap("loop correction");
+    return;
+  }
 
   log().info("global BA started on map version ", mirror_.map().version, ": ", mirror_.map().keyframes.size(),
              " keyframes (", mirror_.keyframes_awaiting_state(), " more from the frontend left out: not mapped yet)");
@@ -538,6 +542,13 @@ void LoopCloserNode::finish_global_ba() {
              " points, ", outcome.stats.imu_factors, " IMU factors, ", outcome.stats.iterations, " iterations in ",
              outcome.elapsed_ms, " ms (CPU ", outcome.cpu_ms, " ms)");
   publish_and_wait(std::move(*outcome.correction));
+  release_heap("global BA");
+}
+
+void LoopCloserNode::release_heap(const char* after) {
+  const runtime::HeapRelease release = runtime::release_free_heap(&stats());
+  log().info("heap after the ", after, ": ", release.released_bytes() / 1024, " KiB returned to the system in ",
+             release.elapsed_ms, " ms, RSS ", release.rss_after_bytes / (1024 * 1024), " MiB");
 }
 
 bool LoopCloserNode::publish_and_wait(LoopCorrection correction) {

@@ -69,6 +69,9 @@ class LoopCloserNode : public runtime::Component {
   void process_keyframe(KeyframeId id);
   // Waits for the global BA started last and publishes its correction (if it was not aborted).
   void finish_global_ba();
+  // Returns the free heap to the system after a burst (the global BA thread's arena, a correction's
+  // solver); counted as heap_released_kib, timed as stage heap_release (runtime/heap.hpp).
+  void release_heap(const char* after);
   // Publishes the correction and waits until the mapper applied it and the mirror holds the result.
   bool publish_and_wait(LoopCorrection correction);
   void acknowledge(KeyframeId id);

@@ -44,6 +44,7 @@ void MapMirror::add_keyframe(const msg::Keyframe& message) {
   keyframe.parent = pending->second.parent;
   keyframe.covisible = std::move(pending->second.covisible);
   keyframe.culled = pending->second.culled;
+  if (keyframe.culled) release_culled_keyframe(keyframe);
   pending_states_.erase(pending);
 }
 

@@ -127,7 +127,10 @@ bool apply_keyframe_state(Map& map, const msg::KeyframeState& state) {
     keyframe->covisible.emplace_back(neighbour.id, static_cast<int>(neighbour.weight));
   }
   keyframe->culled = state.culled;
-  return true;  // a culled keyframe stays (flagged) so frames referencing it keep their anchor
+  // A culled keyframe stays (flagged) so frames referencing it keep their anchor; its data goes, as in
+  // the mapper (a culled keyframe is never revived: the mapper sends no features again).
+  if (keyframe->culled) release_culled_keyframe(*keyframe);
+  return true;
 }
 
 void apply_point_state(Map& map, const msg::MapPointState& state) {

@@ -118,6 +118,41 @@ TEST_F(MirrorOfARealTimeRun, AStateBeforeItsKeyframeSampleGivesTheKeyframeTheMap
   EXPECT_EQ(restarted.map().keyframe(1)->map_id, 7u);
 }
 
+// A keyframe the mapper culled keeps only its pose, parent and state in the copy, whichever comes first, its
+// state or its sample (ORB-SLAM's SetBadFlag; issue 41): its features and point slots are gone with their
+// memory, so the copy's size follows the keyframes kept, not every keyframe ever made.
+TEST_F(MirrorOfARealTimeRun, ACulledKeyframeKeepsNoFeaturesInTheCopy) {
+  for (KeyframeId k = 1; k <= 2; ++k) {
+    map(publish_keyframe(k, truth(k), k - 1, mapper_.map().version), k - 1, mapper_.map().version);
+    publish_map();
+  }
+  ASSERT_GT(mirror_.map().keyframes.at(2).features.size(), 100u);
+  std::vector<msg::CovisibleKeyframe> covisible;
+  Keyframe culled = mapper_.map().keyframes.at(2);
+  culled.culled = true;
+  mirror_.apply_keyframe_state(messages::to_state_message(culled, mapper_.map().version, covisible));
+  // The culled state before the sample (a restarted loop closer): released as the keyframe enters.
+  auto made = publish_keyframe(3, truth(3), 2, mapper_.map().version);
+  const messages::KeyframeMessage sample(made.first, 3, made.second, world_.camera, 2, mapper_.map().version);
+  map(std::move(made), 2, mapper_.map().version);
+  Keyframe third = mapper_.map().keyframes.at(3);
+  third.culled = true;
+  MapMirror restarted(KeyframeAdmission::kWithMapperState);
+  restarted.apply_keyframe_state(messages::to_state_message(third, mapper_.map().version, covisible));
+  restarted.add_keyframe(sample.get());
+
+  for (const Keyframe* keyframe : {&mirror_.map().keyframes.at(2), restarted.map().keyframe(3)}) {
+    ASSERT_NE(keyframe, nullptr);
+    EXPECT_TRUE(keyframe->culled);
+    EXPECT_EQ(keyframe->features.size(), 0u);
+    EXPECT_EQ(keyframe->features.descriptors.capacity(), 0u);
+    EXPECT_EQ(keyframe->features.keypoints.capacity(), 0u);
+    EXPECT_EQ(keyframe->point_ids.capacity(), 0u);
+  }
+  EXPECT_LT(max_abs_difference(mirror_.map().keyframes.at(2).T_wc, culled.T_wc), kTolerance);
+  EXPECT_EQ(mirror_.map().keyframes.at(2).parent, culled.parent);
+}
+
 TEST_F(MirrorOfARealTimeRun, GlobalBaAfterALoopCorrectionKeepsAKeyframeThatWasInFlight) {
   for (KeyframeId k = 1; k <= 4; ++k) {
     map(publish_keyframe(k, truth(k), k - 1, mapper_.map().version), k - 1, mapper_.map().version);

@@ -62,6 +62,34 @@ TEST(MapStateMessages, KeyframeStateRoundTripsThroughAMirror) {
   EXPECT_EQ(mirror.version, 0u);  // only the version markers advance it
 }
 
+// Every mirror (the frontend's, the loop closer's, the viewer's) applies states with apply_keyframe_state:
+// a culled keyframe's features and point slots go there with their memory, as in the mapper (issue 41).
+TEST(MapStateMessages, ACulledKeyframesStateReleasesItsFeaturesInAMirror) {
+  Map mirror = mirror_with_keyframe(7);
+  Keyframe& held = mirror.keyframes.at(7);
+  held.features.keypoints.resize(4);
+  held.features.descriptors.resize(4);
+  held.features.u_right_px.assign(4, 10.f);
+  held.features.depth_m.assign(4, 2.f);
+  held.point_ids = {11, kNoId, 12, 13};
+  Keyframe state;
+  state.id = 7;
+  state.T_wc = pose(0.1, {0.5, 0.0, 0.0});
+  state.parent = 3;
+  state.culled = true;
+  std::vector<msg::CovisibleKeyframe> buffer;
+  ASSERT_TRUE(apply_keyframe_state(mirror, to_state_message(state, 9, buffer)));
+  const Keyframe& mirrored = mirror.keyframes.at(7);
+  EXPECT_TRUE(mirrored.culled);
+  EXPECT_EQ(mirrored.parent, 3u);
+  EXPECT_LT(pose_difference(mirrored.T_wc, state.T_wc), 1e-12);
+  EXPECT_EQ(mirrored.features.size(), 0u);
+  EXPECT_EQ(mirrored.features.keypoints.capacity(), 0u);
+  EXPECT_EQ(mirrored.features.descriptors.capacity(), 0u);
+  EXPECT_EQ(mirrored.features.depth_m.capacity(), 0u);
+  EXPECT_EQ(mirrored.point_ids.capacity(), 0u);
+}
+
 // The markers that end every batch of states: id 0 on both topics, carrying the batch's map version;
 // a mirror holds version v completely once both topics' markers reached v.
 TEST(MapStateMessages, VersionMarkersEndABatchOnBothTopics) {

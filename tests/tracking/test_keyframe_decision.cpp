@@ -202,6 +202,54 @@ TEST(KeyframeDecision, RevisitCoveredByAnOldNearKeyframeOnly) {
   EXPECT_FALSE(revisit_covered(frame, map, camera, options));
 }
 
+// Revisits looking further away (issue 41, room_laps' lap 2): an old keyframe within the distance but
+// 20 degrees off covers the frame when >= 99 % of its tracked inliers are old points (their reference
+// keyframe >= 10 s old), and not below that share, nor without an old keyframe near.
+TEST(KeyframeDecision, RevisitCoveredByOldPointsWhenLookingFurtherAway) {
+  const PinholeStereo camera = test::synthetic_camera();
+  TrackerOptions options;  // 10 s, 3 baselines, 15 degrees, old share 0.99
+  Frame frame = make_counted_frame(camera, 60, 200);
+  frame.stamp_ns = 60'000'000'000;
+  Map map;
+  auto add = [&](KeyframeId id, double age_s, double x_m, double yaw_deg) {
+    Keyframe& kf = map.keyframes[id];
+    kf.id = id;
+    kf.stamp_ns = frame.stamp_ns - static_cast<std::int64_t>(age_s * 1e9);
+    kf.T_wc = frame.T_wc;
+    kf.T_wc.translation().x() += x_m;
+    kf.T_wc.linear() = Eigen::AngleAxisd(yaw_deg * kPi / 180.0, Eigen::Vector3d::UnitY()).matrix();
+  };
+  add(1, 2.0, 0.0, 0.0);    // recent (the keyframe just made): covers nothing
+  add(2, 30.0, 0.1, 20.0);  // old, near, 20 degrees off
+  // The frame's 60 tracked points: the first `old` made by keyframe 2, the others by keyframe 1.
+  auto points_made = [&](int old) {
+    for (int i = 0; i < 60; ++i) {
+      const PointId id = frame.point_ids[static_cast<std::size_t>(i)];
+      map.points[id].id = id;
+      map.points[id].reference_kf = i < old ? 2 : 1;
+    }
+  };
+  points_made(60);
+  EXPECT_NEAR(old_inlier_share(frame, map, options.revisit_min_age_s), 1.0, 1e-12);
+  EXPECT_TRUE(revisit_covered(frame, map, camera, options));
+  points_made(50);  // 0.83 < 0.99
+  EXPECT_NEAR(old_inlier_share(frame, map, options.revisit_min_age_s), 50.0 / 60.0, 1e-12);
+  EXPECT_FALSE(revisit_covered(frame, map, camera, options));
+  options.revisit_min_old_inlier_share = 0.8;
+  EXPECT_TRUE(revisit_covered(frame, map, camera, options));
+  frame.outlier[0] = true;  // an outlier is not an inlier: 49 / 59
+  EXPECT_NEAR(old_inlier_share(frame, map, options.revisit_min_age_s), 49.0 / 59.0, 1e-12);
+  frame.outlier[0] = false;
+  points_made(40);  // 0.67 < 0.8
+  EXPECT_FALSE(revisit_covered(frame, map, camera, options));
+  points_made(60);
+  options.revisit_min_old_inlier_share = 0.0;  // the angle alone
+  EXPECT_FALSE(revisit_covered(frame, map, camera, options));
+  options = TrackerOptions{};
+  map.keyframes.at(2).T_wc.translation().x() += 0.3;  // 0.4 m away: not near
+  EXPECT_FALSE(revisit_covered(frame, map, camera, options));
+}
+
 // A covered frame makes no keyframe where the close-point rule would make one, but weak tracking
 // (under a quarter of the reference keyframe's points) still does.
 TEST(KeyframeDecision, RevisitSuppressesAKeyframeUnlessTrackingIsWeak) {

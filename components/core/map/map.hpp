@@ -96,6 +96,17 @@ inline KeyframeId map_origin(const Map& map, MapId map_id) {
   return kNoId;
 }
 
+// A culled keyframe (ORB-SLAM's SetBadFlag) keeps its id, map, stamp, pose and parent: frames that
+// referenced it keep their anchor, and corrections move it. Its features and point slots go, with
+// their memory (not only their size), in the mapper and in every mirror, so each process's memory
+// follows the keyframes kept, not every keyframe ever made (issue 41, docs/mapping.md).
+inline void release_culled_keyframe(Keyframe& keyframe) {
+  StereoFeatures released;
+  released.pyramid = keyframe.features.pyramid;
+  keyframe.features = std::move(released);
+  std::vector<PointId>().swap(keyframe.point_ids);
+}
+
 // A point's observations counted as ORB-SLAM2's MapPoint::Observations(): 2 for a keypoint with stereo
 // depth, 1 otherwise. Its thresholds (point culling, the reference keyframe's tracked points) are in
 // these units.

@@ -129,15 +129,9 @@ void cull_keyframe(Map& map, KeyframeId kf_id, MapChanges& changes) {
     changed_keyframes.insert(child);
   }
 
-  kf->covisible.clear();
+  std::vector<std::pair<KeyframeId, int>>().swap(kf->covisible);
   kf->culled = true;
-  // Only its pose and parent are used from now on (the trajectory of the frames that referenced it,
-  // correction of its pose): its features would otherwise grow the mapper's memory and map file with
-  // every keyframe ever made instead of every keyframe kept (issue 41, docs/mapping.md).
-  StereoFeatures released;
-  released.pyramid = kf->features.pyramid;
-  kf->features = std::move(released);
-  kf->point_ids = {};
+  release_culled_keyframe(*kf);
   changed_keyframes.insert(kf_id);
 }
 

@@ -56,12 +56,29 @@ bool revisit_covered(const Frame& frame, const Map& map, const PinholeStereo& ca
   const double max_distance_m = options.revisit_max_distance_baselines * camera.baseline_m;
   const double min_cos = std::cos(options.revisit_max_angle_deg * kPi / 180.0);
   const Eigen::Vector3d axis = frame.T_wc.linear().col(2);
+  bool near = false;
   for (const auto& [id, keyframe] : map.keyframes) {
     if (keyframe.culled || keyframe.stamp_ns > newest_ns) continue;
     if ((keyframe.T_wc.translation() - frame.T_wc.translation()).norm() > max_distance_m) continue;
     if (keyframe.T_wc.linear().col(2).dot(axis) >= min_cos) return true;
+    near = true;
   }
-  return false;
+  const double share = options.revisit_min_old_inlier_share;
+  return near && share > 0.0 && share <= 1.0 && old_inlier_share(frame, map, options.revisit_min_age_s) >= share;
+}
+
+double old_inlier_share(const Frame& frame, const Map& map, double min_age_s) {
+  const auto newest_ns = frame.stamp_ns - static_cast<std::int64_t>(min_age_s * 1e9);
+  int inliers = 0;
+  int old = 0;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    if (frame.point_ids[i] == kNoId || frame.outlier[i]) continue;
+    ++inliers;
+    const MapPoint* point = map.point(frame.point_ids[i]);
+    const Keyframe* reference = point == nullptr ? nullptr : map.keyframe(point->reference_kf);
+    if (reference != nullptr && reference->stamp_ns <= newest_ns) ++old;
+  }
+  return inliers > 0 ? static_cast<double>(old) / inliers : 0.0;
 }
 
 KeyframeDecision decide_keyframe(const Frame& frame, const PinholeStereo& camera, const KeyframeDecisionInput& input,

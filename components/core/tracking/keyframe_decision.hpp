@@ -53,8 +53,14 @@ int count_reference_points_near_clip(const Keyframe& reference, const Map& map, 
 int count_tracked_near_clip(const Frame& frame);
 
 // Whether a keyframe (not culled) made at least options.revisit_min_age_s before the frame is within
-// options.revisit_max_distance_baselines baselines and options.revisit_max_angle_deg of its pose.
+// options.revisit_max_distance_baselines baselines and options.revisit_max_angle_deg of its pose, or
+// within that distance at any angle while options.revisit_min_old_inlier_share of the frame's tracked
+// inliers are old points (old_inlier_share()).
 bool revisit_covered(const Frame& frame, const Map& map, const PinholeStereo& camera, const TrackerOptions& options);
+
+// The share of the frame's tracked inliers whose point's reference keyframe was made at least
+// `min_age_s` before the frame (0 without inliers).
+double old_inlier_share(const Frame& frame, const Map& map, double min_age_s);
 
 KeyframeDecision decide_keyframe(const Frame& frame, const PinholeStereo& camera, const KeyframeDecisionInput& input,
                                  const TrackerOptions& options);
