@@ -113,7 +113,9 @@ const char* const kSettingsKeys[] = {"Camera.fps",
                                      "Pipeline.leftOnlyFeatures",
                                      "Tracker.stationaryTestChi2",
                                      "Tracker.rotationOnlyTestChi2",
-                                     "Tracker.ransacSeed"};
+                                     "Tracker.ransacSeed",
+                                     "Tracker.revisitMinAgeS",
+                                     "Tracker.revisitMinOldInlierShare"};
 
 // The keys of the settings file before issue 33 that are constants now: a file still giving one (an
 // older copy of a shipped file) is told it is not used, never silently ignored.
@@ -206,29 +208,32 @@ TEST(FrontendOptions, EachDocumentedSettingsKeyChangesWhatTheFrontendReports) {
   const std::string base((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::string baseline = reported(with_settings(euroc));
   // {key, value, the key whose line it replaces (ORB-SLAM3's Stereo.ThDepth replaces ThDepth)}
-  const std::tuple<const char*, const char*, const char*> changes[] = {{"Camera.fps", "30.0", nullptr},
-                                                                       {"ThDepth", "40.0", nullptr},
-                                                                       {"Stereo.ThDepth", "40.0", "ThDepth"},
-                                                                       {"ORBextractor.nFeatures", "1500", nullptr},
-                                                                       {"ORBextractor.scaleFactor", "1.3", nullptr},
-                                                                       {"ORBextractor.nLevels", "6", nullptr},
-                                                                       {"ORBextractor.iniThFAST", "25", nullptr},
-                                                                       {"ORBextractor.minThFAST", "5", nullptr},
-                                                                       {"HE.mode", "\"global\"", nullptr},
-                                                                       {"HE.stereo", "\"shared\"", nullptr},
-                                                                       {"HE.globalClipLimit", "3.0", nullptr},
-                                                                       {"HE.clipLimit", "4.0", nullptr},
-                                                                       {"HE.tilesX", "4", nullptr},
-                                                                       {"HE.tilesY", "4", nullptr},
-                                                                       {"HE.adaptiveOnBelow", "20.0", nullptr},
-                                                                       {"HE.adaptiveOffAbove", "40.0", nullptr},
-                                                                       {"Stereo.rowBand", "3.0", nullptr},
-                                                                       {"Pipeline.parallel", "0", nullptr},
-                                                                       {"Pipeline.pinThreads", "0", nullptr},
-                                                                       {"Pipeline.leftOnlyFeatures", "0.5", nullptr},
-                                                                       {"Tracker.stationaryTestChi2", "0", nullptr},
-                                                                       {"Tracker.rotationOnlyTestChi2", "0", nullptr},
-                                                                       {"Tracker.ransacSeed", "7", nullptr}};
+  const std::tuple<const char*, const char*, const char*> changes[] = {
+      {"Camera.fps", "30.0", nullptr},
+      {"ThDepth", "40.0", nullptr},
+      {"Stereo.ThDepth", "40.0", "ThDepth"},
+      {"ORBextractor.nFeatures", "1500", nullptr},
+      {"ORBextractor.scaleFactor", "1.3", nullptr},
+      {"ORBextractor.nLevels", "6", nullptr},
+      {"ORBextractor.iniThFAST", "25", nullptr},
+      {"ORBextractor.minThFAST", "5", nullptr},
+      {"HE.mode", "\"global\"", nullptr},
+      {"HE.stereo", "\"shared\"", nullptr},
+      {"HE.globalClipLimit", "3.0", nullptr},
+      {"HE.clipLimit", "4.0", nullptr},
+      {"HE.tilesX", "4", nullptr},
+      {"HE.tilesY", "4", nullptr},
+      {"HE.adaptiveOnBelow", "20.0", nullptr},
+      {"HE.adaptiveOffAbove", "40.0", nullptr},
+      {"Stereo.rowBand", "3.0", nullptr},
+      {"Pipeline.parallel", "0", nullptr},
+      {"Pipeline.pinThreads", "0", nullptr},
+      {"Pipeline.leftOnlyFeatures", "0.5", nullptr},
+      {"Tracker.stationaryTestChi2", "0", nullptr},
+      {"Tracker.rotationOnlyTestChi2", "0", nullptr},
+      {"Tracker.ransacSeed", "7", nullptr},
+      {"Tracker.revisitMinAgeS", "0", nullptr},
+      {"Tracker.revisitMinOldInlierShare", "0.9", nullptr}};
   std::set<std::string> changed;
   for (const auto& [key, value, replaces] : changes) {
     changed.insert(key);

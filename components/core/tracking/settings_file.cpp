@@ -99,7 +99,8 @@ std::string describe_settings(const StereoFeaturePipelineOptions& p, const Track
        << (p.parallel ? (p.pin_threads ? "parallel (pinned)" : "parallel (unpinned)") : "serial")
        << ", left-only features " << p.left_only_features << "; tracker ThDepth " << t.close_depth_baselines
        << " baselines, keyframe at least every " << t.max_frames_between_keyframes << " frames, stationary test "
-       << t.stationary_test_chi2 << "/" << t.rotation_only_test_chi2 << ", RANSAC seed " << t.ransac_seed;
+       << t.stationary_test_chi2 << "/" << t.rotation_only_test_chi2 << ", RANSAC seed " << t.ransac_seed
+       << ", revisits after " << t.revisit_min_age_s << " s (old inliers " << t.revisit_min_old_inlier_share << ")";
   return line.str();
 }
 

@@ -49,6 +49,9 @@ void read_tracker_settings(const cv::FileNode& root, const std::string& source, 
   int seed = static_cast<int>(t.ransac_seed);
   read_int(root, source, "Tracker.ransacSeed", seed, 0, INT_MAX);
   t.ransac_seed = static_cast<std::uint64_t>(seed);
+  // The revisit rule (issue 41, not ORB-SLAM2's): 0 s turns it off, ORB-SLAM2's keyframe decision.
+  read_number(root, source, "Tracker.revisitMinAgeS", t.revisit_min_age_s, 0.0, 1e6);
+  read_number(root, source, "Tracker.revisitMinOldInlierShare", t.revisit_min_old_inlier_share, 0.0, 1.0);
 }
 
 }  // namespace heslam

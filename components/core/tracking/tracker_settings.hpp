@@ -5,6 +5,7 @@
 //   ThDepth     -> close_depth_baselines (close / far split, in baselines; ORB-SLAM3: Stereo.ThDepth)
 //   Tracker.stationaryTestChi2, .rotationOnlyTestChi2 -> the stationary test (0: off, as ORB-SLAM2)
 //   Tracker.ransacSeed -> ransac_seed (repeatability experiments)
+//   Tracker.revisitMinAgeS, .revisitMinOldInlierShare -> the revisit rule (0 s: off, as ORB-SLAM2)
 // The other TrackerOptions fields are constants (tracker_options.hpp): a file giving one of their old
 // Tracker.* keys is told it is not used.
 // A missing key keeps the default; a wrong type or a value out of range is one error naming the
