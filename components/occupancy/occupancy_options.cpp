@@ -61,6 +61,7 @@ OccupancyProcessOptions OccupancyProcessOptions::from_config(const runtime::Conf
   v.tsdf_min_weight = config.get_double("voxel.tsdf_min_weight", v.tsdf_min_weight, 0.001, 1e6);
   v.tsdf_free_ratio = config.get_double("voxel.tsdf_free_ratio", v.tsdf_free_ratio, 0.001, 1e6);
   v.tsdf_zero_crossing = config.get_bool("voxel.tsdf_zero_crossing", v.tsdf_zero_crossing);
+  v.tsdf_fit_radius = config.get_int("voxel.tsdf_fit_radius", v.tsdf_fit_radius, 0, 3);
   if (!(v.tsdf_occupied_m < v.tsdf_truncation_m)) {
     throw std::runtime_error(config.source() + ": voxel.tsdf_occupied_m must be below voxel.tsdf_truncation_m");
   }

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -355,6 +356,50 @@ TEST(OccupancyGrid, TsdfZeroCrossingMarksTheVoxelTheSurfaceLiesIn) {
     EXPECT_EQ(threshold.at(20, j), CellState::kOccupied) << j;
     EXPECT_EQ(threshold.at(21, j), CellState::kOccupied) << j;
   }
+}
+
+// The plane fit (tsdf_fit_radius): a wall at x = 1.040 (cell 20 is [1.00, 1.05)) seen in 4 images, each
+// with a depth error that is the same over a 5 cm patch (as stereo's is correlated over a window) and
+// 1.5 cm rms between patches. A voxel's own average keeps ~0.8 cm of it, enough to put some columns'
+// crossing in cell 21 (the wall 1 cm from the border); fitted over 27 voxels the wall is in cell 20
+// in every column and nowhere else.
+TEST(OccupancyGrid, TsdfPlaneFitPlacesANoisyWallInItsCell) {
+  auto fuse = [](int fit_radius) {
+    VoxelMapOptions options;
+    options.model = FusionModel::kTsdf;
+    options.tsdf_truncation_m = 0.15;
+    options.tsdf_occupied_m = 0.04;
+    options.tsdf_min_weight = 0.5;
+    options.tsdf_zero_crossing = true;
+    options.tsdf_fit_radius = fit_radius;
+    VoxelMap map(options);
+    std::mt19937 random(36);
+    std::normal_distribution<double> patch_error(0.0, 0.015);
+    for (int image = 0; image < 4; ++image) {
+      std::map<std::pair<int, int>, double> error;  // per 5 cm patch of the wall
+      std::vector<Eigen::Vector3f> points;
+      for (const Eigen::Vector3f& p : wall_points(1.040)) {
+        const std::pair<int, int> patch{static_cast<int>(std::floor(p.y() / 0.05)),
+                                        static_cast<int>(std::floor(p.z() / 0.05))};
+        if (!error.count(patch)) error[patch] = patch_error(random);
+        points.emplace_back(p.x() + static_cast<float>(error[patch]), p.y(), p.z());
+      }
+      const std::vector<Eigen::Vector3f> normals(points.size(), Eigen::Vector3f(-1.f, 0.f, 0.f));
+      map.integrate({0.025, 0.025, 0.025}, points, {}, normals);
+    }
+    return OccupancyGrid::from_voxels(map, GridBand{-0.25, 0.25});
+  };
+  const OccupancyGrid own = fuse(0);
+  const OccupancyGrid fitted = fuse(1);
+  int misplaced_own = 0;
+  // The wall's columns j in [-20, 20); the outermost have neighbours on one side only: still fitted.
+  for (int j = -20; j < 20; ++j) {
+    EXPECT_EQ(fitted.at(20, j), CellState::kOccupied) << j;
+    EXPECT_NE(fitted.at(19, j), CellState::kOccupied) << j;
+    EXPECT_NE(fitted.at(21, j), CellState::kOccupied) << j;
+    misplaced_own += own.at(21, j) == CellState::kOccupied || own.at(19, j) == CellState::kOccupied;
+  }
+  EXPECT_GT(misplaced_own, 3) << "the noise must be large enough that a voxel's own average misplaces the wall";
 }
 
 TEST(OccupancyMap, CloudFilesRoundTripAndRefuseTruncation) {

@@ -27,18 +27,25 @@ constexpr double kFreeThresh = 0.196;
 OccupancyGrid OccupancyGrid::from_voxels(const VoxelMap& voxels, const GridBand& band) {
   OccupancyGrid grid(voxels.options().resolution_m);
   std::set<std::pair<int, int>> near;  // columns with a voxel near a surface: never free
-  voxels.for_each_state([&](const VoxelIndex& v, VoxelMap::VoxelState state) {
-    const double z = voxels.center_of(v).z();
-    if (z < band.min_m || z > band.max_m) return;
-    CellState& cell = grid.cells_[{v.x, v.y}];
-    if (state == VoxelMap::VoxelState::kOccupied) {
-      cell = CellState::kOccupied;
-    } else if (state == VoxelMap::VoxelState::kFree && cell != CellState::kOccupied) {
-      cell = CellState::kFree;
-    } else if (state == VoxelMap::VoxelState::kNear) {
-      near.insert({v.x, v.y});
-    }
-  });
+  // The layers whose voxel centres may lie in the band (centre of layer k: (k + 1/2) resolution; one more
+  // each side against rounding, the centre test below decides).
+  const double r = voxels.options().resolution_m;
+  const int min_layer = static_cast<int>(std::floor(band.min_m / r - 0.5));
+  const int max_layer = static_cast<int>(std::ceil(band.max_m / r - 0.5));
+  voxels.for_each_state(
+      [&](const VoxelIndex& v, VoxelMap::VoxelState state) {
+        const double z = voxels.center_of(v).z();
+        if (z < band.min_m || z > band.max_m) return;
+        CellState& cell = grid.cells_[{v.x, v.y}];
+        if (state == VoxelMap::VoxelState::kOccupied) {
+          cell = CellState::kOccupied;
+        } else if (state == VoxelMap::VoxelState::kFree && cell != CellState::kOccupied) {
+          cell = CellState::kFree;
+        } else if (state == VoxelMap::VoxelState::kNear) {
+          near.insert({v.x, v.y});
+        }
+      },
+      min_layer, max_layer);
   for (const auto& column : near) {
     CellState& cell = grid.cells_[column];
     if (cell == CellState::kFree) cell = CellState::kUnknown;

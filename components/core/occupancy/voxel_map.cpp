@@ -9,6 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Cholesky>
+
 namespace heslam {
 namespace {
 
@@ -39,6 +41,9 @@ VoxelMap::VoxelMap(const VoxelMapOptions& options) : options_(options) {
       !(options.tsdf_occupied_m < options.tsdf_truncation_m) || !(options.tsdf_min_weight > 0.0) ||
       !(options.tsdf_free_ratio > 0.0)) {
     throw std::invalid_argument("voxel map: tsdf needs 0 < occupied_m < truncation_m, min_weight > 0, free_ratio > 0");
+  }
+  if (options.tsdf_fit_radius < 0 || options.tsdf_fit_radius > 3) {
+    throw std::invalid_argument("voxel map: tsdf_fit_radius must be 0..3 voxels");
   }
 }
 
@@ -79,16 +84,16 @@ float VoxelMap::log_odds(const VoxelIndex& v) const { return cell(v).value; }
 
 float VoxelMap::weight(const VoxelIndex& v) const { return cell(v).weight; }
 
-VoxelMap::VoxelState VoxelMap::state(const Cell& c) const {
+VoxelMap::VoxelState VoxelMap::state(const Cell& c, float evidence) const {
   if (options_.model == FusionModel::kTsdf) {
-    const double crossed_limit = options_.tsdf_free_ratio * c.weight;
+    const double crossed_limit = options_.tsdf_free_ratio * evidence;
     if (c.crossed > crossed_limit) return VoxelState::kFree;
     if (!(c.weight > 0.f)) return VoxelState::kUnknown;
-    if (std::abs(c.value) <= options_.tsdf_occupied_m && c.weight >= options_.tsdf_min_weight) {
+    if (std::abs(c.value) <= options_.tsdf_occupied_m && evidence >= options_.tsdf_min_weight) {
       return VoxelState::kOccupied;
     }
     // Free: the band's averaged distance is in front by more than half the truncation.
-    if (c.value >= 0.5 * options_.tsdf_truncation_m && c.weight >= options_.tsdf_min_weight) return VoxelState::kFree;
+    if (c.value >= 0.5 * options_.tsdf_truncation_m && evidence >= options_.tsdf_min_weight) return VoxelState::kFree;
     return std::abs(c.value) < 0.5 * options_.tsdf_truncation_m ? VoxelState::kNear : VoxelState::kUnknown;
   }
   if (c.value > options_.occupied_log_odds) return VoxelState::kOccupied;
@@ -96,28 +101,88 @@ VoxelMap::VoxelState VoxelMap::state(const Cell& c) const {
   return VoxelState::kUnknown;
 }
 
-VoxelMap::VoxelState VoxelMap::state_at(const VoxelIndex& v, const Cell& c) const {
-  const VoxelState s = state(c);
+VoxelMap::VoxelState VoxelMap::state_at(const VoxelIndex& v, const Cell& own,
+                                        const std::unordered_map<std::uint64_t, Fit>* fitted) const {
+  // A cell's distance and evidence: its fit's where it has one, else its own.
+  const auto judged = [&](std::uint64_t k, Cell c) {
+    float evidence = c.weight;
+    if (fitted) {
+      if (const auto found = fitted->find(k); found != fitted->end()) {
+        c.value = found->second.distance;
+        evidence = found->second.weight;
+      }
+    }
+    return std::pair{c, evidence};
+  };
+  const auto [c, evidence] = judged(key(v), own);
+  const VoxelState s = state(c, evidence);
   if (options_.model != FusionModel::kTsdf || !options_.tsdf_zero_crossing || s != VoxelState::kOccupied) return s;
   // Occupied only when the surface lies between this voxel's centre and a 6-neighbour's (their
   // distances of opposite signs), nearer this one (a tie goes to the voxel in front).
   const float min_weight = static_cast<float>(options_.tsdf_min_weight);
   static constexpr int kNeighbours[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
   for (const auto& d : kNeighbours) {
-    const auto found = cells_.find(key({v.x + d[0], v.y + d[1], v.z + d[2]}));
+    const std::uint64_t k = key({v.x + d[0], v.y + d[1], v.z + d[2]});
+    const auto found = cells_.find(k);
     if (found == cells_.end()) continue;
-    const Cell& n = found->second;
-    if (!(n.weight >= min_weight) || (n.value >= 0.f) == (c.value >= 0.f)) continue;
+    const auto [n, n_evidence] = judged(k, found->second);
+    if (!(n_evidence >= min_weight) || (n.value >= 0.f) == (c.value >= 0.f)) continue;
     const float here = std::abs(c.value), there = std::abs(n.value);
     if (here < there || (here == there && c.value >= 0.f)) return VoxelState::kOccupied;
   }
   return std::abs(c.value) < 0.5 * options_.tsdf_truncation_m ? VoxelState::kNear : VoxelState::kUnknown;
 }
 
-void VoxelMap::for_each_state(const std::function<void(const VoxelIndex&, VoxelState)>& visit) const {
+std::unordered_map<std::uint64_t, VoxelMap::Fit> VoxelMap::fitted_distances(int min_layer, int max_layer) const {
+  const int r = options_.tsdf_fit_radius;
+  const float limit = 0.999f * static_cast<float>(options_.tsdf_truncation_m);
+  // Voxels whose average is a distance to a surface: observed in a band, not at the truncation.
+  const auto holds_distance = [&](const Cell& c) { return c.weight > 0.f && std::abs(c.value) < limit; };
+  std::unordered_map<std::uint64_t, Fit> fitted;
+  for (const auto& [k, c] : cells_) {
+    if (!holds_distance(c)) continue;
+    const VoxelIndex v = unkey(k);
+    if (v.z < min_layer || v.z > max_layer) continue;
+    // Weighted least squares of distance = a + g . offset over the neighbourhood; a is the fit at the centre.
+    Eigen::Matrix4d normal = Eigen::Matrix4d::Zero();
+    Eigen::Vector4d rhs = Eigen::Vector4d::Zero();
+    int count = 0;
+    double pooled = 0.0;
+    for (int dx = -r; dx <= r; ++dx) {
+      for (int dy = -r; dy <= r; ++dy) {
+        for (int dz = -r; dz <= r; ++dz) {
+          const auto found = cells_.find(key({v.x + dx, v.y + dy, v.z + dz}));
+          if (found == cells_.end() || !holds_distance(found->second)) continue;
+          const Eigen::Vector4d row(1.0, dx, dy, dz);
+          const double w = found->second.weight;
+          normal.noalias() += w * row * row.transpose();
+          rhs.noalias() += (w * found->second.value) * row;
+          pooled += w;
+          ++count;
+        }
+      }
+    }
+    if (count < 8) continue;
+    const Eigen::LDLT<Eigen::Matrix4d> solver(normal);
+    if (solver.info() != Eigen::Success || !(solver.rcond() > 1e-3)) continue;  // neighbours on a line or plane
+    fitted.emplace(k, Fit{static_cast<float>(solver.solve(rhs)(0)), static_cast<float>(pooled)});
+  }
+  return fitted;
+}
+
+void VoxelMap::for_each_state(const std::function<void(const VoxelIndex&, VoxelState)>& visit, int min_layer,
+                              int max_layer) const {
+  std::unordered_map<std::uint64_t, Fit> fitted;
+  const bool fit = options_.model == FusionModel::kTsdf && options_.tsdf_fit_radius > 0;
+  if (fit) {
+    // The layers' own fits and their neighbours' above and below (the zero crossing looks at them).
+    fitted = fitted_distances(min_layer == std::numeric_limits<int>::min() ? min_layer : min_layer - 1,
+                              max_layer == std::numeric_limits<int>::max() ? max_layer : max_layer + 1);
+  }
   for (const auto& [k, c] : cells_) {
     const VoxelIndex v = unkey(k);
-    visit(v, state_at(v, c));
+    if (v.z < min_layer || v.z > max_layer) continue;
+    visit(v, state_at(v, c, fit ? &fitted : nullptr));
   }
 }
 

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <span>
 #include <string>
 #include <unordered_map>
@@ -45,6 +46,13 @@ struct VoxelMapOptions {
   // with tsdf_min_weight), so that a wall along the lattice is one voxel thick wherever it lies
   // between the voxel centres. false: every voxel within tsdf_occupied_m of the surface (1-2 voxels).
   bool tsdf_zero_crossing = false;
+  // kTsdf: a voxel's state is judged by the distance at its centre of a linear function (a plane's
+  // signed distance) fitted by weighted least squares to the averaged distances of the (2 r + 1)^3
+  // voxels around it that hold one within the truncation (at least 8 of them, not all on one plane;
+  // else its own), and by the weight those voxels pool (for tsdf_min_weight and tsdf_free_ratio).
+  // On a plane the fit is exact whichever neighbours were observed (a mean would lean towards the
+  // side seen more), so only the noise averages out. 0: each voxel's own average (voxblox's).
+  int tsdf_fit_radius = 0;
   // Log-odds of one observation and the clamping bounds: OctoMap's defaults (hit 0.7, miss 0.4,
   // clamped to [0.12, 0.97]), so a cell flips after a few contrary observations, never after one.
   float hit_log_odds = 0.847f;
@@ -112,8 +120,11 @@ class VoxelMap {
   // kNear (kTsdf only): observed near a surface, not confirmed occupied; a grid column holding one is
   // never called free.
   enum class VoxelState : std::uint8_t { kUnknown, kFree, kOccupied, kNear };
-  // Every observed voxel and its state (unordered).
-  void for_each_state(const std::function<void(const VoxelIndex&, VoxelState)>& visit) const;
+  // Every observed voxel and its state (unordered); with min_layer / max_layer only the voxels whose z
+  // index lies in that range (a grid's band: with tsdf_fit_radius the fit is made for those alone).
+  void for_each_state(const std::function<void(const VoxelIndex&, VoxelState)>& visit,
+                      int min_layer = std::numeric_limits<int>::min(),
+                      int max_layer = std::numeric_limits<int>::max()) const;
 
   std::size_t size() const { return cells_.size(); }
   void clear() { cells_.clear(); }
@@ -133,9 +144,20 @@ class VoxelMap {
   static VoxelIndex unkey(std::uint64_t key);
   void update(std::uint64_t key, float delta);
   Cell cell(const VoxelIndex& v) const;
-  VoxelState state(const Cell& c) const;
+  // `evidence`: the weight the min-weight and free-ratio tests use (the cell's own, or its fit's pooled weight).
+  VoxelState state(const Cell& c, float evidence) const;
+  VoxelState state(const Cell& c) const { return state(c, c.weight); }
+  // A tsdf_fit_radius fit: the distance at the voxel's centre and the weight of the voxels it pooled.
+  struct Fit {
+    float distance;
+    float weight;
+  };
   // state() with the zero-crossing rule (tsdf_zero_crossing), which needs the voxel's neighbours.
-  VoxelState state_at(const VoxelIndex& v, const Cell& c) const;
+  // `fitted`: the tsdf_fit_radius distances by key (a voxel absent keeps its own), or null.
+  VoxelState state_at(const VoxelIndex& v, const Cell& c,
+                      const std::unordered_map<std::uint64_t, Fit>* fitted = nullptr) const;
+  // The tsdf_fit_radius distance of every voxel with z index in [min_layer, max_layer] that holds one.
+  std::unordered_map<std::uint64_t, Fit> fitted_distances(int min_layer, int max_layer) const;
   std::size_t integrate_tsdf(const Eigen::Vector3d& origin, std::span<const Eigen::Vector3f> points,
                              std::span<const float> sigmas_m, std::span<const Eigen::Vector3f> normals);
 
