@@ -11,6 +11,7 @@
 #include "idl/loop.h"
 #include "idl/map.h"
 #include "idl/occupancy.h"
+#include "idl/occupancy_save.h"
 #include "idl/odometry.h"
 #include "idl/status.h"
 
@@ -48,6 +49,8 @@ using Counter = heslam_msg_Counter;
 using ComponentStatus = heslam_msg_ComponentStatus;
 using OccupancyGrid2D = heslam_msg_OccupancyGrid2D;
 using DenseCloud = heslam_msg_DenseCloud;
+using OccupancySaveRequest = heslam_msg_OccupancySaveRequest;
+using OccupancySaveReply = heslam_msg_OccupancySaveReply;
 
 }  // namespace heslam::msg
 
@@ -78,6 +81,8 @@ HESLAM_RUNTIME_MESSAGE(heslam_msg_KeyframeDone, "KeyframeDone");
 HESLAM_RUNTIME_MESSAGE(heslam_msg_ComponentStatus, "ComponentStatus");
 HESLAM_RUNTIME_MESSAGE(heslam_msg_OccupancyGrid2D, "OccupancyGrid2D");
 HESLAM_RUNTIME_MESSAGE(heslam_msg_DenseCloud, "DenseCloud");
+HESLAM_RUNTIME_MESSAGE(heslam_msg_OccupancySaveRequest, "OccupancySaveRequest");
+HESLAM_RUNTIME_MESSAGE(heslam_msg_OccupancySaveReply, "OccupancySaveReply");
 
 #undef HESLAM_RUNTIME_MESSAGE
 

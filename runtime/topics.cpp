@@ -28,6 +28,8 @@ constexpr std::array kAllTopics{
     TopicEntry{topic_names::kStatus, "ComponentStatus", QosRole::kStatus},
     TopicEntry{topic_names::kOccupancyGrid, "OccupancyGrid2D", QosRole::kCalibration},
     TopicEntry{topic_names::kDenseCloud, "DenseCloud", QosRole::kCalibration},
+    TopicEntry{topic_names::kOccupancySaveRequest, "OccupancySaveRequest", QosRole::kLockstep},
+    TopicEntry{topic_names::kOccupancySaveReply, "OccupancySaveReply", QosRole::kLockstep},
 };
 
 void check_namespace(const char* what, const std::string& ns) {

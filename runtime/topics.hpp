@@ -38,6 +38,8 @@ inline constexpr std::string_view kTurns = "lockstep/turns";
 inline constexpr std::string_view kStatus = "system/status";
 inline constexpr std::string_view kOccupancyGrid = "map/occupancy_grid";
 inline constexpr std::string_view kDenseCloud = "map/dense_cloud";
+inline constexpr std::string_view kOccupancySaveRequest = "map/occupancy_save_request";
+inline constexpr std::string_view kOccupancySaveReply = "map/occupancy_save_reply";
 }  // namespace topic_names
 
 // All topics under one namespace: Topics("robot1").stereo().name == "robot1/camera/stereo".
@@ -99,6 +101,15 @@ class Topics {
   }
   TopicSpec<msg::DenseCloud> dense_cloud() const {
     return {full_name(topic_names::kDenseCloud), QosRole::kCalibration};
+  }
+  // heslam-occupancy's map on request (heslam-occupancy-save, as nav2's map_saver asks map_server): the
+  // lockstep acknowledgements' profile (reliable, volatile, KEEP_LAST(64)): never lost, never replayed to a
+  // late reader; a requester waits for the process's reader to match before it writes.
+  TopicSpec<msg::OccupancySaveRequest> occupancy_save_request() const {
+    return {full_name(topic_names::kOccupancySaveRequest), QosRole::kLockstep};
+  }
+  TopicSpec<msg::OccupancySaveReply> occupancy_save_reply() const {
+    return {full_name(topic_names::kOccupancySaveReply), QosRole::kLockstep};
   }
 
  private:

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -73,10 +74,11 @@ void OccupancyNode::configure(const runtime::Config& config) {
                         runtime::Qos(runtime::QosRole::kImages).keep_last(kFrameReaderDepth));
   keyframe_reader_.emplace(participant(), topics().keyframes());
   keyframe_state_reader_.emplace(participant(), topics().keyframe_states());
+  if (options_.up_from_gravity) odometry_reader_.emplace(participant(), topics().odometry());
   grid_writer_.emplace(participant(), topics().occupancy_grid());
   if (options_.cloud_max_points > 0) cloud_writer_.emplace(participant(), topics().dense_cloud());
-  save_reader_.emplace(participant(), save_request_topic(topics()));
-  save_writer_.emplace(participant(), save_reply_topic(topics()));
+  save_reader_.emplace(participant(), topics().occupancy_save_request());
+  save_writer_.emplace(participant(), topics().occupancy_save_reply());
   waitset_ = std::make_unique<runtime::WaitSet>(participant(), image_participant().separate_domain()
                                                                    ? runtime::WaitScope::kAllDomains
                                                                    : runtime::WaitScope::kParticipant);
@@ -85,10 +87,12 @@ void OccupancyNode::configure(const runtime::Config& config) {
   waitset_->attach(*keyframe_reader_);
   waitset_->attach(*keyframe_state_reader_);
   waitset_->attach(*save_reader_);
+  if (odometry_reader_) waitset_->attach(*odometry_reader_);
   log().info(
       "voxels ", options_.map.voxels.resolution_m, " m, grid band [", options_.map.band.min_m, ", ",
-      options_.map.band.max_m, "] m along ", to_string(options_.map.up), ", depth ", options_.stereo.min_depth_m, "-",
-      options_.stereo.max_depth_m, " m, HE ", to_string(options_.he.mode),
+      options_.map.band.max_m, "] m along ", to_string(options_.map.up),
+      options_.up_from_gravity ? " (against gravity once the odometry gives one)" : "", ", depth ",
+      options_.stereo.min_depth_m, "-", options_.stereo.max_depth_m, " m, HE ", to_string(options_.he.mode),
       options_.settings_file.empty() ? std::string(" (no settings file)")
                                      : " (" + options_.settings_file.string() + ")",
       options_.output_stem.empty() ? std::string() : ", output " + options_.output_stem.string() + ".pgm/.yaml/.ply",
@@ -141,6 +145,15 @@ void OccupancyNode::run() {
     }
   }
   take_all();
+  if (latest_up_w_ && latest_up_w_ != sent_up_w_) {
+    // The final map in the newest gravity's frame, whatever the last change the worker saw: it then
+    // depends on the last gravity only, not on when the small refinements arrived.
+    Job job;
+    job.kind = Job::Kind::kUp;
+    job.up_w = *latest_up_w_;
+    sent_up_w_ = latest_up_w_;
+    push(std::move(job));
+  }
   // Poses or culls of keyframes this process never received (states may come before their keyframe,
   // so only the end can tell): counted, they moved nothing.
   std::size_t unknown = 0;
@@ -230,6 +243,9 @@ void OccupancyNode::take_all() {
     }
     push(std::move(job));
   });
+  if (odometry_reader_) {
+    apply(*odometry_reader_, "odometry", [&](const msg::Odometry& message) { on_odometry(message); });
+  }
   apply(*frame_reader_, "frames", [&](const msg::StereoFrame& message) { on_frame(message); });
   apply(*keyframe_reader_, "keyframes", [&](const msg::Keyframe& message) { on_keyframe(message); });
   match_pending();
@@ -243,6 +259,25 @@ void OccupancyNode::take_all() {
     stats().count("save_requests");
     push(std::move(job));
   }
+}
+
+void OccupancyNode::on_odometry(const msg::Odometry& message) {
+  if (!message.gravity_valid) return;
+  const Eigen::Vector3d g_w(message.g_w[0], message.g_w[1], message.g_w[2]);
+  if (!g_w.allFinite() || g_w.norm() < 5.0 || g_w.norm() > 15.0) {
+    throw std::runtime_error("frame seq " + std::to_string(message.seq) +
+                             ": gravity g_w is not finite or not 5..15 m/s^2");
+  }
+  latest_up_w_ = -g_w.normalized();
+  // The worker turns the grid (and fuses every cloud again) only when gravity moved by more than this
+  // since the last turn: the initialization's estimate is refined for a while in small steps.
+  constexpr double kMinUpChangeRad = 0.2 * std::numbers::pi / 180.0;
+  if (sent_up_w_ && std::acos(std::clamp(sent_up_w_->dot(*latest_up_w_), -1.0, 1.0)) <= kMinUpChangeRad) return;
+  Job job;
+  job.kind = Job::Kind::kUp;
+  job.up_w = *latest_up_w_;
+  sent_up_w_ = latest_up_w_;
+  push(std::move(job));
 }
 
 void OccupancyNode::on_frame(const msg::StereoFrame& message) {
@@ -352,6 +387,18 @@ void OccupancyNode::worker_loop() {
             }
             break;
           case Job::Kind::kSave: save_on_request(*job); break;
+          case Job::Kind::kUp: {
+            if (!up_w_) {
+              log().info("grid up: against the odometry's gravity, ", up_tilt_deg(job->up_w), " deg from ",
+                         to_string(options_.map.up), "; the map is fused again in that frame");
+            }
+            map_->set_up_direction(job->up_w);  // drops the voxels: fuse_pending() fuses every cloud again
+            up_w_ = job->up_w;
+            ++up_changes_;
+            stats().count("grid_up_changes");
+            grid_dirty_ = cloud_dirty_ = true;
+            break;
+          }
           case Job::Kind::kCull:
             if (map_->has_cloud(job->keyframe_id)) grid_dirty_ = cloud_dirty_ = true;
             map_->cull(job->keyframe_id);
@@ -540,12 +587,22 @@ void OccupancyNode::write_outputs() {
   const std::size_t points = map_->write_ply(ply);
   log().info("wrote ", options_.output_stem.string(), ".pgm/.yaml (map_server) and ", ply.string(), " (", points,
              " points)");
+  if (up_w_) {
+    log().info("grid up: against the last gravity, ", up_tilt_deg(*up_w_), " deg from ", to_string(options_.map.up),
+               " (", up_changes_, " turns)");
+  }
   if (options_.first_poses_grid) write_first_poses_grid();
+}
+
+double OccupancyNode::up_tilt_deg(const Eigen::Vector3d& up_w) const {
+  const double cosine = std::clamp(up_w.dot(up_direction(options_.map.up)), -1.0, 1.0);
+  return std::acos(cosine) * 180.0 / std::numbers::pi;
 }
 
 void OccupancyNode::write_first_poses_grid() {
   auto timer = stats().time("first_poses_rebuild");
   OccupancyMap before(options_.map);
+  if (up_w_) before.set_up_direction(*up_w_);
   std::size_t without_pose = 0;
   double moved_max_m = 0.0;  // how far a keyframe's camera moved from its first pose to its final one
   for (const auto& [id, cloud] : map_->all_clouds()) {

@@ -32,7 +32,6 @@
 #include "components/core/occupancy/multiview_depth.hpp"
 #include "components/core/occupancy/occupancy_map.hpp"
 #include "components/occupancy/occupancy_options.hpp"
-#include "components/occupancy/occupancy_save.hpp"
 #include "runtime/component.hpp"
 #include "runtime/writer.hpp"
 
@@ -51,12 +50,13 @@ class OccupancyNode final : public runtime::Component {
   };
   // Work for the worker, in arrival order: a keyframe's frame to turn into a cloud, or a pose update.
   struct Job {
-    enum class Kind { kCloud, kPose, kCull, kSave } kind = Kind::kCloud;
+    enum class Kind { kCloud, kPose, kCull, kSave, kUp } kind = Kind::kCloud;
     std::uint64_t keyframe_id = 0;
-    Frame frame;                     // kCloud
-    Pose3 T_wc = Pose3::Identity();  // kPose; kCloud: the keyframe sample's (multi-view refinement)
-    std::uint64_t request_id = 0;    // kSave: the map as it is now, to ...
-    std::filesystem::path stem;      // ... STEM.pgm + STEM.yaml + STEM.ply
+    Frame frame;                                     // kCloud
+    Pose3 T_wc = Pose3::Identity();                  // kPose; kCloud: the keyframe sample's (multi-view refinement)
+    std::uint64_t request_id = 0;                    // kSave: the map as it is now, to ...
+    std::filesystem::path stem;                      // ... STEM.pgm + STEM.yaml + STEM.ply
+    Eigen::Vector3d up_w = Eigen::Vector3d::Zero();  // kUp: against the odometry's gravity, world frame
   };
   struct PendingKeyframe {
     std::uint64_t id = 0;
@@ -73,6 +73,10 @@ class OccupancyNode final : public runtime::Component {
   void take_all();
   void on_frame(const msg::StereoFrame& message);
   void on_keyframe(const msg::Keyframe& message);
+  // grid.up_from_gravity: a valid gravity on the odometry becomes the grid's up (kUp job) when it moved.
+  void on_odometry(const msg::Odometry& message);
+  // The angle between a world direction and grid.up's axis, degrees.
+  double up_tilt_deg(const Eigen::Vector3d& up_w) const;
   void on_keyframe_state(const msg::KeyframeState& message);
   // Pending keyframes whose frame is in the ring go to the worker; those older than the newest frame
   // without theirs are skipped (counted).
@@ -96,6 +100,7 @@ class OccupancyNode final : public runtime::Component {
   std::optional<runtime::Reader<msg::StereoFrame>> frame_reader_;
   std::optional<runtime::Reader<msg::Keyframe>> keyframe_reader_;
   std::optional<runtime::Reader<msg::KeyframeState>> keyframe_state_reader_;
+  std::optional<runtime::Reader<msg::Odometry>> odometry_reader_;  // grid.up_from_gravity: the IMU's gravity
   std::unique_ptr<runtime::WaitSet> waitset_;
   std::optional<runtime::Writer<msg::OccupancyGrid2D>> grid_writer_;
   std::optional<runtime::Writer<msg::DenseCloud>> cloud_writer_;
@@ -109,6 +114,9 @@ class OccupancyNode final : public runtime::Component {
   std::map<std::uint64_t, bool> has_state_;       // ids with a mapper state (their pose is the mapper's)
   std::set<std::uint64_t> culled_ids_;            // ids the mapper culled
   std::map<std::uint64_t, Pose3> first_poses_;    // each keyframe's pose in its keyframe sample
+  // Against the newest gravity on the odometry, and the one last sent to the worker (kUp).
+  std::optional<Eigen::Vector3d> latest_up_w_;
+  std::optional<Eigen::Vector3d> sent_up_w_;
 
   // Shared with the worker (mutex_).
   std::mutex mutex_;
@@ -121,6 +129,8 @@ class OccupancyNode final : public runtime::Component {
   std::optional<HistogramEqualizer> equalizer_;
   std::optional<DenseStereo> stereo_;
   std::optional<MultiViewDepth> multiview_;  // options_.multiview enabled: the last keyframes' left images
+  std::optional<Eigen::Vector3d> up_w_;      // the grid's up from gravity, once the odometry gave one
+  std::size_t up_changes_ = 0;
   // Keyframes refined against at least one neighbour, and their pixels (with a disparity / refined).
   std::size_t multiview_keyframes_ = 0;
   std::size_t multiview_pixels_ = 0;

@@ -78,6 +78,7 @@ OccupancyProcessOptions OccupancyProcessOptions::from_config(const runtime::Conf
   o.cloud_max_points = config.get_int("live.cloud_max_points", o.cloud_max_points, 0, 10000000);
   o.idle_priority = config.get_bool("idle_priority", o.idle_priority);
   o.first_poses_grid = config.get_bool("first_poses_grid", o.first_poses_grid);
+  o.up_from_gravity = config.get_bool("grid.up_from_gravity", o.up_from_gravity);
   if (!config.get_string("settings.file", "").empty()) o.settings_file = config.get_path("settings.file", {});
   std::filesystem::path settings_arg;
   runtime::Flags flags("heslam-occupancy [options]");

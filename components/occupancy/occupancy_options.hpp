@@ -44,6 +44,11 @@ struct OccupancyProcessOptions {
   // first pose (the frontend's, before the mapper's refinement and any loop correction), the map as if
   // no correction had come, beside the corrected one (docs/occupancy.md, "A loop correction").
   bool first_poses_grid = false;
+  // grid.up_from_gravity: once the odometry carries a gravity (an inertial run, docs/imu.md), the grid's
+  // up is against it instead of grid.up's axis (the map is fused again then), so the height band is level
+  // and the grid lies in the gravity-aligned map the recorder and the ROS 2 bridge use. Stereo-only
+  // runs carry no gravity: unchanged.
+  bool up_from_gravity = true;
   // --output-stem STEM: STEM.pgm, STEM.yaml (map_server), STEM.ply written at the end; empty: none.
   std::filesystem::path output_stem;
   // --state-dir DIR: one file per keyframe cloud (replaced atomically), so a restarted process

@@ -13,7 +13,6 @@
 #include <string>
 #include <thread>
 
-#include "components/occupancy/occupancy_save.hpp"
 #include "runtime/args.hpp"
 #include "runtime/flags.hpp"
 #include "runtime/participant.hpp"
@@ -30,8 +29,8 @@ int run(const runtime::CommonArgs& common, const std::filesystem::path& stem, do
   const runtime::Participant participant({.domain_id = common.domain_id, .dds_config = common.dds_config});
   const runtime::Topics topics(common.ns);
   // The reply reader first, so that no reply can come before it matched.
-  runtime::Reader<msg::OccupancySaveReply> replies(participant, occupancy::save_reply_topic(topics));
-  runtime::Writer<msg::OccupancySaveRequest> requests(participant, occupancy::save_request_topic(topics));
+  runtime::Reader<msg::OccupancySaveReply> replies(participant, topics.occupancy_save_reply());
+  runtime::Writer<msg::OccupancySaveRequest> requests(participant, topics.occupancy_save_request());
   const auto deadline =
       Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
   const auto remaining = [&] {

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <numbers>
 #include <random>
 #include <vector>
 
@@ -400,6 +401,52 @@ TEST(OccupancyGrid, TsdfPlaneFitPlacesANoisyWallInItsCell) {
     misplaced_own += own.at(21, j) == CellState::kOccupied || own.at(19, j) == CellState::kOccupied;
   }
   EXPECT_GT(misplaced_own, 3) << "the noise must be large enough that a voxel's own average misplaces the wall";
+}
+
+// The grid's up from gravity (set_up_direction): a camera pitched 10 deg down, 1.4 m above a floor, a wall
+// 4.02 m ahead (both exact points, the camera's frame the world). Along the camera's -y the height band
+// (-0.7 .. 0.3 m) is tilted with the camera: beyond ~4 m ahead the floor rises into it and the wall is
+// smeared over several cells. Against gravity the band is level: the floor stays out and the wall is the
+// one row of cells at 4.02 m (grid y along the level forward direction).
+TEST(OccupancyMap, UpFromGravityLevelsTheBand) {
+  const double pitch = 10.0 * std::numbers::pi / 180.0;
+  // Camera axes in a level frame G (z up, x the level forward): forward pitched down, x right = -y_G.
+  const Eigen::Vector3d z_c(std::cos(pitch), 0.0, -std::sin(pitch));
+  const Eigen::Vector3d x_c(0.0, -1.0, 0.0);
+  const Eigen::Vector3d y_c = z_c.cross(x_c);
+  Eigen::Matrix3d R_gc;
+  R_gc << x_c, y_c, z_c;
+  KeyframeCloud cloud;
+  for (double y = -1.0; y < 1.0; y += 0.02) {
+    for (double x = 0.5; x < 4.0; x += 0.02)
+      cloud.points_c.push_back((R_gc.transpose() * Eigen::Vector3d(x, y, -1.4)).cast<float>());
+    for (double z = -1.4; z < 1.0; z += 0.02)
+      cloud.points_c.push_back((R_gc.transpose() * Eigen::Vector3d(4.02, y, z)).cast<float>());
+  }
+  auto grid = [&](bool from_gravity) {
+    OccupancyMap map;
+    if (from_gravity) {
+      EXPECT_TRUE(map.set_up_direction(R_gc.transpose() * Eigen::Vector3d::UnitZ()));
+    }
+    map.set_pose(1, Pose3::Identity());
+    map.add_cloud(1, cloud);
+    map.fuse_pending();
+    return map.grid();
+  };
+  const OccupancyGrid level = grid(true);
+  const OccupancyGrid tilted = grid(false);
+  std::size_t level_off_wall = 0, tilted_off_wall = 0;
+  for (const auto& [ij, state] : level.cells()) level_off_wall += state == CellState::kOccupied && ij.second != 80;
+  for (const auto& [ij, state] : tilted.cells()) tilted_off_wall += state == CellState::kOccupied && ij.second != 80;
+  EXPECT_EQ(level_off_wall, 0u) << "the floor, 1.4 m down, is outside a level band";
+  EXPECT_GE(level.count(CellState::kOccupied), 38u);  // the wall's 2 m: 40 cells
+  EXPECT_GT(tilted_off_wall, 20u) << "along the pitched camera's -y the floor enters the band";
+  // Up along the first camera's -y (no gravity) and a direction that is not a unit vector change nothing.
+  OccupancyMap unchanged;
+  EXPECT_FALSE(unchanged.set_up_direction(Eigen::Vector3d(0.0, -2.0, 0.0)));
+  EXPECT_NEAR(unchanged.angle_to_up(Eigen::Vector3d(0.0, -1.0, 0.0)), 0.0, 1e-12);
+  EXPECT_TRUE(unchanged.set_up_direction(Eigen::Vector3d(0.0, -1.0, 0.0)));
+  EXPECT_TRUE(unchanged.R_gw().isApprox(OccupancyMap().R_gw(), 1e-12));
 }
 
 TEST(OccupancyMap, CloudFilesRoundTripAndRefuseTruncation) {

@@ -328,7 +328,7 @@ TEST(Topics, NamesLiveUnderTheNamespace) {
   EXPECT_EQ(Topics().stereo().name, "heslam/camera/stereo");
   EXPECT_EQ(Topics("robot1").map_points().name, "robot1/map/points");
   EXPECT_EQ(Topics("a/b").status().role, QosRole::kStatus);
-  EXPECT_EQ(all_topics().size(), 16u);
+  EXPECT_EQ(all_topics().size(), 18u);
 }
 
 TEST(Participant, BadDomainIsOneLine) {

@@ -2,6 +2,7 @@
 // message text, option parsing and topic resolution.
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -273,6 +274,39 @@ TEST(SpyTopic, ResolvesRelativeAndFullNames) {
                     [&]<typename T>(std::type_identity<T>) { visited = runtime::MessageTraits<T>::name(); });
   EXPECT_EQ(visited, "FrameDone");
   EXPECT_THROW(with_message_type("Image", [](auto) {}), std::runtime_error);
+}
+
+// Every topic of the table can be echoed: its type is compiled into the spy.
+TEST(SpyTopic, EveryTopicOfTheTableHasItsTypeInTheSpy) {
+  for (const runtime::TopicEntry& entry : runtime::all_topics()) {
+    std::string visited;
+    EXPECT_NO_THROW(with_message_type(std::string(entry.type_name), [&]<typename T>(std::type_identity<T>) {
+      visited = runtime::MessageTraits<T>::name();
+    })) << entry.relative_name;
+    EXPECT_EQ(visited, entry.type_name) << entry.relative_name;
+  }
+  const ResolvedTopic reply = resolve_topic("map/occupancy_save_reply", "heslam");
+  EXPECT_EQ(reply.type_name, "OccupancySaveReply");
+  EXPECT_EQ(reply.role, runtime::QosRole::kLockstep);
+}
+
+TEST(MessageFormat, OccupancySaveReplyShowsWhatWasWritten) {
+  msg::OccupancySaveReply reply{};
+  reply.request_id = 7;
+  reply.ok = true;
+  std::string stem = "/tmp/run/now", empty;
+  reply.output_stem = stem.data();
+  reply.message = empty.data();
+  reply.keyframes = 8;
+  reply.occupied_cells = 120;
+  reply.free_cells = 900;
+  reply.points = 4321;
+  const std::string text = format_message(reply, {});
+  EXPECT_NE(text.find("request_id: 7"), std::string::npos) << text;
+  EXPECT_NE(text.find("ok: true"), std::string::npos) << text;
+  EXPECT_NE(text.find("output_stem: /tmp/run/now"), std::string::npos) << text;
+  EXPECT_NE(text.find("120 occupied, 900 free"), std::string::npos) << text;
+  EXPECT_NE(text.find("points: 4321"), std::string::npos) << text;
 }
 
 }  // namespace

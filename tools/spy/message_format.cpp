@@ -420,4 +420,24 @@ std::string format_message(const msg::DenseCloud& cloud, const FormatOptions& /*
   return text.str();
 }
 
+std::string format_message(const msg::OccupancySaveRequest& request, const FormatOptions& /*options*/) {
+  Text text;
+  text.line(0, "request_id", std::to_string(request.request_id));
+  text.line(0, "output_stem", request.output_stem ? request.output_stem : "");
+  return text.str();
+}
+
+std::string format_message(const msg::OccupancySaveReply& reply, const FormatOptions& /*options*/) {
+  Text text;
+  text.line(0, "request_id", std::to_string(reply.request_id));
+  text.line(0, "ok", reply.ok ? "true" : "false");
+  text.line(0, "output_stem", reply.output_stem ? reply.output_stem : "");
+  text.line(0, "keyframes", std::to_string(reply.keyframes));
+  text.line(0, "cells",
+            std::to_string(reply.occupied_cells) + " occupied, " + std::to_string(reply.free_cells) + " free");
+  text.line(0, "points", std::to_string(reply.points));
+  text.line(0, "message", reply.message ? reply.message : "");
+  return text.str();
+}
+
 }  // namespace heslam

@@ -29,6 +29,8 @@ std::string format_message(const msg::KeyframeDone& done, const FormatOptions& o
 std::string format_message(const msg::ComponentStatus& status, const FormatOptions& options);
 std::string format_message(const msg::OccupancyGrid2D& grid, const FormatOptions& options);
 std::string format_message(const msg::DenseCloud& cloud, const FormatOptions& options);
+std::string format_message(const msg::OccupancySaveRequest& request, const FormatOptions& options);
+std::string format_message(const msg::OccupancySaveReply& reply, const FormatOptions& options);
 
 // The line of a sample without data (its instance disposed, or its last writer gone), naming the
 // instance by its key: only the key fields of such a sample are set. "# disposed: id lm:12",

@@ -47,6 +47,8 @@ void with_message_type(std::string_view type_name, Fn&& fn) {
   visit(std::type_identity<msg::ComponentStatus>{});
   visit(std::type_identity<msg::OccupancyGrid2D>{});
   visit(std::type_identity<msg::DenseCloud>{});
+  visit(std::type_identity<msg::OccupancySaveRequest>{});
+  visit(std::type_identity<msg::OccupancySaveReply>{});
   if (!found) throw std::runtime_error("type '" + std::string(type_name) + "': not compiled into heslam-spy");
 }
 

@@ -1,6 +1,7 @@
 // The keyframe-anchored occupancy map (see occupancy_map.hpp).
 #include "components/core/occupancy/occupancy_map.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -45,9 +46,26 @@ const char* to_string(UpAxis up) {
   return "?";
 }
 
+Eigen::Vector3d up_direction(UpAxis up) { return rotation_for(up).transpose() * Eigen::Vector3d::UnitZ(); }
+
 OccupancyMap::OccupancyMap(const OccupancyMapOptions& options)
     : options_(options), R_gw_(rotation_for(options.up)), voxels_(options.voxels) {
   if (!(options.band.min_m < options.band.max_m)) throw std::invalid_argument("occupancy: band min must be < max");
+}
+
+bool OccupancyMap::set_up_direction(const Eigen::Vector3d& up_w) {
+  if (!up_w.allFinite() || std::abs(up_w.norm() - 1.0) > 1e-6) return false;
+  const Eigen::Matrix3d R_base = rotation_for(options_.up);
+  const Eigen::Quaterniond level = Eigen::Quaterniond::FromTwoVectors(R_base * up_w, Eigen::Vector3d::UnitZ());
+  R_gw_ = level.toRotationMatrix() * R_base;
+  voxels_.clear();
+  fused_.clear();
+  stale_ = false;
+  return true;
+}
+
+double OccupancyMap::angle_to_up(const Eigen::Vector3d& up_w) const {
+  return std::acos(std::clamp((R_gw_ * up_w).z(), -1.0, 1.0));
 }
 
 bool OccupancyMap::set_pose(std::uint64_t id, const Pose3& T_wc) {

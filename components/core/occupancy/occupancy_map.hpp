@@ -30,6 +30,8 @@ namespace heslam {
 enum class UpAxis { kMinusY, kY, kZ };
 UpAxis parse_up_axis(const std::string& name);  // throws std::invalid_argument
 const char* to_string(UpAxis up);
+// The axis as a world direction: -y is (0, -1, 0).
+Eigen::Vector3d up_direction(UpAxis up);
 
 struct OccupancyMapOptions {
   VoxelMapOptions voxels;
@@ -85,6 +87,14 @@ class OccupancyMap {
   OccupancyGrid grid() const { return OccupancyGrid::from_voxels(voxels_, options_.band); }
   // world -> grid frame rotation.
   const Eigen::Matrix3d& R_gw() const { return R_gw_; }
+  // The grid's up as a world direction (against gravity, from the IMU): the grid frame becomes the
+  // `up` option's turned by the smallest rotation that takes this direction to its z, so heights are
+  // along it and the grid is level. The voxels were fused in the old frame: they are dropped, and the
+  // next fuse_pending() (or rebuild()) fuses every cloud again. Returns false, changing nothing, for a
+  // direction that is not finite or not of unit length (1 +- 1e-6).
+  bool set_up_direction(const Eigen::Vector3d& up_w);
+  // The angle (radians) between a world direction (unit length) and the grid's current up.
+  double angle_to_up(const Eigen::Vector3d& up_w) const;
 
   std::size_t clouds() const { return clouds_.size(); }
   std::size_t fused() const { return fused_.size(); }
