@@ -37,6 +37,7 @@ constexpr std::chrono::milliseconds kWaitPeriod{200};
 constexpr int kFrameReaderDepth = 8;
 const char* const kRunFile = "RUN";
 const char* const kCloudExtension = ".cloud";
+const char* const kViewExtension = ".view";  // the multi-view refinement's kept views
 
 // This thread's CPU time: the work per keyframe apart from the machine's load (wall times grow with it).
 double thread_cpu_ms() {
@@ -47,6 +48,10 @@ double thread_cpu_ms() {
 
 std::filesystem::path cloud_file(const std::filesystem::path& dir, std::uint64_t id) {
   return dir / (std::to_string(id) + kCloudExtension);
+}
+
+std::filesystem::path view_file(const std::filesystem::path& dir, std::uint64_t id) {
+  return dir / (std::to_string(id) + kViewExtension);
 }
 
 }  // namespace
@@ -113,12 +118,25 @@ void OccupancyNode::load_state() {
   if (stored != run) {
     // Another run's clouds (or none): start empty.
     for (const auto& entry : fs::directory_iterator(options_.state_dir)) {
-      if (entry.path().extension() == kCloudExtension) fs::remove(entry.path());
+      const auto extension = entry.path().extension();
+      if (extension == kCloudExtension || extension == kViewExtension) fs::remove(entry.path());
     }
     runtime::replace_file_contents(options_.state_dir / kRunFile, run + "\n");
     return;
   }
   for (const auto& entry : fs::directory_iterator(options_.state_dir)) {
+    if (entry.path().extension() == kViewExtension) {
+      try {
+        KeptView view = read_view(entry.path());
+        next_view_sequence_ = std::max(next_view_sequence_, view.sequence + 1);
+        loaded_views_.push_back(std::move(view));
+      } catch (const std::exception& error) {
+        stats().count("bad_state_files");
+        log().warn(error.what(), "; removed (counted as bad_state_files)");
+        fs::remove(entry.path());
+      }
+      continue;
+    }
     if (entry.path().extension() != kCloudExtension) continue;
     try {
       std::uint64_t id = 0;
@@ -469,7 +487,10 @@ void OccupancyNode::make_cloud(const Job& job) {
       stereo_->camera().fx_px != rectifier->camera().fx_px || stereo_->camera().bf() != rectifier->camera().bf()) {
     stereo_.emplace(rectifier->camera(), options_.stereo);
     multiview_.reset();
-    if (options_.multiview.enabled()) multiview_.emplace(rectifier->camera(), options_.multiview);
+    if (options_.multiview.enabled()) {
+      multiview_.emplace(rectifier->camera(), options_.multiview);
+      restore_views();
+    }
   }
   KeyframeCloud cloud;
   cloud.stamp_ns = job.frame.stamp_ns;
@@ -489,6 +510,7 @@ void OccupancyNode::make_cloud(const Job& job) {
       MultiViewDepthStats refined;
       disparity = multiview_->refine(disparity, left, right, job.T_wc, &refined);
       multiview_->add_view(left, job.T_wc);
+      keep_view(job.keyframe_id, left, job.T_wc);
       if (refined.views_used > 0) {
         ++multiview_keyframes_;
         multiview_pixels_ += refined.pixels;
@@ -626,6 +648,39 @@ void OccupancyNode::write_first_poses_grid() {
   log().info("wrote ", stem.string(), ".pgm/.yaml: ", before.fused(), " keyframe clouds at their first poses (",
              without_pose, " without one; the farthest moved ", moved_max_m, " m since), grid ",
              grid.count(CellState::kOccupied), " occupied + ", grid.count(CellState::kFree), " free cells");
+}
+
+void OccupancyNode::restore_views() {
+  // The views a killed process had kept, oldest first (the order of add_view), of this camera's size.
+  std::sort(loaded_views_.begin(), loaded_views_.end(),
+            [](const KeptView& a, const KeptView& b) { return a.sequence < b.sequence; });
+  std::size_t restored = 0;
+  for (const KeptView& view : loaded_views_) {
+    if (view.left.cols != stereo_->camera().width_px || view.left.rows != stereo_->camera().height_px) {
+      stats().count("bad_state_files");
+      log().warn("kept view of keyframe ", view.keyframe_id, ": ", view.left.cols, "x", view.left.rows,
+                 " pixels, the camera has ", stereo_->camera().width_px, "x", stereo_->camera().height_px,
+                 "; skipped (counted as bad_state_files)");
+      continue;
+    }
+    multiview_->add_view(view.left, view.T_wc);
+    kept_views_.push_back({view.sequence, view.keyframe_id});
+    ++restored;
+  }
+  if (restored > 0) log().info("multi-view: ", restored, " kept view(s) restored from the state folder");
+  loaded_views_.clear();
+}
+
+void OccupancyNode::keep_view(std::uint64_t keyframe_id, const cv::Mat& left, const Pose3& T_wc) {
+  if (options_.state_dir.empty()) return;
+  // Persisted as the process keeps it (before the keyframe's cloud), the oldest beyond `neighbours` removed.
+  const std::uint64_t sequence = next_view_sequence_++;
+  write_view(view_file(options_.state_dir, keyframe_id), KeptView{keyframe_id, sequence, left, T_wc});
+  kept_views_.push_back({sequence, keyframe_id});
+  while (static_cast<int>(kept_views_.size()) > options_.multiview.neighbours) {
+    std::filesystem::remove(view_file(options_.state_dir, kept_views_.front().keyframe_id));
+    kept_views_.pop_front();
+  }
 }
 
 void OccupancyNode::publish_live(bool final) {

@@ -23,6 +23,7 @@
 #include <optional>
 #include <set>
 #include <thread>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -75,6 +76,9 @@ class OccupancyNode final : public runtime::Component {
   void on_keyframe(const msg::Keyframe& message);
   // grid.up_from_gravity: a valid gravity on the odometry becomes the grid's up (kUp job) when it moved.
   void on_odometry(const msg::Odometry& message);
+  // Worker thread: the views of the state folder into a new multiview_; a kept view into the state folder.
+  void restore_views();
+  void keep_view(std::uint64_t keyframe_id, const cv::Mat& left, const Pose3& T_wc);
   // The angle between a world direction and grid.up's axis, degrees.
   double up_tilt_deg(const Eigen::Vector3d& up_w) const;
   void on_keyframe_state(const msg::KeyframeState& message);
@@ -129,7 +133,16 @@ class OccupancyNode final : public runtime::Component {
   std::optional<HistogramEqualizer> equalizer_;
   std::optional<DenseStereo> stereo_;
   std::optional<MultiViewDepth> multiview_;  // options_.multiview enabled: the last keyframes' left images
-  std::optional<Eigen::Vector3d> up_w_;      // the grid's up from gravity, once the odometry gave one
+  // Its kept views on disk (STATE/ID.view): loaded at start, given to multiview_ once it exists; the
+  // files of the views it keeps, oldest first; the next view's sequence number.
+  struct KeptViewFile {
+    std::uint64_t sequence = 0;
+    std::uint64_t keyframe_id = 0;
+  };
+  std::vector<KeptView> loaded_views_;
+  std::deque<KeptViewFile> kept_views_;
+  std::uint64_t next_view_sequence_ = 0;
+  std::optional<Eigen::Vector3d> up_w_;  // the grid's up from gravity, once the odometry gave one
   std::size_t up_changes_ = 0;
   // Keyframes refined against at least one neighbour, and their pixels (with a disparity / refined).
   std::size_t multiview_keyframes_ = 0;

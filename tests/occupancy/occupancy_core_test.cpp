@@ -468,6 +468,31 @@ TEST(OccupancyMap, CloudFilesRoundTripAndRefuseTruncation) {
   std::filesystem::remove_all(dir);
 }
 
+// A multi-view kept view (heslam-occupancy's state folder) reads back exactly; a short or foreign file is refused.
+TEST(MultiViewDepth, KeptViewFilesRoundTripAndRefuseTruncation) {
+  const auto dir = temp_dir("view");
+  KeptView view;
+  view.keyframe_id = 77;
+  view.sequence = 5;
+  view.left = cv::Mat(48, 64, CV_8UC1);
+  cv::randu(view.left, 0, 256);
+  view.T_wc.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  view.T_wc.translation() = Eigen::Vector3d(0.1, -2.5, 7.25);
+  write_view(dir / "77.view", view);
+  const KeptView back = read_view(dir / "77.view");
+  EXPECT_EQ(back.keyframe_id, 77u);
+  EXPECT_EQ(back.sequence, 5u);
+  EXPECT_EQ(back.T_wc.matrix(), view.T_wc.matrix());
+  ASSERT_EQ(back.left.size(), view.left.size());
+  EXPECT_EQ(cv::norm(back.left, view.left, cv::NORM_INF), 0.0);
+  std::filesystem::resize_file(dir / "77.view", std::filesystem::file_size(dir / "77.view") - 1);
+  EXPECT_THROW(read_view(dir / "77.view"), std::runtime_error);
+  write_cloud(dir / "kf.view", 1, KeyframeCloud{0, wall_points(1.0), 0.f, {}});
+  EXPECT_THROW(read_view(dir / "kf.view"), std::runtime_error);
+  EXPECT_THROW(write_view(dir / "x.view", KeptView{}), std::invalid_argument);
+  std::filesystem::remove_all(dir);
+}
+
 // A rectified camera of width x height pixels, focal length f_px, principal point at the centre, 0.1 m baseline.
 PinholeStereo small_camera(double f_px, int width, int height) {
   PinholeStereo camera;

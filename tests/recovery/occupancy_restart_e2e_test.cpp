@@ -45,21 +45,18 @@ std::string file_text(const fs::path& file) {
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
-TEST(OccupancyRestart, KilledMidRunItSavesTheGridAndCloudOfAnUndisturbedRun) {
-  fs::path dataset;
-  const std::string render_error = test::cached_synth("room", kRoomFrames, dataset);
-  ASSERT_TRUE(render_error.empty()) << render_error;
-  const test::ScratchDir dir("occupancy_restart");
-  const std::vector<std::string> args{"occupancy=heslam-occupancy", "loop_closer=none"};
-
+// The undisturbed run ("calm") and the one whose heslam-occupancy is killed and restarted ("killed") in `dir`;
+// their saved grid and cloud must be byte-identical. `output`: the restarted run's supervisor output.
+void compare_killed_with_calm(const fs::path& dataset, const fs::path& dir, const std::vector<std::string>& args,
+                              std::string& output) {
   {
-    auto calm = test::start_pipeline("synth", dataset, dir.path(), "calm", test::exclusive_domain_id(), args);
+    auto calm = test::start_pipeline("synth", dataset, dir, "calm", test::exclusive_domain_id(), args);
     ASSERT_EQ(test::finish(*calm), 0) << calm->out() << calm->err();
   }
 
   const int domain = test::exclusive_domain_id();
   test::OccupancyRunWatch watch(domain, kStateTimeout);
-  auto run = test::start_pipeline("synth", dataset, dir.path(), "killed", domain, args);
+  auto run = test::start_pipeline("synth", dataset, dir, "killed", domain, args);
   ASSERT_TRUE(watch.until([&] { return watch.keyframe_ids.size() >= kKillAfterKeyframes; })) << run->err();
   const pid_t replay = test::child_pid(run->pid(), "heslam-replay");
   ASSERT_GT(replay, 0);
@@ -76,7 +73,7 @@ TEST(OccupancyRestart, KilledMidRunItSavesTheGridAndCloudOfAnUndisturbedRun) {
   ASSERT_EQ(kill(victim, SIGKILL), 0);
   // Its state folder: one file per keyframe cloud (a culled keyframe's was removed).
   std::size_t files = 0;
-  for (const auto& entry : fs::directory_iterator(dir.path() / "killed.occupancy")) {
+  for (const auto& entry : fs::directory_iterator(dir / "killed.occupancy")) {
     files += entry.path().extension() == ".cloud";
   }
   ASSERT_GT(files, 0u);
@@ -87,14 +84,14 @@ TEST(OccupancyRestart, KilledMidRunItSavesTheGridAndCloudOfAnUndisturbedRun) {
   })) << run->err();
   ASSERT_EQ(kill(replay, SIGUSR2), 0);  // resume
   ASSERT_EQ(test::finish(*run), 0) << run->out() << run->err();
-  const std::string output = run->out() + run->err();
+  output = run->out() + run->err();
   EXPECT_NE(output.find("occupancy"), std::string::npos);
 
   // The run itself is the undisturbed one (lockstep), and so is the map.
-  EXPECT_EQ(file_text(dir.path() / "killed.txt"), file_text(dir.path() / "calm.txt"));
+  EXPECT_EQ(file_text(dir / "killed.txt"), file_text(dir / "calm.txt"));
   for (const char* extension : {".pgm", ".yaml", ".ply"}) {
-    const std::string calm = file_text(dir.path() / (std::string("calm") + extension));
-    std::string killed = file_text(dir.path() / (std::string("killed") + extension));
+    const std::string calm = file_text(dir / (std::string("calm") + extension));
+    std::string killed = file_text(dir / (std::string("killed") + extension));
     // The YAML names its image: killed.pgm there, calm.pgm in the undisturbed run's.
     if (const std::size_t image = killed.find("image: killed.pgm"); image != std::string::npos) {
       killed.replace(image, std::string("image: killed.pgm").size(), "image: calm.pgm");
@@ -107,6 +104,35 @@ TEST(OccupancyRestart, KilledMidRunItSavesTheGridAndCloudOfAnUndisturbedRun) {
       "[ figures  ] occupancy killed after %zu keyframe clouds (%zu cloud files), restarted; grid and cloud "
       "byte-identical to the undisturbed run's\n",
       clouds_before, files);
+}
+
+// The room twice, undisturbed and with heslam-occupancy killed mid-run (see the top), with the pipeline
+// arguments `extra` (an occupancy_config); `dir_name` names the scratch folder. Returns the restarted run's output.
+std::string kill_and_compare(const std::string& dir_name, const std::vector<std::string>& extra) {
+  fs::path dataset;
+  const std::string render_error = test::cached_synth("room", kRoomFrames, dataset);
+  EXPECT_TRUE(render_error.empty()) << render_error;
+  if (!render_error.empty()) return {};
+  const test::ScratchDir dir(dir_name);
+  std::vector<std::string> args{"occupancy=heslam-occupancy", "loop_closer=none"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  std::string output;
+  compare_killed_with_calm(dataset, dir.path(), args, output);
+  return output;
+}
+
+TEST(OccupancyRestart, KilledMidRunItSavesTheGridAndCloudOfAnUndisturbedRun) {
+  kill_and_compare("occupancy_restart", {});
+}
+
+// With the multi-view refinement (config/occupancy/multiview.yaml) each keyframe's depth also depends on
+// the last keyframes' left images: the process keeps them in its state folder (STATE/ID.view), and the
+// restarted one refines its next keyframes against the same views, so its map is the undisturbed run's too.
+TEST(OccupancyRestart, KilledMidRunWithTheMultiViewRefinementItSavesTheMapOfAnUndisturbedRun) {
+  const std::string output =
+      kill_and_compare("occupancy_restart_multiview",
+                       {"occupancy_config=" + (test::source_dir() / "config/occupancy/multiview.yaml").string()});
+  EXPECT_NE(output.find("kept view(s) restored from the state folder"), std::string::npos) << output;
 }
 
 }  // namespace

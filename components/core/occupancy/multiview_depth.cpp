@@ -3,11 +3,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <stdexcept>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
+
+#include "runtime/atomic_file.hpp"
 
 namespace heslam {
 namespace {
@@ -391,6 +396,64 @@ cv::Mat MultiViewDepth::refine(const cv::Mat& disparity, const cv::Mat& left, co
   }
   s.mean_abs_change_px = s.refined ? change / static_cast<double>(s.refined) : 0.0;
   return out;
+}
+
+namespace {
+
+constexpr char kViewMagic[8] = {'H', 'E', 'S', 'V', 'I', 'E', 'W', '1'};
+
+template <typename T>
+void append(std::string& out, const T& value) {
+  out.append(reinterpret_cast<const char*>(&value), sizeof(value));
+}
+
+}  // namespace
+
+void write_view(const std::filesystem::path& file, const KeptView& view) {
+  if (view.left.type() != CV_8UC1 || view.left.empty()) {
+    throw std::invalid_argument(file.string() + ": a kept view is an 8-bit grey image");
+  }
+  std::string out(kViewMagic, sizeof(kViewMagic));
+  append(out, view.keyframe_id);
+  append(out, view.sequence);
+  const Eigen::Matrix4d T = view.T_wc.matrix();
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) append(out, T(r, c));
+  }
+  append(out, static_cast<std::int32_t>(view.left.rows));
+  append(out, static_cast<std::int32_t>(view.left.cols));
+  for (int r = 0; r < view.left.rows; ++r) out.append(view.left.ptr<char>(r), static_cast<std::size_t>(view.left.cols));
+  runtime::replace_file_contents(file, out, /*sync=*/false);
+}
+
+KeptView read_view(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw std::runtime_error(file.string() + ": cannot open");
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  constexpr std::size_t kHeader = sizeof(kViewMagic) + 2 * sizeof(std::uint64_t) + 16 * sizeof(double) + 8;
+  if (bytes.size() < kHeader || std::memcmp(bytes.data(), kViewMagic, sizeof(kViewMagic)) != 0) {
+    throw std::runtime_error(file.string() + ": not a heslam-occupancy kept view (magic HESVIEW1)");
+  }
+  KeptView view;
+  const char* at = bytes.data() + sizeof(kViewMagic);
+  std::memcpy(&view.keyframe_id, at, 8);
+  std::memcpy(&view.sequence, at + 8, 8);
+  Eigen::Matrix4d T;
+  for (int i = 0; i < 16; ++i) std::memcpy(&T(i / 4, i % 4), at + 16 + 8 * i, 8);
+  std::int32_t rows = 0, cols = 0;
+  std::memcpy(&rows, at + 16 + 128, 4);
+  std::memcpy(&cols, at + 16 + 128 + 4, 4);
+  if (rows <= 0 || cols <= 0 || bytes.size() != kHeader + static_cast<std::size_t>(rows) * cols) {
+    throw std::runtime_error(file.string() + ": " + std::to_string(bytes.size()) + " bytes for a " +
+                             std::to_string(cols) + "x" + std::to_string(rows) + " image");
+  }
+  if (!T.allFinite() || T.row(3) != Eigen::RowVector4d(0, 0, 0, 1)) {
+    throw std::runtime_error(file.string() + ": the pose is not a finite rigid transform");
+  }
+  view.T_wc.matrix() = T;
+  view.left = cv::Mat(rows, cols, CV_8UC1);
+  std::memcpy(view.left.data, bytes.data() + kHeader, static_cast<std::size_t>(rows) * cols);
+  return view;
 }
 
 }  // namespace heslam

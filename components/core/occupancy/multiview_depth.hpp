@@ -18,7 +18,9 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <deque>
+#include <filesystem>
 #include <string>
 
 #include <opencv2/core.hpp>
@@ -103,5 +105,20 @@ class MultiViewDepth {
   MultiViewDepthOptions options_;
   std::deque<View> views_;
 };
+
+// A kept view as heslam-occupancy persists it, so that a restarted process refines its next keyframes
+// against the same views as an undisturbed one: the keyframe's 8-bit rectified, equalized left image (as
+// given to add_view), its pose, and the order it was kept in.
+struct KeptView {
+  std::uint64_t keyframe_id = 0;
+  std::uint64_t sequence = 0;  // 0, 1, 2, ... in the order the views were kept
+  cv::Mat left;                // CV_8UC1
+  Pose3 T_wc = Pose3::Identity();
+};
+// As a file (binary: magic HESVIEW1, keyframe id, sequence, T_wc as 16 doubles row-major, rows, cols as
+// int32, the pixels), replaced atomically; read back exactly. read_view throws std::runtime_error naming the
+// file on a short, foreign or inconsistent file; write_view std::invalid_argument for an image not CV_8UC1.
+void write_view(const std::filesystem::path& file, const KeptView& view);
+KeptView read_view(const std::filesystem::path& file);
 
 }  // namespace heslam
