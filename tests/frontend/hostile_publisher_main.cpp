@@ -7,7 +7,7 @@
 //   stray_frame       a valid StereoFrame of the dataset's size with seq 1,000,000
 //   malformed_frame   a StereoFrame whose images hold 16 bytes, seq 2,000,000
 //   calibration       the dataset's calibration with the left fx 10 % larger (a valid, different one)
-//   nan_keyframe      a Keyframe with a NaN pose;  nan_keyframe_state: KeyframeState of fe:1, NaN pose
+//   nan_keyframe      a Keyframe with a NaN pose;  nan_keyframe_state: KeyframeState of fe:999999, NaN pose
 //   (wrong_keyframe_state: fe:2) nan_point         MapPointState lm:1 with a NaN position;  nan_odometry: Odometry seq
 //   5, NaN pose nan_correction    a LoopCorrection moving fe:1 to a NaN pose wrong_keyframe_state, wrong_odometry:
 //   valid samples with a pose 100 m away (only the
@@ -137,7 +137,10 @@ int run(int argc, char** argv) {
   add(all, domain, topics.keyframes(), keyframe);
 
   msg::KeyframeState state{};
-  state.id = kFrontendTag | 1;
+  // An instance no run writes: readers keep the newest sample per instance (KEEP_LAST(1)), so a NaN state
+  // of a real keyframe (fe:1, before) can be replaced by the mapper's next state of it before a reader
+  // takes it, which then counts no rejection (the frontend counted none once in a loaded suite).
+  state.id = kFrontendTag | 999999;
   state.map_version = 1'000'000;
   state.T_wc = nan_pose();
   add(all, domain, topics.keyframe_states(), state);
