@@ -45,15 +45,19 @@ std::string file_text(const fs::path& file) {
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
-// The undisturbed run ("calm") and the one whose heslam-occupancy is killed and restarted ("killed") in `dir`;
-// their saved grid and cloud must be byte-identical. `output`: the restarted run's supervisor output.
-void compare_killed_with_calm(const fs::path& dataset, const fs::path& dir, const std::vector<std::string>& args,
-                              std::string& output) {
-  {
-    auto calm = test::start_pipeline("synth", dataset, dir, "calm", test::exclusive_domain_id(), args);
-    ASSERT_EQ(test::finish(*calm), 0) << calm->out() << calm->err();
-  }
+// Whether a run's heslam-occupancy skipped a keyframe whose frame it never received (counted as
+// keyframes_without_frame). At a run's start the replay may send the first frame before its writer has
+// matched this process's reader (frames are volatile: docs/occupancy.md, Left); that run's map then lacks
+// the first keyframe's cloud, which is not what this test compares, so the run is made again.
+bool lost_a_frame(const fs::path& dir, const std::string& label) {
+  return file_text(dir / ("logs_" + label) / "occupancy.log").find("keyframes_without_frame") != std::string::npos;
+}
 
+constexpr int kAttempts = 3;  // runs of one kind made until one received every frame
+
+// The run whose heslam-occupancy is killed mid-run and restarted, as "killed" in `dir`.
+void killed_run(const fs::path& dataset, const fs::path& dir, const std::vector<std::string>& args, std::string& output,
+                std::size_t& clouds_before, std::size_t& files) {
   const int domain = test::exclusive_domain_id();
   test::OccupancyRunWatch watch(domain, kStateTimeout);
   auto run = test::start_pipeline("synth", dataset, dir, "killed", domain, args);
@@ -66,13 +70,13 @@ void compare_killed_with_calm(const fs::path& dataset, const fs::path& dir, cons
       << "frames " << watch.last_frame_seq.value_or(0) << ", done " << watch.last_done_seq.value_or(0) << ", keyframes "
       << watch.keyframe_ids.size() << ", clouds " << (watch.occupancy ? watch.occupancy->counter("clouds") : 0) << "\n"
       << run->err();
-  const std::size_t clouds_before = watch.occupancy->counter("clouds");
+  clouds_before = watch.occupancy->counter("clouds");
   const pid_t victim = test::child_pid(run->pid(), kComm);
   ASSERT_GT(victim, 0);
   ASSERT_EQ(victim, watch.occupancy->pid);
   ASSERT_EQ(kill(victim, SIGKILL), 0);
   // Its state folder: one file per keyframe cloud (a culled keyframe's was removed).
-  std::size_t files = 0;
+  files = 0;
   for (const auto& entry : fs::directory_iterator(dir / "killed.occupancy")) {
     files += entry.path().extension() == ".cloud";
   }
@@ -86,6 +90,30 @@ void compare_killed_with_calm(const fs::path& dataset, const fs::path& dir, cons
   ASSERT_EQ(test::finish(*run), 0) << run->out() << run->err();
   output = run->out() + run->err();
   EXPECT_NE(output.find("occupancy"), std::string::npos);
+}
+
+// The undisturbed run ("calm") and the one whose heslam-occupancy is killed and restarted ("killed") in `dir`;
+// their saved grid and cloud must be byte-identical. `output`: the restarted run's supervisor output.
+void compare_killed_with_calm(const fs::path& dataset, const fs::path& dir, const std::vector<std::string>& args,
+                              std::string& output) {
+  for (int attempt = 1; attempt <= kAttempts; ++attempt) {
+    fs::remove_all(dir / "logs_calm");
+    auto calm = test::start_pipeline("synth", dataset, dir, "calm", test::exclusive_domain_id(), args);
+    ASSERT_EQ(test::finish(*calm), 0) << calm->out() << calm->err();
+    if (!lost_a_frame(dir, "calm")) break;
+    std::printf("[ note     ] the undisturbed run's heslam-occupancy missed a frame (attempt %d): made again\n",
+                attempt);
+    ASSERT_LT(attempt, kAttempts) << "every undisturbed run missed a frame";
+  }
+  std::size_t clouds_before = 0, files = 0;
+  for (int attempt = 1; attempt <= kAttempts; ++attempt) {
+    fs::remove_all(dir / "logs_killed");
+    killed_run(dataset, dir, args, output, clouds_before, files);
+    if (::testing::Test::HasFatalFailure()) return;
+    if (!lost_a_frame(dir, "killed")) break;
+    std::printf("[ note     ] the killed run's heslam-occupancy missed a frame (attempt %d): made again\n", attempt);
+    ASSERT_LT(attempt, kAttempts) << "every killed run missed a frame";
+  }
 
   // The run itself is the undisturbed one (lockstep), and so is the map.
   EXPECT_EQ(file_text(dir / "killed.txt"), file_text(dir / "calm.txt"));
