@@ -163,15 +163,9 @@ void OccupancyNode::run() {
     }
   }
   take_all();
-  if (latest_up_w_ && latest_up_w_ != sent_up_w_) {
-    // The final map in the newest gravity's frame, whatever the last change the worker saw: it then
-    // depends on the last gravity only, not on when the small refinements arrived.
-    Job job;
-    job.kind = Job::Kind::kUp;
-    job.up_w = *latest_up_w_;
-    sent_up_w_ = latest_up_w_;
-    push(std::move(job));
-  }
+  // The final map in the newest gravity's frame, whatever the last change the worker saw: it then
+  // depends on the last gravity only, not on when the small refinements arrived.
+  if (latest_up_w_ && latest_up_w_ != sent_up_w_) send_up(*latest_up_w_);
   // Poses or culls of keyframes this process never received (states may come before their keyframe,
   // so only the end can tell): counted, they moved nothing.
   std::size_t unknown = 0;
@@ -291,10 +285,14 @@ void OccupancyNode::on_odometry(const msg::Odometry& message) {
   // since the last turn: the initialization's estimate is refined for a while in small steps.
   constexpr double kMinUpChangeRad = 0.2 * std::numbers::pi / 180.0;
   if (sent_up_w_ && std::acos(std::clamp(sent_up_w_->dot(*latest_up_w_), -1.0, 1.0)) <= kMinUpChangeRad) return;
+  send_up(*latest_up_w_);
+}
+
+void OccupancyNode::send_up(const Eigen::Vector3d& up_w) {
   Job job;
   job.kind = Job::Kind::kUp;
-  job.up_w = *latest_up_w_;
-  sent_up_w_ = latest_up_w_;
+  job.up_w = up_w;
+  sent_up_w_ = up_w;
   push(std::move(job));
 }
 

@@ -76,6 +76,8 @@ class OccupancyNode final : public runtime::Component {
   void on_keyframe(const msg::Keyframe& message);
   // grid.up_from_gravity: a valid gravity on the odometry becomes the grid's up (kUp job) when it moved.
   void on_odometry(const msg::Odometry& message);
+  // A kUp job for the worker: the grid's up becomes up_w (remembered as the one last sent).
+  void send_up(const Eigen::Vector3d& up_w);
   // Worker thread: the views of the state folder into a new multiview_; a kept view into the state folder.
   void restore_views();
   void keep_view(std::uint64_t keyframe_id, const cv::Mat& left, const Pose3& T_wc);
